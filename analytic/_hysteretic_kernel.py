@@ -1,0 +1,531 @@
+"""Numba kernels for the OpenSees ``Hysteretic`` uniaxial material.
+
+This module holds the *only* implementation of the material arithmetic in
+deckpound; :class:`deckpound.analytic.hysteretic.HystereticMaterial` is a thin
+Python wrapper around it.  The kernels reproduce OpenSees 3.7.1
+``HystereticMaterial.cpp`` operation by operation (same branch order, same
+floating-point expression order), so that stresses and tangents agree bit for
+bit with ``openseespy`` 3.7.1.
+
+Units
+-----
+The material is unit-agnostic: "strain" is whatever deformation measure the
+backbone rotations/strains ``e*`` are given in (e.g. m for a bent spring in
+force-displacement form, rad for a moment-rotation hinge) and "stress" is the
+matching force measure ``s*`` (kN, kN·m, ...).  Tangents are stress/strain.
+
+Array layouts
+-------------
+Parameters (``params``, float64, length :data:`N_PARAMS`, read-only to the
+kernels; build with :func:`pack_hysteretic`):
+
+====  ===========  =====================================================
+idx   name         meaning
+====  ===========  =====================================================
+0-5   s1p..e3p     positive backbone (s1p, e1p, s2p, e2p, s3p, e3p)
+6-11  s1n..e3n     negative backbone (s1n, e1n, s2n, e2n, s3n, e3n)
+12    pinchX       deformation pinching factor
+13    pinchY       force pinching factor
+14    damage1      ductility damage factor
+15    damage2      energy damage factor
+16    beta         unloading-stiffness degradation exponent
+17-19 E1p,E2p,E3p  positive backbone slopes
+20-22 E1n,E2n,E3n  negative backbone slopes
+23    Eup          max(E1p, E2p, E3p): elastic reloading stiffness (+)
+24    Eun          max(E1n, E2n, E3n): elastic reloading stiffness (-)
+25    energyA      reference energy of the backbone (damage2 normaliser)
+====  ===========  =====================================================
+
+State (``state``, float64, length :data:`N_STATE`, mutated in place; build
+with :func:`hyst_init_state`).  Load indicators are stored as 0.0/1.0/2.0
+(0 = virgin, 1 = last increment positive, 2 = last increment negative):
+
+====  ==============  ==============================================
+idx   name            meaning
+====  ==============  ==============================================
+0     CrotMax         committed max strain (positive excursion)
+1     CrotMin         committed min strain (negative excursion)
+2     CrotPu          committed zero-stress strain after + unloading
+3     CrotNu          committed zero-stress strain after - unloading
+4     CenergyD        committed dissipated energy
+5     CloadIndicator  committed load indicator
+6     Cstress         committed stress
+7     Cstrain         committed strain
+8     TrotMax         trial counterpart of 0
+9     TrotMin         trial counterpart of 1
+10    TrotPu          trial counterpart of 2
+11    TrotNu          trial counterpart of 3
+12    TenergyD        trial counterpart of 4
+13    TloadIndicator  trial counterpart of 5
+14    Tstress         trial stress         (read this after set_trial)
+15    Tstrain         trial strain
+16    Ttangent        trial tangent        (read this after set_trial)
+====  ==============  ==============================================
+
+There is deliberately no committed tangent: OpenSees 3.7.1 does not keep one,
+so ``revertToLastCommit`` leaves the trial tangent untouched.
+"""
+
+from __future__ import annotations
+
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "N_PARAMS",
+    "N_STATE",
+    "POS_INF_STRAIN",
+    "NEG_INF_STRAIN",
+    "DBL_EPSILON",
+    "P_S1P", "P_E1P", "P_S2P", "P_E2P", "P_S3P", "P_E3P",
+    "P_S1N", "P_E1N", "P_S2N", "P_E2N", "P_S3N", "P_E3N",
+    "P_PINCHX", "P_PINCHY", "P_DAMAGE1", "P_DAMAGE2", "P_BETA",
+    "P_E1P_SLOPE", "P_E2P_SLOPE", "P_E3P_SLOPE",
+    "P_E1N_SLOPE", "P_E2N_SLOPE", "P_E3N_SLOPE",
+    "P_EUP", "P_EUN", "P_ENERGYA",
+    "C_ROTMAX", "C_ROTMIN", "C_ROTPU", "C_ROTNU", "C_ENERGYD", "C_LOADIND",
+    "C_STRESS", "C_STRAIN",
+    "T_ROTMAX", "T_ROTMIN", "T_ROTPU", "T_ROTNU", "T_ENERGYD", "T_LOADIND",
+    "T_STRESS", "T_STRAIN", "T_TANGENT",
+    "pack_hysteretic_params",
+    "hyst_init_state",
+    "hyst_set_trial",
+    "hyst_commit",
+    "hyst_revert",
+    "hyst_revert_to_start",
+]
+
+#: Strain clamp used by OpenSees (``UniaxialMaterial.h``).
+POS_INF_STRAIN = 1.0e16
+NEG_INF_STRAIN = -1.0e16
+#: ``DBL_EPSILON``: trial-strain increments smaller than this are ignored.
+DBL_EPSILON = 2.0 ** -52  # 2.220446049250313e-16
+
+# ---------------------------------------------------------------- parameters
+P_S1P, P_E1P, P_S2P, P_E2P, P_S3P, P_E3P = 0, 1, 2, 3, 4, 5
+P_S1N, P_E1N, P_S2N, P_E2N, P_S3N, P_E3N = 6, 7, 8, 9, 10, 11
+P_PINCHX, P_PINCHY, P_DAMAGE1, P_DAMAGE2, P_BETA = 12, 13, 14, 15, 16
+P_E1P_SLOPE, P_E2P_SLOPE, P_E3P_SLOPE = 17, 18, 19
+P_E1N_SLOPE, P_E2N_SLOPE, P_E3N_SLOPE = 20, 21, 22
+P_EUP, P_EUN, P_ENERGYA = 23, 24, 25
+N_PARAMS = 26
+
+# --------------------------------------------------------------------- state
+C_ROTMAX, C_ROTMIN, C_ROTPU, C_ROTNU, C_ENERGYD, C_LOADIND = 0, 1, 2, 3, 4, 5
+C_STRESS, C_STRAIN = 6, 7
+T_ROTMAX, T_ROTMIN, T_ROTPU, T_ROTNU, T_ENERGYD, T_LOADIND = 8, 9, 10, 11, 12, 13
+T_STRESS, T_STRAIN, T_TANGENT = 14, 15, 16
+N_STATE = 17
+
+
+def pack_hysteretic_params(s1p, e1p, s2p, e2p, s3p, e3p,
+                           s1n, e1n, s2n, e2n, s3n, e3n,
+                           pinch_x, pinch_y, damage1, damage2, beta,
+                           energy_a):
+    """Assemble a params array from an (already validated) 3-point backbone.
+
+    No validation happens here; use
+    :func:`deckpound.analytic.hysteretic.pack_hysteretic`, which parses the
+    OpenSees argument list, checks it and computes ``energy_a``.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64 array of length :data:`N_PARAMS` (layout in module docstring).
+    """
+    p = np.empty(N_PARAMS, dtype=np.float64)
+    p[P_S1P], p[P_E1P], p[P_S2P], p[P_E2P], p[P_S3P], p[P_E3P] = (
+        s1p, e1p, s2p, e2p, s3p, e3p)
+    p[P_S1N], p[P_E1N], p[P_S2N], p[P_E2N], p[P_S3N], p[P_E3N] = (
+        s1n, e1n, s2n, e2n, s3n, e3n)
+    p[P_PINCHX], p[P_PINCHY] = pinch_x, pinch_y
+    p[P_DAMAGE1], p[P_DAMAGE2], p[P_BETA] = damage1, damage2, beta
+    # Envelope slopes (OpenSees setEnvelope); Python float arithmetic is
+    # IEEE binary64, identical to the C++ expressions.
+    e1p_s = s1p / e1p
+    e2p_s = (s2p - s1p) / (e2p - e1p)
+    e3p_s = (s3p - s2p) / (e3p - e2p)
+    e1n_s = s1n / e1n
+    e2n_s = (s2n - s1n) / (e2n - e1n)
+    e3n_s = (s3n - s2n) / (e3n - e2n)
+    eup = e1p_s
+    if e2p_s > eup:
+        eup = e2p_s
+    if e3p_s > eup:
+        eup = e3p_s
+    eun = e1n_s
+    if e2n_s > eun:
+        eun = e2n_s
+    if e3n_s > eun:
+        eun = e3n_s
+    p[P_E1P_SLOPE], p[P_E2P_SLOPE], p[P_E3P_SLOPE] = e1p_s, e2p_s, e3p_s
+    p[P_E1N_SLOPE], p[P_E2N_SLOPE], p[P_E3N_SLOPE] = e1n_s, e2n_s, e3n_s
+    p[P_EUP], p[P_EUN], p[P_ENERGYA] = eup, eun, energy_a
+    return p
+
+
+# ------------------------------------------------------------ envelope helpers
+@njit(cache=True, inline="always")
+def _pos_env_stress(p, strain):
+    if strain <= 0.0:
+        return 0.0
+    elif strain <= p[P_E1P]:
+        return p[P_E1P_SLOPE] * strain
+    elif strain <= p[P_E2P]:
+        return p[P_S1P] + p[P_E2P_SLOPE] * (strain - p[P_E1P])
+    elif strain <= p[P_E3P] or p[P_E3P_SLOPE] > 0.0:
+        return p[P_S2P] + p[P_E3P_SLOPE] * (strain - p[P_E2P])
+    else:
+        return p[P_S3P]
+
+
+@njit(cache=True, inline="always")
+def _neg_env_stress(p, strain):
+    if strain >= 0.0:
+        return 0.0
+    elif strain >= p[P_E1N]:
+        return p[P_E1N_SLOPE] * strain
+    elif strain >= p[P_E2N]:
+        return p[P_S1N] + p[P_E2N_SLOPE] * (strain - p[P_E1N])
+    elif strain >= p[P_E3N] or p[P_E3N_SLOPE] > 0.0:
+        return p[P_S2N] + p[P_E3N_SLOPE] * (strain - p[P_E2N])
+    else:
+        return p[P_S3N]
+
+
+@njit(cache=True, inline="always")
+def _pos_env_tangent(p, strain):
+    if strain < 0.0:
+        return p[P_E1P_SLOPE] * 1.0e-9
+    elif strain <= p[P_E1P]:
+        return p[P_E1P_SLOPE]
+    elif strain <= p[P_E2P]:
+        return p[P_E2P_SLOPE]
+    elif strain <= p[P_E3P] or p[P_E3P_SLOPE] > 0.0:
+        return p[P_E3P_SLOPE]
+    else:
+        return p[P_E1P_SLOPE] * 1.0e-9
+
+
+@njit(cache=True, inline="always")
+def _neg_env_tangent(p, strain):
+    if strain > 0.0:
+        return p[P_E1N_SLOPE] * 1.0e-9
+    elif strain >= p[P_E1N]:
+        return p[P_E1N_SLOPE]
+    elif strain >= p[P_E2N]:
+        return p[P_E2N_SLOPE]
+    elif strain >= p[P_E3N] or p[P_E3N_SLOPE] > 0.0:
+        return p[P_E3N_SLOPE]
+    else:
+        return p[P_E1N_SLOPE] * 1.0e-9
+
+
+@njit(cache=True, inline="always")
+def _pos_env_rotlim(p, strain):
+    """Strain where the softening positive backbone reaches zero stress."""
+    limit = POS_INF_STRAIN
+    if strain <= p[P_E1P]:
+        return POS_INF_STRAIN
+    if strain > p[P_E1P] and strain <= p[P_E2P] and p[P_E2P_SLOPE] < 0.0:
+        limit = p[P_E1P] - p[P_S1P] / p[P_E2P_SLOPE]
+    if strain > p[P_E2P] and p[P_E3P_SLOPE] < 0.0:
+        limit = p[P_E2P] - p[P_S2P] / p[P_E3P_SLOPE]
+    if limit == POS_INF_STRAIN:
+        return POS_INF_STRAIN
+    elif _pos_env_stress(p, limit) > 0.0:
+        return POS_INF_STRAIN
+    else:
+        return limit
+
+
+@njit(cache=True, inline="always")
+def _neg_env_rotlim(p, strain):
+    """Strain where the softening negative backbone reaches zero stress."""
+    limit = NEG_INF_STRAIN
+    if strain >= p[P_E1N]:
+        return NEG_INF_STRAIN
+    if strain < p[P_E1N] and strain >= p[P_E2N] and p[P_E2N_SLOPE] < 0.0:
+        limit = p[P_E1N] - p[P_S1N] / p[P_E2N_SLOPE]
+    if strain < p[P_E2N] and p[P_E3N_SLOPE] < 0.0:
+        limit = p[P_E2N] - p[P_S2N] / p[P_E3N_SLOPE]
+    if limit == NEG_INF_STRAIN:
+        return NEG_INF_STRAIN
+    elif _neg_env_stress(p, limit) < 0.0:
+        return NEG_INF_STRAIN
+    else:
+        return limit
+
+
+@njit(cache=True, inline="always")
+def _degradation(ratio, beta):
+    """Unloading-stiffness factor ``k = 1 / max(1, ratio**beta)``.
+
+    ``ratio`` is the committed ductility ``mu = rot_extreme / rot_1``.
+    Short-circuit: for ``0 <= ratio <= 1`` and ``beta >= 0`` (enforced by the
+    argument checks) IEEE ``pow`` returns a value in ``[0, 1]`` (the exact
+    result is <= 1 and 1.0 is representable, so no correctly or faithfully
+    rounded ``pow`` can exceed it); OpenSees then yields exactly ``1.0``
+    either through ``k < 1 -> 1`` or ``1/1``.  Skipping ``pow`` therefore
+    gives the identical double, and keeps the kernel cheap before yielding.
+    """
+    if ratio <= 1.0 and ratio >= 0.0:
+        return 1.0
+    k = ratio ** beta
+    if k < 1.0:
+        return 1.0
+    return 1.0 / k
+
+
+# ------------------------------------------------------------------- kernels
+@njit(cache=True)
+def hyst_init_state(params):
+    """Return a fresh state array (OpenSees constructor: revertToStart +
+    revertToLastCommit).  ``params`` as built by ``pack_hysteretic``."""
+    s = np.zeros(N_STATE, dtype=np.float64)
+    s[T_TANGENT] = params[P_E1P_SLOPE]
+    return s
+
+
+@njit(cache=True)
+def hyst_revert_to_start(params, state):
+    """OpenSees ``revertToStart``: zero committed history and trial
+    stress/strain, trial tangent = E1p.  Like OpenSees 3.7.1, the *trial*
+    history variables (indices 8-13) are left untouched."""
+    state[C_ROTMAX] = 0.0
+    state[C_ROTMIN] = 0.0
+    state[C_ROTPU] = 0.0
+    state[C_ROTNU] = 0.0
+    state[C_ENERGYD] = 0.0
+    state[C_LOADIND] = 0.0
+    state[C_STRESS] = 0.0
+    state[C_STRAIN] = 0.0
+    state[T_STRAIN] = 0.0
+    state[T_STRESS] = 0.0
+    state[T_TANGENT] = params[P_E1P_SLOPE]
+
+
+@njit(cache=True)
+def hyst_commit(state):
+    """OpenSees ``commitState``: copy trial history/stress/strain to
+    committed (there is no committed tangent)."""
+    state[C_ROTMAX] = state[T_ROTMAX]
+    state[C_ROTMIN] = state[T_ROTMIN]
+    state[C_ROTPU] = state[T_ROTPU]
+    state[C_ROTNU] = state[T_ROTNU]
+    state[C_ENERGYD] = state[T_ENERGYD]
+    state[C_LOADIND] = state[T_LOADIND]
+    state[C_STRESS] = state[T_STRESS]
+    state[C_STRAIN] = state[T_STRAIN]
+
+
+@njit(cache=True)
+def hyst_revert(state):
+    """OpenSees 3.7.1 ``revertToLastCommit``: trial := committed for history,
+    stress and strain; the trial *tangent is not restored* (3.7.1 quirk)."""
+    state[T_ROTMAX] = state[C_ROTMAX]
+    state[T_ROTMIN] = state[C_ROTMIN]
+    state[T_ROTPU] = state[C_ROTPU]
+    state[T_ROTNU] = state[C_ROTNU]
+    state[T_ENERGYD] = state[C_ENERGYD]
+    state[T_LOADIND] = state[C_LOADIND]
+    state[T_STRESS] = state[C_STRESS]
+    state[T_STRAIN] = state[C_STRAIN]
+
+
+@njit(cache=True, inline="always")
+def _positive_increment(p, s, d_strain):
+    c_rot_max = s[C_ROTMAX]
+    c_rot_min = s[C_ROTMIN]
+    c_stress = s[C_STRESS]
+    e_up = p[P_EUP]
+    e_un = p[P_EUN]
+    rot1p = p[P_E1P]
+    rot1n = p[P_E1N]
+    kn = _degradation(c_rot_min / rot1n, p[P_BETA])
+    kp = _degradation(c_rot_max / rot1p, p[P_BETA])
+
+    if s[T_LOADIND] == 2.0:
+        if c_stress <= 0.0:
+            s[T_ROTNU] = s[C_STRAIN] - c_stress / (e_un * kn)
+            energy = s[C_ENERGYD] - 0.5 * c_stress / (e_un * kn) * c_stress
+            damfc = 0.0
+            if c_rot_min < rot1n:
+                damfc = p[P_DAMAGE2] * energy / p[P_ENERGYA]
+                damfc += p[P_DAMAGE1] * (c_rot_min - rot1n) / rot1n
+            s[T_ROTMAX] = c_rot_max * (1.0 + damfc)
+    s[T_LOADIND] = 1.0
+
+    t_rot_max = s[T_ROTMAX]
+    if t_rot_max > POS_INF_STRAIN:
+        t_rot_max = POS_INF_STRAIN
+    t_rot_max = t_rot_max if t_rot_max > rot1p else rot1p
+    s[T_ROTMAX] = t_rot_max
+
+    t_rot_nu = s[T_ROTNU]
+    pinch_y = p[P_PINCHY]
+    maxmom = _pos_env_stress(p, t_rot_max)
+    rotlim = _neg_env_rotlim(p, c_rot_min)
+    rotrel = rotlim if rotlim > t_rot_nu else t_rot_nu
+    rotmp2 = t_rot_max - (1.0 - pinch_y) * maxmom / (e_up * kp)
+    rotch = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
+
+    t_strain = s[T_STRAIN]
+    if t_strain < t_rot_nu:
+        tangent = e_un * kn
+        stress = c_stress + tangent * d_strain
+        if stress >= 0.0:
+            stress = 0.0
+            tangent = e_un * 1.0e-9
+    elif t_strain >= t_rot_nu and t_strain < rotch:
+        if t_strain <= rotrel:
+            stress = 0.0
+            tangent = e_up * 1.0e-9
+        else:
+            tangent = maxmom * pinch_y / (rotch - rotrel)
+            tmpmo1 = c_stress + e_up * kp * d_strain
+            tmpmo2 = (t_strain - rotrel) * tangent
+            if tmpmo1 < tmpmo2:
+                stress = tmpmo1
+                tangent = e_up * kp
+            else:
+                stress = tmpmo2
+    else:
+        tangent = (1.0 - pinch_y) * maxmom / (t_rot_max - rotch)
+        tmpmo1 = c_stress + e_up * kp * d_strain
+        tmpmo2 = pinch_y * maxmom + (t_strain - rotch) * tangent
+        if tmpmo1 < tmpmo2:
+            stress = tmpmo1
+            tangent = e_up * kp
+        else:
+            stress = tmpmo2
+    s[T_STRESS] = stress
+    s[T_TANGENT] = tangent
+
+
+@njit(cache=True, inline="always")
+def _negative_increment(p, s, d_strain):
+    c_rot_max = s[C_ROTMAX]
+    c_rot_min = s[C_ROTMIN]
+    c_stress = s[C_STRESS]
+    e_up = p[P_EUP]
+    e_un = p[P_EUN]
+    rot1p = p[P_E1P]
+    rot1n = p[P_E1N]
+    kn = _degradation(c_rot_min / rot1n, p[P_BETA])
+    kp = _degradation(c_rot_max / rot1p, p[P_BETA])
+
+    if s[T_LOADIND] == 1.0:
+        if c_stress >= 0.0:
+            s[T_ROTPU] = s[C_STRAIN] - c_stress / (e_up * kp)
+            energy = s[C_ENERGYD] - 0.5 * c_stress / (e_up * kp) * c_stress
+            damfc = 0.0
+            if c_rot_max > rot1p:
+                damfc = p[P_DAMAGE2] * energy / p[P_ENERGYA]
+                damfc += p[P_DAMAGE1] * (c_rot_max - rot1p) / rot1p
+            s[T_ROTMIN] = c_rot_min * (1.0 + damfc)
+    s[T_LOADIND] = 2.0
+
+    t_rot_min = s[T_ROTMIN]
+    if t_rot_min < NEG_INF_STRAIN:
+        t_rot_min = NEG_INF_STRAIN
+    t_rot_min = t_rot_min if t_rot_min < rot1n else rot1n
+    s[T_ROTMIN] = t_rot_min
+
+    t_rot_pu = s[T_ROTPU]
+    pinch_y = p[P_PINCHY]
+    minmom = _neg_env_stress(p, t_rot_min)
+    rotlim = _pos_env_rotlim(p, c_rot_max)
+    rotrel = rotlim if rotlim < t_rot_pu else t_rot_pu
+    rotmp2 = t_rot_min - (1.0 - pinch_y) * minmom / (e_un * kn)
+    rotch = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
+
+    t_strain = s[T_STRAIN]
+    if t_strain > t_rot_pu:
+        tangent = e_up * kp
+        stress = c_stress + tangent * d_strain
+        if stress <= 0.0:
+            stress = 0.0
+            tangent = e_up * 1.0e-9
+    elif t_strain <= t_rot_pu and t_strain > rotch:
+        if t_strain >= rotrel:
+            stress = 0.0
+            tangent = e_un * 1.0e-9
+        else:
+            tangent = minmom * pinch_y / (rotch - rotrel)
+            tmpmo1 = c_stress + e_un * kn * d_strain
+            tmpmo2 = (t_strain - rotrel) * tangent
+            if tmpmo1 > tmpmo2:
+                stress = tmpmo1
+                tangent = e_un * kn
+            else:
+                stress = tmpmo2
+    else:
+        tangent = (1.0 - pinch_y) * minmom / (t_rot_min - rotch)
+        tmpmo1 = c_stress + e_un * kn * d_strain
+        tmpmo2 = pinch_y * minmom + (t_strain - rotch) * tangent
+        if tmpmo1 > tmpmo2:
+            stress = tmpmo1
+            tangent = e_un * kn
+        else:
+            stress = tmpmo2
+    s[T_STRESS] = stress
+    s[T_TANGENT] = tangent
+
+
+@njit(cache=True)
+def hyst_set_trial(params, state, strain):
+    """OpenSees 3.7.1 ``HystereticMaterial::setTrialStrain``.
+
+    Updates ``state`` in place; read ``state[T_STRESS]`` (index 14) and
+    ``state[T_TANGENT]`` (index 16) afterwards.  Reproduces two 3.7.1 quirks:
+
+    * virgin material (trial load indicator 0) and ``strain == 0.0``: nothing
+      at all is changed (not even the trial strain);
+    * ``|strain - committed strain| < DBL_EPSILON`` (2.22e-16, absolute): the
+      trial strain is stored and the trial history reset to the committed one,
+      but the previous *trial* stress, tangent and load indicator are kept
+      (OpenSees issue #1817).
+
+    Cost: two ``pow`` calls per call once the material has yielded in either
+    direction with ``beta > 0``; none while ``e1n <= CrotMin`` and
+    ``CrotMax <= e1p`` (see ``_degradation``).
+    """
+    p = params
+    s = state
+    if s[T_LOADIND] == 0.0 and strain == 0.0:
+        return
+    s[T_ROTMAX] = s[C_ROTMAX]
+    s[T_ROTMIN] = s[C_ROTMIN]
+    s[T_ENERGYD] = s[C_ENERGYD]
+    s[T_ROTPU] = s[C_ROTPU]
+    s[T_ROTNU] = s[C_ROTNU]
+
+    s[T_STRAIN] = strain
+    d_strain = strain - s[C_STRAIN]
+    if abs(d_strain) < DBL_EPSILON:
+        return
+
+    load = s[C_LOADIND]
+    if load == 0.0:
+        load = 2.0 if d_strain < 0.0 else 1.0
+    s[T_LOADIND] = load
+
+    if strain >= s[C_ROTMAX]:
+        s[T_ROTMAX] = strain
+        s[T_TANGENT] = _pos_env_tangent(p, strain)
+        s[T_STRESS] = _pos_env_stress(p, strain)
+        s[T_LOADIND] = 1.0
+    elif strain <= s[C_ROTMIN]:
+        s[T_ROTMIN] = strain
+        s[T_TANGENT] = _neg_env_tangent(p, strain)
+        s[T_STRESS] = _neg_env_stress(p, strain)
+        s[T_LOADIND] = 2.0
+    else:
+        if d_strain < 0.0:
+            _negative_increment(p, s, d_strain)
+        elif d_strain > 0.0:
+            _positive_increment(p, s, d_strain)
+
+    s[T_ENERGYD] = s[C_ENERGYD] + 0.5 * (s[C_STRESS] + s[T_STRESS]) * d_strain

@@ -1,0 +1,500 @@
+r"""Planar frictional impact / contact impulses on the velocity level (numba).
+
+This is the one-step contact solve of deckpound's Moreau-Jean engine: for the
+``nc`` (<= 4 in practice, any nc works) active contacts of a time step, find
+the normal and tangential impulses.
+
+Equations
+---------
+Generalised velocities U (deck: x, y, theta, plus extra DOFs), iteration
+matrix M (mass matrix, or the Moreau-Jean iteration matrix
+M + theta h C + theta^2 h^2 K; any invertible matrix), contact Jacobians
+W_N, W_T of shape (ndof, nc)::
+
+    M (U+ - U_free) = W_N P_N + W_T P_T
+    U_N+ = W_N^T U+ + b_N ,   U_T+ = W_T^T U+ + b_T        (b: moving supports)
+
+With the Delassus matrix G = W^T M^-1 W, W = [W_N  W_T] (shape (2nc, 2nc),
+rows/columns ordered N_0..N_{nc-1}, T_0..T_{nc-1}) and the *free* contact
+velocities u_free = W^T U_free + b (what the contact velocities would be
+without contact impulses)::
+
+    U_N+ = uN_free + G_NN P_N + G_NT P_T
+    U_T+ = uT_free + G_TN P_N + G_TT P_T
+
+Contact laws, per contact i:
+
+* Newton impact:  xi_N = U_N+ + e U_N-  >= 0,  P_N >= 0,  xi_N P_N = 0,
+  with U_N- the pre-impact normal velocity and e in [0, 1].
+* Planar Coulomb: -U_T+ in mu P_N d|P_T|, i.e. |P_T| <= mu P_N, U_T+ = 0 if
+  |P_T| < mu P_N (stick), and U_T+ = -s |U_T+| when P_T = s mu P_N (slip
+  opposite to the friction impulse).
+
+Sign conventions: U_N > 0 separates, U_N < 0 approaches; P_N >= 0 pushes the
+bodies apart along the W_N column.  P_T and U_T are both measured along the
+same tangent t (the W_T column): P_T > 0 is a friction impulse along +t,
+U_T > 0 is slip along +t, so in slip P_T * U_T+ < 0.
+
+LCP formulation (primary; three unknowns per frictional contact, Glocker &
+Pfeiffer 1992, Pfeiffer & Glocker 1996, Leine & Nijmeijer 2004 Sec. 7.3)
+----------------------------------------------------------------------------
+Split the friction interval and the slip velocity::
+
+    P_R = mu P_N + P_T >= 0,  P_L = mu P_N - P_T = 2 mu P_N - P_R >= 0,
+    U_T+ = v+ - v-,   v+, v- >= 0,   v+ P_R = 0,  v- P_L = 0.
+
+Unknowns z = (P_N, P_R, v-), slacks w = (xi_N, v+, P_L)::
+
+    [xi_N]   [G_NN - G_NT mu   G_NT  0] [P_N]   [uN_free + e uN-]
+    [v+  ] = [G_TN - G_TT mu   G_TT  I] [P_R] + [uT_free        ]
+    [P_L ]   [2 mu             -I    0] [v- ]   [0              ]
+
+(mu = diag(mu_i)).  Contacts with mu_i = 0 carry only their P_N unknown
+(P_T = 0), so mu = 0 everywhere reduces to the normal-only LCP
+G_NN P_N + uN_free + e uN- = xi_N, n = nc.  Impulses are scaled by
+1 / mean(diag G_NN) so that the LCP matrix is O(1) (Delassus entries of a
+140 t deck are ~1e-5 1/kg).
+
+This matrix is *not* copositive in general (z^T A z contains
+mu P_N^T (G_TN P_N + G_TT P_T), which can be negative), so Lemke's
+processability theorem does not cover it.  Hence the fall-backs:
+
+1. Lemke on the 3-unknown LCP above (status 0 when it verifies);
+2. Lemke on the Stewart-Trinkle / Anitescu-Potra form with four unknowns
+   (P_N, beta+, beta-, lambda), P_T = beta+ - beta-, lambda = |U_T+|::
+
+       [xi_N   ]   [G_NN   G_NT  -G_NT  0] [P_N  ]   [uN_free + e uN-]
+       [l + U_T] = [G_TN   G_TT  -G_TT  1] [beta+] + [ uT_free       ]
+       [l - U_T]   [-G_TN -G_TT   G_TT  1] [beta-]   [-uT_free       ]
+       [slack  ]   [mu     -1     -1    0] [lambda]  [0              ]
+
+   whose matrix is copositive for symmetric PSD G (Anitescu & Potra 1997),
+   status 1;
+3. exhaustive enumeration of the 3-unknown LCP (n <= 12), status 2.
+
+Every candidate is verified against the contact laws directly (velocities
+recomputed from G); status 3 means no candidate verified and the best one is
+returned.  Returned residuals, both in velocity units:
+
+* comp_res = max_i |min(xi_N,i , G_NN,ii P_N,i)|  (Signorini-Newton
+  complementarity; also measures P_N < 0 and xi_N < 0);
+* cone_res = max_i |g P_T,i - proj_[-g mu P_N,i , g mu P_N,i](g P_T,i - U_T+,i)|
+  with g = G_TT,ii: the natural-map residual of the Coulomb law, zero iff
+  |P_T| <= mu P_N and -U_T+ is in the normal cone of the friction interval.
+
+Non-uniqueness (documented, and tested): when two corners of one deck face
+are in contact their tangent columns in W_T coincide (same tangent, same
+lever arm along the face normal), G is singular (e.g. 4 corners on a 3-DOF
+deck) and the split of the tangential impulse between the corners is not
+unique; the split of normal impulses can also be non-unique for 4 contacts
+on 3 DOFs.  The face totals sum(P_T), the generalised impulse W P, hence U+
+and all contact velocities, are unique whenever W_N P_N + W_T P_T is
+determined (the case for one deck face on one abutment).  Lemke returns one
+valid vertex solution; do not post-process individual corner tangential
+impulses, use face totals.
+
+Energy: with U_free = U- and e = 0, or with mu = 0 and U_N- <= 0, the impact
+does not increase the kinetic energy.  With friction and e > 0 Newton's law
+combined with Coulomb friction is *not* energetically consistent in general
+(Kane's paradox: an eccentric impact with large mu that ends in stick can
+gain energy, Kane & Levinson 1985, Glocker 2004).  This is a property of the
+impact law, not of the solver.
+
+References
+----------
+C. Glocker, F. Pfeiffer, "Dynamical systems with unilateral contacts",
+    Nonlinear Dynamics 3 (1992) 245-259; F. Pfeiffer, C. Glocker,
+    "Multibody Dynamics with Unilateral Contacts", Wiley 1996.
+R. I. Leine, H. Nijmeijer, "Dynamics and Bifurcations of Non-Smooth
+    Mechanical Systems", Springer 2004, Ch. 7.
+V. Acary, B. Brogliato, "Numerical Methods for Nonsmooth Dynamical Systems",
+    Springer 2008, Ch. 10 and 12.
+D. E. Stewart, J. C. Trinkle, "An implicit time-stepping scheme for rigid
+    body dynamics with inelastic collisions and Coulomb friction", IJNME 39
+    (1996); M. Anitescu, F. A. Potra, "Formulating dynamic multi-rigid-body
+    contact problems with friction as solvable linear complementarity
+    problems", Nonlinear Dynamics 14 (1997) 231-247.
+C. Glocker, "Concepts for modeling impacts without friction", Acta Mech.
+    168 (2004) 1-19.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .lcp import lcp_enumerate, lcp_lemke, ENUM_MAX_N
+
+__all__ = [
+    "CONTACT_OPEN",
+    "CONTACT_STICK",
+    "CONTACT_SLIP",
+    "STATUS_LEMKE",
+    "STATUS_LEMKE_ST",
+    "STATUS_ENUM",
+    "STATUS_FAILED",
+    "MODE_AUTO",
+    "MODE_LEMKE3",
+    "MODE_LEMKE_ST",
+    "MODE_ENUM",
+    "delassus",
+    "velocity_update",
+    "contact_residuals",
+    "solve_contact_impulses",
+    "solve_contact_impulses_into",
+]
+
+CONTACT_OPEN = 0
+CONTACT_STICK = 1
+CONTACT_SLIP = 2
+
+STATUS_LEMKE = 0      # verified, Lemke on the 3-unknown LCP
+STATUS_LEMKE_ST = 1   # verified, Lemke on the Stewart-Trinkle LCP
+STATUS_ENUM = 2       # verified, enumeration
+STATUS_FAILED = 3     # nothing verified; best candidate returned
+
+MODE_AUTO = 0
+MODE_LEMKE3 = 1
+MODE_LEMKE_ST = 2
+MODE_ENUM = 3
+
+_VTOL = 1e-9   # default relative acceptance tolerance (velocity units)
+
+
+@njit(cache=True)
+def delassus(M, W_N, W_T):
+    """G = W^T M^-1 W with W = [W_N  W_T]; M (ndof, ndof) invertible,
+    W_N, W_T (ndof, nc).  Returns G (2nc, 2nc), order N_0..N_{nc-1},
+    T_0..T_{nc-1}."""
+    ndof, nc = W_N.shape
+    W = np.empty((ndof, 2 * nc))
+    W[:, :nc] = W_N
+    W[:, nc:] = W_T
+    X = np.linalg.solve(np.ascontiguousarray(M), W)
+    return W.T @ X
+
+
+@njit(cache=True)
+def velocity_update(M, W_N, W_T, U_free, P_N, P_T):
+    """U+ = U_free + M^-1 (W_N P_N + W_T P_T)."""
+    r = W_N @ P_N + W_T @ P_T
+    return U_free + np.linalg.solve(np.ascontiguousarray(M), r)
+
+
+@njit(cache=True)
+def _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus):
+    nc = uN_free.shape[0]
+    for i in range(nc):
+        sN = uN_free[i]
+        sT = uT_free[i]
+        for j in range(nc):
+            sN += G[i, j] * P_N[j] + G[i, nc + j] * P_T[j]
+            sT += G[nc + i, j] * P_N[j] + G[nc + i, nc + j] * P_T[j]
+        uN_plus[i] = sN
+        uT_plus[i] = sT
+
+
+@njit(cache=True)
+def contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus):
+    """(comp_res, cone_res) in velocity units, see module docstring."""
+    nc = P_N.shape[0]
+    comp = 0.0
+    cone = 0.0
+    for i in range(nc):
+        gN = G[i, i]
+        if not gN > 0.0:
+            gN = 1.0
+        xi = uN_plus[i] + e[i] * uN_minus[i]
+        a = gN * P_N[i]
+        m = a if a < xi else xi
+        if abs(m) > comp:
+            comp = abs(m)
+        gT = G[nc + i, nc + i]
+        if not gT > 0.0:
+            gT = gN
+        bound = gT * mu[i] * (P_N[i] if P_N[i] > 0.0 else 0.0)
+        y = gT * P_T[i] - uT_plus[i]
+        if y > bound:
+            y = bound
+        elif y < -bound:
+            y = -bound
+        r = abs(gT * P_T[i] - y)
+        if r > cone:
+            cone = r
+    return comp, cone
+
+
+@njit(cache=True)
+def _impulse_scale(G, nc):
+    s = 0.0
+    for i in range(nc):
+        s += G[i, i]
+    s /= nc
+    if not s > 0.0:
+        return 1.0
+    return 1.0 / s
+
+
+@njit(cache=True)
+def _build_lcp3(G, qN, uT_free, mu, fidx, nf, s):
+    """3-unknown LCP (scaled impulses).  fidx[k] = contact of k-th
+    frictional contact."""
+    nc = qN.shape[0]
+    n = nc + 2 * nf
+    A = np.zeros((n, n))
+    q = np.zeros(n)
+    # friction coefficient per contact (0 for frictionless)
+    for i in range(nc):
+        q[i] = qN[i]
+        for j in range(nc):
+            A[i, j] = s * G[i, j]
+    for l in range(nf):
+        j = fidx[l]
+        for i in range(nc):
+            A[i, j] -= s * mu[j] * G[i, nc + j]
+            A[i, nc + l] = s * G[i, nc + j]
+    for k in range(nf):
+        i = fidx[k]
+        r = nc + k
+        q[r] = uT_free[i]
+        for j in range(nc):
+            A[r, j] = s * G[nc + i, j]
+        for l in range(nf):
+            j = fidx[l]
+            A[r, j] -= s * mu[j] * G[nc + i, nc + j]
+            A[r, nc + l] = s * G[nc + i, nc + j]
+        A[r, nc + nf + k] = 1.0
+        r2 = nc + nf + k
+        A[r2, i] = 2.0 * mu[i]
+        A[r2, nc + k] = -1.0
+    return A, q
+
+
+@njit(cache=True)
+def _extract3(z, mu, fidx, nf, s, P_N, P_T):
+    nc = P_N.shape[0]
+    for i in range(nc):
+        P_N[i] = s * z[i]
+        P_T[i] = 0.0
+    for k in range(nf):
+        i = fidx[k]
+        P_T[i] = s * (z[nc + k] - mu[i] * z[i])
+
+
+@njit(cache=True)
+def _build_lcp_st(G, qN, uT_free, mu, fidx, nf, s):
+    """Stewart-Trinkle / Anitescu-Potra LCP: unknowns (P_N, b+, b-, lam)."""
+    nc = qN.shape[0]
+    n = nc + 3 * nf
+    A = np.zeros((n, n))
+    q = np.zeros(n)
+    for i in range(nc):
+        q[i] = qN[i]
+        for j in range(nc):
+            A[i, j] = s * G[i, j]
+        for l in range(nf):
+            j = fidx[l]
+            A[i, nc + l] = s * G[i, nc + j]
+            A[i, nc + nf + l] = -s * G[i, nc + j]
+    for k in range(nf):
+        i = fidx[k]
+        rp = nc + k
+        rm = nc + nf + k
+        rl = nc + 2 * nf + k
+        q[rp] = uT_free[i]
+        q[rm] = -uT_free[i]
+        for j in range(nc):
+            A[rp, j] = s * G[nc + i, j]
+            A[rm, j] = -s * G[nc + i, j]
+        for l in range(nf):
+            j = fidx[l]
+            g = s * G[nc + i, nc + j]
+            A[rp, nc + l] = g
+            A[rp, nc + nf + l] = -g
+            A[rm, nc + l] = -g
+            A[rm, nc + nf + l] = g
+        A[rp, nc + 2 * nf + k] = 1.0
+        A[rm, nc + 2 * nf + k] = 1.0
+        A[rl, i] = mu[i]
+        A[rl, nc + k] = -1.0
+        A[rl, nc + nf + k] = -1.0
+    return A, q
+
+
+@njit(cache=True)
+def _extract_st(z, fidx, nf, s, P_N, P_T):
+    nc = P_N.shape[0]
+    for i in range(nc):
+        P_N[i] = s * z[i]
+        P_T[i] = 0.0
+    for k in range(nf):
+        i = fidx[k]
+        P_T[i] = s * (z[nc + k] - z[nc + nf + k])
+
+
+@njit(cache=True)
+def _evaluate(G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus,
+              uT_plus):
+    _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus)
+    comp, cone = contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus,
+                                   uT_plus)
+    return comp, cone
+
+
+@njit(cache=True)
+def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
+                                P_N, P_T, uN_plus, uT_plus, state,
+                                mode=0, rtol=1e-9):
+    """Frictional impact impulses for nc active contacts, written into the
+    output arrays.
+
+    Parameters
+    ----------
+    G : (2nc, 2nc) Delassus matrix W^T M^-1 W, order [N_0..N_nc-1, T_0..].
+    uN_free, uT_free : (nc,) contact velocities of the contact-free motion
+        (including moving-support offsets b_N, b_T).
+    uN_minus : (nc,) pre-impact normal velocities U_N- (Newton law target
+        U_N+ >= -e U_N-).
+    e, mu : (nc,) restitution in [0, 1] and friction coefficient >= 0.
+    P_N, P_T, uN_plus, uT_plus : (nc,) float64 outputs.
+    state : (nc,) int64 output, 0 open, 1 stick, 2 slip.
+    mode : 0 auto (3-unknown Lemke -> Stewart-Trinkle Lemke -> enumeration),
+        1 / 2 / 3 force one method (testing).
+    rtol : acceptance tolerance relative to the velocity scale
+        max(|uN_free|, |uT_free|, |e uN_minus|).
+
+    Returns
+    -------
+    (status, comp_res, cone_res): status 0/1/2 verified (by method 3-unknown
+    Lemke / Stewart-Trinkle Lemke / enumeration), 3 failed (best candidate
+    returned); residuals in velocity units.
+    """
+    nc = uN_free.shape[0]
+    if nc == 0:
+        return STATUS_LEMKE, 0.0, 0.0
+    vscale = 0.0
+    for i in range(nc):
+        vscale = max(vscale, abs(uN_free[i]), abs(uT_free[i]),
+                     abs(e[i] * uN_minus[i]))
+    tolv = rtol * vscale
+    if vscale == 0.0:
+        tolv = 1e-300
+    s = _impulse_scale(G, nc)
+    qN = np.empty(nc)
+    for i in range(nc):
+        qN[i] = uN_free[i] + e[i] * uN_minus[i]
+    fidx = np.empty(nc, dtype=np.int64)
+    nf = 0
+    for i in range(nc):
+        if mu[i] > 0.0:
+            fidx[nf] = i
+            nf += 1
+
+    bN = np.zeros(nc)
+    bT = np.zeros(nc)
+    best = np.inf
+    best_status = STATUS_FAILED
+    cN = np.empty(nc)
+    cT = np.empty(nc)
+    vN = np.empty(nc)
+    vT = np.empty(nc)
+    done = False
+    best_comp = np.inf
+    best_cone = np.inf
+
+    # 1. Lemke, 3-unknown formulation
+    A3, q3 = _build_lcp3(G, qN, uT_free, mu, fidx, nf, s)
+    if mode == MODE_AUTO or mode == MODE_LEMKE3:
+        z, w, st, npiv = lcp_lemke(A3, q3)
+        _extract3(z, mu, fidx, nf, s, cN, cT)
+        comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT,
+                               vN, vT)
+        r = max(comp, cone)
+        if r < best:
+            best = r
+            best_comp = comp
+            best_cone = cone
+            bN[:] = cN
+            bT[:] = cT
+            best_status = STATUS_LEMKE if r <= tolv else STATUS_FAILED
+        done = r <= tolv
+    # 2. Lemke, Stewart-Trinkle formulation (copositive)
+    if (not done) and nf > 0 and (mode == MODE_AUTO or mode == MODE_LEMKE_ST):
+        Ast, qst = _build_lcp_st(G, qN, uT_free, mu, fidx, nf, s)
+        z, w, st, npiv = lcp_lemke(Ast, qst)
+        _extract_st(z, fidx, nf, s, cN, cT)
+        comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT,
+                               vN, vT)
+        r = max(comp, cone)
+        if r < best:
+            best = r
+            best_comp = comp
+            best_cone = cone
+            bN[:] = cN
+            bT[:] = cT
+            best_status = STATUS_LEMKE_ST if r <= tolv else STATUS_FAILED
+        done = r <= tolv
+    elif mode == MODE_LEMKE_ST and nf == 0:
+        # frictionless: the ST form is the normal LCP
+        z, w, st, npiv = lcp_lemke(A3, q3)
+        _extract3(z, mu, fidx, nf, s, cN, cT)
+        comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT,
+                               vN, vT)
+        r = max(comp, cone)
+        best = r
+        best_comp = comp
+        best_cone = cone
+        bN[:] = cN
+        bT[:] = cT
+        best_status = STATUS_LEMKE_ST if r <= tolv else STATUS_FAILED
+        done = r <= tolv
+    # 3. enumeration of the 3-unknown LCP
+    if (not done) and (mode == MODE_AUTO or mode == MODE_ENUM) and \
+            nc + 2 * nf <= ENUM_MAX_N:
+        z, w, st, res = lcp_enumerate(A3, q3)
+        _extract3(z, mu, fidx, nf, s, cN, cT)
+        comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT,
+                               vN, vT)
+        r = max(comp, cone)
+        if r < best:
+            best = r
+            best_comp = comp
+            best_cone = cone
+            bN[:] = cN
+            bT[:] = cT
+            best_status = STATUS_ENUM if r <= tolv else STATUS_FAILED
+
+    # outputs
+    for i in range(nc):
+        P_N[i] = bN[i]
+        P_T[i] = bT[i]
+    _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus)
+    ptol = rtol * s * vscale
+    for i in range(nc):
+        if P_N[i] <= ptol:
+            state[i] = CONTACT_OPEN
+        elif abs(uT_plus[i]) <= tolv:
+            state[i] = CONTACT_STICK
+        else:
+            state[i] = CONTACT_SLIP
+    return best_status, best_comp, best_cone
+
+
+@njit(cache=True)
+def solve_contact_impulses(G, uN_free, uT_free, uN_minus, e, mu, mode=0,
+                           rtol=1e-9):
+    """Allocating wrapper of :func:`solve_contact_impulses_into`.
+
+    Returns ``(P_N, P_T, uN_plus, uT_plus, state, status, comp_res,
+    cone_res)``; arrays of shape (nc,), state int64.
+    """
+    nc = uN_free.shape[0]
+    P_N = np.zeros(nc)
+    P_T = np.zeros(nc)
+    uN_plus = np.zeros(nc)
+    uT_plus = np.zeros(nc)
+    state = np.zeros(nc, dtype=np.int64)
+    status, comp, cone = solve_contact_impulses_into(
+        G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus,
+        state, mode, rtol)
+    return P_N, P_T, uN_plus, uT_plus, state, status, comp, cone

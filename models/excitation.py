@@ -1,0 +1,348 @@
+"""Multi-support excitation: support motions, loaders and a seeded synthetic record.
+
+Each support channel (``<bent>_x``, ``<bent>_y`` for every shake table, ``seat1_x`` and
+``seat2_x`` for the actuators) has a displacement [m] and velocity [m/s] history on one time
+base; accelerations [m/s²] are derived. Engines resample onto their own step with
+:meth:`SupportMotion.resample` (linear interpolation, held constant after the record ends).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import scipy.signal
+
+from .errors import SceneError
+from .mechanics import support_channels
+from .scene import Excitation, Scene
+
+G = 9.80665  # standard gravity [m/s²]
+_LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+
+
+@dataclass(frozen=True)
+class SupportMotion:
+    """Displacement and velocity of every support channel on a common time base.
+
+    Attributes
+    ----------
+    t : (n,) array [s], strictly increasing, starting at 0.
+    disp, vel : dict channel → (n,) array [m], [m/s].
+    """
+
+    t: np.ndarray
+    disp: dict[str, np.ndarray]
+    vel: dict[str, np.ndarray]
+    acc_exact: dict[str, np.ndarray] | None = None
+
+    @property
+    def channels(self) -> tuple[str, ...]:
+        return tuple(self.disp)
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    def acc(self, channel: str) -> np.ndarray:
+        """Acceleration [m/s²]: the generator's exact one if known, else from the velocity
+        by second-order differences."""
+        if self.acc_exact is not None and channel in self.acc_exact:
+            return self.acc_exact[channel]
+        return np.gradient(self.vel[channel], self.t)
+
+    def resample(self, dt: float, duration: float | None = None) -> "SupportMotion":
+        """Motion at t_n = n·dt, n = 0..N, N = round(duration/dt), by linear interpolation.
+
+        Exact for piecewise-linear data; after the record ends the last value is held (the
+        records are baseline-corrected, so that is rest).
+        """
+        if not dt > 0:
+            raise SceneError("dt", f"must be > 0 s, got {dt}")
+        total = self.duration if duration is None else duration
+        n = int(round(total / dt))
+        t = np.arange(n + 1) * dt
+        disp = {k: np.interp(t, self.t, v) for k, v in self.disp.items()}
+        vel = {k: np.interp(t, self.t, v) for k, v in self.vel.items()}
+        return SupportMotion(t=t, disp=disp, vel=vel)
+
+    def matrices(self, channels: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """(n, n_channels) displacement and velocity arrays in the given channel order."""
+        missing = [c for c in channels if c not in self.disp]
+        if missing:
+            raise SceneError("excitation", f"no record for support {missing[0]!r}")
+        D = np.column_stack([self.disp[c] for c in channels])
+        V = np.column_stack([self.vel[c] for c in channels])
+        return np.ascontiguousarray(D), np.ascontiguousarray(V)
+
+    def scaled(self, factor: float) -> "SupportMotion":
+        acc = None if self.acc_exact is None else {k: v * factor for k, v in self.acc_exact.items()}
+        return SupportMotion(self.t, {k: v * factor for k, v in self.disp.items()},
+                             {k: v * factor for k, v in self.vel.items()}, acc)
+
+
+# -- signal processing ---------------------------------------------------------------------
+
+def _spectral_derivative(x: np.ndarray, dt: float) -> np.ndarray:
+    """d/dt of a signal that starts and ends at rest, by FFT on a zero-padded copy."""
+    n = len(x)
+    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    X = np.fft.rfft(x, nfft)
+    w = 2.0 * np.pi * np.fft.rfftfreq(nfft, dt)
+    return np.fft.irfft(1j * w * X, nfft)[:n]
+
+
+def _taper(n: int, frac: float = 0.05) -> np.ndarray:
+    """Tukey-type cosine taper rising over the first and falling over the last frac·n samples."""
+    w = np.ones(n)
+    m = max(2, int(frac * n))
+    ramp = 0.5 * (1.0 - np.cos(np.pi * np.arange(m) / m))
+    w[:m] = ramp
+    w[-m:] = ramp[::-1]
+    return w
+
+
+def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.ndarray, ...]:
+    """Displacement, velocity and acceleration from a raw acceleration record.
+
+    Zero-phase 4th-order Butterworth high-pass at ``highpass`` Hz, double integration
+    (trapezoidal), a cosine taper on the displacement, and velocity and acceleration
+    re-derived spectrally from the tapered displacement. The three are then consistent and
+    the record starts and ends at rest (final displacement and velocity exactly zero).
+    """
+    nyq = 0.5 / dt
+    if not 0 < highpass < nyq:
+        raise SceneError("excitation.highpass",
+                         f"must lie between 0 and the Nyquist frequency {nyq:g} Hz, got {highpass}")
+    sos = scipy.signal.butter(4, highpass / nyq, btype="highpass", output="sos")
+    pad = len(acc)
+    a = scipy.signal.sosfiltfilt(sos, np.concatenate([np.zeros(pad), acc, np.zeros(pad)]))
+    v = np.concatenate([[0.0], np.cumsum(0.5 * (a[1:] + a[:-1]) * dt)])
+    d = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)])
+    d = d[pad:2 * pad]
+    d = (d - np.linspace(d[0], d[-1], len(d))) * _taper(len(d))
+    v = _spectral_derivative(d, dt)
+    a = _spectral_derivative(v, dt)
+    return d, v, a
+
+
+def _envelope(t: np.ndarray, duration: float) -> np.ndarray:
+    """Jennings-type envelope: quadratic rise, strong phase, exponential decay to ~3 %."""
+    t1, t2 = 0.08 * duration, 0.35 * duration
+    c = np.log(1.0 / 0.03) / (duration - t2)
+    return np.where(t < t1, (t / t1) ** 2, np.where(t <= t2, 1.0, np.exp(-c * (t - t2))))
+
+
+def _kanai_tajimi(noise: np.ndarray, dt: float, fg: float, zg: float) -> np.ndarray:
+    """Filter white noise through the Kanai-Tajimi ground filter (frequency domain)."""
+    n = len(noise)
+    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+    w = 2.0 * np.pi * np.fft.rfftfreq(nfft, dt)
+    wg = 2.0 * np.pi * fg
+    H = (wg ** 2 + 2j * zg * wg * w) / (wg ** 2 - w ** 2 + 2j * zg * wg * w)
+    return np.fft.irfft(H * np.fft.rfft(noise, nfft), nfft)[:n]
+
+
+def synthetic_component(exc: Excitation, pga: float, rng: np.random.Generator,
+                        common: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
+    """One earthquake-like component scaled so that max|a| = pga [g] exactly.
+
+    Returns (t, d, v, a) in s, m, m/s, m/s². ``common`` (a white-noise sample) is mixed in
+    with weight √(1 − incoherence) to make correlated components at several tables.
+    """
+    n = int(round(exc.duration / exc.dt)) + 1
+    t = np.arange(n) * exc.dt
+    noise = rng.standard_normal(n)
+    if common is not None:
+        g = exc.incoherence
+        noise = np.sqrt(1.0 - g) * common + np.sqrt(g) * noise
+    raw = _kanai_tajimi(noise, exc.dt, exc.dominant_frequency, exc.ground_damping)
+    raw *= _envelope(t, exc.duration)
+    d, v, a = baseline_corrected(raw, exc.dt, exc.highpass)
+    s = pga * G / np.max(np.abs(a))
+    return t, d * s, v * s, a * s
+
+
+def _shift(x: np.ndarray, steps: int) -> np.ndarray:
+    """Delay a record by a whole number of samples (zeros in front, same length)."""
+    if steps <= 0:
+        return x
+    return np.concatenate([np.zeros(steps), x[:-steps]])
+
+
+def synthetic_motion(scene: Scene) -> SupportMotion:
+    """The seeded synthetic biaxial multi-support record of the scene.
+
+    Transverse (y) PGA = excitation.pga, longitudinal (x) = longitudinal_ratio · pga. Tables are
+    identical unless ``incoherence`` > 0 (partly independent noise) or ``lag`` > 0 (table k is
+    delayed by k·lag). The actuators follow the x motion of the nearest table.
+    """
+    exc = scene.excitation
+    rng = np.random.default_rng(exc.seed)
+    n = int(round(exc.duration / exc.dt)) + 1
+    common = {"x": rng.standard_normal(n), "y": rng.standard_normal(n)}
+    pgas = {"x": exc.pga * exc.longitudinal_ratio, "y": exc.pga}
+    disp: dict[str, np.ndarray] = {}
+    vel: dict[str, np.ndarray] = {}
+    acc: dict[str, np.ndarray] = {}
+    t = np.arange(n) * exc.dt
+    base: dict[str, tuple] = {}
+    for axis in ("x", "y"):
+        sub = np.random.default_rng([exc.seed, ord(axis)])
+        base[axis] = synthetic_component(exc, pgas[axis], sub, common[axis]) if pgas[axis] > 0 \
+            else (t, np.zeros(n), np.zeros(n), np.zeros(n))
+    lag_steps = int(round(exc.lag / exc.dt))
+    for k, bent in enumerate(scene.bents):
+        for axis in ("x", "y"):
+            if exc.incoherence > 0 and pgas[axis] > 0:
+                sub = np.random.default_rng([exc.seed, ord(axis), k + 1])
+                _, d, v, a = synthetic_component(exc, pgas[axis], sub, common[axis])
+            else:
+                _, d, v, a = base[axis]
+            disp[f"{bent.name}_{axis}"] = _shift(d, k * lag_steps)
+            vel[f"{bent.name}_{axis}"] = _shift(v, k * lag_steps)
+            acc[f"{bent.name}_{axis}"] = _shift(a, k * lag_steps)
+    first, last = scene.bents[0].name, scene.bents[-1].name
+    disp["seat1_x"], vel["seat1_x"] = disp[f"{first}_x"].copy(), vel[f"{first}_x"].copy()
+    disp["seat2_x"], vel["seat2_x"] = disp[f"{last}_x"].copy(), vel[f"{last}_x"].copy()
+    acc["seat1_x"], acc["seat2_x"] = acc[f"{first}_x"].copy(), acc[f"{last}_x"].copy()
+    return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc)
+
+
+# -- loaders -------------------------------------------------------------------------------
+
+def check_time_base(t: np.ndarray, field: str) -> None:
+    """Refuse non-finite, duplicate or decreasing time stamps."""
+    if len(t) < 2:
+        raise SceneError(field, f"needs at least 2 time stamps, got {len(t)}")
+    if not np.all(np.isfinite(t)):
+        i = int(np.argmin(np.isfinite(t)))
+        raise SceneError(field, f"time stamp {i} is not finite ({t[i]})")
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0)) + 1
+        kind = "duplicate" if dt[i - 1] == 0 else "decreasing"
+        raise SceneError(field, f"time stamps must increase strictly; stamp {i} ({t[i]} s) is {kind}")
+
+
+def load_csv_motion(scene: Scene) -> SupportMotion:
+    """Support motion from a CSV file: ``time_column`` and ``<channel>_disp`` [+ ``_vel``].
+
+    Displacements in ``disp_unit`` (velocities in disp_unit/s); a missing velocity column is
+    derived by second-order differences. Every support channel must have a displacement column;
+    unknown columns are refused (a misspelt name would otherwise be ignored silently).
+    """
+    exc = scene.excitation
+    path = Path(exc.file or "")
+    field = "excitation.file"
+    if not path.is_file():
+        raise SceneError(field, f"CSV record {str(path)!r} does not exist")
+    try:
+        frame = pd.read_csv(path)
+    except Exception as err:  # pandas raises many types for malformed text
+        raise SceneError(field, f"cannot read CSV {str(path)!r}: {str(err).splitlines()[0]}") from None
+    if exc.time_column not in frame.columns:
+        raise SceneError("excitation.time_column",
+                         f"column {exc.time_column!r} not in {str(path)!r}; columns: {', '.join(map(str, frame.columns))}")
+    channels = support_channels(scene)
+    allowed = {exc.time_column} | {f"{c}_disp" for c in channels} | {f"{c}_vel" for c in channels}
+    for col in frame.columns:
+        if col not in allowed:
+            raise SceneError(field, f"unknown column {col!r}; expected {exc.time_column!r} and "
+                             f"<support>_disp / <support>_vel for supports {', '.join(channels)}")
+    for c in channels:
+        if f"{c}_disp" not in frame.columns:
+            raise SceneError(field, f"support {c!r} has no record (column '{c}_disp' missing)")
+    try:
+        numeric = frame.apply(pd.to_numeric, errors="raise").to_numpy(dtype=float)
+    except (ValueError, TypeError) as err:
+        raise SceneError(field, f"non-numeric value in {str(path)!r}: {err}") from None
+    data = pd.DataFrame(numeric, columns=frame.columns)
+    if not np.all(np.isfinite(numeric)):
+        row, col = np.argwhere(~np.isfinite(numeric))[0]
+        raise SceneError(field, f"value in row {row + 2}, column {frame.columns[col]!r} is missing "
+                         "or not finite (records of mismatched length?)")
+    t = data[exc.time_column].to_numpy()
+    check_time_base(t, field)
+    f = _LENGTH_UNITS[exc.disp_unit] * exc.scale
+    disp, vel = {}, {}
+    for c in channels:
+        disp[c] = data[f"{c}_disp"].to_numpy() * f
+        vel[c] = data[f"{c}_vel"].to_numpy() * f if f"{c}_vel" in data else np.gradient(disp[c], t)
+    return SupportMotion(t=t - t[0], disp=disp, vel=vel)
+
+
+_NPTS_DT = re.compile(r"NPTS\s*=\s*(\d+)\s*,\s*DT\s*=\s*([0-9.Ee+-]+)", re.IGNORECASE)
+_OLD_NPTS_DT = re.compile(r"^\s*(\d+)\s+([0-9.Ee+-]+)\s+NPTS", re.IGNORECASE)
+
+
+def read_at2(path: str | Path, field: str = "excitation.file_x") -> tuple[float, np.ndarray]:
+    """Read a PEER AT2 file: (dt [s], acceleration [g]).
+
+    Header: three text lines, then ``NPTS= n, DT= dt SEC`` (NGA-West2) or ``n dt NPTS, DT``
+    (older files); then the values, several per line. The value count must equal NPTS.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(field, f"AT2 record {str(path)!r} does not exist")
+    try:
+        lines = path.read_text().splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise SceneError(field, f"cannot read {str(path)!r}: {err}") from None
+    if len(lines) < 5:
+        raise SceneError(field, f"{str(path)!r} is not a PEER AT2 file (needs 4 header lines and data)")
+    m = _NPTS_DT.search(lines[3]) or _OLD_NPTS_DT.search(lines[3])
+    if not m:
+        raise SceneError(field, f"{str(path)!r}: line 4 must give NPTS and DT, got {lines[3].strip()!r}")
+    npts, dt = int(m.group(1)), float(m.group(2))
+    if not (np.isfinite(dt) and dt > 0):
+        raise SceneError(field, f"{str(path)!r}: DT must be > 0 s, got {dt}")
+    try:
+        values = np.array([float(tok) for line in lines[4:] for tok in line.split()])
+    except ValueError as err:
+        raise SceneError(field, f"{str(path)!r}: non-numeric value in the data ({err})") from None
+    if len(values) != npts:
+        raise SceneError(field, f"{str(path)!r}: header says NPTS={npts} but the file holds {len(values)} values")
+    if not np.all(np.isfinite(values)):
+        raise SceneError(field, f"{str(path)!r}: the data hold a non-finite value")
+    return dt, values
+
+
+def load_at2_motion(scene: Scene) -> SupportMotion:
+    """Biaxial motion from two AT2 records (x and y), baseline-corrected, at every table."""
+    exc = scene.excitation
+    dtx, ax = read_at2(exc.file_x, "excitation.file_x")
+    dty, ay = read_at2(exc.file_y, "excitation.file_y")
+    if dtx != dty or len(ax) != len(ay):
+        raise SceneError("excitation.file_y", f"time base ({len(ay)} values at {dty} s) differs "
+                         f"from file_x ({len(ax)} values at {dtx} s)")
+    t = np.arange(len(ax)) * dtx
+    comp = {axis: baseline_corrected(a * G * exc.scale, dtx, exc.highpass)
+            for axis, a in (("x", ax), ("y", ay))}
+    disp, vel = {}, {}
+    lag_steps = int(round(exc.lag / dtx))
+    for k, bent in enumerate(scene.bents):
+        for axis in ("x", "y"):
+            disp[f"{bent.name}_{axis}"] = _shift(comp[axis][0], k * lag_steps)
+            vel[f"{bent.name}_{axis}"] = _shift(comp[axis][1], k * lag_steps)
+    disp["seat1_x"], vel["seat1_x"] = disp[f"{scene.bents[0].name}_x"], vel[f"{scene.bents[0].name}_x"]
+    disp["seat2_x"], vel["seat2_x"] = disp[f"{scene.bents[-1].name}_x"], vel[f"{scene.bents[-1].name}_x"]
+    return SupportMotion(t=t, disp=disp, vel=vel)
+
+
+def support_motion(scene: Scene) -> SupportMotion:
+    """The scene's support motion, whatever its source."""
+    kind = scene.excitation.kind
+    if kind == "synthetic":
+        return synthetic_motion(scene)
+    if kind == "csv":
+        return load_csv_motion(scene)
+    return load_at2_motion(scene)
+
+
+def analysis_duration(scene: Scene, motion: SupportMotion) -> float:
+    """Run length: ``run.duration`` if given, else the record length [s]."""
+    return scene.run.duration if scene.run.duration is not None else motion.duration

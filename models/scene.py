@@ -1,0 +1,371 @@
+"""The scene: one engine-independent description of a deck-abutment pounding problem.
+
+Units are SI with tonnes throughout: kN, m, t, s, rad (1 kN = 1 t·m/s²). Axes: x longitudinal
+(bridge axis), y transverse, θ in-plane rotation about the vertical, counter-clockwise positive.
+The deck centre is at x = 0 and the deck spans x ∈ [−L/2, L/2], y ∈ [−W/2, W/2]; bent stations
+are given from the left (x = −L/2) end, seat 1 is the left seat, seat 2 the right one.
+
+The records are frozen and validate themselves on construction; the scene knows nothing about
+the engines that run it (the engine settings are plain data read by the engines).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from ._fields import spec, validate
+from .errors import SceneError
+
+CONTACT_LAWS = ("linear", "kelvin-voigt", "hertz", "hertz-damp", "bilinear")
+FRICTION_MODES = ("none", "slip", "stick")
+GEOMETRIES = ("linear", "nonlinear")
+SUPPORTS_PER_BENT = ("x", "y")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Deck:
+    """Rigid deck in plan: size, mass and polar inertia about its centre."""
+
+    length: float = spec(unit="m", doc="deck length along x", gt=0.0)
+    width: float = spec(unit="m", doc="deck width along y", gt=0.0)
+    mass: float = spec(unit="t", doc="deck mass M_d", gt=0.0)
+    inertia: float = spec(unit="t*m^2", doc="deck polar mass moment of inertia I_d", gt=0.0)
+    stick_modulus: float = spec(3.0e9, unit="kN/m^2",
+                                doc="Young's modulus of the stiff stick elements (OpenSees stick mode)",
+                                gt=0.0)
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class TakedaSpring:
+    """Takeda-type (peak-oriented, OpenSees Hysteretic stand-in) bent spring in one direction.
+
+    Backbone: elastic to (yield_force / stiffness, yield_force), then hardening with slope
+    post_yield_ratio · stiffness up to ultimate_displacement (the second Hysteretic point);
+    unloading stiffness stiffness · μ^(−beta).
+    """
+
+    stiffness: float = spec(unit="kN/m", doc="initial (post-crack) stiffness k0", gt=0.0)
+    yield_force: float = spec(unit="kN", doc="yield force F_y", gt=0.0)
+    post_yield_ratio: float = spec(0.05, unit="-", doc="post-yield to initial stiffness ratio",
+                                   ge=0.0, lt=1.0)
+    beta: float = spec(0.5, unit="-", doc="Takeda unloading-stiffness exponent", ge=0.0, le=2.0)
+    ultimate_displacement: float = spec(0.3, unit="m",
+                                        doc="deformation of the second backbone point", gt=0.0)
+
+    def __post_init__(self) -> None:
+        validate(self)
+        if self.ultimate_displacement <= self.yield_displacement:
+            raise SceneError("ultimate_displacement",
+                             f"must exceed the yield displacement {self.yield_displacement:.6g} m, "
+                             f"got {self.ultimate_displacement}")
+
+    @property
+    def yield_displacement(self) -> float:
+        """Yield displacement F_y / k0 [m]."""
+        return self.yield_force / self.stiffness
+
+
+@dataclass(frozen=True, kw_only=True)
+class Bent:
+    """A two-column bent: a Takeda spring per horizontal direction between deck and shake table."""
+
+    name: str = spec(doc="label used in result columns (bent1_fx, ...)")
+    station: float = spec(unit="m", doc="distance from the deck's left end (x = -L/2)", ge=0.0)
+    x: TakedaSpring = spec(doc="longitudinal spring")
+    y: TakedaSpring = spec(doc="transverse spring")
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Seat:
+    """An abutment seat: rigid body guided in y, on its actuator through springs and dashpots.
+
+    The seat moves in x and rotates about the mid-point of its contact face; its spring and
+    dashpot act on the deformation between the seat and its actuator.
+    """
+
+    name: str = spec(doc="label")
+    mass: float = spec(unit="t", doc="seat mass", gt=0.0)
+    inertia: float = spec(unit="t*m^2", doc="seat polar inertia about the contact-face mid-point",
+                          gt=0.0)
+    kx: float = spec(unit="kN/m", doc="translational spring to the actuator", gt=0.0)
+    ktheta: float = spec(unit="kN*m/rad", doc="rotational spring", gt=0.0)
+    cx: float = spec(unit="kN*s/m", doc="translational dashpot", ge=0.0)
+    ctheta: float = spec(unit="kN*m*s/rad", doc="rotational dashpot", ge=0.0)
+    gap: float = spec(unit="m", doc="initial clear gap between deck end and seat face", ge=0.0)
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Contact:
+    """Deck-seat contact at the four deck corners (compliance laws; nonsmooth uses e and mu)."""
+
+    law: str = spec("linear", doc="normal contact law of the compliance engines",
+                    choices=CONTACT_LAWS)
+    stiffness: float = spec(1.0e6, unit="kN/m (hertz: kN/m^exponent)",
+                            doc="normal contact stiffness per corner (K1 for bilinear)", gt=0.0)
+    exponent: float = spec(1.5, unit="-", doc="Hertz exponent", gt=0.0)
+    restitution: float = spec(0.6, unit="-",
+                              doc="coefficient of restitution e (damped laws, nonsmooth)",
+                              ge=0.0, le=1.0)
+    bilinear_ratio: float = spec(0.35, unit="-", doc="K2/K1 of the Muthukumar bilinear law",
+                                 gt=0.0, le=1.0)
+    bilinear_yield: float = spec(0.001, unit="m", doc="yield deformation of the bilinear law",
+                                 gt=0.0)
+    friction: float = spec(0.0, unit="-", doc="Coulomb friction coefficient mu", ge=0.0)
+    friction_mode: str = spec("none", doc="none | slip (no sticking) | stick (stick spring)",
+                              choices=FRICTION_MODES)
+    tangential_stiffness: float = spec(1.0e6, unit="kN/m",
+                                       doc="tangential stick spring per corner (stick mode)",
+                                       gt=0.0)
+    slip_velocity: float = spec(1.0e-3, unit="m/s",
+                                doc="regularisation velocity of the slip mode (tanh(v/v0))", gt=0.0)
+    geometry: str = spec("linear", doc="contact kinematics", choices=GEOMETRIES)
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+    @property
+    def has_friction(self) -> bool:
+        """True when friction does work: mu > 0 and a friction mode is selected."""
+        return self.friction > 0.0 and self.friction_mode != "none"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Damping:
+    """Rayleigh damping C = a0·M + a1·K0 with the ratio matched at two frequencies.
+
+    K0 is the initial stiffness of the bent and seat springs (contact excluded); the
+    mass-proportional part acts on absolute velocities and the stiffness-proportional part on
+    the springs' deformation rates (this is what OpenSees does under MultipleSupport; every
+    engine uses the same definition).
+    """
+
+    ratio: float = spec(0.08, unit="-", doc="damping ratio at both frequencies", ge=0.0, lt=1.0)
+    method: str = spec("modes", doc="modes: natural modes of the contact-free elastic model; "
+                       "frequencies: given values", choices=("modes", "frequencies"))
+    modes: tuple[int, ...] = spec((1, 3), doc="the two mode numbers (1-based, by frequency)",
+                                  ge=1)
+    frequencies: tuple[float, ...] = spec((2.0, 5.0), unit="Hz",
+                                          doc="the two frequencies (method = frequencies)", gt=0.0)
+
+    def __post_init__(self) -> None:
+        validate(self)
+        for name in ("modes", "frequencies"):
+            value = getattr(self, name)
+            if len(value) != 2 or value[0] == value[1]:
+                raise SceneError(name, f"must hold two different values, got {list(value)}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Excitation:
+    """Multi-support excitation: 3 shake tables (x, y) and 2 seat actuators (x).
+
+    kind = synthetic: a seeded earthquake-like record (filtered white noise, envelope,
+    baseline correction) scaled to ``pga`` (transverse) and ``longitudinal_ratio`` · pga (x);
+    kind = csv: ``file`` with ``time_column`` and, per support channel, ``<channel>_disp`` and
+    optionally ``<channel>_vel`` (channels bent1_x, bent1_y, ..., seat1_x, seat2_x);
+    kind = at2: PEER AT2 acceleration records ``file_x`` and ``file_y`` (g), integrated with
+    baseline correction, applied at every table; the actuators follow the x motion.
+    """
+
+    kind: str = spec("synthetic", doc="record source", choices=("synthetic", "csv", "at2"))
+    pga: float = spec(0.5, unit="g", doc="transverse peak ground acceleration (run label)",
+                      gt=0.0, le=5.0)
+    longitudinal_ratio: float = spec(1.2, unit="-", doc="longitudinal PGA / transverse PGA",
+                                     ge=0.0, le=10.0)
+    seed: int = spec(1994, doc="random seed of the synthetic record", ge=0)
+    duration: float = spec(20.0, unit="s", doc="synthetic record length", gt=0.0, le=600.0)
+    dt: float = spec(0.005, unit="s", doc="synthetic record sampling step", gt=0.0, le=0.1)
+    dominant_frequency: float = spec(3.5, unit="Hz",
+                                     doc="Kanai-Tajimi ground frequency of the synthetic record",
+                                     gt=0.0)
+    ground_damping: float = spec(0.6, unit="-", doc="Kanai-Tajimi ground damping ratio",
+                                 gt=0.0, lt=5.0)
+    highpass: float = spec(0.5, unit="Hz", doc="baseline-correction high-pass corner", gt=0.0)
+    lag: float = spec(0.0, unit="s", doc="time lag between successive bent tables", ge=0.0)
+    incoherence: float = spec(0.0, unit="-",
+                              doc="fraction of independent noise at each table (0 = coherent)",
+                              ge=0.0, le=1.0)
+    file: str | None = spec(None, doc="CSV file (kind = csv), relative to the scene file")
+    time_column: str = spec("t", doc="CSV time column")
+    disp_unit: str = spec("m", doc="CSV displacement unit", choices=("m", "cm", "mm", "in"))
+    file_x: str | None = spec(None, doc="AT2 record for x (kind = at2)")
+    file_y: str | None = spec(None, doc="AT2 record for y (kind = at2)")
+    scale: float = spec(1.0, unit="-", doc="factor applied to loaded records", gt=0.0)
+
+    def __post_init__(self) -> None:
+        validate(self)
+        if self.kind == "csv" and not self.file:
+            raise SceneError("file", "is required when kind = 'csv'")
+        if self.kind == "at2" and not (self.file_x and self.file_y):
+            raise SceneError("file_x" if not self.file_x else "file_y",
+                             "is required when kind = 'at2' (one AT2 record per direction)")
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunSettings:
+    """What every engine shares: how long to run and how often to store output."""
+
+    duration: float | None = spec(None, unit="s",
+                                  doc="analysis length (default: the record length)", gt=0.0)
+    output_dt: float = spec(0.005, unit="s", doc="output step of the stored result", gt=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class OpenSeesSettings:
+    """Settings of the OpenSees engine (plain data; the scene does not import OpenSees)."""
+
+    mode: str = spec("rigid", doc="rigid: 7-DOF rigid bodies via constraints; stick: stiff "
+                     "elastic sticks (paper)", choices=("rigid", "stick"))
+    dt: float = spec(5.0e-4, unit="s", doc="analysis time step", gt=0.0)
+    gamma: float = spec(0.5, unit="-", doc="Newmark gamma", gt=0.0, le=1.0)
+    beta: float = spec(0.25, unit="-", doc="Newmark beta", gt=0.0, le=0.5)
+    algorithm: str = spec("Newton", doc="solution algorithm",
+                          choices=("Newton", "ModifiedNewton", "KrylovNewton", "NewtonLineSearch"))
+    test: str = spec("NormDispIncr", doc="convergence test",
+                     choices=("NormDispIncr", "EnergyIncr", "NormUnbalance"))
+    tolerance: float = spec(1.0e-10, unit="m", doc="convergence tolerance", gt=0.0)
+    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1)
+    system: str = spec("BandGeneral", doc="linear system",
+                       choices=("BandGeneral", "UmfPack", "FullGeneral", "SparseGeneral"))
+    fallback: str = spec("substep", doc="on a failed step: none, or rebuild the analysis and "
+                         "sub-step", choices=("none", "substep"))
+    substeps: int = spec(10, doc="sub-steps per step in the fallback", ge=2)
+    stick_elements: int = spec(4, doc="elements per deck half in stick mode", ge=1)
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ComplianceSettings:
+    """Settings of the pure-Python compliance engine."""
+
+    integrator: str = spec("newmark", doc="newmark: fixed-step Newmark-Newton (OpenSees clone); "
+                           "adaptive: error-controlled with event location",
+                           choices=("newmark", "adaptive"))
+    dt: float = spec(5.0e-4, unit="s", doc="time step (newmark)", gt=0.0)
+    tolerance: float = spec(1.0e-10, unit="m", doc="Newton NormDispIncr tolerance", gt=0.0)
+    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1)
+    rtol: float = spec(1.0e-6, unit="-", doc="relative tolerance (adaptive)", gt=0.0)
+    atol: float = spec(1.0e-9, unit="m", doc="absolute tolerance (adaptive)", gt=0.0)
+    max_step: float = spec(0.01, unit="s", doc="largest step (adaptive)", gt=0.0)
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class NonsmoothSettings:
+    """Settings of the nonsmooth (Moreau-Jean) engine."""
+
+    h: float = spec(1.0e-3, unit="s", doc="time step", gt=0.0)
+    theta: float = spec(0.5, unit="-", doc="theta of the Moreau-Jean scheme", ge=0.5, le=1.0)
+    solver: str = spec("lemke", doc="contact problem solver", choices=("lemke", "enumeration"))
+    tolerance: float = spec(1.0e-10, unit="-", doc="complementarity tolerance", gt=0.0)
+    max_iterations: int = spec(50, doc="Newton iterations per step for the Takeda springs", ge=1)
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Sequence:
+    """The experiment's sequence of runs on one specimen, carrying damage from run to run.
+
+    Start-of-run gap: each seat's gap minus the residual closing displacement of the previous
+    run (deck end relative to the seat face, averaged over the face's two corners), floored at 0.
+    Bent stiffness: k_next = min(k, k0·μ^(−β)) with μ = peak |deformation| / yield deformation
+    of the previous run (the Takeda unloading stiffness at that peak), per bent and direction.
+    """
+
+    pgas: tuple[float, ...] = spec((0.075, 0.15, 0.25, 0.5, 0.75, 1.0, 1.0), unit="g",
+                                   doc="transverse PGA label of each run", gt=0.0)
+    carry_gap: bool = spec(True, doc="start each run from the previous run's residual gap")
+    carry_stiffness: bool = spec(True, doc="degrade bent stiffness by the previous peak")
+
+    def __post_init__(self) -> None:
+        validate(self)
+        if not self.pgas:
+            raise SceneError("pgas", "must hold at least one run")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Scene:
+    """A complete deck-abutment pounding problem; engines take it and return a Result."""
+
+    name: str = spec(doc="scene name")
+    description: str = spec("", doc="free text")
+    deck: Deck = spec(doc="the deck")
+    bents: tuple[Bent, ...] = spec(doc="the bents, left to right")
+    seats: tuple[Seat, ...] = spec(doc="seat 1 (left) and seat 2 (right)")
+    contact: Contact = spec(default_factory=Contact, doc="deck-seat contact")
+    damping: Damping = spec(default_factory=Damping, doc="Rayleigh damping")
+    excitation: Excitation = spec(default_factory=Excitation, doc="support motion")
+    run: RunSettings = spec(default_factory=RunSettings, doc="shared run settings")
+    opensees: OpenSeesSettings = spec(default_factory=OpenSeesSettings, doc="OpenSees engine")
+    compliance: ComplianceSettings = spec(default_factory=ComplianceSettings,
+                                          doc="compliance engine")
+    nonsmooth: NonsmoothSettings = spec(default_factory=NonsmoothSettings,
+                                        doc="nonsmooth engine")
+    sequence: Sequence = spec(default_factory=Sequence, doc="test sequence")
+    notes: dict[str, str] = spec(default_factory=dict,
+                                 doc="source or assumption of each value, keyed by dotted path")
+
+    def __post_init__(self) -> None:
+        validate(self)
+        if not self.bents:
+            raise SceneError("bents", "must hold at least one bent")
+        if len(self.seats) != 2:
+            raise SceneError("seats", f"must hold exactly 2 seats (left, right), got {len(self.seats)}")
+        names = [b.name for b in self.bents]
+        if len(set(names)) != len(names):
+            raise SceneError("bents", f"names must be unique, got {names}")
+        for i, b in enumerate(self.bents):
+            if not 0.0 <= b.station <= self.deck.length:
+                raise SceneError(f"bents[{i}].station",
+                                 f"must lie on the deck, in [0, {self.deck.length}] m, "
+                                 f"got {b.station}")
+        for key in self.notes:
+            _check_path(self, key)
+
+    # -- derived geometry (no engine knowledge) ------------------------------------------
+    @property
+    def bent_x(self) -> tuple[float, ...]:
+        """Bent positions in deck coordinates, x = station − L/2 [m]."""
+        return tuple(b.station - 0.5 * self.deck.length for b in self.bents)
+
+    @property
+    def corners(self) -> tuple[tuple[float, float], ...]:
+        """Corner coordinates (x_c, y_c) [m]: c1 (−L/2, −W/2), c2 (−L/2, W/2), c3 (L/2, −W/2),
+        c4 (L/2, W/2); c1, c2 face seat 1 and c3, c4 face seat 2."""
+        hl, hw = 0.5 * self.deck.length, 0.5 * self.deck.width
+        return ((-hl, -hw), (-hl, hw), (hl, -hw), (hl, hw))
+
+    def replace(self, **changes) -> "Scene":
+        """A copy with top-level fields replaced (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+
+def _check_path(scene: Scene, key: str) -> None:
+    """Check that a notes key names an existing field (``bents[0].x.stiffness``)."""
+    obj = scene
+    for part in key.replace("]", "").split("."):
+        name, _, index = part.partition("[")
+        if not dataclasses.is_dataclass(obj) or name not in {f.name for f in dataclasses.fields(obj)}:
+            raise SceneError(f"notes.{key}", "names no field of the scene")
+        obj = getattr(obj, name)
+        if index:
+            try:
+                obj = obj[int(index)]
+            except (ValueError, IndexError, TypeError):
+                raise SceneError(f"notes.{key}", "names no field of the scene") from None

@@ -1,0 +1,161 @@
+"""Scene files: TOML in and out (exact round trip), built-in scenes, ``--set`` overrides, schema."""
+
+from __future__ import annotations
+
+import copy
+import importlib.resources
+import json
+import math
+import re
+import tomllib
+from pathlib import Path
+from typing import Any, Iterable
+
+import tomli_w
+
+from ._fields import from_mapping, json_schema, to_mapping
+from .errors import SceneError
+from .scene import Scene
+
+_BUILTIN_PACKAGE = "deckpound.models"
+_BUILTIN_DIR = "scenes"
+
+
+def builtin_scene_names() -> list[str]:
+    """Names of the scenes shipped with the package."""
+    folder = importlib.resources.files(_BUILTIN_PACKAGE) / _BUILTIN_DIR
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def builtin_scene_text(name: str) -> str:
+    """The TOML text of a built-in scene (refuses unknown names, listing the valid ones)."""
+    names = builtin_scene_names()
+    if name not in names:
+        raise SceneError("scene", f"unknown scene {name!r}; built-in scenes: {', '.join(names)}")
+    return (importlib.resources.files(_BUILTIN_PACKAGE) / _BUILTIN_DIR / f"{name}.toml").read_text()
+
+
+def _reject_nonfinite(data: Any, path: str = "") -> None:
+    if isinstance(data, float) and not math.isfinite(data):
+        raise SceneError(path, f"must be a finite number, got {data}")
+    if isinstance(data, dict):
+        for k, v in data.items():
+            _reject_nonfinite(v, f"{path}.{k}" if path else str(k))
+    elif isinstance(data, list):
+        for i, v in enumerate(data):
+            _reject_nonfinite(v, f"{path}[{i}]")
+
+
+def scene_from_mapping(data: dict[str, Any]) -> Scene:
+    """Build and validate a scene from a nested mapping."""
+    _reject_nonfinite(data)
+    return from_mapping(Scene, data)
+
+
+def parse_toml(text: str, source: str = "scene") -> dict[str, Any]:
+    """Parse TOML text, turning syntax errors into a one-line SceneError."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(source, f"is not valid TOML: {err}") from None
+
+
+def load_scene_data(ref: str | Path) -> tuple[dict[str, Any], Path | None]:
+    """Raw mapping of a scene given by built-in name or file path, and its folder."""
+    path = Path(ref)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            raise SceneError("scene", f"file {str(path)!r} does not exist")
+        try:
+            text = path.read_text()
+        except (OSError, UnicodeDecodeError) as err:
+            raise SceneError("scene", f"cannot read {str(path)!r}: {err}") from None
+        return parse_toml(text, str(path)), path.resolve().parent
+    return parse_toml(builtin_scene_text(str(ref)), str(ref)), None
+
+
+def load_scene(ref: str | Path, overrides: Iterable[str] = ()) -> Scene:
+    """Load a scene by built-in name or TOML path and apply ``path=value`` overrides.
+
+    Relative record paths in the excitation are resolved against the scene file's folder.
+    """
+    data, folder = load_scene_data(ref)
+    data = apply_overrides(data, overrides)
+    if folder is not None:
+        exc = data.get("excitation")
+        if isinstance(exc, dict):
+            for key in ("file", "file_x", "file_y"):
+                if isinstance(exc.get(key), str) and not Path(exc[key]).is_absolute():
+                    exc[key] = str(folder / exc[key])
+    return scene_from_mapping(data)
+
+
+def scene_to_toml(scene: Scene) -> str:
+    """TOML text of a scene; ``scene_from_toml(scene_to_toml(s)) == s`` exactly."""
+    return tomli_w.dumps(to_mapping(scene))
+
+
+def scene_from_toml(text: str) -> Scene:
+    """Scene from TOML text."""
+    return scene_from_mapping(parse_toml(text))
+
+
+def scene_schema() -> dict[str, Any]:
+    """JSON Schema of the scene file."""
+    schema = json_schema(Scene)
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["title"] = "deckpound scene"
+    return schema
+
+
+def scene_schema_json() -> str:
+    return json.dumps(scene_schema(), indent=2)
+
+
+_SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
+
+
+def _parse_value(text: str) -> Any:
+    """A TOML value (number, bool, string, array), or the bare text as a string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_overrides(data: dict[str, Any], overrides: Iterable[str]) -> dict[str, Any]:
+    """Apply ``dotted.path[index]=value`` overrides to a raw scene mapping (a copy).
+
+    Values are parsed as TOML (``2e6``, ``true``, ``[1, 3]``, ``"text"``); a bare word is a
+    string. Unknown paths are refused when the scene is validated.
+    """
+    data = copy.deepcopy(data)
+    for item in overrides:
+        if "=" not in item:
+            raise SceneError("--set", f"expects PATH=VALUE, got {item!r}")
+        path, raw = item.split("=", 1)
+        path = path.strip()
+        parts = path.split(".")
+        node: Any = data
+        for depth, part in enumerate(parts):
+            m = _SEGMENT.match(part)
+            if not m:
+                raise SceneError("--set", f"malformed path {path!r}")
+            key, idx = m.group(1), [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]
+            last = depth == len(parts) - 1
+            if not isinstance(node, dict):
+                raise SceneError(path, "names no field of the scene")
+            if last and not idx:
+                node[key] = _parse_value(raw.strip())
+                break
+            if key not in node:
+                node[key] = {} if not idx else []
+            node = node[key]
+            for j, i in enumerate(idx):
+                if not isinstance(node, list) or i >= len(node):
+                    raise SceneError(path, f"index {i} is out of range")
+                if last and j == len(idx) - 1:
+                    node[i] = _parse_value(raw.strip())
+                else:
+                    node = node[i]
+    return data
