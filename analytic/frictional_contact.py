@@ -91,7 +91,9 @@ on 3 DOFs.  The face totals sum(P_T), the generalised impulse W P, hence U+
 and all contact velocities, are unique whenever W_N P_N + W_T P_T is
 determined (the case for one deck face on one abutment).  Lemke returns one
 valid vertex solution; do not post-process individual corner tangential
-impulses, use face totals.
+impulses, use face totals.  For contacts with identical tangent columns the
+solver returns the canonical split P_T,i = (sum P_T) mu_i P_N,i /
+sum(mu_j P_N,j), which preserves the cone, the velocities and the totals.
 
 Energy: with U_free = U- and e = 0, or with mu = 0 and U_N- <= 0, the impact
 does not increase the kinetic energy.  With friction and e > 0 Newton's law
@@ -342,6 +344,49 @@ def _evaluate(G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus,
 
 
 @njit(cache=True)
+def _split_shared_tangents(G, mu, P_N, P_T):
+    """Contacts whose tangent columns of W coincide (||W_Ti - W_Tj||^2_M^-1
+    = G_TiTi + G_TjTj - 2 G_TiTj = 0) share one tangential velocity; only
+    the sum of their P_T is determined.  Redistribute the sum in proportion
+    to mu_i P_N,i (cone- and velocity-preserving, deterministic).  Returns
+    True if anything was changed."""
+    nc = P_N.shape[0]
+    group = np.full(nc, -1, dtype=np.int64)
+    changed = False
+    for i in range(nc):
+        if group[i] >= 0 or not mu[i] > 0.0:
+            continue
+        group[i] = i
+        gi = G[nc + i, nc + i]
+        m = 1
+        for j in range(i + 1, nc):
+            if group[j] >= 0 or not mu[j] > 0.0:
+                continue
+            gj = G[nc + j, nc + j]
+            d = gi + gj - 2.0 * G[nc + i, nc + j]
+            if abs(d) <= 1e-12 * (gi + gj):
+                group[j] = i
+                m += 1
+        if m < 2:
+            continue
+        tot = 0.0
+        cap = 0.0
+        for j in range(i, nc):
+            if group[j] == i:
+                tot += P_T[j]
+                pn = P_N[j] if P_N[j] > 0.0 else 0.0
+                cap += mu[j] * pn
+        if not cap > 0.0:
+            continue
+        for j in range(i, nc):
+            if group[j] == i:
+                pn = P_N[j] if P_N[j] > 0.0 else 0.0
+                P_T[j] = tot * (mu[j] * pn / cap)
+        changed = True
+    return changed
+
+
+@njit(cache=True)
 def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
                                 P_N, P_T, uN_plus, uT_plus, state,
                                 mode=0, rtol=1e-9):
@@ -463,6 +508,19 @@ def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
             bN[:] = cN
             bT[:] = cT
             best_status = STATUS_ENUM if r <= tolv else STATUS_FAILED
+
+    # canonical split of tangential impulses among contacts with identical
+    # tangent columns (two corners of one face)
+    if nf > 1:
+        cN[:] = bN
+        cT[:] = bT
+        if _split_shared_tangents(G, mu, cN, cT):
+            comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN,
+                                   cT, vN, vT)
+            if max(comp, cone) <= max(best, tolv):
+                bT[:] = cT
+                best_comp = comp
+                best_cone = cone
 
     # outputs
     for i in range(nc):

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# deckpound bootstrap: sets up everything on a fresh Linux machine, then runs a job.
+#   ./run.sh paper [-o DIR]   the main job on the built-in benchmark
+#   ./run.sh test [ARGS]      the test suite (ARGS go to pytest, e.g. -m slow)
+#   ./run.sh <any deckpound command>
+# Idempotent: a re-run only reinstalls when pyproject.toml changed.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+cd "$here"
+venv="${DECKPOUND_VENV:-$here/.venv}"
+
+# 1. the one system library openseespy needs (Debian/Ubuntu: libblas3)
+if ! ldconfig -p 2>/dev/null | grep -q 'libblas\.so\.3'; then
+  echo "run.sh: installing libblas3 (needed by openseespy)" >&2
+  sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+  $sudo_cmd apt-get update -qq && $sudo_cmd apt-get install -y -qq libblas3 >/dev/null
+fi
+
+# 2. a virtual environment with deckpound installed (editable)
+py="${PYTHON:-python3}"
+"$py" -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else 1)' \
+  || { echo "run.sh: Python >= 3.11 is required ($py is $("$py" -V 2>&1))" >&2; exit 2; }
+[ -x "$venv/bin/python" ] || "$py" -m venv "$venv"
+stamp="$venv/.deckpound-installed"
+want="$(sha256sum pyproject.toml | cut -d' ' -f1)"
+if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
+  "$venv/bin/python" -m pip install -q --upgrade pip >/dev/null
+  "$venv/bin/python" -m pip install -q -e ".[test]"
+  echo "$want" > "$stamp"
+fi
+
+# 3. the job
+cmd="${1:-paper}"; shift || true
+case "$cmd" in
+  test) exec "$venv/bin/python" -m pytest -q -p no:cacheprovider "$@" ;;
+  *)    exec "$venv/bin/deckpound" "$cmd" "$@" ;;
+esac

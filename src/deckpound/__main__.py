@@ -1,0 +1,5 @@
+import sys
+
+from deckpound.cli import main
+
+sys.exit(main())

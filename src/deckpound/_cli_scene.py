@@ -1,0 +1,88 @@
+"""CLI: ``scene list|show|validate|schema`` and ``excitation plot``."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from deckpound.models.errors import SceneError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    from .cli import add_scene_args
+
+    scene = sub.add_parser("scene", help="list, show, validate scenes; print the schema")
+    ssub = scene.add_subparsers(dest="scene_command", metavar="ACTION")
+    ssub.required = True
+    p = ssub.add_parser("list", help="built-in scenes")
+    p.set_defaults(func=_list)
+    p = ssub.add_parser("show", help="print a scene as TOML (edit it and run it)")
+    add_scene_args(p)
+    p.set_defaults(func=_show)
+    p = ssub.add_parser("validate", help="check a scene and its records; exit 2 if bad")
+    add_scene_args(p)
+    p.set_defaults(func=_validate)
+    p = ssub.add_parser("schema", help="JSON Schema of the scene file")
+    p.set_defaults(func=_schema)
+
+    exc = sub.add_parser("excitation", help="support motion of a scene")
+    esub = exc.add_subparsers(dest="excitation_command", metavar="ACTION")
+    esub.required = True
+    p = esub.add_parser("plot", help="plot every support's displacement, velocity, acceleration")
+    add_scene_args(p)
+    p.add_argument("-o", "--output", required=True, metavar="FILE.png")
+    p.set_defaults(func=_plot)
+
+
+def _list(args) -> int:
+    from deckpound.models.scene_io import builtin_scene_names, load_scene
+
+    for name in builtin_scene_names():
+        print(f"{name}\t{load_scene(name).description}")
+    return 0
+
+
+def _show(args) -> int:
+    from deckpound.models.scene_io import load_scene, scene_to_toml
+
+    sys.stdout.write(scene_to_toml(load_scene(args.scene, args.overrides)))
+    return 0
+
+
+def _validate(args) -> int:
+    from deckpound.models.excitation import analysis_duration, support_motion
+    from deckpound.models.mechanics import natural_modes
+    from deckpound.models.scene_io import load_scene
+
+    scene = load_scene(args.scene, args.overrides)
+    motion = support_motion(scene)
+    periods = natural_modes(scene).periods
+    print(f"{scene.name}: valid; {len(scene.bents)} bents, gaps "
+          f"{scene.seats[0].gap:g}/{scene.seats[1].gap:g} m, record {motion.duration:g} s "
+          f"({len(motion.channels)} supports), analysis {analysis_duration(scene, motion):g} s, "
+          f"periods {', '.join(f'{T:.3f}' for T in periods[:3])} s")
+    return 0
+
+
+def _schema(args) -> int:
+    from deckpound.models.scene_io import scene_schema_json
+
+    print(scene_schema_json())
+    return 0
+
+
+def _plot(args) -> int:
+    from deckpound.models.excitation import support_motion
+    from deckpound.models.scene_io import load_scene
+
+    out = Path(args.output)
+    if out.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise SceneError("--output", f"must end in .png, .pdf or .svg, got {str(out)!r}")
+    scene = load_scene(args.scene, args.overrides)
+    motion = support_motion(scene)
+    from deckpound.compare.plotting import plot_excitation
+
+    plot_excitation(scene, motion, out)
+    print(f"wrote {out}")
+    return 0

@@ -1,0 +1,169 @@
+"""Excitation: synthetic generator, CSV and AT2 loaders, resampling (issue 2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from deckpound.models.errors import SceneError
+from deckpound.models.excitation import (G, SupportMotion, load_csv_motion, read_at2,
+                                         support_motion)
+from deckpound.models.mechanics import support_channels
+from deckpound.models.scene_io import load_scene
+
+
+def test_same_seed_same_record_other_seed_other_record():
+    a = support_motion(load_scene("saiidi-4span"))
+    b = support_motion(load_scene("saiidi-4span"))
+    c = support_motion(load_scene("saiidi-4span", ["excitation.seed=7"]))
+    for ch in a.channels:
+        np.testing.assert_array_equal(a.disp[ch], b.disp[ch])
+    assert not np.allclose(a.disp["bent1_y"], c.disp["bent1_y"])
+
+
+@pytest.mark.parametrize("pga", [0.075, 0.5, 1.0])
+def test_pga_exact_biaxial_and_ends_at_rest(pga):
+    m = support_motion(load_scene("saiidi-4span", [f"excitation.pga={pga}"]))
+    assert np.max(np.abs(m.acc("bent1_y"))) / G == pytest.approx(pga, rel=1e-12)
+    assert np.max(np.abs(m.acc("bent1_x"))) / G == pytest.approx(1.2 * pga, rel=1e-12)
+    peak_v = np.max(np.abs(m.vel["bent1_x"]))
+    peak_d = np.max(np.abs(m.disp["bent1_x"]))
+    for ch in m.channels:
+        assert abs(m.disp[ch][-1]) <= 1e-6 * peak_d
+        assert abs(m.vel[ch][-1]) <= 1e-4 * peak_v
+
+
+def test_velocity_is_derivative_of_displacement():
+    m = support_motion(load_scene("saiidi-4span"))
+    d, v = m.disp["bent2_x"], m.vel["bent2_x"]
+    dt = m.t[1] - m.t[0]
+    central = (d[2:] - d[:-2]) / (2 * dt)
+    # central differences err by (w dt)^2/6 ~ 1e-2 for the content of this record
+    assert np.max(np.abs(central - v[1:-1])) < 2e-2 * np.max(np.abs(v))
+
+
+def test_spectrum_is_earthquake_like():
+    """Energy concentrated around the Kanai-Tajimi frequency, little below the high-pass."""
+    m = support_motion(load_scene("saiidi-4span"))
+    a = m.acc("bent1_y")
+    f = np.fft.rfftfreq(len(a), m.t[1])
+    p = np.abs(np.fft.rfft(a)) ** 2
+    band = lambda lo, hi: p[(f >= lo) & (f < hi)].sum() / p.sum()
+    assert band(1.0, 10.0) > 0.7
+    assert band(0.0, 0.3) < 0.01
+    assert 1.5 < f[np.argmax(p)] < 8.0
+
+
+def test_tables_identical_unless_lag_or_incoherence():
+    m = support_motion(load_scene("saiidi-4span"))
+    np.testing.assert_array_equal(m.disp["bent1_y"], m.disp["bent3_y"])
+    np.testing.assert_array_equal(m.disp["seat1_x"], m.disp["bent1_x"])
+    lag = support_motion(load_scene("saiidi-4span", ["excitation.lag=0.1"]))
+    np.testing.assert_array_equal(lag.disp["bent2_y"][20:], lag.disp["bent1_y"][:-20])
+    inc = support_motion(load_scene("saiidi-4span", ["excitation.incoherence=0.3"]))
+    r = np.corrcoef(inc.acc("bent1_y"), inc.acc("bent3_y"))[0, 1]
+    assert 0.3 < r < 0.95
+
+
+def test_resample_exact_on_linear_data():
+    t = np.array([0.0, 0.3, 1.0, 2.0])
+    d = {"a": 2.0 * t + 1.0}
+    m = SupportMotion(t=t, disp=d, vel={"a": np.full(4, 2.0)})
+    r = m.resample(0.01)
+    np.testing.assert_allclose(r.disp["a"], 2.0 * r.t + 1.0, rtol=0, atol=1e-14)
+    assert len(r.t) == 201 and r.t[-1] == pytest.approx(2.0)
+    longer = m.resample(0.5, duration=3.0)
+    assert longer.disp["a"][-1] == d["a"][-1]  # held after the record ends
+
+
+def _write_csv(path, scene, n=50, dt=0.01, drop=None, extra=None, t_override=None):
+    t = np.arange(n) * dt if t_override is None else t_override
+    cols = {"t": t}
+    for i, ch in enumerate(support_channels(scene)):
+        cols[f"{ch}_disp"] = 1e-3 * np.sin(t * (i + 1))
+        cols[f"{ch}_vel"] = 1e-3 * (i + 1) * np.cos(t * (i + 1))
+    if drop:
+        cols.pop(drop)
+    if extra:
+        cols[extra] = t
+    import pandas as pd
+
+    pd.DataFrame(cols).to_csv(path, index=False)
+
+
+def _csv_scene(path, unit="m"):
+    return load_scene("saiidi-4span", ["excitation.kind=csv", f"excitation.file='{path}'",
+                                       f"excitation.disp_unit={unit}"])
+
+
+def test_csv_loader_reads_every_support(tmp_path):
+    p = tmp_path / "rec.csv"
+    scene = _csv_scene(p)
+    _write_csv(p, scene)
+    m = load_csv_motion(scene)
+    assert set(m.channels) == set(support_channels(scene))
+    np.testing.assert_allclose(m.disp["bent1_x"], 1e-3 * np.sin(m.t))
+    mm = load_csv_motion(_csv_scene(p, "mm"))
+    np.testing.assert_allclose(mm.disp["seat2_x"], 1e-3 * m.disp["seat2_x"])
+
+
+@pytest.mark.parametrize("case,match", [
+    (dict(drop="bent2_y_disp"), "support 'bent2_y' has no record"),
+    (dict(extra="bent9_x_disp"), "unknown column 'bent9_x_disp'"),
+    (dict(t_override=np.array([0.0, 0.1, 0.1, 0.2] + [0.3 + 0.1 * i for i in range(46)])),
+     "duplicate"),
+    (dict(t_override=np.array([0.0, 0.2, 0.1] + [0.3 + 0.1 * i for i in range(47)])),
+     "decreasing"),
+])
+def test_csv_refusals(tmp_path, case, match):
+    p = tmp_path / "rec.csv"
+    scene = _csv_scene(p)
+    _write_csv(p, scene, **case)
+    with pytest.raises(SceneError, match=match):
+        load_csv_motion(scene)
+
+
+def test_csv_mismatched_length_refused(tmp_path):
+    p = tmp_path / "rec.csv"
+    scene = _csv_scene(p)
+    _write_csv(p, scene)
+    lines = p.read_text().splitlines()
+    lines[-1] = ",".join(lines[-1].split(",")[:5])  # a short last row
+    p.write_text("\n".join(lines) + "\n")
+    with pytest.raises(SceneError, match="missing or not finite"):
+        load_csv_motion(scene)
+
+
+AT2_HEADER = """PEER NGA STRONG MOTION DATABASE RECORD
+Northridge-01, 1/17/1994, LA - Century City CC North, 090
+ACCELERATION TIME SERIES IN UNITS OF G
+NPTS=   {n}, DT=   .0100 SEC
+"""
+
+
+def _write_at2(path, acc, n=None):
+    body = "\n".join("  ".join(f"{v: .7E}" for v in acc[i:i + 5]) for i in range(0, len(acc), 5))
+    path.write_text(AT2_HEADER.format(n=len(acc) if n is None else n) + body + "\n")
+
+
+def test_at2_loader_and_baseline_correction(tmp_path):
+    t = np.arange(1000) * 0.01
+    acc = 0.3 * np.sin(2 * np.pi * 2.0 * t) * np.exp(-((t - 4) / 2) ** 2)
+    px, py = tmp_path / "x.at2", tmp_path / "y.at2"
+    _write_at2(px, acc)
+    _write_at2(py, 0.5 * acc)
+    dt, values = read_at2(px)
+    assert dt == 0.01 and len(values) == 1000
+    np.testing.assert_allclose(values, acc, rtol=1e-7, atol=1e-12)
+    scene = load_scene("saiidi-4span", ["excitation.kind=at2", f"excitation.file_x='{px}'",
+                                        f"excitation.file_y='{py}'"])
+    m = support_motion(scene)
+    assert abs(m.disp["bent1_x"][-1]) < 1e-12 and abs(m.vel["bent1_x"][-1]) < 1e-6 * np.abs(m.vel["bent1_x"]).max()
+    assert np.max(np.abs(m.acc("bent1_x"))) / G == pytest.approx(0.3, rel=0.05)
+
+
+def test_at2_count_mismatch_refused(tmp_path):
+    p = tmp_path / "x.at2"
+    _write_at2(p, np.zeros(20), n=25)
+    with pytest.raises(SceneError, match="NPTS=25 but the file holds 20"):
+        read_at2(p)

@@ -1,0 +1,54 @@
+"""Common result: columns, units, atomic files, round trip (issue 2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from deckpound.models.result import Result, column_unit, scene_hash, standard_columns
+
+
+def _result():
+    cols = standard_columns(["bent1", "bent2", "bent3"])
+    n = 11
+    data = {c: np.linspace(0, 1, n) * (i + 1) / 3.0 for i, c in enumerate(cols)}
+    return Result(engine="compliance", columns=data, meta={"steps": 10, "wall_time": 0.5})
+
+
+def test_standard_columns_and_units():
+    cols = standard_columns(["bent1"])
+    assert cols[:8] == ["t", "deck_x", "deck_y", "deck_theta", "seat1_x", "seat1_theta",
+                        "seat2_x", "seat2_theta"]
+    assert "gap_c4" in cols and "fn_c1" in cols and "ft_c3" in cols and "bent1_fy" in cols
+    assert column_unit("deck_theta") == "rad" and column_unit("fn_c2") == "kN"
+    assert column_unit("gap_c1") == "m" and column_unit("bent1_fx") == "kN"
+
+
+def test_write_read_round_trip(tmp_path):
+    r = _result()
+    csv_path, json_path = r.write(tmp_path)
+    assert csv_path.name == "compliance.csv" and json_path.name == "compliance.json"
+    back = Result.read(tmp_path, "compliance")
+    for k in r.columns:
+        np.testing.assert_array_equal(back[k], r[k])
+    assert back.meta["units"]["deck_theta"] == "rad" and back.meta["steps"] == 10
+    assert not list(tmp_path.glob(".*part"))
+
+
+def test_interrupted_write_leaves_no_partial_file(tmp_path, monkeypatch):
+    r = _result()
+    import os
+
+    def boom(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "replace", boom)
+    with pytest.raises(KeyboardInterrupt):
+        r.write(tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_scene_hash_changes_with_any_field(bench_scene):
+    other = bench_scene.replace(description="x")
+    assert scene_hash(bench_scene) == scene_hash(bench_scene.replace())
+    assert scene_hash(bench_scene) != scene_hash(other)
