@@ -46,11 +46,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _run(args) -> int:
     from deckpound.models.scene_io import load_scene
 
-    from .engines import get_engine
+    from .engines import get_engine, run_engine
 
-    engine = get_engine(args.engine)
+    get_engine(args.engine)  # refuse an unknown name before any work
     scene = load_scene(args.scene, args.overrides)
-    result = engine(scene)
+    result = run_engine(args.engine, scene)
     csv_path, _ = result.write(args.output)
     m = result.meta
     print(f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "

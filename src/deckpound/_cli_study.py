@@ -1,9 +1,147 @@
-"""CLI: comparison, studies, the paper job, benchmarks (registered as they are built)."""
+"""CLI: ``compare``, ``study``, ``paper`` and ``export-vtk``."""
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
+
+from deckpound.models.errors import SceneError
+
+
+def _parallel_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--workers", type=int, default=None,
+                   help="local worker processes (default: one per core)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run cases on a Dask distributed cluster, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--cache", default=None, metavar="DIR",
+                   help="result cache (default: OUT/cache); finished cases are never recomputed")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    return None
+    from .cli import add_scene_args
+
+    p = sub.add_parser("compare", help="run engines on one scene, align, compare, plot")
+    add_scene_args(p)
+    p.add_argument("--engines", default="opensees,compliance,nonsmooth",
+                   help="comma-separated engine names")
+    p.add_argument("--measured", default=None, metavar="CSV",
+                   help="measured data (t + result column names) to compare against")
+    p.add_argument("-o", "--output", required=True, metavar="DIR")
+    _parallel_args(p)
+    p.set_defaults(func=_compare)
+
+    p = sub.add_parser("study", help="a sensitivity study: table + figure")
+    p.add_argument("name", metavar="NAME", help="stiffness, friction, sticking, law, geometry, "
+                   "opensees-mode or sequence")
+    add_scene_args(p)
+    p.add_argument("-o", "--output", default=None, metavar="DIR",
+                   help="output folder (default: study-NAME)")
+    p.add_argument("--quick", action="store_true", help="fewer cases")
+    _parallel_args(p)
+    p.set_defaults(func=_study)
+
+    p = sub.add_parser("paper", help="the main job: sequence x 3 engines + studies + report")
+    p.add_argument("--scene", default="saiidi-4span", help="scene (default: the benchmark)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE")
+    p.add_argument("-o", "--output", default="deckpound-report", metavar="DIR")
+    p.add_argument("--quick", action="store_true", help="fewer study cases")
+    p.add_argument("--studies", default=None,
+                   help="comma-separated subset of studies (default: all)")
+    _parallel_args(p)
+    p.set_defaults(func=_paper)
+
+    p = sub.add_parser("export-vtk", help="deck and seat outlines over time for ParaView")
+    p.add_argument("result_dir", metavar="RESULT_DIR")
+    p.add_argument("-o", "--output", required=True, metavar="DIR")
+    p.add_argument("--every", type=int, default=1, help="write every N-th output sample")
+    p.set_defaults(func=_export_vtk)
+
+
+def _engines(text: str) -> list[str]:
+    from .engines import ENGINES
+
+    names = [e.strip() for e in text.split(",") if e.strip()]
+    for e in names:
+        if e not in ENGINES:
+            raise SceneError("--engines", f"unknown engine {e!r}; valid engines: {', '.join(ENGINES)}")
+    if not names:
+        raise SceneError("--engines", "names no engine")
+    return names
+
+
+def _compare(args) -> int:
+    from deckpound.compare.compare_run import run_compare
+    from deckpound.models.scene_io import load_scene
+
+    scene = load_scene(args.scene, args.overrides)
+    engines = _engines(args.engines)
+    measured = None
+    if args.measured:
+        from deckpound.compare.metrics import measured_result
+
+        measured = measured_result(args.measured)
+    summary = run_compare(scene, engines, args.output, measured=measured, workers=args.workers,
+                          scheduler=args.scheduler, cache_dir=args.cache,
+                          progress=not args.no_progress)
+    print(summary)
+    return 0
+
+
+def _study(args) -> int:
+    from deckpound.compare.cases import ResultCache
+    from deckpound.compare.studies import STUDY_NAMES, run_study
+    from deckpound.models.scene_io import load_scene
+
+    if args.name not in STUDY_NAMES:
+        raise SceneError("study", f"unknown study {args.name!r}; valid studies: {', '.join(STUDY_NAMES)}")
+    scene = load_scene(args.scene, args.overrides)
+    out = Path(args.output or f"study-{args.name}")
+    cache_dir = Path(args.cache) if args.cache else out / "cache"
+    if args.name == "sequence":
+        from deckpound.compare import figures
+        from deckpound.compare.paper import ENGINES, sequence_table
+        from deckpound.compare.sequence_run import run_sequences
+
+        seqs = run_sequences(scene, list(ENGINES), cache_dir, args.workers, args.scheduler,
+                             not args.no_progress)
+        table = sequence_table(seqs)
+        out.mkdir(parents=True, exist_ok=True)
+        table.to_csv(out / "sequence.csv", index=False)
+        figures.peak_vs_pga(table, scene, out / "sequence.png")
+    else:
+        table, _ = run_study(args.name, scene, out, quick=args.quick,
+                             cache=ResultCache(cache_dir), workers=args.workers,
+                             scheduler=args.scheduler, progress=not args.no_progress)
+    cols = [c for c in ("label", "engine", "run", "pga", "peak_theta", "peak_y", "contact_events",
+                        "wall_time", "status") if c in table]
+    print(table[cols].to_string(index=False))
+    print(f"wrote {out}")
+    return 0
+
+
+def _paper(args) -> int:
+    from deckpound.compare.paper import run_paper
+    from deckpound.compare.studies import STUDIES
+    from deckpound.models.scene_io import load_scene
+
+    scene = load_scene(args.scene, args.overrides)
+    studies = None
+    if args.studies:
+        studies = tuple(s.strip() for s in args.studies.split(",") if s.strip())
+        for s in studies:
+            if s not in STUDIES:
+                raise SceneError("--studies", f"unknown study {s!r}; valid: {', '.join(STUDIES)}")
+    report = run_paper(scene, args.output, quick=args.quick, workers=args.workers,
+                       scheduler=args.scheduler, cache_dir=args.cache, studies=studies,
+                       progress=not args.no_progress)
+    print(f"wrote {report} and {report.with_suffix('.html')}")
+    return 0
+
+
+def _export_vtk(args) -> int:
+    from deckpound.compare.vtk import export_vtk
+
+    for p in export_vtk(args.result_dir, args.output, args.every):
+        print(f"wrote {p}")
+    return 0

@@ -47,3 +47,13 @@ def get_engine(name: str) -> Callable:
 def output_stride(dt: float, output_dt: float) -> int:
     """Steps between stored outputs: round(output_dt / dt), at least 1."""
     return max(1, int(round(output_dt / dt)))
+
+
+def run_engine(name: str, scene, motion=None, **kwargs):
+    """Run engine ``name`` on ``scene`` and attach the full scene to the result's metadata
+    (so a result folder is self-describing: VTK export and re-runs need nothing else)."""
+    from deckpound.models._fields import to_mapping
+
+    result = get_engine(name)(scene, motion, **kwargs)
+    result.meta["scene"] = to_mapping(scene)
+    return result

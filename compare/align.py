@@ -1,0 +1,131 @@
+"""Put results of different engines on one time base.
+
+Rules
+-----
+* Common base: t_k = k·dt from 0 to the earliest end time among the results; dt defaults to
+  the finest output step among them.
+* Kinematic columns (displacements, rotations, gaps, spring forces): linear interpolation
+  when the base is at least as fine as the source. When the base is coarser, each base sample takes the source sample of
+  largest magnitude in its bin [t_k − dt/2, t_k + dt/2): the series keeps its peaks exactly
+  instead of interpolating them away.
+* Contact forces (``fn_*``, ``ft_*``): averaged over each bin so that the impulse ∫λ dt is
+  conserved (the source is integrated as a piecewise-linear signal, the bin average is the
+  integral over the bin divided by its length). Impulse columns (``pn_*``, ``pt_*``: impulse
+  per output interval of the nonsmooth engine) are summed into bins.
+
+Tables: :func:`long_table` (engine, t, quantity, value) and :func:`wide_tables`
+(one frame per engine), written by :func:`write_tables` as Parquet and CSV.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from deckpound.models.result import Result
+
+FORCE_PREFIXES = ("fn_", "ft_")
+IMPULSE_PREFIXES = ("pn_", "pt_")
+
+
+def common_time_base(results: dict[str, Result], dt: float | None = None) -> np.ndarray:
+    """t_k = k·dt, k = 0.., up to the earliest end time of the results [s]."""
+    if not results:
+        raise ValueError("no results to align")
+    steps = [float(np.median(np.diff(r.t))) for r in results.values() if len(r.t) > 1]
+    dt = dt if dt is not None else min(steps)
+    end = min(r.t[-1] for r in results.values())
+    n = int(np.floor(end / dt + 1e-9))
+    return np.arange(n + 1) * dt
+
+
+def _cumulative_integral(t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    return np.concatenate([[0.0], np.cumsum(0.5 * (x[1:] + x[:-1]) * np.diff(t))])
+
+
+def bin_average(t_src: np.ndarray, x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Average of a piecewise-linear signal over bins centred on t (impulse-conserving)."""
+    dt = t[1] - t[0] if len(t) > 1 else 1.0
+    edges = np.concatenate([[t[0] - 0.5 * dt], 0.5 * (t[1:] + t[:-1]), [t[-1] + 0.5 * dt]])
+    edges = np.clip(edges, t_src[0], t_src[-1])
+    F = _cumulative_integral(t_src, x)
+    I = np.interp(edges, t_src, F)
+    width = np.diff(edges)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        avg = np.where(width > 0, np.diff(I) / np.where(width > 0, width, 1.0), 0.0)
+    return avg
+
+
+def bin_sum(t_src: np.ndarray, x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Sum of samples falling in each bin centred on t (for impulses per interval)."""
+    dt = t[1] - t[0] if len(t) > 1 else 1.0
+    idx = np.floor((t_src - t[0]) / dt + 0.5).astype(int)
+    keep = (idx >= 0) & (idx < len(t))
+    return np.bincount(idx[keep], weights=x[keep], minlength=len(t))[: len(t)]
+
+
+def peak_preserving(t_src: np.ndarray, x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Linear interpolation, or largest-magnitude sample per bin when t is coarser."""
+    src_dt = float(np.median(np.diff(t_src))) if len(t_src) > 1 else 0.0
+    dt = t[1] - t[0] if len(t) > 1 else 0.0
+    if dt <= src_dt * (1 + 1e-9):
+        return np.interp(t, t_src, x)
+    idx = np.floor((t_src - t[0]) / dt + 0.5).astype(int)
+    out = np.interp(t, t_src, x)
+    keep = (idx >= 0) & (idx < len(t))
+    order = np.argsort(np.abs(x[keep]), kind="stable")  # later (larger) writes win
+    out[idx[keep][order]] = x[keep][order]
+    return out
+
+
+def align_column(name: str, t_src: np.ndarray, x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    if name.startswith(FORCE_PREFIXES):
+        return bin_average(t_src, x, t)
+    if name.startswith(IMPULSE_PREFIXES):
+        return bin_sum(t_src, x, t)
+    return peak_preserving(t_src, x, t)
+
+
+def align(results: dict[str, Result], dt: float | None = None,
+          columns: list[str] | None = None) -> dict[str, pd.DataFrame]:
+    """Wide frames (one per engine/label) on the common time base."""
+    t = common_time_base(results, dt)
+    if columns is None:
+        sets = [set(r.columns) - {"t"} for r in results.values()]
+        first = [c for c in next(iter(results.values())).columns if c != "t"]
+        columns = [c for c in first if all(c in s for s in sets)]
+    out = {}
+    for label, r in results.items():
+        data = {"t": t}
+        for c in columns:
+            data[c] = align_column(c, r.t, r[c], t)
+        out[label] = pd.DataFrame(data)
+    return out
+
+
+def long_table(aligned: dict[str, pd.DataFrame]) -> pd.DataFrame:
+    """(engine, t, quantity, value) rows from aligned wide frames."""
+    parts = []
+    for label, frame in aligned.items():
+        m = frame.melt(id_vars="t", var_name="quantity", value_name="value")
+        m.insert(0, "engine", label)
+        parts.append(m)
+    return pd.concat(parts, ignore_index=True)
+
+
+def write_tables(aligned: dict[str, pd.DataFrame], folder: str | Path) -> list[Path]:
+    """aligned_long.{parquet,csv} and aligned_<engine>.{parquet,csv} in ``folder``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    frames = {"aligned_long": long_table(aligned)}
+    frames.update({f"aligned_{k}": v for k, v in aligned.items()})
+    for name, frame in frames.items():
+        for suffix, writer in ((".parquet", frame.to_parquet), (".csv", frame.to_csv)):
+            p = folder / f"{name}{suffix}"
+            kwargs = {"index": False}
+            writer(p, **kwargs)
+            written.append(p)
+    return written

@@ -1,0 +1,169 @@
+"""Cases (engine + fully resolved scene), their cache, and the parallel runner.
+
+Every finished case is stored under the SHA-256 of its full description (engine name, the
+whole scene, deckpound version), so an interrupted study resumes without recomputing and a
+repeated one returns at once. Cases run in parallel on local processes (default: one per
+core) or on a Dask distributed cluster (``scheduler="tcp://host:port"``), with a progress bar
+on stderr.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+from deckpound import __version__
+from deckpound.models._fields import to_mapping
+from deckpound.models.result import Result
+from deckpound.models.scene import Scene
+
+
+@dataclass(frozen=True)
+class Case:
+    """One engine run of one scene, with the parameter values that define it in a study."""
+
+    label: str
+    engine: str
+    scene: Scene
+    params: dict[str, Any] = field(default_factory=dict, compare=False, hash=False)
+
+    @property
+    def key(self) -> str:
+        return case_key(self.engine, self.scene)
+
+
+def case_key(engine: str, scene: Scene) -> str:
+    """SHA-256 of engine, full scene and version: the cache key."""
+    text = json.dumps({"engine": engine, "scene": to_mapping(scene), "version": __version__},
+                      sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class ResultCache:
+    """A folder of finished results, one sub-folder per case key (written atomically)."""
+
+    def __init__(self, folder: str | Path):
+        self.folder = Path(folder)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.hits = 0
+        self.misses = 0
+
+    def path(self, key: str) -> Path:
+        return self.folder / key
+
+    def get(self, key: str, engine: str) -> Result | None:
+        p = self.path(key)
+        if (p / f"{engine}.json").is_file() and (p / f"{engine}.csv").is_file():
+            self.hits += 1
+            return Result.read(p, engine)
+        self.misses += 1
+        return None
+
+    def put(self, key: str, result: Result) -> None:
+        """Write into a temporary folder, then rename it into place (never half a case)."""
+        tmp = Path(tempfile.mkdtemp(dir=self.folder, prefix=f".{key[:12]}."))
+        try:
+            result.write(tmp)
+            final = self.path(key)
+            if final.exists():
+                shutil.rmtree(final)
+            os.replace(tmp, final)
+        finally:
+            if tmp.exists():
+                shutil.rmtree(tmp, ignore_errors=True)
+
+
+def run_case(engine: str, scene: Scene) -> Result:
+    """Run one case in this process (the worker function; picklable arguments)."""
+    import warnings
+
+    from deckpound.engines import run_engine
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return run_engine(engine, scene)
+
+
+class Progress:
+    """A one-line text progress bar on stderr (silent when ``enabled`` is False)."""
+
+    def __init__(self, total: int, title: str, enabled: bool = True):
+        self.total, self.done, self.title = total, 0, title
+        self.enabled = enabled and total > 0
+        self.t0 = time.perf_counter()
+        self._draw()
+
+    def advance(self, n: int = 1) -> None:
+        self.done += n
+        self._draw()
+
+    def _draw(self) -> None:
+        if not self.enabled:
+            return
+        width = 30
+        fill = int(width * self.done / max(self.total, 1))
+        elapsed = time.perf_counter() - self.t0
+        sys.stderr.write(f"\r{self.title} [{'#' * fill}{'.' * (width - fill)}] "
+                         f"{self.done}/{self.total} {elapsed:6.1f} s")
+        if self.done >= self.total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+
+def run_cases(cases: Iterable[Case], *, cache: ResultCache | None = None,
+              workers: int | None = None, scheduler: str | None = None,
+              progress: bool = True, title: str = "cases") -> dict[str, Result]:
+    """Run cases (cached ones are loaded), in parallel; results keyed by case label."""
+    cases = list(cases)
+    results: dict[str, Result] = {}
+    todo = []
+    for c in cases:
+        hit = cache.get(c.key, c.engine) if cache is not None else None
+        if hit is not None:
+            results[c.label] = hit
+        else:
+            todo.append(c)
+    bar = Progress(len(cases), title, progress)
+    bar.advance(len(cases) - len(todo))
+
+    def finish(case: Case, result: Result) -> None:
+        if cache is not None and result.ok:
+            cache.put(case.key, result)
+        results[case.label] = result
+        bar.advance()
+
+    _map_parallel(todo, lambda c: (c.engine, c.scene), run_case, finish, workers, scheduler)
+    return {c.label: results[c.label] for c in cases}
+
+
+def _map_parallel(items: list, args_of: Callable, func: Callable, on_done: Callable,
+                  workers: int | None, scheduler: str | None) -> None:
+    """Apply func(*args_of(item)) to items on Dask, a process pool, or in this process."""
+    if not items:
+        return
+    if scheduler:
+        from dask.distributed import Client, as_completed as dask_completed
+
+        with Client(scheduler) as client:
+            futures = {client.submit(func, *args_of(it), pure=False): it for it in items}
+            for fut in dask_completed(futures):
+                on_done(futures[fut], fut.result())
+        return
+    n = workers if workers is not None else (os.cpu_count() or 1)
+    if n <= 1 or len(items) == 1:
+        for it in items:
+            on_done(it, func(*args_of(it)))
+        return
+    with ProcessPoolExecutor(max_workers=min(n, len(items))) as pool:
+        futures = {pool.submit(func, *args_of(it)): it for it in items}
+        for fut in as_completed(futures):
+            on_done(futures[fut], fut.result())

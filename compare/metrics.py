@@ -1,0 +1,109 @@
+"""Comparison metrics between two time series (engine vs reference, or vs measured data).
+
+For a quantity x (test) and r (reference) on one time base t:
+
+* peak            P(x) = max |x|; ``peak_ratio`` = P(x) / P(r)
+* time of peak    t at which |x| is largest
+* NRMSE           √(mean((x − r)²)) / P(r)          (normalised by the reference peak)
+* correlation     Pearson ρ(x, r) (NaN when either is constant)
+* residual        mean of x over the last 2 % of the record (permanent offset)
+* contact events  number of closures of a gap: samples where g goes from > 0 to ≤ 0, and
+  their times
+
+Peaks and times are taken on each engine's own (native) output, so alignment cannot blunt them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from deckpound.models.result import Result
+
+
+def peak(x: np.ndarray) -> float:
+    return float(np.max(np.abs(x))) if len(x) else float("nan")
+
+
+def time_of_peak(t: np.ndarray, x: np.ndarray) -> float:
+    return float(t[int(np.argmax(np.abs(x)))])
+
+
+def nrmse(x: np.ndarray, r: np.ndarray) -> float:
+    p = peak(r)
+    return float(np.sqrt(np.mean((x - r) ** 2)) / p) if p > 0 else float("nan")
+
+
+def correlation(x: np.ndarray, r: np.ndarray) -> float:
+    if np.std(x) == 0 or np.std(r) == 0:
+        return float("nan")
+    return float(np.corrcoef(x, r)[0, 1])
+
+
+def residual(x: np.ndarray, frac: float = 0.02) -> float:
+    n = max(1, int(frac * len(x)))
+    return float(np.mean(x[-n:]))
+
+
+def closure_times(t: np.ndarray, gap: np.ndarray) -> np.ndarray:
+    """Times at which a gap closes (goes from > 0 to ≤ 0)."""
+    closing = (gap[1:] <= 0.0) & (gap[:-1] > 0.0)
+    return t[1:][closing]
+
+
+def contact_events(result: Result) -> dict[str, list[float]]:
+    """Closure times per corner."""
+    return {f"c{c}": closure_times(result.t, result[f"gap_c{c}"]).tolist() for c in range(1, 5)
+            if f"gap_c{c}" in result.columns}
+
+
+def summary(result: Result, quantities: list[str]) -> dict[str, float]:
+    """Peak, time of peak and residual of quantities on a result's native output."""
+    out = {}
+    for q in quantities:
+        out[f"peak_{q}"] = peak(result[q])
+        out[f"tpeak_{q}"] = time_of_peak(result.t, result[q])
+        out[f"residual_{q}"] = residual(result[q])
+    ev = contact_events(result)
+    out["contact_events"] = sum(len(v) for v in ev.values())
+    return out
+
+
+def compare_pair(test: Result, ref: Result, aligned_test: pd.DataFrame,
+                 aligned_ref: pd.DataFrame, quantities: list[str]) -> pd.DataFrame:
+    """One row per quantity: peaks, peak ratio, peak times, NRMSE, correlation, residuals."""
+    rows = []
+    for q in quantities:
+        x, r = aligned_test[q].to_numpy(), aligned_ref[q].to_numpy()
+        px, pr = peak(test[q]), peak(ref[q])
+        rows.append({
+            "quantity": q, "peak": px, "peak_ref": pr,
+            "peak_ratio": px / pr if pr > 0 else float("nan"),
+            "t_peak": time_of_peak(test.t, test[q]), "t_peak_ref": time_of_peak(ref.t, ref[q]),
+            "nrmse": nrmse(x, r), "correlation": correlation(x, r),
+            "residual": residual(test[q]), "residual_ref": residual(ref[q]),
+        })
+    return pd.DataFrame(rows)
+
+
+def measured_result(path, t_column: str = "t") -> Result:
+    """Measured data a user supplies as CSV (columns named as result columns) as a Result."""
+    from deckpound.models.errors import SceneError
+    from deckpound.models.excitation import check_time_base
+
+    try:
+        frame = pd.read_csv(path)
+    except Exception as err:
+        raise SceneError("--measured", f"cannot read CSV {str(path)!r}: {str(err).splitlines()[0]}") from None
+    if t_column not in frame:
+        raise SceneError("--measured", f"{str(path)!r} has no {t_column!r} column")
+    try:
+        cols = {c: frame[c].to_numpy(dtype=float) for c in frame.columns}
+    except ValueError as err:
+        raise SceneError("--measured", f"{str(path)!r}: non-numeric value ({err})") from None
+    for c, v in cols.items():
+        if not np.all(np.isfinite(v)):
+            raise SceneError("--measured", f"{str(path)!r}: column {c!r} has missing or non-finite values")
+    check_time_base(cols[t_column], "--measured")
+    cols["t"] = cols.pop(t_column)
+    return Result(engine="measured", columns=cols, meta={"source": str(path)})

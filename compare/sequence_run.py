@@ -1,0 +1,67 @@
+"""Run the experiment's test sequence with an engine, carrying gap and stiffness between runs.
+
+The carry rule lives in :mod:`deckpound.models.sequence`; this module only drives engines
+through it. Runs of one engine are sequential (each needs the previous result); different
+engines run in parallel. Every run is cached under its full description.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from deckpound.models.excitation import support_motion
+from deckpound.models.result import Result
+from deckpound.models.scene import Scene
+from deckpound.models.sequence import (SpecimenState, initial_state, next_state,
+                                       scene_for_run)
+
+from .cases import Progress, ResultCache, _map_parallel, case_key, run_case
+
+
+@dataclass
+class SequenceRun:
+    """One run of a sequence: its PGA label, the state it started from, its scene and result."""
+
+    index: int
+    pga: float
+    state: SpecimenState
+    scene: Scene
+    result: Result
+
+
+def run_sequence(scene: Scene, engine: str, cache_folder: str | Path | None = None,
+                 start: SpecimenState | None = None) -> list[SequenceRun]:
+    """All runs of ``scene.sequence`` with one engine; stops after a failed run."""
+    cache = ResultCache(cache_folder) if cache_folder is not None else None
+    state = start if start is not None else initial_state(scene)
+    runs = []
+    for i, pga in enumerate(scene.sequence.pgas):
+        run_scene = scene_for_run(scene, pga, state)
+        key = case_key(engine, run_scene)
+        result = cache.get(key, engine) if cache is not None else None
+        if result is None:
+            result = run_case(engine, run_scene)
+            if cache is not None and result.ok:
+                cache.put(key, result)
+        runs.append(SequenceRun(i + 1, pga, state, run_scene, result))
+        if not result.ok:
+            break
+        state = next_state(scene, state, run_scene, result, support_motion(run_scene))
+    return runs
+
+
+def run_sequences(scene: Scene, engines: list[str], cache_folder: str | Path | None = None,
+                  workers: int | None = None, scheduler: str | None = None,
+                  progress: bool = True) -> dict[str, list[SequenceRun]]:
+    """The sequence for several engines, one engine per worker."""
+    out: dict[str, list[SequenceRun]] = {}
+    bar = Progress(len(engines), "sequence", progress)
+
+    def done(engine, runs):
+        out[engine] = runs
+        bar.advance()
+
+    _map_parallel(engines, lambda e: (scene, e, cache_folder), run_sequence, done, workers,
+                  scheduler)
+    return {e: out[e] for e in engines}
