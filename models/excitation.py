@@ -333,11 +333,37 @@ def load_at2_motion(scene: Scene) -> SupportMotion:
     return SupportMotion(t=t, disp=disp, vel=vel)
 
 
+def pulse_motion(scene: Scene) -> SupportMotion:
+    """One longitudinal displacement pulse at every support (see Excitation, kind = pulse).
+
+    d = D (1 − cos ωt)/2, v = D ω sin(ωt)/2, a = D ω² cos(ωt)/2 for t ≤ T (ω = 2π/T), rest
+    afterwards; D = 2 a_max / ω² with a_max = pga · longitudinal_ratio · g. Starts and ends at
+    rest (the acceleration jumps at t = 0 and T, as an actuator command may).
+    """
+    exc = scene.excitation
+    n = int(round(exc.duration / exc.dt)) + 1
+    t = np.arange(n) * exc.dt
+    w = 2.0 * np.pi / exc.pulse_period
+    D = 2.0 * exc.pga * exc.longitudinal_ratio * G / w ** 2
+    on = t <= exc.pulse_period
+    d = np.where(on, 0.5 * D * (1.0 - np.cos(w * t)), 0.0)
+    v = np.where(on, 0.5 * D * w * np.sin(w * t), 0.0)
+    a = np.where(on, 0.5 * D * w * w * np.cos(w * t), 0.0)
+    zero = np.zeros(n)
+    disp, vel, acc = {}, {}, {}
+    for ch in support_channels(scene):
+        x = ch.endswith("_x")
+        disp[ch], vel[ch], acc[ch] = (d, v, a) if x else (zero, zero, zero)
+    return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc)
+
+
 def support_motion(scene: Scene) -> SupportMotion:
     """The scene's support motion, whatever its source."""
     kind = scene.excitation.kind
     if kind == "synthetic":
         return synthetic_motion(scene)
+    if kind == "pulse":
+        return pulse_motion(scene)
     if kind == "csv":
         return load_csv_motion(scene)
     return load_at2_motion(scene)

@@ -174,10 +174,14 @@ class Excitation:
     kind = csv: ``file`` with ``time_column`` and, per support channel, ``<channel>_disp`` and
     optionally ``<channel>_vel`` (channels bent1_x, bent1_y, ..., seat1_x, seat2_x);
     kind = at2: PEER AT2 acceleration records ``file_x`` and ``file_y`` (g), integrated with
-    baseline correction, applied at every table; the actuators follow the x motion.
+    baseline correction, applied at every table; the actuators follow the x motion;
+    kind = pulse: one longitudinal displacement pulse d = D(1 − cos 2πt/T)/2 for t ≤ T
+    (``pulse_period`` T), max acceleration pga · longitudinal_ratio, no transverse motion —
+    the canonical single-impact input.
     """
 
-    kind: str = spec("synthetic", doc="record source", choices=("synthetic", "csv", "at2"))
+    kind: str = spec("synthetic", doc="record source",
+                     choices=("synthetic", "csv", "at2", "pulse"))
     pga: float = spec(0.5, unit="g", doc="transverse peak ground acceleration (run label)",
                       gt=0.0, le=5.0)
     longitudinal_ratio: float = spec(1.2, unit="-", doc="longitudinal PGA / transverse PGA",
@@ -201,6 +205,7 @@ class Excitation:
     file_x: str | None = spec(None, doc="AT2 record for x (kind = at2)")
     file_y: str | None = spec(None, doc="AT2 record for y (kind = at2)")
     scale: float = spec(1.0, unit="-", doc="factor applied to loaded records", gt=0.0)
+    pulse_period: float = spec(0.5, unit="s", doc="period of the pulse (kind = pulse)", gt=0.0)
 
     def __post_init__(self) -> None:
         validate(self)

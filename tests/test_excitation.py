@@ -167,3 +167,13 @@ def test_at2_count_mismatch_refused(tmp_path):
     _write_at2(p, np.zeros(20), n=25)
     with pytest.raises(SceneError, match="NPTS=25 but the file holds 20"):
         read_at2(p)
+
+
+def test_pulse_is_one_longitudinal_cycle_at_rest_after():
+    s = load_scene("saiidi-4span", ["excitation.kind=pulse", "excitation.pga=0.5",
+                                    "excitation.duration=2", "excitation.pulse_period=0.4"])
+    m = support_motion(s)
+    assert np.max(np.abs(m.acc("bent2_x"))) / G == pytest.approx(0.6, rel=1e-12)
+    assert np.all(m.disp["bent2_y"] == 0) and m.disp["seat1_x"][-1] == 0.0
+    w = 2 * np.pi / 0.4
+    assert m.disp["bent1_x"].max() == pytest.approx(2 * 0.6 * G / w**2, rel=1e-3)
