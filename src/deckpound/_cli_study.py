@@ -51,6 +51,23 @@ def register(sub: argparse._SubParsersAction) -> None:
     _parallel_args(p)
     p.set_defaults(func=_paper)
 
+    p = sub.add_parser("bench", help="work-precision benchmark: wall time vs error, every engine")
+    p.add_argument("--scene", default="saiidi-4span")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE")
+    p.add_argument("-o", "--output", default="deckpound-bench", metavar="DIR")
+    p.add_argument("--quick", action="store_true", help="fewer configurations, shorter records")
+    p.add_argument("--repeats", type=int, default=None, help="runs per configuration (median)")
+    p.set_defaults(func=_bench)
+
+    p = sub.add_parser("stress", help="stability stress test over hard settings, every engine")
+    p.add_argument("--scene", default="saiidi-4span")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE")
+    p.add_argument("-o", "--output", default="deckpound-stress", metavar="DIR")
+    p.add_argument("--quick", action="store_true", help="a small subset of the grid")
+    p.add_argument("--engines", default="opensees,compliance,nonsmooth")
+    p.add_argument("--timeout", type=float, default=300.0, help="seconds per cell")
+    p.set_defaults(func=_stress)
+
     p = sub.add_parser("export-vtk", help="deck and seat outlines over time for ParaView")
     p.add_argument("result_dir", metavar="RESULT_DIR")
     p.add_argument("-o", "--output", required=True, metavar="DIR")
@@ -136,6 +153,34 @@ def _paper(args) -> int:
                        scheduler=args.scheduler, cache_dir=args.cache, studies=studies,
                        progress=not args.no_progress)
     print(f"wrote {report} and {report.with_suffix('.html')}")
+    return 0
+
+
+def _bench(args) -> int:
+    from deckpound.compare.bench import run_bench
+    from deckpound.models.scene_io import load_scene
+
+    if args.repeats is not None and args.repeats < 1:
+        raise SceneError("--repeats", f"must be >= 1, got {args.repeats}")
+    scene = load_scene(args.scene, args.overrides)
+    table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
+    cols = [c for c in ("scene", "config", "status", "wall", "us_per_step", "err_peak_theta",
+                        "err_peak_y", "nrmse_theta", "speedup_vs_opensees_equal_error") if c in table]
+    print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    print(f"wrote {args.output}")
+    return 0
+
+
+def _stress(args) -> int:
+    from deckpound.compare.stress import run_stress
+    from deckpound.models.scene_io import load_scene
+
+    scene = load_scene(args.scene, args.overrides)
+    table = run_stress(scene, args.output, quick=args.quick, engines=tuple(_engines(args.engines)),
+                       timeout=args.timeout)
+    bad = table[(table["status"] != "success") | (~table["finite"])]
+    print(table.groupby(["engine", "status"]).size().to_string())
+    print(f"{len(table)} cells, {len(bad)} not finished with finite output; wrote {args.output}")
     return 0
 
 
