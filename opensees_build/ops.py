@@ -60,8 +60,12 @@ class ArrayArg:
     values: np.ndarray
 
     def digest(self, sig: int = 10) -> str:
-        """SHA-256 of the values formatted with ``sig`` significant digits (platform-robust)."""
-        text = "\n".join(f"{v:.{sig - 1}e}" for v in self.values)
+        """SHA-256 of the values formatted with ``sig`` significant digits, entries below
+        1e-9 of the largest set to 0 (robust to last-bit differences between platforms)."""
+        v = np.asarray(self.values, dtype=float)
+        scale = float(np.abs(v).max()) if v.size else 0.0
+        v = np.where(np.abs(v) < 1e-9 * scale, 0.0, v)
+        text = "\n".join(f"{x:.{sig - 1}e}" for x in v)
         return hashlib.sha256(text.encode()).hexdigest()
 
     def file_text(self) -> str:
@@ -128,6 +132,13 @@ class OpsSession:
             OpsSession._active = False
             self._open = False
 
+    @property
+    def raw(self):
+        """The openseespy module itself, for hot loops (nothing is logged through it)."""
+        if not self._open:
+            raise RuntimeError("OpsSession is not open")
+        return _ops
+
     # -- tags ---------------------------------------------------------------------------
     def tag(self, kind: str, name: str) -> int:
         """Integer tag of ``name`` among objects of ``kind`` (allocated 1, 2, ... on first use)."""
@@ -192,7 +203,8 @@ class OpsSession:
 def render_command(cmd: Command, style: str, *, golden: bool = False,
                    file_of: dict[str, str] | None = None, module: str = "ops") -> str:
     """One command as a line of ``style``: ``log`` (Tcl-like, arrays abbreviated), ``tcl`` or
-    ``py`` (arrays read from files named by ``file_of[name]``)."""
+    ``py`` (arrays read with ``-filePath`` from files named by ``file_of[name]`` in the script's
+    folder: ``$here`` in Tcl, ``_here(name)`` in Python — the scripts define both)."""
     if cmd.name == "#":
         return f"# {cmd.args[0]}"
     parts: list[str] = []
@@ -203,8 +215,8 @@ def render_command(cmd: Command, style: str, *, golden: bool = False,
                 parts.append(f"-values <{a.name}: {len(a.values)} values sha256 {a.digest()}>")
             else:
                 fname = (file_of or {}).get(a.name, f"{a.name}.txt")
-                parts.append("-filePath " + fname)
-                py_parts += ["'-filePath'", repr(fname)]
+                parts.append(f"-filePath [file join $here {fname}]")
+                py_parts += ["'-filePath'", f"_here({fname!r})"]
             continue
         parts.append(render_value(a, "tcl" if style != "py" else "py", golden=golden))
         py_parts.append(render_value(a, "py"))

@@ -1,0 +1,274 @@
+"""The OpenSees engine: ``run_opensees(scene, motion=None, *, raise_on_failure=False) -> Result``.
+
+Follows the engine contract of :mod:`deckpound.engines`. The step loop (:func:`run_steps`) and
+the state sampling (:func:`sample_row`) are plain functions of an ``ops`` object (the
+openseespy module or anything with its functions) and a ``plan`` dict of tags and constants;
+:mod:`.export` copies their source verbatim into the exported Python script, so the script
+and the in-process run execute the same code.
+
+Result columns (sign conventions):
+
+* ``deck_x/y/theta`` — centre node displacement (absolute) [m, m, rad], θ counter-clockwise;
+* ``seat1_x/theta``, ``seat2_x/theta`` — seat node (contact-face mid-point) [m, rad];
+* ``gap_c1..c4`` — g = g₀ + side·(u_deck corner,x − u_seat corner,x), side +1 for c1, c2 (seat 1,
+  left) and −1 for c3, c4; negative = penetration;
+* ``fn_c*`` — normal contact force ≥ 0 in compression [kN] (−stress of the gap material);
+* ``ft_c*`` — tangential (y) contact force acting ON THE DECK corner, + = +y [kN] (0 without
+  friction);
+* ``<bent>_fx/_fy`` — Hysteretic material stress of the bent spring for the deformation
+  deck − table [kN] (+ = the deck is pulled back towards −x / −y).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+
+import numpy as np
+
+from deckpound import __version__
+from deckpound.engines import output_stride
+from deckpound.models import mechanics
+from deckpound.models.errors import EngineFailure
+from deckpound.models.excitation import analysis_duration, support_motion
+from deckpound.models.result import (STATUS_FAILED, STATUS_SUCCESS, Result, scene_hash,
+                                     standard_columns)
+from deckpound.models._fields import to_mapping
+from deckpound.models.scene import Scene
+
+from .model import ModelInfo, analysis_commands, build_model
+from .ops import OpsSession, openseespy_version
+
+ENGINE = "opensees"
+
+
+# ------------------------------------------------------------------------------------------
+# Runtime functions: self-contained (math only), copied into the exported Python script.
+# ------------------------------------------------------------------------------------------
+
+def define_analysis(ops, plan):
+    """(Re)define the analysis objects from plan['analysis'] (list of command tuples)."""
+    for cmd in plan["analysis"]:
+        getattr(ops, cmd[0])(*cmd[1:])
+
+
+def corner_gaps(ops, plan):
+    """Physical gaps g = g0 + side*(u_deck,x - u_seat,x) of the four corners [m]."""
+    out = []
+    for c in range(4):
+        ud = ops.nodeDisp(plan["deck_corners"][c], 1)
+        us = ops.nodeDisp(plan["seat_corners"][c], 1)
+        out.append(plan["g0"][c] + plan["sides"][c] * (ud - us))
+    return out
+
+
+def contact_forces(ops, plan):
+    """(fn, ft) of the four corners: fn >= 0 compression, ft on the deck along +y [kN]."""
+    fn, ft = [], []
+    for c in range(4):
+        e = plan["gap_elements"][c] if plan["gap_elements"] else 0
+        if not e:
+            fn.append(0.0)
+            ft.append(0.0)
+        elif plan["friction"]:
+            f = ops.eleResponse(e, "force")   # resisting forces [Fx_i, Fy_i, M_i, Fx_j, Fy_j, M_j]
+            # force ON the deck (node j) is minus its resisting force; the normal points from
+            # the seat to the deck (+x at seat 1, -x at seat 2)
+            fn.append(-plan["sides"][c] * f[3] + 0.0)
+            ft.append(-f[4] + 0.0)
+        else:
+            fn.append(-ops.eleResponse(e, "basicForce")[0] + 0.0)
+            ft.append(0.0)
+    return fn, ft
+
+
+def sample_row(ops, plan, t):
+    """One output row in the order of plan['columns']."""
+    dk = ops.nodeDisp(plan["deck"])
+    s1 = ops.nodeDisp(plan["seats"][0])
+    s2 = ops.nodeDisp(plan["seats"][1])
+    row = [t, dk[0], dk[1], dk[2], s1[0], s1[2], s2[0], s2[2]]
+    row += corner_gaps(ops, plan)
+    fn, ft = contact_forces(ops, plan)
+    row += fn + ft
+    for e in plan["bent_elements"]:
+        f = ops.eleResponse(e, "basicForce")
+        row += [f[0], f[1]]
+    return row
+
+
+def run_steps(ops, plan, log=None):
+    """Step the defined model plan['n_steps'] times with analyze(1, dt).
+
+    Every return code is checked; a failed step counts as a failure and, with
+    plan['fallback'] == 'substep', is retried (the failed analyze has reverted the domain to
+    its last commit) after rebuilding the analysis objects (wipeAnalysis + define_analysis:
+    the Transformation handler otherwise keeps a stale increment on constrained nodes; there
+    is no revertToLastCommit command in openseespy 3.7) with plan['substeps']
+    sub-steps, each checked. A non-finite state is a failure. Returns a dict with the rows and
+    the statistics.
+    """
+    dt = plan["dt"]
+    n_steps = plan["n_steps"]
+    stride = plan["stride"]
+    rows = [sample_row(ops, plan, 0.0)]
+    closed = [g < 0.0 for g in corner_gaps(ops, plan)] if plan["gap_elements"] else []
+    stats = {"steps": 0, "iterations": 0, "failures": 0, "rescued": 0, "contact_events": 0,
+             "status": "success", "message": "", "failed_time": None, "failed_step": None}
+    for n in range(1, n_steps + 1):
+        ok = ops.analyze(1, dt)
+        if ok == 0:
+            stats["iterations"] += ops.testIter()
+        else:
+            stats["failures"] += 1
+            if log is not None:
+                log(f"step {n} (t = {n * dt:.6g} s) failed with code {ok}")
+            if plan["fallback"] == "substep":
+                ops.wipeAnalysis()
+                define_analysis(ops, plan)
+                h = dt / plan["substeps"]
+                for k in range(plan["substeps"]):
+                    ok = ops.analyze(1, h)
+                    if ok != 0:
+                        break
+                    stats["iterations"] += ops.testIter()
+                ops.wipeAnalysis()
+                define_analysis(ops, plan)
+                if ok == 0:
+                    stats["rescued"] += 1
+        if ok == 0:
+            dk = ops.nodeDisp(plan["deck"])
+            if not all(math.isfinite(v) for v in dk):
+                ok = -100
+        if ok != 0:
+            stats["status"] = "failed"
+            stats["failed_step"] = n
+            stats["failed_time"] = n * dt
+            stats["message"] = (f"step {n} (t = {n * dt:.6g} s) did not converge"
+                                + (f" even with {plan['substeps']} sub-steps"
+                                   if plan["fallback"] == "substep" else "")
+                                if ok != -100 else f"non-finite state at step {n} "
+                                f"(t = {n * dt:.6g} s)")
+            break
+        stats["steps"] = n
+        if plan["gap_elements"]:
+            gaps = corner_gaps(ops, plan)
+            for c in range(4):
+                now = gaps[c] < 0.0
+                if now and not closed[c]:
+                    stats["contact_events"] += 1
+                closed[c] = now
+        if n % stride == 0:
+            row = sample_row(ops, plan, n * dt)
+            if not all(math.isfinite(v) for v in row):
+                stats["status"] = "failed"
+                stats["failed_step"] = n
+                stats["failed_time"] = n * dt
+                stats["message"] = f"non-finite state at step {n} (t = {n * dt:.6g} s)"
+                break
+            rows.append(row)
+    return {"rows": rows, "stats": stats}
+
+
+# ------------------------------------------------------------------------------------------
+# In-process driver
+# ------------------------------------------------------------------------------------------
+
+def make_plan(scene: Scene, info: ModelInfo, duration: float) -> dict:
+    """Tags and constants of the step loop (JSON-able: also written into exported scripts)."""
+    s = scene.opensees
+    return {
+        "dt": s.dt,
+        "n_steps": int(round(duration / s.dt)),
+        "stride": output_stride(s.dt, scene.run.output_dt),
+        "fallback": s.fallback,
+        "substeps": s.substeps,
+        "deck": info.deck,
+        "seats": list(info.seats),
+        "deck_corners": list(info.deck_corners),
+        "seat_corners": list(info.seat_corners),
+        "gap_elements": list(info.gap_elements),
+        "g0": list(info.g0),
+        "sides": list(info.sides),
+        "bent_elements": list(info.bent_elements),
+        "friction": info.friction,
+        "analysis": [list(c) for c in analysis_commands(scene)],
+        "columns": standard_columns([b.name for b in scene.bents]),
+    }
+
+
+def build(ops: OpsSession, scene: Scene, motion=None) -> tuple[ModelInfo, dict]:
+    """Build model + analysis in an open session; returns (info, plan)."""
+    if motion is None:
+        motion = support_motion(scene)
+    duration = analysis_duration(scene, motion)
+    dt = scene.opensees.dt
+    res = motion.resample(dt, duration)
+    info = build_model(ops, scene, res)
+    plan = make_plan(scene, info, duration)
+    ops.comment("analysis")
+    for cmd in plan["analysis"]:
+        ops.call(*cmd)
+    return info, plan
+
+
+def command_log(scene: Scene, motion=None):
+    """The benchmark-style command log of the scene (model + analysis, no stepping)."""
+    with OpsSession() as ops:
+        build(ops, scene, motion)
+        return list(ops.log)
+
+
+def result_from_rows(scene: Scene, plan: dict, out: dict, wall: float, extra=None) -> Result:
+    cols = plan["columns"]
+    arr = np.array(out["rows"], dtype=float).reshape(-1, len(cols))
+    columns = {c: arr[:, k].copy() for k, c in enumerate(cols)}
+    st = out["stats"]
+    meta = {
+        "wall_time": wall,
+        "steps": st["steps"],
+        "iterations": st["iterations"],
+        "contact_events": st["contact_events"],
+        "failures": st["failures"],
+        "rescued_by_substeps": st["rescued"],
+        "status": STATUS_SUCCESS if st["status"] == "success" else STATUS_FAILED,
+        "message": st["message"],
+        "settings": to_mapping(scene.opensees),
+        "scene_hash": scene_hash(scene),
+        "version": __version__,
+        "openseespy": openseespy_version(),
+        "dt": plan["dt"],
+    }
+    if st["status"] != "success":
+        meta["failed_time"] = st["failed_time"]
+        meta["failed_step"] = st["failed_step"]
+    if extra:
+        meta.update(extra)
+    return Result(engine=ENGINE, columns=columns, meta=meta)
+
+
+def run_opensees(scene: Scene, motion=None, *, raise_on_failure: bool = False,
+                 _before_run=None, _ops_wrapper=None) -> Result:
+    """Run the scene in OpenSees (see the module docstring for the result columns).
+
+    ``_before_run(ops_raw, info, plan)`` and ``_ops_wrapper(ops_raw) -> ops`` are test hooks
+    (set initial velocities; inject a failing step).
+    """
+    t0 = time.perf_counter()
+    messages: list[str] = []
+    with OpsSession() as ops:
+        info, plan = build(ops, scene, motion)
+        raw = ops.raw
+        if _before_run is not None:
+            _before_run(raw, info, plan)
+        runner_ops = _ops_wrapper(raw) if _ops_wrapper is not None else raw
+        out = run_steps(runner_ops, plan, log=messages.append)
+    wall = time.perf_counter() - t0
+    result = result_from_rows(scene, plan, out, wall, {"step_log": messages[:100]})
+    if out["stats"]["failures"]:
+        warnings.warn(f"OpenSees: {out['stats']['failures']} failed step(s), "
+                      f"{out['stats']['rescued']} rescued by sub-stepping", stacklevel=2)
+    if not result.ok and raise_on_failure:
+        raise EngineFailure(f"opensees: {result.meta['message']}")
+    return result

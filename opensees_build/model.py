@@ -1,0 +1,396 @@
+"""Scene → OpenSees model commands (plan view: ndm 2, ndf 3; kN, m, t, s).
+
+Nodes (tags by name through :meth:`OpsSession.tag`):
+
+* ``deck`` — deck centre (0, 0) carrying all the deck mass (M_d, M_d, I_d);
+* ``deck c1..c4`` — deck corners at (±L/2, ±W/2) (c1 (−,−), c2 (−,+), c3 (+,−), c4 (+,+));
+* the deck node above each bent at (x_b, 0) (the centre node itself when x_b = 0);
+* ``seat1``/``seat2`` — contact-face mid-points (∓L/2, 0) with mass (m_s, 0, I_s); with
+  friction they sit at ∓(L/2 + g₀) so that zeroLengthContact2D sees the physical gap;
+* ``seat1 c1``, ... — seat corners, rigidLinked (beam) to their seat node;
+* ``actuator1``/``actuator2`` — at the seat nodes, imposed x motion, y and θ fixed;
+* ``table <bent>`` — at (x_b, 0), imposed x and y motion, θ fixed.
+
+Mode ``rigid``: rigidLink beams from the centre to the corners and bent nodes (exactly the 7
+DOF of the analytic engines, plus massless seat-y DOFs held by a guide spring). Mode
+``stick``: elasticBeamColumn sticks along the axis (``stick_elements`` equal elements per half,
+plus nodes at the bent stations), transverse sticks from the deck ends to the corners;
+E = ``deck.stick_modulus``, section of a deck W wide and W/8 deep (A = W²/8, I = W⁴/96 about
+the vertical axis) — with E = 3e9 kN/m² (100× concrete) the sticks are near-rigid; the sticks
+are massless and excluded from Rayleigh damping (``region -eleOnly ... -rayleigh 0 0 0 0``).
+
+Seat guide: a rigidLink retained node must not be ``fix``ed (it breaks the Transformation
+handler in 3.7), so each seat's y DOF is held by a stiff zeroLength spring (:data:`GUIDE_STIFFNESS`)
+from its actuator, without Rayleigh damping; the seat has no y mass.
+
+Springs: bents — zeroLength table → deck bent node, Hysteretic (Takeda stand-in) in x and y;
+seats — zeroLength actuator → seat, Elastic k in x and θ, and a second zeroLength with
+Viscous(c, α = 1) dashpots (no Rayleigh on it: see the comment in :func:`build_model`). The
+bent and seat springs take the Rayleigh stiffness part on the initial stiffness (``rayleigh a0 0 a1 0`` + ``-doRayleigh 1``); the mass
+part acts on the absolute velocities of the deck and seat nodes. Gap elements and sticks take
+no Rayleigh damping.
+
+Gaps: see :func:`gap_mapping` — the ONE place where the positive physical gap g₀ and the
+closing direction are mapped to OpenSees' node order and negative (compression) parameters.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from deckpound.models import mechanics
+from deckpound.models.contact_params import kelvin_voigt_damping
+from deckpound.models.errors import SceneError
+from deckpound.models.scene import Scene
+
+from .ops import ArrayArg, OpsSession
+
+#: stiffness of the seat y guide springs [kN/m] (seat y stays ~ F_t / k ≈ 0)
+GUIDE_STIFFNESS = 1.0e10
+#: "infinite" yield force of the linear gap (ElasticPPGap) [kN]
+HUGE_FORCE = 1.0e20
+#: samples of the last value appended to every support record (a Path series returns 0 at and
+#: after its last sample; time advances by repeated addition of dt and may overshoot)
+RECORD_PAD = 16
+CORNER_NAMES = ("c1", "c2", "c3", "c4")
+SIDES = (1.0, 1.0, -1.0, -1.0)
+
+
+@dataclass
+class ModelInfo:
+    """Tags and constants the runner needs to read the model's state."""
+
+    mode: str
+    deck: int
+    seats: tuple[int, int]
+    deck_corners: tuple[int, ...]
+    seat_corners: tuple[int, ...]
+    gap_elements: tuple[int, ...]
+    g0: tuple[float, ...]
+    sides: tuple[float, ...]
+    bent_names: tuple[str, ...]
+    bent_elements: tuple[int, ...]
+    friction: bool
+    stick_elements: tuple[int, ...] = ()
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class GapSpec:
+    """One corner's gap element: node order and material (OpenSees signs)."""
+
+    i_node: int
+    j_node: int
+    material: str
+    args: tuple[float, ...]
+
+
+# -- checks -------------------------------------------------------------------------------
+
+def check_scene(scene: Scene) -> None:
+    """Refuse what OpenSees cannot express (SceneError) and warn about options that do nothing."""
+    c = scene.contact
+    if c.law in ("hertz", "hertz-damp"):
+        raise SceneError("contact.law", f"OpenSees cannot express the {c.law!r} law of the scene "
+                         "(F = k δ^n (1 + 3(1−e²)/4 δ̇/v⁻)): its Hertzdamp material has not been "
+                         "shown to be the same law; use linear, bilinear or kelvin-voigt")
+    if c.has_friction:
+        if c.friction_mode == "slip":
+            raise SceneError("contact.friction_mode", "OpenSees cannot express 'slip' (regularised "
+                             "friction without sticking); zeroLengthContact2D always has a stick "
+                             "spring: use friction_mode = 'stick'")
+        if c.law != "linear":
+            raise SceneError("contact.law", f"OpenSees cannot combine the {c.law!r} law with "
+                             "friction: zeroLengthContact2D is a linear penalty contact; use "
+                             "law = 'linear' with friction")
+    if c.geometry == "nonlinear":
+        warnings.warn("contact.geometry = 'nonlinear' does nothing in the OpenSees engine: the "
+                      "gap elements act along the fixed x axis (linear kinematics)", stacklevel=3)
+    if c.friction > 0.0 and c.friction_mode == "none":
+        warnings.warn("contact.friction > 0 does nothing with friction_mode = 'none'", stacklevel=3)
+    unused = []
+    if c.law != "hertz" and c.law != "hertz-damp" and c.exponent != 1.5:
+        unused.append("contact.exponent")
+    if c.law != "kelvin-voigt" and c.restitution != 0.6:
+        unused.append("contact.restitution")
+    if c.law != "bilinear" and (c.bilinear_ratio != 0.35 or c.bilinear_yield != 0.001):
+        unused.append("contact.bilinear_ratio/bilinear_yield")
+    if c.has_friction and c.slip_velocity != 1.0e-3:
+        unused.append("contact.slip_velocity")
+    if unused:
+        warnings.warn(f"{', '.join(unused)} do(es) nothing for contact.law = {c.law!r} in the "
+                      "OpenSees engine", stacklevel=3)
+
+
+# -- the one sign-convention function -------------------------------------------------------
+
+def gap_mapping(scene: Scene, corner: int, deck_node: int, seat_node: int,
+                mat_tag: int) -> GapSpec:
+    """Node order and OpenSees material of corner ``corner`` (0..3) for the scene's law.
+
+    Physical gap (positive when open): g = g₀ + side·(u_deck,x − u_seat,x), side = +1 for c1, c2
+    (seat 1, left) and −1 for c3, c4. zeroLength strain is u_j − u_i, so the nodes are ordered
+    (seat, deck) for side +1 and (deck, seat) for side −1: strain = side·(u_deck − u_seat) = g − g₀
+    and closing is negative (compression). The materials take a negative gap −g₀ (and negative
+    yield values), so their stress is ≤ 0 and the contact force fn = −stress ≥ 0.
+    """
+    side = SIDES[corner]
+    g0 = scene.seats[0].gap if corner < 2 else scene.seats[1].gap
+    i, j = (seat_node, deck_node) if side > 0 else (deck_node, seat_node)
+    c = scene.contact
+    if c.law == "linear":
+        return GapSpec(i, j, "ElasticPPGap", (mat_tag, c.stiffness, -HUGE_FORCE, -g0))
+    if c.law == "bilinear":
+        return GapSpec(i, j, "ImpactMaterial",
+                       (mat_tag, c.stiffness, c.bilinear_ratio * c.stiffness, -c.bilinear_yield, -g0))
+    if c.law == "kelvin-voigt":
+        damp = float(kelvin_voigt_damping(scene)[corner])
+        return GapSpec(i, j, "ViscoelasticGap", (mat_tag, c.stiffness, damp, -g0))
+    raise SceneError("contact.law", f"OpenSees cannot express the {c.law!r} law")
+
+
+# -- geometry helpers ---------------------------------------------------------------------
+
+def stick_section(scene: Scene) -> tuple[float, float]:
+    """(A [m²], I [m⁴]) of the deck sticks: a section W wide and W/8 deep, bending in plan."""
+    w = scene.deck.width
+    return w * w / 8.0, w ** 4 / 96.0
+
+
+def stick_stations(scene: Scene) -> list[float]:
+    """x of the stick nodes: ``stick_elements`` equal elements per half plus the bent stations."""
+    hl = 0.5 * scene.deck.length
+    n = scene.opensees.stick_elements
+    xs = [-hl + k * hl / n for k in range(n + 1)] + [k * hl / n for k in range(1, n + 1)]
+    tol = 1e-9 * scene.deck.length
+    for xb in scene.bent_x:
+        if all(abs(xb - x) > tol for x in xs):
+            xs.append(xb)
+    xs = sorted(xs)
+    xs[min(range(len(xs)), key=lambda k: abs(xs[k]))] = 0.0
+    return xs
+
+
+def padded(values: np.ndarray) -> np.ndarray:
+    return np.concatenate([values, np.full(RECORD_PAD, values[-1])])
+
+
+# -- the model ----------------------------------------------------------------------------
+
+def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True,
+                supports: str = "motion") -> ModelInfo:
+    """Define nodes, masses, constraints, materials, elements, damping and (optionally) the
+    multiple-support excitation.
+
+    Parameters
+    ----------
+    motion : resampled :class:`SupportMotion` on the analysis step (needed for
+        ``supports = "motion"``).
+    gaps : False leaves the gap elements out (contact-free model, e.g. for eigen).
+    supports : ``"motion"`` — MultipleSupport imposed motion; ``"fixed"`` — supports fixed.
+    """
+    check_scene(scene)
+    s = scene.opensees
+    d = scene.deck
+    hl, hw = 0.5 * d.length, 0.5 * d.width
+    friction = gaps and scene.contact.has_friction
+    T = ops.tag
+    ops.model("basic", "-ndm", 2, "-ndf", 3)
+
+    # --- deck ------------------------------------------------------------------------------
+    ops.comment("deck: centre node with all the deck mass")
+    deck = T("node", "deck")
+    ops.node(deck, 0.0, 0.0)
+    ops.mass(deck, d.mass, d.mass, d.inertia)
+    dcorners = []
+    for name, (xc, yc) in zip(CORNER_NAMES, scene.corners):
+        n = T("node", f"deck {name}")
+        ops.node(n, xc, yc)
+        dcorners.append(n)
+    tol = 1e-9 * d.length
+    bent_nodes: list[int] = []
+    sticks: list[int] = []
+    if s.mode == "rigid":
+        for b, xb in zip(scene.bents, scene.bent_x):
+            if abs(xb) <= tol:
+                bent_nodes.append(deck)
+            else:
+                n = T("node", f"deck {b.name}")
+                ops.node(n, xb, 0.0)
+                bent_nodes.append(n)
+        ops.comment("rigid deck: rigidLink beams from the centre")
+        for n in dcorners + [n for n in bent_nodes if n != deck]:
+            ops.rigidLink("beam", deck, n)
+    else:
+        area, inertia = stick_section(scene)
+        ops.comment(f"stick deck: E = {d.stick_modulus:g} kN/m2, A = W^2/8, I = W^4/96 (near-rigid)")
+        transf = T("transf", "deck")
+        ops.geomTransf("Linear", transf)
+        xs = stick_stations(scene)
+        axis = []
+        for k, x in enumerate(xs):
+            if x == 0.0:
+                axis.append(deck)
+                continue
+            n = T("node", f"stick {k}")
+            ops.node(n, x, 0.0)
+            axis.append(n)
+        for k in range(len(axis) - 1):
+            e = T("element", f"stick {k}")
+            ops.element("elasticBeamColumn", e, axis[k], axis[k + 1], area, d.stick_modulus,
+                        inertia, transf)
+            sticks.append(e)
+        for c, n in enumerate(dcorners):
+            end = axis[0] if c < 2 else axis[-1]
+            e = T("element", f"stick {CORNER_NAMES[c]}")
+            ops.element("elasticBeamColumn", e, end, n, area, d.stick_modulus, inertia, transf)
+            sticks.append(e)
+        for xb in scene.bent_x:
+            k = min(range(len(xs)), key=lambda k: abs(xs[k] - xb))
+            bent_nodes.append(axis[k])
+
+    # --- seats ----------------------------------------------------------------------------
+    seats, scorners, acts = [], [], []
+    for j, seat in enumerate(scene.seats):
+        sgn = -1.0 if j == 0 else 1.0
+        xf = sgn * (hl + (seat.gap if friction else 0.0))
+        ops.comment(f"seat {j + 1}: contact-face mid-point, guided in y by a stiff spring")
+        n = T("node", f"seat{j + 1}")
+        ops.node(n, xf, 0.0)
+        ops.mass(n, seat.mass, 0.0, seat.inertia)
+        seats.append(n)
+        a = T("node", f"actuator{j + 1}")
+        ops.node(a, xf, 0.0)
+        ops.fix(a, 1 if supports == "fixed" else 0, 1, 1)
+        acts.append(a)
+        for c in (0, 1) if j == 0 else (2, 3):
+            sc = T("node", f"seat{j + 1} {CORNER_NAMES[c]}")
+            ops.node(sc, xf, scene.corners[c][1])
+            ops.rigidLink("beam", n, sc)
+            scorners.append(sc)
+
+    # --- materials and springs ----------------------------------------------------------------
+    bent_eles = []
+    tables = []
+    for b, xb, dn in zip(scene.bents, scene.bent_x, bent_nodes):
+        tn = T("node", f"table {b.name}")
+        ops.node(tn, xb, 0.0)
+        ops.fix(tn, *((1, 1, 1) if supports == "fixed" else (0, 0, 1)))
+        tables.append(tn)
+        mats = []
+        for dirn, spring in (("x", b.x), ("y", b.y)):
+            m = T("material", f"{b.name} {dirn}")
+            fy, dy = spring.yield_force, spring.yield_displacement
+            du = spring.ultimate_displacement
+            f2 = fy + spring.post_yield_ratio * spring.stiffness * (du - dy)
+            ops.uniaxialMaterial("Hysteretic", m, fy, dy, f2, du, -fy, -dy, -f2, -du,
+                                 1.0, 1.0, 0.0, 0.0, spring.beta)
+            mats.append(m)
+        e = T("element", f"bent {b.name}")
+        ops.element("zeroLength", e, tn, dn, "-mat", *mats, "-dir", 1, 2, "-doRayleigh", 1)
+        bent_eles.append(e)
+    for j, seat in enumerate(scene.seats):
+        mx = T("material", f"seat{j + 1} kx")
+        ops.uniaxialMaterial("Elastic", mx, seat.kx)
+        mt = T("material", f"seat{j + 1} ktheta")
+        ops.uniaxialMaterial("Elastic", mt, seat.ktheta)
+        e = T("element", f"seat{j + 1} spring")
+        ops.element("zeroLength", e, acts[j], seats[j], "-mat", mx, mt, "-dir", 1, 3,
+                    "-doRayleigh", 1)
+        # dashpots in their own element: with -doRayleigh 1 a zeroLength (3.7) drops its
+        # materials' damping tangent from the damping matrix (Newton then converges linearly)
+        cx = T("material", f"seat{j + 1} cx")
+        ops.uniaxialMaterial("Viscous", cx, seat.cx, 1.0)
+        ct = T("material", f"seat{j + 1} ctheta")
+        ops.uniaxialMaterial("Viscous", ct, seat.ctheta, 1.0)
+        e = T("element", f"seat{j + 1} dashpot")
+        ops.element("zeroLength", e, acts[j], seats[j], "-mat", cx, ct, "-dir", 1, 3)
+    mg = T("material", "seat guide")
+    ops.uniaxialMaterial("Elastic", mg, GUIDE_STIFFNESS)
+    for j in range(2):
+        e = T("element", f"seat{j + 1} guide")
+        ops.element("zeroLength", e, acts[j], seats[j], "-mat", mg, "-dir", 2)
+
+    # --- gaps -----------------------------------------------------------------------------
+    gap_eles = []
+    g0 = tuple(scene.seats[0].gap if c < 2 else scene.seats[1].gap for c in range(4))
+    if gaps:
+        ops.comment(f"contact at the corners: law {scene.contact.law}"
+                    + (", zeroLengthContact2D with friction" if friction else ""))
+        for c in range(4):
+            e = T("element", f"gap {CORNER_NAMES[c]}")
+            if friction:
+                # i = seat corner, j = deck corner; zeroLengthContact2D (3.7) measures the gap
+                # as n·(x_i + u_i − x_j − u_j) (verified), so n points from the deck to the
+                # seat: −x at seat 1, +x at seat 2. Its nodes are g₀ apart (it warns that
+                # L > tolerance: harmless, the gap is the geometric one).
+                nx = -1.0 if SIDES[c] > 0 else 1.0
+                ct = scene.contact
+                ops.element("zeroLengthContact2D", e, scorners[c], dcorners[c], ct.stiffness,
+                            ct.tangential_stiffness, ct.friction, "-normal", nx, 0.0)
+            else:
+                spec = gap_mapping(scene, c, dcorners[c], scorners[c],
+                                   T("material", f"gap {CORNER_NAMES[c]}"))
+                ops.uniaxialMaterial(spec.material, *spec.args)
+                ops.element("zeroLength", e, spec.i_node, spec.j_node, "-mat", spec.args[0],
+                            "-dir", 1)
+            gap_eles.append(e)
+
+    # --- damping --------------------------------------------------------------------------
+    a0, a1, (wi, wj) = mechanics.rayleigh_coefficients(scene)
+    ops.comment(f"Rayleigh: a0 M (absolute velocities) + a1 K0 (bent and seat springs); "
+                f"matched at {wi:.6g} and {wj:.6g} rad/s")
+    ops.rayleigh(a0, 0.0, a1, 0.0)
+    if sticks:
+        ops.region(T("region", "sticks"), "-eleOnly", *sticks, "-rayleigh", 0.0, 0.0, 0.0, 0.0)
+
+    # --- excitation -----------------------------------------------------------------------
+    if supports == "motion":
+        if motion is None:
+            raise ValueError("build_model needs the resampled motion for supports='motion'")
+        dt = float(motion.t[1] - motion.t[0])
+        ops.comment("multiple-support excitation: imposed displacement and velocity")
+        pat = T("pattern", "supports")
+        ops.pattern("MultipleSupport", pat)
+        channels = mechanics.support_channels(scene)
+        D, V = motion.matrices(channels)
+        where = []
+        for b, tn in zip(scene.bents, tables):
+            where += [(tn, 1), (tn, 2)]
+        where += [(acts[0], 1), (acts[1], 1)]
+        for k, (ch, (node, dof)) in enumerate(zip(channels, where)):
+            ts_d = T("timeSeries", f"{ch} disp")
+            ops.timeSeries("Path", ts_d, "-dt", dt, ArrayArg(f"{ch}_disp", padded(D[:, k])))
+            ts_v = T("timeSeries", f"{ch} vel")
+            ops.timeSeries("Path", ts_v, "-dt", dt, ArrayArg(f"{ch}_vel", padded(V[:, k])))
+            gm = T("groundMotion", ch)
+            ops.groundMotion(gm, "Plain", "-disp", ts_d, "-vel", ts_v)
+            ops.imposedMotion(node, dof, gm)
+
+    return ModelInfo(mode=s.mode, deck=deck, seats=tuple(seats), deck_corners=tuple(dcorners),
+                     seat_corners=tuple(scorners), gap_elements=tuple(gap_eles), g0=g0,
+                     sides=SIDES, bent_names=tuple(b.name for b in scene.bents),
+                     bent_elements=tuple(bent_eles), friction=friction,
+                     stick_elements=tuple(sticks))
+
+
+def analysis_commands(scene: Scene) -> list[tuple]:
+    """The analysis definition as (command, *args) tuples (re-issued by the substep fallback)."""
+    s = scene.opensees
+    return [
+        ("constraints", "Transformation"),
+        ("numberer", "RCM"),
+        ("system", s.system),
+        ("test", s.test, s.tolerance, s.max_iterations),
+        ("algorithm", s.algorithm),
+        ("integrator", "Newmark", s.gamma, s.beta),
+        ("analysis", "Transient"),
+    ]
+
+
+def define_analysis(ops: OpsSession, scene: Scene) -> None:
+    for cmd in analysis_commands(scene):
+        ops.call(*cmd)
