@@ -103,8 +103,9 @@ class Progress:
         self._draw()
 
     def advance(self, n: int = 1) -> None:
-        self.done += n
-        self._draw()
+        if n:
+            self.done += n
+            self._draw()
 
     def _draw(self) -> None:
         if not self.enabled:
