@@ -118,7 +118,8 @@ def study_figure(study, scene: Scene, cases, results: dict[str, Result], table: 
         ax.set_xticklabels(labels, rotation=30, ha="right", fontsize=7)
     ax.set_ylabel("peak deck rotation [mrad]")
     ax.set_title(study.title)
-    ax.legend(fontsize=7)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7)
     ax2 = axes[0, 1]
     for k, c in enumerate(cases):
         r = results[c.label]

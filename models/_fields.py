@@ -24,6 +24,12 @@ from typing import Any
 from .errors import SceneError
 
 
+# Floats beyond these magnitudes are no physical value in SI units with tonnes, and they
+# overflow or underflow (to inf, NaN or subnormals) in the engines' arithmetic.
+MIN_MAGNITUDE = 1e-30
+MAX_MAGNITUDE = 1e30
+
+
 def spec(
     default: Any = dataclasses.MISSING,
     *,
@@ -67,6 +73,9 @@ def _check_number(name: str, value: float, meta: typing.Mapping[str, Any]) -> No
         raise SceneError(name, f"must be < {meta['lt']}{u}, got {_fmt(value)}")
     if meta.get("le") is not None and not value <= meta["le"]:
         raise SceneError(name, f"must be <= {meta['le']}{u}, got {_fmt(value)}")
+    if isinstance(value, float) and value != 0.0 and not MIN_MAGNITUDE <= abs(value) <= MAX_MAGNITUDE:
+        raise SceneError(name, f"is beyond any physical value: magnitudes from {MIN_MAGNITUDE:g} "
+                         f"to {MAX_MAGNITUDE:g}{u} are allowed, got {_fmt(value)}")
 
 
 def _coerce(name: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> Any:
@@ -84,7 +93,11 @@ def _coerce(name: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> A
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise SceneError(name, f"must be a number{_unit(meta)}, got {_fmt(value)}")
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:
+            raise SceneError(name, f"must be a finite number{_unit(meta)}, got an integer "
+                             "too large for a float") from None
         _check_number(name, value, meta)
         return value
     if tp is int:

@@ -22,6 +22,8 @@ from .scene import Excitation, Scene
 
 G = 9.80665  # standard gravity [m/s²]
 _LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+MIN_SAMPLES = 16  # shortest record the baseline correction (zero-phase filter, taper) can handle
+MAX_SAMPLES = 2_000_000  # longest record held in memory (600 s at 0.3 ms)
 
 
 @dataclass(frozen=True)
@@ -114,9 +116,10 @@ def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.
     the record starts and ends at rest (final displacement and velocity exactly zero).
     """
     nyq = 0.5 / dt
-    if not 0 < highpass < nyq:
+    if not 1e-6 * nyq <= highpass < nyq:  # below 1e-6·nyq the filter design is singular
         raise SceneError("excitation.highpass",
-                         f"must lie between 0 and the Nyquist frequency {nyq:g} Hz, got {highpass}")
+                         f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
+                         f"of the record, got {highpass}")
     sos = scipy.signal.butter(4, highpass / nyq, btype="highpass", output="sos")
     pad = len(acc)
     a = scipy.signal.sosfiltfilt(sos, np.concatenate([np.zeros(pad), acc, np.zeros(pad)]))
@@ -162,7 +165,12 @@ def synthetic_component(exc: Excitation, pga: float, rng: np.random.Generator,
     raw = _kanai_tajimi(noise, exc.dt, exc.dominant_frequency, exc.ground_damping)
     raw *= _envelope(t, exc.duration)
     d, v, a = baseline_corrected(raw, exc.dt, exc.highpass)
-    s = pga * G / np.max(np.abs(a))
+    peak = np.max(np.abs(a))
+    if not (np.isfinite(peak) and peak > 0.0):
+        raise SceneError("excitation.dominant_frequency",
+                         f"gives no usable record with highpass = {exc.highpass} Hz and dt = "
+                         f"{exc.dt} s (peak acceleration {peak}), got {exc.dominant_frequency} Hz")
+    s = pga * G / peak
     return t, d * s, v * s, a * s
 
 
@@ -170,7 +178,36 @@ def _shift(x: np.ndarray, steps: int) -> np.ndarray:
     """Delay a record by a whole number of samples (zeros in front, same length)."""
     if steps <= 0:
         return x
-    return np.concatenate([np.zeros(steps), x[:-steps]])
+    steps = min(steps, len(x))
+    return np.concatenate([np.zeros(steps), x[:len(x) - steps]])
+
+
+def _check_samples(n: float, short_field: str, long_field: str, what: str) -> None:
+    """Refuse records too short for the baseline correction or too long to hold."""
+    if n < MIN_SAMPLES:
+        raise SceneError(short_field, f"{what} gives {n:g} samples; at least {MIN_SAMPLES} are needed")
+    if n > MAX_SAMPLES:
+        raise SceneError(long_field, f"{what} gives {n:.3g} samples; at most {MAX_SAMPLES:g} are allowed")
+
+
+def _check_lag(scene: Scene, dt: float, n: int) -> int:
+    """Lag in whole steps; refuses a lag that delays the last table beyond the record."""
+    exc = scene.excitation
+    steps = int(round(exc.lag / dt))
+    last = (len(scene.bents) - 1) * steps
+    if last >= n:
+        limit = (n - 1) * dt / max(1, len(scene.bents) - 1)
+        raise SceneError("excitation.lag",
+                         f"delays the last table by {last * dt:g} s, beyond the record length "
+                         f"{(n - 1) * dt:g} s; must be < {limit:g} s, got {exc.lag}")
+    return steps
+
+
+def _synthetic_samples(exc: Excitation) -> int:
+    """Sample count of a generated record (synthetic, pulse), refused when absurd."""
+    _check_samples(round(exc.duration / exc.dt) + 1.0, "excitation.duration", "excitation.dt",
+                   f"duration {exc.duration} s at dt = {exc.dt} s")
+    return int(round(exc.duration / exc.dt)) + 1
 
 
 def synthetic_motion(scene: Scene) -> SupportMotion:
@@ -181,8 +218,8 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     delayed by k·lag). The actuators follow the x motion of the nearest table.
     """
     exc = scene.excitation
+    n = _synthetic_samples(exc)
     rng = np.random.default_rng(exc.seed)
-    n = int(round(exc.duration / exc.dt)) + 1
     common = {"x": rng.standard_normal(n), "y": rng.standard_normal(n)}
     pgas = {"x": exc.pga * exc.longitudinal_ratio, "y": exc.pga}
     disp: dict[str, np.ndarray] = {}
@@ -194,7 +231,7 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
         sub = np.random.default_rng([exc.seed, ord(axis)])
         base[axis] = synthetic_component(exc, pgas[axis], sub, common[axis]) if pgas[axis] > 0 \
             else (t, np.zeros(n), np.zeros(n), np.zeros(n))
-    lag_steps = int(round(exc.lag / exc.dt))
+    lag_steps = _check_lag(scene, exc.dt, n)
     for k, bent in enumerate(scene.bents):
         for axis in ("x", "y"):
             if exc.incoherence > 0 and pgas[axis] > 0:
@@ -243,10 +280,15 @@ def load_csv_motion(scene: Scene) -> SupportMotion:
     try:
         frame = pd.read_csv(path)
     except Exception as err:  # pandas raises many types for malformed text
-        raise SceneError(field, f"cannot read CSV {str(path)!r}: {str(err).splitlines()[0]}") from None
+        first = (str(err).strip().splitlines() or [type(err).__name__])[0]
+        raise SceneError(field, f"cannot read CSV {str(path)!r}: {first}") from None
+    if not isinstance(frame.index, pd.RangeIndex):  # data rows longer than the header
+        raise SceneError(field, f"{str(path)!r}: the data rows hold more values than the header "
+                         f"has columns ({len(frame.columns)})")
     if exc.time_column not in frame.columns:
         raise SceneError("excitation.time_column",
-                         f"column {exc.time_column!r} not in {str(path)!r}; columns: {', '.join(map(str, frame.columns))}")
+                         f"column {exc.time_column!r} not in {str(path)!r}; columns: "
+                         f"{', '.join(map(repr, frame.columns))}")
     channels = support_channels(scene)
     allowed = {exc.time_column} | {f"{c}_disp" for c in channels} | {f"{c}_vel" for c in channels}
     for col in frame.columns:
@@ -256,6 +298,10 @@ def load_csv_motion(scene: Scene) -> SupportMotion:
     for c in channels:
         if f"{c}_disp" not in frame.columns:
             raise SceneError(field, f"support {c!r} has no record (column '{c}_disp' missing)")
+    for col in frame.columns:
+        if pd.api.types.is_bool_dtype(frame[col]):
+            raise SceneError(field, f"non-numeric value in {str(path)!r}: column {col!r} holds "
+                             "true/false values, numbers expected")
     try:
         numeric = frame.apply(pd.to_numeric, errors="raise").to_numpy(dtype=float)
     except (ValueError, TypeError) as err:
@@ -297,7 +343,11 @@ def read_at2(path: str | Path, field: str = "excitation.file_x") -> tuple[float,
     m = _NPTS_DT.search(lines[3]) or _OLD_NPTS_DT.search(lines[3])
     if not m:
         raise SceneError(field, f"{str(path)!r}: line 4 must give NPTS and DT, got {lines[3].strip()!r}")
-    npts, dt = int(m.group(1)), float(m.group(2))
+    try:
+        npts, dt = int(m.group(1)), float(m.group(2))
+    except ValueError:
+        raise SceneError(field, f"{str(path)!r}: line 4 must give NPTS and DT as numbers, "
+                         f"got {lines[3].strip()!r}") from None
     if not (np.isfinite(dt) and dt > 0):
         raise SceneError(field, f"{str(path)!r}: DT must be > 0 s, got {dt}")
     try:
@@ -316,6 +366,7 @@ def load_at2_motion(scene: Scene) -> SupportMotion:
     exc = scene.excitation
     dtx, ax = read_at2(exc.file_x, "excitation.file_x")
     dty, ay = read_at2(exc.file_y, "excitation.file_y")
+    _check_samples(len(ax), "excitation.file_x", "excitation.file_x", f"AT2 record {exc.file_x!r}")
     if dtx != dty or len(ax) != len(ay):
         raise SceneError("excitation.file_y", f"time base ({len(ay)} values at {dty} s) differs "
                          f"from file_x ({len(ax)} values at {dtx} s)")
@@ -323,7 +374,7 @@ def load_at2_motion(scene: Scene) -> SupportMotion:
     comp = {axis: baseline_corrected(a * G * exc.scale, dtx, exc.highpass)
             for axis, a in (("x", ax), ("y", ay))}
     disp, vel = {}, {}
-    lag_steps = int(round(exc.lag / dtx))
+    lag_steps = _check_lag(scene, dtx, len(t))
     for k, bent in enumerate(scene.bents):
         for axis in ("x", "y"):
             disp[f"{bent.name}_{axis}"] = _shift(comp[axis][0], k * lag_steps)
@@ -341,7 +392,7 @@ def pulse_motion(scene: Scene) -> SupportMotion:
     rest (the acceleration jumps at t = 0 and T, as an actuator command may).
     """
     exc = scene.excitation
-    n = int(round(exc.duration / exc.dt)) + 1
+    n = _synthetic_samples(exc)
     t = np.arange(n) * exc.dt
     w = 2.0 * np.pi / exc.pulse_period
     D = 2.0 * exc.pga * exc.longitudinal_ratio * G / w ** 2
@@ -361,12 +412,22 @@ def support_motion(scene: Scene) -> SupportMotion:
     """The scene's support motion, whatever its source."""
     kind = scene.excitation.kind
     if kind == "synthetic":
-        return synthetic_motion(scene)
-    if kind == "pulse":
-        return pulse_motion(scene)
-    if kind == "csv":
-        return load_csv_motion(scene)
-    return load_at2_motion(scene)
+        motion, field = synthetic_motion(scene), "excitation"
+    elif kind == "pulse":
+        motion, field = pulse_motion(scene), "excitation"
+    elif kind == "csv":
+        motion, field = load_csv_motion(scene), "excitation.file"
+    else:
+        motion, field = load_at2_motion(scene), "excitation.file_x"
+    if not np.all(np.isfinite(motion.t)):
+        raise SceneError(field, "the time stamps overflow to a non-finite value")
+    for name, arrays in (("displacement", motion.disp), ("velocity", motion.vel)):
+        for ch, x in arrays.items():
+            if not np.all(np.isfinite(x)):
+                raise SceneError(field, f"the {name} of support {ch!r} overflows to a non-finite "
+                                 f"value (scale = {scene.excitation.scale}; check the record's "
+                                 "magnitude and units)")
+    return motion
 
 
 def analysis_duration(scene: Scene, motion: SupportMotion) -> float:

@@ -52,12 +52,18 @@ def _show(args) -> int:
 
 def _validate(args) -> int:
     from deckpound.models.excitation import analysis_duration, support_motion
-    from deckpound.models.mechanics import natural_modes
+    import numpy as np
+
+    from deckpound.models.mechanics import natural_modes, rayleigh_coefficients
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene(args.scene, args.overrides)
     motion = support_motion(scene)
     periods = natural_modes(scene).periods
+    rayleigh_coefficients(scene)  # refuses damping.modes beyond the number of modes
+    if not np.all(np.isfinite(periods)):
+        raise SceneError("scene", "the masses and stiffnesses give non-finite natural periods "
+                         f"({', '.join(f'{T:g}' for T in periods)} s); check them for extreme values")
     print(f"{scene.name}: valid; {len(scene.bents)} bents, gaps "
           f"{scene.seats[0].gap:g}/{scene.seats[1].gap:g} m, record {motion.duration:g} s "
           f"({len(motion.channels)} supports), analysis {analysis_duration(scene, motion):g} s, "
