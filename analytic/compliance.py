@@ -1,0 +1,620 @@
+"""Compliance engine: penalty (compliant) contact on the 7-DOF plan model.
+
+Entry point :func:`run_compliance` (the engine contract of :mod:`deckpound.engines`).
+
+Equation of motion (absolute coordinates, the model of the OpenSees engine)::
+
+    M ü + a0 M u̇ + Bᵀ[f_s(d) + (a1 k0 + c_dash) ḋ] = W_Nᵀ λ_N + W_Tᵀ λ_T
+
+smooth part from :mod:`deckpound.analytic.system`, contact laws from
+:mod:`deckpound.analytic.contact_laws`, kinematics from :mod:`deckpound.analytic.kinematics`.
+
+Integrators (``scene.compliance.integrator``)
+---------------------------------------------
+``newmark`` — the OpenSees transient algorithm, step for step: Newmark γ = ½, β = ¼
+(``integrator('Newmark', 0.5, 0.25)``, displacement form), full Newton
+(``algorithm('Newton')``), ``test('NormDispIncr', tol, max_iterations)``:
+
+* ``Newmark::newStep``: constant-displacement predictor u⁰ = u_n,
+  u̇⁰ = (1 − γ/β) u̇_n + Δt (1 − γ/(2β)) ü_n, ü⁰ = (1 − 1/(2β)) ü_n − u̇_n/(βΔt); supports at
+  t_{n+1}; residual.
+* each iteration: tangent K_t + γ/(βΔt) C_t + 1/(βΔt²) M at the last trial state, solve,
+  ``Newmark::update`` (u += Δu, u̇ += γ/(βΔt) Δu, ü += Δu/(βΔt²)), residual, test
+  ‖Δu‖₂ ≤ tol (``CTestNormDispIncr``: ≤, the 2-norm of the whole increment vector, failure
+  after ``max_iterations`` solves).
+* materials committed after convergence; ü₀ = 0 at t = 0 (OpenSees starts from rest; the
+  records start at rest).
+* a step that does not converge is redone from its start in 10 sub-steps (the OpenSees
+  engine's ``fallback = "substep"``); counted in ``failures`` / ``rescued_by_substeps``.
+
+The whole step loop is one numba function; the contact laws are skipped while every corner's
+gap is open (g > 0, where every law gives zero force) and the tangent factorisation is reused
+while it is bitwise the elastic one (identical matrix → identical factors, so results do not
+change). Output every :func:`deckpound.engines.output_stride` steps.
+
+``adaptive`` — :mod:`deckpound.analytic.adaptive` (error-controlled Dormand–Prince 5(4) with
+event location; see there).
+
+Result columns: the standard ones (``fn_c*`` = λ_N, compression > 0, OpenSees-identical
+Kelvin–Voigt may give small tension at the end of an impact; ``ft_c*`` = λ_T, the tangential
+force on the deck along +t = +y for linear kinematics; ``<bent>_fx/_fy`` the Takeda material
+force for deformation deck − table) plus energies [kJ]: ``energy_input`` (work of the support
+reactions: −∫ f_springᵀ S du_g, plus the initial mechanical energy — zero from rest),
+``energy_kinetic``, ``energy_strain`` (recoverable energy of
+bent and seat springs), ``energy_viscous`` (Rayleigh + seat dashpots), ``energy_hysteretic``
+(Takeda), ``energy_contact_stored`` (contact + stick springs), ``energy_contact_dissipated``,
+``energy_friction`` (dissipated by slip) and ``energy_error`` = input − all the others. Work
+terms are trapezoidal over each step, which closes the balance of the Newmark average
+acceleration scheme exactly up to the Newton residual.
+"""
+
+from __future__ import annotations
+
+import time as _time
+import warnings
+
+import numpy as np
+from numba import njit
+
+from deckpound.analytic import contact_laws as cl
+from deckpound.analytic.kinematics import pack_geometry
+from deckpound.analytic.system import pack_system, spring_assemble, spring_commit, \
+    spring_deformations, spring_revert, spring_stored_energy, spring_tangent, \
+    spring_update_materials
+from deckpound.engines import output_stride
+from deckpound.models.errors import EngineFailure
+from deckpound.models.excitation import SupportMotion, analysis_duration, support_motion
+from deckpound.models.result import STATUS_FAILED, STATUS_SUCCESS, Result, scene_hash, \
+    standard_columns
+from deckpound.models.scene import Scene
+
+__all__ = ["run_compliance", "ENERGY_COLUMNS", "output_columns"]
+
+ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
+                  "energy_hysteretic", "energy_contact_stored", "energy_contact_dissipated",
+                  "energy_friction", "energy_error")
+N_ENERGY = len(ENERGY_COLUMNS)
+GAMMA, BETA = 0.5, 0.25
+SUBSTEPS = 10   # sub-steps of the fallback for a failed step (OpenSees engine default)
+# column layout of the numba output array
+_C_T, _C_U, _C_GAP, _C_FN, _C_FT, _C_BENT = 0, 1, 8, 12, 16, 20
+# result DOF column order: deck_x, deck_y, deck_theta, seat1_x, seat1_theta, seat2_x, seat2_theta
+_DOF_OF_COL = np.array([4, 5, 6, 0, 1, 2, 3], dtype=np.int64)
+
+
+def output_columns(scene: Scene) -> list[str]:
+    """Column names of the compliance result (standard columns, then the energies)."""
+    return standard_columns([b.name for b in scene.bents]) + list(ENERGY_COLUMNS)
+
+
+# ----------------------------------------------------------------------------- linear algebra
+@njit(cache=True)
+def lu_factor(A, piv):
+    """In-place LU with partial pivoting of a small dense matrix. Returns False if singular."""
+    n = A.shape[0]
+    for k in range(n):
+        p = k
+        amax = abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > amax:
+                amax = abs(A[i, k])
+                p = i
+        piv[k] = p
+        if amax == 0.0 or not np.isfinite(amax):
+            return False
+        if p != k:
+            for j in range(n):
+                tmp = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = tmp
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            A[i, k] *= inv
+            lik = A[i, k]
+            if lik != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= lik * A[k, j]
+    return True
+
+
+@njit(cache=True)
+def lu_solve(LU, piv, b, x):
+    """Solve with the factors of :func:`lu_factor` (x may alias b)."""
+    n = LU.shape[0]
+    for i in range(n):
+        x[i] = b[i]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            tmp = x[k]
+            x[k] = x[p]
+            x[p] = tmp
+    for i in range(n):
+        s = x[i]
+        for j in range(i):
+            s -= LU[i, j] * x[j]
+        x[i] = s
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for j in range(i + 1, n):
+            s -= LU[i, j] * x[j]
+        x[i] = s / LU[i, i]
+
+
+# ----------------------------------------------------------------------------- Newmark kernel
+@njit(cache=True)
+def _store(out, row, t, u, g, lam, lt, hstate, nbs, energy):
+    out[row, _C_T] = t
+    for k in range(7):
+        out[row, _C_U + k] = u[_DOF_OF_COL[k]]
+    for c in range(4):
+        out[row, _C_GAP + c] = g[c]
+        out[row, _C_FN + c] = lam[c]
+        out[row, _C_FT + c] = lt[c]
+    for i in range(nbs):
+        out[row, _C_BENT + i] = hstate[i, 14]
+    base = _C_BENT + nbs
+    for k in range(energy.shape[0]):
+        out[row, base + k] = energy[k]
+
+
+@njit(cache=True)
+def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
+    """Output energies from the running work totals W = [input, springs, viscous, contact,
+    friction]."""
+    ke = 0.0
+    for j in range(7):
+        ke += 0.5 * sa.mass[j] * v[j] * v[j]
+    es = spring_stored_energy(sa, hstate, u, ug)
+    ec = cl.contact_stored_energy(cp, cs)
+    efs = 0.0                                        # stick-spring part of ec
+    for c in range(4):
+        if cp[c, cl.P_FMODE] == 2 and cs[c, cl.S_CFT] != 0.0:
+            efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
+    energy[0] = W[0]
+    energy[1] = ke
+    energy[2] = es
+    energy[3] = W[2]
+    energy[4] = W[1] - es
+    energy[5] = ec
+    energy[6] = W[3] - (ec - efs)
+    energy[7] = W[4] - efs
+    energy[8] = W[0] - (ke + W[1] + W[2] + W[3] + W[4])
+
+
+@njit(cache=True)
+def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, UG, VG, dt, tol, maxit, stride,
+                nbs, out, info, u0, v0, substeps):
+    """Run the OpenSees-clone Newmark–Newton loop over all steps of UG, VG (N+1 rows).
+
+    u0, v0: initial displacement and velocity (7,); the initial acceleration solves
+    M ü₀ = F_c − F (zero when starting at rest with the supports at rest, as OpenSees).
+    A step that fails is redone from its start in ``substeps`` sub-steps (supports linearly
+    interpolated), as the OpenSees engine's ``fallback = "substep"``; ``substeps`` ≤ 1 disables
+    that.
+
+    Fills ``out`` (one row per output) and ``info`` = [status (0 ok, 1 no convergence,
+    2 singular tangent, 3 non-finite), rows written, failed step, iterations, contact events,
+    factorisations reused (same matrix), max iterations of a step, steps rescued by
+    sub-stepping].
+    """
+    nsteps = UG.shape[0] - 1
+    ns = sa.k0.shape[0]
+    nch = UG.shape[1]
+    mass = sa.mass
+    hp = sa.hparams
+    kind = sa.kind
+    u = np.zeros(7)
+    v = np.zeros(7)
+    a = np.zeros(7)
+    un = np.zeros(7)
+    vn = np.zeros(7)
+    an = np.zeros(7)
+    us = np.zeros(7)
+    vs = np.zeros(7)
+    as_ = np.zeros(7)
+    du = np.zeros(7)
+    R = np.zeros(7)
+    f = np.zeros(7)
+    fc = np.zeros(7)
+    K = np.zeros((7, 7))
+    Keff = np.zeros((7, 7))
+    LU = np.zeros((7, 7))
+    piv = np.zeros(7, dtype=np.int64)
+    H = np.zeros((7, 7))
+    fs = np.zeros(ns)
+    kt = np.zeros(ns)
+    g = np.zeros(4)
+    gd = np.zeros(4)
+    WN = np.zeros((4, 7))
+    WT = np.zeros((4, 7))
+    lam = np.zeros(4)
+    lt = np.zeros(4)
+    der = np.zeros((4, 7))
+    evaluated = np.zeros(4, dtype=np.bool_)
+    kt_fact = np.zeros(ns)          # spring tangents of the factors held in LU
+    lu_springs_only = False         # LU holds a factorisation without contact terms
+    lu_h = 0.0                      # step of the factors held in LU
+    ug = np.zeros(nch)
+    vg = np.zeros(nch)
+    ugo = np.zeros(nch)
+    # elastic effective tangent for the main step and its factors
+    Kel = np.zeros((7, 7))
+    LUel = np.zeros((7, 7))
+    pivel = np.zeros(7, dtype=np.int64)
+    c2 = GAMMA / (BETA * dt)
+    c3 = 1.0 / (BETA * dt * dt)
+    spring_tangent(sa, sa.k0, K)
+    for i in range(7):
+        for j in range(7):
+            Kel[i, j] = K[i, j] + c2 * Cmat[i, j]
+        Kel[i, i] += c3 * mass[i]
+    LUel[:, :] = Kel
+    if not lu_factor(LUel, pivel):
+        info[0] = 2
+        return
+    # energy bookkeeping: previous-(sub)step quantities
+    d_prev = np.zeros(ns)
+    dd_prev = np.zeros(ns)
+    fs_prev = np.zeros(ns)
+    d_new = np.zeros(ns)
+    dd_new = np.zeros(ns)
+    lam_prev = np.zeros(4)
+    lt_prev = np.zeros(4)
+    g_prev = np.zeros(4)
+    W = np.zeros(5)
+    energy = np.zeros(9)
+    for k in range(nch):
+        ug[k] = UG[0, k]
+        vg[k] = VG[0, k]
+    # initial state (OpenSees: at rest, ü₀ = 0 — the same as equilibrium then)
+    for j in range(7):
+        u[j] = u0[j]
+        v[j] = v0[j]
+        un[j] = u0[j]
+    spring_deformations(sa, u, v, ug, vg, d_new, dd_new)
+    spring_update_materials(hp, hstate, kind, d_new)
+    spring_assemble(sa, hstate, d_new, dd_new, v, f, fs, kt)
+    ncl = cl.eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
+                           evaluated)
+    if ncl < 0:
+        ncl = cl.eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
+                             evaluated)
+    for j in range(7):
+        a[j] = (fc[j] - f[j]) / mass[j]
+    spring_commit(sa, hstate)
+    cl.contact_commit(cs, g, gd, evaluated)
+    for c in range(4):
+        lam_prev[c] = lam[c]
+        lt_prev[c] = lt[c]
+        g_prev[c] = g[c]
+    for i in range(ns):
+        fs_prev[i] = fs[i]
+        d_prev[i] = d_new[i]
+        dd_prev[i] = dd_new[i]
+    # initial mechanical energy counts as input (zero from rest)
+    es0 = spring_stored_energy(sa, hstate, u, ug)
+    ec0 = cl.contact_stored_energy(cp, cs)
+    ke0 = 0.0
+    for j in range(7):
+        ke0 += 0.5 * mass[j] * v[j] * v[j]
+    W[0] = ke0 + es0 + ec0
+    W[1] = es0
+    W[3] = ec0
+    _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
+    _store(out, 0, 0.0, u, g, lam, lt, hstate, nbs, energy)
+    row = 1
+    total_it = 0
+    events = 0
+    reused = 0
+    maxit_seen = 0
+    rescued = 0
+    status = 0
+    for n in range(nsteps):
+        for j in range(7):
+            us[j] = u[j]
+            vs[j] = v[j]
+            as_[j] = a[j]
+        nsub = 1
+        while True:
+            h = dt / nsub
+            c2 = GAMMA / (BETA * h)
+            c3 = 1.0 / (BETA * h * h)
+            a1p = 1.0 - GAMMA / BETA
+            a2p = h * (1.0 - 0.5 * GAMMA / BETA)
+            a3p = -1.0 / (BETA * h)
+            a4p = 1.0 - 0.5 / BETA
+            sub_ok = True
+            for ksub in range(nsub):
+                # --- Newmark::newStep
+                for k in range(nch):
+                    ugo[k] = ug[k]
+                    if nsub == 1:
+                        ug[k] = UG[n + 1, k]
+                        vg[k] = VG[n + 1, k]
+                    else:
+                        w = (ksub + 1.0) / nsub
+                        ug[k] = UG[n, k] + w * (UG[n + 1, k] - UG[n, k])
+                        vg[k] = VG[n, k] + w * (VG[n + 1, k] - VG[n, k])
+                for j in range(7):
+                    un[j] = u[j]
+                    vn[j] = v[j]
+                    an[j] = a[j]
+                for j in range(7):
+                    v[j] = a1p * vn[j] + a2p * an[j]
+                    a[j] = a4p * an[j] + a3p * vn[j]
+                # --- formUnbalance
+                spring_deformations(sa, u, v, ug, vg, d_new, dd_new)
+                spring_update_materials(hp, hstate, kind, d_new)
+                nonel = spring_assemble(sa, hstate, d_new, dd_new, v, f, fs, kt)
+                ncl = cl.eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc,
+                                       lam, lt, der, evaluated)
+                if ncl < 0:
+                    ncl = cl.eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc,
+                                         lam, lt, der, evaluated)
+                anyev = evaluated[0] or evaluated[1] or evaluated[2] or evaluated[3]
+                for j in range(7):
+                    R[j] = fc[j] - f[j] - mass[j] * a[j]
+                it = 0
+                converged = False
+                while True:
+                    # --- formTangent + solve (factors reused when the matrix is the same)
+                    same = False
+                    if not anyev:
+                        if nonel == 0 and nsub == 1:
+                            same = True
+                            lu_solve(LUel, pivel, R, du)
+                        elif lu_springs_only and lu_h == h:
+                            same = True
+                            for i in range(ns):
+                                if kt[i] != kt_fact[i]:
+                                    same = False
+                                    break
+                            if same:
+                                lu_solve(LU, piv, R, du)
+                    if same:
+                        reused += 1
+                    else:
+                        spring_tangent(sa, kt, K)
+                        for i in range(7):
+                            for j in range(7):
+                                Keff[i, j] = K[i, j] + c2 * Cmat[i, j]
+                            Keff[i, i] += c3 * mass[i]
+                        if anyev:
+                            cl.contact_tangent(cp, u, geom, nonlinear, lam, der, evaluated, WN,
+                                               WT, c2, Keff, H)
+                        LU[:, :] = Keff
+                        lu_springs_only = not anyev
+                        lu_h = h
+                        for i in range(ns):
+                            kt_fact[i] = kt[i]
+                        if not lu_factor(LU, piv):
+                            lu_springs_only = False
+                            status = 2
+                            break
+                        lu_solve(LU, piv, R, du)
+                    # --- Newmark::update
+                    nrm = 0.0
+                    for j in range(7):
+                        u[j] += du[j]
+                        v[j] += c2 * du[j]
+                        a[j] += c3 * du[j]
+                        nrm += du[j] * du[j]
+                    nrm = np.sqrt(nrm)
+                    # --- formUnbalance
+                    spring_deformations(sa, u, v, ug, vg, d_new, dd_new)
+                    spring_update_materials(hp, hstate, kind, d_new)
+                    nonel = spring_assemble(sa, hstate, d_new, dd_new, v, f, fs, kt)
+                    ncl = cl.eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc,
+                                           lam, lt, der, evaluated)
+                    if ncl < 0:
+                        ncl = cl.eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT,
+                                             fc, lam, lt, der, evaluated)
+                    anyev = evaluated[0] or evaluated[1] or evaluated[2] or evaluated[3]
+                    for j in range(7):
+                        R[j] = fc[j] - f[j] - mass[j] * a[j]
+                    it += 1
+                    if not np.isfinite(nrm):
+                        status = 3
+                        break
+                    if nrm <= tol:
+                        converged = True
+                        break
+                    if it >= maxit:
+                        status = 1
+                        break
+                total_it += it
+                if it > maxit_seen:
+                    maxit_seen = it
+                if not converged:
+                    sub_ok = False
+                    break
+                status = 0
+                # --- commit
+                spring_commit(sa, hstate)
+                for c in range(4):
+                    if cs[c, cl.S_CCLOSED] == 0.0 and cs[c, cl.S_TCLOSED] != 0.0 and evaluated[c]:
+                        events += 1
+                if nonlinear and not anyev:
+                    cl.gaps_and_rates(u, v, geom, nonlinear, g, gd, WN, WT)
+                cl.contact_commit(cs, g, gd, evaluated)
+                # --- energy (trapezoidal work over the (sub)step)
+                for i in range(ns):
+                    di = d_new[i]
+                    vi = dd_new[i]
+                    ch = sa.schan[i]
+                    if ch >= 0:
+                        ftot_o = fs_prev[i] + sa.crate[i] * dd_prev[i]
+                        ftot_n = fs[i] + sa.crate[i] * vi
+                        W[0] -= sa.sval[i] * (ug[ch] - ugo[ch]) * 0.5 * (ftot_o + ftot_n)
+                    dlt = di - d_prev[i]
+                    W[1] += dlt * 0.5 * (fs_prev[i] + fs[i])
+                    W[2] += dlt * 0.5 * sa.crate[i] * (dd_prev[i] + vi)
+                    d_prev[i] = di
+                    dd_prev[i] = vi
+                    fs_prev[i] = fs[i]
+                a0 = sa.scal[0]
+                for j in range(7):
+                    W[2] += (u[j] - un[j]) * a0 * mass[j] * 0.5 * (vn[j] + v[j])
+                for c in range(4):
+                    W[3] -= 0.5 * (lam_prev[c] + lam[c]) * (g[c] - g_prev[c])
+                    if lt[c] != 0.0 or lt_prev[c] != 0.0:
+                        ds = 0.0
+                        for j in range(7):
+                            ds += WT[c, j] * (u[j] - un[j])
+                        W[4] -= 0.5 * (lt_prev[c] + lt[c]) * ds
+                    lam_prev[c] = lam[c]
+                    lt_prev[c] = lt[c]
+                    g_prev[c] = g[c]
+            if sub_ok:
+                if nsub > 1:
+                    rescued += 1
+                break
+            if nsub > 1 or substeps <= 1 or status == 3:
+                break
+            # --- revert to the start of the step and sub-step it
+            spring_revert(sa, hstate)
+            cl.contact_revert(cs)
+            for j in range(7):
+                u[j] = us[j]
+                v[j] = vs[j]
+                a[j] = as_[j]
+            for k in range(nch):
+                ug[k] = UG[n, k]
+                vg[k] = VG[n, k]
+            nsub = substeps
+        if status != 0:
+            info[0] = status
+            info[1] = row
+            info[2] = n + 1
+            info[3] = total_it
+            info[4] = events
+            info[6] = maxit_seen
+            info[7] = rescued
+            return
+        # --- output
+        if (n + 1) % stride == 0:
+            _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
+            _store(out, row, (n + 1) * dt, u, g, lam, lt, hstate, nbs, energy)
+            row += 1
+    info[0] = 0
+    info[1] = row
+    info[3] = total_it
+    info[4] = events
+    info[5] = reused
+    info[6] = maxit_seen
+    info[7] = rescued
+    _ = ncl
+
+
+# ----------------------------------------------------------------------------- engine
+_STATUS_TEXT = {1: "Newton did not converge (NormDispIncr)", 2: "singular tangent",
+                3: "non-finite state"}
+
+
+def _warn_ignored(scene: Scene) -> None:
+    ct = scene.contact
+    if ct.friction > 0.0 and ct.friction_mode == "none":
+        warnings.warn("contact.friction > 0 is ignored because contact.friction_mode = 'none'",
+                      stacklevel=3)
+    if ct.friction_mode != "none" and ct.friction == 0.0:
+        warnings.warn(f"contact.friction_mode = {ct.friction_mode!r} has no effect with "
+                      "contact.friction = 0", stacklevel=3)
+
+
+def prepare(scene: Scene, motion: SupportMotion | None, dt: float, *, kv_clip: bool = False):
+    """Pack everything a run needs (shared by the integrators and the verification)."""
+    if motion is None:
+        motion = support_motion(scene)
+    duration = analysis_duration(scene, motion)
+    ps = pack_system(scene)
+    res = motion.resample(dt, duration)
+    UG, VG = res.matrices(ps.channels)
+    cp = cl.pack_contact(scene, kv_clip=kv_clip)
+    geom = pack_geometry(scene)
+    cs = cl.new_contact_state(geom[8:12])
+    return ps, UG, VG, cp, cs, geom, duration
+
+
+def _initial(initial_state):
+    u0 = np.zeros(7)
+    v0 = np.zeros(7)
+    if initial_state is not None:
+        u0[:] = np.asarray(initial_state[0], dtype=float)
+        v0[:] = np.asarray(initial_state[1], dtype=float)
+    return u0, v0
+
+
+def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,
+                   raise_on_failure: bool = False, kv_clip: bool = False,
+                   initial_state=None, substeps: int = SUBSTEPS) -> Result:
+    """Run the compliance engine on ``scene`` (engine contract of :mod:`deckpound.engines`).
+
+    Extra keywords (not scene options): ``kv_clip`` clips the Kelvin–Voigt force at zero
+    instead of the OpenSees ViscoelasticGap behaviour (tension allowed until the gap reopens);
+    ``initial_state = (u0, v0)`` starts from the given DOF displacements and velocities
+    (default rest, as OpenSees); ``substeps``: sub-steps of the fallback for a failed step
+    (like the OpenSees engine's ``fallback = "substep"``; 1 disables it).
+    """
+    _warn_ignored(scene)
+    if scene.compliance.integrator == "adaptive":
+        from deckpound.analytic.adaptive import run_adaptive
+        return run_adaptive(scene, motion, raise_on_failure=raise_on_failure, kv_clip=kv_clip,
+                            initial_state=initial_state)
+    t0 = _time.perf_counter()
+    cset = scene.compliance
+    dt = cset.dt
+    ps, UG, VG, cp, cs, geom, duration = prepare(scene, motion, dt, kv_clip=kv_clip)
+    stride = output_stride(dt, scene.run.output_dt)
+    nsteps = UG.shape[0] - 1
+    nbs = ps.n_bent_springs
+    cols = output_columns(scene)
+    out = np.zeros((nsteps // stride + 1, len(cols)))
+    info = np.zeros(8, dtype=np.int64)
+    hstate = ps.new_state()
+    u0, v0 = _initial(initial_state)
+    t1 = _time.perf_counter()
+    newmark_run(ps.arrays, ps.C, hstate, cp, cs, geom, scene.contact.geometry == "nonlinear",
+                UG, VG, dt, cset.tolerance, cset.max_iterations, stride, nbs, out, info, u0, v0,
+                substeps)
+    t2 = _time.perf_counter()
+    status_code, rows = int(info[0]), int(info[1])
+    meta = {
+        "engine": "compliance",
+        "integrator": "newmark",
+        "settings": {"dt": dt, "tolerance": cset.tolerance,
+                     "max_iterations": cset.max_iterations, "gamma": GAMMA, "beta": BETA,
+                     "kv_clip": kv_clip},
+        "scene_hash": scene_hash(scene),
+        "wall_time": t2 - t0,
+        "loop_time": t2 - t1,
+        "us_per_step": 1e6 * (t2 - t1) / max(nsteps, 1),
+        "steps": nsteps if status_code == 0 else int(info[2]) - 1,
+        "iterations": int(info[3]),
+        "max_step_iterations": int(info[6]),
+        "elastic_factor_reuses": int(info[5]),
+        "contact_events": int(info[4]),
+        "failures": int(info[7]) + (0 if status_code == 0 else 1),
+        "rescued_by_substeps": int(info[7]),
+        "duration": duration,
+        "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
+        "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
+                       "contact_stored + contact_dissipated + friction) [kJ]",
+    }
+    columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
+    ein = np.max(np.abs(columns["energy_input"])) if rows else 0.0
+    meta["energy_closure"] = float(np.max(np.abs(columns["energy_error"])) / ein) \
+        if ein > 0 else 0.0
+    if status_code == 0:
+        meta["status"] = STATUS_SUCCESS
+        meta["message"] = f"{nsteps} steps, {int(info[3])} Newton iterations"
+    else:
+        step = int(info[2])
+        meta["status"] = STATUS_FAILED
+        meta["failed_step"] = step
+        meta["failed_time"] = step * dt
+        meta["message"] = (f"{_STATUS_TEXT.get(status_code, 'failure')} at step {step} "
+                           f"(t = {step * dt:.6g} s)")
+        if raise_on_failure:
+            raise EngineFailure(f"compliance engine: {meta['message']}")
+    return Result(engine="compliance", columns=columns, meta=meta)

@@ -1,0 +1,467 @@
+"""Compliant normal contact laws and regularised / elastic-plastic friction, in numba.
+
+One corner at a time: the engine gives the gap g (g < 0 penetration, δ = −g), its rate ġ and,
+for friction, the tangential relative velocity U_T and the tangential relative displacement
+increment Δs of the step; the law returns the normal force λ_N (compression > 0), the tangential
+force λ_T (force on the deck along +t, i.e. +y for linear kinematics) and their derivatives for
+Newton. The generalised contact force on the 7 DOF is W_Nᵀ λ_N + W_Tᵀ λ_T (right-hand side).
+
+Normal laws (``scene.contact.law``), each the arithmetic of the OpenSees material the OpenSees
+engine uses (strain ε = g − g₀, OpenSees gap = −g₀, so ε − gap = g):
+
+* ``linear`` — OpenSees ``ElasticPPGap(k, Fy→∞, −g₀)``: λ = −k g for g ≤ 0, else 0
+  (closed at g = 0 exactly, tangent k).
+* ``kelvin-voigt`` — OpenSees ``ViscoelasticGap(k, c, −g₀)``: λ = −k g − c ġ for g < 0, else 0,
+  c from :func:`deckpound.models.contact_params.kelvin_voigt_damping`. ViscoelasticGap does NOT
+  clip tension: near the end of the restitution phase λ may be negative until the gap reopens
+  (that is what makes the restitution exactly e for the linear oscillator). Default: this
+  OpenSees-identical behaviour; ``clip=True`` (engine keyword ``kv_clip``) uses max(λ, 0).
+* ``hertz`` — λ = k (−g)^n for g < 0.
+* ``hertz-damp`` — λ = k δ^n (1 + D δ̇ / v⁻), D = 3(1 − e²)/4 (Lankarani–Nikravesh), clipped at 0;
+  v⁻ is the approach velocity δ̇ committed at the last open state before the impact (at the
+  located closure event in the adaptive integrator), floored at ``V_IMPACT_MIN``.
+* ``bilinear`` — OpenSees ``ImpactMaterial(K1, K2, −δ_y, −g₀)`` (Muthukumar): loading with K1
+  from the committed stress, capped by the line K1 δ_y + K2 (δ − δ_y); unloading with K1, floored
+  by the line K2 δ; open (0) for g ≥ 0. The OpenSees quirks are kept: the increment is taken from
+  the committed strain even when that was open (first-contact step), and a zero increment keeps
+  the previous trial stress and tangent.
+
+Friction (``scene.contact.friction_mode``):
+
+* ``slip`` — λ_T = −μ λ_N⁺ tanh(U_T / v₀): Coulomb without sticking.
+* ``stick`` — elastic-plastic tangential spring (return mapping), the law of OpenSees
+  zeroLengthContact2D: trial λ_T = λ_T,n − k_t Δs; if |trial| ≤ μ λ_N⁺ stick, else slip with
+  λ_T = μ λ_N⁺ sign(trial). The tangential force is released when the corner opens.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from deckpound.models import contact_params
+from deckpound.models.scene import CONTACT_LAWS, FRICTION_MODES, Scene
+
+__all__ = [
+    "LAW_CODES", "FRICTION_CODES", "N_CP", "N_CS", "V_IMPACT_MIN",
+    "pack_contact", "new_contact_state", "normal_law", "friction_law", "contact_commit",
+    "contact_revert", "contact_stored_energy", "gap_hessian",
+]
+
+LAW_CODES = {name: i for i, name in enumerate(CONTACT_LAWS)}   # linear 0, kv 1, hertz 2, hd 3, bil 4
+FRICTION_CODES = {name: i for i, name in enumerate(FRICTION_MODES)}  # none 0, slip 1, stick 2
+V_IMPACT_MIN = 1.0e-3   # m/s, floor of the Hunt–Crossley approach velocity
+
+# parameters per corner (cp[c, :])
+P_LAW, P_K, P_N, P_C, P_D, P_K2, P_DY, P_MU, P_FMODE, P_KT, P_V0, P_CLIP = range(12)
+N_CP = 12
+# state per corner (cs[c, :])
+S_CG, S_CGD, S_CLAM, S_CFT, S_CCLOSED, S_CVIMP, S_TLAM, S_TTAN, S_TFT, S_TVIMP, S_TCLOSED = \
+    range(11)
+N_CS = 11
+
+
+def pack_contact(scene: Scene, *, kv_clip: bool = False) -> np.ndarray:
+    """Per-corner parameter array (4, N_CP) of the scene's contact law and friction."""
+    ct = scene.contact
+    cp = np.zeros((4, N_CP))
+    cp[:, P_LAW] = LAW_CODES[ct.law]
+    cp[:, P_K] = ct.stiffness
+    cp[:, P_N] = ct.exponent
+    cp[:, P_C] = contact_params.kelvin_voigt_damping(scene)
+    cp[:, P_D] = contact_params.hunt_crossley_factor(ct.restitution)
+    cp[:, P_K2] = ct.bilinear_ratio * ct.stiffness
+    cp[:, P_DY] = ct.bilinear_yield
+    cp[:, P_MU] = ct.friction
+    cp[:, P_FMODE] = FRICTION_CODES[ct.friction_mode] if ct.friction > 0.0 else 0
+    cp[:, P_KT] = ct.tangential_stiffness
+    cp[:, P_V0] = ct.slip_velocity
+    cp[:, P_CLIP] = 1.0 if kv_clip else 0.0
+    return cp
+
+
+def new_contact_state(gaps0) -> np.ndarray:
+    """Virgin corner states (4, N_CS) with committed gaps ``gaps0``."""
+    cs = np.zeros((4, N_CS))
+    cs[:, S_CG] = gaps0
+    return cs
+
+
+@njit(cache=True)
+def normal_law(cp, cs, g, gd, out):
+    """Trial normal force of one corner. cp, cs: that corner's rows.
+
+    out[0] = λ_N, out[1] = ∂λ_N/∂g, out[2] = ∂λ_N/∂ġ. Returns True when the corner is closed.
+    """
+    law = int(cp[P_LAW])
+    lam = 0.0
+    dg = 0.0
+    dgd = 0.0
+    closed = False
+    if law == 0:                                  # ElasticPPGap, Fy -> inf
+        if g <= 0.0:
+            closed = True
+            lam = -cp[P_K] * g
+            dg = -cp[P_K]
+    elif law == 1:                                # ViscoelasticGap
+        if g < 0.0:
+            closed = True
+            lam = cp[P_K] * (-g) + cp[P_C] * (-gd)
+            dg = -cp[P_K]
+            dgd = -cp[P_C]
+            if cp[P_CLIP] != 0.0 and lam < 0.0:
+                lam = 0.0
+                dg = 0.0
+                dgd = 0.0
+    elif law == 2:                                # Hertz
+        if g < 0.0:
+            closed = True
+            n = cp[P_N]
+            dlt = -g
+            lam = cp[P_K] * dlt ** n
+            dg = -n * cp[P_K] * dlt ** (n - 1.0)
+    elif law == 3:                                # Hertz-damp (Lankarani-Nikravesh)
+        if g < 0.0:
+            closed = True
+            if cs[S_CCLOSED] == 0.0:
+                vimp = -cs[S_CGD]
+                if vimp < V_IMPACT_MIN:
+                    vimp = V_IMPACT_MIN
+            else:
+                vimp = cs[S_CVIMP]
+            cs[S_TVIMP] = vimp
+            n = cp[P_N]
+            dlt = -g
+            dn = dlt ** n
+            fac = 1.0 + cp[P_D] * (-gd) / vimp
+            lam = cp[P_K] * dn * fac
+            if lam > 0.0:
+                dg = -n * cp[P_K] * dlt ** (n - 1.0) * fac
+                dgd = -cp[P_K] * dn * cp[P_D] / vimp
+            else:
+                lam = 0.0
+    else:                                         # ImpactMaterial (stress = -lambda)
+        k1 = cp[P_K]
+        k2 = cp[P_K2]
+        dy = -cp[P_DY]
+        dstrain = g - cs[S_CG]
+        cstress = -cs[S_CLAM]
+        if g >= 0.0:
+            stress = 0.0
+            tan = 0.0
+        else:
+            closed = True
+            if dstrain < 0.0:
+                stress = cstress + k1 * dstrain
+                tan = k1
+                lim = k1 * dy + k2 * (g - dy)
+                if cstress + k1 * dstrain < lim:
+                    stress = lim
+                    tan = k2
+            elif dstrain > 0.0:
+                stress = cstress + k1 * dstrain
+                tan = k1
+                lim = k2 * g
+                if cstress + k1 * dstrain > lim:
+                    stress = lim
+                    tan = k2
+            else:                                  # OpenSees: trial values unchanged
+                stress = -cs[S_TLAM]
+                tan = cs[S_TTAN]
+        lam = -stress
+        dg = -tan
+        cs[S_TTAN] = tan
+    cs[S_TLAM] = lam
+    cs[S_TCLOSED] = 1.0 if closed else 0.0
+    out[0] = lam
+    out[1] = dg
+    out[2] = dgd
+    return closed
+
+
+@njit(cache=True)
+def friction_law(cp, cs, lam_n, ds, ut, out):
+    """Trial tangential force of one corner (force on the deck along +t).
+
+    lam_n : trial normal force; ds : tangential relative displacement increment of the step
+    (stick mode); ut : tangential relative velocity (slip mode).
+    out[0] = λ_T, out[1] = ∂λ_T/∂Δs, out[2] = ∂λ_T/∂U_T, out[3] = ∂λ_T/∂λ_N.
+    Returns 0 open/no friction, 1 stick, 2 slip.
+    """
+    mode = int(cp[P_FMODE])
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = 0.0
+    cs[S_TFT] = 0.0
+    if mode == 0 or lam_n <= 0.0:
+        return 0
+    mu = cp[P_MU]
+    if mode == 1:
+        x = ut / cp[P_V0]
+        th = np.tanh(x)
+        out[0] = -mu * lam_n * th
+        out[2] = -mu * lam_n * (1.0 - th * th) / cp[P_V0]
+        out[3] = -mu * th
+        cs[S_TFT] = out[0]
+        return 2
+    trial = cs[S_CFT] - cp[P_KT] * ds
+    lim = mu * lam_n
+    if abs(trial) <= lim:
+        out[0] = trial
+        out[1] = -cp[P_KT]
+        cs[S_TFT] = trial
+        return 1
+    sg = 1.0 if trial > 0.0 else -1.0
+    out[0] = sg * lim
+    out[3] = sg * mu
+    cs[S_TFT] = out[0]
+    return 2
+
+
+@njit(cache=True)
+def contact_commit(cs, g, gd, evaluated):
+    """Commit the corners after a converged step; g, gd: converged gaps and rates (4,).
+
+    ``evaluated[c]`` False means the law was skipped (corner open by a margin): its trial is the
+    open state. Committed gaps are updated for every corner (the bilinear law and the impact
+    velocity need them, as OpenSees updates every element every step).
+    """
+    for c in range(4):
+        if not evaluated[c]:
+            cs[c, S_TLAM] = 0.0
+            cs[c, S_TFT] = 0.0
+            cs[c, S_TCLOSED] = 0.0
+            cs[c, S_TTAN] = 0.0
+        cs[c, S_CG] = g[c]
+        cs[c, S_CGD] = gd[c]
+        cs[c, S_CLAM] = cs[c, S_TLAM]
+        cs[c, S_CFT] = cs[c, S_TFT]
+        cs[c, S_CCLOSED] = cs[c, S_TCLOSED]
+        cs[c, S_CVIMP] = cs[c, S_TVIMP]
+
+
+@njit(cache=True)
+def contact_revert(cs):
+    """Trial := committed (OpenSees revertToLastCommit; the bilinear tangent is kept)."""
+    for c in range(4):
+        cs[c, S_TLAM] = cs[c, S_CLAM]
+        cs[c, S_TFT] = cs[c, S_CFT]
+        cs[c, S_TCLOSED] = cs[c, S_CCLOSED]
+        cs[c, S_TVIMP] = cs[c, S_CVIMP]
+
+
+@njit(cache=True)
+def contact_stored_energy(cp, cs):
+    """Recoverable energy in the committed contact springs and stick springs [kJ]."""
+    e = 0.0
+    for c in range(4):
+        law = int(cp[c, P_LAW])
+        g = cs[c, S_CG]
+        lam = cs[c, S_CLAM]
+        if lam > 0.0 and g < 0.0:
+            k = cp[c, P_K]
+            if law == 0 or law == 1:
+                e += 0.5 * k * g * g
+            elif law == 2 or law == 3:
+                n = cp[c, P_N]
+                e += k * (-g) ** (n + 1.0) / (n + 1.0)
+            else:
+                # unload along K1 from (g, -lam) to the K2 line through the origin, then along it
+                k2 = cp[c, P_K2]
+                if k > k2:
+                    gs = (k * g + lam) / (k - k2)
+                    if gs > 0.0:
+                        gs = 0.0
+                else:
+                    gs = g
+                lam_s = -k2 * gs
+                e += 0.5 * (lam + lam_s) * (gs - g) + 0.5 * k2 * gs * gs
+        if cp[c, P_FMODE] == 2 and cs[c, S_CFT] != 0.0:
+            e += 0.5 * cs[c, S_CFT] ** 2 / cp[c, P_KT]
+    return e
+
+
+@njit(cache=True)
+def gap_hessian(u, geom, c, H):
+    """∂²g_N/∂u² of corner c for the geometrically nonlinear kinematics (7×7, filled)."""
+    XD, YD, TD = 4, 5, 6
+    xc, yc, g0, side = geom[c], geom[4 + c], geom[8 + c], geom[12 + c]
+    hl = geom[16]
+    sx = 0 if side > 0 else 2
+    st = 1 if side > 0 else 3
+    for i in range(7):
+        for j in range(7):
+            H[i, j] = 0.0
+    th, ths = u[TD], u[st]
+    ct, sn = np.cos(th), np.sin(th)
+    cs_, ss = np.cos(ths), np.sin(ths)
+    px = u[XD] + xc * ct - yc * sn
+    py = u[YD] + xc * sn + yc * ct
+    dpx = -xc * sn - yc * ct
+    dpy = xc * ct - yc * sn
+    d2px = -xc * ct + yc * sn
+    d2py = -xc * sn - yc * ct
+    fx = -side * (hl + g0) + u[sx]
+    rx, ry = px - fx, py
+    nx, ny = side * cs_, side * ss
+    dnx, dny = -side * ss, side * cs_          # ∂n/∂θ_s
+    H[TD, TD] = nx * d2px + ny * d2py
+    H[XD, st] = dnx
+    H[YD, st] = dny
+    H[TD, st] = dnx * dpx + dny * dpy
+    H[sx, st] = -dnx
+    H[st, st] = side * (-cs_ * rx - ss * ry)
+    for (i, j) in ((XD, st), (YD, st), (TD, st), (sx, st)):
+        H[j, i] = H[i, j]
+    return H
+
+
+# --------------------------------------------------------------------------- assembly helpers
+from deckpound.analytic.kinematics import contact_kinematics  # noqa: E402
+
+
+@njit(cache=True, inline="always")
+def _linear_gaps(u, v, geom, g, gd):
+    """Gaps and gap rates of the small-rotation kinematics (kinematics.contact_kinematics)."""
+    for c in range(4):
+        yc, g0, side = geom[4 + c], geom[8 + c], geom[12 + c]
+        sx = 0 if side > 0 else 2
+        st = 1 if side > 0 else 3
+        g[c] = g0 + side * ((u[4] - yc * u[6]) - (u[sx] - yc * u[st]))
+        gd[c] = side * ((v[4] - yc * v[6]) - (v[sx] - yc * v[st]))
+
+
+@njit(cache=True)
+def gaps_and_rates(u, v, geom, nonlinear, g, gd, WN, WT):
+    """Gaps g and rates ġ = W_N u̇ of the four corners (fills WN, WT when nonlinear)."""
+    if not nonlinear:
+        _linear_gaps(u, v, geom, g, gd)
+    else:
+        contact_kinematics(u, geom, True, g, WN, WT)
+        for c in range(4):
+            s = 0.0
+            for j in range(7):
+                s += WN[c, j] * v[j]
+            gd[c] = s
+
+
+@njit(cache=True)
+def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
+                 evaluated):
+    if nonlinear:
+        gaps_and_rates(u, v, geom, True, g, gd, WN, WT)
+        for j in range(7):
+            fc[j] = 0.0
+        for c in range(4):
+            lam[c] = 0.0
+            lt[c] = 0.0
+            evaluated[c] = g[c] <= 0.0
+    else:
+        contact_kinematics(u, geom, False, g, WN, WT)
+    nclosed = 0
+    out = np.empty(4)
+    for c in range(4):
+        for k in range(7):
+            der[c, k] = 0.0
+        if not evaluated[c]:
+            continue
+        closed = normal_law(cp[c], cs[c], g[c], gd[c], out)
+        lam[c] = out[0]
+        der[c, 0] = out[1]
+        der[c, 1] = out[2]
+        if closed:
+            nclosed += 1
+        if cp[c, P_FMODE] != 0.0:
+            ds = 0.0
+            ut = 0.0
+            for j in range(7):
+                ds += WT[c, j] * (u[j] - un[j])
+                ut += WT[c, j] * v[j]
+            friction_law(cp[c], cs[c], lam[c], ds, ut, out)
+            lt[c] = out[0]
+            der[c, 2] = out[1]
+            der[c, 3] = out[2]
+            der[c, 4] = out[3]
+            der[c, 5] = ds
+            der[c, 6] = ut
+        else:
+            cs[c, S_TFT] = 0.0
+        for j in range(7):
+            fc[j] += WN[c, j] * lam[c] + WT[c, j] * lt[c]
+    return nclosed
+
+
+@njit(cache=True)
+def contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der, evaluated):
+    """Contact forces (convenience: :func:`eval_contacts`, then :func:`eval_closed` if needed)."""
+    n = eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
+                      evaluated)
+    if n < 0:
+        n = eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
+                        evaluated)
+    return n
+
+
+@njit(cache=True)
+def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
+                  evaluated):
+    """Gap check (call-free, cheap); returns 0 when every corner is open (fc, lam, lt zeroed),
+    −1 when :func:`eval_closed` must evaluate the laws (some g ≤ 0, or nonlinear kinematics).
+
+    Contact forces at the trial (u, u̇); un: displacement at the start of the step.
+
+    Fills g, gd (4,), fc (7,) = Σ W_Nᵀ λ_N + W_Tᵀ λ_T, lam, lt (4,), der (4, 7): per corner
+    [∂λ_N/∂g, ∂λ_N/∂ġ, ∂λ_T/∂Δs, ∂λ_T/∂U_T, ∂λ_T/∂λ_N, Δs, U_T], evaluated (4,) bool, and WN,
+    WT (when some corner is closed). Corners with g > 0 are open for every law and are skipped
+    (the laws are not evaluated at all while every gap is open).
+    """
+    # (no calls: numba then prunes the reference counting of the array arguments) only: numba then prunes the reference counting of the array arguments)
+    anyc = nonlinear
+    if not nonlinear:
+        for c in range(4):
+            yc, g0, side = geom[4 + c], geom[8 + c], geom[12 + c]
+            sx = 0 if side > 0 else 2
+            st = 1 if side > 0 else 3
+            gc = g0 + side * ((u[4] - yc * u[6]) - (u[sx] - yc * u[st]))
+            g[c] = gc
+            gd[c] = side * ((v[4] - yc * v[6]) - (v[sx] - yc * v[st]))
+            lam[c] = 0.0
+            lt[c] = 0.0
+            evaluated[c] = gc <= 0.0
+            if gc <= 0.0:
+                anyc = True
+        for j in range(7):
+            fc[j] = 0.0
+    if not anyc:
+        return 0
+    return -1
+
+
+@njit(cache=True)
+def contact_tangent(cp, u, geom, nonlinear, lam, der, evaluated, WN, WT, c2, Keff, H):
+    """Add −∂F_c/∂u − c2 ∂F_c/∂u̇ to Keff (Newmark: ∂u̇/∂u = c2).
+
+    Includes the geometric term −λ_N ∂²g/∂u² for nonlinear kinematics; the derivative of W_T
+    (friction, nonlinear kinematics only) is neglected (quasi-Newton; the converged solution
+    is unaffected).
+    """
+    for c in range(4):
+        if not evaluated[c]:
+            continue
+        kn = -(der[c, 0] + c2 * der[c, 1])
+        kt = der[c, 2] + c2 * der[c, 3]
+        tn = der[c, 4] * (der[c, 0] + c2 * der[c, 1])
+        if kn != 0.0 or kt != 0.0 or tn != 0.0:
+            for i in range(7):
+                wni = WN[c, i]
+                wti = WT[c, i]
+                if wni == 0.0 and wti == 0.0:
+                    continue
+                for j in range(7):
+                    Keff[i, j] += kn * wni * WN[c, j] - wti * (kt * WT[c, j] + tn * WN[c, j])
+        if nonlinear and lam[c] != 0.0:
+            gap_hessian(u, geom, c, H)
+            for i in range(7):
+                for j in range(7):
+                    Keff[i, j] -= lam[c] * H[i, j]

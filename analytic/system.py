@@ -1,0 +1,365 @@
+"""Smooth (contact-free) forces of the 7-DOF model, packed once and evaluated in numba.
+
+This module is the one implementation of the bent and seat springs, their dashpots and the
+Rayleigh damping that the compliance engine (:mod:`deckpound.analytic.compliance`) and the
+nonsmooth engine share. It knows nothing about contact.
+
+Model (the same as the OpenSees engine, see :mod:`deckpound.models.mechanics`)
+------------------------------------------------------------------------------
+DOFs u = [x₁, θ₁, x₂, θ₂, x_d, y_d, θ_d]. Spring deformations and rates
+
+    d = B u − S u_g(t),        ḋ = B u̇ − S u̇_g(t)
+
+(u_g, u̇_g: support displacement and velocity per channel of
+:func:`deckpound.models.mechanics.support_channels`). The generalised internal force is
+
+    F(u, u̇) = Bᵀ [ f_s(d) + (a1·k0 + c_dash) ḋ ] + a0 · M u̇
+
+with f_s the OpenSees ``Hysteretic`` clone (Takeda stand-in, ``element_copy=True``) for the bent
+springs and linear k0·d for the seat springs; a1·k0 is the stiffness-proportional Rayleigh part on
+the spring deformation rates with the *initial* stiffness (OpenSees ``rayleigh(a0, 0, a1, 0)``
+with ``-doRayleigh 1`` on the zeroLength elements) and a0·M the mass part on absolute velocities.
+The equation of motion is ``M ü + F(u, u̇) = (contact forces)``.
+
+Usage (Python side)::
+
+    ps = pack_system(scene)            # once per run
+    sa, hstate = ps.arrays, ps.new_state()
+    spring_forces(sa, hstate, u, v, ug, vg, f, K, fs, kt, d, dd, True)  # trial, forces, tangent
+    spring_commit(sa, hstate)          # after a converged / accepted step
+    spring_revert(sa, hstate)          # to discard a trial
+
+``ps.C`` is the constant damping matrix ∂F/∂u̇ = a0 M + Bᵀ diag(a1 k0 + c_dash) B; ``K`` returned by
+:func:`spring_forces` is ∂F/∂u = Bᵀ diag(k_t) B with k_t the material tangents.
+
+Units: m, rad, t, kN, s (kN = t·m/s²).
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from deckpound.analytic._hysteretic_kernel import (
+    C_ROTMAX,
+    C_ROTMIN,
+    C_STRAIN,
+    C_STRESS,
+    N_PARAMS,
+    N_STATE,
+    P_E1N,
+    P_E1P,
+    P_EUN,
+    P_EUP,
+    P_BETA,
+    T_STRESS,
+    T_TANGENT,
+    hyst_commit,
+    hyst_init_state,
+    hyst_revert,
+    hyst_set_trial,
+)
+from deckpound.analytic.hysteretic import pack_hysteretic
+from deckpound.models import mechanics
+from deckpound.models.scene import Scene, TakedaSpring
+
+__all__ = [
+    "SystemArrays",
+    "PackedSystem",
+    "pack_system",
+    "takeda_hysteretic_args",
+    "spring_deformations",
+    "spring_forces",
+    "spring_update_materials",
+    "spring_assemble",
+    "spring_tangent",
+    "spring_commit",
+    "spring_revert",
+    "spring_stored_energy",
+    "N_DOF",
+    "KIND_LINEAR",
+    "KIND_HYSTERETIC",
+]
+
+N_DOF = 7
+KIND_LINEAR = 0
+KIND_HYSTERETIC = 1
+
+#: The flat arrays the numba kernels take (a numba-compatible namedtuple).
+#:
+#: mass (7,) diagonal of M; B (ns, 7), S (ns, nch) dense kinematic matrices; bidx (ns, 2) int,
+#: bval (ns, 2), bnnz (ns,) int: the ≤ 2 non-zeros of each row of B; schan (ns,) int (−1: none),
+#: sval (ns,): the ≤ 1 non-zero of each row of S; k0 (ns,) initial stiffness; cdash (ns,) explicit
+#: dashpot; crate (ns,) = a1·k0 + cdash, the total rate coefficient of each spring; kind (ns,)
+#: int (0 linear, 1 Hysteretic); hparams (ns, 26) Hysteretic params (zero rows for linear
+#: springs); scal (2,) = [a0, a1].
+SystemArrays = namedtuple(
+    "SystemArrays",
+    ["mass", "B", "S", "bidx", "bval", "bnnz", "schan", "sval", "k0", "cdash", "crate", "kind",
+     "hparams", "scal"],
+)
+
+
+def takeda_hysteretic_args(spring: TakedaSpring) -> tuple[float, ...]:
+    """The 13 numbers after the tag of OpenSees ``uniaxialMaterial Hysteretic`` for a bent spring.
+
+    2-point symmetric backbone (F_y, F_y/k0), (F_y + r k0 (d_u − d_y), d_u); pinchX = pinchY = 1,
+    damage1 = damage2 = 0, beta. The OpenSees engine builds the same material.
+    """
+    k0, fy, r, du = spring.stiffness, spring.yield_force, spring.post_yield_ratio, \
+        spring.ultimate_displacement
+    dy = fy / k0
+    fu = fy + r * k0 * (du - dy)
+    return (fy, dy, fu, du, -fy, -dy, -fu, -du, 1.0, 1.0, 0.0, 0.0, spring.beta)
+
+
+@dataclass(frozen=True)
+class PackedSystem:
+    """A scene packed for the kernels (build with :func:`pack_system`).
+
+    Attributes
+    ----------
+    arrays : SystemArrays, the read-only inputs of the kernels.
+    C : (7, 7) constant damping matrix a0 M + Bᵀ diag(a1 k0 + c_dash) B.
+    K0 : (7, 7) initial stiffness Bᵀ diag(k0) B.
+    a0, a1 : Rayleigh coefficients; omega : the two matched circular frequencies.
+    spring_names : labels of the springs (``bent1_x``, ..., ``seat2_theta``).
+    channels : support channel names, the order of u_g.
+    n_bent_springs : 2 × number of bents (the first rows of B).
+    """
+
+    arrays: SystemArrays
+    C: np.ndarray
+    K0: np.ndarray
+    a0: float
+    a1: float
+    omega: tuple[float, float]
+    spring_names: tuple[str, ...]
+    channels: tuple[str, ...]
+    n_bent_springs: int
+
+    @property
+    def n_springs(self) -> int:
+        return len(self.spring_names)
+
+    def new_state(self) -> np.ndarray:
+        """Fresh (virgin) material state, shape (n_springs, 17); rows of linear springs unused."""
+        st = np.zeros((self.n_springs, N_STATE))
+        for i in range(self.n_springs):
+            if self.arrays.kind[i] == KIND_HYSTERETIC:
+                st[i] = hyst_init_state(self.arrays.hparams[i])
+        return st
+
+
+def pack_system(scene: Scene) -> PackedSystem:
+    """Pack the scene's mass, springs, dashpots, Rayleigh damping and Takeda materials."""
+    B, S = mechanics.spring_matrices(scene)
+    k0 = mechanics.spring_stiffness(scene)
+    cdash = mechanics.spring_damping(scene)
+    a0, a1, omega = mechanics.rayleigh_coefficients(scene)
+    mass = np.diag(mechanics.mass_matrix(scene)).copy()
+    ns, nch = S.shape
+    nb2 = 2 * len(scene.bents)
+    bidx = np.zeros((ns, 2), dtype=np.int64)
+    bval = np.zeros((ns, 2))
+    bnnz = np.zeros(ns, dtype=np.int64)
+    schan = -np.ones(ns, dtype=np.int64)
+    sval = np.zeros(ns)
+    for i in range(ns):
+        nz = np.flatnonzero(B[i])
+        if len(nz) > 2:
+            raise ValueError("spring_matrices: more than 2 non-zeros in a row of B")
+        bnnz[i] = len(nz)
+        bidx[i, :len(nz)] = nz
+        bval[i, :len(nz)] = B[i, nz]
+        nzs = np.flatnonzero(S[i])
+        if len(nzs) > 1:
+            raise ValueError("spring_matrices: more than 1 non-zero in a row of S")
+        if len(nzs):
+            schan[i] = nzs[0]
+            sval[i] = S[i, nzs[0]]
+    kind = np.zeros(ns, dtype=np.int64)
+    hparams = np.zeros((ns, N_PARAMS))
+    names = []
+    for j, b in enumerate(scene.bents):
+        for a, spring in enumerate((b.x, b.y)):
+            i = 2 * j + a
+            kind[i] = KIND_HYSTERETIC
+            hparams[i] = pack_hysteretic(*takeda_hysteretic_args(spring), element_copy=True)
+            names.append(f"{b.name}_{'xy'[a]}")
+    names += ["seat1_x", "seat1_theta", "seat2_x", "seat2_theta"]
+    crate = a1 * k0 + cdash
+    arrays = SystemArrays(mass=mass, B=np.ascontiguousarray(B), S=np.ascontiguousarray(S),
+                          bidx=bidx, bval=bval, bnnz=bnnz, schan=schan, sval=sval,
+                          k0=k0.astype(float), cdash=cdash.astype(float), crate=crate,
+                          kind=kind, hparams=hparams, scal=np.array([a0, a1]))
+    C = np.diag(a0 * mass) + B.T @ (crate[:, None] * B)
+    K0 = B.T @ (k0[:, None] * B)
+    return PackedSystem(arrays=arrays, C=C, K0=K0, a0=float(a0), a1=float(a1),
+                        omega=(float(omega[0]), float(omega[1])), spring_names=tuple(names),
+                        channels=mechanics.support_channels(scene), n_bent_springs=nb2)
+
+
+# --------------------------------------------------------------------------- kernels
+@njit(cache=True)
+def spring_deformations(sa, u, v, ug, vg, d, dd):
+    """Fill d = B u − S u_g and dd = B u̇ − S u̇_g (shape (ns,))."""
+    ns = sa.k0.shape[0]
+    for i in range(ns):
+        di = 0.0
+        vi = 0.0
+        for q in range(sa.bnnz[i]):
+            j = sa.bidx[i, q]
+            di += sa.bval[i, q] * u[j]
+            vi += sa.bval[i, q] * v[j]
+        ch = sa.schan[i]
+        if ch >= 0:
+            di -= sa.sval[i] * ug[ch]
+            vi -= sa.sval[i] * vg[ch]
+        d[i] = di
+        dd[i] = vi
+
+
+@njit(cache=True)
+def spring_update_materials(hparams, hstate, kind, d):
+    """Set the trial deformation d[i] of every Hysteretic spring (trial state in hstate)."""
+    for i in range(kind.shape[0]):
+        if kind[i] == 1:
+            hyst_set_trial(hparams[i], hstate[i], d[i])
+
+
+@njit(cache=True)
+def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
+    """Spring forces from deformations d, rates dd and the materials' trial state.
+
+    f (7,) out = Bᵀ[f_s + crate·ḋ] + a0 M u̇; fs, kt (ns,) out: restoring force and tangent.
+    Returns the number of springs whose tangent differs from k0. Call-free on purpose (numba
+    then prunes all reference counting of the many array arguments).
+    """
+    a0 = sa.scal[0]
+    for j in range(7):
+        f[j] = a0 * sa.mass[j] * v[j]
+    nonel = 0
+    for i in range(sa.k0.shape[0]):
+        if sa.kind[i] == 1:
+            fsi = hstate[i, T_STRESS]
+            kti = hstate[i, T_TANGENT]
+        else:
+            kti = sa.k0[i]
+            fsi = kti * d[i]
+        if kti != sa.k0[i]:
+            nonel += 1
+        fs[i] = fsi
+        kt[i] = kti
+        fi = fsi + sa.crate[i] * dd[i]
+        for q in range(sa.bnnz[i]):
+            f[sa.bidx[i, q]] += sa.bval[i, q] * fi
+    return nonel
+
+
+@njit(cache=True)
+def spring_tangent(sa, kt, K):
+    """K = Bᵀ diag(kt) B (7×7, overwritten)."""
+    for j in range(7):
+        for k in range(7):
+            K[j, k] = 0.0
+    for i in range(sa.k0.shape[0]):
+        nnz = sa.bnnz[i]
+        for q in range(nnz):
+            j = sa.bidx[i, q]
+            bj = sa.bval[i, q] * kt[i]
+            for r in range(nnz):
+                K[j, sa.bidx[i, r]] += bj * sa.bval[i, r]
+
+
+@njit(cache=True)
+def spring_forces(sa, hstate, u, v, ug, vg, f, K, fs, kt, d, dd, want_tangent):
+    """Trial spring state and generalised internal force at (u, u̇, t) (convenience wrapper).
+
+    Parameters
+    ----------
+    sa : SystemArrays; hstate : (ns, 17) material states (trial part updated in place).
+    u, v : (7,) absolute displacements and velocities; ug, vg : (nch,) support motion.
+    f : (7,) out, F = Bᵀ[f_s + crate·ḋ] + a0 M u̇.
+    K : (7, 7) out (if want_tangent), Bᵀ diag(k_t) B, the tangent ∂F/∂u (∂F/∂u̇ is the
+        constant :attr:`PackedSystem.C`).
+    fs, kt : (ns,) out, restoring force of each spring (Takeda stress for bents) and tangent.
+    d, dd : (ns,) out, deformations and deformation rates.
+
+    Returns the number of springs whose tangent differs from k0 (0 = all elastic).
+
+    Hot loops should call the pieces (:func:`spring_deformations`,
+    :func:`spring_update_materials`, :func:`spring_assemble`, :func:`spring_tangent`) directly:
+    numba keeps reference-count operations on every array argument of a function that makes
+    several calls, ~10 ns per array per call; the pieces are call-free or take few arrays.
+    """
+    spring_deformations(sa, u, v, ug, vg, d, dd)
+    spring_update_materials(sa.hparams, hstate, sa.kind, d)
+    nonel = spring_assemble(sa, hstate, d, dd, v, f, fs, kt)
+    if want_tangent:
+        spring_tangent(sa, kt, K)
+    return nonel
+
+
+@njit(cache=True)
+def spring_commit(sa, hstate):
+    """Commit the trial state of every Hysteretic spring (OpenSees commitState)."""
+    for i in range(sa.k0.shape[0]):
+        if sa.kind[i] == 1:
+            hyst_commit(hstate[i])
+
+
+@njit(cache=True)
+def spring_revert(sa, hstate):
+    """Revert every Hysteretic spring to its last committed state."""
+    for i in range(sa.k0.shape[0]):
+        if sa.kind[i] == 1:
+            hyst_revert(hstate[i])
+
+
+@njit(cache=True)
+def _unloading_stiffness(p, st, stress):
+    """Takeda unloading stiffness E_u·max(1, μ^β)^(−1) at the committed excursion."""
+    if stress >= 0.0:
+        ratio = st[C_ROTMAX] / p[P_E1P]
+        e = p[P_EUP]
+    else:
+        ratio = st[C_ROTMIN] / p[P_E1N]
+        e = p[P_EUN]
+    k = 1.0
+    if ratio > 1.0:
+        k = ratio ** p[P_BETA]
+        if k < 1.0:
+            k = 1.0
+    return e / k
+
+
+@njit(cache=True)
+def spring_stored_energy(sa, hstate, u, ug):
+    """Recoverable (elastic) energy of the springs at the committed state [kJ].
+
+    Linear springs: ½ k0 d². Takeda springs: f_s² / (2 k_u), the energy released by unloading
+    along the current unloading stiffness k_u = k0 μ^(−β) (the rest of ∫ f_s dd is hysteresis).
+    """
+    e = 0.0
+    ns = sa.k0.shape[0]
+    for i in range(ns):
+        if sa.kind[i] == 1:
+            s = hstate[i, C_STRESS]
+            ku = _unloading_stiffness(sa.hparams[i], hstate[i], s)
+            e += 0.5 * s * s / ku
+        else:
+            di = 0.0
+            for q in range(sa.bnnz[i]):
+                di += sa.bval[i, q] * u[sa.bidx[i, q]]
+            ch = sa.schan[i]
+            if ch >= 0:
+                di -= sa.sval[i] * ug[ch]
+            e += 0.5 * sa.k0[i] * di * di
+    return e
+
+
+_ = C_STRAIN  # (index kept importable for callers reading the committed deformation)
