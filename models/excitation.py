@@ -315,10 +315,12 @@ def load_csv_motion(scene: Scene) -> SupportMotion:
     check_time_base(t, field)
     f = _LENGTH_UNITS[exc.disp_unit] * exc.scale
     disp, vel = {}, {}
-    for c in channels:
-        disp[c] = data[f"{c}_disp"].to_numpy() * f
-        vel[c] = data[f"{c}_vel"].to_numpy() * f if f"{c}_vel" in data else np.gradient(disp[c], t)
-    return SupportMotion(t=t - t[0], disp=disp, vel=vel)
+    with np.errstate(all="ignore"):  # overflow is refused by support_motion, not warned about
+        for c in channels:
+            disp[c] = data[f"{c}_disp"].to_numpy() * f
+            vel[c] = data[f"{c}_vel"].to_numpy() * f if f"{c}_vel" in data else np.gradient(disp[c], t)
+        t = t - t[0]
+    return SupportMotion(t=t, disp=disp, vel=vel)
 
 
 _NPTS_DT = re.compile(r"NPTS\s*=\s*(\d+)\s*,\s*DT\s*=\s*([0-9.Ee+-]+)", re.IGNORECASE)
@@ -371,8 +373,9 @@ def load_at2_motion(scene: Scene) -> SupportMotion:
         raise SceneError("excitation.file_y", f"time base ({len(ay)} values at {dty} s) differs "
                          f"from file_x ({len(ax)} values at {dtx} s)")
     t = np.arange(len(ax)) * dtx
-    comp = {axis: baseline_corrected(a * G * exc.scale, dtx, exc.highpass)
-            for axis, a in (("x", ax), ("y", ay))}
+    with np.errstate(all="ignore"):  # overflow is refused by support_motion, not warned about
+        comp = {axis: baseline_corrected(a * G * exc.scale, dtx, exc.highpass)
+                for axis, a in (("x", ax), ("y", ay))}
     disp, vel = {}, {}
     lag_steps = _check_lag(scene, dtx, len(t))
     for k, bent in enumerate(scene.bents):

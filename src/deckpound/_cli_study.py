@@ -18,6 +18,14 @@ def _parallel_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
+def _benchmark_scene_args(p: argparse.ArgumentParser, out_default: str, quick_help: str) -> None:
+    """--scene (default: the benchmark), --set, -o and --quick of the whole-study commands."""
+    p.add_argument("--scene", default="saiidi-4span", help="scene (default: the benchmark)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE")
+    p.add_argument("-o", "--output", default=out_default, metavar="DIR")
+    p.add_argument("--quick", action="store_true", help=quick_help)
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     from .cli import add_scene_args
 
@@ -42,28 +50,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_study)
 
     p = sub.add_parser("paper", help="the main job: sequence x 3 engines + studies + report")
-    p.add_argument("--scene", default="saiidi-4span", help="scene (default: the benchmark)")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE")
-    p.add_argument("-o", "--output", default="deckpound-report", metavar="DIR")
-    p.add_argument("--quick", action="store_true", help="fewer study cases")
+    _benchmark_scene_args(p, "deckpound-report", "fewer study cases")
     p.add_argument("--studies", default=None,
                    help="comma-separated subset of studies (default: all)")
     _parallel_args(p)
     p.set_defaults(func=_paper)
 
     p = sub.add_parser("bench", help="work-precision benchmark: wall time vs error, every engine")
-    p.add_argument("--scene", default="saiidi-4span")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE")
-    p.add_argument("-o", "--output", default="deckpound-bench", metavar="DIR")
-    p.add_argument("--quick", action="store_true", help="fewer configurations, shorter records")
+    _benchmark_scene_args(p, "deckpound-bench", "fewer configurations, shorter records")
     p.add_argument("--repeats", type=int, default=None, help="runs per configuration (median)")
     p.set_defaults(func=_bench)
 
     p = sub.add_parser("stress", help="stability stress test over hard settings, every engine")
-    p.add_argument("--scene", default="saiidi-4span")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE")
-    p.add_argument("-o", "--output", default="deckpound-stress", metavar="DIR")
-    p.add_argument("--quick", action="store_true", help="a small subset of the grid")
+    _benchmark_scene_args(p, "deckpound-stress", "a small subset of the grid")
     p.add_argument("--engines", default="opensees,compliance,nonsmooth")
     p.add_argument("--timeout", type=float, default=300.0, help="seconds per cell")
     p.set_defaults(func=_stress)
