@@ -221,7 +221,7 @@ def _pivot(T, r, c):
 
 
 @njit(cache=True)
-def _lex_select(T, rows, nrows, c, n, rhs, rtol):
+def _lex_select(T, rows, nrows, c, n, rtol):
     """Among candidate rows (first nrows entries of ``rows``, all tied in the
     minimum ratio), pick the lexicographic minimum of T[i, 0:n] / T[i, c]
     (rows of the basis inverse, Cottle-Pang-Stone Sec. 4.9)."""
@@ -375,7 +375,7 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
         elif nt == 1:
             r = rows[0]
         else:
-            r = _lex_select(T, rows, nt, c, n, 2 * n + 1, tol)
+            r = _lex_select(T, rows, nt, c, n, tol)
         leaving = basis[r]
         _pivot(T, r, c)
         basis[r] = c
