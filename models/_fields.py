@@ -57,13 +57,18 @@ def _unit(meta: typing.Mapping[str, Any]) -> str:
     return f" {meta['unit']}" if meta.get("unit") not in ("", "-", None) else ""
 
 
+def _in_unit(meta: typing.Mapping[str, Any]) -> str:
+    u = _unit(meta)
+    return f" in{u}" if u else ""
+
+
 def _fmt(value: Any) -> str:
     return repr(value) if isinstance(value, str) else f"{value}"
 
 
 def _check_number(name: str, value: float, meta: typing.Mapping[str, Any]) -> None:
     if isinstance(value, float) and not math.isfinite(value):
-        raise SceneError(name, f"must be a finite number{_unit(meta)}, got {value}")
+        raise SceneError(name, f"must be a finite number{_in_unit(meta)}, got {value}")
     u = _unit(meta)
     if meta.get("gt") is not None and not value > meta["gt"]:
         raise SceneError(name, f"must be > {meta['gt']}{u}, got {_fmt(value)}")
@@ -92,11 +97,11 @@ def _coerce(name: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> A
         return from_mapping(tp, value, name)
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise SceneError(name, f"must be a number{_unit(meta)}, got {_fmt(value)}")
+            raise SceneError(name, f"must be a number{_in_unit(meta)}, got {_fmt(value)}")
         try:
             value = float(value)
         except OverflowError:
-            raise SceneError(name, f"must be a finite number{_unit(meta)}, got an integer "
+            raise SceneError(name, f"must be a finite number{_in_unit(meta)}, got an integer "
                              "too large for a float") from None
         _check_number(name, value, meta)
         return value
@@ -105,7 +110,7 @@ def _coerce(name: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> A
             if isinstance(value, float) and value.is_integer():
                 value = int(value)
             else:
-                raise SceneError(name, f"must be an integer{_unit(meta)}, got {_fmt(value)}")
+                raise SceneError(name, f"must be an integer{_in_unit(meta)}, got {_fmt(value)}")
         _check_number(name, value, meta)
         return value
     if tp is bool:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import copy
 import importlib.resources
 import json
-import math
 import re
 import tomllib
 from pathlib import Path
@@ -35,20 +34,12 @@ def builtin_scene_text(name: str) -> str:
     return (importlib.resources.files(_BUILTIN_PACKAGE) / _BUILTIN_DIR / f"{name}.toml").read_text()
 
 
-def _reject_nonfinite(data: Any, path: str = "") -> None:
-    if isinstance(data, float) and not math.isfinite(data):
-        raise SceneError(path, f"must be a finite number, got {data}")
-    if isinstance(data, dict):
-        for k, v in data.items():
-            _reject_nonfinite(v, f"{path}.{k}" if path else str(k))
-    elif isinstance(data, list):
-        for i, v in enumerate(data):
-            _reject_nonfinite(v, f"{path}[{i}]")
-
-
 def scene_from_mapping(data: dict[str, Any]) -> Scene:
-    """Build and validate a scene from a nested mapping."""
-    _reject_nonfinite(data)
+    """Build and validate a scene from a nested mapping.
+
+    Unknown keys are refused first, then every value against its field's type and range
+    (NaN and inf are refused there, so the message names the field's type and unit).
+    """
     return from_mapping(Scene, data)
 
 
