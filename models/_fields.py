@@ -78,7 +78,8 @@ def _check_number(name: str, value: float, meta: typing.Mapping[str, Any]) -> No
         raise SceneError(name, f"must be < {meta['lt']}{u}, got {_fmt(value)}")
     if meta.get("le") is not None and not value <= meta["le"]:
         raise SceneError(name, f"must be <= {meta['le']}{u}, got {_fmt(value)}")
-    if isinstance(value, float) and value != 0.0 and not MIN_MAGNITUDE <= abs(value) <= MAX_MAGNITUDE:
+    if (isinstance(value, float) and value != 0.0
+            and not MIN_MAGNITUDE <= abs(value) <= MAX_MAGNITUDE):
         raise SceneError(name, f"is beyond any physical value: magnitudes from {MIN_MAGNITUDE:g} "
                          f"to {MAX_MAGNITUDE:g}{u} are allowed, got {_fmt(value)}")
 

@@ -185,9 +185,11 @@ def _shift(x: np.ndarray, steps: int) -> np.ndarray:
 def _check_samples(n: float, short_field: str, long_field: str, what: str) -> None:
     """Refuse records too short for the baseline correction or too long to hold."""
     if n < MIN_SAMPLES:
-        raise SceneError(short_field, f"{what} gives {n:g} samples; at least {MIN_SAMPLES} are needed")
+        raise SceneError(short_field,
+                         f"{what} gives {n:g} samples; at least {MIN_SAMPLES} are needed")
     if n > MAX_SAMPLES:
-        raise SceneError(long_field, f"{what} gives {n:.3g} samples; at most {MAX_SAMPLES:g} are allowed")
+        raise SceneError(long_field,
+                         f"{what} gives {n:.3g} samples; at most {MAX_SAMPLES:g} are allowed")
 
 
 def _check_lag(scene: Scene, dt: float, n: int) -> int:
@@ -318,7 +320,8 @@ def load_csv_motion(scene: Scene) -> SupportMotion:
     with np.errstate(all="ignore"):  # overflow is refused by support_motion, not warned about
         for c in channels:
             disp[c] = data[f"{c}_disp"].to_numpy() * f
-            vel[c] = data[f"{c}_vel"].to_numpy() * f if f"{c}_vel" in data else np.gradient(disp[c], t)
+            vel[c] = (data[f"{c}_vel"].to_numpy() * f if f"{c}_vel" in data
+                      else np.gradient(disp[c], t))
         t = t - t[0]
     return SupportMotion(t=t, disp=disp, vel=vel)
 

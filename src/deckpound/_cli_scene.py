@@ -63,7 +63,8 @@ def _validate(args) -> int:
     rayleigh_coefficients(scene)  # refuses damping.modes beyond the number of modes
     if not np.all(np.isfinite(periods)):
         raise SceneError("scene", "the masses and stiffnesses give non-finite natural periods "
-                         f"({', '.join(f'{T:g}' for T in periods)} s); check them for extreme values")
+                         f"({', '.join(f'{T:g}' for T in periods)} s); check them for extreme "
+                         "values")
     print(f"{scene.name}: valid; {len(scene.bents)} bents, gaps "
           f"{scene.seats[0].gap:g}/{scene.seats[1].gap:g} m, record {motion.duration:g} s "
           f"({len(motion.channels)} supports), analysis {analysis_duration(scene, motion):g} s, "
@@ -85,10 +86,15 @@ def _plot(args) -> int:
     out = Path(args.output)
     if out.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise SceneError("--output", f"must end in .png, .pdf or .svg, got {str(out)!r}")
+    if out.is_dir():
+        raise SceneError("--output", f"{str(out)!r} is a folder; give a file name")
     scene = load_scene(args.scene, args.overrides)
     motion = support_motion(scene)
     from deckpound.compare.plotting import plot_excitation
 
-    plot_excitation(scene, motion, out)
+    try:
+        plot_excitation(scene, motion, out)
+    except OSError as err:  # folder not creatable, no permission, disk full
+        raise SceneError("--output", f"cannot write {str(out)!r}: {err}") from None
     print(f"wrote {out}")
     return 0

@@ -45,7 +45,10 @@ def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = lambda msg, cat, *a, **k: f"deckpound: warning: {msg}\n"
     try:
         parser = build_parser()
-        args = parser.parse_args(argv)
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as done:  # --help / --version have printed their text
+            return done.code if isinstance(done.code, int) else 0
         return int(args.func(args) or 0)
     except (SceneError, UsageError) as err:
         print(f"deckpound: error: {err}", file=sys.stderr)
