@@ -65,6 +65,11 @@ class SupportMotion:
         if not dt > 0:
             raise SceneError("dt", f"must be > 0 s, got {dt}")
         total = self.duration if duration is None else duration
+        from .scene import MAX_STEPS
+
+        if total / dt > MAX_STEPS:
+            raise SceneError("dt", f"gives {total / dt:.3g} steps over {total:g} s; at most "
+                             f"{MAX_STEPS:.0e} are allowed")
         n = int(round(total / dt))
         t = np.arange(n + 1) * dt
         disp = {k: np.interp(t, self.t, v) for k, v in self.disp.items()}

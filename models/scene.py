@@ -14,6 +14,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+import re
+
 from ._fields import spec, validate
 from .errors import SceneError
 
@@ -21,6 +23,9 @@ CONTACT_LAWS = ("linear", "kelvin-voigt", "hertz", "hertz-damp", "bilinear")
 FRICTION_MODES = ("none", "slip", "stick")
 GEOMETRIES = ("linear", "nonlinear")
 SUPPORTS_PER_BENT = ("x", "y")
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
+#: largest number of time steps one run may take (a 60 s record at 1e-5 s is 6e6)
+MAX_STEPS = 50_000_000
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -224,6 +229,9 @@ class RunSettings:
                                   doc="analysis length (default: the record length)", gt=0.0)
     output_dt: float = spec(0.005, unit="s", doc="output step of the stored result", gt=0.0)
 
+    def __post_init__(self) -> None:
+        validate(self)
+
 
 @dataclass(frozen=True, kw_only=True)
 class OpenSeesSettings:
@@ -244,8 +252,8 @@ class OpenSeesSettings:
                        choices=("BandGeneral", "UmfPack", "FullGeneral", "SparseGeneral"))
     fallback: str = spec("substep", doc="on a failed step: none, or rebuild the analysis and "
                          "sub-step", choices=("none", "substep"))
-    substeps: int = spec(10, doc="sub-steps per step in the fallback", ge=2)
-    stick_elements: int = spec(4, doc="elements per deck half in stick mode", ge=1)
+    substeps: int = spec(10, doc="sub-steps per step in the fallback", ge=2, le=1000)
+    stick_elements: int = spec(4, doc="elements per deck half in stick mode", ge=1, le=100)
 
     def __post_init__(self) -> None:
         validate(self)
@@ -335,6 +343,11 @@ class Scene:
         names = [b.name for b in self.bents]
         if len(set(names)) != len(names):
             raise SceneError("bents", f"names must be unique, got {names}")
+        for i, name in enumerate(names):
+            # bent names become result columns and support channels (<name>_fx, <name>_x)
+            if not _NAME.match(name) or name in ("seat1", "seat2", "deck"):
+                raise SceneError(f"bents[{i}].name", "must be a word of letters, digits and _ "
+                                 f"(not 'seat1', 'seat2' or 'deck'), got {name!r}")
         for i, b in enumerate(self.bents):
             if not 0.0 <= b.station <= self.deck.length:
                 raise SceneError(f"bents[{i}].station",
@@ -342,6 +355,21 @@ class Scene:
                                  f"got {b.station}")
         for key in self.notes:
             _check_path(self, key)
+        self._check_step_counts()
+
+    def _check_step_counts(self) -> None:
+        """Refuse steps so small that a run could not fit in memory or time (MAX_STEPS)."""
+        duration = self.run.duration
+        if duration is None and self.excitation.kind in ("synthetic", "pulse"):
+            duration = self.excitation.duration
+        if duration is None:
+            return  # a loaded record: checked when it is resampled
+        for field, step in (("run.output_dt", self.run.output_dt), ("opensees.dt", self.opensees.dt),
+                            ("compliance.dt", self.compliance.dt), ("nonsmooth.h", self.nonsmooth.h)):
+            if duration / step > MAX_STEPS:
+                raise SceneError(field, f"gives {duration / step:.3g} steps over {duration:g} s; at "
+                                 f"most {MAX_STEPS:.0e} are allowed, so it must be >= "
+                                 f"{duration / MAX_STEPS:.3g} s, got {step}")
 
     # -- derived geometry (no engine knowledge) ------------------------------------------
     @property

@@ -132,3 +132,17 @@ def test_notes_must_name_fields(bench_scene):
 def test_override_index_out_of_range():
     with pytest.raises(SceneError, match="out of range"):
         apply_overrides({"bents": [{}]}, ["bents[3].station=1"])
+
+
+@pytest.mark.parametrize("overrides,field", [
+    (["bents[0].name=seat1"], "bents[0].name"),
+    (["bents[1].name='a,b'"], "bents[1].name"),
+    (["compliance.dt=1e-9"], "compliance.dt"),
+    (["run.output_dt=1e-12"], "run.output_dt"),
+    (["opensees.substeps=100000"], "opensees.substeps"),
+])
+def test_names_and_step_counts_refused(overrides, field):
+    """Fuzzing found bent names that collide with seat channels and steps too small to run."""
+    with pytest.raises(SceneError) as info:
+        load_scene("saiidi-4span", overrides)
+    assert str(info.value).startswith(field)

@@ -49,6 +49,9 @@ def _run(args) -> int:
     from .engines import get_engine, run_engine
 
     get_engine(args.engine)  # refuse an unknown name before any work
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise SceneError("--output", f"{str(out)!r} exists and is not a folder")
     scene = load_scene(args.scene, args.overrides)
     result = run_engine(args.engine, scene)
     csv_path, _ = result.write(args.output)
