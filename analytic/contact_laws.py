@@ -22,9 +22,11 @@ engine uses (strain ε = g − g₀, OpenSees gap = −g₀, so ε − gap = g):
   located closure event in the adaptive integrator), floored at ``V_IMPACT_MIN``.
 * ``bilinear`` — OpenSees ``ImpactMaterial(K1, K2, −δ_y, −g₀)`` (Muthukumar): loading with K1
   from the committed stress, capped by the line K1 δ_y + K2 (δ − δ_y); unloading with K1, floored
-  by the line K2 δ; open (0) for g ≥ 0. The OpenSees quirks are kept: the increment is taken from
-  the committed strain even when that was open (first-contact step), and a zero increment keeps
-  the previous trial stress and tangent.
+  by the line K2 δ; open (0) for g ≥ 0. On the first contact step the increment is measured from
+  the closure point g = 0 (continuous force); ImpactMaterial measures it from the last open
+  strain, which makes the force jump at closure and Newton fail on the benchmark (OpenSees fails
+  at the same step) — ``pack_contact(..., impact_opensees=True)`` reproduces that exactly. A
+  zero increment keeps the previous trial stress and tangent, as in OpenSees.
 
 Friction (``scene.contact.friction_mode``):
 
@@ -53,16 +55,23 @@ FRICTION_CODES = {name: i for i, name in enumerate(FRICTION_MODES)}  # none 0, s
 V_IMPACT_MIN = 1.0e-3   # m/s, floor of the Hunt–Crossley approach velocity
 
 # parameters per corner (cp[c, :])
-P_LAW, P_K, P_N, P_C, P_D, P_K2, P_DY, P_MU, P_FMODE, P_KT, P_V0, P_CLIP = range(12)
-N_CP = 12
+P_LAW, P_K, P_N, P_C, P_D, P_K2, P_DY, P_MU, P_FMODE, P_KT, P_V0, P_CLIP, P_IMPQ = range(13)
+N_CP = 13
 # state per corner (cs[c, :])
 S_CG, S_CGD, S_CLAM, S_CFT, S_CCLOSED, S_CVIMP, S_TLAM, S_TTAN, S_TFT, S_TVIMP, S_TCLOSED = \
     range(11)
 N_CS = 11
 
 
-def pack_contact(scene: Scene, *, kv_clip: bool = False) -> np.ndarray:
-    """Per-corner parameter array (4, N_CP) of the scene's contact law and friction."""
+def pack_contact(scene: Scene, *, kv_clip: bool = False,
+                 impact_opensees: bool = False) -> np.ndarray:
+    """Per-corner parameter array (4, N_CP) of the scene's contact law and friction.
+
+    ``impact_opensees`` keeps ImpactMaterial's first-contact quirk in the bilinear law (the
+    increment taken from the last open strain, so the force jumps at closure and Newton can
+    fail exactly where OpenSees fails); the default measures the first increment from the
+    closure point g = 0, the continuous Muthukumar law.
+    """
     ct = scene.contact
     cp = np.zeros((4, N_CP))
     cp[:, P_LAW] = LAW_CODES[ct.law]
@@ -77,6 +86,7 @@ def pack_contact(scene: Scene, *, kv_clip: bool = False) -> np.ndarray:
     cp[:, P_KT] = ct.tangential_stiffness
     cp[:, P_V0] = ct.slip_velocity
     cp[:, P_CLIP] = 1.0 if kv_clip else 0.0
+    cp[:, P_IMPQ] = 1.0 if impact_opensees else 0.0
     return cp
 
 
@@ -144,7 +154,10 @@ def normal_law(cp, cs, g, gd, out):
         k1 = cp[P_K]
         k2 = cp[P_K2]
         dy = -cp[P_DY]
-        dstrain = g - cs[S_CG]
+        g_committed = cs[S_CG]
+        if cp[P_IMPQ] == 0.0 and g_committed > 0.0:
+            g_committed = 0.0      # first contact: load from the closure point (continuous law)
+        dstrain = g - g_committed
         cstress = -cs[S_CLAM]
         if g >= 0.0:
             stress = 0.0

@@ -1,0 +1,730 @@
+r"""Nonsmooth engine: Moreau–Jean time stepping with rigid, frictional, impacting contact.
+
+Entry point :func:`run_nonsmooth` (the engine contract of :mod:`deckpound.engines`).
+
+Model
+-----
+The 7-DOF plan model of the other engines (DOFs u = [x₁, θ₁, x₂, θ₂, x_d, y_d, θ_d]) with the
+deck–seat contacts made rigid: the measure differential equation
+
+    M du̇ = −F(u, u̇, t) dt + W_Nᵀ dΛ_N + W_Tᵀ dΛ_T,
+    F(u, u̇, t) = Bᵀ[f_s(d) + crate·ḋ] + a0·M u̇,   d = B u − S u_g(t),  ḋ = B u̇ − S u̇_g(t)
+
+(smooth part: the shared kernels of :mod:`deckpound.analytic.system` — Takeda bent springs,
+linear seat springs, seat dashpots, Rayleigh damping, multi-support excitation; W_N, W_T rows
+from :func:`deckpound.analytic.kinematics.contact_kinematics`, geometrically linear or
+nonlinear). Per corner: Newton's impact law 0 ≤ U_N⁺ + e·U_N⁻ ⊥ P_N ≥ 0 and set-valued planar
+Coulomb friction −U_T⁺ ∈ μ·P_N·∂|P_T| (μ = ``contact.friction`` when
+``contact.friction_mode`` ≠ none; the slip/stick distinction and the contact stiffness / law
+options of the compliance engines do not apply). U_N = W_N u̇ and U_T = W_T u̇ contain the seat
+DOFs, so the moving seats enter the relative velocities exactly as the kinematics define them.
+
+Time discretisation (Moreau–Jean θ-scheme, Jean 1999, Acary & Brogliato 2008 Ch. 10)
+------------------------------------------------------------------------------------
+Step k → k+1 (h = ``nonsmooth.h``, θ = ``nonsmooth.theta`` ∈ [½, 1], default ½)::
+
+    M (v_{k+1} − v_k) = −h [θ F_{k+1} + (1 − θ) F_k] + W_Nᵀ P_N + W_Tᵀ P_T
+    q_{k+1} = q_k + h [(1 − θ) v_k + θ v_{k+1}]
+    F_k = F(q_k, v_k, t_k),  F_{k+1} = F(q_{k+1}, v_{k+1}, t_{k+1})
+
+* **Implicit** (θ-weighted end values): every smooth force — spring restoring forces (Takeda
+  and seats), seat dashpots, Rayleigh damping (both the a0·M and the a1·K0 parts), and the
+  support motion u_g, u̇_g that drives them (taken at t_k and t_{k+1}). The contact impulses
+  P are fully implicit (they act on v_{k+1}).
+* **Explicit**: the active set (a corner is active when its gap at the predicted mid-step
+  position q_M = q_k + h/2·v_k is ≤ 0), the contact Jacobians W_N, W_T (evaluated at q_M;
+  constant for linear kinematics), and the pre-impact velocities U_N⁻ = W_N v_k.
+
+The nonlinear (Takeda) equation is solved by Newton's method on v_{k+1} with the contact
+problem re-solved inside every iteration (Siconos' MoreauJeanOSI Newton loop). Iteration 0 is
+the *linearised θ-method*: with K_t = Bᵀ diag(k_t) B the material tangents of the committed
+state and the exact linearisation of F about (q_k, v_k, t_k),
+
+    F_{k+1} ≈ F_k + K_t Δq + C Δv − Bᵀ[k_t ∘ S Δu_g + crate ∘ S Δu̇_g],   Δq = h v_k + θ h Δv,
+
+(C = a0 M + Bᵀ diag(crate) B is constant), so
+
+    Ŵ = M + θ h C + θ² h² K_t,
+    v_free = v_k + Ŵ⁻¹ [ −h F_k − θ h² K_t v_k + θ h Bᵀ(k_t ∘ S Δu_g + crate ∘ S Δu̇_g) ],
+    v_{k+1} = v_free + Ŵ⁻¹ (W_Nᵀ P_N + W_Tᵀ P_T).
+
+The springs are then evaluated at (q_{k+1}, v_{k+1}, t_{k+1}) (Takeda trial state from the
+committed history). The residual of the θ-equation is exactly θ h Bᵀ r with the per-spring
+linearisation mismatch r_i = f_s,i(d_{k+1}) − f_s,i(d_lin) − k_t,i (d_{k+1} − d_lin); the step is
+accepted when max|r_i| ≤ ``nonsmooth.tolerance`` × (largest Takeda yield force) — for linear
+springs and for Takeda springs that stay on one branch the linearised step is exact and no
+further iteration is made. Otherwise Newton iterates (tangent, free velocity and contact
+problem recomputed at the current iterate, active set kept) up to ``nonsmooth.max_iterations``;
+non-convergence fails the step. The Takeda history is committed once per accepted step with
+q_{k+1} = q_k + h[(1−θ)v_k + θv_{k+1}]. For θ = ½ and linear springs the smooth part is the
+trapezoidal rule (second order, energy-conserving); with impacts the scheme is first order.
+
+The contact problem of the (≤ 4) active corners is the planar frictional impact problem of
+:mod:`deckpound.analytic.frictional_contact` with the Delassus matrix G = W Ŵ⁻¹ Wᵀ, free
+contact velocities W v_free and U_N⁻ = W_N v_k, solved exactly (Lemke with Stewart–Trinkle
+Lemke and enumeration fall-backs for ``solver = lemke``; enumeration only for
+``solver = enumeration``) and verified against the contact laws (relative tolerance
+``nonsmooth.tolerance``); an unverified solve fails the run at that step. Steps without an
+active corner skip the contact solve; frictionless runs (μ = 0) carry only normal unknowns.
+
+Active but separating corners. A corner can be active (g(q_M) ≤ 0) while it already separates
+(U_N⁻ > 0, typically the step after an impact or in persistent contact with the seat springs
+pushing). Newton's law there (U_N⁺ ≥ −e U_N⁻) lets a positive P_N do positive work
+½ P_N (1 − e) U_N⁻ on v_m for θ = ½, i.e. gain energy. Such corners use the restitution
+max(e, (1 − θ)/θ) instead (:func:`separating_restitution`; = 1 for θ = ½, = e for θ = 1):
+then P_N > 0 implies θU_N⁺ + (1−θ)U_N⁻ ≤ 0 (= 0 for θ = ½) and the normal impulse does no
+positive work, so for
+frictionless contact every step is dissipative (tested); approaching corners (U_N⁻ ≤ 0, the
+impacts) keep Newton's law unchanged. Friction keeps the standard law on U_T⁺; its work on
+v_m is −μP_N|U_T⁺| ≤ 0 for θ = 1 but not sign-definite for θ < 1, and with e > 0 Newton's law
+combined with Coulomb friction can gain energy in an impact (Kane's paradox, see
+:mod:`deckpound.analytic.frictional_contact`).
+
+Output (every :func:`deckpound.engines.output_stride` steps)
+-------------------------------------------------------------
+Standard columns (gaps at q_{k+1}; ``fn_c*``/``ft_c*`` = impulse over the output interval
+divided by its length — impulse-conserving averages; ``ft`` along +t, +y for linear
+kinematics, force on the deck; ``<bent>_fx/_fy`` the Takeda force), plus ``pn_c*``, ``pt_c*``
+(impulse accumulated over the output interval [kN·s]; two corners of one face share one
+tangent, so the per-corner split of ``pt`` is not unique — the solver returns the split in
+proportion to μ·P_N; face totals are unique), ``state_c*`` (0 open, 1 stick, 2 slip, from the
+last step of the interval) and energies [kJ], exact for the discrete scheme (closing to round-
+off and the Newton tolerance; derivation: multiply the step equation by
+v_m = (1−θ)v_k + θv_{k+1}, note Δq = h v_m and v_mᵀMΔv = ΔT + (θ−½)ΔvᵀMΔv):
+
+* ``energy_input``: initial mechanical energy − Σ (SΔu_g)ᵀ(f_s + crate·ḋ)_θ, the work of the
+  support reactions;
+* ``energy_kinetic``; ``energy_strain`` (recoverable spring energy, as the compliance engine);
+* ``energy_viscous``: Σ Δdᵀ crate ḋ_θ + a0 Δqᵀ M v_m; ``energy_hysteretic``: Σ Δdᵀ f_s,θ − strain;
+* ``energy_impact`` = −Σ P_N (W_N v_m), ``energy_friction`` = −Σ P_T (W_T v_m) (for θ = ½:
+  −½ P (U⁻ + U⁺), the impulses' work on the mean velocity);
+* ``energy_numerical`` = Σ (θ − ½) Δvᵀ M Δv ≥ 0, the algorithmic dissipation of θ > ½;
+* ``energy_error`` = input − all the others.
+
+(x)_θ = θ x_{k+1} + (1−θ) x_k. Metadata: the contract's fields plus ``contact_solves`` (contact
+problems solved, Newton re-solves included; also reported as ``iterations``),
+``contact_steps``, ``newton_iterations``, ``max_complementarity`` and ``max_cone_residual``
+(largest verified residuals of :func:`~deckpound.analytic.frictional_contact.
+solve_contact_impulses_into`, m/s), ``max_penetration`` (on the output rows, m) and
+``energy_error`` (largest |energy_error|, kJ), ``final_u``/``final_v`` (DOF displacements and
+velocities at the last accepted step, DOF order of :mod:`deckpound.models.mechanics`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time as _time
+import warnings
+
+import numpy as np
+from numba import njit
+
+from deckpound.analytic._hysteretic_kernel import P_S1P
+from deckpound.analytic.compliance import lu_factor, lu_solve
+from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM, STATUS_FAILED, \
+    solve_contact_impulses_into
+from deckpound.analytic.kinematics import contact_kinematics, pack_geometry
+from deckpound.analytic.support_motion import record_at, support_record
+from deckpound.analytic.system import pack_system, spring_assemble, spring_commit, \
+    spring_deformations, spring_stored_energy, spring_tangent, spring_update_materials
+from deckpound.engines import output_stride
+from deckpound.models.errors import EngineFailure
+from deckpound.models.excitation import SupportMotion, analysis_duration, support_motion
+from deckpound.models.result import STATUS_FAILED as RESULT_FAILED, STATUS_SUCCESS, Result, \
+    scene_hash, standard_columns
+from deckpound.models.scene import Contact, Scene
+
+__all__ = ["run_nonsmooth", "output_columns", "ENERGY_COLUMNS", "moreau_jean_run"]
+
+ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
+                  "energy_hysteretic", "energy_impact", "energy_friction", "energy_numerical",
+                  "energy_error")
+N_ENERGY = len(ENERGY_COLUMNS)
+# column layout of the numba output array
+_C_T, _C_U, _C_GAP, _C_FN, _C_FT, _C_BENT = 0, 1, 8, 12, 16, 20
+# result DOF column order: deck_x, deck_y, deck_theta, seat1_x, seat1_theta, seat2_x, seat2_theta
+_DOF_OF_COL = np.array([4, 5, 6, 0, 1, 2, 3], dtype=np.int64)
+# info codes
+ST_OK, ST_NEWTON, ST_CONTACT, ST_NONFINITE, ST_SINGULAR = 0, 1, 2, 3, 4
+_STATUS_TEXT = {ST_NEWTON: "Newton iteration of the Takeda springs did not converge",
+                ST_CONTACT: "contact problem not solved (no verified solution)",
+                ST_NONFINITE: "non-finite state", ST_SINGULAR: "singular iteration matrix"}
+
+
+def output_columns(scene: Scene) -> list[str]:
+    """Column names of the nonsmooth result (standard, impulses, contact states, energies)."""
+    cols = standard_columns([b.name for b in scene.bents])
+    cols += [f"pn_c{c}" for c in range(1, 5)] + [f"pt_c{c}" for c in range(1, 5)]
+    cols += [f"state_c{c}" for c in range(1, 5)]
+    return cols + list(ENERGY_COLUMNS)
+
+
+# ----------------------------------------------------------------------------- kernels
+@njit(cache=True)
+def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
+    """LU of Ŵ = M + θhC + θ²h² Bᵀ diag(kt) B (K scratch). Returns False if singular."""
+    spring_tangent(sa, kt, K)
+    c1 = theta * h
+    c2 = c1 * c1
+    for i in range(7):
+        for j in range(7):
+            LU[i, j] = c1 * Cmat[i, j] + c2 * K[i, j]
+        LU[i, i] += sa.mass[i]
+    return lu_factor(LU, piv)
+
+
+@njit(cache=True)
+def _contact_solve(LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu, mode, rtol,
+                   P_N, P_T, state, vnew):
+    """Solve the frictional impact problem of the active corners act[:nact].
+
+    G = W Ŵ⁻¹ Wᵀ, u_free = W v_free, U_N⁻ = W_N v0; vnew = v_free + Ŵ⁻¹ Wᵀ P. Restitution
+    ``ecoef`` for approaching corners (U_N⁻ ≤ 0), ``esep`` for separating ones.
+    P_N, P_T, state (4,) are written per corner (zero / open for inactive corners).
+    Returns (status, comp_res, cone_res).
+    """
+    nc = nact
+    X = np.empty((2 * nc, 7))       # rows: Ŵ⁻¹ w for each column w of W
+    Wr = np.empty((2 * nc, 7))
+    col = np.empty(7)
+    for a in range(nc):
+        c = act[a]
+        for j in range(7):
+            Wr[a, j] = WN[c, j]
+            Wr[nc + a, j] = WT[c, j]
+    for r in range(2 * nc):
+        for j in range(7):
+            col[j] = Wr[r, j]
+        lu_solve(LU, piv, col, col)
+        for j in range(7):
+            X[r, j] = col[j]
+    G = np.empty((2 * nc, 2 * nc))
+    for r in range(2 * nc):
+        for s in range(r, 2 * nc):
+            acc = 0.0
+            for j in range(7):
+                acc += Wr[r, j] * X[s, j]
+            G[r, s] = acc
+            G[s, r] = acc
+    uNf = np.empty(nc)
+    uTf = np.empty(nc)
+    uNm = np.empty(nc)
+    ea = np.empty(nc)
+    ma = np.empty(nc)
+    for a in range(nc):
+        sN = 0.0
+        sT = 0.0
+        sm = 0.0
+        for j in range(7):
+            sN += Wr[a, j] * vfree[j]
+            sT += Wr[nc + a, j] * vfree[j]
+            sm += Wr[a, j] * v0[j]
+        uNf[a] = sN
+        uTf[a] = sT
+        uNm[a] = sm
+        ea[a] = ecoef if sm <= 0.0 else esep
+        ma[a] = mu
+    pN = np.zeros(nc)
+    pT = np.zeros(nc)
+    uNp = np.zeros(nc)
+    uTp = np.zeros(nc)
+    st = np.zeros(nc, dtype=np.int64)
+    status, comp, cone = solve_contact_impulses_into(G, uNf, uTf, uNm, ea, ma, pN, pT, uNp,
+                                                     uTp, st, mode, rtol)
+    for c in range(4):
+        P_N[c] = 0.0
+        P_T[c] = 0.0
+        state[c] = 0
+    for j in range(7):
+        vnew[j] = vfree[j]
+    for a in range(nc):
+        c = act[a]
+        P_N[c] = pN[a]
+        P_T[c] = pT[a]
+        state[c] = st[a]
+        for j in range(7):
+            vnew[j] += X[a, j] * pN[a] + X[nc + a, j] * pT[a]
+    return status, comp, cone
+
+
+@njit(cache=True)
+def _energies(sa, hstate, q, v, ug, W, energy):
+    """Output energies from the running totals W = [input, spring work, viscous, impact,
+    friction, numerical]."""
+    ke = 0.0
+    for j in range(7):
+        ke += 0.5 * sa.mass[j] * v[j] * v[j]
+    es = spring_stored_energy(sa, hstate, q, ug)
+    energy[0] = W[0]
+    energy[1] = ke
+    energy[2] = es
+    energy[3] = W[2]
+    energy[4] = W[1] - es
+    energy[5] = W[3]
+    energy[6] = W[4]
+    energy[7] = W[5]
+    energy[8] = W[0] - (ke + W[1] + W[2] + W[3] + W[4] + W[5])
+
+
+@njit(cache=True)
+def _store(out, row, t, q, g, fn, ft, fs, nbs, pn, pt, state, energy):
+    out[row, _C_T] = t
+    for k in range(7):
+        out[row, _C_U + k] = q[_DOF_OF_COL[k]]
+    for c in range(4):
+        out[row, _C_GAP + c] = g[c]
+        out[row, _C_FN + c] = fn[c]
+        out[row, _C_FT + c] = ft[c]
+    for i in range(nbs):
+        out[row, _C_BENT + i] = fs[i]
+    base = _C_BENT + nbs
+    for c in range(4):
+        out[row, base + c] = pn[c]
+        out[row, base + 4 + c] = pt[c]
+        out[row, base + 8 + c] = state[c]
+    base += 12
+    for k in range(energy.shape[0]):
+        out[row, base + k] = energy[k]
+
+
+@njit(cache=True)
+def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, theta, ecoef,
+                    esep, mu, mode, rtol,
+                    ftol, maxit, stride, nbs, out, info, rinfo, u0, v0, uv_end):
+    """The Moreau–Jean step loop over ``nsteps`` steps of length h.
+
+    Support motion: the record (tb, DG, VGR) of
+    :func:`deckpound.analytic.support_motion.support_record`, interpolated at t_n = n·h in the
+    loop (identical to ``motion.resample(h)``, bounded memory).
+
+    Fills ``out`` (one row per output) and ``info`` = [status (0 ok, 1 Newton, 2 contact,
+    3 non-finite, 4 singular), rows written, failed step, contact solves, contact events
+    (corner activations), contact steps, Newton iterations, max iterations of a step,
+    iteration-matrix factorisations]; ``rinfo`` = [max complementarity residual, max cone
+    residual]; ``uv_end`` (2, 7) = displacement and velocity at the last accepted step.
+    """
+    ns = sa.k0.shape[0]
+    nch = DG.shape[1]
+    mass = sa.mass
+    hp = sa.hparams
+    kind = sa.kind
+    a0 = sa.scal[0]
+    q = np.zeros(7)
+    v = np.zeros(7)
+    qk = np.zeros(7)
+    vk = np.zeros(7)
+    qM = np.zeros(7)
+    vfree = np.zeros(7)
+    vnew = np.zeros(7)
+    R = np.zeros(7)
+    dv = np.zeros(7)
+    Fk = np.zeros(7)
+    f = np.zeros(7)
+    K = np.zeros((7, 7))
+    LU = np.zeros((7, 7))
+    piv = np.zeros(7, dtype=np.int64)
+    kt_fact = np.full(ns, np.nan)     # tangents of the factors held in LU
+    # spring quantities: committed start of step (k), linearisation point (lin), new iterate
+    d_k = np.zeros(ns)
+    dd_k = np.zeros(ns)
+    fs_k = np.zeros(ns)
+    kt_k = np.zeros(ns)
+    d_lin = np.zeros(ns)
+    fs_lin = np.zeros(ns)
+    kt_lin = np.zeros(ns)
+    d = np.zeros(ns)
+    dd = np.zeros(ns)
+    fs = np.zeros(ns)
+    kt = np.zeros(ns)
+    sdu = np.zeros(ns)      # S Δu_g per spring
+    sdv = np.zeros(ns)      # S Δu̇_g per spring
+    gap = np.zeros(4)
+    WN = np.zeros((4, 7))
+    WT = np.zeros((4, 7))
+    gapo = np.zeros(4)
+    WNo = np.zeros((4, 7))
+    WTo = np.zeros((4, 7))
+    act = np.zeros(4, dtype=np.int64)
+    was_active = np.zeros(4, dtype=np.bool_)
+    P_N = np.zeros(4)
+    P_T = np.zeros(4)
+    state = np.zeros(4, dtype=np.int64)
+    pn_acc = np.zeros(4)
+    pt_acc = np.zeros(4)
+    fn_out = np.zeros(4)
+    ft_out = np.zeros(4)
+    ug = np.zeros(nch)
+    vg = np.zeros(nch)
+    ugo = np.zeros(nch)
+    vgo = np.zeros(nch)
+    W = np.zeros(6)
+    energy = np.zeros(9)
+    th = theta
+    th1 = 1.0 - theta
+    # ---- initial state
+    jrec = record_at(tb, DG, VGR, 0.0, 0, ug, vg)
+    for j in range(7):
+        q[j] = u0[j]
+        v[j] = v0[j]
+    spring_deformations(sa, q, v, ug, vg, d_k, dd_k)
+    spring_update_materials(hp, hstate, kind, d_k)
+    spring_assemble(sa, hstate, d_k, dd_k, v, Fk, fs_k, kt_k)
+    spring_commit(sa, hstate)
+    es0 = spring_stored_energy(sa, hstate, q, ug)
+    ke0 = 0.0
+    for j in range(7):
+        ke0 += 0.5 * mass[j] * v[j] * v[j]
+    W[0] = ke0 + es0
+    W[1] = es0
+    contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
+    _energies(sa, hstate, q, v, ug, W, energy)
+    _store(out, 0, 0.0, q, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state, energy)
+    row = 1
+    solves = 0
+    events = 0
+    csteps = 0
+    newton = 0
+    maxit_seen = 0
+    nfact = 0
+    max_comp = 0.0
+    max_cone = 0.0
+    status = ST_OK
+    inv_out = 1.0 / (stride * h)
+    for n in range(nsteps):
+        # ---- support motion at t_{n+1} and its increment (per spring)
+        for k in range(nch):
+            ugo[k] = ug[k]
+            vgo[k] = vg[k]
+        jrec = record_at(tb, DG, VGR, (n + 1) * h, jrec, ug, vg)
+        for i in range(ns):
+            ch = sa.schan[i]
+            if ch >= 0:
+                sdu[i] = sa.sval[i] * (ug[ch] - ugo[ch])
+                sdv[i] = sa.sval[i] * (vg[ch] - vgo[ch])
+            else:
+                sdu[i] = 0.0
+                sdv[i] = 0.0
+        for j in range(7):
+            qk[j] = q[j]
+            vk[j] = v[j]
+            qM[j] = q[j] + 0.5 * h * v[j]
+        # ---- active set at the predicted mid-step position
+        contact_kinematics(qM, geom, nonlinear, gap, WN, WT)
+        nact = 0
+        for c in range(4):
+            if gap[c] <= 0.0:
+                act[nact] = c
+                nact += 1
+                if not was_active[c]:
+                    events += 1
+                was_active[c] = True
+            else:
+                was_active[c] = False
+        if nact > 0:
+            csteps += 1
+        # ---- iteration 0: residual of the linearisation about the committed state
+        # R = h F_k + θh Bᵀ[k_t ∘ (h B v_k − SΔu_g) − crate ∘ SΔu̇_g]
+        for j in range(7):
+            R[j] = h * Fk[j]
+        for i in range(ns):
+            bv = 0.0
+            for r in range(sa.bnnz[i]):
+                bv += sa.bval[i, r] * vk[sa.bidx[i, r]]
+            t_i = th * h * (kt_k[i] * (h * bv - sdu[i]) - sa.crate[i] * sdv[i])
+            for r in range(sa.bnnz[i]):
+                R[sa.bidx[i, r]] += sa.bval[i, r] * t_i
+            d_lin[i] = d_k[i]
+            fs_lin[i] = fs_k[i]
+            kt_lin[i] = kt_k[i]
+        for j in range(7):
+            v[j] = vk[j]
+        it = 0
+        converged = False
+        while True:
+            # ---- iteration matrix (refactored only when a tangent changed)
+            same = True
+            for i in range(ns):
+                if kt_lin[i] != kt_fact[i]:
+                    same = False
+                    break
+            if not same:
+                if not _iteration_matrix(sa, Cmat, kt_lin, h, theta, K, LU, piv):
+                    status = ST_SINGULAR
+                    break
+                nfact += 1
+                for i in range(ns):
+                    kt_fact[i] = kt_lin[i]
+            # ---- free velocity v_free = v − Ŵ⁻¹ R
+            lu_solve(LU, piv, R, dv)
+            for j in range(7):
+                vfree[j] = v[j] - dv[j]
+            # ---- contact
+            if nact > 0:
+                cst, comp, cone = _contact_solve(LU, piv, WN, WT, act, nact, vk, vfree, ecoef,
+                                                 esep, mu, mode, rtol, P_N, P_T, state, vnew)
+                solves += 1
+                if cst == STATUS_FAILED:
+                    status = ST_CONTACT
+                    break
+                if comp > max_comp:
+                    max_comp = comp
+                if cone > max_cone:
+                    max_cone = cone
+                for j in range(7):
+                    v[j] = vnew[j]
+            else:
+                for j in range(7):
+                    v[j] = vfree[j]
+            for j in range(7):
+                q[j] = qk[j] + h * (th1 * vk[j] + th * v[j])
+            # ---- springs at the new iterate
+            spring_deformations(sa, q, v, ug, vg, d, dd)
+            spring_update_materials(hp, hstate, kind, d)
+            spring_assemble(sa, hstate, d, dd, v, f, fs, kt)
+            it += 1
+            rmax = 0.0
+            for i in range(ns):
+                if kind[i] == 1:
+                    r_i = abs(fs[i] - fs_lin[i] - kt_lin[i] * (d[i] - d_lin[i]))
+                    if r_i > rmax:
+                        rmax = r_i
+            if not np.isfinite(rmax):
+                status = ST_NONFINITE
+                break
+            if rmax <= ftol:
+                converged = True
+                break
+            if it >= maxit:
+                status = ST_NEWTON
+                break
+            # ---- Newton: residual of the θ-equation at the iterate (contact impulse excluded)
+            for j in range(7):
+                R[j] = mass[j] * (v[j] - vk[j]) + h * (th1 * Fk[j] + th * f[j])
+            for i in range(ns):
+                d_lin[i] = d[i]
+                fs_lin[i] = fs[i]
+                kt_lin[i] = kt[i]
+        newton += it
+        if it > maxit_seen:
+            maxit_seen = it
+        if converged:
+            for j in range(7):
+                if not np.isfinite(v[j]) or not np.isfinite(q[j]):
+                    status = ST_NONFINITE
+        if status != ST_OK:
+            for j in range(7):
+                uv_end[0, j] = qk[j]
+                uv_end[1, j] = vk[j]
+            info[0] = status
+            info[1] = row
+            info[2] = n + 1
+            info[3] = solves
+            info[4] = events
+            info[5] = csteps
+            info[6] = newton
+            info[7] = maxit_seen
+            info[8] = nfact
+            rinfo[0] = max_comp
+            rinfo[1] = max_cone
+            return
+        spring_commit(sa, hstate)
+        # ---- energy (exact work of the θ-scheme over the step)
+        for i in range(ns):
+            fth = th * fs[i] + th1 * fs_k[i]
+            cth = sa.crate[i] * (th * dd[i] + th1 * dd_k[i])
+            dlt = d[i] - d_k[i]
+            W[0] -= sdu[i] * (fth + cth)
+            W[1] += dlt * fth
+            W[2] += dlt * cth
+            d_k[i] = d[i]
+            dd_k[i] = dd[i]
+            fs_k[i] = fs[i]
+            kt_k[i] = kt[i]
+        num = 0.0
+        for j in range(7):
+            vm = th1 * vk[j] + th * v[j]
+            W[2] += a0 * mass[j] * (q[j] - qk[j]) * vm
+            dvj = v[j] - vk[j]
+            num += mass[j] * dvj * dvj
+            Fk[j] = f[j]
+        W[5] += (th - 0.5) * num
+        if nact > 0:
+            for a in range(nact):
+                c = act[a]
+                uN = 0.0
+                uT = 0.0
+                for j in range(7):
+                    vm = th1 * vk[j] + th * v[j]
+                    uN += WN[c, j] * vm
+                    uT += WT[c, j] * vm
+                W[3] -= P_N[c] * uN
+                W[4] -= P_T[c] * uT
+                pn_acc[c] += P_N[c]
+                pt_acc[c] += P_T[c]
+        else:
+            for c in range(4):
+                state[c] = 0
+        # ---- output
+        if (n + 1) % stride == 0:
+            contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
+            for c in range(4):
+                fn_out[c] = pn_acc[c] * inv_out
+                ft_out[c] = pt_acc[c] * inv_out
+            _energies(sa, hstate, q, v, ug, W, energy)
+            _store(out, row, (n + 1) * h, q, gapo, fn_out, ft_out, fs, nbs, pn_acc, pt_acc,
+                   state, energy)
+            row += 1
+            for c in range(4):
+                pn_acc[c] = 0.0
+                pt_acc[c] = 0.0
+    for j in range(7):
+        uv_end[0, j] = q[j]
+        uv_end[1, j] = v[j]
+    info[0] = ST_OK
+    info[1] = row
+    info[3] = solves
+    info[4] = events
+    info[5] = csteps
+    info[6] = newton
+    info[7] = maxit_seen
+    info[8] = nfact
+    rinfo[0] = max_comp
+    rinfo[1] = max_cone
+
+
+# ----------------------------------------------------------------------------- engine
+_CONTACT_DEFAULTS = Contact()
+_IGNORED_CONTACT = ("law", "stiffness", "exponent", "bilinear_ratio", "bilinear_yield")
+
+
+def _warn_ignored(scene: Scene) -> None:
+    ct = scene.contact
+    changed = [k for k in _IGNORED_CONTACT if getattr(ct, k) != getattr(_CONTACT_DEFAULTS, k)]
+    if changed:
+        warnings.warn("nonsmooth engine: contact is rigid (Newton impact law with restitution "
+                      f"e); contact.{', contact.'.join(changed)} do not apply", stacklevel=3)
+    if ct.friction > 0.0 and ct.friction_mode == "none":
+        warnings.warn("contact.friction > 0 is ignored because contact.friction_mode = 'none'",
+                      stacklevel=3)
+    elif ct.has_friction:
+        warnings.warn(f"nonsmooth engine: contact.friction_mode = {ct.friction_mode!r} means "
+                      "set-valued Coulomb friction (mu = contact.friction); the slip/stick "
+                      "distinction, contact.tangential_stiffness and contact.slip_velocity do "
+                      "not apply", stacklevel=3)
+    elif ct.friction_mode != "none" and ct.friction == 0.0:
+        warnings.warn(f"contact.friction_mode = {ct.friction_mode!r} has no effect with "
+                      "contact.friction = 0", stacklevel=3)
+
+
+def separating_restitution(e: float, theta: float) -> float:
+    """Restitution used at an active corner that is already separating (U_N⁻ > 0):
+    max(e, (1 − θ)/θ), which makes the normal impulse's work on v_m non-positive."""
+    return max(float(e), (1.0 - theta) / theta)
+
+
+def _force_tolerance(ps, tol: float) -> float:
+    """Newton acceptance of the spring-force linearisation mismatch [kN]."""
+    hyst = ps.arrays.kind == 1
+    scale = float(np.max(np.abs(ps.arrays.hparams[hyst, P_S1P]))) if np.any(hyst) else 1.0
+    return tol * max(scale, 1.0)
+
+
+def _initial(initial_state):
+    u0 = np.zeros(7)
+    v0 = np.zeros(7)
+    if initial_state is not None:
+        u0[:] = np.asarray(initial_state[0], dtype=float)
+        v0[:] = np.asarray(initial_state[1], dtype=float)
+    return u0, v0
+
+
+def run_nonsmooth(scene: Scene, motion: SupportMotion | None = None, *,
+                  raise_on_failure: bool = False, initial_state=None) -> Result:
+    """Run the Moreau–Jean nonsmooth engine on ``scene`` (engine contract of
+    :mod:`deckpound.engines`; method and output in the module docstring).
+
+    Extra keyword (not a scene option): ``initial_state = (u0, v0)`` starts from the given DOF
+    displacements and velocities (default rest).
+    """
+    _warn_ignored(scene)
+    t0 = _time.perf_counter()
+    ns_set = scene.nonsmooth
+    h, theta = ns_set.h, ns_set.theta
+    if motion is None:
+        motion = support_motion(scene)
+    duration = analysis_duration(scene, motion)
+    ps = pack_system(scene)
+    tb, DG, VGR = support_record(motion, ps.channels)
+    geom = pack_geometry(scene)
+    ct = scene.contact
+    mu = float(ct.friction) if ct.has_friction else 0.0
+    mode = MODE_ENUM if ns_set.solver == "enumeration" else MODE_AUTO
+    stride = output_stride(h, scene.run.output_dt)
+    nsteps = int(round(duration / h))
+    nbs = ps.n_bent_springs
+    cols = output_columns(scene)
+    out = np.zeros((nsteps // stride + 1, len(cols)))
+    info = np.zeros(9, dtype=np.int64)
+    rinfo = np.zeros(2)
+    uv_end = np.zeros((2, 7))
+    hstate = ps.new_state()
+    u0, v0 = _initial(initial_state)
+    ftol = _force_tolerance(ps, ns_set.tolerance)
+    t1 = _time.perf_counter()
+    moreau_jean_run(ps.arrays, ps.C, hstate, geom, ct.geometry == "nonlinear", tb, DG, VGR,
+                    nsteps, h, theta,
+                    float(ct.restitution), separating_restitution(ct.restitution, theta), mu,
+                    mode, float(ns_set.tolerance), ftol,
+                    int(ns_set.max_iterations), stride, nbs, out, info, rinfo, u0, v0, uv_end)
+    t2 = _time.perf_counter()
+    status_code, rows = int(info[0]), int(info[1])
+    steps = nsteps if status_code == ST_OK else int(info[2]) - 1
+    columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
+    gaps = np.column_stack([columns[f"gap_c{c}"] for c in range(1, 5)])
+    ein = float(np.max(np.abs(columns["energy_input"]))) if rows else 0.0
+    eerr = float(np.max(np.abs(columns["energy_error"]))) if rows else 0.0
+    meta = {
+        "engine": "nonsmooth",
+        "settings": dataclasses.asdict(ns_set) | {"friction": mu,
+                                                  "restitution": float(ct.restitution)},
+        "scene_hash": scene_hash(scene),
+        "wall_time": t2 - t0,
+        "loop_time": t2 - t1,
+        "us_per_step": 1e6 * (t2 - t1) / max(nsteps, 1),
+        "steps": steps,
+        "iterations": int(info[3]),
+        "contact_solves": int(info[3]),
+        "contact_steps": int(info[5]),
+        "newton_iterations": int(info[6]),
+        "max_step_iterations": int(info[7]),
+        "factorisations": int(info[8]),
+        "contact_events": int(info[4]),
+        "failures": 0 if status_code == ST_OK else 1,
+        "max_complementarity": float(rinfo[0]),
+        "max_cone_residual": float(rinfo[1]),
+        "max_penetration": float(max(0.0, -np.min(gaps))) if rows else 0.0,
+        "energy_error": eerr,
+        "energy_closure": eerr / ein if ein > 0 else 0.0,
+        "duration": duration,
+        "final_u": uv_end[0].tolist(),
+        "final_v": uv_end[1].tolist(),
+        "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
+        "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
+                       "impact + friction + numerical) [kJ]",
+        "iterations_note": "iterations = contact problems solved (Newton re-solves included)",
+    }
+    if status_code == ST_OK:
+        meta["status"] = STATUS_SUCCESS
+        meta["message"] = (f"{nsteps} steps, {int(info[5])} with contact, {int(info[3])} "
+                           f"contact solves")
+    else:
+        step = int(info[2])
+        meta["status"] = RESULT_FAILED
+        meta["failed_step"] = step
+        meta["failed_time"] = step * h
+        meta["message"] = (f"{_STATUS_TEXT.get(status_code, 'failure')} at step {step} "
+                           f"(t = {step * h:.6g} s)")
+        if raise_on_failure:
+            raise EngineFailure(f"nonsmooth engine: {meta['message']}")
+    return Result(engine="nonsmooth", columns=columns, meta=meta)
+

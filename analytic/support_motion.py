@@ -1,0 +1,85 @@
+"""Support motion at the engine's step, interpolated inside the compiled loop (bounded memory).
+
+Engines used to resample the whole record onto their own step
+(:meth:`deckpound.models.excitation.SupportMotion.resample`), i.e. arrays of
+``n_steps × n_channels`` for displacement and velocity: 6 million steps × 8 channels × 2 ×
+8 bytes ≈ 0.8 GB for a 60 s record at dt = 1e-5 s. Instead, keep the record at its own samples
+(a few thousand rows) and interpolate at t_n = n·dt inside the step loop:
+
+    tb, D, V = support_record(motion, channels)      # once per run (Python)
+    j = 0
+    j = record_at(tb, D, V, n * dt, j, ug, vg)        # per step (numba); j: search hint
+
+:func:`record_at` is bit-for-bit the arithmetic of ``np.interp(t, tb, column)`` (NumPy's
+``arr_interp``: slope = (y[j+1] − y[j]) / (x[j+1] − x[j]), value = slope·(t − x[j]) + y[j];
+exactly y[j] at a sample; the first / last value held before / after the record), so an
+engine that switches from ``motion.resample(dt, duration)`` to it produces identical
+results (tested in ``tests/test_support_motion.py``). The hint ``j`` makes sequential calls
+O(1); any hint is valid (the search moves both ways).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["support_record", "record_at", "record_at_times"]
+
+
+def support_record(motion, channels) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(tb, D, V): the record's own time base (n,) and displacement / velocity (n, n_channels)
+    in the given channel order, contiguous float64 (what :func:`record_at` takes)."""
+    tb = np.ascontiguousarray(np.asarray(motion.t, dtype=np.float64))
+    D, V = motion.matrices(tuple(channels))
+    return tb, np.ascontiguousarray(D, dtype=np.float64), np.ascontiguousarray(V, dtype=np.float64)
+
+
+@njit(cache=True)
+def record_at(tb, D, V, t, j, ug, vg):
+    """Fill ug, vg (n_channels,) with the support motion at time t; returns the new hint.
+
+    Identical to ``np.interp(t, tb, D[:, k])`` (and V) for every channel k.
+    """
+    n = tb.shape[0]
+    nch = D.shape[1]
+    if t >= tb[n - 1]:                       # at or after the last sample: last value held
+        for k in range(nch):
+            ug[k] = D[n - 1, k]
+            vg[k] = V[n - 1, k]
+        return n - 1
+    if t < tb[0]:                            # before the record: first value held
+        for k in range(nch):
+            ug[k] = D[0, k]
+            vg[k] = V[0, k]
+        return 0
+    if j < 0:
+        j = 0
+    if j > n - 2:
+        j = n - 2
+    while tb[j] > t:
+        j -= 1
+    while tb[j + 1] <= t:
+        j += 1
+    # now tb[j] <= t < tb[j+1]
+    if tb[j] == t:
+        for k in range(nch):
+            ug[k] = D[j, k]
+            vg[k] = V[j, k]
+        return j
+    dx = tb[j + 1] - tb[j]
+    x = t - tb[j]
+    for k in range(nch):
+        s = (D[j + 1, k] - D[j, k]) / dx
+        ug[k] = s * x + D[j, k]
+        s = (V[j + 1, k] - V[j, k]) / dx
+        vg[k] = s * x + V[j, k]
+    return j
+
+
+@njit(cache=True)
+def record_at_times(tb, D, V, dt, n0, n1, UG, VG):
+    """Rows n0..n1−1 of the resampled motion at t = n·dt into UG, VG (n1 − n0, n_channels):
+    a bounded-size block version of ``motion.resample`` (for engines that step in chunks)."""
+    j = 0
+    for n in range(n0, n1):
+        j = record_at(tb, D, V, n * dt, j, UG[n - n0], VG[n - n0])
