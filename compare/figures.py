@@ -74,9 +74,14 @@ def peak_vs_pga(table: pd.DataFrame, scene: Scene, path: str | Path,
     """Peak deck rotation vs run PGA over the sequence, one line per engine (paper Fig. 7)."""
     fig, axes = new_figure(1, 1, width=5.5, height=3.2)
     ax = axes[0, 0]
-    for k, (engine, g) in enumerate(table.groupby("engine", sort=False)):
-        st = engine_style(engine)
-        ax.plot(g["run"], 1e3 * g[quantity], marker=CYCLE[k % len(CYCLE)]["marker"], **st)
+    markers = {"opensees": "o", "compliance": "s", "nonsmooth": "^"}
+    for engine, g in table.groupby("engine", sort=False):
+        base, _, variant = engine.partition(" ")
+        st = engine_style(base)
+        if variant:  # the same engine under another assumption: hollow markers, thinner line
+            st.update(label=f"{st['label']}, {variant}", markerfacecolor="white",
+                      linewidth=0.9)
+        ax.plot(g["run"], 1e3 * g[quantity], marker=markers.get(base, "x"), **st)
     runs = table.drop_duplicates("run")
     ax.set_xticks(runs["run"])
     ax.set_xticklabels([f"{r}\n{p:g} g" for r, p in zip(runs["run"], runs["pga"])])
