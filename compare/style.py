@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 ENGINE_STYLE = {
-    "opensees": dict(color="#000000", linestyle="-", linewidth=1.4, label="OpenSees (compliance)"),
+    "opensees": dict(color="#000000", linestyle="-", linewidth=1.4, label="OpenSees"),
     "compliance": dict(color="#1f5fa8", linestyle="--", linewidth=1.2, label="compliance clone"),
     "nonsmooth": dict(color="#c0392b", linestyle=":", linewidth=1.6, label="nonsmooth"),
     "measured": dict(color="#777777", linestyle="-.", linewidth=1.0, label="measured"),
