@@ -391,3 +391,14 @@ def test_process_unknown_engine_and_version(tmp_path):
     assert "Traceback" not in p.stderr and not (tmp_path / "out").exists()
     p = _process(tmp_path, "--version")
     assert p.returncode == 0 and p.stdout.strip() == f"deckpound {__version__}"
+
+
+def test_verify_clone_cli_reports_agreement_and_speed(capsys):
+    """`deckpound verify clone` prints the largest deviation and both speeds (issue 4)."""
+    from deckpound.cli import main as cli_main
+
+    assert cli_main(["verify", "clone", "saiidi-4span", "--set", "excitation.duration=1.0"]) == 0
+    out = capsys.readouterr().out
+    line = [ln for ln in out.splitlines() if ln.startswith("largest deviation")][0]
+    assert float(line.split(":")[1].split()[0]) < 1e-8
+    assert "us/step" in out
