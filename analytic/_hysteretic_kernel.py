@@ -68,6 +68,7 @@ so ``revertToLastCommit`` leaves the trial tangent untouched.
 
 from __future__ import annotations
 
+import os
 
 import numpy as np
 from numba import njit
@@ -95,6 +96,12 @@ __all__ = [
     "hyst_revert",
     "hyst_revert_to_start",
 ]
+
+#: The elastic short-circuit of :func:`_degradation` (``pow`` skipped while the ductility is
+#: ≤ 1; bit-identical results). ``DECKPOUND_TAKEDA_SHORTCUT=0`` in the environment turns it
+#: off, for measurement only (``compare/skips.py``). numba freezes the value at compile time
+#: and its cache does not see it change: run such a process with its own ``NUMBA_CACHE_DIR``.
+ELASTIC_SHORTCUT = os.environ.get("DECKPOUND_TAKEDA_SHORTCUT", "1") != "0"
 
 #: Strain clamp used by OpenSees (``UniaxialMaterial.h``).
 POS_INF_STRAIN = 1.0e16
@@ -270,7 +277,7 @@ def _degradation(ratio, beta):
     either through ``k < 1 -> 1`` or ``1/1``.  Skipping ``pow`` therefore
     gives the identical double, and keeps the kernel cheap before yielding.
     """
-    if ratio <= 1.0 and ratio >= 0.0:
+    if ELASTIC_SHORTCUT and ratio <= 1.0 and ratio >= 0.0:
         return 1.0
     k = ratio ** beta
     if k < 1.0:

@@ -33,6 +33,7 @@ error norm) from the power of each force, so ``energy_error`` measures the integ
 from __future__ import annotations
 
 import time as _time
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
@@ -63,6 +64,11 @@ _E = _B5 - np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200
 NY = 14          # u, v
 NE = 5           # energy integrals: input, springs, viscous, contact, friction
 NT = NY + NE
+# accepted-step-size statistics: log10(h) histogram, H_BINS_PER_DECADE bins per decade from
+# 10**H_LOG_MIN to 1 s, row 0 = out of contact, row 1 = in contact (a gap ≤ 0 at either end)
+H_LOG_MIN = -14.0
+H_BINS_PER_DECADE = 20
+H_NBINS = int(-H_LOG_MIN) * H_BINS_PER_DECADE
 
 
 @njit(cache=True)
@@ -195,10 +201,14 @@ def _event_value(kind_idx, y, sa, geom, nonlinear, cp, tb, D, V, t, ws):
     return ut
 
 
+# module level: a namedtuple class made per call would be a new numba type each time (a fresh
+# compilation of the whole loop on every run, ~7 s); its typename must equal its module
+# attribute name, or numba pickles the class by value and the on-disk cache never hits
+_WS = namedtuple("_WS", "ug vg d dd f fs kt g gd WN WT fc lam lt der ev nbs")
+
+
 def _workspace(ns, nch, nbs):
-    from collections import namedtuple
-    W = namedtuple("WS", "ug vg d dd f fs kt g gd WN WT fc lam lt der ev nbs")
-    return W(np.zeros(nch), np.zeros(nch), np.zeros(ns), np.zeros(ns), np.zeros(7), np.zeros(ns),
+    return _WS(np.zeros(nch), np.zeros(nch), np.zeros(ns), np.zeros(ns), np.zeros(7), np.zeros(ns),
              np.zeros(ns), np.zeros(4), np.zeros(4), np.zeros((4, 7)), np.zeros((4, 7)),
              np.zeros(7), np.zeros(4), np.zeros(4), np.zeros((4, 7)),
              np.zeros(4, dtype=np.bool_), nbs)
@@ -232,9 +242,10 @@ def _rk_step(t, y, k1, h, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws,
 
 @njit(cache=True)
 def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, nbs, rtol, atol,
-                 max_step, out, info, ws, u0, v0, A, C, B5, E):
+                 max_step, out, info, ws, u0, v0, A, C, B5, E, hist, hstat):
     """The adaptive loop; fills out (rows at k·out_dt) and info = [status, rows, steps,
-    rejected, events, rhs calls]."""
+    rejected, events, rhs calls]; hist (2, H_NBINS) counts of accepted step sizes and
+    hstat (2, 3) = [min, max, sum] of them, row 0 out of contact, row 1 in contact."""
     y = np.zeros(NT)
     for j in range(7):
         y[j] = u0[j]
@@ -338,6 +349,8 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
         else:
             h_acc = h
         # accept: state at t + h_acc, commit materials and contacts there
+        t_start = t
+        in_contact = ev0[0] <= 0.0 or ev0[1] <= 0.0 or ev0[2] <= 0.0 or ev0[3] <= 0.0
         t = t + h_acc
         if hit_break:
             t = tbreak
@@ -353,7 +366,27 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
         calls += 1
         _events(y, k1, sa, cp, geom, nonlinear, nbs, ws, ev0)
         steps += 1
-        if not np.isfinite(y[0]):
+        if ev0[0] <= 0.0 or ev0[1] <= 0.0 or ev0[2] <= 0.0 or ev0[3] <= 0.0:
+            in_contact = True
+        hs = t - t_start
+        ic = 1 if in_contact else 0
+        if hs > 0.0:
+            b = int((np.log10(hs) - H_LOG_MIN) * H_BINS_PER_DECADE)
+            if b < 0:
+                b = 0
+            if b >= H_NBINS:
+                b = H_NBINS - 1
+            hist[ic, b] += 1
+            if hstat[ic, 0] == 0.0 or hs < hstat[ic, 0]:
+                hstat[ic, 0] = hs
+            if hs > hstat[ic, 1]:
+                hstat[ic, 1] = hs
+            hstat[ic, 2] += hs
+        finite = True
+        for j in range(NT):
+            if not np.isfinite(y[j]):
+                finite = False
+        if not finite:
             info[0] = 3
             break
         if row < nout and abs(t - row * out_dt) <= 1e-9 * out_dt:
@@ -412,6 +445,29 @@ def _adaptive_store(sa, hstate, cp, cs, y, ws, out, row, t, nbs):
     out[row, base + 8] = W0 - (ke + W1 + W2 + W3 + W4)
 
 
+def _hist_median(counts: np.ndarray) -> float:
+    """Median step size from a log10 histogram (geometric centre of the median bin)."""
+    total = int(counts.sum())
+    if total == 0:
+        return float("nan")
+    b = int(np.searchsorted(np.cumsum(counts), 0.5 * total))
+    return float(10.0 ** (H_LOG_MIN + (b + 0.5) / H_BINS_PER_DECADE))
+
+
+def step_size_summary(hist: np.ndarray, hstat: np.ndarray) -> dict:
+    """Accepted step sizes out of / in contact: count, median (from a log histogram with
+    H_BINS_PER_DECADE bins per decade, ±6 %), min, max, mean, and the time covered [s]."""
+    out = {}
+    for ic, name in ((0, "free"), (1, "contact")):
+        n = int(hist[ic].sum())
+        out[name] = {"steps": n, "median": _hist_median(hist[ic]),
+                     "min": float(hstat[ic, 0]) if n else float("nan"),
+                     "max": float(hstat[ic, 1]) if n else float("nan"),
+                     "mean": float(hstat[ic, 2] / n) if n else float("nan"),
+                     "time": float(hstat[ic, 2])}
+    return out
+
+
 def run_adaptive(scene: Scene, motion: SupportMotion | None = None, *,
                  raise_on_failure: bool = False, kv_clip: bool = False,
                  initial_state=None) -> Result:
@@ -433,10 +489,12 @@ def run_adaptive(scene: Scene, motion: SupportMotion | None = None, *,
     ws = _workspace(ps.n_springs, UG.shape[1], nbs)
     hstate = ps.new_state()
     u0, v0 = _initial(initial_state)
+    hist = np.zeros((2, H_NBINS), dtype=np.int64)
+    hstat = np.zeros((2, 3))
     t1 = _time.perf_counter()
     adaptive_run(ps.arrays, hstate, cp, cs, geom, scene.contact.geometry == "nonlinear", tb, UG,
                  VG, (nout - 1) * out_dt, out_dt, nbs, cset.rtol, cset.atol, cset.max_step, out,
-                 info, ws, u0, v0, _A, _C, _B5, _E)
+                 info, ws, u0, v0, _A, _C, _B5, _E, hist, hstat)
     t2 = _time.perf_counter()
     rows = int(info[1])
     columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
@@ -456,6 +514,7 @@ def run_adaptive(scene: Scene, motion: SupportMotion | None = None, *,
         "duration": duration,
         "energy_closure": float(np.max(np.abs(columns["energy_error"])) / ein) if ein > 0 else 0.0,
         "energy_columns": list(ENERGY_COLUMNS),
+        "step_sizes": step_size_summary(hist, hstat),
     }
     if info[0] == 0 and rows == nout:
         meta["status"] = STATUS_SUCCESS

@@ -70,31 +70,61 @@ def _row(engine: str, cell: dict, outcome) -> dict:
     r = outcome.result
     if r is None:
         row.update(finite=False, max_penetration=np.nan, energy_error=np.nan,
-                   complementarity=np.nan, failed_time=np.nan, t_end=np.nan)
+                   complementarity=np.nan, failed_time=np.nan, failed_step=np.nan, t_end=np.nan)
         return row
     data = np.column_stack([v for v in r.columns.values()])
     gaps = np.column_stack([r[f"gap_c{c}"] for c in range(1, 5)])
     row.update(
         finite=bool(np.all(np.isfinite(data))),
         max_penetration=float(max(0.0, -np.min(gaps))) if len(gaps) else np.nan,
-        energy_error=float(r.meta.get("energy_error", np.nan)),
+        energy_error=_energy_error(r),
         complementarity=float(r.meta.get("max_complementarity", np.nan)),
-        failed_time=float(r.meta.get("failed_time", np.nan)) if r.meta.get("failed_time") is not None else np.nan,
+        failed_time=_num(r.meta.get("failed_time")),
+        failed_step=_num(r.meta.get("failed_step")),
         t_end=float(r.t[-1]) if len(r.t) else np.nan,
     )
+    if row["status"] == "success" and not row["finite"]:
+        # an engine must never return non-finite output as a success (engine contract)
+        row["status"] = "non-finite"
+        row["message"] = ("reported success but the output holds NaN/inf: " + row["message"])[:200]
     return row
+
+
+def _num(value) -> float:
+    return float(value) if value is not None else np.nan
+
+
+def _energy_error(r) -> float:
+    """Energy-balance error relative to the input, max|energy_error| / max|energy_input| from
+    the columns (every engine that tracks energy has both), else the engine's own relative
+    ``energy_closure``; NaN for engines without an energy balance (OpenSees)."""
+    if "energy_error" in r.columns and "energy_input" in r.columns and len(r.t):
+        with np.errstate(all="ignore"):
+            ein = float(np.max(np.abs(r["energy_input"])))
+            return float(np.max(np.abs(r["energy_error"]))) / ein if ein > 0 else np.nan
+    if r.meta.get("energy_closure") is not None:
+        return float(r.meta["energy_closure"])
+    return np.nan
 
 
 def run_stress(base: Scene, out: str | Path, *, quick: bool = False,
                engines: tuple[str, ...] = ENGINES, duration: float | None = None,
-               timeout: float = 300.0, progress: bool = True) -> pd.DataFrame:
-    """Run the grid, write stress.csv and heat maps into ``out``; return the table."""
+               timeout: float = 300.0, progress: bool = True,
+               cells: list[dict] | None = None) -> pd.DataFrame:
+    """Run the grid (or the given ``cells``), write stress.csv and heat maps into ``out``;
+    return the table.
+
+    Status per cell: ``success`` (finished; output checked finite), ``failed`` (the engine's
+    own failure status, with ``failed_time`` / ``failed_step``), ``non-finite`` (reported
+    success with NaN/inf in the output: an engine bug, never hidden), ``timeout``,
+    ``crashed`` (exception or dead child, message kept) or ``refused`` (the scene validation
+    rejected the cell)."""
     from .cases import Progress
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     duration = duration if duration is not None else (1.0 if quick else 5.0)
-    cells = grid(quick)
+    cells = grid(quick) if cells is None else cells
     rows = []
     bar = Progress(len(cells) * len(engines), "stress", progress)
     t0 = time.perf_counter()
@@ -119,8 +149,11 @@ def run_stress(base: Scene, out: str | Path, *, quick: bool = False,
 
 def heat_maps(table: pd.DataFrame, scene: Scene, out: Path) -> list[Path]:
     """Stiffness × step maps of outcome and penetration per engine; one-way sweeps as a grid."""
+    from matplotlib.colors import ListedColormap, LogNorm
+
     from .style import new_figure, save
 
+    status_cmap = ListedColormap(["#f4a6a6", "#a8dba8"])     # 0 FAIL (red), 1 ok (green)
     written = []
     two_way = table.dropna(subset=["stiffness", "dt"])
     engines = list(dict.fromkeys(table["engine"]))
@@ -136,15 +169,26 @@ def heat_maps(table: pd.DataFrame, scene: Scene, out: Path) -> list[Path]:
                 i, k = dts.index(r["dt"]), ks.index(r["stiffness"])
                 ok[i, k] = 1.0 if (r["status"] == "success" and r["finite"]) else 0.0
                 pen[i, k] = 1e3 * r["max_penetration"]
-            for row, (data, title, cmap) in enumerate(((ok, "finished with finite output", "Greys"),
-                                                        (pen, "max penetration [mm]", "Greys"))):
+            for row, (data, title) in enumerate(((ok, "finished with finite output"),
+                                                 (pen, "max penetration [mm]"))):
                 ax = axes[row, j]
-                im = ax.imshow(data, cmap=cmap, origin="lower", aspect="auto",
-                               vmin=0 if row == 0 else None, vmax=1 if row == 0 else None)
+                ax.grid(False)
+                norm = None
+                if row == 0:
+                    im = ax.imshow(data, cmap=status_cmap, origin="lower", aspect="auto",
+                                   vmin=0, vmax=1)
+                else:
+                    pos = data[np.isfinite(data) & (data > 0)]
+                    norm = LogNorm(vmin=pos.min(), vmax=max(pos.max(), pos.min() * 10)) \
+                        if len(pos) else None
+                    im = ax.imshow(np.where(data > 0, data, np.nan), cmap="Blues",
+                                   origin="lower", aspect="auto", norm=norm)
                 for (i, k), v in np.ndenumerate(data):
                     label = "—" if not np.isfinite(v) else (("ok" if v else "FAIL") if row == 0 else f"{v:.3g}")
+                    dark = row == 1 and norm is not None and np.isfinite(v) and v > 0 \
+                        and norm(v) > 0.6
                     ax.text(k, i, label, ha="center", va="center", fontsize=6,
-                            color="red" if (row == 0 and v == 0) else "#0055aa")
+                            color="white" if dark else "black")
                 ax.set_xticks(range(len(ks)))
                 ax.set_xticklabels([f"{k:.0e}" for k in ks], fontsize=6)
                 ax.set_yticks(range(len(dts)))
@@ -166,10 +210,11 @@ def heat_maps(table: pd.DataFrame, scene: Scene, out: Path) -> list[Path]:
                 data[engines.index(r["engine"]), vals.index(r[c])] = \
                     1.0 if (r["status"] == "success" and r["finite"]) else 0.0
             ax = axes[0, j]
-            ax.imshow(data, cmap="Greys", vmin=0, vmax=1, aspect="auto")
+            ax.grid(False)
+            ax.imshow(data, cmap=status_cmap, vmin=0, vmax=1, aspect="auto")
             for (i, k), v in np.ndenumerate(data):
-                ax.text(k, i, "ok" if v == 1 else "FAIL", ha="center", va="center", fontsize=6,
-                        color="red" if v == 0 else "#0055aa")
+                label = "—" if not np.isfinite(v) else ("ok" if v == 1 else "FAIL")
+                ax.text(k, i, label, ha="center", va="center", fontsize=6, color="black")
             ax.set_xticks(range(len(vals)))
             ax.set_xticklabels([f"{v:g}" for v in vals], fontsize=7)
             ax.set_yticks(range(len(engines)))
