@@ -19,8 +19,9 @@ def _check_solution(M, q, z, w, tol=1e-12):
     roundoff = 1e-13 * scale * (1 + np.abs(M).max()) * (1 + np.abs(z).max())
     np.testing.assert_allclose(w, M @ z + q, rtol=0, atol=roundoff)
     nat, fb = lcp_residual(z, w)
-    assert nat <= tol * scale, nat
-    assert fb <= 10 * tol * scale * np.sqrt(len(q)), fb
+    size = scale + np.abs(M).max() * np.abs(z).max()   # magnitude of the terms summed in w
+    assert nat <= tol * size, nat
+    assert fb <= 10 * tol * size * np.sqrt(len(q)), fb
 
 
 # ---------------------------------------------------------------- textbook
