@@ -204,7 +204,13 @@ def build(ops: OpsSession, scene: Scene, motion=None) -> tuple[ModelInfo, dict]:
         motion = support_motion(scene)
     duration = analysis_duration(scene, motion)
     dt = scene.opensees.dt
-    res = motion.resample(dt, duration)
+    # Path series interpolate linearly, exactly as the record is meant between samples: give
+    # OpenSees the record at its own (uniform) step when that is coarser than the analysis
+    # step, so memory does not grow with the number of steps (6e6 steps at dt = 1e-5).
+    rec = np.diff(motion.t)
+    uniform = len(rec) > 0 and np.allclose(rec, rec[0], rtol=1e-9, atol=0.0)
+    step = float(rec[0]) if uniform and rec[0] > dt else dt
+    res = motion.resample(step, duration)
     info = build_model(ops, scene, res)
     plan = make_plan(scene, info, duration)
     ops.comment("analysis")
