@@ -59,7 +59,7 @@ from numba import njit
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic.kinematics import pack_geometry
 from deckpound.analytic.support_motion import record_at, support_record
-from deckpound.analytic.system import pack_system, spring_assemble, spring_commit, \
+from deckpound.analytic.system import initial_dofs, pack_system, spring_assemble, spring_commit, \
     spring_deformations, spring_revert, spring_stored_energy, spring_tangent, \
     spring_update_materials
 from deckpound.engines import output_stride
@@ -611,15 +611,6 @@ def prepare(scene: Scene, motion: SupportMotion | None, dt: float, *, kv_clip: b
     return ps, UG, VG, cp, cs, geom, duration
 
 
-def _initial(initial_state):
-    u0 = np.zeros(7)
-    v0 = np.zeros(7)
-    if initial_state is not None:
-        u0[:] = np.asarray(initial_state[0], dtype=float)
-        v0[:] = np.asarray(initial_state[1], dtype=float)
-    return u0, v0
-
-
 def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,
                    raise_on_failure: bool = False, kv_clip: bool = False,
                    initial_state=None, substeps: int = SUBSTEPS, channels=None,
@@ -676,7 +667,7 @@ def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,
     out = np.zeros((nsteps // kstride + 1, len(cols)))
     info = np.zeros(8, dtype=np.int64)
     hstate = ps.new_state()
-    u0, v0 = _initial(initial_state)
+    u0, v0 = initial_dofs(initial_state)
     t1 = _time.perf_counter()
     newmark_run(ps.arrays, ps.C, hstate, cp, cs, geom, scene.contact.geometry == "nonlinear",
                 tb, DG, VGR, nsteps, dt, cset.tolerance, cset.max_iterations, kstride, nbs, out,

@@ -125,7 +125,7 @@ from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM, STATUS_F
     solve_contact_impulses_into
 from deckpound.analytic.kinematics import contact_kinematics, pack_geometry
 from deckpound.analytic.support_motion import record_at, support_record
-from deckpound.analytic.system import pack_system, spring_assemble, spring_commit, \
+from deckpound.analytic.system import initial_dofs, pack_system, spring_assemble, spring_commit, \
     spring_deformations, spring_stored_energy, spring_tangent, spring_update_materials
 from deckpound.engines import output_stride
 from deckpound.models.errors import EngineFailure
@@ -629,15 +629,6 @@ def _force_tolerance(ps, tol: float) -> float:
     return tol * max(scale, 1.0)
 
 
-def _initial(initial_state):
-    u0 = np.zeros(7)
-    v0 = np.zeros(7)
-    if initial_state is not None:
-        u0[:] = np.asarray(initial_state[0], dtype=float)
-        v0[:] = np.asarray(initial_state[1], dtype=float)
-    return u0, v0
-
-
 def run_nonsmooth(scene: Scene, motion: SupportMotion | None = None, *,
                   raise_on_failure: bool = False, initial_state=None) -> Result:
     """Run the Moreau–Jean nonsmooth engine on ``scene`` (engine contract of
@@ -668,7 +659,7 @@ def run_nonsmooth(scene: Scene, motion: SupportMotion | None = None, *,
     rinfo = np.zeros(2)
     uv_end = np.zeros((2, 7))
     hstate = ps.new_state()
-    u0, v0 = _initial(initial_state)
+    u0, v0 = initial_dofs(initial_state)
     ftol = _force_tolerance(ps, ns_set.tolerance)
     t1 = _time.perf_counter()
     moreau_jean_run(ps.arrays, ps.C, hstate, geom, ct.geometry == "nonlinear", tb, DG, VGR,

@@ -363,3 +363,13 @@ def spring_stored_energy(sa, hstate, u, ug):
 
 
 _ = C_STRAIN  # (index kept importable for callers reading the committed deformation)
+
+
+def initial_dofs(initial_state) -> tuple[np.ndarray, np.ndarray]:
+    """(u0, v0) of the 7 DOF from an engine's ``initial_state = (u0, v0)`` keyword (None: rest)."""
+    u0 = np.zeros(7)
+    v0 = np.zeros(7)
+    if initial_state is not None:
+        u0[:] = np.asarray(initial_state[0], dtype=float)
+        v0[:] = np.asarray(initial_state[1], dtype=float)
+    return u0, v0
