@@ -39,7 +39,8 @@ import numpy as np
 from numba import njit
 
 from deckpound.analytic import contact_laws as cl
-from deckpound.analytic.compliance import ENERGY_COLUMNS, _initial, output_columns, prepare
+from deckpound.analytic.compliance import ENERGY_COLUMNS, output_columns, prepare
+from deckpound.analytic.system import initial_dofs
 from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
     spring_stored_energy, spring_update_materials
 from deckpound.models.errors import EngineFailure
@@ -488,7 +489,7 @@ def run_adaptive(scene: Scene, motion: SupportMotion | None = None, *,
     nbs = ps.n_bent_springs
     ws = _workspace(ps.n_springs, UG.shape[1], nbs)
     hstate = ps.new_state()
-    u0, v0 = _initial(initial_state)
+    u0, v0 = initial_dofs(initial_state)
     hist = np.zeros((2, H_NBINS), dtype=np.int64)
     hstat = np.zeros((2, 3))
     t1 = _time.perf_counter()
