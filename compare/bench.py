@@ -5,8 +5,8 @@ record) and each configuration (engine + step or tolerance), the benchmark measu
 median wall time over ``repeats`` runs and the error against a converged reference:
 
 * compliance-family configurations (OpenSees, compliance newmark/adaptive) against the
-  ``adaptive`` compliance integrator at tight tolerance (same model, so the error is pure
-  discretisation error);
+  compliance Newmark integrator at dt = 1e-5 (same model, so the error is pure discretisation
+  error; see :data:`REFERENCES` for why not the adaptive integrator);
 * nonsmooth configurations against the nonsmooth engine at a very small step (rigid limit).
 
 Errors: relative error of the peak deck rotation and of the peak transverse displacement,
@@ -74,9 +74,14 @@ def configs(quick: bool) -> list[Config]:
     return out
 
 
+#: Converged references. The compliance family uses Newmark at dt = 1e-5: on the benchmark
+#: it agrees with Newmark at 5e-5 and OpenSees at 1e-4 to 1e-7 of the peak rotation, while the
+#: adaptive integrator at its default max_step drifts after repeated Takeda yielding (bent force
+#: off by up to 11 % late in the 20 s record; with max_step = 1e-4 it agrees to 1e-7), so it is
+#: measured here as a configuration, not used as the reference.
 REFERENCES = {
-    "compliance": ("compliance.integrator=adaptive", "compliance.rtol=1e-08",
-                   "compliance.atol=1e-11"),
+    "compliance": ("compliance.integrator=newmark", "compliance.dt=1e-05",
+                   "compliance.tolerance=1e-12"),
     "nonsmooth": ("nonsmooth.h=2e-05",),
 }
 
