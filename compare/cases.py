@@ -110,6 +110,8 @@ class Progress:
     def _draw(self) -> None:
         if not self.enabled:
             return
+        if not sys.stderr.isatty() and self.done < self.total:
+            return  # in a log file, only the finished bar
         width = 30
         fill = int(width * self.done / max(self.total, 1))
         elapsed = time.perf_counter() - self.t0
