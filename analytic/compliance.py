@@ -63,10 +63,9 @@ from deckpound.analytic.system import initial_dofs, pack_system, spring_assemble
     spring_deformations, spring_revert, spring_stored_energy, spring_tangent, \
     spring_update_materials
 from deckpound.engines import output_stride
-from deckpound.models.errors import EngineFailure
 from deckpound.models.excitation import SupportMotion, analysis_duration, support_motion
-from deckpound.models.result import STATUS_FAILED, STATUS_SUCCESS, Result, scene_hash, \
-    standard_columns
+from deckpound.models.result import Result, scene_hash, \
+    set_status, standard_columns
 from deckpound.models.scene import Scene
 
 __all__ = ["run_compliance", "ENERGY_COLUMNS", "output_columns"]
@@ -704,16 +703,8 @@ def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,
         ein = np.max(np.abs(columns["energy_input"])) if rows else 0.0
         meta["energy_closure"] = float(np.max(np.abs(columns["energy_error"])) / ein) \
             if ein > 0 else 0.0
-    if status_code == 0:
-        meta["status"] = STATUS_SUCCESS
-        meta["message"] = f"{nsteps} steps, {int(info[3])} Newton iterations"
-    else:
-        step = int(info[2])
-        meta["status"] = STATUS_FAILED
-        meta["failed_step"] = step
-        meta["failed_time"] = step * dt
-        meta["message"] = (f"{_STATUS_TEXT.get(status_code, 'failure')} at step {step} "
-                           f"(t = {step * dt:.6g} s)")
-        if raise_on_failure:
-            raise EngineFailure(f"compliance engine: {meta['message']}")
+    ok = status_code == 0
+    set_status(meta, engine="compliance", ok=ok, step=int(info[2]), dt=dt,
+               message=f"{nsteps} steps, {int(info[3])} Newton iterations" if ok
+               else _STATUS_TEXT.get(status_code, "failure"), raise_on_failure=raise_on_failure)
     return Result(engine="compliance", columns=columns, meta=meta)

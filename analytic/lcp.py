@@ -390,8 +390,6 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
         val = T[i, 2 * n + 1] * qscale
         if v >= n and v < 2 * n:
             z[v - n] = val if val > 0.0 else 0.0
-        elif v == 2 * n:
-            z0val = val
     for i in range(n):
         s = q[i]
         for j in range(n):

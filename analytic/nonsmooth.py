@@ -128,10 +128,9 @@ from deckpound.analytic.support_motion import record_at, support_record
 from deckpound.analytic.system import initial_dofs, pack_system, spring_assemble, spring_commit, \
     spring_deformations, spring_stored_energy, spring_tangent, spring_update_materials
 from deckpound.engines import output_stride
-from deckpound.models.errors import EngineFailure
 from deckpound.models.excitation import SupportMotion, analysis_duration, support_motion
-from deckpound.models.result import STATUS_FAILED as RESULT_FAILED, STATUS_SUCCESS, Result, \
-    scene_hash, standard_columns
+from deckpound.models.result import Result, \
+    scene_hash, set_status, standard_columns
 from deckpound.models.scene import Contact, Scene
 
 __all__ = ["run_nonsmooth", "output_columns", "ENERGY_COLUMNS", "moreau_jean_run"]
@@ -704,18 +703,10 @@ def run_nonsmooth(scene: Scene, motion: SupportMotion | None = None, *,
                        "impact + friction + numerical) [kJ]",
         "iterations_note": "iterations = contact problems solved (Newton re-solves included)",
     }
-    if status_code == ST_OK:
-        meta["status"] = STATUS_SUCCESS
-        meta["message"] = (f"{nsteps} steps, {int(info[5])} with contact, {int(info[3])} "
-                           f"contact solves")
-    else:
-        step = int(info[2])
-        meta["status"] = RESULT_FAILED
-        meta["failed_step"] = step
-        meta["failed_time"] = step * h
-        meta["message"] = (f"{_STATUS_TEXT.get(status_code, 'failure')} at step {step} "
-                           f"(t = {step * h:.6g} s)")
-        if raise_on_failure:
-            raise EngineFailure(f"nonsmooth engine: {meta['message']}")
+    ok = status_code == ST_OK
+    set_status(meta, engine="nonsmooth", ok=ok, step=int(info[2]), dt=h,
+               message=(f"{nsteps} steps, {int(info[5])} with contact, {int(info[3])} contact "
+                        "solves") if ok else _STATUS_TEXT.get(status_code, "failure"),
+               raise_on_failure=raise_on_failure)
     return Result(engine="nonsmooth", columns=columns, meta=meta)
 

@@ -167,3 +167,25 @@ def _atomic_write(path: Path, text: str) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def set_status(meta: dict[str, Any], *, engine: str, ok: bool, message: str, step: int = 0,
+               dt: float = 0.0, raise_on_failure: bool = False) -> None:
+    """Fill ``status``/``message`` (and, on failure, ``failed_step``/``failed_time``) per the
+    engine contract; on failure with ``raise_on_failure`` raise EngineFailure.
+
+    ``message`` is the success summary, or on failure the reason (``"Newton did not
+    converge"``), to which the step and time are appended.
+    """
+    if ok:
+        meta["status"] = STATUS_SUCCESS
+        meta["message"] = message
+        return
+    meta["status"] = STATUS_FAILED
+    meta["failed_step"] = step
+    meta["failed_time"] = step * dt
+    meta["message"] = f"{message} at step {step} (t = {step * dt:.6g} s)"
+    if raise_on_failure:
+        from .errors import EngineFailure
+
+        raise EngineFailure(f"{engine} engine: {meta['message']}")

@@ -29,7 +29,6 @@ import numpy as np
 
 from deckpound import __version__
 from deckpound.engines import output_stride
-from deckpound.models import mechanics
 from deckpound.models.errors import EngineFailure
 from deckpound.models.excitation import analysis_duration, support_motion
 from deckpound.models.result import (STATUS_FAILED, STATUS_SUCCESS, Result, scene_hash,

@@ -195,7 +195,7 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
     check_scene(scene)
     s = scene.opensees
     d = scene.deck
-    hl, hw = 0.5 * d.length, 0.5 * d.width
+    hl = 0.5 * d.length
     friction = gaps and scene.contact.has_friction
     T = ops.tag
     ops.model("basic", "-ndm", 2, "-ndf", 3)

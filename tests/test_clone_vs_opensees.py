@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import importlib.util
 
-import numpy as np
 import pytest
 
 from deckpound.models.scene_io import load_scene
