@@ -75,10 +75,15 @@ def configs(quick: bool) -> list[Config]:
 
 
 #: Converged references. The compliance family uses Newmark at dt = 1e-5: on the benchmark
-#: it agrees with Newmark at 5e-5 and OpenSees at 1e-4 to 1e-7 of the peak rotation, while the
-#: adaptive integrator at its default max_step drifts after repeated Takeda yielding (bent force
-#: off by up to 11 % late in the 20 s record; with max_step = 1e-4 it agrees to 1e-7), so it is
-#: measured here as a configuration, not used as the reference.
+#: it agrees with Newmark at 5e-5 and OpenSees at 1e-4 to 1e-7 of the peak rotation. The
+#: adaptive integrator is measured as a configuration, not used as the reference: OpenSees's
+#: Hysteretic material (cloned bit for bit) depends on where its state is committed even along
+#: a monotonic strain path — replaying one bent's converged deformation history with commits
+#: at every 2e-5 s sample or only at reversals and every 5 ms changes its force by 1.4 % of the
+#: peak — so the model's converged answer is the commit-every-small-step limit, which the
+#: adaptive integrator (one commit per accepted step, up to 10 ms) reaches only with
+#: ``compliance.max_step=1e-4`` (1e-7 agreement); at its default it is off by up to 11 % in a
+#: bent force late in the 20 s record.
 REFERENCES = {
     "compliance": ("compliance.integrator=newmark", "compliance.dt=1e-05",
                    "compliance.tolerance=1e-12"),
