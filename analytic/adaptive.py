@@ -41,6 +41,7 @@ from numba import njit
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic.compliance import ENERGY_COLUMNS, output_columns, prepare
 from deckpound.analytic.system import initial_dofs
+from deckpound.analytic._hysteretic_kernel import C_ROTMAX, C_ROTMIN
 from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
     spring_stored_energy, spring_update_materials
 from deckpound.models.errors import EngineFailure
@@ -242,8 +243,23 @@ def _rk_step(t, y, k1, h, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws,
 
 
 @njit(cache=True)
+def _any_yielded(sa, hstate):
+    """True once any Takeda (Hysteretic) spring has been deformed past its first backbone point.
+
+    From then on the material's state depends on where it is committed, even along monotonic
+    paths (OpenSees Hysteretic arithmetic), so the loop caps its steps at ``commit_step``.
+    """
+    for i in range(hstate.shape[0]):
+        if sa.kind[i] == 1:
+            if (hstate[i, C_ROTMAX] > sa.hparams[i, 1] or
+                    hstate[i, C_ROTMIN] < sa.hparams[i, 7]):
+                return True
+    return False
+
+
+@njit(cache=True)
 def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, nbs, rtol, atol,
-                 max_step, out, info, ws, u0, v0, A, C, B5, E, hist, hstat):
+                 max_step, commit_step, out, info, ws, u0, v0, A, C, B5, E, hist, hstat):
     """The adaptive loop; fills out (rows at k·out_dt) and info = [status, rows, steps,
     rejected, events, rhs calls]; hist (2, H_NBINS) counts of accepted step sizes and
     hstat (2, 3) = [min, max, sum] of them, row 0 out of contact, row 1 in contact."""
@@ -278,6 +294,7 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
     row = 1
     nout = out.shape[0]
     h = min(max_step, out_dt, 1e-4)
+    yielded = _any_yielded(sa, hstate)
     steps = 0
     rejected = 0
     events = 0
@@ -296,6 +313,8 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
         if tout < tbreak:
             tbreak = tout
         hmax = min(max_step, tbreak - t)
+        if yielded and hmax > commit_step:
+            hmax = commit_step
         if h > hmax:
             h = hmax
         hit_break = abs((t + h) - tbreak) <= tiny * max(1.0, tbreak)
@@ -361,6 +380,8 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
         calls += 1
         spring_commit(sa, hstate)
         cl.contact_commit(cs, ws.g, ws.gd, ws.ev)
+        if not yielded:
+            yielded = _any_yielded(sa, hstate)
         for j in range(7):
             uc[j] = y[j]
         _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, k1)
@@ -494,7 +515,8 @@ def run_adaptive(scene: Scene, motion: SupportMotion | None = None, *,
     hstat = np.zeros((2, 3))
     t1 = _time.perf_counter()
     adaptive_run(ps.arrays, hstate, cp, cs, geom, scene.contact.geometry == "nonlinear", tb, UG,
-                 VG, (nout - 1) * out_dt, out_dt, nbs, cset.rtol, cset.atol, cset.max_step, out,
+                 VG, (nout - 1) * out_dt, out_dt, nbs, cset.rtol, cset.atol, cset.max_step,
+                 cset.commit_step, out,
                  info, ws, u0, v0, _A, _C, _B5, _E, hist, hstat)
     t2 = _time.perf_counter()
     rows = int(info[1])
@@ -503,6 +525,7 @@ def run_adaptive(scene: Scene, motion: SupportMotion | None = None, *,
     meta = {
         "engine": "compliance", "integrator": "adaptive",
         "settings": {"rtol": cset.rtol, "atol": cset.atol, "max_step": cset.max_step,
+                     "commit_step": cset.commit_step,
                      "kv_clip": kv_clip, "scheme": "Dormand-Prince 5(4) with events"},
         "scene_hash": scene_hash(scene), "wall_time": t2 - t0, "loop_time": t2 - t1,
         "steps": int(info[2]), "rejected_steps": int(info[3]), "events": int(info[4]),

@@ -5,8 +5,8 @@ record) and each configuration (engine + step or tolerance), the benchmark measu
 median wall time over ``repeats`` runs and the error against a converged reference:
 
 * compliance-family configurations (OpenSees, compliance newmark/adaptive) against the
-  compliance Newmark integrator at dt = 1e-5 (same model, so the error is pure discretisation
-  error; see :data:`REFERENCES` for why not the adaptive integrator);
+  ``adaptive`` compliance integrator at tight tolerance with dense Takeda commits (same model,
+  so the error is pure discretisation error; see :data:`REFERENCES`);
 * nonsmooth configurations against the nonsmooth engine at a very small step (rigid limit).
 
 Errors: relative error of the peak deck rotation and of the peak transverse displacement,
@@ -74,19 +74,14 @@ def configs(quick: bool) -> list[Config]:
     return out
 
 
-#: Converged references. The compliance family uses Newmark at dt = 1e-5: on the benchmark
-#: it agrees with Newmark at 5e-5 and OpenSees at 1e-4 to 1e-7 of the peak rotation. The
-#: adaptive integrator is measured as a configuration, not used as the reference: OpenSees's
-#: Hysteretic material (cloned bit for bit) depends on where its state is committed even along
-#: a monotonic strain path — replaying one bent's converged deformation history with commits
-#: at every 2e-5 s sample or only at reversals and every 5 ms changes its force by 1.4 % of the
-#: peak — so the model's converged answer is the commit-every-small-step limit, which the
-#: adaptive integrator (one commit per accepted step, up to 10 ms) reaches only with
-#: ``compliance.max_step=1e-4`` (1e-7 agreement); at its default it is off by up to 11 % in a
-#: bent force late in the 20 s record.
+#: Converged references. The compliance family uses the adaptive integrator at tight tolerance
+#: with the Takeda state committed every 1e-5 s once a spring has yielded (OpenSees's Hysteretic
+#: material depends on where it is committed, even along monotonic paths, so the model's
+#: converged answer is the dense-commit limit); on the benchmark it agrees with Newmark at
+#: dt = 2e-5 to 1.5e-7 of the peak rotation.
 REFERENCES = {
-    "compliance": ("compliance.integrator=newmark", "compliance.dt=1e-05",
-                   "compliance.tolerance=1e-12"),
+    "compliance": ("compliance.integrator=adaptive", "compliance.rtol=1e-08",
+                   "compliance.atol=1e-11", "compliance.commit_step=1e-05"),
     "nonsmooth": ("nonsmooth.h=2e-05",),
 }
 

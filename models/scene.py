@@ -272,6 +272,9 @@ class ComplianceSettings:
     rtol: float = spec(1.0e-6, unit="-", doc="relative tolerance (adaptive)", gt=0.0)
     atol: float = spec(1.0e-9, unit="m", doc="absolute tolerance (adaptive)", gt=0.0)
     max_step: float = spec(0.01, unit="s", doc="largest step (adaptive)", gt=0.0)
+    commit_step: float = spec(1.0e-4, unit="s",
+                              doc="largest step (adaptive) once a Takeda spring has yielded: "
+                              "the Hysteretic state depends on where it is committed", gt=0.0)
 
     def __post_init__(self) -> None:
         validate(self)
