@@ -394,7 +394,8 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                 for j in range(7):
                     v[j] = a1p * vn[j] + a2p * an[j]
                     a[j] = a4p * an[j] + a3p * vn[j]
-                # --- formUnbalance
+                # --- formUnbalance (written out here and in the Newton loop on purpose: a
+                # wrapper taking these ~20 arrays costs ~12 ns per array per call in numba)
                 spring_deformations(sa, u, v, ug, vg, d_new, dd_new)
                 spring_update_materials(hp, hstate, kind, d_new)
                 nonel = spring_assemble(sa, hstate, d_new, dd_new, v, f, fs, kt)

@@ -514,18 +514,8 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
             for j in range(7):
                 uv_end[0, j] = qk[j]
                 uv_end[1, j] = vk[j]
-            info[0] = status
-            info[1] = row
             info[2] = n + 1
-            info[3] = solves
-            info[4] = events
-            info[5] = csteps
-            info[6] = newton
-            info[7] = maxit_seen
-            info[8] = nfact
-            rinfo[0] = max_comp
-            rinfo[1] = max_cone
-            return
+            break
         spring_commit(sa, hstate)
         # ---- energy (exact work of the θ-scheme over the step)
         for i in range(ns):
@@ -576,10 +566,11 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
             for c in range(4):
                 pn_acc[c] = 0.0
                 pt_acc[c] = 0.0
-    for j in range(7):
-        uv_end[0, j] = q[j]
-        uv_end[1, j] = v[j]
-    info[0] = ST_OK
+    if status == ST_OK:
+        for j in range(7):
+            uv_end[0, j] = q[j]
+            uv_end[1, j] = v[j]
+    info[0] = status
     info[1] = row
     info[3] = solves
     info[4] = events
