@@ -59,6 +59,7 @@ from numba import njit
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic.kinematics import pack_geometry
 from deckpound.analytic.support_motion import record_at, support_record
+from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.system import initial_dofs, pack_system, spring_assemble, spring_commit, \
     spring_deformations, spring_revert, spring_stored_energy, spring_tangent, \
     spring_update_materials
@@ -106,60 +107,6 @@ SKIPS = ("contact", "friction", "factor_reuse", "decimate")
 def output_columns(scene: Scene) -> list[str]:
     """Column names of the compliance result (standard columns, then the energies)."""
     return standard_columns([b.name for b in scene.bents]) + list(ENERGY_COLUMNS)
-
-
-# ----------------------------------------------------------------------------- linear algebra
-@njit(cache=True)
-def lu_factor(A, piv):
-    """In-place LU with partial pivoting of a small dense matrix. Returns False if singular."""
-    n = A.shape[0]
-    for k in range(n):
-        p = k
-        amax = abs(A[k, k])
-        for i in range(k + 1, n):
-            if abs(A[i, k]) > amax:
-                amax = abs(A[i, k])
-                p = i
-        piv[k] = p
-        if amax == 0.0 or not np.isfinite(amax):
-            return False
-        if p != k:
-            for j in range(n):
-                tmp = A[k, j]
-                A[k, j] = A[p, j]
-                A[p, j] = tmp
-        inv = 1.0 / A[k, k]
-        for i in range(k + 1, n):
-            A[i, k] *= inv
-            lik = A[i, k]
-            if lik != 0.0:
-                for j in range(k + 1, n):
-                    A[i, j] -= lik * A[k, j]
-    return True
-
-
-@njit(cache=True)
-def lu_solve(LU, piv, b, x):
-    """Solve with the factors of :func:`lu_factor` (x may alias b)."""
-    n = LU.shape[0]
-    for i in range(n):
-        x[i] = b[i]
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            tmp = x[k]
-            x[k] = x[p]
-            x[p] = tmp
-    for i in range(n):
-        s = x[i]
-        for j in range(i):
-            s -= LU[i, j] * x[j]
-        x[i] = s
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for j in range(i + 1, n):
-            s -= LU[i, j] * x[j]
-        x[i] = s / LU[i, i]
 
 
 # ----------------------------------------------------------------------------- Newmark kernel

@@ -120,7 +120,7 @@ import numpy as np
 from numba import njit
 
 from deckpound.analytic._hysteretic_kernel import P_S1P
-from deckpound.analytic.compliance import lu_factor, lu_solve
+from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM, STATUS_FAILED, \
     solve_contact_impulses_into
 from deckpound.analytic.kinematics import contact_kinematics, pack_geometry
