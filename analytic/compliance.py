@@ -78,9 +78,9 @@ N_ENERGY = len(ENERGY_COLUMNS)
 GAMMA, BETA = 0.5, 0.25
 SUBSTEPS = 10   # sub-steps of the fallback for a failed step (OpenSees engine default)
 # column layout of the numba output array
-_C_T, _C_U, _C_GAP, _C_FN, _C_FT, _C_BENT = 0, 1, 8, 12, 16, 20
-# result DOF column order: deck_x, deck_y, deck_theta, seat1_x, seat1_theta, seat2_x, seat2_theta
-_DOF_OF_COL = np.array([4, 5, 6, 0, 1, 2, 3], dtype=np.int64)
+from deckpound.analytic.system import (  # noqa: E402  (output layout shared by both engines)
+    C_BENT as _C_BENT, C_FN as _C_FN, C_FT as _C_FT, C_GAP as _C_GAP, C_T as _C_T, C_U as _C_U,
+    DOF_OF_COLUMN as _DOF_OF_COL)
 # work-saving skips of the Newmark kernel (flags array; 1 = skip active, the default)
 F_CONTACT_SKIP, F_FACTOR_REUSE, F_ENERGY = 0, 1, 2
 N_FLAGS = 3

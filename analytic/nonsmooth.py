@@ -140,9 +140,9 @@ ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_vis
                   "energy_error")
 N_ENERGY = len(ENERGY_COLUMNS)
 # column layout of the numba output array
-_C_T, _C_U, _C_GAP, _C_FN, _C_FT, _C_BENT = 0, 1, 8, 12, 16, 20
-# result DOF column order: deck_x, deck_y, deck_theta, seat1_x, seat1_theta, seat2_x, seat2_theta
-_DOF_OF_COL = np.array([4, 5, 6, 0, 1, 2, 3], dtype=np.int64)
+from deckpound.analytic.system import (  # noqa: E402  (output layout shared by both engines)
+    C_BENT as _C_BENT, C_FN as _C_FN, C_FT as _C_FT, C_GAP as _C_GAP, C_T as _C_T, C_U as _C_U,
+    DOF_OF_COLUMN as _DOF_OF_COL)
 # info codes
 ST_OK, ST_NEWTON, ST_CONTACT, ST_NONFINITE, ST_SINGULAR = 0, 1, 2, 3, 4
 _STATUS_TEXT = {ST_NEWTON: "Newton iteration of the Takeda springs did not converge",

@@ -373,3 +373,11 @@ def initial_dofs(initial_state) -> tuple[np.ndarray, np.ndarray]:
         u0[:] = np.asarray(initial_state[0], dtype=float)
         v0[:] = np.asarray(initial_state[1], dtype=float)
     return u0, v0
+
+
+# Output array layout of the analytic engines' compiled loops (one place for both): time,
+# the 7 result DOF columns, gaps, normal and tangential forces, then the bent forces.
+C_T, C_U, C_GAP, C_FN, C_FT, C_BENT = 0, 1, 8, 12, 16, 20
+#: DOF index of each result column deck_x, deck_y, deck_theta, seat1_x, seat1_theta, seat2_x,
+#: seat2_theta (the DOF vector is [x1, θ1, x2, θ2, x_d, y_d, θ_d])
+DOF_OF_COLUMN = np.array([4, 5, 6, 0, 1, 2, 3], dtype=np.int64)
