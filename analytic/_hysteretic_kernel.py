@@ -71,6 +71,7 @@ from __future__ import annotations
 import os
 
 import numpy as np
+from deckpound.analytic._jit import kernel
 from numba import njit
 
 __all__ = [
@@ -295,7 +296,7 @@ def hyst_init_state(params):
     return s
 
 
-@njit(cache=True)
+@kernel
 def hyst_revert_to_start(params, state):
     """OpenSees ``revertToStart``: zero committed history and trial
     stress/strain, trial tangent = E1p.  Like OpenSees 3.7.1, the *trial*
@@ -313,7 +314,7 @@ def hyst_revert_to_start(params, state):
     state[T_TANGENT] = params[P_E1P_SLOPE]
 
 
-@njit(cache=True)
+@kernel
 def hyst_commit(state):
     """OpenSees ``commitState``: copy trial history/stress/strain to
     committed (there is no committed tangent)."""
@@ -327,7 +328,7 @@ def hyst_commit(state):
     state[C_STRAIN] = state[T_STRAIN]
 
 
-@njit(cache=True)
+@kernel
 def hyst_revert(state):
     """OpenSees 3.7.1 ``revertToLastCommit``: trial := committed for history,
     stress and strain; the trial *tangent is not restored* (3.7.1 quirk)."""
@@ -481,7 +482,7 @@ def _negative_increment(p, s, d_strain):
     s[T_TANGENT] = tangent
 
 
-@njit(cache=True)
+@kernel
 def hyst_set_trial(params, state, strain):
     """OpenSees 3.7.1 ``HystereticMaterial::setTrialStrain``.
 

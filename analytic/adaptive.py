@@ -38,6 +38,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from deckpound.analytic._jit import kernel
+
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic.compliance import ENERGY_COLUMNS, output_columns, prepare
 from deckpound.analytic.system import initial_dofs
@@ -73,7 +75,7 @@ H_BINS_PER_DECADE = 20
 H_NBINS = int(-H_LOG_MIN) * H_BINS_PER_DECADE
 
 
-@njit(cache=True)
+@kernel
 def _support(t, tb, D, V, ug, vg):
     """Support disp/vel at t (linear interpolation on the record time base tb)."""
     n = tb.shape[0]
@@ -99,7 +101,7 @@ def _support(t, tb, D, V, ug, vg):
         vg[j] = V[k, j] + w * (V[k + 1, j] - V[k, j])
 
 
-@njit(cache=True)
+@kernel
 def _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, dy):
     """dy = [u̇, ü, powers] at (t, y); trial material/contact states relative to committed."""
     ns = sa.k0.shape[0]
@@ -149,7 +151,7 @@ def _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, dy):
     dy[18] = pfr
 
 
-@njit(cache=True)
+@kernel
 def _events(y, dy, sa, cp, geom, nonlinear, nbs, ws, ev):
     """Event function values at a state: gaps (4), Takeda ḋ (nbs), ġ (4, bilinear), U_T (4,
     stick friction); unused entries 0."""
@@ -170,7 +172,7 @@ def _events(y, dy, sa, cp, geom, nonlinear, nbs, ws, ev):
         ev[k + 4 + c] = ut
 
 
-@njit(cache=True)
+@kernel
 def _hermite(y0, f0, y1, f1, h, th):
     h00 = 2 * th ** 3 - 3 * th ** 2 + 1
     h10 = th ** 3 - 2 * th ** 2 + th
@@ -179,7 +181,7 @@ def _hermite(y0, f0, y1, f1, h, th):
     return h00 * y0 + h10 * h * f0 + h01 * y1 + h11 * h * f1
 
 
-@njit(cache=True)
+@kernel
 def _event_value(kind_idx, y, sa, geom, nonlinear, cp, tb, D, V, t, ws):
     """Value of event kind_idx at an interpolated state y (t for the supports)."""
     u = y[0:7]
@@ -216,7 +218,7 @@ def _workspace(ns, nch, nbs):
              np.zeros(4, dtype=np.bool_), nbs)
 
 
-@njit(cache=True)
+@kernel
 def _rk_step(t, y, k1, h, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, K, ytmp,
              ynew, A, C, B5, E, atol, rtol):
     """One DP5(4) step; returns the scaled error norm (ynew filled, K[6] = f(t+h, ynew))."""
@@ -242,7 +244,7 @@ def _rk_step(t, y, k1, h, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws,
     return np.sqrt(err / NY)
 
 
-@njit(cache=True)
+@kernel
 def _any_yielded(sa, hstate):
     """True once any Takeda (Hysteretic) spring has been deformed past its first backbone point.
 
@@ -433,7 +435,7 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
     info[5] = calls
 
 
-@njit(cache=True)
+@kernel
 def _adaptive_store(sa, hstate, cp, cs, y, ws, out, row, t, nbs):
     out[row, 0] = t
     order = (4, 5, 6, 0, 1, 2, 3)

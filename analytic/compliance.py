@@ -57,6 +57,7 @@ import numpy as np
 from numba import njit
 
 from deckpound.analytic import contact_laws as cl
+from deckpound.analytic._jit import kernel
 from deckpound.analytic.kinematics import pack_geometry
 from deckpound.analytic.support_motion import record_at, support_record
 from deckpound.analytic.dense import lu_factor, lu_solve
@@ -110,7 +111,7 @@ def output_columns(scene: Scene) -> list[str]:
 
 
 # ----------------------------------------------------------------------------- Newmark kernel
-@njit(cache=True)
+@kernel
 def _store(out, row, t, u, g, lam, lt, hstate, nbs, energy, buf, colsel):
     """Output row ``row``: the full row into ``buf``, then the selected columns into ``out``."""
     buf[_C_T] = t
@@ -129,7 +130,7 @@ def _store(out, row, t, u, g, lam, lt, hstate, nbs, energy, buf, colsel):
         out[row, q] = buf[colsel[q]]
 
 
-@njit(cache=True)
+@kernel
 def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
     """Output energies from the running work totals W = [input, springs, viscous, contact,
     friction]."""

@@ -41,6 +41,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from deckpound.analytic._jit import kernel
+
 from deckpound.models import contact_params
 from deckpound.models.scene import CONTACT_LAWS, FRICTION_MODES, Scene
 
@@ -97,11 +99,11 @@ def new_contact_state(gaps0) -> np.ndarray:
     return cs
 
 
-@njit(cache=True)
-def normal_law(cp, cs, g, gd, out):
+@kernel
+def normal_law(cp, cs, g, gd):
     """Trial normal force of one corner. cp, cs: that corner's rows.
 
-    out[0] = λ_N, out[1] = ∂λ_N/∂g, out[2] = ∂λ_N/∂ġ. Returns True when the corner is closed.
+    Returns (closed, λ_N, ∂λ_N/∂g, ∂λ_N/∂ġ); closed is True when the corner is closed.
     """
     law = int(cp[P_LAW])
     lam = 0.0
@@ -186,53 +188,49 @@ def normal_law(cp, cs, g, gd, out):
         cs[S_TTAN] = tan
     cs[S_TLAM] = lam
     cs[S_TCLOSED] = 1.0 if closed else 0.0
-    out[0] = lam
-    out[1] = dg
-    out[2] = dgd
-    return closed
+    return closed, lam, dg, dgd
 
 
-@njit(cache=True)
-def friction_law(cp, cs, lam_n, ds, ut, out):
+@kernel
+def friction_law(cp, cs, lam_n, ds, ut):
     """Trial tangential force of one corner (force on the deck along +t).
 
     lam_n : trial normal force; ds : tangential relative displacement increment of the step
     (stick mode); ut : tangential relative velocity (slip mode).
-    out[0] = λ_T, out[1] = ∂λ_T/∂Δs, out[2] = ∂λ_T/∂U_T, out[3] = ∂λ_T/∂λ_N.
-    Returns 0 open/no friction, 1 stick, 2 slip.
+    Returns (state, λ_T, ∂λ_T/∂Δs, ∂λ_T/∂U_T, ∂λ_T/∂λ_N); state 0 open/no friction, 1 stick,
+    2 slip.
     """
     mode = int(cp[P_FMODE])
-    out[0] = 0.0
-    out[1] = 0.0
-    out[2] = 0.0
-    out[3] = 0.0
-    cs[S_TFT] = 0.0
-    if mode == 0 or lam_n <= 0.0:
-        return 0
-    mu = cp[P_MU]
-    if mode == 1:
-        x = ut / cp[P_V0]
-        th = np.tanh(x)
-        out[0] = -mu * lam_n * th
-        out[2] = -mu * lam_n * (1.0 - th * th) / cp[P_V0]
-        out[3] = -mu * th
-        cs[S_TFT] = out[0]
-        return 2
-    trial = cs[S_CFT] - cp[P_KT] * ds
-    lim = mu * lam_n
-    if abs(trial) <= lim:
-        out[0] = trial
-        out[1] = -cp[P_KT]
-        cs[S_TFT] = trial
-        return 1
-    sg = 1.0 if trial > 0.0 else -1.0
-    out[0] = sg * lim
-    out[3] = sg * mu
-    cs[S_TFT] = out[0]
-    return 2
+    state = 0
+    lt = 0.0
+    d_ds = 0.0
+    d_ut = 0.0
+    d_lam = 0.0
+    if mode != 0 and lam_n > 0.0:
+        mu = cp[P_MU]
+        if mode == 1:
+            th = np.tanh(ut / cp[P_V0])
+            lt = -mu * lam_n * th
+            d_ut = -mu * lam_n * (1.0 - th * th) / cp[P_V0]
+            d_lam = -mu * th
+            state = 2
+        else:
+            trial = cs[S_CFT] - cp[P_KT] * ds
+            lim = mu * lam_n
+            if abs(trial) <= lim:
+                lt = trial
+                d_ds = -cp[P_KT]
+                state = 1
+            else:
+                sg = 1.0 if trial > 0.0 else -1.0
+                lt = sg * lim
+                d_lam = sg * mu
+                state = 2
+    cs[S_TFT] = lt
+    return state, lt, d_ds, d_ut, d_lam
 
 
-@njit(cache=True)
+@kernel
 def contact_commit(cs, g, gd, evaluated):
     """Commit the corners after a converged step; g, gd: converged gaps and rates (4,).
 
@@ -254,7 +252,7 @@ def contact_commit(cs, g, gd, evaluated):
         cs[c, S_CVIMP] = cs[c, S_TVIMP]
 
 
-@njit(cache=True)
+@kernel
 def contact_revert(cs):
     """Trial := committed (OpenSees revertToLastCommit; the bilinear tangent is kept)."""
     for c in range(4):
@@ -264,7 +262,7 @@ def contact_revert(cs):
         cs[c, S_TVIMP] = cs[c, S_CVIMP]
 
 
-@njit(cache=True)
+@kernel
 def contact_stored_energy(cp, cs):
     """Recoverable energy in the committed contact springs and stick springs [kJ]."""
     e = 0.0
@@ -295,7 +293,7 @@ def contact_stored_energy(cp, cs):
     return e
 
 
-@njit(cache=True)
+@kernel
 def gap_hessian(u, geom, c, H):
     """∂²g_N/∂u² of corner c for the geometrically nonlinear kinematics (7×7, filled)."""
     XD, YD, TD = 4, 5, 6
@@ -327,7 +325,6 @@ def gap_hessian(u, geom, c, H):
     H[st, st] = side * (-cs_ * rx - ss * ry)
     for (i, j) in ((XD, st), (YD, st), (TD, st), (sx, st)):
         H[j, i] = H[i, j]
-    return H
 
 
 # --------------------------------------------------------------------------- assembly helpers
@@ -345,7 +342,7 @@ def _linear_gaps(u, v, geom, g, gd):
         gd[c] = side * ((v[4] - yc * v[6]) - (v[sx] - yc * v[st]))
 
 
-@njit(cache=True)
+@kernel
 def gaps_and_rates(u, v, geom, nonlinear, g, gd, WN, WT):
     """Gaps g and rates ġ = W_N u̇ of the four corners (fills WN, WT when nonlinear)."""
     if not nonlinear:
@@ -359,7 +356,7 @@ def gaps_and_rates(u, v, geom, nonlinear, g, gd, WN, WT):
             gd[c] = s
 
 
-@njit(cache=True)
+@kernel
 def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
                  evaluated):
     if nonlinear:
@@ -373,16 +370,12 @@ def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, d
     else:
         contact_kinematics(u, geom, False, g, WN, WT)
     nclosed = 0
-    out = np.empty(4)
     for c in range(4):
         for k in range(7):
             der[c, k] = 0.0
         if not evaluated[c]:
             continue
-        closed = normal_law(cp[c], cs[c], g[c], gd[c], out)
-        lam[c] = out[0]
-        der[c, 0] = out[1]
-        der[c, 1] = out[2]
+        closed, lam[c], der[c, 0], der[c, 1] = normal_law(cp[c], cs[c], g[c], gd[c])
         if closed:
             nclosed += 1
         if cp[c, P_FMODE] != 0.0:
@@ -391,11 +384,8 @@ def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, d
             for j in range(7):
                 ds += WT[c, j] * (u[j] - un[j])
                 ut += WT[c, j] * v[j]
-            friction_law(cp[c], cs[c], lam[c], ds, ut, out)
-            lt[c] = out[0]
-            der[c, 2] = out[1]
-            der[c, 3] = out[2]
-            der[c, 4] = out[3]
+            _, lt[c], der[c, 2], der[c, 3], der[c, 4] = friction_law(cp[c], cs[c], lam[c], ds,
+                                                                      ut)
             der[c, 5] = ds
             der[c, 6] = ut
         else:
@@ -405,7 +395,7 @@ def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, d
     return nclosed
 
 
-@njit(cache=True)
+@kernel
 def contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der, evaluated):
     """Contact forces (convenience: :func:`eval_contacts`, then :func:`eval_closed` if needed)."""
     n = eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
@@ -416,7 +406,7 @@ def contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
     return n
 
 
-@njit(cache=True)
+@kernel
 def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
                   evaluated):
     """Gap check (call-free, cheap); returns 0 when every corner is open (fc, lam, lt zeroed),
@@ -451,7 +441,7 @@ def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt,
     return -1
 
 
-@njit(cache=True)
+@kernel
 def contact_tangent(cp, u, geom, nonlinear, lam, der, evaluated, WN, WT, c2, Keff, H):
     """Add −∂F_c/∂u − c2 ∂F_c/∂u̇ to Keff (Newmark: ∂u̇/∂u = c2).
 

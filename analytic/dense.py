@@ -7,10 +7,10 @@ without allocation, so the compiled step loops never call into LAPACK's Python l
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from deckpound.analytic._jit import kernel
 
 
-@njit(cache=True)
+@kernel
 def lu_factor(A, piv):
     """In-place LU with partial pivoting of a small dense matrix. Returns False if singular."""
     n = A.shape[0]
@@ -39,7 +39,7 @@ def lu_factor(A, piv):
     return True
 
 
-@njit(cache=True)
+@kernel
 def lu_solve(LU, piv, b, x):
     """Solve with the factors of :func:`lu_factor` (x may alias b)."""
     n = LU.shape[0]

@@ -125,6 +125,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from deckpound.analytic._jit import kernel
+
 from .lcp import lcp_enumerate, lcp_lemke, ENUM_MAX_N
 
 __all__ = [
@@ -183,7 +185,7 @@ def velocity_update(M, W_N, W_T, U_free, P_N, P_T):
     return U_free + np.linalg.solve(np.ascontiguousarray(M), r)
 
 
-@njit(cache=True)
+@kernel
 def _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus):
     nc = uN_free.shape[0]
     for i in range(nc):
@@ -196,7 +198,7 @@ def _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus):
         uT_plus[i] = sT
 
 
-@njit(cache=True)
+@kernel
 def contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus):
     """(comp_res, cone_res) in velocity units, see module docstring."""
     nc = P_N.shape[0]
@@ -226,7 +228,7 @@ def contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus):
     return comp, cone
 
 
-@njit(cache=True)
+@kernel
 def _impulse_scale(G, nc):
     s = 0.0
     for i in range(nc):
@@ -272,7 +274,7 @@ def _build_lcp3(G, qN, uT_free, mu, fidx, nf, s):
     return A, q
 
 
-@njit(cache=True)
+@kernel
 def _extract3(z, mu, fidx, nf, s, P_N, P_T):
     nc = P_N.shape[0]
     for i in range(nc):
@@ -323,7 +325,7 @@ def _build_lcp_st(G, qN, uT_free, mu, fidx, nf, s):
     return A, q
 
 
-@njit(cache=True)
+@kernel
 def _extract_st(z, fidx, nf, s, P_N, P_T):
     nc = P_N.shape[0]
     for i in range(nc):
@@ -334,7 +336,7 @@ def _extract_st(z, fidx, nf, s, P_N, P_T):
         P_T[i] = s * (z[nc + k] - z[nc + nf + k])
 
 
-@njit(cache=True)
+@kernel
 def _evaluate(G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus,
               uT_plus):
     _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus)

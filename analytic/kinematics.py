@@ -23,7 +23,7 @@ flat arrays, so they run inside the engines' step loops and from Python alike.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from deckpound.analytic._jit import kernel
 
 from deckpound.models.scene import Scene
 
@@ -46,7 +46,7 @@ def pack_geometry(scene: Scene, gaps: tuple[float, float] | None = None) -> np.n
     return np.array(xc + yc + g0 + side + [0.5 * scene.deck.length], dtype=np.float64)
 
 
-@njit(cache=True)
+@kernel
 def contact_kinematics(u, geom, nonlinear, gap, WN, WT):
     """Fill gap (4,), WN (4, 7) and WT (4, 7) for displacement u (7,).
 
@@ -94,7 +94,6 @@ def contact_kinematics(u, geom, nonlinear, gap, WN, WT):
             WT[c, YD] = ty
             WT[c, TD] = tx * dpx + ty * dpy
             WT[c, sx] = ss
-    return gap
 
 
 def corner_gaps(scene: Scene, u: np.ndarray, nonlinear: bool = False,

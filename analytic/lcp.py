@@ -49,6 +49,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from deckpound.analytic._jit import kernel
+
 __all__ = [
     "LEMKE_SOLVED",
     "LEMKE_RAY",
@@ -67,7 +69,7 @@ ENUM_TOO_LARGE = 3
 ENUM_MAX_N = 12
 
 
-@njit(cache=True)
+@kernel
 def lcp_residual(z, w):
     """Complementarity residuals of a candidate (z, w = M z + q).
 
@@ -202,7 +204,7 @@ def _polish(M, q, basic_z, z):
     return ok and rank == m
 
 
-@njit(cache=True)
+@kernel
 def _pivot(T, r, c):
     """Gauss-Jordan pivot of tableau T on element (r, c)."""
     nr, nc = T.shape

@@ -119,6 +119,8 @@ import warnings
 import numpy as np
 from numba import njit
 
+from deckpound.analytic._jit import kernel
+
 from deckpound.analytic._hysteretic_kernel import P_S1P
 from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM, STATUS_FAILED, \
@@ -159,7 +161,7 @@ def output_columns(scene: Scene) -> list[str]:
 
 
 # ----------------------------------------------------------------------------- kernels
-@njit(cache=True)
+@kernel
 def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
     """LU of Ŵ = M + θhC + θ²h² Bᵀ diag(kt) B (K scratch). Returns False if singular."""
     spring_tangent(sa, kt, K)
@@ -246,7 +248,7 @@ def _contact_solve(LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu, mode,
     return status, comp, cone
 
 
-@njit(cache=True)
+@kernel
 def _energies(sa, hstate, q, v, ug, W, energy):
     """Output energies from the running totals W = [input, spring work, viscous, impact,
     friction, numerical]."""
@@ -265,7 +267,7 @@ def _energies(sa, hstate, q, v, ug, W, energy):
     energy[8] = W[0] - (ke + W[1] + W[2] + W[3] + W[4] + W[5])
 
 
-@njit(cache=True)
+@kernel
 def _store(out, row, t, q, g, fn, ft, fs, nbs, pn, pt, state, energy):
     out[row, _C_T] = t
     for k in range(7):

@@ -21,7 +21,7 @@ O(1); any hint is valid (the search moves both ways).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from deckpound.analytic._jit import kernel
 
 __all__ = ["support_record", "record_at", "record_at_times"]
 
@@ -34,7 +34,7 @@ def support_record(motion, channels) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return tb, np.ascontiguousarray(D, dtype=np.float64), np.ascontiguousarray(V, dtype=np.float64)
 
 
-@njit(cache=True)
+@kernel
 def record_at(tb, D, V, t, j, ug, vg):
     """Fill ug, vg (n_channels,) with the support motion at time t; returns the new hint.
 
@@ -76,7 +76,7 @@ def record_at(tb, D, V, t, j, ug, vg):
     return j
 
 
-@njit(cache=True)
+@kernel
 def record_at_times(tb, D, V, dt, n0, n1, UG, VG):
     """Rows n0..n1−1 of the resampled motion at t = n·dt into UG, VG (n1 − n0, n_channels):
     a bounded-size block version of ``motion.resample`` (for engines that step in chunks)."""

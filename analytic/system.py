@@ -41,7 +41,7 @@ from collections import namedtuple
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from deckpound.analytic._jit import kernel
 
 from deckpound.analytic._hysteretic_kernel import (
     C_ROTMAX,
@@ -204,7 +204,7 @@ def pack_system(scene: Scene) -> PackedSystem:
 
 
 # --------------------------------------------------------------------------- kernels
-@njit(cache=True)
+@kernel
 def spring_deformations(sa, u, v, ug, vg, d, dd):
     """Fill d = B u − S u_g and dd = B u̇ − S u̇_g (shape (ns,))."""
     ns = sa.k0.shape[0]
@@ -223,7 +223,7 @@ def spring_deformations(sa, u, v, ug, vg, d, dd):
         dd[i] = vi
 
 
-@njit(cache=True)
+@kernel
 def spring_update_materials(hparams, hstate, kind, d):
     """Set the trial deformation d[i] of every Hysteretic spring (trial state in hstate)."""
     for i in range(kind.shape[0]):
@@ -231,7 +231,7 @@ def spring_update_materials(hparams, hstate, kind, d):
             hyst_set_trial(hparams[i], hstate[i], d[i])
 
 
-@njit(cache=True)
+@kernel
 def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
     """Spring forces from deformations d, rates dd and the materials' trial state.
 
@@ -260,7 +260,7 @@ def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
     return nonel
 
 
-@njit(cache=True)
+@kernel
 def spring_tangent(sa, kt, K):
     """K = Bᵀ diag(kt) B (7×7, overwritten)."""
     for j in range(7):
@@ -275,7 +275,7 @@ def spring_tangent(sa, kt, K):
                 K[j, sa.bidx[i, r]] += bj * sa.bval[i, r]
 
 
-@njit(cache=True)
+@kernel
 def spring_forces(sa, hstate, u, v, ug, vg, f, K, fs, kt, d, dd, want_tangent):
     """Trial spring state and generalised internal force at (u, u̇, t) (convenience wrapper).
 
@@ -304,7 +304,7 @@ def spring_forces(sa, hstate, u, v, ug, vg, f, K, fs, kt, d, dd, want_tangent):
     return nonel
 
 
-@njit(cache=True)
+@kernel
 def spring_commit(sa, hstate):
     """Commit the trial state of every Hysteretic spring (OpenSees commitState)."""
     for i in range(sa.k0.shape[0]):
@@ -312,7 +312,7 @@ def spring_commit(sa, hstate):
             hyst_commit(hstate[i])
 
 
-@njit(cache=True)
+@kernel
 def spring_revert(sa, hstate):
     """Revert every Hysteretic spring to its last committed state."""
     for i in range(sa.k0.shape[0]):
@@ -320,7 +320,7 @@ def spring_revert(sa, hstate):
             hyst_revert(hstate[i])
 
 
-@njit(cache=True)
+@kernel
 def _unloading_stiffness(p, st, stress):
     """Takeda unloading stiffness E_u·max(1, μ^β)^(−1) at the committed excursion."""
     if stress >= 0.0:
@@ -337,7 +337,7 @@ def _unloading_stiffness(p, st, stress):
     return e / k
 
 
-@njit(cache=True)
+@kernel
 def spring_stored_energy(sa, hstate, u, ug):
     """Recoverable (elastic) energy of the springs at the committed state [kJ].
 

@@ -1,0 +1,41 @@
+"""The compile decorator of deckpound's per-step kernels: numba without reference counting.
+
+Every numba function that takes arrays increments the arrays' reference counts on entry and
+decrements them on exit (and around every view it takes, e.g. ``hstate[i]``). Each of these is an
+atomic add through a function pointer, ~5–10 ns. numba's LLVM pass that removes the matched pairs
+misses them as soon as an array's last use depends on a branch (an early ``return``, an
+``if``/``else`` that reads the array on one side only), because LLVM first merges the decrements
+of the branches into one ``phi``. The Takeda kernel is all branches: measured on the benchmark
+scene, ~60 % of the Newmark loop's time went to reference counting (6 Hysteretic springs, three
+force evaluations per step: 374 ns per evaluation with, 35 ns without).
+
+:func:`kernel` compiles a function with numba's runtime (NRT) switched off (``_nrt=False``, a
+documented-in-code numba flag used by its own test-suite; see numba issue #2350, "refcount op in
+branching code affects performance"). Such a function cannot allocate (``np.empty``, ``np.zeros``,
+``.copy()``, array expressions); numba refuses to compile it if it tries, so the rule is checked,
+not assumed. It may take views of arrays and call other kernels. Allocation belongs in the
+engine's driver (Python, or one NRT function that allocates and then calls the kernel loop).
+Arrays passed in stay owned by the caller: without reference counting a kernel must not keep
+them beyond the call, and it must not *return* an array (not even one it was given): an NRT
+caller takes a returned array as a new reference and releases it, which frees the caller's
+array under it (a crash). Kernels write into the arrays they are given and return scalars or
+tuples of scalars.
+
+Use ``@kernel`` in place of ``@njit(cache=True)`` for functions on the per-step path;
+``@kernel(inline="always")`` etc. pass options through.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+__all__ = ["kernel"]
+
+
+def kernel(fn=None, **options):
+    """``numba.njit(cache=True, _nrt=False, **options)``: see the module docstring."""
+    opts = {"cache": True, "_nrt": False}
+    opts.update(options)
+    if fn is None:
+        return lambda f: njit(**opts)(f)
+    return njit(**opts)(fn)
