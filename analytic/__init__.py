@@ -10,7 +10,11 @@ Smooth forces, kinematics and the Takeda kernel are shared by both engines
 (:mod:`.system`, :mod:`.kinematics`, :mod:`._hysteretic_kernel`).
 """
 
-from .hysteretic import HystereticMaterial
+from ._jit import use_source_keyed_cache
+
+use_source_keyed_cache()
+
+from .hysteretic import HystereticMaterial  # noqa: E402  (after the cache is placed)
 
 __all__ = ["HystereticMaterial", "run_compliance", "run_nonsmooth"]
 

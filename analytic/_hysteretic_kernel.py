@@ -113,8 +113,8 @@ __all__ = [
 
 #: The elastic short-circuit of :func:`_degradation` (``pow`` skipped while the ductility is
 #: ≤ 1; bit-identical results). ``DECKPOUND_TAKEDA_SHORTCUT=0`` in the environment turns it
-#: off, for measurement only (``compare/skips.py``). numba freezes the value at compile time
-#: and its cache does not see it change: run such a process with its own ``NUMBA_CACHE_DIR``.
+#: off, for measurement only (``compare/skips.py``). numba freezes the value at compile time;
+#: the package keys its kernel cache by it (:func:`deckpound.analytic._jit.use_source_keyed_cache`).
 ELASTIC_SHORTCUT = os.environ.get("DECKPOUND_TAKEDA_SHORTCUT", "1") != "0"
 
 #: Strain clamp used by OpenSees (``UniaxialMaterial.h``).

@@ -27,9 +27,16 @@ Use ``@kernel`` in place of ``@njit(cache=True)`` for functions on the per-step 
 
 from __future__ import annotations
 
+import hashlib
+import os
+from pathlib import Path
+
+import numba
 from numba import njit
 
-__all__ = ["kernel"]
+__all__ = ["kernel", "use_source_keyed_cache"]
+
+_HERE = Path(__file__).resolve().parent
 
 
 def kernel(fn=None, **options):
@@ -39,3 +46,37 @@ def kernel(fn=None, **options):
     if fn is None:
         return lambda f: njit(**opts)(f)
     return njit(**opts)(fn)
+
+
+def use_source_keyed_cache() -> Path | None:
+    """Put numba's on-disk cache of the analytic kernels in a directory keyed by their sources.
+
+    numba checks a cached function against its *own* file only; a kernel it calls from another
+    module is compiled into it, so after a change to e.g. ``_hysteretic_kernel.py`` the cached
+    Newmark loop of ``compliance.py`` would still run the old Takeda arithmetic, silently. Keying
+    the cache directory by a hash of every source file of this package (and of the environment
+    switches the kernels freeze at compile time) makes any change start a fresh cache.
+
+    The directory is ``$XDG_CACHE_HOME/deckpound/numba/<hash>`` (default ``~/.cache``). A
+    ``NUMBA_CACHE_DIR`` set by the user wins; an unwritable location leaves numba's default.
+    Called by the package ``__init__`` before any kernel is decorated. Returns the directory
+    used, or None.
+    """
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return None
+    h = hashlib.sha256()
+    for src in sorted(_HERE.glob("*.py")):
+        h.update(src.name.encode())
+        h.update(src.read_bytes())
+    h.update(os.environ.get("DECKPOUND_TAKEDA_SHORTCUT", "1").encode())
+    h.update(numba.__version__.encode())
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    target = base / "deckpound" / "numba" / h.hexdigest()[:16]
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    if not os.access(target, os.W_OK):
+        return None
+    numba.config.CACHE_DIR = str(target)
+    return target
