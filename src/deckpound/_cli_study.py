@@ -172,7 +172,7 @@ def _bench(args) -> int:
         cols = ["scene", "skip", "time_with", "time_without", "speedup", "us_per_step_with",
                 "us_per_step_without", "max_abs_diff"]
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-        print(steps[["scene", "where", "steps", "median", "min", "max", "time"]]
+        print(steps[["scene", "commit_cap", "where", "steps", "median", "min", "max", "time"]]
               .to_string(index=False, float_format=lambda v: f"{v:.3g}"))
         bad = table[(table["skip"] != "geometry") & ~table["identical"].astype(bool)]
         print(f"wrote {args.output}; " + ("every skip gives identical results" if not len(bad)
