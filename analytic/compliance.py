@@ -54,7 +54,6 @@ import time as _time
 import warnings
 
 import numpy as np
-from numba import njit
 
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._jit import kernel
@@ -154,9 +153,45 @@ def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
     energy[8] = W[0] - (ke + W[1] + W[2] + W[3] + W[4])
 
 
-@njit(cache=True)
+def newmark_workspace(ns: int, nch: int, nbs: int) -> tuple:
+    """The arrays :func:`newmark_run` works in (zeroed): ns springs, nch support channels, nbs
+    bent springs. Allocated here because the kernel runs without numba's runtime."""
+    return (np.zeros(_C_BENT + nbs + N_ENERGY), np.zeros((13, 7)), np.zeros((6, 7, 7)),
+            np.zeros((2, 7), dtype=np.int64), np.zeros((8, ns)), np.zeros((7, 4)),
+            np.zeros((3, 4, 7)), np.zeros(4, dtype=np.bool_), np.zeros((7, nch)), np.zeros(5),
+            np.zeros(N_ENERGY))
+
+
+@kernel(inline="always")
+def _form_unbalance(sa, hstate, cp, cs, geom, nonlinear, skip_contact, u, v, a, un, ug, vg,
+                    d, dd, f, fs, kt, g, gd, WN, WT, fc, lam, lt, der, evaluated, R):
+    """OpenSees ``formUnbalance`` at the trial (u, u̇, ü) and supports (u_g, u̇_g).
+
+    Springs: trial material state, F (into f), restoring forces fs and tangents kt. Contacts:
+    the gap check, then the laws of the closed corners (every corner when ``skip_contact`` is
+    off, linear kinematics). Residual R = F_c − F − M ü. un: displacement at the step start.
+    Returns (number of springs off their elastic tangent, any corner evaluated).
+    """
+    spring_deformations(sa, u, v, ug, vg, d, dd)
+    spring_update_materials(sa.hparams, hstate, sa.kind, d)
+    nonel = spring_assemble(sa, hstate, d, dd, v, f, fs, kt)
+    ncl = cl.eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
+                           evaluated)
+    if not skip_contact and not nonlinear:
+        for c in range(4):
+            evaluated[c] = True
+        ncl = -1
+    if ncl < 0:
+        cl.eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
+                       evaluated)
+    for j in range(7):
+        R[j] = fc[j] - f[j] - sa.mass[j] * a[j]
+    return nonel, evaluated[0] or evaluated[1] or evaluated[2] or evaluated[3]
+
+
+@kernel
 def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, dt, tol, maxit,
-                stride, nbs, out, info, u0, v0, substeps, flags, colsel):
+                stride, nbs, out, info, u0, v0, substeps, flags, colsel, work):
     """Run the OpenSees-clone Newmark–Newton loop over ``nsteps`` steps of size dt.
 
     Support motion: the record's own samples (tb, DG, VGR from
@@ -187,52 +222,24 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
     skip_contact = flags[F_CONTACT_SKIP] != 0
     reuse_factors = flags[F_FACTOR_REUSE] != 0
     want_energy = flags[F_ENERGY] != 0
-    buf = np.zeros(_C_BENT + nbs + N_ENERGY)
+    # workspace (allocated by newmark_workspace: this kernel runs without numba's runtime)
+    buf, w7, w77, wpiv, wns, w4, w47, evaluated, wch, W, energy = work
     mass = sa.mass
-    hp = sa.hparams
-    kind = sa.kind
-    u = np.zeros(7)
-    v = np.zeros(7)
-    a = np.zeros(7)
-    un = np.zeros(7)
-    vn = np.zeros(7)
-    an = np.zeros(7)
-    us = np.zeros(7)
-    vs = np.zeros(7)
-    as_ = np.zeros(7)
-    du = np.zeros(7)
-    R = np.zeros(7)
-    f = np.zeros(7)
-    fc = np.zeros(7)
-    K = np.zeros((7, 7))
-    Keff = np.zeros((7, 7))
-    LU = np.zeros((7, 7))
-    piv = np.zeros(7, dtype=np.int64)
-    H = np.zeros((7, 7))
-    fs = np.zeros(ns)
-    kt = np.zeros(ns)
-    g = np.zeros(4)
-    gd = np.zeros(4)
-    WN = np.zeros((4, 7))
-    WT = np.zeros((4, 7))
-    lam = np.zeros(4)
-    lt = np.zeros(4)
-    der = np.zeros((4, 7))
-    evaluated = np.zeros(4, dtype=np.bool_)
-    kt_fact = np.zeros(ns)          # spring tangents of the factors held in LU
+    u, v, a, un, vn, an, us, vs, as_, du, R, f, fc = (w7[0], w7[1], w7[2], w7[3], w7[4], w7[5],
+                                                      w7[6], w7[7], w7[8], w7[9], w7[10],
+                                                      w7[11], w7[12])
+    K, Keff, LU, H, Kel, LUel = w77[0], w77[1], w77[2], w77[3], w77[4], w77[5]
+    piv, pivel = wpiv[0], wpiv[1]
+    fs, kt, kt_fact, d_prev, dd_prev, fs_prev, d_new, dd_new = (wns[0], wns[1], wns[2], wns[3],
+                                                                wns[4], wns[5], wns[6], wns[7])
+    g, gd, lam, lt, lam_prev, lt_prev, g_prev = w4[0], w4[1], w4[2], w4[3], w4[4], w4[5], w4[6]
+    WN, WT, der = w47[0], w47[1], w47[2]
+    # supports: at the trial, at the last (sub)step, at t_n and t_{n+1} (start and end of step)
+    ug, vg, ugo, ug0, vg0, ug1, vg1 = wch[0], wch[1], wch[2], wch[3], wch[4], wch[5], wch[6]
+    # kt_fact: spring tangents of the factors held in LU; Kel, LUel, pivel: the elastic
+    # effective tangent of the main step and its factors
     lu_springs_only = False         # LU holds a factorisation without contact terms
     lu_h = 0.0                      # step of the factors held in LU
-    ug = np.zeros(nch)
-    vg = np.zeros(nch)
-    ugo = np.zeros(nch)
-    ug0 = np.zeros(nch)             # supports at t_n (start of the step)
-    vg0 = np.zeros(nch)
-    ug1 = np.zeros(nch)             # supports at t_{n+1}
-    vg1 = np.zeros(nch)
-    # elastic effective tangent for the main step and its factors
-    Kel = np.zeros((7, 7))
-    LUel = np.zeros((7, 7))
-    pivel = np.zeros(7, dtype=np.int64)
     c2 = GAMMA / (BETA * dt)
     c3 = 1.0 / (BETA * dt * dt)
     spring_tangent(sa, sa.k0, K)
@@ -240,21 +247,12 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
         for j in range(7):
             Kel[i, j] = K[i, j] + c2 * Cmat[i, j]
         Kel[i, i] += c3 * mass[i]
-    LUel[:, :] = Kel
+    for i in range(7):
+        for j in range(7):
+            LUel[i, j] = Kel[i, j]
     if not lu_factor(LUel, pivel):
         info[0] = 2
         return
-    # energy bookkeeping: previous-(sub)step quantities
-    d_prev = np.zeros(ns)
-    dd_prev = np.zeros(ns)
-    fs_prev = np.zeros(ns)
-    d_new = np.zeros(ns)
-    dd_new = np.zeros(ns)
-    lam_prev = np.zeros(4)
-    lt_prev = np.zeros(4)
-    g_prev = np.zeros(4)
-    W = np.zeros(5)
-    energy = np.zeros(9)
     jrec = record_at(tb, DG, VGR, 0.0, 0, ug1, vg1)
     for k in range(nch):
         ug[k] = ug1[k]
@@ -264,17 +262,8 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
         u[j] = u0[j]
         v[j] = v0[j]
         un[j] = u0[j]
-    spring_deformations(sa, u, v, ug, vg, d_new, dd_new)
-    spring_update_materials(hp, hstate, kind, d_new)
-    spring_assemble(sa, hstate, d_new, dd_new, v, f, fs, kt)
-    ncl = cl.eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                           evaluated)
-    if not skip_contact and not nonlinear:
-        evaluated[:] = True
-        ncl = -1
-    if ncl < 0:
-        ncl = cl.eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                             evaluated)
+    _form_unbalance(sa, hstate, cp, cs, geom, nonlinear, skip_contact, u, v, a, un, ug, vg,
+                    d_new, dd_new, f, fs, kt, g, gd, WN, WT, fc, lam, lt, der, evaluated, R)
     for j in range(7):
         a[j] = (fc[j] - f[j]) / mass[j]
     spring_commit(sa, hstate)
@@ -342,22 +331,9 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                 for j in range(7):
                     v[j] = a1p * vn[j] + a2p * an[j]
                     a[j] = a4p * an[j] + a3p * vn[j]
-                # --- formUnbalance (written out here and in the Newton loop on purpose: a
-                # wrapper taking these ~20 arrays costs ~12 ns per array per call in numba)
-                spring_deformations(sa, u, v, ug, vg, d_new, dd_new)
-                spring_update_materials(hp, hstate, kind, d_new)
-                nonel = spring_assemble(sa, hstate, d_new, dd_new, v, f, fs, kt)
-                ncl = cl.eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc,
-                                       lam, lt, der, evaluated)
-                if not skip_contact and not nonlinear:
-                    evaluated[:] = True
-                    ncl = -1
-                if ncl < 0:
-                    ncl = cl.eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc,
-                                         lam, lt, der, evaluated)
-                anyev = evaluated[0] or evaluated[1] or evaluated[2] or evaluated[3]
-                for j in range(7):
-                    R[j] = fc[j] - f[j] - mass[j] * a[j]
+                nonel, anyev = _form_unbalance(sa, hstate, cp, cs, geom, nonlinear, skip_contact,
+                                               u, v, a, un, ug, vg, d_new, dd_new, f, fs, kt, g,
+                                               gd, WN, WT, fc, lam, lt, der, evaluated, R)
                 it = 0
                 converged = False
                 while True:
@@ -386,7 +362,9 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                         if anyev:
                             cl.contact_tangent(cp, u, geom, nonlinear, lam, der, evaluated, WN,
                                                WT, c2, Keff, H)
-                        LU[:, :] = Keff
+                        for i in range(7):
+                            for j in range(7):
+                                LU[i, j] = Keff[i, j]
                         lu_springs_only = not anyev
                         lu_h = h
                         for i in range(ns):
@@ -404,21 +382,10 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                         a[j] += c3 * du[j]
                         nrm += du[j] * du[j]
                     nrm = np.sqrt(nrm)
-                    # --- formUnbalance
-                    spring_deformations(sa, u, v, ug, vg, d_new, dd_new)
-                    spring_update_materials(hp, hstate, kind, d_new)
-                    nonel = spring_assemble(sa, hstate, d_new, dd_new, v, f, fs, kt)
-                    ncl = cl.eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc,
-                                           lam, lt, der, evaluated)
-                    if not skip_contact and not nonlinear:
-                        evaluated[:] = True
-                        ncl = -1
-                    if ncl < 0:
-                        ncl = cl.eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT,
-                                             fc, lam, lt, der, evaluated)
-                    anyev = evaluated[0] or evaluated[1] or evaluated[2] or evaluated[3]
-                    for j in range(7):
-                        R[j] = fc[j] - f[j] - mass[j] * a[j]
+                    nonel, anyev = _form_unbalance(sa, hstate, cp, cs, geom, nonlinear,
+                                                   skip_contact, u, v, a, un, ug, vg, d_new,
+                                                   dd_new, f, fs, kt, g, gd, WN, WT, fc, lam, lt,
+                                                   der, evaluated, R)
                     it += 1
                     if not np.isfinite(nrm):
                         status = 3
@@ -513,7 +480,6 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
     info[5] = reused
     info[6] = maxit_seen
     info[7] = rescued
-    _ = ncl
 
 
 # ----------------------------------------------------------------------------- engine
@@ -616,10 +582,11 @@ def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,
     info = np.zeros(8, dtype=np.int64)
     hstate = ps.new_state()
     u0, v0 = initial_dofs(initial_state)
+    work = newmark_workspace(ps.n_springs, DG.shape[1], nbs)
     t1 = _time.perf_counter()
     newmark_run(ps.arrays, ps.C, hstate, cp, cs, geom, scene.contact.geometry == "nonlinear",
                 tb, DG, VGR, nsteps, dt, cset.tolerance, cset.max_iterations, kstride, nbs, out,
-                info, u0, v0, substeps, flags, colsel)
+                info, u0, v0, substeps, flags, colsel, work)
     t2 = _time.perf_counter()
     status_code, rows = int(info[0]), int(info[1])
     if kstride != stride:
