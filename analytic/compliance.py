@@ -27,7 +27,8 @@ Integrators (``scene.compliance.integrator``)
 * a step that does not converge is redone from its start in 10 sub-steps (the OpenSees
   engine's ``fallback = "substep"``); counted in ``failures`` / ``rescued_by_substeps``.
 
-The whole step loop is one numba function; the contact laws are skipped while every corner's
+The whole step loop is one numba kernel compiled without numba's runtime (:mod:`._jit`, in
+arrays from :func:`newmark_workspace`); the contact laws are skipped while every corner's
 gap is open (g > 0, where every law gives zero force) and the tangent factorisation is reused
 while it is bitwise the elastic one (identical matrix → identical factors, so results do not
 change). Output every :func:`deckpound.engines.output_stride` steps.

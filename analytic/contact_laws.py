@@ -419,7 +419,6 @@ def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt,
     WT (when some corner is closed). Corners with g > 0 are open for every law and are skipped
     (the laws are not evaluated at all while every gap is open).
     """
-    # (no calls: numba then prunes the reference counting of the array arguments) only: numba then prunes the reference counting of the array arguments)
     anyc = nonlinear
     if not nonlinear:
         for c in range(4):

@@ -236,8 +236,7 @@ def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
     """Spring forces from deformations d, rates dd and the materials' trial state.
 
     f (7,) out = Bᵀ[f_s + crate·ḋ] + a0 M u̇; fs, kt (ns,) out: restoring force and tangent.
-    Returns the number of springs whose tangent differs from k0. Call-free on purpose (numba
-    then prunes all reference counting of the many array arguments).
+    Returns the number of springs whose tangent differs from k0.
     """
     a0 = sa.scal[0]
     for j in range(7):
@@ -291,10 +290,8 @@ def spring_forces(sa, hstate, u, v, ug, vg, f, K, fs, kt, d, dd, want_tangent):
 
     Returns the number of springs whose tangent differs from k0 (0 = all elastic).
 
-    Hot loops should call the pieces (:func:`spring_deformations`,
-    :func:`spring_update_materials`, :func:`spring_assemble`, :func:`spring_tangent`) directly:
-    numba keeps reference-count operations on every array argument of a function that makes
-    several calls, ~10 ns per array per call; the pieces are call-free or take few arrays.
+    Hot loops call the pieces (:func:`spring_deformations`, :func:`spring_update_materials`,
+    :func:`spring_assemble`, :func:`spring_tangent`) and skip the tangent when it is not needed.
     """
     spring_deformations(sa, u, v, ug, vg, d, dd)
     spring_update_materials(sa.hparams, hstate, sa.kind, d)
