@@ -174,7 +174,7 @@ def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
     return lu_factor(LU, piv)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=True)   # allocates: keeps numba's runtime when called from a kernel
 def _contact_solve(LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu, mode, rtol,
                    P_N, P_T, state, vnew):
     """Solve the frictional impact problem of the active corners act[:nact].
@@ -288,10 +288,20 @@ def _store(out, row, t, q, g, fn, ft, fs, nbs, pn, pt, state, energy):
         out[row, base + k] = energy[k]
 
 
-@njit(cache=True)
+def moreau_jean_workspace(ns: int, nch: int) -> tuple:
+    """The arrays :func:`moreau_jean_run` works in (ns springs, nch support channels).
+    Allocated here because the kernel runs without numba's runtime."""
+    wns = np.zeros((14, ns))
+    wns[0] = np.nan                  # no factorisation held yet
+    return (np.zeros((11, 7)), np.zeros((2, 7, 7)), np.zeros(7, dtype=np.int64), wns,
+            np.zeros((8, 4)), np.zeros((4, 4, 7)), np.zeros((2, 4), dtype=np.int64),
+            np.zeros(4, dtype=np.bool_), np.zeros((4, nch)), np.zeros(6), np.zeros(N_ENERGY))
+
+
+@kernel
 def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, theta, ecoef,
                     esep, mu, mode, rtol,
-                    ftol, maxit, stride, nbs, out, info, rinfo, u0, v0, uv_end):
+                    ftol, maxit, stride, nbs, out, info, rinfo, u0, v0, uv_end, work):
     """The Moreau–Jean step loop over ``nsteps`` steps of length h.
 
     Support motion: the record (tb, DG, VGR) of
@@ -310,56 +320,21 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
     hp = sa.hparams
     kind = sa.kind
     a0 = sa.scal[0]
-    q = np.zeros(7)
-    v = np.zeros(7)
-    qk = np.zeros(7)
-    vk = np.zeros(7)
-    qM = np.zeros(7)
-    vfree = np.zeros(7)
-    vnew = np.zeros(7)
-    R = np.zeros(7)
-    dv = np.zeros(7)
-    Fk = np.zeros(7)
-    f = np.zeros(7)
-    K = np.zeros((7, 7))
-    LU = np.zeros((7, 7))
-    piv = np.zeros(7, dtype=np.int64)
-    kt_fact = np.full(ns, np.nan)     # tangents of the factors held in LU
-    # spring quantities: committed start of step (k), linearisation point (lin), new iterate
-    d_k = np.zeros(ns)
-    dd_k = np.zeros(ns)
-    fs_k = np.zeros(ns)
-    kt_k = np.zeros(ns)
-    d_lin = np.zeros(ns)
-    fs_lin = np.zeros(ns)
-    kt_lin = np.zeros(ns)
-    d = np.zeros(ns)
-    dd = np.zeros(ns)
-    fs = np.zeros(ns)
-    kt = np.zeros(ns)
-    sdu = np.zeros(ns)      # S Δu_g per spring
-    sdv = np.zeros(ns)      # S Δu̇_g per spring
-    gap = np.zeros(4)
-    WN = np.zeros((4, 7))
-    WT = np.zeros((4, 7))
-    gapo = np.zeros(4)
-    WNo = np.zeros((4, 7))
-    WTo = np.zeros((4, 7))
-    act = np.zeros(4, dtype=np.int64)
-    was_active = np.zeros(4, dtype=np.bool_)
-    P_N = np.zeros(4)
-    P_T = np.zeros(4)
-    state = np.zeros(4, dtype=np.int64)
-    pn_acc = np.zeros(4)
-    pt_acc = np.zeros(4)
-    fn_out = np.zeros(4)
-    ft_out = np.zeros(4)
-    ug = np.zeros(nch)
-    vg = np.zeros(nch)
-    ugo = np.zeros(nch)
-    vgo = np.zeros(nch)
-    W = np.zeros(6)
-    energy = np.zeros(9)
+    # workspace (allocated by moreau_jean_workspace: this kernel runs without numba's runtime)
+    w7, w77, piv, wns, w4, w47, wi4, was_active, wch, W, energy = work
+    q, v, qk, vk, qM, vfree, vnew, R, dv, Fk, f = (w7[0], w7[1], w7[2], w7[3], w7[4], w7[5],
+                                                  w7[6], w7[7], w7[8], w7[9], w7[10])
+    K, LU = w77[0], w77[1]
+    # spring quantities: committed start of step (k), linearisation point (lin), new iterate;
+    # kt_fact: tangents of the factors held in LU (NaN: none); sdu, sdv: S Δu_g, S Δu̇_g
+    (kt_fact, d_k, dd_k, fs_k, kt_k, d_lin, fs_lin, kt_lin, d, dd, fs, kt, sdu,
+     sdv) = (wns[0], wns[1], wns[2], wns[3], wns[4], wns[5], wns[6], wns[7], wns[8], wns[9],
+             wns[10], wns[11], wns[12], wns[13])
+    gap, gapo, P_N, P_T, pn_acc, pt_acc, fn_out, ft_out = (w4[0], w4[1], w4[2], w4[3], w4[4],
+                                                          w4[5], w4[6], w4[7])
+    WN, WT, WNo, WTo = w47[0], w47[1], w47[2], w47[3]
+    act, state = wi4[0], wi4[1]
+    ug, vg, ugo, vgo = wch[0], wch[1], wch[2], wch[3]
     th = theta
     th1 = 1.0 - theta
     # ---- initial state
@@ -653,12 +628,14 @@ def run_nonsmooth(scene: Scene, motion: SupportMotion | None = None, *,
     hstate = ps.new_state()
     u0, v0 = initial_dofs(initial_state)
     ftol = _force_tolerance(ps, ns_set.tolerance)
+    work = moreau_jean_workspace(ps.n_springs, DG.shape[1])
     t1 = _time.perf_counter()
     moreau_jean_run(ps.arrays, ps.C, hstate, geom, ct.geometry == "nonlinear", tb, DG, VGR,
                     nsteps, h, theta,
                     float(ct.restitution), separating_restitution(ct.restitution, theta), mu,
                     mode, float(ns_set.tolerance), ftol,
-                    int(ns_set.max_iterations), stride, nbs, out, info, rinfo, u0, v0, uv_end)
+                    int(ns_set.max_iterations), stride, nbs, out, info, rinfo, u0, v0, uv_end,
+                    work)
     t2 = _time.perf_counter()
     status_code, rows = int(info[0]), int(info[1])
     steps = nsteps if status_code == ST_OK else int(info[2]) - 1
