@@ -13,10 +13,10 @@ force evaluations per step: 374 ns per evaluation with, 35 ns without).
 documented-in-code numba flag used by its own test-suite; see numba issue #2350, "refcount op in
 branching code affects performance"). Such a function cannot allocate (``np.empty``, ``np.zeros``,
 ``.copy()``, array expressions); numba refuses to compile it if it tries, so the rule is checked,
-not assumed. It may take views of arrays and call other kernels. numba passes the caller's runtime flag on
-to callees that do not set it: a function that allocates and is called from a kernel must say
-``njit(_nrt=True)`` explicitly (as the nonsmooth engine's contact solve does). Allocation belongs in the
-engine's driver (Python, or one NRT function that allocates and then calls the kernel loop).
+not assumed. It may take views of arrays and call other kernels. numba passes the caller's
+runtime flag on to callees that do not set it: a function that allocates and is called from a
+kernel must say ``njit(_nrt=True)`` explicitly (as the nonsmooth engine's contact solve does).
+Allocation belongs in the engine's driver (``newmark_workspace``, ``moreau_jean_workspace``).
 Arrays passed in stay owned by the caller: without reference counting a kernel must not keep
 them beyond the call, and it must not *return* an array (not even one it was given): an NRT
 caller takes a returned array as a new reference and releases it, which frees the caller's

@@ -52,7 +52,8 @@ __all__ = [
     "contact_revert", "contact_stored_energy", "gap_hessian",
 ]
 
-LAW_CODES = {name: i for i, name in enumerate(CONTACT_LAWS)}   # linear 0, kv 1, hertz 2, hd 3, bil 4
+# linear 0, kelvin-voigt 1, hertz 2, hertz-damp 3, bilinear 4
+LAW_CODES = {name: i for i, name in enumerate(CONTACT_LAWS)}
 FRICTION_CODES = {name: i for i, name in enumerate(FRICTION_MODES)}  # none 0, slip 1, stick 2
 V_IMPACT_MIN = 1.0e-3   # m/s, floor of the Hunt–Crossley approach velocity
 

@@ -386,7 +386,6 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
             status = LEMKE_SOLVED
             break
     # read the tableau solution
-    z0val = 0.0
     for i in range(n):
         v = basis[i]
         val = T[i, 2 * n + 1] * qscale

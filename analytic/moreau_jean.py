@@ -1,0 +1,491 @@
+r"""The Moreau–Jean step loop of the nonsmooth engine.
+
+Driven by :func:`deckpound.analytic.nonsmooth.run_nonsmooth`; the model, the output columns
+and the energy bookkeeping are described there.
+
+Time discretisation (Moreau–Jean θ-scheme, Jean 1999, Acary & Brogliato 2008 Ch. 10)
+------------------------------------------------------------------------------------
+Step k → k+1 (h = ``nonsmooth.h``, θ = ``nonsmooth.theta`` ∈ [½, 1], default ½)::
+
+    M (v_{k+1} − v_k) = −h [θ F_{k+1} + (1 − θ) F_k] + W_Nᵀ P_N + W_Tᵀ P_T
+    q_{k+1} = q_k + h [(1 − θ) v_k + θ v_{k+1}]
+    F_k = F(q_k, v_k, t_k),  F_{k+1} = F(q_{k+1}, v_{k+1}, t_{k+1})
+
+* **Implicit** (θ-weighted end values): every smooth force — spring restoring forces (Takeda
+  and seats), seat dashpots, Rayleigh damping (both the a0·M and the a1·K0 parts), and the
+  support motion u_g, u̇_g that drives them (taken at t_k and t_{k+1}). The contact impulses
+  P are fully implicit (they act on v_{k+1}).
+* **Explicit**: the active set (a corner is active when its gap at the predicted mid-step
+  position q_M = q_k + h/2·v_k is ≤ 0), the contact Jacobians W_N, W_T (evaluated at q_M;
+  constant for linear kinematics), and the pre-impact velocities U_N⁻ = W_N v_k.
+
+The nonlinear (Takeda) equation is solved by Newton's method on v_{k+1} with the contact
+problem re-solved inside every iteration (Siconos' MoreauJeanOSI Newton loop). Iteration 0 is
+the *linearised θ-method*: with K_t = Bᵀ diag(k_t) B the material tangents of the committed
+state and the exact linearisation of F about (q_k, v_k, t_k),
+
+    F_{k+1} ≈ F_k + K_t Δq + C Δv − Bᵀ[k_t ∘ S Δu_g + crate ∘ S Δu̇_g],   Δq = h v_k + θ h Δv,
+
+(C = a0 M + Bᵀ diag(crate) B is constant), so
+
+    Ŵ = M + θ h C + θ² h² K_t,
+    v_free = v_k + Ŵ⁻¹ [ −h F_k − θ h² K_t v_k + θ h Bᵀ(k_t ∘ S Δu_g + crate ∘ S Δu̇_g) ],
+    v_{k+1} = v_free + Ŵ⁻¹ (W_Nᵀ P_N + W_Tᵀ P_T).
+
+The springs are then evaluated at (q_{k+1}, v_{k+1}, t_{k+1}) (Takeda trial state from the
+committed history). The residual of the θ-equation is exactly θ h Bᵀ r with the per-spring
+linearisation mismatch r_i = f_s,i(d_{k+1}) − f_s,i(d_lin) − k_t,i (d_{k+1} − d_lin); the step is
+accepted when max|r_i| ≤ ``nonsmooth.tolerance`` × (largest Takeda yield force) — for linear
+springs and for Takeda springs that stay on one branch the linearised step is exact and no
+further iteration is made. Otherwise Newton iterates (tangent, free velocity and contact
+problem recomputed at the current iterate, active set kept) up to ``nonsmooth.max_iterations``;
+non-convergence fails the step. The Takeda history is committed once per accepted step with
+q_{k+1} = q_k + h[(1−θ)v_k + θv_{k+1}]. For θ = ½ and linear springs the smooth part is the
+trapezoidal rule (second order, energy-conserving); with impacts the scheme is first order.
+
+The contact problem of the (≤ 4) active corners is the planar frictional impact problem of
+:mod:`deckpound.analytic.frictional_contact` with the Delassus matrix G = W Ŵ⁻¹ Wᵀ, free
+contact velocities W v_free and U_N⁻ = W_N v_k, solved exactly (Lemke with Stewart–Trinkle
+Lemke and enumeration fall-backs for ``solver = lemke``; enumeration only for
+``solver = enumeration``) and verified against the contact laws (relative tolerance
+``nonsmooth.tolerance``); an unverified solve fails the run at that step. Steps without an
+active corner skip the contact solve; frictionless runs (μ = 0) carry only normal unknowns.
+
+Active but separating corners. A corner can be active (g(q_M) ≤ 0) while it already separates
+(U_N⁻ > 0, typically the step after an impact or in persistent contact with the seat springs
+pushing). Newton's law there (U_N⁺ ≥ −e U_N⁻) lets a positive P_N do positive work
+½ P_N (1 − e) U_N⁻ on v_m for θ = ½, i.e. gain energy. Such corners use the restitution
+max(e, (1 − θ)/θ) instead (:func:`deckpound.analytic.nonsmooth.separating_restitution`;
+= 1 for θ = ½, = e for θ = 1): then P_N > 0 implies θU_N⁺ + (1−θ)U_N⁻ ≤ 0 (= 0 for θ = ½) and
+the normal impulse does no positive work, so for frictionless contact every step is
+dissipative (tested); approaching corners (U_N⁻ ≤ 0, the
+impacts) keep Newton's law unchanged. Friction keeps the standard law on U_T⁺; its work on
+v_m is −μP_N|U_T⁺| ≤ 0 for θ = 1 but not sign-definite for θ < 1, and with e > 0 Newton's law
+combined with Coulomb friction can gain energy in an impact (Kane's paradox, see
+:mod:`deckpound.analytic.frictional_contact`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from deckpound.analytic._jit import kernel
+from deckpound.analytic.dense import lu_factor, lu_solve
+from deckpound.analytic.frictional_contact import STATUS_FAILED, solve_contact_impulses_into
+from deckpound.analytic.kinematics import contact_kinematics
+from deckpound.analytic.support_motion import record_at
+from deckpound.analytic.system import (
+    C_BENT as _C_BENT, C_FN as _C_FN, C_FT as _C_FT, C_GAP as _C_GAP, C_T as _C_T, C_U as _C_U,
+    DOF_OF_COLUMN as _DOF_OF_COL)
+from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
+    spring_stored_energy, spring_tangent, spring_update_materials
+
+__all__ = ["moreau_jean_run", "moreau_jean_workspace", "ENERGY_COLUMNS", "N_ENERGY", "ST_OK",
+           "ST_NEWTON", "ST_CONTACT", "ST_NONFINITE", "ST_SINGULAR"]
+
+#: Energy columns of the nonsmooth result, in the order the kernel writes them [kJ].
+ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
+                  "energy_hysteretic", "energy_impact", "energy_friction", "energy_numerical",
+                  "energy_error")
+N_ENERGY = len(ENERGY_COLUMNS)
+# info codes
+ST_OK, ST_NEWTON, ST_CONTACT, ST_NONFINITE, ST_SINGULAR = 0, 1, 2, 3, 4
+
+
+@kernel
+def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
+    """LU of Ŵ = M + θhC + θ²h² Bᵀ diag(kt) B (K scratch). Returns False if singular."""
+    spring_tangent(sa, kt, K)
+    c1 = theta * h
+    c2 = c1 * c1
+    for i in range(7):
+        for j in range(7):
+            LU[i, j] = c1 * Cmat[i, j] + c2 * K[i, j]
+        LU[i, i] += sa.mass[i]
+    return lu_factor(LU, piv)
+
+
+@njit(cache=True, _nrt=True)   # allocates: keeps numba's runtime when called from a kernel
+def _contact_solve(LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu, mode, rtol,
+                   P_N, P_T, state, vnew):
+    """Solve the frictional impact problem of the active corners act[:nact].
+
+    G = W Ŵ⁻¹ Wᵀ, u_free = W v_free, U_N⁻ = W_N v0; vnew = v_free + Ŵ⁻¹ Wᵀ P. Restitution
+    ``ecoef`` for approaching corners (U_N⁻ ≤ 0), ``esep`` for separating ones.
+    P_N, P_T, state (4,) are written per corner (zero / open for inactive corners).
+    Returns (status, comp_res, cone_res).
+    """
+    nc = nact
+    X = np.empty((2 * nc, 7))       # rows: Ŵ⁻¹ w for each column w of W
+    Wr = np.empty((2 * nc, 7))
+    col = np.empty(7)
+    for a in range(nc):
+        c = act[a]
+        for j in range(7):
+            Wr[a, j] = WN[c, j]
+            Wr[nc + a, j] = WT[c, j]
+    for r in range(2 * nc):
+        for j in range(7):
+            col[j] = Wr[r, j]
+        lu_solve(LU, piv, col, col)
+        for j in range(7):
+            X[r, j] = col[j]
+    G = np.empty((2 * nc, 2 * nc))
+    for r in range(2 * nc):
+        for s in range(r, 2 * nc):
+            acc = 0.0
+            for j in range(7):
+                acc += Wr[r, j] * X[s, j]
+            G[r, s] = acc
+            G[s, r] = acc
+    uNf = np.empty(nc)
+    uTf = np.empty(nc)
+    uNm = np.empty(nc)
+    ea = np.empty(nc)
+    ma = np.empty(nc)
+    for a in range(nc):
+        sN = 0.0
+        sT = 0.0
+        sm = 0.0
+        for j in range(7):
+            sN += Wr[a, j] * vfree[j]
+            sT += Wr[nc + a, j] * vfree[j]
+            sm += Wr[a, j] * v0[j]
+        uNf[a] = sN
+        uTf[a] = sT
+        uNm[a] = sm
+        ea[a] = ecoef if sm <= 0.0 else esep
+        ma[a] = mu
+    pN = np.zeros(nc)
+    pT = np.zeros(nc)
+    uNp = np.zeros(nc)
+    uTp = np.zeros(nc)
+    st = np.zeros(nc, dtype=np.int64)
+    status, comp, cone = solve_contact_impulses_into(G, uNf, uTf, uNm, ea, ma, pN, pT, uNp,
+                                                     uTp, st, mode, rtol)
+    for c in range(4):
+        P_N[c] = 0.0
+        P_T[c] = 0.0
+        state[c] = 0
+    for j in range(7):
+        vnew[j] = vfree[j]
+    for a in range(nc):
+        c = act[a]
+        P_N[c] = pN[a]
+        P_T[c] = pT[a]
+        state[c] = st[a]
+        for j in range(7):
+            vnew[j] += X[a, j] * pN[a] + X[nc + a, j] * pT[a]
+    return status, comp, cone
+
+
+@kernel
+def _energies(sa, hstate, q, v, ug, W, energy):
+    """Output energies from the running totals W = [input, spring work, viscous, impact,
+    friction, numerical]."""
+    ke = 0.0
+    for j in range(7):
+        ke += 0.5 * sa.mass[j] * v[j] * v[j]
+    es = spring_stored_energy(sa, hstate, q, ug)
+    energy[0] = W[0]
+    energy[1] = ke
+    energy[2] = es
+    energy[3] = W[2]
+    energy[4] = W[1] - es
+    energy[5] = W[3]
+    energy[6] = W[4]
+    energy[7] = W[5]
+    energy[8] = W[0] - (ke + W[1] + W[2] + W[3] + W[4] + W[5])
+
+
+@kernel
+def _store(out, row, t, q, g, fn, ft, fs, nbs, pn, pt, state, energy):
+    out[row, _C_T] = t
+    for k in range(7):
+        out[row, _C_U + k] = q[_DOF_OF_COL[k]]
+    for c in range(4):
+        out[row, _C_GAP + c] = g[c]
+        out[row, _C_FN + c] = fn[c]
+        out[row, _C_FT + c] = ft[c]
+    for i in range(nbs):
+        out[row, _C_BENT + i] = fs[i]
+    base = _C_BENT + nbs
+    for c in range(4):
+        out[row, base + c] = pn[c]
+        out[row, base + 4 + c] = pt[c]
+        out[row, base + 8 + c] = state[c]
+    base += 12
+    for k in range(energy.shape[0]):
+        out[row, base + k] = energy[k]
+
+
+def moreau_jean_workspace(ns: int, nch: int) -> tuple:
+    """The arrays :func:`moreau_jean_run` works in (ns springs, nch support channels).
+    Allocated here because the kernel runs without numba's runtime."""
+    wns = np.zeros((14, ns))
+    wns[0] = np.nan                  # no factorisation held yet
+    return (np.zeros((11, 7)), np.zeros((2, 7, 7)), np.zeros(7, dtype=np.int64), wns,
+            np.zeros((8, 4)), np.zeros((4, 4, 7)), np.zeros((2, 4), dtype=np.int64),
+            np.zeros(4, dtype=np.bool_), np.zeros((4, nch)), np.zeros(6), np.zeros(N_ENERGY))
+
+
+@kernel
+def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, theta, ecoef,
+                    esep, mu, mode, rtol,
+                    ftol, maxit, stride, nbs, out, info, rinfo, u0, v0, uv_end, work):
+    """The Moreau–Jean step loop over ``nsteps`` steps of length h.
+
+    Support motion: the record (tb, DG, VGR) of
+    :func:`deckpound.analytic.support_motion.support_record`, interpolated at t_n = n·h in the
+    loop (identical to ``motion.resample(h)``, bounded memory).
+
+    Fills ``out`` (one row per output) and ``info`` = [status (0 ok, 1 Newton, 2 contact,
+    3 non-finite, 4 singular), rows written, failed step, contact solves, contact events
+    (corner activations), contact steps, Newton iterations, max iterations of a step,
+    iteration-matrix factorisations]; ``rinfo`` = [max complementarity residual, max cone
+    residual]; ``uv_end`` (2, 7) = displacement and velocity at the last accepted step.
+    """
+    ns = sa.k0.shape[0]
+    nch = DG.shape[1]
+    mass = sa.mass
+    hp = sa.hparams
+    kind = sa.kind
+    a0 = sa.scal[0]
+    # workspace (allocated by moreau_jean_workspace: this kernel runs without numba's runtime)
+    w7, w77, piv, wns, w4, w47, wi4, was_active, wch, W, energy = work
+    q, v, qk, vk, qM, vfree, vnew, R, dv, Fk, f = (w7[0], w7[1], w7[2], w7[3], w7[4], w7[5],
+                                                  w7[6], w7[7], w7[8], w7[9], w7[10])
+    K, LU = w77[0], w77[1]
+    # spring quantities: committed start of step (k), linearisation point (lin), new iterate;
+    # kt_fact: tangents of the factors held in LU (NaN: none); sdu, sdv: S Δu_g, S Δu̇_g
+    (kt_fact, d_k, dd_k, fs_k, kt_k, d_lin, fs_lin, kt_lin, d, dd, fs, kt, sdu,
+     sdv) = (wns[0], wns[1], wns[2], wns[3], wns[4], wns[5], wns[6], wns[7], wns[8], wns[9],
+             wns[10], wns[11], wns[12], wns[13])
+    gap, gapo, P_N, P_T, pn_acc, pt_acc, fn_out, ft_out = (w4[0], w4[1], w4[2], w4[3], w4[4],
+                                                          w4[5], w4[6], w4[7])
+    WN, WT, WNo, WTo = w47[0], w47[1], w47[2], w47[3]
+    act, state = wi4[0], wi4[1]
+    ug, vg, ugo, vgo = wch[0], wch[1], wch[2], wch[3]
+    th = theta
+    th1 = 1.0 - theta
+    # ---- initial state
+    jrec = record_at(tb, DG, VGR, 0.0, 0, ug, vg)
+    for j in range(7):
+        q[j] = u0[j]
+        v[j] = v0[j]
+    spring_deformations(sa, q, v, ug, vg, d_k, dd_k)
+    spring_update_materials(hp, hstate, kind, d_k)
+    spring_assemble(sa, hstate, d_k, dd_k, v, Fk, fs_k, kt_k)
+    spring_commit(sa, hstate)
+    es0 = spring_stored_energy(sa, hstate, q, ug)
+    ke0 = 0.0
+    for j in range(7):
+        ke0 += 0.5 * mass[j] * v[j] * v[j]
+    W[0] = ke0 + es0
+    W[1] = es0
+    contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
+    _energies(sa, hstate, q, v, ug, W, energy)
+    _store(out, 0, 0.0, q, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state, energy)
+    row = 1
+    solves = 0
+    events = 0
+    csteps = 0
+    newton = 0
+    maxit_seen = 0
+    nfact = 0
+    max_comp = 0.0
+    max_cone = 0.0
+    status = ST_OK
+    inv_out = 1.0 / (stride * h)
+    for n in range(nsteps):
+        # ---- support motion at t_{n+1} and its increment (per spring)
+        for k in range(nch):
+            ugo[k] = ug[k]
+            vgo[k] = vg[k]
+        jrec = record_at(tb, DG, VGR, (n + 1) * h, jrec, ug, vg)
+        for i in range(ns):
+            ch = sa.schan[i]
+            if ch >= 0:
+                sdu[i] = sa.sval[i] * (ug[ch] - ugo[ch])
+                sdv[i] = sa.sval[i] * (vg[ch] - vgo[ch])
+            else:
+                sdu[i] = 0.0
+                sdv[i] = 0.0
+        for j in range(7):
+            qk[j] = q[j]
+            vk[j] = v[j]
+            qM[j] = q[j] + 0.5 * h * v[j]
+        # ---- active set at the predicted mid-step position
+        contact_kinematics(qM, geom, nonlinear, gap, WN, WT)
+        nact = 0
+        for c in range(4):
+            if gap[c] <= 0.0:
+                act[nact] = c
+                nact += 1
+                if not was_active[c]:
+                    events += 1
+                was_active[c] = True
+            else:
+                was_active[c] = False
+        if nact > 0:
+            csteps += 1
+        # ---- iteration 0: residual of the linearisation about the committed state
+        # R = h F_k + θh Bᵀ[k_t ∘ (h B v_k − SΔu_g) − crate ∘ SΔu̇_g]
+        for j in range(7):
+            R[j] = h * Fk[j]
+        for i in range(ns):
+            bv = 0.0
+            for r in range(sa.bnnz[i]):
+                bv += sa.bval[i, r] * vk[sa.bidx[i, r]]
+            t_i = th * h * (kt_k[i] * (h * bv - sdu[i]) - sa.crate[i] * sdv[i])
+            for r in range(sa.bnnz[i]):
+                R[sa.bidx[i, r]] += sa.bval[i, r] * t_i
+            d_lin[i] = d_k[i]
+            fs_lin[i] = fs_k[i]
+            kt_lin[i] = kt_k[i]
+        for j in range(7):
+            v[j] = vk[j]
+        it = 0
+        converged = False
+        while True:
+            # ---- iteration matrix (refactored only when a tangent changed)
+            same = True
+            for i in range(ns):
+                if kt_lin[i] != kt_fact[i]:
+                    same = False
+                    break
+            if not same:
+                if not _iteration_matrix(sa, Cmat, kt_lin, h, theta, K, LU, piv):
+                    status = ST_SINGULAR
+                    break
+                nfact += 1
+                for i in range(ns):
+                    kt_fact[i] = kt_lin[i]
+            # ---- free velocity v_free = v − Ŵ⁻¹ R
+            lu_solve(LU, piv, R, dv)
+            for j in range(7):
+                vfree[j] = v[j] - dv[j]
+            # ---- contact
+            if nact > 0:
+                cst, comp, cone = _contact_solve(LU, piv, WN, WT, act, nact, vk, vfree, ecoef,
+                                                 esep, mu, mode, rtol, P_N, P_T, state, vnew)
+                solves += 1
+                if cst == STATUS_FAILED:
+                    status = ST_CONTACT
+                    break
+                if comp > max_comp:
+                    max_comp = comp
+                if cone > max_cone:
+                    max_cone = cone
+                for j in range(7):
+                    v[j] = vnew[j]
+            else:
+                for j in range(7):
+                    v[j] = vfree[j]
+            for j in range(7):
+                q[j] = qk[j] + h * (th1 * vk[j] + th * v[j])
+            # ---- springs at the new iterate
+            spring_deformations(sa, q, v, ug, vg, d, dd)
+            spring_update_materials(hp, hstate, kind, d)
+            spring_assemble(sa, hstate, d, dd, v, f, fs, kt)
+            it += 1
+            rmax = 0.0
+            for i in range(ns):
+                if kind[i] == 1:
+                    r_i = abs(fs[i] - fs_lin[i] - kt_lin[i] * (d[i] - d_lin[i]))
+                    if r_i > rmax:
+                        rmax = r_i
+            if not np.isfinite(rmax):
+                status = ST_NONFINITE
+                break
+            if rmax <= ftol:
+                converged = True
+                break
+            if it >= maxit:
+                status = ST_NEWTON
+                break
+            # ---- Newton: residual of the θ-equation at the iterate (contact impulse excluded)
+            for j in range(7):
+                R[j] = mass[j] * (v[j] - vk[j]) + h * (th1 * Fk[j] + th * f[j])
+            for i in range(ns):
+                d_lin[i] = d[i]
+                fs_lin[i] = fs[i]
+                kt_lin[i] = kt[i]
+        newton += it
+        if it > maxit_seen:
+            maxit_seen = it
+        if converged:
+            for j in range(7):
+                if not np.isfinite(v[j]) or not np.isfinite(q[j]):
+                    status = ST_NONFINITE
+        if status != ST_OK:
+            for j in range(7):
+                uv_end[0, j] = qk[j]
+                uv_end[1, j] = vk[j]
+            info[2] = n + 1
+            break
+        spring_commit(sa, hstate)
+        # ---- energy (exact work of the θ-scheme over the step)
+        for i in range(ns):
+            fth = th * fs[i] + th1 * fs_k[i]
+            cth = sa.crate[i] * (th * dd[i] + th1 * dd_k[i])
+            dlt = d[i] - d_k[i]
+            W[0] -= sdu[i] * (fth + cth)
+            W[1] += dlt * fth
+            W[2] += dlt * cth
+            d_k[i] = d[i]
+            dd_k[i] = dd[i]
+            fs_k[i] = fs[i]
+            kt_k[i] = kt[i]
+        num = 0.0
+        for j in range(7):
+            vm = th1 * vk[j] + th * v[j]
+            W[2] += a0 * mass[j] * (q[j] - qk[j]) * vm
+            dvj = v[j] - vk[j]
+            num += mass[j] * dvj * dvj
+            Fk[j] = f[j]
+        W[5] += (th - 0.5) * num
+        if nact > 0:
+            for a in range(nact):
+                c = act[a]
+                uN = 0.0
+                uT = 0.0
+                for j in range(7):
+                    vm = th1 * vk[j] + th * v[j]
+                    uN += WN[c, j] * vm
+                    uT += WT[c, j] * vm
+                W[3] -= P_N[c] * uN
+                W[4] -= P_T[c] * uT
+                pn_acc[c] += P_N[c]
+                pt_acc[c] += P_T[c]
+        else:
+            for c in range(4):
+                state[c] = 0
+        # ---- output
+        if (n + 1) % stride == 0:
+            contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
+            for c in range(4):
+                fn_out[c] = pn_acc[c] * inv_out
+                ft_out[c] = pt_acc[c] * inv_out
+            _energies(sa, hstate, q, v, ug, W, energy)
+            _store(out, row, (n + 1) * h, q, gapo, fn_out, ft_out, fs, nbs, pn_acc, pt_acc,
+                   state, energy)
+            row += 1
+            for c in range(4):
+                pn_acc[c] = 0.0
+                pt_acc[c] = 0.0
+    if status == ST_OK:
+        for j in range(7):
+            uv_end[0, j] = q[j]
+            uv_end[1, j] = v[j]
+    info[0] = status
+    info[1] = row
+    info[3] = solves
+    info[4] = events
+    info[5] = csteps
+    info[6] = newton
+    info[7] = maxit_seen
+    info[8] = nfact
+    rinfo[0] = max_comp
+    rinfo[1] = max_cone
