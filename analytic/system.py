@@ -363,12 +363,19 @@ _ = C_STRAIN  # (index kept importable for callers reading the committed deforma
 
 
 def initial_dofs(initial_state) -> tuple[np.ndarray, np.ndarray]:
-    """(u0, v0) of the 7 DOF from an engine's ``initial_state = (u0, v0)`` keyword (None: rest)."""
+    """(u0, v0) of the 7 DOF from an engine's ``initial_state = (u0, v0)`` keyword (None: rest).
+
+    Raises ValueError unless both are 7 finite numbers [m, rad; m/s, rad/s].
+    """
     u0 = np.zeros(7)
     v0 = np.zeros(7)
     if initial_state is not None:
-        u0[:] = np.asarray(initial_state[0], dtype=float)
-        v0[:] = np.asarray(initial_state[1], dtype=float)
+        for name, dst, src in (("u0", u0, initial_state[0]), ("v0", v0, initial_state[1])):
+            arr = np.asarray(src, dtype=float)
+            if arr.shape != (7,) or not np.all(np.isfinite(arr)):
+                raise ValueError(f"initial_state {name} must be 7 finite numbers (DOF order "
+                                 f"x1, th1, x2, th2, x_d, y_d, th_d); got {arr.tolist()!r}")
+            dst[:] = arr
     return u0, v0
 
 

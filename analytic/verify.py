@@ -37,8 +37,8 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
 
     The clone takes the OpenSees step, tolerance and iteration limit (``tolerance`` overrides
     both when given). Returns ``{"deviation": {column: rel. dev.}, "worst": (column, dev),
-    "speed_ratio": OpenSees wall time / clone wall time (clone compiled beforehand), "us_per_step": {...},
-    "iterations": {...}, "status": {...}}``.
+    "speed_ratio": OpenSees wall time / clone wall time (clone compiled beforehand),
+    "us_per_step": {...}, "iterations": {...}, "status": {...}}``.
     """
     from deckpound.analytic.compliance import run_compliance
     from deckpound.opensees_build.engine import run_opensees

@@ -170,21 +170,23 @@ def _atomic_write(path: Path, text: str) -> None:
 
 
 def set_status(meta: dict[str, Any], *, engine: str, ok: bool, message: str, step: int = 0,
-               dt: float = 0.0, raise_on_failure: bool = False) -> None:
+               dt: float = 0.0, time: float | None = None, raise_on_failure: bool = False) -> None:
     """Fill ``status``/``message`` (and, on failure, ``failed_step``/``failed_time``) per the
     engine contract; on failure with ``raise_on_failure`` raise EngineFailure.
 
     ``message`` is the success summary, or on failure the reason (``"Newton did not
-    converge"``), to which the step and time are appended.
+    converge"``), to which the step and time are appended. The failure time is ``step · dt``
+    (fixed-step engines) unless ``time`` is given (adaptive steps) [s].
     """
     if ok:
         meta["status"] = STATUS_SUCCESS
         meta["message"] = message
         return
+    t = step * dt if time is None else time
     meta["status"] = STATUS_FAILED
     meta["failed_step"] = step
-    meta["failed_time"] = step * dt
-    meta["message"] = f"{message} at step {step} (t = {step * dt:.6g} s)"
+    meta["failed_time"] = t
+    meta["message"] = f"{message} at step {step} (t = {t:.6g} s)"
     if raise_on_failure:
         from .errors import EngineFailure
 

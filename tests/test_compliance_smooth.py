@@ -105,3 +105,26 @@ def test_failed_step_is_reported_without_nan():
     from deckpound.models.errors import EngineFailure
     with pytest.raises(EngineFailure):
         run_compliance(sc, raise_on_failure=True)
+
+
+
+def test_non_finite_initial_state_is_refused():
+    sc = with_compliance(with_run(base_scene(), duration=0.5), integrator="adaptive")
+    u0 = np.zeros(7)
+    u0[5] = np.nan
+    for integrator in ("adaptive", "newmark"):
+        with pytest.raises(ValueError, match="initial_state u0 must be 7 finite numbers"):
+            run_compliance(with_compliance(sc, integrator=integrator),
+                           initial_state=(u0, np.zeros(7)))
+    with pytest.raises(ValueError, match="initial_state v0"):
+        run_compliance(sc, initial_state=(np.zeros(7), np.zeros(6)))
+
+
+def test_failure_time_of_an_adaptive_run_is_its_own():
+    """Adaptive steps vary: the failure is reported at the time given, not step × dt."""
+    from deckpound.models.result import set_status
+    meta = {}
+    set_status(meta, engine="compliance (adaptive)", ok=False, step=1234, time=3.25,
+               message="step size underflow")
+    assert meta["status"] == "failed" and meta["failed_step"] == 1234
+    assert meta["failed_time"] == 3.25 and meta["message"].endswith("(t = 3.25 s)")

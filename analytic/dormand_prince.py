@@ -1,0 +1,441 @@
+"""The Dormand–Prince 5(4) step loop with event location of the adaptive compliance integrator.
+
+Driven by :func:`deckpound.analytic.adaptive.run_adaptive`, where the scheme, the breakpoints,
+the events and the commit rule are described. One numba function (:func:`adaptive_run`) runs
+the whole record; the right-hand side, the event functions, the Hermite interpolant and one
+Runge–Kutta step are kernels (:mod:`deckpound.analytic._jit`).
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from deckpound.analytic import contact_laws as cl
+from deckpound.analytic._hysteretic_kernel import C_ROTMAX, C_ROTMIN
+from deckpound.analytic._jit import kernel
+from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
+    spring_stored_energy, spring_update_materials
+
+__all__ = ["adaptive_run", "workspace", "TABLEAU", "H_NBINS", "H_LOG_MIN", "H_BINS_PER_DECADE"]
+
+# Dormand–Prince 5(4) tableau
+_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+_A = np.zeros((7, 7))
+_A[1, 0] = 1 / 5
+_A[2, :2] = [3 / 40, 9 / 40]
+_A[3, :3] = [44 / 45, -56 / 15, 32 / 9]
+_A[4, :4] = [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729]
+_A[5, :5] = [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656]
+_A[6, :6] = [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]
+_B5 = _A[6].copy()
+_E = _B5 - np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100,
+                     1 / 40])
+NY = 14          # u, v
+NE = 5           # energy integrals: input, springs, viscous, contact, friction
+NT = NY + NE
+# accepted-step-size statistics: log10(h) histogram, H_BINS_PER_DECADE bins per decade from
+# 10**H_LOG_MIN to 1 s, row 0 = out of contact, row 1 = in contact (a gap ≤ 0 at either end)
+H_LOG_MIN = -14.0
+H_BINS_PER_DECADE = 20
+H_NBINS = int(-H_LOG_MIN) * H_BINS_PER_DECADE
+
+
+@kernel
+def _support(t, tb, D, V, ug, vg):
+    """Support disp/vel at t (linear interpolation on the record time base tb)."""
+    n = tb.shape[0]
+    if t <= tb[0]:
+        k = 0
+        w = 0.0
+    elif t >= tb[n - 1]:
+        k = n - 2
+        w = 1.0
+    else:
+        lo = 0
+        hi = n - 1
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if tb[mid] <= t:
+                lo = mid
+            else:
+                hi = mid
+        k = lo
+        w = (t - tb[k]) / (tb[k + 1] - tb[k])
+    for j in range(D.shape[1]):
+        ug[j] = D[k, j] + w * (D[k + 1, j] - D[k, j])
+        vg[j] = V[k, j] + w * (V[k + 1, j] - V[k, j])
+
+
+@kernel
+def _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, dy):
+    """dy = [u̇, ü, powers] at (t, y); trial material/contact states relative to committed."""
+    ns = sa.k0.shape[0]
+    u = y[0:7]
+    v = y[7:14]
+    ug = ws.ug
+    vg = ws.vg
+    _support(t, tb, D, V, ug, vg)
+    spring_deformations(sa, u, v, ug, vg, ws.d, ws.dd)
+    spring_update_materials(sa.hparams, hstate, sa.kind, ws.d)
+    spring_assemble(sa, hstate, ws.d, ws.dd, v, ws.f, ws.fs, ws.kt)
+    n = cl.eval_contacts(cp, cs, u, v, uc, geom, nonlinear, ws.g, ws.gd, ws.WN, ws.WT, ws.fc,
+                         ws.lam, ws.lt, ws.der, ws.ev)
+    if n < 0:
+        cl.eval_closed(cp, cs, u, v, uc, geom, nonlinear, ws.g, ws.gd, ws.WN, ws.WT, ws.fc,
+                       ws.lam, ws.lt, ws.der, ws.ev)
+    for j in range(7):
+        dy[j] = v[j]
+        dy[7 + j] = (ws.fc[j] - ws.f[j]) / sa.mass[j]
+    # powers: input (supports), springs (f_s ḋ), viscous, contact (λ_N δ̇), friction (−λ_T U_T)
+    pin = 0.0
+    psp = 0.0
+    pvi = 0.0
+    for i in range(ns):
+        ftot = ws.fs[i] + sa.crate[i] * ws.dd[i]
+        ch = sa.schan[i]
+        if ch >= 0:
+            pin -= sa.sval[i] * vg[ch] * ftot
+        psp += ws.fs[i] * ws.dd[i]
+        pvi += sa.crate[i] * ws.dd[i] * ws.dd[i]
+    a0 = sa.scal[0]
+    for j in range(7):
+        pvi += a0 * sa.mass[j] * v[j] * v[j]
+    pco = 0.0
+    pfr = 0.0
+    for c in range(4):
+        pco -= ws.lam[c] * ws.gd[c]
+        if ws.lt[c] != 0.0:
+            ut = 0.0
+            for j in range(7):
+                ut += ws.WT[c, j] * v[j]
+            pfr -= ws.lt[c] * ut
+    dy[14] = pin
+    dy[15] = psp
+    dy[16] = pvi
+    dy[17] = pco
+    dy[18] = pfr
+
+
+@kernel
+def _events(y, dy, sa, cp, geom, nonlinear, nbs, ws, ev):
+    """Event function values at a state: gaps (4), Takeda ḋ (nbs), ġ (4, bilinear), U_T (4,
+    stick friction); unused entries 0."""
+    u = y[0:7]
+    v = y[7:14]
+    cl.gaps_and_rates(u, v, geom, nonlinear, ws.g, ws.gd, ws.WN, ws.WT)
+    for c in range(4):
+        ev[c] = ws.g[c]
+    for i in range(nbs):
+        ev[4 + i] = ws.dd[i]
+    k = 4 + nbs
+    for c in range(4):
+        ev[k + c] = ws.gd[c] if (cp[c, cl.P_LAW] == 4 and ws.g[c] < 0.0) else 0.0
+        ut = 0.0
+        if cp[c, cl.P_FMODE] == 2 and ws.g[c] < 0.0:
+            for j in range(7):
+                ut += ws.WT[c, j] * v[j]
+        ev[k + 4 + c] = ut
+
+
+@kernel
+def _hermite(y0, f0, y1, f1, h, th):
+    h00 = 2 * th ** 3 - 3 * th ** 2 + 1
+    h10 = th ** 3 - 2 * th ** 2 + th
+    h01 = -2 * th ** 3 + 3 * th ** 2
+    h11 = th ** 3 - th ** 2
+    return h00 * y0 + h10 * h * f0 + h01 * y1 + h11 * h * f1
+
+
+@kernel
+def _event_value(kind_idx, y, sa, geom, nonlinear, cp, tb, D, V, t, ws):
+    """Value of event kind_idx at an interpolated state y (t for the supports)."""
+    u = y[0:7]
+    v = y[7:14]
+    cl.gaps_and_rates(u, v, geom, nonlinear, ws.g, ws.gd, ws.WN, ws.WT)
+    nbs2 = kind_idx - 4
+    if kind_idx < 4:
+        return ws.g[kind_idx]
+    ns_ev = ws.nbs
+    if nbs2 < ns_ev:
+        _support(t, tb, D, V, ws.ug, ws.vg)
+        spring_deformations(sa, u, v, ws.ug, ws.vg, ws.d, ws.dd)
+        return ws.dd[nbs2]
+    c = nbs2 - ns_ev
+    if c < 4:
+        return ws.gd[c]
+    c -= 4
+    ut = 0.0
+    for j in range(7):
+        ut += ws.WT[c, j] * v[j]
+    return ut
+
+
+# module level: a namedtuple class made per call would be a new numba type each time (a fresh
+# compilation of the whole loop on every run, ~7 s); its typename must equal its module
+# attribute name, or numba pickles the class by value and the on-disk cache never hits
+_WS = namedtuple("_WS", "ug vg d dd f fs kt g gd WN WT fc lam lt der ev nbs")
+
+
+def workspace(ns, nch, nbs):
+    return _WS(np.zeros(nch), np.zeros(nch), np.zeros(ns), np.zeros(ns), np.zeros(7), np.zeros(ns),
+             np.zeros(ns), np.zeros(4), np.zeros(4), np.zeros((4, 7)), np.zeros((4, 7)),
+             np.zeros(7), np.zeros(4), np.zeros(4), np.zeros((4, 7)),
+             np.zeros(4, dtype=np.bool_), nbs)
+
+
+@kernel
+def _rk_step(t, y, k1, h, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, K, ytmp,
+             ynew, A, C, B5, E, atol, rtol):
+    """One DP5(4) step; returns the scaled error norm (ynew filled, K[6] = f(t+h, ynew))."""
+    for j in range(NT):
+        K[0, j] = k1[j]
+    for s in range(1, 7):
+        for j in range(NT):
+            acc = y[j]
+            for r in range(s):
+                acc += h * A[s, r] * K[r, j]
+            ytmp[j] = acc
+        if s == 6:
+            for j in range(NT):
+                ynew[j] = ytmp[j]
+        _rhs(t + C[s] * h, ytmp, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, K[s])
+    err = 0.0
+    for j in range(NY):
+        e = 0.0
+        for s in range(7):
+            e += h * E[s] * K[s, j]
+        sc = atol + rtol * max(abs(y[j]), abs(ynew[j]))
+        err += (e / sc) ** 2
+    return np.sqrt(err / NY)
+
+
+@kernel
+def _any_yielded(sa, hstate):
+    """True once any Takeda (Hysteretic) spring has been deformed past its first backbone point.
+
+    From then on the material's state depends on where it is committed, even along monotonic
+    paths (OpenSees Hysteretic arithmetic), so the loop caps its steps at ``commit_step``.
+    """
+    for i in range(hstate.shape[0]):
+        if sa.kind[i] == 1:
+            if (hstate[i, C_ROTMAX] > sa.hparams[i, 1] or
+                    hstate[i, C_ROTMIN] < sa.hparams[i, 7]):
+                return True
+    return False
+
+
+@njit(cache=True)
+def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, nbs, rtol, atol,
+                 max_step, commit_step, out, info, ws, u0, v0, A, C, B5, E, hist, hstat):
+    """The adaptive loop; fills out (rows at k·out_dt) and info = [status, rows, steps,
+    rejected, events, rhs calls]; hist (2, H_NBINS) counts of accepted step sizes and
+    hstat (2, 3) = [min, max, sum] of them, row 0 out of contact, row 1 in contact."""
+    y = np.zeros(NT)
+    for j in range(7):
+        y[j] = u0[j]
+        y[7 + j] = v0[j]
+    uc = y[0:7].copy()
+    K = np.zeros((7, NT))
+    k1 = np.zeros(NT)
+    ytmp = np.zeros(NT)
+    ynew = np.zeros(NT)
+    yev = np.zeros(NT)
+    nev = 4 + nbs + 8
+    ev0 = np.zeros(nev)
+    ev1 = np.zeros(nev)
+    tiny = 1e-13
+    t = 0.0
+    _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, k1)
+    spring_commit(sa, hstate)
+    cl.contact_commit(cs, ws.g, ws.gd, ws.ev)
+    # initial energy
+    ke = 0.0
+    for j in range(7):
+        ke += 0.5 * sa.mass[j] * y[7 + j] ** 2
+    es0 = spring_stored_energy(sa, hstate, y[0:7], ws.ug)
+    ec0 = cl.contact_stored_energy(cp, cs)
+    y[14] = ke + es0 + ec0
+    y[15] = es0
+    y[17] = ec0
+    _adaptive_store(sa, hstate, cp, cs, y, ws, out, 0, 0.0, nbs)
+    row = 1
+    nout = out.shape[0]
+    h = min(max_step, out_dt, 1e-4)
+    yielded = _any_yielded(sa, hstate)
+    steps = 0
+    rejected = 0
+    events = 0
+    calls = 1
+    kseg = 0
+    ntb = tb.shape[0]
+    _events(y, k1, sa, cp, geom, nonlinear, nbs, ws, ev0)
+    while t < t_end - tiny * max(1.0, t_end):
+        # next breakpoint: record sample or output time
+        while kseg < ntb and tb[kseg] <= t + tiny * max(1.0, t):
+            kseg += 1
+        tbreak = t_end
+        if kseg < ntb and tb[kseg] < tbreak:
+            tbreak = tb[kseg]
+        tout = row * out_dt
+        if tout < tbreak:
+            tbreak = tout
+        hmax = min(max_step, tbreak - t)
+        if yielded and hmax > commit_step:
+            hmax = commit_step
+        if h > hmax:
+            h = hmax
+        hit_break = abs((t + h) - tbreak) <= tiny * max(1.0, tbreak)
+        if h <= 1e-14:
+            info[0] = 1
+            break
+        err = _rk_step(t, y, k1, h, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, K,
+                       ytmp, ynew, A, C, B5, E, atol, rtol)
+        calls += 6
+        if not np.isfinite(err):
+            err = 1e10
+        if err > 1.0:
+            rejected += 1
+            h *= max(0.2, 0.9 * err ** -0.2)
+            continue
+        # events inside (t, t+h]
+        _rhs(t + h, ynew, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, ytmp)
+        calls += 1
+        _events(ynew, ytmp, sa, cp, geom, nonlinear, nbs, ws, ev1)
+        th_ev = 2.0
+        for q in range(nev):
+            a_, b_ = ev0[q], ev1[q]
+            if a_ == 0.0 or (a_ < 0.0) == (b_ < 0.0):
+                if not (b_ == 0.0 and a_ != 0.0):
+                    continue
+            # bisection on the Hermite interpolant
+            lo = 0.0
+            hi = 1.0
+            flo = a_
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                for j in range(NY):
+                    yev[j] = _hermite(y[j], k1[j], ynew[j], ytmp[j], h, mid)
+                fm = _event_value(q, yev, sa, geom, nonlinear, cp, tb, D, V, t + mid * h, ws)
+                if (fm < 0.0) == (flo < 0.0) and fm != 0.0:
+                    lo = mid
+                    flo = fm
+                else:
+                    hi = mid
+                if (hi - lo) * h < 1e-13:
+                    break
+            if hi < th_ev:
+                th_ev = hi
+        if th_ev < 1.0 and th_ev * h > 1e-12:
+            he = th_ev * h
+            _rk_step(t, y, k1, he, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, K,
+                     ytmp, ynew, A, C, B5, E, atol, rtol)
+            calls += 6
+            events += 1
+            h_acc = he
+            hit_break = False
+        else:
+            h_acc = h
+        # accept: state at t + h_acc, commit materials and contacts there
+        t_start = t
+        in_contact = ev0[0] <= 0.0 or ev0[1] <= 0.0 or ev0[2] <= 0.0 or ev0[3] <= 0.0
+        t = t + h_acc
+        if hit_break:
+            t = tbreak
+        for j in range(NT):
+            y[j] = ynew[j]
+        _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, k1)
+        calls += 1
+        spring_commit(sa, hstate)
+        cl.contact_commit(cs, ws.g, ws.gd, ws.ev)
+        if not yielded:
+            yielded = _any_yielded(sa, hstate)
+        for j in range(7):
+            uc[j] = y[j]
+        _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, k1)
+        calls += 1
+        _events(y, k1, sa, cp, geom, nonlinear, nbs, ws, ev0)
+        steps += 1
+        if ev0[0] <= 0.0 or ev0[1] <= 0.0 or ev0[2] <= 0.0 or ev0[3] <= 0.0:
+            in_contact = True
+        hs = t - t_start
+        ic = 1 if in_contact else 0
+        if hs > 0.0:
+            b = int((np.log10(hs) - H_LOG_MIN) * H_BINS_PER_DECADE)
+            if b < 0:
+                b = 0
+            if b >= H_NBINS:
+                b = H_NBINS - 1
+            hist[ic, b] += 1
+            if hstat[ic, 0] == 0.0 or hs < hstat[ic, 0]:
+                hstat[ic, 0] = hs
+            if hs > hstat[ic, 1]:
+                hstat[ic, 1] = hs
+            hstat[ic, 2] += hs
+        finite = True
+        for j in range(NT):
+            if not np.isfinite(y[j]):
+                finite = False
+        if not finite:
+            info[0] = 3
+            break
+        if row < nout and abs(t - row * out_dt) <= 1e-9 * out_dt:
+            _adaptive_store(sa, hstate, cp, cs, y, ws, out, row, row * out_dt, nbs)
+            row += 1
+        if err > 0.0:
+            fac = 0.9 * err ** -0.2
+            if fac > 5.0:
+                fac = 5.0
+            if fac < 0.2:
+                fac = 0.2
+            hn = h * fac
+        else:
+            hn = h * 5.0
+        if h_acc < h and hn > h:
+            hn = h
+        h = hn
+    info[1] = row
+    info[2] = steps
+    info[3] = rejected
+    info[4] = events
+    info[5] = calls
+
+
+@kernel
+def _adaptive_store(sa, hstate, cp, cs, y, ws, out, row, t, nbs):
+    out[row, 0] = t
+    order = (4, 5, 6, 0, 1, 2, 3)
+    for k in range(7):
+        out[row, 1 + k] = y[order[k]]
+    for c in range(4):
+        out[row, 8 + c] = ws.g[c]
+        out[row, 12 + c] = ws.lam[c]
+        out[row, 16 + c] = ws.lt[c]
+    for i in range(nbs):
+        out[row, 20 + i] = hstate[i, 14]
+    base = 20 + nbs
+    ke = 0.0
+    for j in range(7):
+        ke += 0.5 * sa.mass[j] * y[7 + j] ** 2
+    es = spring_stored_energy(sa, hstate, y[0:7], ws.ug)
+    ec = cl.contact_stored_energy(cp, cs)
+    efs = 0.0
+    for c in range(4):
+        if cp[c, cl.P_FMODE] == 2 and cs[c, cl.S_CFT] != 0.0:
+            efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
+    W0, W1, W2, W3, W4 = y[14], y[15], y[16], y[17], y[18]
+    out[row, base + 0] = W0
+    out[row, base + 1] = ke
+    out[row, base + 2] = es
+    out[row, base + 3] = W2
+    out[row, base + 4] = W1 - es
+    out[row, base + 5] = ec
+    out[row, base + 6] = W3 - (ec - efs)
+    out[row, base + 7] = W4 - efs
+    out[row, base + 8] = W0 - (ke + W1 + W2 + W3 + W4)
+
+
+#: (A, C, B5, E) of the tableau, in the order adaptive_run takes them
+TABLEAU = (_A, _C, _B5, _E)
