@@ -35,41 +35,12 @@ bodies apart along the W_N column.  P_T and U_T are both measured along the
 same tangent t (the W_T column): P_T > 0 is a friction impulse along +t,
 U_T > 0 is slip along +t, so in slip P_T * U_T+ < 0.
 
-LCP formulation (primary; three unknowns per frictional contact, Glocker &
-Pfeiffer 1992, Pfeiffer & Glocker 1996, Leine & Nijmeijer 2004 Sec. 7.3)
-----------------------------------------------------------------------------
-Split the friction interval and the slip velocity::
-
-    P_R = mu P_N + P_T >= 0,  P_L = mu P_N - P_T = 2 mu P_N - P_R >= 0,
-    U_T+ = v+ - v-,   v+, v- >= 0,   v+ P_R = 0,  v- P_L = 0.
-
-Unknowns z = (P_N, P_R, v-), slacks w = (xi_N, v+, P_L)::
-
-    [xi_N]   [G_NN - G_NT mu   G_NT  0] [P_N]   [uN_free + e uN-]
-    [v+  ] = [G_TN - G_TT mu   G_TT  I] [P_R] + [uT_free        ]
-    [P_L ]   [2 mu             -I    0] [v- ]   [0              ]
-
-(mu = diag(mu_i)).  Contacts with mu_i = 0 carry only their P_N unknown
-(P_T = 0), so mu = 0 everywhere reduces to the normal-only LCP
-G_NN P_N + uN_free + e uN- = xi_N, n = nc.  Impulses are scaled by
-1 / mean(diag G_NN) so that the LCP matrix is O(1) (Delassus entries of a
-140 t deck are ~1e-5 1/kg).
-
-This matrix is *not* copositive in general (z^T A z contains
-mu P_N^T (G_TN P_N + G_TT P_T), which can be negative), so Lemke's
-processability theorem does not cover it.  Hence the fall-backs:
-
-1. Lemke on the 3-unknown LCP above (status 0 when it verifies);
-2. Lemke on the Stewart-Trinkle / Anitescu-Potra form with four unknowns
-   (P_N, beta+, beta-, lambda), P_T = beta+ - beta-, lambda = |U_T+|::
-
-       [xi_N   ]   [G_NN   G_NT  -G_NT  0] [P_N  ]   [uN_free + e uN-]
-       [l + U_T] = [G_TN   G_TT  -G_TT  1] [beta+] + [ uT_free       ]
-       [l - U_T]   [-G_TN -G_TT   G_TT  1] [beta-]   [-uT_free       ]
-       [slack  ]   [mu     -1     -1    0] [lambda]  [0              ]
-
-   whose matrix is copositive for symmetric PSD G (Anitescu & Potra 1997),
-   status 1;
+Solution (the LCP forms are written out in :mod:`deckpound.analytic.coulomb_lcp`)
+-----------------------------------------------------------------------------------
+1. Lemke on the 3-unknown LCP (P_N, P_R = mu P_N + P_T, v-) of Glocker & Pfeiffer
+   (status 0 when it verifies); its matrix is not copositive in general, so
+2. Lemke on the Stewart-Trinkle / Anitescu-Potra form (P_N, beta+, beta-,
+   lambda), copositive for symmetric PSD G (status 1);
 3. exhaustive enumeration of the 3-unknown LCP (n <= 12), status 2.
 
 Every candidate is verified against the contact laws directly (velocities
@@ -127,7 +98,8 @@ from numba import njit
 
 from deckpound.analytic._jit import kernel
 
-from .lcp import lcp_enumerate, lcp_lemke, ENUM_MAX_N
+from .coulomb_lcp import build_lcp3, build_lcp_st, extract3, extract_st
+from .lcp import ENUM_MAX_N, lcp_enumerate, lcp_lemke
 
 __all__ = [
     "CONTACT_OPEN",
@@ -239,103 +211,6 @@ def _impulse_scale(G, nc):
     return 1.0 / s
 
 
-@njit(cache=True)
-def _build_lcp3(G, qN, uT_free, mu, fidx, nf, s):
-    """3-unknown LCP (scaled impulses).  fidx[k] = contact of k-th
-    frictional contact."""
-    nc = qN.shape[0]
-    n = nc + 2 * nf
-    A = np.zeros((n, n))
-    q = np.zeros(n)
-    # friction coefficient per contact (0 for frictionless)
-    for i in range(nc):
-        q[i] = qN[i]
-        for j in range(nc):
-            A[i, j] = s * G[i, j]
-    for l in range(nf):
-        j = fidx[l]
-        for i in range(nc):
-            A[i, j] -= s * mu[j] * G[i, nc + j]
-            A[i, nc + l] = s * G[i, nc + j]
-    for k in range(nf):
-        i = fidx[k]
-        r = nc + k
-        q[r] = uT_free[i]
-        for j in range(nc):
-            A[r, j] = s * G[nc + i, j]
-        for l in range(nf):
-            j = fidx[l]
-            A[r, j] -= s * mu[j] * G[nc + i, nc + j]
-            A[r, nc + l] = s * G[nc + i, nc + j]
-        A[r, nc + nf + k] = 1.0
-        r2 = nc + nf + k
-        A[r2, i] = 2.0 * mu[i]
-        A[r2, nc + k] = -1.0
-    return A, q
-
-
-@kernel
-def _extract3(z, mu, fidx, nf, s, P_N, P_T):
-    nc = P_N.shape[0]
-    for i in range(nc):
-        P_N[i] = s * z[i]
-        P_T[i] = 0.0
-    for k in range(nf):
-        i = fidx[k]
-        P_T[i] = s * (z[nc + k] - mu[i] * z[i])
-
-
-@njit(cache=True)
-def _build_lcp_st(G, qN, uT_free, mu, fidx, nf, s):
-    """Stewart-Trinkle / Anitescu-Potra LCP: unknowns (P_N, b+, b-, lam)."""
-    nc = qN.shape[0]
-    n = nc + 3 * nf
-    A = np.zeros((n, n))
-    q = np.zeros(n)
-    for i in range(nc):
-        q[i] = qN[i]
-        for j in range(nc):
-            A[i, j] = s * G[i, j]
-        for l in range(nf):
-            j = fidx[l]
-            A[i, nc + l] = s * G[i, nc + j]
-            A[i, nc + nf + l] = -s * G[i, nc + j]
-    for k in range(nf):
-        i = fidx[k]
-        rp = nc + k
-        rm = nc + nf + k
-        rl = nc + 2 * nf + k
-        q[rp] = uT_free[i]
-        q[rm] = -uT_free[i]
-        for j in range(nc):
-            A[rp, j] = s * G[nc + i, j]
-            A[rm, j] = -s * G[nc + i, j]
-        for l in range(nf):
-            j = fidx[l]
-            g = s * G[nc + i, nc + j]
-            A[rp, nc + l] = g
-            A[rp, nc + nf + l] = -g
-            A[rm, nc + l] = -g
-            A[rm, nc + nf + l] = g
-        A[rp, nc + 2 * nf + k] = 1.0
-        A[rm, nc + 2 * nf + k] = 1.0
-        A[rl, i] = mu[i]
-        A[rl, nc + k] = -1.0
-        A[rl, nc + nf + k] = -1.0
-    return A, q
-
-
-@kernel
-def _extract_st(z, fidx, nf, s, P_N, P_T):
-    nc = P_N.shape[0]
-    for i in range(nc):
-        P_N[i] = s * z[i]
-        P_T[i] = 0.0
-    for k in range(nf):
-        i = fidx[k]
-        P_T[i] = s * (z[nc + k] - z[nc + nf + k])
-
-
 @kernel
 def _evaluate(G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus,
               uT_plus):
@@ -343,6 +218,26 @@ def _evaluate(G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus,
     comp, cone = contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus,
                                    uT_plus)
     return comp, cone
+
+
+@kernel
+def _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best,
+                    verified_status, tolv):
+    """Check the candidate impulses (cN, cT) against the contact laws; keep them in (bN, bT)
+    when their residual max(comp, cone) beats ``best[0]``, with best = [residual, comp, cone,
+    status]: ``verified_status`` if the residual is ≤ tolv, else STATUS_FAILED. Returns True
+    when the candidate is verified."""
+    comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT)
+    r = max(comp, cone)
+    if r < best[0]:
+        best[0] = r
+        best[1] = comp
+        best[2] = cone
+        best[3] = verified_status if r <= tolv else STATUS_FAILED
+        for i in range(cN.shape[0]):
+            bN[i] = cN[i]
+            bT[i] = cT[i]
+    return r <= tolv
 
 
 @njit(cache=True)
@@ -439,77 +334,43 @@ def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
 
     bN = np.zeros(nc)
     bT = np.zeros(nc)
-    best = np.inf
-    best_status = STATUS_FAILED
     cN = np.empty(nc)
     cT = np.empty(nc)
     vN = np.empty(nc)
     vT = np.empty(nc)
+    best = np.array([np.inf, np.inf, np.inf, STATUS_FAILED])   # residual, comp, cone, status
     done = False
-    best_comp = np.inf
-    best_cone = np.inf
 
     # 1. Lemke, 3-unknown formulation
-    A3, q3 = _build_lcp3(G, qN, uT_free, mu, fidx, nf, s)
+    A3, q3 = build_lcp3(G, qN, uT_free, mu, fidx, nf, s)
     if mode == MODE_AUTO or mode == MODE_LEMKE3:
         z, w, st, npiv = lcp_lemke(A3, q3)
-        _extract3(z, mu, fidx, nf, s, cN, cT)
-        comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT,
-                               vN, vT)
-        r = max(comp, cone)
-        if r < best:
-            best = r
-            best_comp = comp
-            best_cone = cone
-            bN[:] = cN
-            bT[:] = cT
-            best_status = STATUS_LEMKE if r <= tolv else STATUS_FAILED
-        done = r <= tolv
+        extract3(z, mu, fidx, nf, s, cN, cT)
+        done = _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT,
+                               best, STATUS_LEMKE, tolv)
     # 2. Lemke, Stewart-Trinkle formulation (copositive)
     if (not done) and nf > 0 and (mode == MODE_AUTO or mode == MODE_LEMKE_ST):
-        Ast, qst = _build_lcp_st(G, qN, uT_free, mu, fidx, nf, s)
+        Ast, qst = build_lcp_st(G, qN, uT_free, mu, fidx, nf, s)
         z, w, st, npiv = lcp_lemke(Ast, qst)
-        _extract_st(z, fidx, nf, s, cN, cT)
-        comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT,
-                               vN, vT)
-        r = max(comp, cone)
-        if r < best:
-            best = r
-            best_comp = comp
-            best_cone = cone
-            bN[:] = cN
-            bT[:] = cT
-            best_status = STATUS_LEMKE_ST if r <= tolv else STATUS_FAILED
-        done = r <= tolv
+        extract_st(z, fidx, nf, s, cN, cT)
+        done = _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT,
+                               best, STATUS_LEMKE_ST, tolv)
     elif mode == MODE_LEMKE_ST and nf == 0:
         # frictionless: the ST form is the normal LCP
         z, w, st, npiv = lcp_lemke(A3, q3)
-        _extract3(z, mu, fidx, nf, s, cN, cT)
-        comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT,
-                               vN, vT)
-        r = max(comp, cone)
-        best = r
-        best_comp = comp
-        best_cone = cone
-        bN[:] = cN
-        bT[:] = cT
-        best_status = STATUS_LEMKE_ST if r <= tolv else STATUS_FAILED
-        done = r <= tolv
+        extract3(z, mu, fidx, nf, s, cN, cT)
+        done = _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT,
+                               best, STATUS_LEMKE_ST, tolv)
     # 3. enumeration of the 3-unknown LCP
     if (not done) and (mode == MODE_AUTO or mode == MODE_ENUM) and \
             nc + 2 * nf <= ENUM_MAX_N:
         z, w, st, res = lcp_enumerate(A3, q3)
-        _extract3(z, mu, fidx, nf, s, cN, cT)
-        comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT,
-                               vN, vT)
-        r = max(comp, cone)
-        if r < best:
-            best = r
-            best_comp = comp
-            best_cone = cone
-            bN[:] = cN
-            bT[:] = cT
-            best_status = STATUS_ENUM if r <= tolv else STATUS_FAILED
+        extract3(z, mu, fidx, nf, s, cN, cT)
+        _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best,
+                        STATUS_ENUM, tolv)
+    best_comp = best[1]
+    best_cone = best[2]
+    best_status = int(best[3])
 
     # canonical split of tangential impulses among contacts with identical
     # tangent columns (two corners of one face)
@@ -519,7 +380,7 @@ def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
         if _split_shared_tangents(G, mu, cN, cT):
             comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN,
                                    cT, vN, vT)
-            if max(comp, cone) <= max(best, tolv):
+            if max(comp, cone) <= max(best[0], tolv):
                 bT[:] = cT
                 best_comp = comp
                 best_cone = cone
