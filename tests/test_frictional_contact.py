@@ -5,7 +5,6 @@ import itertools
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
 
 from deckpound.analytic.frictional_contact import (
     CONTACT_OPEN,
@@ -20,84 +19,10 @@ from deckpound.analytic.frictional_contact import (
     delassus,
     solve_contact_impulses,
     solve_contact_impulses_into,
-    velocity_update,
 )
 from deckpound.analytic.lcp import lcp_lemke
-
-# deck of the reference bridge: 33.5 m x 2.4 m in plan, 140.5 t, 13,090 t m^2
-L_DECK, B_DECK = 33.5, 2.4
-M_DECK, I_DECK = 140.5e3, 13.09e6
-
-
-def corner_jacobian(r, n):
-    """Jacobian rows of a point at r (body frame = global, theta = 0) of a
-    planar rigid body with DOFs (x, y, theta): v_p = (vx - w r_y, vy + w r_x).
-    Normal n points from the obstacle into the body; t = (-n_y, n_x)."""
-    n = np.asarray(n, float)
-    t = np.array([-n[1], n[0]])
-    aN = -n[0] * r[1] + n[1] * r[0]
-    aT = -t[0] * r[1] + t[1] * r[0]
-    return np.array([n[0], n[1], aN]), np.array([t[0], t[1], aT])
-
-
-def build(Mmat, contacts):
-    nc = len(contacts)
-    WN = np.zeros((Mmat.shape[0], nc))
-    WT = np.zeros((Mmat.shape[0], nc))
-    for j, (r, n) in enumerate(contacts):
-        wn, wt = corner_jacobian(np.asarray(r, float), n)
-        WN[:3, j] = wn
-        WT[:3, j] = wt
-    return WN, WT
-
-
-def solve_for(Mmat, WN, WT, U_minus, e, mu, U_free=None, mode=0):
-    if U_free is None:
-        U_free = U_minus
-    G = delassus(Mmat, WN, WT)
-    uNf = WN.T @ U_free
-    uTf = WT.T @ U_free
-    uNm = WN.T @ U_minus
-    out = solve_contact_impulses(G, uNf, uTf, uNm, np.asarray(e, float),
-                                 np.asarray(mu, float), mode)
-    PN, PT, uNp, uTp, state, status, comp, cone = out
-    Up = velocity_update(Mmat, WN, WT, U_free, PN, PT)
-    return dict(PN=PN, PT=PT, uNp=uNp, uTp=uTp, state=state, status=status,
-                comp=comp, cone=cone, Up=Up, G=G, uNm=uNm, uNf=uNf, uTf=uTf)
-
-
-def check_laws(res, e, mu, tol):
-    """Contact laws checked directly on the returned quantities."""
-    PN, PT, uNp, uTp = res["PN"], res["PT"], res["uNp"], res["uTp"]
-    e = np.asarray(e, float)
-    mu = np.asarray(mu, float)
-    Pscale = tol / max(np.diag(res["G"]).max(), 1e-300)
-    xi = uNp + e * res["uNm"]
-    assert np.all(PN >= -Pscale)
-    assert np.all(xi >= -tol)
-    # complementarity: xi_N = 0 or P_N = 0 at every contact
-    assert np.all(np.minimum(np.abs(xi) / tol, np.abs(PN) / Pscale) <= 1.0)
-    assert np.all(np.abs(PT) <= mu * PN + Pscale)
-    for i in range(len(PN)):
-        if res["state"][i] == CONTACT_SLIP and mu[i] > 0:
-            # slip opposite to the friction impulse, friction saturated
-            assert PT[i] * uTp[i] < 0.0
-            assert abs(abs(PT[i]) - mu[i] * PN[i]) <= Pscale
-        if res["state"][i] == CONTACT_STICK:
-            assert abs(uTp[i]) <= tol
-        if PN[i] > Pscale and abs(uTp[i]) > tol and mu[i] > 0:
-            assert res["state"][i] == CONTACT_SLIP
-    # velocities consistent with the generalised update
-    G = res["G"]
-    nc = len(PN)
-    np.testing.assert_allclose(uNp, res["uNf"] + G[:nc, :nc] @ PN + G[:nc, nc:] @ PT,
-                               rtol=0, atol=tol)
-    assert res["comp"] <= tol and res["cone"] <= tol
-
-
-def kinetic(Mmat, U):
-    return 0.5 * U @ Mmat @ U
-
+from _contact_helpers import (B_DECK, I_DECK, L_DECK, M_DECK, build, check_laws, corner_jacobian,
+                             kinetic, solve_for)
 
 # -------------------------------------------------------------- (a) point mass
 
@@ -227,7 +152,6 @@ def closed_form_face_pair(m, I, U, e, mu):
     (L/2, +-B/2) sharing one tangent column.  Enumerate (corner open/closed) x
     (stick, slip+, slip-) and return the consistent case: P_N (2,), total P_T,
     U+."""
-    Mmat = np.diag([m, m, I])
     r = [(L_DECK / 2, B_DECK / 2), (L_DECK / 2, -B_DECK / 2)]
     n = (-1.0, 0.0)
     wn = [corner_jacobian(np.array(ri), n)[0] for ri in r]
@@ -416,86 +340,3 @@ def test_kane_paradox_energy_gain_with_e_one():
     assert kind == "stick" and abs(res["PT"][0] - PT) <= 1e-10 * PN
 
 
-# ------------------------------------------------------ (d) random properties
-
-DECK_CONTACTS = [((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)),
-                 ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0)),
-                 ((L_DECK / 2, B_DECK / 2), (0.0, -1.0)),
-                 ((-L_DECK / 2, B_DECK / 2), (0.0, -1.0))]
-
-
-def _random_deck_problem(rng, nc):
-    """3-DOF deck (+ 4 extra DOFs, 7 in all as in the engine) with a full SPD
-    iteration matrix; contacts from one abutment face and the shear keys of
-    one side (kinematically compatible set)."""
-    Mmat = np.zeros((7, 7))
-    Mmat[:3, :3] = np.diag([M_DECK, M_DECK, I_DECK])
-    Mmat[3:, 3:] = np.diag(rng.uniform(1e4, 1e6, 4))
-    A = rng.normal(size=(7, 7)) * rng.uniform(0, 0.3)
-    D = np.sqrt(np.diag(Mmat))
-    Mmat = Mmat + (D[:, None] * (A @ A.T) * D[None, :]) / 7
-    sel = rng.choice(4, size=nc, replace=False)
-    WN, WT = build(Mmat, [DECK_CONTACTS[i] for i in sel])
-    # the contacts also see the extra DOFs (pier / abutment flexibility)
-    WN[3:, :] = rng.normal(size=(4, nc)) * 0.2
-    WT[3:, :] = rng.normal(size=(4, nc)) * 0.2
-    return Mmat, WN, WT
-
-
-@settings(max_examples=250, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), nc=st.integers(1, 4),
-       e_zero=st.booleans(), mu_max=st.sampled_from([0.0, 0.3, 1.0]),
-       free_differs=st.booleans())
-def test_random_contact_properties(seed, nc, e_zero, mu_max, free_differs):
-    rng = np.random.default_rng(seed)
-    Mmat, WN, WT = _random_deck_problem(rng, nc)
-    U = rng.normal(size=7) * np.r_[1.0, 1.0, 0.05, 0.1 * np.ones(4)]
-    Uf = U + (rng.normal(size=7) * 0.1 if free_differs else 0.0)
-    e = np.zeros(nc) if e_zero else rng.uniform(0, 1, nc)
-    mu = rng.uniform(0, mu_max, nc)
-    res = solve_for(Mmat, WN, WT, U, e, mu, U_free=Uf)
-    vs = max(np.abs(res["uNf"]).max(), np.abs(res["uTf"]).max(), np.abs(e * res["uNm"]).max(), 1e-300)
-    assert res["status"] in (STATUS_LEMKE, STATUS_LEMKE_ST, STATUS_ENUM)
-    check_laws(res, e, mu, 1e-9 * vs)
-    np.testing.assert_allclose(WN.T @ res["Up"], res["uNp"], rtol=0, atol=1e-9 * vs)
-    np.testing.assert_allclose(WT.T @ res["Up"], res["uTp"], rtol=0, atol=1e-9 * vs)
-    if not free_differs and (e_zero or mu_max == 0.0):
-        # no energy gain: e = 0 (any mu), or frictionless with U_N- <= 0 at
-        # every contact carrying impulse
-        if e_zero or np.all(res["uNm"][res["PN"] > 0] <= 0):
-            T0 = kinetic(Mmat, U)
-            assert kinetic(Mmat, res["Up"]) <= T0 * (1 + 1e-12)
-
-
-@settings(max_examples=100, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), nc=st.integers(1, 4),
-       mode=st.sampled_from([MODE_LEMKE_ST, MODE_ENUM]))
-def test_random_fallback_methods_valid(seed, nc, mode):
-    rng = np.random.default_rng(seed)
-    Mmat, WN, WT = _random_deck_problem(rng, nc)
-    U = rng.normal(size=7) * np.r_[1.0, 1.0, 0.05, 0.1 * np.ones(4)]
-    e = rng.uniform(0, 1, nc)
-    mu = rng.uniform(0, 1, nc)
-    res = solve_for(Mmat, WN, WT, U, e, mu, mode=mode)
-    vs = max(np.abs(res["uNf"]).max(), np.abs(res["uTf"]).max(), 1e-300)
-    assert res["status"] == (STATUS_LEMKE_ST if mode == MODE_LEMKE_ST else STATUS_ENUM)
-    check_laws(res, e, mu, 1e-9 * vs)
-
-
-@settings(max_examples=150, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), nc=st.integers(1, 4))
-def test_random_generic_jacobians_e_zero_dissipative(seed, nc):
-    """Arbitrary SPD 7x7 M and arbitrary W, e = 0, U_free = U-: always
-    solvable (Anitescu-Potra) and never gains kinetic energy."""
-    rng = np.random.default_rng(seed)
-    A = rng.normal(size=(7, 7))
-    Mmat = A @ A.T + 0.5 * np.eye(7)
-    WN = rng.normal(size=(7, nc))
-    WT = rng.normal(size=(7, nc))
-    U = rng.normal(size=7)
-    mu = rng.uniform(0, 1.5, nc)
-    res = solve_for(Mmat, WN, WT, U, np.zeros(nc), mu)
-    vs = max(np.abs(res["uNf"]).max(), np.abs(res["uTf"]).max(), 1e-300)
-    assert res["status"] in (STATUS_LEMKE, STATUS_LEMKE_ST, STATUS_ENUM)
-    check_laws(res, np.zeros(nc), mu, 1e-9 * vs)
-    assert kinetic(Mmat, res["Up"]) <= kinetic(Mmat, U) * (1 + 1e-12) + 1e-15
