@@ -397,17 +397,6 @@ def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, d
 
 
 @kernel
-def contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der, evaluated):
-    """Contact forces (convenience: :func:`eval_contacts`, then :func:`eval_closed` if needed)."""
-    n = eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                      evaluated)
-    if n < 0:
-        n = eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                        evaluated)
-    return n
-
-
-@kernel
 def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
                   evaluated):
     """Gap check (call-free, cheap); returns 0 when every corner is open (fc, lam, lt zeroed),

@@ -25,12 +25,16 @@ Usage (Python side)::
 
     ps = pack_system(scene)            # once per run
     sa, hstate = ps.arrays, ps.new_state()
-    spring_forces(sa, hstate, u, v, ug, vg, f, K, fs, kt, d, dd, True)  # trial, forces, tangent
+    # in a kernel, at a trial (u, u̇) and support motion (u_g, u̇_g):
+    spring_deformations(sa, u, v, ug, vg, d, dd)            # d, ḋ
+    spring_update_materials(sa.hparams, hstate, sa.kind, d)  # Takeda trial states
+    spring_assemble(sa, hstate, d, dd, v, f, fs, kt)         # F, f_s, k_t
+    spring_tangent(sa, kt, K)                                # K = Bᵀ diag(k_t) B
     spring_commit(sa, hstate)          # after a converged / accepted step
     spring_revert(sa, hstate)          # to discard a trial
 
-``ps.C`` is the constant damping matrix ∂F/∂u̇ = a0 M + Bᵀ diag(a1 k0 + c_dash) B; ``K`` returned by
-:func:`spring_forces` is ∂F/∂u = Bᵀ diag(k_t) B with k_t the material tangents.
+``ps.C`` is the constant damping matrix ∂F/∂u̇ = a0 M + Bᵀ diag(a1 k0 + c_dash) B; ``K`` from
+:func:`spring_tangent` is ∂F/∂u = Bᵀ diag(k_t) B with k_t the material tangents.
 
 Units: m, rad, t, kN, s (kN = t·m/s²).
 """
@@ -72,7 +76,6 @@ __all__ = [
     "pack_system",
     "takeda_hysteretic_args",
     "spring_deformations",
-    "spring_forces",
     "spring_update_materials",
     "spring_assemble",
     "spring_tangent",
@@ -272,33 +275,6 @@ def spring_tangent(sa, kt, K):
             bj = sa.bval[i, q] * kt[i]
             for r in range(nnz):
                 K[j, sa.bidx[i, r]] += bj * sa.bval[i, r]
-
-
-@kernel
-def spring_forces(sa, hstate, u, v, ug, vg, f, K, fs, kt, d, dd, want_tangent):
-    """Trial spring state and generalised internal force at (u, u̇, t) (convenience wrapper).
-
-    Parameters
-    ----------
-    sa : SystemArrays; hstate : (ns, 17) material states (trial part updated in place).
-    u, v : (7,) absolute displacements and velocities; ug, vg : (nch,) support motion.
-    f : (7,) out, F = Bᵀ[f_s + crate·ḋ] + a0 M u̇.
-    K : (7, 7) out (if want_tangent), Bᵀ diag(k_t) B, the tangent ∂F/∂u (∂F/∂u̇ is the
-        constant :attr:`PackedSystem.C`).
-    fs, kt : (ns,) out, restoring force of each spring (Takeda stress for bents) and tangent.
-    d, dd : (ns,) out, deformations and deformation rates.
-
-    Returns the number of springs whose tangent differs from k0 (0 = all elastic).
-
-    Hot loops call the pieces (:func:`spring_deformations`, :func:`spring_update_materials`,
-    :func:`spring_assemble`, :func:`spring_tangent`) and skip the tangent when it is not needed.
-    """
-    spring_deformations(sa, u, v, ug, vg, d, dd)
-    spring_update_materials(sa.hparams, hstate, sa.kind, d)
-    nonel = spring_assemble(sa, hstate, d, dd, v, f, fs, kt)
-    if want_tangent:
-        spring_tangent(sa, kt, K)
-    return nonel
 
 
 @kernel
