@@ -36,15 +36,16 @@ import time as _time
 
 import numpy as np
 
-from deckpound.analytic.compliance import ENERGY_COLUMNS, output_columns, prepare
+from deckpound.analytic._jit import ensure_compiled
+from deckpound.analytic.compliance import ENERGY_COLUMNS, pack_run
 from deckpound.analytic.dormand_prince import H_BINS_PER_DECADE, H_LOG_MIN, H_NBINS, TABLEAU, \
     adaptive_run, workspace
 from deckpound.analytic.system import initial_dofs
-from deckpound.models.excitation import SupportMotion, support_motion
-from deckpound.models.result import Result, scene_hash, set_status
-from deckpound.models.scene import Scene
+from deckpound.engine_contract import RunOutput, Status, engine_columns
+from deckpound.models.excitation import analysis_duration
 
 __all__ = ["run_adaptive"]
+
 
 def _hist_median(counts: np.ndarray) -> float:
     """Median step size from a log10 histogram (geometric centre of the median bin)."""
@@ -69,21 +70,20 @@ def step_size_summary(hist: np.ndarray, hstat: np.ndarray) -> dict:
     return out
 
 
-def run_adaptive(scene: Scene, motion: SupportMotion | None = None, *,
-                 raise_on_failure: bool = False, kv_clip: bool = False,
-                 initial_state=None) -> Result:
-    """Adaptive compliance run (see the module docstring); engine contract as
-    :func:`deckpound.analytic.compliance.run_compliance`."""
-    t0 = _time.perf_counter()
-    cset = scene.compliance
-    if motion is None:
-        motion = support_motion(scene)
+def run_adaptive(plan, scene, settings, motion, *, kv_clip: bool = False,
+                 initial_state=None) -> RunOutput:
+    """Adaptive compliance run (see the module docstring); called by the compliance engine."""
+    cset = settings
+    duration = analysis_duration(scene, motion)
+    # the record at its own samples, resampled on its finest step (breakpoints every sample)
     dtr = float(np.min(np.diff(motion.t)))
-    ps, UG, VG, cp, cs, geom, duration = prepare(scene, motion, dtr, kv_clip=kv_clip)
+    res = motion.resample(dtr, duration)
+    ps, _, cp, cs, corners = pack_run(plan, scene, res, kv_clip=kv_clip)
+    UG, VG = res.matrices(ps.channels)
     tb = np.arange(UG.shape[0]) * dtr
     out_dt = scene.run.output_dt
     nout = int(round(duration / out_dt)) + 1
-    cols = output_columns(scene)
+    cols = engine_columns(plan) + list(ENERGY_COLUMNS)
     out = np.zeros((nout, len(cols)))
     info = np.zeros(6, dtype=np.int64)
     nbs = ps.n_bent_springs
@@ -92,38 +92,33 @@ def run_adaptive(scene: Scene, motion: SupportMotion | None = None, *,
     u0, v0 = initial_dofs(initial_state)
     hist = np.zeros((2, H_NBINS), dtype=np.int64)
     hstat = np.zeros((2, 3))
+    args = (ps.arrays, hstate, cp, cs, corners, scene.contact.geometry == "nonlinear", tb, UG,
+            VG, (nout - 1) * out_dt, out_dt, nbs, cset.rtol, cset.atol, cset.max_step,
+            cset.commit_step, out, info, ws, u0, v0, *TABLEAU, hist, hstat)
+    compile_time = ensure_compiled(adaptive_run, *args)
     t1 = _time.perf_counter()
-    adaptive_run(ps.arrays, hstate, cp, cs, geom, scene.contact.geometry == "nonlinear", tb, UG,
-                 VG, (nout - 1) * out_dt, out_dt, nbs, cset.rtol, cset.atol, cset.max_step,
-                 cset.commit_step, out,
-                 info, ws, u0, v0, *TABLEAU, hist, hstat)
-    t2 = _time.perf_counter()
+    adaptive_run(*args)
+    loop = _time.perf_counter() - t1
     rows = int(info[1])
     columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
     ein = np.max(np.abs(columns["energy_input"])) if rows else 0.0
-    meta = {
-        "engine": "compliance", "integrator": "adaptive",
-        "settings": {"rtol": cset.rtol, "atol": cset.atol, "max_step": cset.max_step,
-                     "commit_step": cset.commit_step,
-                     "kv_clip": kv_clip, "scheme": "Dormand-Prince 5(4) with events"},
-        "scene_hash": scene_hash(scene), "wall_time": t2 - t0, "loop_time": t2 - t1,
-        "steps": int(info[2]), "rejected_steps": int(info[3]), "events": int(info[4]),
-        "rhs_calls": int(info[5]), "iterations": 0, "failures": 0 if info[0] == 0 else 1,
-        "contact_events": int(np.sum(np.diff((columns["fn_c1"] != 0).astype(int)) > 0) +
-                              np.sum(np.diff((columns["fn_c2"] != 0).astype(int)) > 0) +
-                              np.sum(np.diff((columns["fn_c3"] != 0).astype(int)) > 0) +
-                              np.sum(np.diff((columns["fn_c4"] != 0).astype(int)) > 0))
-        if rows > 1 else 0,
-        "duration": duration,
-        "energy_closure": float(np.max(np.abs(columns["energy_error"])) / ein) if ein > 0 else 0.0,
+    ok = info[0] == 0 and rows == nout
+    extra = {
+        "integrator": "adaptive", "kv_clip": kv_clip,
+        "scheme": "Dormand-Prince 5(4) with events",
+        "rejected_steps": int(info[3]), "events": int(info[4]), "rhs_calls": int(info[5]),
+        "energy_closure": float(np.max(np.abs(columns["energy_error"])) / ein) if ein > 0
+        else 0.0,
         "energy_columns": list(ENERGY_COLUMNS),
         "step_sizes": step_size_summary(hist, hstat),
     }
-    ok = info[0] == 0 and rows == nout
-    set_status(meta, engine="compliance (adaptive)", ok=ok, step=int(info[2]),
-               time=(rows - 1) * out_dt if rows else 0.0,
-               message=(f"{int(info[2])} steps ({int(info[3])} rejected, {int(info[4])} events)"
-                        if ok else
-                        "step size underflow" if info[0] == 1 else "non-finite state"),
-               raise_on_failure=raise_on_failure)
-    return Result(engine="compliance", columns=columns, meta=meta)
+    t_fail = (rows - 1) * out_dt if rows else 0.0
+    return RunOutput(
+        columns=columns,
+        status=Status.SUCCESS if ok else (Status.NOT_CONVERGED if info[0] == 1
+                                          else Status.NONFINITE),
+        message=(f"{int(info[2])} steps ({int(info[3])} rejected, {int(info[4])} events)" if ok
+                 else "step size underflow" if info[0] == 1 else "non-finite state"),
+        failed_step=None if ok else int(info[2]), failed_time=None if ok else t_fail,
+        steps=int(info[2]), failed_steps=0 if ok else 1, compile_time=compile_time,
+        loop_time=loop, extra=extra)

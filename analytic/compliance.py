@@ -1,6 +1,7 @@
 """Compliance engine: penalty (compliant) contact on the 7-DOF plan model.
 
-Entry point :func:`run_compliance` (the engine contract of :mod:`deckpound.engines`).
+Engine :class:`ComplianceEngine` (registry name ``compliance``; the contract of
+:mod:`deckpound.engine_contract`); :func:`run_compliance` is the same as a function.
 
 Equation of motion (absolute coordinates, the model of the OpenSees engine)::
 
@@ -20,8 +21,8 @@ event location; see there).
 
 Result columns: the standard ones (``fn_c*`` = λ_N, compression > 0, OpenSees-identical
 Kelvin–Voigt may give small tension at the end of an impact; ``ft_c*`` = λ_T, the tangential
-force on the deck along +t = +y for linear kinematics; ``<bent>_fx/_fy`` the Takeda material
-force for deformation deck − table) plus energies [kJ]: ``energy_input`` (work of the support
+force on the deck along the face tangent t (+y for a straight deck and linear kinematics);
+``<bent>_fx/_fy`` the Takeda material force for deformation deck − table) plus energies [kJ]: ``energy_input`` (work of the support
 reactions: −∫ f_springᵀ S du_g, plus the initial mechanical energy — zero from rest),
 ``energy_kinetic``, ``energy_strain`` (recoverable energy of
 bent and seat springs), ``energy_viscous`` (Rayleigh + seat dashpots), ``energy_hysteretic``
@@ -34,26 +35,22 @@ acceleration scheme exactly up to the Newton residual.
 from __future__ import annotations
 
 import time as _time
-import warnings
 
 import numpy as np
 
-from deckpound.analytic import contact_laws as cl
-from deckpound.analytic.kinematics import pack_geometry
-from deckpound.analytic.newmark import BETA, ENERGY_COLUMNS, F_CONTACT_SKIP, F_ENERGY, \
-    F_FACTOR_REUSE, GAMMA, N_FLAGS, newmark_run, newmark_workspace
-from deckpound.analytic.support_motion import support_record
-from deckpound.analytic.system import initial_dofs, pack_system
-from deckpound.engines import output_stride
-from deckpound.models.excitation import SupportMotion, analysis_duration, support_motion
-from deckpound.models.result import Result, scene_hash, \
-    set_status, standard_columns
-from deckpound.models.scene import Scene
+from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
+from deckpound.models.excitation import SupportMotion, analysis_duration
+from deckpound.models.plan import Plan
+from deckpound.models.scene import ComplianceSettings, Scene
 
-__all__ = ["run_compliance", "ENERGY_COLUMNS", "output_columns"]
+__all__ = ["ComplianceEngine", "run_compliance", "ENERGY_COLUMNS", "output_columns", "SKIPS"]
 
+#: Energy columns of the compliance result, in the order the kernels write them [kJ].
+ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
+                  "energy_hysteretic", "energy_contact_stored", "energy_contact_dissipated",
+                  "energy_friction", "energy_error")
 SUBSTEPS = 10   # sub-steps of the fallback for a failed step (OpenSees engine default)
-#: The skips :func:`run_compliance` can turn off for measurement (``_skips={name: False}``);
+#: The skips the engine can turn off for measurement (``_skips={name: False}``);
 #: results are identical with and without each (``compare/skips.py`` measures and checks):
 #:
 #: * ``contact`` — contact laws, contact tangent and refactorisation skipped while every
@@ -72,151 +69,177 @@ SUBSTEPS = 10   # sub-steps of the fallback for a failed step (OpenSees engine d
 #:   result decimated afterwards.
 SKIPS = ("contact", "friction", "factor_reuse", "decimate")
 
-
-def output_columns(scene: Scene) -> list[str]:
-    """Column names of the compliance result (standard columns, then the energies)."""
-    return standard_columns([b.name for b in scene.bents]) + list(ENERGY_COLUMNS)
-
-
-# ----------------------------------------------------------------------------- engine
+_STATUS = {1: Status.NOT_CONVERGED, 2: Status.SINGULAR, 3: Status.NONFINITE}
 _STATUS_TEXT = {1: "Newton did not converge (NormDispIncr)", 2: "singular tangent",
                 3: "non-finite state"}
 
 
-def _warn_ignored(scene: Scene) -> None:
-    ct = scene.contact
-    if ct.friction > 0.0 and ct.friction_mode == "none":
-        warnings.warn("contact.friction > 0 is ignored because contact.friction_mode = 'none'",
-                      stacklevel=3)
-    if ct.friction_mode != "none" and ct.friction == 0.0:
-        warnings.warn(f"contact.friction_mode = {ct.friction_mode!r} has no effect with "
-                      "contact.friction = 0", stacklevel=3)
+def output_columns(scene: Scene) -> list[str]:
+    """Column names of the compliance result (standard columns, then the energies)."""
+    from deckpound.models.plan import standard_columns
+
+    return standard_columns([b.name for b in scene.bents]) + list(ENERGY_COLUMNS)
 
 
-def pack_run(scene: Scene, motion: SupportMotion | None, *, kv_clip: bool = False):
-    """Like :func:`prepare` but with the support record at its own samples (tb, D, V) instead
-    of resampled arrays: memory independent of the number of steps."""
-    if motion is None:
-        motion = support_motion(scene)
-    duration = analysis_duration(scene, motion)
-    ps = pack_system(scene)
-    tb, D, V = support_record(motion, ps.channels)
-    cp = cl.pack_contact(scene, kv_clip=kv_clip)
-    geom = pack_geometry(scene)
-    cs = cl.new_contact_state(geom[8:12])
-    return ps, (tb, D, V), cp, cs, geom, duration
+def pack_run(plan: Plan, scene: Scene, motion: SupportMotion, *, kv_clip: bool = False):
+    """Everything a compliance run needs, packed once: (ps, (tb, D, V), cp, cs, corners).
 
-
-def prepare(scene: Scene, motion: SupportMotion | None, dt: float, *, kv_clip: bool = False):
-    """Pack everything a run needs (shared by the integrators and the verification)."""
-    if motion is None:
-        motion = support_motion(scene)
-    duration = analysis_duration(scene, motion)
-    ps = pack_system(scene)
-    res = motion.resample(dt, duration)
-    UG, VG = res.matrices(ps.channels)
-    cp = cl.pack_contact(scene, kv_clip=kv_clip)
-    geom = pack_geometry(scene)
-    cs = cl.new_contact_state(geom[8:12])
-    return ps, UG, VG, cp, cs, geom, duration
-
-
-def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,
-                   raise_on_failure: bool = False, kv_clip: bool = False,
-                   initial_state=None, substeps: int = SUBSTEPS, channels=None,
-                   _skips: dict | None = None) -> Result:
-    """Run the compliance engine on ``scene`` (engine contract of :mod:`deckpound.engines`).
-
-    Extra keywords (not scene options): ``kv_clip`` clips the Kelvin–Voigt force at zero
-    instead of the OpenSees ViscoelasticGap behaviour (tension allowed until the gap reopens);
-    ``initial_state = (u0, v0)`` starts from the given DOF displacements and velocities
-    (default rest, as OpenSees); ``substeps``: sub-steps of the fallback for a failed step
-    (like the OpenSees engine's ``fallback = "substep"``; 1 disables it); ``channels``: store
-    only these result columns (``t`` is always stored; energy work is not accumulated unless
-    an energy column is requested) — the default stores every column (engine contract).
-    ``_skips`` (private, for measurement): ``{name: False}`` turns off a work-saving skip of
-    :data:`SKIPS` (Newmark integrator only; results are identical).
+    The support record stays at its own samples (tb, D, V): memory independent of the number
+    of steps (the kernels interpolate it, see :mod:`deckpound.analytic.support_motion`).
     """
-    _warn_ignored(scene)
-    if scene.compliance.integrator == "adaptive":
-        from deckpound.analytic.adaptive import run_adaptive
-        return run_adaptive(scene, motion, raise_on_failure=raise_on_failure, kv_clip=kv_clip,
-                            initial_state=initial_state)
-    t0 = _time.perf_counter()
-    skips = {k: True for k in SKIPS}
-    for k, v in (_skips or {}).items():
-        if k not in skips:
+    from deckpound.analytic import contact_laws as cl
+    from deckpound.analytic.kinematics import K_G0, pack_corners
+    from deckpound.analytic.support_motion import support_record
+    from deckpound.analytic.system import pack_system
+    from deckpound.models.damping import damping_model
+
+    ps = pack_system(plan, damping_model(scene, plan))
+    record = support_record(motion, ps.channels)
+    cp = cl.pack_contact(scene, kv_clip=kv_clip)
+    corners = pack_corners(plan)
+    cs = cl.new_contact_state(corners[:, K_G0])
+    return ps, record, cp, cs, corners
+
+
+class ComplianceEngine(Engine):
+    """The compliance clone of the OpenSees model (module docstring)."""
+
+    name = "compliance"
+    title = "compliance clone (penalty contact, numba)"
+    Settings = ComplianceSettings
+    settings_field = "compliance"
+    step_field = "dt"
+    style = dict(color="#1f5fa8", linestyle="--", linewidth=1.2, label="compliance clone")
+
+    def reads(self, scene: Scene, settings) -> set[str]:
+        ct = scene.contact
+        read = {"contact.law", "contact.stiffness", "contact.geometry"}
+        if ct.law in ("hertz", "hertz-damp"):
+            read.add("contact.exponent")
+        if ct.law in ("kelvin-voigt", "hertz-damp"):
+            read.add("contact.restitution")
+        if ct.law == "bilinear":
+            read |= {"contact.bilinear_ratio", "contact.bilinear_yield"}
+        if ct.friction_mode != "none":
+            read.add("contact.friction")
+        if ct.friction > 0.0:
+            read.add("contact.friction_mode")
+            if ct.friction_mode == "stick":
+                read.add("contact.tangential_stiffness")
+            if ct.friction_mode == "slip":
+                read.add("contact.slip_velocity")
+        return read
+
+    def _run(self, plan: Plan, scene: Scene, settings, motion, *, kv_clip: bool = False,
+             initial_state=None, substeps: int = SUBSTEPS, channels=None,
+             _skips: dict | None = None) -> RunOutput:
+        """Extra keywords (not scene options): ``kv_clip`` clips the Kelvin–Voigt force at zero
+        instead of the OpenSees ViscoelasticGap behaviour (tension allowed until the gap
+        reopens); ``initial_state = (u0, v0)`` starts from the given DOF displacements and
+        velocities (default rest, as OpenSees); ``substeps``: sub-steps of the fallback for a
+        failed step (1 disables it); ``channels``: store only these columns besides the engine
+        columns (energy work is not accumulated unless an energy column is requested);
+        ``_skips`` (private, for measurement): ``{name: False}`` turns off a work-saving skip of
+        :data:`SKIPS` (``newmark`` only; results are identical)."""
+        if settings.integrator == "adaptive":
+            from deckpound.analytic.adaptive import run_adaptive
+
+            return run_adaptive(plan, scene, settings, motion, kv_clip=kv_clip,
+                                initial_state=initial_state)
+        return _run_newmark(plan, scene, settings, motion, kv_clip=kv_clip,
+                            initial_state=initial_state, substeps=substeps, channels=channels,
+                            skips=_skips)
+
+
+def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, substeps, channels,
+                 skips) -> RunOutput:
+    from deckpound.analytic import contact_laws as cl
+    from deckpound.analytic._jit import ensure_compiled
+    from deckpound.analytic.newmark import (BETA, F_CONTACT_SKIP, F_ENERGY, F_FACTOR_REUSE,
+                                            GAMMA, N_FLAGS, newmark_run, newmark_workspace)
+    from deckpound.analytic.system import initial_dofs
+
+    on = {k: True for k in SKIPS}
+    for k, v in (skips or {}).items():
+        if k not in on:
             raise ValueError(f"unknown skip {k!r}; valid: {', '.join(SKIPS)}")
-        skips[k] = bool(v)
-    cset = scene.compliance
-    dt = cset.dt
-    ps, (tb, DG, VGR), cp, cs, geom, duration = pack_run(scene, motion, kv_clip=kv_clip)
-    if not skips["friction"]:
+        on[k] = bool(v)
+    dt = settings.dt
+    duration = analysis_duration(scene, motion)
+    ps, (tb, DG, VGR), cp, cs, corners = pack_run(plan, scene, motion, kv_clip=kv_clip)
+    if not on["friction"]:
         # the slip law with μ = 0 wherever friction was switched off: same (zero) forces
         off = cp[:, cl.P_FMODE] == 0
         cp[off, cl.P_FMODE] = cl.FRICTION_CODES["slip"]
         cp[off, cl.P_MU] = 0.0
     stride = output_stride(dt, scene.run.output_dt)
-    kstride = stride if skips["decimate"] else 1
+    kstride = stride if on["decimate"] else 1
     nsteps = int(round(duration / dt))
     nbs = ps.n_bent_springs
     all_cols = output_columns(scene)
+    engine_cols = engine_columns(plan)
     if channels is None:
-        cols = all_cols
+        cols = [c for c in all_cols if c in engine_cols or c in ENERGY_COLUMNS]
     else:
         unknown = [c for c in channels if c not in all_cols]
         if unknown:
             raise ValueError(f"unknown result column {unknown[0]!r}; valid: {', '.join(all_cols)}")
-        cols = ["t"] + [c for c in all_cols if c in set(channels) and c != "t"]
-    colsel = np.array([all_cols.index(c) for c in cols], dtype=np.int64)
+        want = set(channels) | set(engine_cols)
+        cols = [c for c in all_cols if c in want and (c in engine_cols or c in ENERGY_COLUMNS)]
+    full = engine_cols + list(ENERGY_COLUMNS)
+    colsel = np.array([full.index(c) for c in cols], dtype=np.int64)
     want_energy = any(c in ENERGY_COLUMNS for c in cols)
     flags = np.ones(N_FLAGS, dtype=np.int64)
-    flags[F_CONTACT_SKIP] = skips["contact"]
-    flags[F_FACTOR_REUSE] = skips["factor_reuse"]
+    flags[F_CONTACT_SKIP] = on["contact"]
+    flags[F_FACTOR_REUSE] = on["factor_reuse"]
     flags[F_ENERGY] = want_energy
     out = np.zeros((nsteps // kstride + 1, len(cols)))
     info = np.zeros(8, dtype=np.int64)
     hstate = ps.new_state()
     u0, v0 = initial_dofs(initial_state)
     work = newmark_workspace(ps.n_springs, DG.shape[1], nbs)
+    args = (ps.arrays, ps.C, hstate, cp, cs, corners, scene.contact.geometry == "nonlinear",
+            tb, DG, VGR, nsteps, dt, settings.tolerance, settings.max_iterations, kstride, nbs,
+            out, info, u0, v0, substeps, flags, colsel, work)
+    compile_time = ensure_compiled(newmark_run, *args)
     t1 = _time.perf_counter()
-    newmark_run(ps.arrays, ps.C, hstate, cp, cs, geom, scene.contact.geometry == "nonlinear",
-                tb, DG, VGR, nsteps, dt, cset.tolerance, cset.max_iterations, kstride, nbs, out,
-                info, u0, v0, substeps, flags, colsel, work)
-    t2 = _time.perf_counter()
+    newmark_run(*args)
+    loop = _time.perf_counter() - t1
     status_code, rows = int(info[0]), int(info[1])
     if kstride != stride:
         out = out[:rows:stride]
         rows = out.shape[0]
-    meta = {
-        "engine": "compliance",
+    columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
+    ok = status_code == 0
+    extra = {
         "integrator": "newmark",
-        "settings": {"dt": dt, "tolerance": cset.tolerance,
-                     "max_iterations": cset.max_iterations, "gamma": GAMMA, "beta": BETA,
-                     "kv_clip": kv_clip, "skips": skips},
-        "scene_hash": scene_hash(scene),
-        "wall_time": t2 - t0,
-        "loop_time": t2 - t1,
-        "us_per_step": 1e6 * (t2 - t1) / max(nsteps, 1),
-        "steps": nsteps if status_code == 0 else int(info[2]) - 1,
-        "iterations": int(info[3]),
+        "gamma": GAMMA, "beta": BETA, "kv_clip": kv_clip, "skips": on,
         "max_step_iterations": int(info[6]),
         "elastic_factor_reuses": int(info[5]),
-        "contact_events": int(info[4]),
-        "failures": int(info[7]) + (0 if status_code == 0 else 1),
-        "rescued_by_substeps": int(info[7]),
-        "duration": duration,
         "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
         "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
                        "contact_stored + contact_dissipated + friction) [kJ]",
     }
-    columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
     if "energy_input" in columns and "energy_error" in columns:
         ein = np.max(np.abs(columns["energy_input"])) if rows else 0.0
-        meta["energy_closure"] = float(np.max(np.abs(columns["energy_error"])) / ein) \
+        extra["energy_closure"] = float(np.max(np.abs(columns["energy_error"])) / ein) \
             if ein > 0 else 0.0
-    ok = status_code == 0
-    set_status(meta, engine="compliance", ok=ok, step=int(info[2]), dt=dt,
-               message=f"{nsteps} steps, {int(info[3])} Newton iterations" if ok
-               else _STATUS_TEXT.get(status_code, "failure"), raise_on_failure=raise_on_failure)
-    return Result(engine="compliance", columns=columns, meta=meta)
+    failed_step = int(info[2])
+    return RunOutput(
+        columns=columns, status=Status.SUCCESS if ok else _STATUS.get(status_code,
+                                                                      Status.NONFINITE),
+        message=(f"{nsteps} steps, {int(info[3])} Newton iterations" if ok
+                 else _STATUS_TEXT.get(status_code, "failure")),
+        failed_step=None if ok else failed_step, failed_time=None if ok else failed_step * dt,
+        steps=nsteps if ok else failed_step - 1, newton_iterations=int(info[3]),
+        failed_steps=int(info[7]) + (0 if ok else 1), rescued_steps=int(info[7]),
+        compile_time=compile_time, loop_time=loop, extra=extra)
+
+
+def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,
+                   raise_on_failure: bool = False, **options):
+    """Run the compliance engine on ``scene`` (keywords of :meth:`ComplianceEngine._run`)."""
+    from deckpound.engines import get_engine
+
+    return get_engine("compliance").run(scene, None, motion, raise_on_failure=raise_on_failure,
+                                        **options)

@@ -49,7 +49,7 @@ from deckpound.models.scene import CONTACT_LAWS, FRICTION_MODES, Scene
 __all__ = [
     "LAW_CODES", "FRICTION_CODES", "N_CP", "N_CS", "V_IMPACT_MIN",
     "pack_contact", "new_contact_state", "normal_law", "friction_law", "contact_commit",
-    "contact_revert", "contact_stored_energy", "gap_hessian",
+    "contact_revert", "contact_stored_energy",
 ]
 
 # linear 0, kelvin-voigt 1, hertz 2, hertz-damp 3, bilinear 4
@@ -294,53 +294,17 @@ def contact_stored_energy(cp, cs):
     return e
 
 
-@kernel
-def gap_hessian(u, geom, c, H):
-    """∂²g_N/∂u² of corner c for the geometrically nonlinear kinematics (7×7, filled)."""
-    XD, YD, TD = 4, 5, 6
-    xc, yc, g0, side = geom[c], geom[4 + c], geom[8 + c], geom[12 + c]
-    hl = geom[16]
-    sx = 0 if side > 0 else 2
-    st = 1 if side > 0 else 3
-    for i in range(7):
-        for j in range(7):
-            H[i, j] = 0.0
-    th, ths = u[TD], u[st]
-    ct, sn = np.cos(th), np.sin(th)
-    cs_, ss = np.cos(ths), np.sin(ths)
-    px = u[XD] + xc * ct - yc * sn
-    py = u[YD] + xc * sn + yc * ct
-    dpx = -xc * sn - yc * ct
-    dpy = xc * ct - yc * sn
-    d2px = -xc * ct + yc * sn
-    d2py = -xc * sn - yc * ct
-    fx = -side * (hl + g0) + u[sx]
-    rx, ry = px - fx, py
-    nx, ny = side * cs_, side * ss
-    dnx, dny = -side * ss, side * cs_          # ∂n/∂θ_s
-    H[TD, TD] = nx * d2px + ny * d2py
-    H[XD, st] = dnx
-    H[YD, st] = dny
-    H[TD, st] = dnx * dpx + dny * dpy
-    H[sx, st] = -dnx
-    H[st, st] = side * (-cs_ * rx - ss * ry)
-    for (i, j) in ((XD, st), (YD, st), (TD, st), (sx, st)):
-        H[j, i] = H[i, j]
-
-
 # --------------------------------------------------------------------------- assembly helpers
-from deckpound.analytic.kinematics import contact_kinematics  # noqa: E402
+from deckpound.analytic.kinematics import (contact_kinematics, gap_hessian,  # noqa: E402
+                                           linear_gap, linear_gap_rate)
 
 
 @njit(cache=True, inline="always")
-def _linear_gaps(u, v, geom, g, gd):
+def _linear_gaps(u, v, corners, g, gd):
     """Gaps and gap rates of the small-rotation kinematics (kinematics.contact_kinematics)."""
     for c in range(4):
-        yc, g0, side = geom[4 + c], geom[8 + c], geom[12 + c]
-        sx = 0 if side > 0 else 2
-        st = 1 if side > 0 else 3
-        g[c] = g0 + side * ((u[4] - yc * u[6]) - (u[sx] - yc * u[st]))
-        gd[c] = side * ((v[4] - yc * v[6]) - (v[sx] - yc * v[st]))
+        g[c] = linear_gap(corners[c], u)
+        gd[c] = linear_gap_rate(corners[c], v)
 
 
 @kernel
@@ -412,12 +376,9 @@ def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt,
     anyc = nonlinear
     if not nonlinear:
         for c in range(4):
-            yc, g0, side = geom[4 + c], geom[8 + c], geom[12 + c]
-            sx = 0 if side > 0 else 2
-            st = 1 if side > 0 else 3
-            gc = g0 + side * ((u[4] - yc * u[6]) - (u[sx] - yc * u[st]))
+            gc = linear_gap(geom[c], u)
             g[c] = gc
-            gd[c] = side * ((v[4] - yc * v[6]) - (v[sx] - yc * v[st]))
+            gd[c] = linear_gap_rate(geom[c], v)
             lam[c] = 0.0
             lt[c] = 0.0
             evaluated[c] = gc <= 0.0

@@ -14,10 +14,10 @@ import numpy as np
 from numba import njit
 
 from deckpound.analytic import contact_laws as cl
-from deckpound.analytic._hysteretic_kernel import C_ROTMAX, C_ROTMIN
+from deckpound.analytic._hysteretic_kernel import C_ROTMAX, C_ROTMIN, T_STRESS
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
-    spring_stored_energy, spring_update_materials
+from deckpound.analytic.system import C_BENT, spring_assemble, spring_commit, \
+    spring_deformations, spring_stored_energy, spring_update_materials, store_standard
 
 __all__ = ["adaptive_run", "workspace", "TABLEAU", "H_NBINS", "H_LOG_MIN", "H_BINS_PER_DECADE"]
 
@@ -405,17 +405,8 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
 
 @kernel
 def _adaptive_store(sa, hstate, cp, cs, y, ws, out, row, t, nbs):
-    out[row, 0] = t
-    order = (4, 5, 6, 0, 1, 2, 3)
-    for k in range(7):
-        out[row, 1 + k] = y[order[k]]
-    for c in range(4):
-        out[row, 8 + c] = ws.g[c]
-        out[row, 12 + c] = ws.lam[c]
-        out[row, 16 + c] = ws.lt[c]
-    for i in range(nbs):
-        out[row, 20 + i] = hstate[i, 14]
-    base = 20 + nbs
+    store_standard(out[row], t, y[0:7], y[7:14], ws.g, ws.lam, ws.lt, hstate[:, T_STRESS], nbs)
+    base = C_BENT + nbs
     ke = 0.0
     for j in range(7):
         ke += 0.5 * sa.mass[j] * y[7 + j] ** 2

@@ -1,77 +1,116 @@
 """Contact kinematics of the 7-DOF plan model: gaps g_N and direction matrices W_N, W_T.
 
-DOFs u = [x₁, θ₁, x₂, θ₂, x_d, y_d, θ_d] (see :mod:`deckpound.models.mechanics`). Corners
-c1 (−L/2, −W/2), c2 (−L/2, W/2) face seat 1; c3 (L/2, −W/2), c4 (L/2, W/2) face seat 2.
+The corner table of :mod:`deckpound.models.plan` is packed once into a (4, :data:`N_K`) array
+(:func:`pack_corners`, columns named by the ``K_*`` constants) that the kernels read; the
+equations are those of the plan model (DOFs u = [x₁, θ₁, x₂, θ₂, x_d, y_d, θ_d]):
 
-Geometrically linear (DESIGN, paper Eq. 1 with fixed directions)::
+Geometrically linear (small rotations), corner at (x, y) with gap-opening normal n, tangent t
+and facing seat point r (relative to the seat pivot)::
 
-    left corner:  g_N = g₀ + (x_d − y_c θ_d) − (x₁ − y_c θ₁)
-    right corner: g_N = g₀ − (x_d − y_c θ_d) + (x₂ − y_c θ₂)
-    tangential velocity U_T = ẏ_d + x_c θ̇_d   (seats are guided in y)
+    g_N = g₀ + n_x [(x_d − y θ_d) − (x_s − r_y θ_s)] + n_y [(y_d + x θ_d) − r_x θ_s]
+    U_T = t_x (ẋ_d − y θ̇_d) + t_y (ẏ_d + x θ̇_d) − t_x ẋ_s
+
+(written so that a straight deck, n = (±1, 0), t = (0, 1), r = (0, y), performs exactly the
+floating-point operations of the paper's g_N = g₀ ± [(x_d − y θ_d) − (x_s − y θ_s)]).
 
 Geometrically nonlinear (paper Fig. 2b): the deck corner at
-P = (x_d + x_c cos θ_d − y_c sin θ_d, y_d + x_c sin θ_d + y_c cos θ_d) and the seat face a line
-through F (the face mid-point, x = ∓(L/2 + g₀) + x_s) with unit normal n (towards the deck)
-and tangent t = (−sin θ_s, cos θ_s):  g_N = n·(P − F);  U_T = t·Ṗ + ẋ_s sin θ_s (the face's
-own velocity along t at the contact point reduces to that term).
+P = (x_d + x cos θ_d − y sin θ_d, y_d + x sin θ_d + y cos θ_d); the seat face is the line
+through the seat pivot F = F₀ + (x_s, 0) (the seats slide along x) with the rest normal n₀ and
+tangent t₀ rotated by θ_s: n = R(θ_s) n₀, t = R(θ_s) t₀; g_N = n·(P − F),
+U_T = t·Ṗ − t_x ẋ_s (the term θ̇_s g_N of the face's rotation is dropped: it vanishes in
+contact).
 
-W_N[c] = ∂g_N/∂u and W_T[c] = ∂U_T/∂u̇ are rows here (shape (4, 7)); the generalised contact
-force is W_Nᵀ λ_N + W_Tᵀ λ_T with λ_N ≥ 0 compression. Functions are numba-compiled and take
-flat arrays, so they run inside the engines' step loops and from Python alike.
+W_N[c] = ∂g_N/∂u and W_T[c] = ∂U_T/∂u̇ are rows (shape (4, 7)); the generalised contact force
+is W_Nᵀ λ_N + W_Tᵀ λ_T with λ_N ≥ 0 compression. The functions are numba kernels on flat
+arrays, usable inside the engines' step loops and from Python alike.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
 from deckpound.analytic._jit import kernel
+from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, N_CORNERS, Plan
 
-from deckpound.models.scene import Scene
+__all__ = ["pack_corners", "contact_kinematics", "linear_gap", "N_K", "K_G0"]
 
-N_CORNERS = 4
 # DOF indices
-X1, T1, X2, T2, XD, YD, TD = range(7)
+XD, YD, TD = DECK_X, DECK_Y, DECK_THETA
+#: columns of the packed corner table: position, gap, normal, tangent, lever arm, seat pivot
+#: at rest, and the DOF indices of the facing seat
+K_X, K_Y, K_G0, K_NX, K_NY, K_TX, K_TY, K_RX, K_RY, K_PX, K_PY, K_SX, K_ST = range(13)
+N_K = 13
 
 
-def pack_geometry(scene: Scene, gaps: tuple[float, float] | None = None) -> np.ndarray:
-    """Flat geometry array: [x_c(4), y_c(4), g₀(4), side(4), L/2].
+def pack_corners(plan: Plan) -> np.ndarray:
+    """The plan's corner table as a (4, N_K) float array (see the ``K_*`` column constants).
 
-    side is +1 for corners facing seat 1 (left) and −1 for seat 2; ``gaps`` overrides the
-    seats' initial gaps [m].
+    The seat pivot at rest is the mid-point of the seat's contact face: the deck end face's
+    mid-point moved by the gap against the normal, F₀ = (∓L/2, 0) − g₀ n.
     """
-    g = gaps if gaps is not None else (scene.seats[0].gap, scene.seats[1].gap)
-    xc = [c[0] for c in scene.corners]
-    yc = [c[1] for c in scene.corners]
-    g0 = [g[0], g[0], g[1], g[1]]
-    side = [1.0, 1.0, -1.0, -1.0]
-    return np.array(xc + yc + g0 + side + [0.5 * scene.deck.length], dtype=np.float64)
+    out = np.zeros((N_CORNERS, N_K))
+    for c in plan.corners:
+        row = out[c.index]
+        row[K_X], row[K_Y], row[K_G0] = c.x, c.y, c.gap
+        row[K_NX], row[K_NY] = c.normal
+        row[K_TX], row[K_TY] = c.tangent
+        row[K_RX], row[K_RY] = c.lever
+        mid = -plan.half_length if c.seat == 0 else plan.half_length
+        row[K_PX] = mid - c.gap * c.normal[0]
+        row[K_PY] = 0.0 - c.gap * c.normal[1]
+        sx, st = c.seat_dofs
+        row[K_SX], row[K_ST] = sx, st
+    return out
+
+
+@kernel(inline="always")
+def linear_gap(k, u):
+    """Gap of one corner (row k of the corner table) for displacement u, linear kinematics."""
+    sx = int(k[K_SX])
+    st = int(k[K_ST])
+    return (k[K_G0] + k[K_NX] * ((u[XD] - k[K_Y] * u[TD]) - (u[sx] - k[K_RY] * u[st]))
+            + k[K_NY] * ((u[YD] + k[K_X] * u[TD]) - k[K_RX] * u[st]))
+
+
+@kernel(inline="always")
+def linear_gap_rate(k, v):
+    """ġ_N = W_N u̇ of one corner, linear kinematics (the gap formula without g₀)."""
+    sx = int(k[K_SX])
+    st = int(k[K_ST])
+    return (k[K_NX] * ((v[XD] - k[K_Y] * v[TD]) - (v[sx] - k[K_RY] * v[st]))
+            + k[K_NY] * ((v[YD] + k[K_X] * v[TD]) - k[K_RX] * v[st]))
 
 
 @kernel
-def contact_kinematics(u, geom, nonlinear, gap, WN, WT):
+def contact_kinematics(u, corners, nonlinear, gap, WN, WT):
     """Fill gap (4,), WN (4, 7) and WT (4, 7) for displacement u (7,).
 
     Parameters
     ----------
     u : (7,) absolute displacements [m, rad].
-    geom : array from :func:`pack_geometry`.
+    corners : the corner table of :func:`pack_corners`.
     nonlinear : bool, exact (True) or small-rotation (False) kinematics.
     """
-    hl = geom[16]
     for c in range(4):
-        xc, yc, g0, side = geom[c], geom[4 + c], geom[8 + c], geom[12 + c]
-        sx = X1 if side > 0 else X2
-        st = T1 if side > 0 else T2
+        k = corners[c]
+        xc, yc = k[K_X], k[K_Y]
+        sx = int(k[K_SX])
+        st = int(k[K_ST])
         for j in range(7):
             WN[c, j] = 0.0
             WT[c, j] = 0.0
         if not nonlinear:
-            gap[c] = g0 + side * ((u[XD] - yc * u[TD]) - (u[sx] - yc * u[st]))
-            WN[c, XD] = side
-            WN[c, TD] = -side * yc
-            WN[c, sx] = -side
-            WN[c, st] = side * yc
-            WT[c, YD] = 1.0
-            WT[c, TD] = xc
+            nx, ny, tx, ty = k[K_NX], k[K_NY], k[K_TX], k[K_TY]
+            gap[c] = linear_gap(k, u)
+            WN[c, XD] = nx
+            WN[c, YD] = ny
+            WN[c, TD] = -nx * yc + ny * xc
+            WN[c, sx] = -nx
+            WN[c, st] = nx * k[K_RY] - ny * k[K_RX]
+            WT[c, XD] = tx
+            WT[c, YD] = ty
+            WT[c, TD] = -tx * yc + ty * xc
+            WT[c, sx] = -tx
         else:
             th, ths = u[TD], u[st]
             ct, sn = np.cos(th), np.sin(th)
@@ -80,30 +119,53 @@ def contact_kinematics(u, geom, nonlinear, gap, WN, WT):
             dpx = -xc * sn - yc * ct          # ∂P_x/∂θ_d
             dpy = xc * ct - yc * sn           # ∂P_y/∂θ_d
             cs, ss = np.cos(ths), np.sin(ths)
-            fx = -side * (hl + g0) + u[sx]
-            nx, ny = side * cs, side * ss     # unit normal towards the deck
-            rx, ry = px - fx, py
+            nx = k[K_NX] * cs - k[K_NY] * ss  # n = R(θ_s) n₀
+            ny = k[K_NX] * ss + k[K_NY] * cs
+            tx = k[K_TX] * cs - k[K_TY] * ss  # t = R(θ_s) t₀
+            ty = k[K_TX] * ss + k[K_TY] * cs
+            rx = px - (k[K_PX] + u[sx])
+            ry = py - k[K_PY]
             gap[c] = nx * rx + ny * ry
             WN[c, XD] = nx
             WN[c, YD] = ny
             WN[c, TD] = nx * dpx + ny * dpy
             WN[c, sx] = -nx
-            WN[c, st] = side * (-ss * rx + cs * ry)
-            tx, ty = -ss, cs
+            WN[c, st] = -ny * rx + nx * ry    # (∂n/∂θ_s)·(P − F), ∂n/∂θ_s = (−n_y, n_x)
             WT[c, XD] = tx
             WT[c, YD] = ty
             WT[c, TD] = tx * dpx + ty * dpy
-            WT[c, sx] = ss
+            WT[c, sx] = -tx
 
 
-def corner_gaps(scene: Scene, u: np.ndarray, nonlinear: bool = False,
-                gaps: tuple[float, float] | None = None) -> np.ndarray:
-    """Gaps of the four corners for each row of u (n, 7) [m] (vectorised convenience)."""
-    u = np.atleast_2d(np.asarray(u, dtype=float))
-    geom = pack_geometry(scene, gaps)
-    out = np.empty((u.shape[0], 4))
-    WN = np.empty((4, 7))
-    WT = np.empty((4, 7))
-    for i in range(u.shape[0]):
-        contact_kinematics(u[i], geom, nonlinear, out[i], WN, WT)
-    return out
+@kernel
+def gap_hessian(u, corners, c, H):
+    """∂²g_N/∂u² of corner c for the geometrically nonlinear kinematics (7×7, filled)."""
+    k = corners[c]
+    xc, yc = k[K_X], k[K_Y]
+    sx = int(k[K_SX])
+    st = int(k[K_ST])
+    for i in range(7):
+        for j in range(7):
+            H[i, j] = 0.0
+    th, ths = u[TD], u[st]
+    ct, sn = np.cos(th), np.sin(th)
+    cs_, ss = np.cos(ths), np.sin(ths)
+    px = u[XD] + xc * ct - yc * sn
+    py = u[YD] + xc * sn + yc * ct
+    dpx = -xc * sn - yc * ct
+    dpy = xc * ct - yc * sn
+    d2px = -xc * ct + yc * sn
+    d2py = -xc * sn - yc * ct
+    nx = k[K_NX] * cs_ - k[K_NY] * ss
+    ny = k[K_NX] * ss + k[K_NY] * cs_
+    rx = px - (k[K_PX] + u[sx])
+    ry = py - k[K_PY]
+    dnx, dny = -ny, nx                         # ∂n/∂θ_s
+    H[TD, TD] = nx * d2px + ny * d2py
+    H[XD, st] = dnx
+    H[YD, st] = dny
+    H[TD, st] = dnx * dpx + dny * dpy
+    H[sx, st] = -dnx
+    H[st, st] = -(nx * rx + ny * ry)           # ∂²n/∂θ_s² = −n
+    for i in (XD, YD, TD, sx):
+        H[st, i] = H[i, st]

@@ -72,22 +72,17 @@ from numba import njit
 
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.dense import lu_factor, lu_solve
+from deckpound.analytic.nonsmooth import ENERGY_COLUMNS
 from deckpound.analytic.frictional_contact import STATUS_FAILED, solve_contact_impulses_into
 from deckpound.analytic.kinematics import contact_kinematics
 from deckpound.analytic.support_motion import record_at
-from deckpound.analytic.system import (
-    C_BENT as _C_BENT, C_FN as _C_FN, C_FT as _C_FT, C_GAP as _C_GAP, C_T as _C_T, C_U as _C_U,
-    DOF_OF_COLUMN as _DOF_OF_COL)
+from deckpound.analytic.system import C_BENT as _C_BENT
 from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
-    spring_stored_energy, spring_tangent, spring_update_materials
+    spring_stored_energy, spring_tangent, spring_update_materials, store_standard
 
 __all__ = ["moreau_jean_run", "moreau_jean_workspace", "ENERGY_COLUMNS", "N_ENERGY", "ST_OK",
            "ST_NEWTON", "ST_CONTACT", "ST_NONFINITE", "ST_SINGULAR"]
 
-#: Energy columns of the nonsmooth result, in the order the kernel writes them [kJ].
-ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
-                  "energy_hysteretic", "energy_impact", "energy_friction", "energy_numerical",
-                  "energy_error")
 N_ENERGY = len(ENERGY_COLUMNS)
 # info codes
 ST_OK, ST_NEWTON, ST_CONTACT, ST_NONFINITE, ST_SINGULAR = 0, 1, 2, 3, 4
@@ -200,16 +195,8 @@ def _energies(sa, hstate, q, v, ug, W, energy):
 
 
 @kernel
-def _store(out, row, t, q, g, fn, ft, fs, nbs, pn, pt, state, energy):
-    out[row, _C_T] = t
-    for k in range(7):
-        out[row, _C_U + k] = q[_DOF_OF_COL[k]]
-    for c in range(4):
-        out[row, _C_GAP + c] = g[c]
-        out[row, _C_FN + c] = fn[c]
-        out[row, _C_FT + c] = ft[c]
-    for i in range(nbs):
-        out[row, _C_BENT + i] = fs[i]
+def _store(out, row, t, q, v, g, fn, ft, fs, nbs, pn, pt, state, energy):
+    store_standard(out[row], t, q, v, g, fn, ft, fs, nbs)
     base = _C_BENT + nbs
     for c in range(4):
         out[row, base + c] = pn[c]
@@ -286,7 +273,8 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
     W[1] = es0
     contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
     _energies(sa, hstate, q, v, ug, W, energy)
-    _store(out, 0, 0.0, q, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state, energy)
+    _store(out, 0, 0.0, q, v, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state,
+           energy)
     row = 1
     solves = 0
     events = 0
@@ -469,7 +457,7 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
                 fn_out[c] = pn_acc[c] * inv_out
                 ft_out[c] = pt_acc[c] * inv_out
             _energies(sa, hstate, q, v, ug, W, energy)
-            _store(out, row, (n + 1) * h, q, gapo, fn_out, ft_out, fs, nbs, pn_acc, pt_acc,
+            _store(out, row, (n + 1) * h, q, v, gapo, fn_out, ft_out, fs, nbs, pn_acc, pt_acc,
                    state, energy)
             row += 1
             for c in range(4):

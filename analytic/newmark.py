@@ -32,21 +32,16 @@ import numpy as np
 
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._jit import kernel
+from deckpound.analytic.compliance import ENERGY_COLUMNS
 from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.support_motion import record_at
-from deckpound.analytic.system import (
-    C_BENT as _C_BENT, C_FN as _C_FN, C_FT as _C_FT, C_GAP as _C_GAP, C_T as _C_T, C_U as _C_U,
-    DOF_OF_COLUMN as _DOF_OF_COL)
+from deckpound.analytic.system import C_BENT as _C_BENT
 from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
-    spring_revert, spring_stored_energy, spring_tangent, spring_update_materials
+    spring_revert, spring_stored_energy, spring_tangent, spring_update_materials, store_standard
 
 __all__ = ["newmark_run", "newmark_workspace", "ENERGY_COLUMNS", "N_ENERGY", "GAMMA", "BETA",
            "F_CONTACT_SKIP", "F_FACTOR_REUSE", "F_ENERGY", "N_FLAGS"]
 
-#: Energy columns of the compliance result, in the order the kernel writes them [kJ].
-ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
-                  "energy_hysteretic", "energy_contact_stored", "energy_contact_dissipated",
-                  "energy_friction", "energy_error")
 N_ENERGY = len(ENERGY_COLUMNS)
 GAMMA, BETA = 0.5, 0.25
 # work-saving skips of the kernel (flags array; 1 = skip active, the default), see
@@ -56,17 +51,9 @@ N_FLAGS = 3
 
 
 @kernel
-def _store(out, row, t, u, g, lam, lt, hstate, nbs, energy, buf, colsel):
+def _store(out, row, t, u, v, g, lam, lt, fs, nbs, energy, buf, colsel):
     """Output row ``row``: the full row into ``buf``, then the selected columns into ``out``."""
-    buf[_C_T] = t
-    for k in range(7):
-        buf[_C_U + k] = u[_DOF_OF_COL[k]]
-    for c in range(4):
-        buf[_C_GAP + c] = g[c]
-        buf[_C_FN + c] = lam[c]
-        buf[_C_FT + c] = lt[c]
-    for i in range(nbs):
-        buf[_C_BENT + i] = hstate[i, 14]
+    store_standard(buf, t, u, v, g, lam, lt, fs, nbs)
     base = _C_BENT + nbs
     for k in range(energy.shape[0]):
         buf[base + k] = energy[k]
@@ -231,7 +218,7 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
     W[1] = es0
     W[3] = ec0
     _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
-    _store(out, 0, 0.0, u, g, lam, lt, hstate, nbs, energy, buf, colsel)
+    _store(out, 0, 0.0, u, v, g, lam, lt, fs, nbs, energy, buf, colsel)
     row = 1
     total_it = 0
     events = 0
@@ -416,7 +403,8 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
         if (n + 1) % stride == 0:
             if want_energy:
                 _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
-            _store(out, row, (n + 1) * dt, u, g, lam, lt, hstate, nbs, energy, buf, colsel)
+            _store(out, row, (n + 1) * dt, u, v, g, lam, lt, fs, nbs, energy, buf,
+                       colsel)
             row += 1
     info[0] = 0
     info[1] = row

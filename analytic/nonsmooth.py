@@ -1,6 +1,7 @@
 r"""Nonsmooth engine: Moreau–Jean time stepping with rigid, frictional, impacting contact.
 
-Entry point :func:`run_nonsmooth` (the engine contract of :mod:`deckpound.engines`).
+Engine :class:`NonsmoothEngine` (registry name ``nonsmooth``; the contract of
+:mod:`deckpound.engine_contract`); :func:`run_nonsmooth` is the same as a function.
 
 Model
 -----
@@ -44,9 +45,9 @@ v_m = (1−θ)v_k + θv_{k+1}, note Δq = h v_m and v_mᵀMΔv = ΔT + (θ−½)
 * ``energy_numerical`` = Σ (θ − ½) Δvᵀ M Δv ≥ 0, the algorithmic dissipation of θ > ½;
 * ``energy_error`` = input − all the others.
 
-(x)_θ = θ x_{k+1} + (1−θ) x_k. Metadata: the contract's fields plus ``contact_solves`` (contact
-problems solved, Newton re-solves included; also reported as ``iterations``),
-``contact_steps``, ``newton_iterations``, ``max_complementarity`` and ``max_cone_residual``
+(x)_θ = θ x_{k+1} + (1−θ) x_k. Metadata: the contract's fields (``contact_solves``: contact
+problems solved, Newton re-solves included; ``newton_iterations``: Newton iterations of the
+Takeda springs) plus ``contact_steps``, ``max_complementarity`` and ``max_cone_residual``
 (largest verified residuals of :func:`~deckpound.analytic.frictional_contact.
 solve_contact_impulses_into`, m/s), ``max_penetration`` (on the output rows, m) and
 ``energy_error`` (largest |energy_error|, kJ), ``final_u``/``final_v`` (DOF displacements and
@@ -57,60 +58,31 @@ from __future__ import annotations
 
 import dataclasses
 import time as _time
-import warnings
 
 import numpy as np
 
-from deckpound.analytic._hysteretic_kernel import P_S1P
-from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM
-from deckpound.analytic.kinematics import pack_geometry
-from deckpound.analytic.moreau_jean import ENERGY_COLUMNS, ST_CONTACT, ST_NEWTON, ST_NONFINITE, \
-    ST_OK, ST_SINGULAR, moreau_jean_run, moreau_jean_workspace
-from deckpound.analytic.support_motion import support_record
-from deckpound.analytic.system import initial_dofs, pack_system
-from deckpound.engines import output_stride
-from deckpound.models.excitation import SupportMotion, analysis_duration, support_motion
-from deckpound.models.result import Result, \
-    scene_hash, set_status, standard_columns
-from deckpound.models.scene import Contact, Scene
+from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
+from deckpound.models.excitation import SupportMotion, analysis_duration
+from deckpound.models.plan import Plan
+from deckpound.models.scene import NonsmoothSettings, Scene
 
-__all__ = ["run_nonsmooth", "output_columns", "ENERGY_COLUMNS", "moreau_jean_run"]
+__all__ = ["NonsmoothEngine", "run_nonsmooth", "output_columns", "ENERGY_COLUMNS"]
 
-_STATUS_TEXT = {ST_NEWTON: "Newton iteration of the Takeda springs did not converge",
-                ST_CONTACT: "contact problem not solved (no verified solution)",
-                ST_NONFINITE: "non-finite state", ST_SINGULAR: "singular iteration matrix"}
+#: Energy columns of the nonsmooth result, in the order the kernel writes them [kJ].
+ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
+                  "energy_hysteretic", "energy_impact", "energy_friction", "energy_numerical",
+                  "energy_error")
+#: Per-corner extras of the nonsmooth result, in kernel order.
+IMPULSE_COLUMNS = tuple(f"pn_c{c}" for c in range(1, 5)) + tuple(f"pt_c{c}" for c in range(1, 5)) \
+    + tuple(f"state_c{c}" for c in range(1, 5))
 
 
 def output_columns(scene: Scene) -> list[str]:
     """Column names of the nonsmooth result (standard, impulses, contact states, energies)."""
-    cols = standard_columns([b.name for b in scene.bents])
-    cols += [f"pn_c{c}" for c in range(1, 5)] + [f"pt_c{c}" for c in range(1, 5)]
-    cols += [f"state_c{c}" for c in range(1, 5)]
-    return cols + list(ENERGY_COLUMNS)
+    from deckpound.models.plan import standard_columns
 
-
-# ----------------------------------------------------------------------------- engine
-_CONTACT_DEFAULTS = Contact()
-_IGNORED_CONTACT = ("law", "stiffness", "exponent", "bilinear_ratio", "bilinear_yield")
-
-
-def _warn_ignored(scene: Scene) -> None:
-    ct = scene.contact
-    changed = [k for k in _IGNORED_CONTACT if getattr(ct, k) != getattr(_CONTACT_DEFAULTS, k)]
-    if changed:
-        warnings.warn("nonsmooth engine: contact is rigid (Newton impact law with restitution "
-                      f"e); contact.{', contact.'.join(changed)} do not apply", stacklevel=3)
-    if ct.friction > 0.0 and ct.friction_mode == "none":
-        warnings.warn("contact.friction > 0 is ignored because contact.friction_mode = 'none'",
-                      stacklevel=3)
-    elif ct.has_friction:
-        warnings.warn(f"nonsmooth engine: contact.friction_mode = {ct.friction_mode!r} means "
-                      "set-valued Coulomb friction (mu = contact.friction); the slip/stick "
-                      "distinction, contact.tangential_stiffness and contact.slip_velocity do "
-                      "not apply", stacklevel=3)
-    elif ct.friction_mode != "none" and ct.friction == 0.0:
-        warnings.warn(f"contact.friction_mode = {ct.friction_mode!r} has no effect with "
-                      "contact.friction = 0", stacklevel=3)
+    return (standard_columns([b.name for b in scene.bents]) + list(IMPULSE_COLUMNS)
+            + list(ENERGY_COLUMNS))
 
 
 def separating_restitution(e: float, theta: float) -> float:
@@ -121,92 +93,128 @@ def separating_restitution(e: float, theta: float) -> float:
 
 def _force_tolerance(ps, tol: float) -> float:
     """Newton acceptance of the spring-force linearisation mismatch [kN]."""
+    from deckpound.analytic._hysteretic_kernel import P_S1P
+
     hyst = ps.arrays.kind == 1
     scale = float(np.max(np.abs(ps.arrays.hparams[hyst, P_S1P]))) if np.any(hyst) else 1.0
     return tol * max(scale, 1.0)
 
 
+class NonsmoothEngine(Engine):
+    """Rigid unilateral frictional contact, Moreau–Jean time stepping (module docstring)."""
+
+    name = "nonsmooth"
+    title = "nonsmooth Moreau–Jean (Newton impact, set-valued Coulomb friction)"
+    Settings = NonsmoothSettings
+    settings_field = "nonsmooth"
+    step_field = "h"
+    style = dict(color="#c0392b", linestyle=":", linewidth=1.6, label="nonsmooth")
+
+    def reads(self, scene: Scene, settings) -> set[str]:
+        ct = scene.contact
+        read = {"contact.restitution", "contact.geometry"}
+        if ct.friction_mode != "none":
+            read.add("contact.friction")
+        if ct.friction > 0.0:
+            read.add("contact.friction_mode")
+        return read
+
+    def notes(self, scene: Scene, settings) -> list[str]:
+        ct = scene.contact
+        if ct.has_friction:
+            return [f"contact.friction_mode = {ct.friction_mode!r} means set-valued Coulomb "
+                    f"friction (mu = {ct.friction:g}): contact is rigid, so the slip/stick "
+                    "distinction of the compliance laws does not apply"]
+        return []
+
+    def _run(self, plan: Plan, scene: Scene, settings, motion, *,
+             initial_state=None) -> RunOutput:
+        """Extra keyword (not a scene option): ``initial_state = (u0, v0)`` starts from the
+        given DOF displacements and velocities (default rest)."""
+        from deckpound.analytic._jit import ensure_compiled
+        from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM
+        from deckpound.analytic.kinematics import pack_corners
+        from deckpound.analytic.moreau_jean import (ST_CONTACT, ST_NEWTON, ST_NONFINITE, ST_OK,
+                                                    ST_SINGULAR, moreau_jean_run,
+                                                    moreau_jean_workspace)
+        from deckpound.analytic.support_motion import support_record
+        from deckpound.analytic.system import initial_dofs, pack_system
+        from deckpound.models.damping import damping_model
+
+        status_of = {ST_NEWTON: Status.NOT_CONVERGED, ST_CONTACT: Status.CONTACT_UNSOLVED,
+                     ST_NONFINITE: Status.NONFINITE, ST_SINGULAR: Status.SINGULAR}
+        text_of = {ST_NEWTON: "Newton iteration of the Takeda springs did not converge",
+                   ST_CONTACT: "contact problem not solved (no verified solution)",
+                   ST_NONFINITE: "non-finite state", ST_SINGULAR: "singular iteration matrix"}
+        ns_set = settings
+        h, theta = ns_set.h, ns_set.theta
+        duration = analysis_duration(scene, motion)
+        ps = pack_system(plan, damping_model(scene, plan))
+        tb, DG, VGR = support_record(motion, ps.channels)
+        corners = pack_corners(plan)
+        ct = scene.contact
+        mu = float(ct.friction) if ct.has_friction else 0.0
+        mode = MODE_ENUM if ns_set.solver == "enumeration" else MODE_AUTO
+        stride = output_stride(h, scene.run.output_dt)
+        nsteps = int(round(duration / h))
+        nbs = ps.n_bent_springs
+        cols = engine_columns(plan) + list(IMPULSE_COLUMNS) + list(ENERGY_COLUMNS)
+        out = np.zeros((nsteps // stride + 1, len(cols)))
+        info = np.zeros(9, dtype=np.int64)
+        rinfo = np.zeros(2)
+        uv_end = np.zeros((2, 7))
+        hstate = ps.new_state()
+        u0, v0 = initial_dofs(initial_state)
+        ftol = _force_tolerance(ps, ns_set.tolerance)
+        work = moreau_jean_workspace(ps.n_springs, DG.shape[1])
+        args = (ps.arrays, ps.C, hstate, corners, ct.geometry == "nonlinear", tb, DG, VGR,
+                nsteps, h, theta, float(ct.restitution),
+                separating_restitution(ct.restitution, theta), mu, mode,
+                float(ns_set.tolerance), ftol, int(ns_set.max_iterations), stride, nbs, out,
+                info, rinfo, u0, v0, uv_end, work)
+        compile_time = ensure_compiled(moreau_jean_run, *args)
+        t1 = _time.perf_counter()
+        moreau_jean_run(*args)
+        loop = _time.perf_counter() - t1
+        status_code, rows = int(info[0]), int(info[1])
+        ok = status_code == ST_OK
+        steps = nsteps if ok else int(info[2]) - 1
+        columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
+        gaps = np.column_stack([columns[f"gap_c{c}"] for c in range(1, 5)])
+        ein = float(np.max(np.abs(columns["energy_input"]))) if rows else 0.0
+        eerr = float(np.max(np.abs(columns["energy_error"]))) if rows else 0.0
+        extra = {
+            "restitution": float(ct.restitution), "friction": mu,
+            "contact_steps": int(info[5]),
+            "max_step_iterations": int(info[7]),
+            "factorisations": int(info[8]),
+            "max_complementarity": float(rinfo[0]),
+            "max_cone_residual": float(rinfo[1]),
+            "max_penetration": float(max(0.0, -np.min(gaps))) if rows else 0.0,
+            "energy_error": eerr,
+            "energy_closure": eerr / ein if ein > 0 else 0.0,
+            "final_u": uv_end[0].tolist(),
+            "final_v": uv_end[1].tolist(),
+            "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
+            "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
+                           "impact + friction + numerical) [kJ]",
+        }
+        return RunOutput(
+            columns=columns, status=Status.SUCCESS if ok else status_of.get(status_code,
+                                                                            Status.NONFINITE),
+            message=(f"{nsteps} steps, {int(info[5])} with contact, {int(info[3])} contact "
+                     "solves") if ok else text_of.get(status_code, "failure"),
+            failed_step=None if ok else int(info[2]),
+            failed_time=None if ok else int(info[2]) * h,
+            steps=steps, newton_iterations=int(info[6]), contact_solves=int(info[3]),
+            failed_steps=0 if ok else 1, compile_time=compile_time, loop_time=loop,
+            extra=extra)
+
+
 def run_nonsmooth(scene: Scene, motion: SupportMotion | None = None, *,
-                  raise_on_failure: bool = False, initial_state=None) -> Result:
-    """Run the Moreau–Jean nonsmooth engine on ``scene`` (engine contract of
-    :mod:`deckpound.engines`; method and output in the module docstring).
+                  raise_on_failure: bool = False, **options):
+    """Run the nonsmooth engine on ``scene`` (keywords of :meth:`NonsmoothEngine._run`)."""
+    from deckpound.engines import get_engine
 
-    Extra keyword (not a scene option): ``initial_state = (u0, v0)`` starts from the given DOF
-    displacements and velocities (default rest).
-    """
-    _warn_ignored(scene)
-    t0 = _time.perf_counter()
-    ns_set = scene.nonsmooth
-    h, theta = ns_set.h, ns_set.theta
-    if motion is None:
-        motion = support_motion(scene)
-    duration = analysis_duration(scene, motion)
-    ps = pack_system(scene)
-    tb, DG, VGR = support_record(motion, ps.channels)
-    geom = pack_geometry(scene)
-    ct = scene.contact
-    mu = float(ct.friction) if ct.has_friction else 0.0
-    mode = MODE_ENUM if ns_set.solver == "enumeration" else MODE_AUTO
-    stride = output_stride(h, scene.run.output_dt)
-    nsteps = int(round(duration / h))
-    nbs = ps.n_bent_springs
-    cols = output_columns(scene)
-    out = np.zeros((nsteps // stride + 1, len(cols)))
-    info = np.zeros(9, dtype=np.int64)
-    rinfo = np.zeros(2)
-    uv_end = np.zeros((2, 7))
-    hstate = ps.new_state()
-    u0, v0 = initial_dofs(initial_state)
-    ftol = _force_tolerance(ps, ns_set.tolerance)
-    work = moreau_jean_workspace(ps.n_springs, DG.shape[1])
-    t1 = _time.perf_counter()
-    moreau_jean_run(ps.arrays, ps.C, hstate, geom, ct.geometry == "nonlinear", tb, DG, VGR,
-                    nsteps, h, theta,
-                    float(ct.restitution), separating_restitution(ct.restitution, theta), mu,
-                    mode, float(ns_set.tolerance), ftol,
-                    int(ns_set.max_iterations), stride, nbs, out, info, rinfo, u0, v0, uv_end,
-                    work)
-    t2 = _time.perf_counter()
-    status_code, rows = int(info[0]), int(info[1])
-    steps = nsteps if status_code == ST_OK else int(info[2]) - 1
-    columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
-    gaps = np.column_stack([columns[f"gap_c{c}"] for c in range(1, 5)])
-    ein = float(np.max(np.abs(columns["energy_input"]))) if rows else 0.0
-    eerr = float(np.max(np.abs(columns["energy_error"]))) if rows else 0.0
-    meta = {
-        "engine": "nonsmooth",
-        "settings": dataclasses.asdict(ns_set) | {"friction": mu,
-                                                  "restitution": float(ct.restitution)},
-        "scene_hash": scene_hash(scene),
-        "wall_time": t2 - t0,
-        "loop_time": t2 - t1,
-        "us_per_step": 1e6 * (t2 - t1) / max(nsteps, 1),
-        "steps": steps,
-        "iterations": int(info[3]),
-        "contact_solves": int(info[3]),
-        "contact_steps": int(info[5]),
-        "newton_iterations": int(info[6]),
-        "max_step_iterations": int(info[7]),
-        "factorisations": int(info[8]),
-        "contact_events": int(info[4]),
-        "failures": 0 if status_code == ST_OK else 1,
-        "max_complementarity": float(rinfo[0]),
-        "max_cone_residual": float(rinfo[1]),
-        "max_penetration": float(max(0.0, -np.min(gaps))) if rows else 0.0,
-        "energy_error": eerr,
-        "energy_closure": eerr / ein if ein > 0 else 0.0,
-        "duration": duration,
-        "final_u": uv_end[0].tolist(),
-        "final_v": uv_end[1].tolist(),
-        "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
-        "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
-                       "impact + friction + numerical) [kJ]",
-        "iterations_note": "iterations = contact problems solved (Newton re-solves included)",
-    }
-    ok = status_code == ST_OK
-    set_status(meta, engine="nonsmooth", ok=ok, step=int(info[2]), dt=h,
-               message=(f"{nsteps} steps, {int(info[5])} with contact, {int(info[3])} contact "
-                        "solves") if ok else _STATUS_TEXT.get(status_code, "failure"),
-               raise_on_failure=raise_on_failure)
-    return Result(engine="nonsmooth", columns=columns, meta=meta)
-
+    return get_engine("nonsmooth").run(scene, None, motion, raise_on_failure=raise_on_failure,
+                                       **options)

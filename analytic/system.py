@@ -23,7 +23,7 @@ The equation of motion is ``M ü + F(u, u̇) = (contact forces)``.
 
 Usage (Python side)::
 
-    ps = pack_system(scene)            # once per run
+    ps = pack_system(plan, damping)    # once per run
     sa, hstate = ps.arrays, ps.new_state()
     # in a kernel, at a trial (u, u̇) and support motion (u_g, u̇_g):
     spring_deformations(sa, u, v, ug, vg, d, dd)            # d, ḋ
@@ -67,14 +67,13 @@ from deckpound.analytic._hysteretic_kernel import (
     hyst_set_trial,
 )
 from deckpound.analytic.hysteretic import pack_hysteretic
-from deckpound.models import mechanics
-from deckpound.models.scene import Scene, TakedaSpring
+from deckpound.models.damping import DampingModel
+from deckpound.models.plan import DOF_COLUMNS, N_CORNERS, VELOCITY_COLUMNS, Plan
 
 __all__ = [
     "SystemArrays",
     "PackedSystem",
     "pack_system",
-    "takeda_hysteretic_args",
     "spring_deformations",
     "spring_update_materials",
     "spring_assemble",
@@ -104,19 +103,6 @@ SystemArrays = namedtuple(
     ["mass", "B", "S", "bidx", "bval", "bnnz", "schan", "sval", "k0", "cdash", "crate", "kind",
      "hparams", "scal"],
 )
-
-
-def takeda_hysteretic_args(spring: TakedaSpring) -> tuple[float, ...]:
-    """The 13 numbers after the tag of OpenSees ``uniaxialMaterial Hysteretic`` for a bent spring.
-
-    2-point symmetric backbone (F_y, F_y/k0), (F_y + r k0 (d_u − d_y), d_u); pinchX = pinchY = 1,
-    damage1 = damage2 = 0, beta. The OpenSees engine builds the same material.
-    """
-    k0, fy, r, du = spring.stiffness, spring.yield_force, spring.post_yield_ratio, \
-        spring.ultimate_displacement
-    dy = fy / k0
-    fu = fy + r * k0 * (du - dy)
-    return (fy, dy, fu, du, -fy, -dy, -fu, -du, 1.0, 1.0, 0.0, 0.0, spring.beta)
 
 
 @dataclass(frozen=True)
@@ -157,53 +143,44 @@ class PackedSystem:
         return st
 
 
-def pack_system(scene: Scene) -> PackedSystem:
-    """Pack the scene's mass, springs, dashpots, Rayleigh damping and Takeda materials."""
-    B, S = mechanics.spring_matrices(scene)
-    k0 = mechanics.spring_stiffness(scene)
-    cdash = mechanics.spring_damping(scene)
-    a0, a1, omega = mechanics.rayleigh_coefficients(scene)
-    mass = np.diag(mechanics.mass_matrix(scene)).copy()
-    ns, nch = S.shape
-    nb2 = 2 * len(scene.bents)
+def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
+    """Pack the plan model's mass, springs, dashpots, damping and Takeda materials."""
+    B, S = plan.spring_matrices
+    k0 = plan.k0
+    mass = plan.mass.copy()
+    ns = plan.n_springs
     bidx = np.zeros((ns, 2), dtype=np.int64)
     bval = np.zeros((ns, 2))
     bnnz = np.zeros(ns, dtype=np.int64)
     schan = -np.ones(ns, dtype=np.int64)
     sval = np.zeros(ns)
-    for i in range(ns):
-        nz = np.flatnonzero(B[i])
-        if len(nz) > 2:
-            raise ValueError("spring_matrices: more than 2 non-zeros in a row of B")
-        bnnz[i] = len(nz)
-        bidx[i, :len(nz)] = nz
-        bval[i, :len(nz)] = B[i, nz]
-        nzs = np.flatnonzero(S[i])
-        if len(nzs) > 1:
-            raise ValueError("spring_matrices: more than 1 non-zero in a row of S")
-        if len(nzs):
-            schan[i] = nzs[0]
-            sval[i] = S[i, nzs[0]]
     kind = np.zeros(ns, dtype=np.int64)
     hparams = np.zeros((ns, N_PARAMS))
-    names = []
-    for j, b in enumerate(scene.bents):
-        for a, spring in enumerate((b.x, b.y)):
-            i = 2 * j + a
+    for i, spring in enumerate(plan.springs):
+        if len(spring.dofs) > 2:
+            raise ValueError(f"spring {spring.name}: more than 2 DOFs in its deformation")
+        bnnz[i] = len(spring.dofs)
+        bidx[i, :len(spring.dofs)] = spring.dofs
+        bval[i, :len(spring.dofs)] = spring.coefs
+        if spring.channel >= 0:
+            schan[i] = spring.channel
+            sval[i] = spring.channel_coef
+        if spring.kind == "takeda":
             kind[i] = KIND_HYSTERETIC
-            hparams[i] = pack_hysteretic(*takeda_hysteretic_args(spring), element_copy=True)
-            names.append(f"{b.name}_{'xy'[a]}")
-    names += ["seat1_x", "seat1_theta", "seat2_x", "seat2_theta"]
-    crate = a1 * k0 + cdash
+            hparams[i] = pack_hysteretic(*spring.takeda, element_copy=True)
+    cdash = damping.dashpots.astype(float)
+    crate = damping.rate_coefficients(plan)
+    a0, a1 = damping.a0, damping.a1
     arrays = SystemArrays(mass=mass, B=np.ascontiguousarray(B), S=np.ascontiguousarray(S),
                           bidx=bidx, bval=bval, bnnz=bnnz, schan=schan, sval=sval,
-                          k0=k0.astype(float), cdash=cdash.astype(float), crate=crate,
+                          k0=k0.astype(float), cdash=cdash, crate=crate,
                           kind=kind, hparams=hparams, scal=np.array([a0, a1]))
     C = np.diag(a0 * mass) + B.T @ (crate[:, None] * B)
     K0 = B.T @ (k0[:, None] * B)
     return PackedSystem(arrays=arrays, C=C, K0=K0, a0=float(a0), a1=float(a1),
-                        omega=(float(omega[0]), float(omega[1])), spring_names=tuple(names),
-                        channels=mechanics.support_channels(scene), n_bent_springs=nb2)
+                        omega=(float(damping.omega[0]), float(damping.omega[1])),
+                        spring_names=tuple(sp.name for sp in plan.springs),
+                        channels=plan.channels, n_bent_springs=plan.n_bent_springs)
 
 
 # --------------------------------------------------------------------------- kernels
@@ -355,9 +332,32 @@ def initial_dofs(initial_state) -> tuple[np.ndarray, np.ndarray]:
     return u0, v0
 
 
-# Output array layout of the analytic engines' compiled loops (one place for both): time,
-# the 7 result DOF columns, gaps, normal and tangential forces, then the bent forces.
-C_T, C_U, C_GAP, C_FN, C_FT, C_BENT = 0, 1, 8, 12, 16, 20
-#: DOF index of each result column deck_x, deck_y, deck_theta, seat1_x, seat1_theta, seat2_x,
-#: seat2_theta (the DOF vector is [x1, θ1, x2, θ2, x_d, y_d, θ_d])
-DOF_OF_COLUMN = np.array([4, 5, 6, 0, 1, 2, 3], dtype=np.int64)
+# Output array layout of the analytic engines' compiled loops, in the order of
+# deckpound.engine_contract.engine_columns: time, the absolute displacement columns, the
+# velocity columns, gaps, normal and tangential forces, then the bent forces.
+C_T = 0
+C_U = 1
+C_V = C_U + len(DOF_COLUMNS)
+C_GAP = C_V + len(VELOCITY_COLUMNS)
+C_FN = C_GAP + N_CORNERS
+C_FT = C_FN + N_CORNERS
+C_BENT = C_FT + N_CORNERS
+#: DOF index of each displacement (and velocity) column, from the plan model
+DOF_OF_COLUMN = np.array([dof for _, dof in DOF_COLUMNS], dtype=np.int64)
+
+
+@kernel
+def store_standard(row, t, u, v, g, fn, ft, fs, nbs):
+    """Fill the engine columns of one output row (layout ``C_*`` above): time, absolute
+    displacements and velocities, gaps, normal and tangential contact forces, bent forces."""
+    row[C_T] = t
+    for k in range(DOF_OF_COLUMN.shape[0]):
+        j = DOF_OF_COLUMN[k]
+        row[C_U + k] = u[j]
+        row[C_V + k] = v[j]
+    for c in range(4):
+        row[C_GAP + c] = g[c]
+        row[C_FN + c] = fn[c]
+        row[C_FT + c] = ft[c]
+    for i in range(nbs):
+        row[C_BENT + i] = fs[i]

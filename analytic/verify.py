@@ -5,7 +5,9 @@
 step and Newton tolerance and reports, per standard result column, the largest deviation
 relative to the column's peak, plus the speed ratio. On the benchmark (frictionless linear gap,
 tolerance 1e-12) the two agree to ~1e-9 of the peaks over the whole record with identical
-Newton iteration counts.
+Newton iteration counts. Velocities are compared separately (``worst_velocity``): Newmark's
+u̇_{n+1} = (2/Δt)(u_{n+1} − u_n) − u̇_n amplifies the round-off of the displacements by 2/Δt,
+so the light, stiff seat rotations agree to ~1e-9 of their peak velocity rather than ~1e-11.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import dataclasses
 
 import numpy as np
 
-from deckpound.models.result import standard_columns
+from deckpound.models.plan import column_unit, standard_columns
 from deckpound.models.scene import Scene
 
 __all__ = ["verify_clone", "column_deviations"]
@@ -61,15 +63,19 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
     rc = run_compliance(sc, motion)
     cols = [c for c in standard_columns([b.name for b in sc.bents]) if c != "t"]
     dev = column_deviations(ro.columns, rc.columns, cols)
-    worst = max(dev.items(), key=lambda kv: kv[1])
+    velocity = {c for c in cols if column_unit(c) in ("m/s", "rad/s")}
+    worst = max(((c, d) for c, d in dev.items() if c not in velocity), key=lambda kv: kv[1])
+    worst_velocity = max(((c, d) for c, d in dev.items() if c in velocity),
+                         key=lambda kv: kv[1])
     steps = max(int(ro.meta.get("steps", 1)), 1)
     return {
         "deviation": dev,
         "worst": worst,
+        "worst_velocity": worst_velocity,
         "speed_ratio": ro.meta["wall_time"] / rc.meta["wall_time"],
         "us_per_step": {"opensees": 1e6 * ro.meta["wall_time"] / steps,
                         "compliance": rc.meta["us_per_step"]},
-        "iterations": {"opensees": ro.meta.get("iterations"),
-                       "compliance": rc.meta.get("iterations")},
+        "iterations": {"opensees": ro.meta.get("newton_iterations"),
+                       "compliance": rc.meta.get("newton_iterations")},
         "status": {"opensees": ro.meta["status"], "compliance": rc.meta["status"]},
     }

@@ -89,7 +89,7 @@ REFERENCES = {
 #: The response whose peak error is the x axis of the work–precision plot and of the speed
 #: ratio: the deck rotation, except for the single longitudinal pulse (a symmetric,
 #: rotation-free response, where the peak rotation is round-off) — there the deck x.
-PRIMARY = {"single-impact": "deck_x"}
+PRIMARY = {"single-impact": "deck_x_rel"}
 
 
 def _rel_peak_error(result, ref, col) -> float:
@@ -100,11 +100,11 @@ def _rel_peak_error(result, ref, col) -> float:
 def errors(result, ref, primary: str = "deck_theta") -> dict[str, float]:
     """Relative peak errors, rotation-history NRMSE and the primary error ``err_primary`` (the
     relative peak error of ``primary``) of a result against a reference."""
-    al = align({"x": result, "ref": ref}, columns=["deck_theta", "deck_y", "deck_x"])
+    al = align({"x": result, "ref": ref}, columns=["deck_theta", "deck_y_rel", "deck_x_rel"])
     out = {
         "err_peak_theta": _rel_peak_error(result, ref, "deck_theta"),
-        "err_peak_y": _rel_peak_error(result, ref, "deck_y"),
-        "err_peak_x": _rel_peak_error(result, ref, "deck_x"),
+        "err_peak_y": _rel_peak_error(result, ref, "deck_y_rel"),
+        "err_peak_x": _rel_peak_error(result, ref, "deck_x_rel"),
         "nrmse_theta": nrmse(al["x"]["deck_theta"].to_numpy(), al["ref"]["deck_theta"].to_numpy()),
     }
     out["err_primary"] = _rel_peak_error(result, ref, primary)

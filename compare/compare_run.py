@@ -14,7 +14,7 @@ from .align import align, write_tables
 from .cases import Case, ResultCache, run_cases
 from .metrics import compare_pair, summary
 
-QUANTITIES = ["deck_theta", "deck_y", "deck_x", "seat1_x", "seat2_x", "gap_c1", "gap_c3"]
+QUANTITIES = ["deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel", "gap_c1", "gap_c3"]
 
 
 def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
@@ -55,9 +55,9 @@ def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
     figures.plan_snapshot(results, scene, figs / "plan_at_peak_rotation.png")
     lines = []
     for label, r in results.items():
-        s = summary(r, ["deck_theta", "deck_y"])
+        s = summary(r, ["deck_theta", "deck_y_rel"])
         lines.append(f"{label:11s} {r.meta.get('status')}: peak θ {1e3 * s['peak_deck_theta']:.3f} mrad, "
-                     f"peak y {1e3 * s['peak_deck_y']:.2f} mm, {s['contact_events']} closures, "
+                     f"peak y rel. tables {1e3 * s['peak_deck_y_rel']:.2f} mm, {s['gap_closures']} gap closures, "
                      f"{r.meta.get('wall_time', float('nan')):.2f} s")
     lines.append(f"wrote {out}")
     return "\n".join(lines)

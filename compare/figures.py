@@ -7,25 +7,25 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound.models.excitation import support_motion
+from deckpound.engines import engine_names
+from deckpound.models.plan import plan_of
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
-from deckpound.models.sequence import bent_deformations
 
 from .style import CYCLE, engine_style, new_figure, save
 
 FORMATS = ("pdf",)
 LABELS = {
     "deck_theta": ("deck rotation θ_d", 1e3, "mrad"),
-    "deck_y": ("deck transverse y_d", 1e3, "mm"),
-    "deck_x": ("deck longitudinal x_d", 1e3, "mm"),
+    "deck_y_rel": ("deck transverse y_d rel. tables", 1e3, "mm"),
+    "deck_x_rel": ("deck longitudinal x_d rel. tables", 1e3, "mm"),
 }
 
 
 def _style_for(label: str, k: int) -> dict:
     engine = label.split()[0]
     st = engine_style(engine)
-    if engine not in ("opensees", "compliance", "nonsmooth", "measured"):
+    if engine not in engine_names() and engine != "measured":
         st = dict(CYCLE[k % len(CYCLE)])
         st.pop("marker", None)
         st.pop("markersize", None)
@@ -34,7 +34,7 @@ def _style_for(label: str, k: int) -> dict:
 
 
 def histories(results: dict[str, Result], scene: Scene, path: str | Path,
-              quantities: tuple[str, ...] = ("deck_theta", "deck_y"), title: str = "") -> list[Path]:
+              quantities: tuple[str, ...] = ("deck_theta", "deck_y_rel"), title: str = "") -> list[Path]:
     """Time histories of quantities overlaid per engine/case (paper Figs. 4–6 style)."""
     fig, axes = new_figure(len(quantities), 1, width=7.5, height=2.2, sharex=True)
     for i, q in enumerate(quantities):
@@ -74,7 +74,7 @@ def peak_vs_pga(table: pd.DataFrame, scene: Scene, path: str | Path,
     """Peak deck rotation vs run PGA over the sequence, one line per engine (paper Fig. 7)."""
     fig, axes = new_figure(1, 1, width=5.5, height=3.2)
     ax = axes[0, 0]
-    markers = {"opensees": "o", "compliance": "s", "nonsmooth": "^"}
+    markers = {e: CYCLE[k % len(CYCLE)]["marker"] for k, e in enumerate(engine_names())}
     for engine, g in table.groupby("engine", sort=False):
         base, _, variant = engine.partition(" ")
         st = engine_style(base)
@@ -139,14 +139,14 @@ def study_figure(study, scene: Scene, cases, results: dict[str, Result], table: 
 
 
 def hysteresis(result: Result, scene: Scene, path: str | Path, title: str = "") -> list[Path]:
-    """Bent force–deformation loops (Takeda springs), x and y, one panel per bent."""
-    motion = support_motion(scene)
-    d = bent_deformations(scene, result, motion)
+    """Bent force–deformation loops (Takeda springs), x and y, one panel per bent (the result's
+    ``<bent>_fx``/``<bent>_dx`` columns: nothing is recomputed from the excitation)."""
     fig, axes = new_figure(2, len(scene.bents), width=3.0 * len(scene.bents), height=2.4)
     for i, b in enumerate(scene.bents):
         for j, axis in enumerate(("x", "y")):
             ax = axes[j, i]
-            ax.plot(1e3 * d[:, i, j], result[f"{b.name}_f{axis}"], color="k", linewidth=0.7)
+            ax.plot(1e3 * result[f"{b.name}_d{axis}"], result[f"{b.name}_f{axis}"], color="k",
+                    linewidth=0.7)
             ax.set_title(f"{b.name} {axis}")
             ax.set_xlabel("deformation [mm]")
             ax.set_ylabel("force [kN]")
@@ -155,26 +155,42 @@ def hysteresis(result: Result, scene: Scene, path: str | Path, title: str = "") 
     return save(fig, path, scene.name, FORMATS)
 
 
+#: the state columns a plan-view outline reads: displacements relative to the supports, so the
+#: picture shows the gaps and the rotation rather than the ground's translation
+OUTLINE_COLUMNS = ("deck_x_rel", "deck_y_rel", "deck_theta", "seat1_x_rel", "seat1_theta",
+                   "seat2_x_rel", "seat2_theta")
+
+
 def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.ndarray]:
-    """Deck and seat outlines (closed polygons, metres) at one state, displacements × scale."""
-    L, W = scene.deck.length, scene.deck.width
+    """Deck and seat outlines (closed polygons, metres) at one state, displacements × scale.
+
+    The deck is the plan model's corner polygon (a parallelogram for a skewed deck) moved by
+    its displacement relative to the shake tables; each seat is a block behind its contact face
+    (the facing points of its two corners, g₀ behind the deck end along the normal), moved by
+    its displacement relative to its actuator and rotated about its pivot.
+    """
+    plan = plan_of(scene)
     th = scale * row["deck_theta"]
     c, s = np.cos(th), np.sin(th)
-    box = np.array([[-L / 2, -W / 2], [L / 2, -W / 2], [L / 2, W / 2], [-L / 2, W / 2],
-                    [-L / 2, -W / 2]])
-    deck = np.column_stack([scale * row["deck_x"] + c * box[:, 0] - s * box[:, 1],
-                            scale * row["deck_y"] + s * box[:, 0] + c * box[:, 1]])
+    k = {cn.name: cn for cn in plan.corners}
+    box = np.array([[k[n].x, k[n].y] for n in ("c1", "c3", "c4", "c2", "c1")])
+    deck = np.column_stack([scale * row["deck_x_rel"] + c * box[:, 0] - s * box[:, 1],
+                            scale * row["deck_y_rel"] + s * box[:, 0] + c * box[:, 1]])
     out = {"deck": deck}
-    depth = 0.6
-    for k, side in ((1, -1.0), (2, 1.0)):
-        gap = scene.seats[k - 1].gap
-        face = side * (L / 2 + gap)
-        seat = np.array([[0, -W / 2 - 0.3], [side * depth, -W / 2 - 0.3], [side * depth, W / 2 + 0.3],
-                         [0, W / 2 + 0.3], [0, -W / 2 - 0.3]])
-        ts = scale * row[f"seat{k}_theta"]
+    depth, overhang = 0.6, 0.3
+    for j in (1, 2):
+        a, b = (k["c1"], k["c2"]) if j == 1 else (k["c3"], k["c4"])
+        n, t = np.array(a.normal), np.array(a.tangent)
+        fa = np.array([a.x, a.y]) - a.gap * n - overhang * t
+        fb = np.array([b.x, b.y]) - b.gap * n + overhang * t
+        seat = np.array([fa, fb, fb - depth * n, fa - depth * n, fa])
+        pivot = 0.5 * (np.array([a.x, a.y]) + np.array([b.x, b.y])) - a.gap * n
+        ts = scale * row[f"seat{j}_theta"]
         cs, ss = np.cos(ts), np.sin(ts)
-        out[f"seat{k}"] = np.column_stack([face + scale * row[f"seat{k}_x"] + cs * seat[:, 0] - ss * seat[:, 1],
-                                           ss * seat[:, 0] + cs * seat[:, 1]])
+        rel = seat - pivot
+        out[f"seat{j}"] = np.column_stack([
+            pivot[0] + scale * row[f"seat{j}_x_rel"] + cs * rel[:, 0] - ss * rel[:, 1],
+            pivot[1] + ss * rel[:, 0] + cs * rel[:, 1]])
     return out
 
 
@@ -184,8 +200,7 @@ def plan_snapshot(results: dict[str, Result], scene: Scene, path: str | Path,
     fig, axes = new_figure(len(results), 1, width=8.0, height=2.0)
     for i, (label, r) in enumerate(results.items()):
         k = int(np.argmax(np.abs(r["deck_theta"])))
-        row = {q: r[q][k] for q in ("deck_x", "deck_y", "deck_theta", "seat1_x",
-                                    "seat1_theta", "seat2_x", "seat2_theta")}
+        row = {q: r[q][k] for q in OUTLINE_COLUMNS}
         ax = axes[i, 0]
         rest = outlines(scene, {q: 0.0 for q in row}, 1.0)
         for name, poly in rest.items():
@@ -195,7 +210,7 @@ def plan_snapshot(results: dict[str, Result], scene: Scene, path: str | Path,
                     edgecolor="k", linewidth=1.0, alpha=0.8)
         ax.set_aspect("equal")
         ax.set_title(f"{label}: t = {r.t[k]:.2f} s, θ_d = {1e3 * row['deck_theta']:.2f} mrad "
-                     f"(displacements × {scale:g})")
+                     f"(displacements relative to the supports × {scale:g})")
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
     return save(fig, path, scene.name, FORMATS)

@@ -7,8 +7,8 @@ For a quantity x (test) and r (reference) on one time base t:
 * NRMSE           √(mean((x − r)²)) / P(r)          (normalised by the reference peak)
 * correlation     Pearson ρ(x, r) (NaN when either is constant)
 * residual        mean of x over the last 2 % of the record (permanent offset)
-* contact events  number of closures of a gap: samples where g goes from > 0 to ≤ 0, and
-  their times
+* gap closures    closures of a gap on the output rows (g goes from > 0 to ≤ 0) and their
+  times — the one definition, :func:`deckpound.models.result.gap_closures`
 
 Peaks and times are taken on each engine's own (native) output, so alignment cannot blunt them.
 """
@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from deckpound.models.result import Result
+from deckpound.models.result import Result, closure_times
 
 
 def peak(x: np.ndarray) -> float:
@@ -45,16 +45,11 @@ def residual(x: np.ndarray, frac: float = 0.02) -> float:
     return float(np.mean(x[-n:]))
 
 
-def closure_times(t: np.ndarray, gap: np.ndarray) -> np.ndarray:
-    """Times at which a gap closes (goes from > 0 to ≤ 0)."""
-    closing = (gap[1:] <= 0.0) & (gap[:-1] > 0.0)
-    return t[1:][closing]
-
-
-def contact_events(result: Result) -> dict[str, list[float]]:
-    """Closure times per corner."""
-    return {f"c{c}": closure_times(result.t, result[f"gap_c{c}"]).tolist() for c in range(1, 5)
-            if f"gap_c{c}" in result.columns}
+def closure_times_per_corner(result: Result) -> dict[str, list[float]]:
+    """Gap closure times per corner (their counts are ``result.meta["gap_closures_per_corner"]``)."""
+    return {f"c{c}": closure_times(result.t, result[f"gap_c{c}"],
+                                   result.columns.get(f"fn_c{c}")).tolist()
+            for c in range(1, 5) if f"gap_c{c}" in result.columns}
 
 
 def summary(result: Result, quantities: list[str]) -> dict[str, float]:
@@ -64,8 +59,7 @@ def summary(result: Result, quantities: list[str]) -> dict[str, float]:
         out[f"peak_{q}"] = peak(result[q])
         out[f"tpeak_{q}"] = time_of_peak(result.t, result[q])
         out[f"residual_{q}"] = residual(result[q])
-    ev = contact_events(result)
-    out["contact_events"] = sum(len(v) for v in ev.values())
+    out["gap_closures"] = result.gap_closures
     return out
 
 

@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from deckpound import __version__
+from deckpound.engines import DEFAULT_REFERENCE, engine_names, engine_style
 from deckpound.models.result import scene_hash
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import scene_to_toml
@@ -28,12 +29,11 @@ from deckpound.models.scene_io import scene_to_toml
 from . import figures
 from .align import align, write_tables
 from .cases import ResultCache
-from .metrics import compare_pair, contact_events, peak
+from .metrics import compare_pair, peak
 from .sequence_run import run_sequences
 from .studies import STUDIES, run_study
 
-ENGINES = ("opensees", "compliance", "nonsmooth")
-QUANTITIES = ["deck_theta", "deck_y", "deck_x", "seat1_x", "seat2_x"]
+QUANTITIES = ["deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel"]
 
 
 def friction_variant(scene: Scene) -> tuple[Scene, str]:
@@ -55,10 +55,10 @@ def sequence_table(sequences: dict) -> pd.DataFrame:
                        gap1_start=run.state.gaps[0], gap2_start=run.state.gaps[1])
             for b, (kx, ky) in zip(run.scene.bents, run.state.stiffness):
                 row[f"{b.name}_kx"], row[f"{b.name}_ky"] = kx, ky
-            row.update(peak_theta=peak(r["deck_theta"]), peak_y=peak(r["deck_y"]),
-                       peak_x=peak(r["deck_x"]),
+            row.update(peak_theta=peak(r["deck_theta"]), peak_y=peak(r["deck_y_rel"]),
+                       peak_x=peak(r["deck_x_rel"]),
                        peak_fn=max(peak(r[f"fn_c{c}"]) for c in range(1, 5)),
-                       contact_events=sum(len(v) for v in contact_events(r).values()),
+                       gap_closures=r.gap_closures,
                        wall_time=r.meta.get("wall_time", np.nan))
             rows.append(row)
     return pd.DataFrame(rows)
@@ -66,9 +66,17 @@ def sequence_table(sequences: dict) -> pd.DataFrame:
 
 def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: int | None = None,
               scheduler: str | None = None, cache_dir: str | Path | None = None,
-              studies: tuple[str, ...] | None = None, progress: bool = True) -> Path:
-    """Run the whole comparison and write the report folder; returns the report.md path."""
+              studies: tuple[str, ...] | None = None, progress: bool = True,
+              engines: tuple[str, ...] | None = None, reference: str = DEFAULT_REFERENCE) -> Path:
+    """Run the whole comparison and write the report folder; returns the report.md path.
+
+    ``engines`` (default: every registered engine) run the sequence; the others are compared
+    against ``reference``.
+    """
     t0 = time.perf_counter()
+    ENGINES = tuple(engines) if engines is not None else engine_names()
+    if reference not in ENGINES:
+        ENGINES = (reference,) + ENGINES
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     cache_dir = Path(cache_dir) if cache_dir is not None else out / "cache"
@@ -92,14 +100,14 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
     n_runs = min(len(v) for v in sequences.values())
     for i in range(n_runs):
         results = {e: sequences[e][i].result for e in ENGINES}
-        run = sequences["opensees"][i]
+        run = sequences[reference][i]
         tag = f"run{run.index}"
         figures.histories(results, run.scene, figs / f"{tag}_histories.png",
                           title=f"run {run.index}: {run.pga:g} g transverse")
         aligned = align(results)
         write_tables(aligned, tables / tag)
-        for e in ("compliance", "nonsmooth"):
-            m = compare_pair(results[e], results["opensees"], aligned[e], aligned["opensees"],
+        for e in (e for e in ENGINES if e != reference):
+            m = compare_pair(results[e], results[reference], aligned[e], aligned[reference],
                              QUANTITIES)
             m.insert(0, "engine", e)
             m.insert(0, "run", run.index)
@@ -108,11 +116,11 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
     metrics.to_csv(tables / "metrics_vs_opensees.csv", index=False)
     last = n_runs - 1
     strongest = {e: sequences[e][last].result for e in ENGINES}
-    s_scene = sequences["opensees"][last].scene
+    s_scene = sequences[reference][last].scene
     figures.contact_forces(strongest, s_scene, figs / "contact_forces_strongest.png",
                            title=f"run {last + 1}: normal contact force per corner")
-    figures.hysteresis(strongest["compliance"], s_scene, figs / "bent_hysteresis_strongest.png",
-                       title=f"run {last + 1}: bent hysteresis (compliance engine)")
+    figures.hysteresis(strongest[reference], s_scene, figs / "bent_hysteresis_strongest.png",
+                       title=f"run {last + 1}: bent hysteresis ({reference} engine)")
     figures.plan_snapshot(strongest, s_scene, figs / "plan_at_peak_rotation.png")
 
     # 3. studies
@@ -124,7 +132,7 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
         study_tables[name] = table
 
     wall = time.perf_counter() - t0
-    return write_report(out, scene, seq, metrics, study_tables, wall, cache)
+    return write_report(out, scene, seq, metrics, study_tables, wall, cache, reference)
 
 
 # -- report --------------------------------------------------------------------------------
@@ -139,15 +147,15 @@ def _md_table(frame: pd.DataFrame, floatfmt: str = ".4g") -> str:
     return "\n".join(lines)
 
 
-def headline_sentences(seq: pd.DataFrame) -> list[str]:
+def headline_sentences(seq: pd.DataFrame, reference: str = DEFAULT_REFERENCE) -> list[str]:
     """The paper's comparison in words: peak rotation of the strongest run per engine/variant."""
     last = seq[seq["run"] == seq["run"].max()].set_index("engine")
-    base = last.loc["opensees", "peak_theta"] if "opensees" in last.index else np.nan
+    base = last.loc[reference, "peak_theta"] if reference in last.index else np.nan
     out = [f"Strongest run ({last['pga'].iloc[0]:g} g, run {int(seq['run'].max())}): peak deck "
            "rotation " + "; ".join(f"{e} {1e3 * r['peak_theta']:.3f} mrad"
-                                   f" ({r['peak_theta'] / base:.3f} × OpenSees)"
+                                   f" ({r['peak_theta'] / base:.3f} × {reference})"
                                    for e, r in last.iterrows()) + "."]
-    closes = seq[seq["contact_events"] > 0].groupby("engine")["run"].min()
+    closes = seq[seq["gap_closures"] > 0].groupby("engine")["run"].min()
     if len(closes):
         out.append("First run in which the gaps close: " + ", ".join(
             f"{e} run {int(r)}" for e, r in closes.items()) + ".")
@@ -155,13 +163,15 @@ def headline_sentences(seq: pd.DataFrame) -> list[str]:
 
 
 def write_report(out: Path, scene: Scene, seq: pd.DataFrame, metrics: pd.DataFrame,
-                 studies: dict[str, pd.DataFrame], wall: float, cache: ResultCache) -> Path:
+                 studies: dict[str, pd.DataFrame], wall: float, cache: ResultCache,
+                 reference: str = DEFAULT_REFERENCE) -> Path:
     """report.md and report.html from the tables (figures referenced relatively)."""
     seq_view = seq[["run", "pga", "engine", "gap1_start", "gap2_start", "peak_theta", "peak_y",
-                    "contact_events", "wall_time", "status"]].copy()
+                    "gap_closures", "wall_time", "status"]].copy()
     seq_view["peak_theta"] = 1e3 * seq_view["peak_theta"]
     seq_view["peak_y"] = 1e3 * seq_view["peak_y"]
-    seq_view = seq_view.rename(columns={"peak_theta": "peak θ [mrad]", "peak_y": "peak y [mm]",
+    seq_view = seq_view.rename(columns={"peak_theta": "peak θ [mrad]",
+                                        "peak_y": "peak y rel. tables [mm]",
                                         "gap1_start": "gap1 [m]", "gap2_start": "gap2 [m]",
                                         "wall_time": "wall [s]"})
     assumptions = {k: v for k, v in scene.notes.items() if v.upper().startswith("ASSUMPTION")}
@@ -184,14 +194,16 @@ def write_report(out: Path, scene: Scene, seq: pd.DataFrame, metrics: pd.DataFra
         f"(longitudinal × {scene.excitation.longitudinal_ratio:g}); gap carried: "
         f"{scene.sequence.carry_gap}, stiffness carried: {scene.sequence.carry_stiffness}.",
     ]))
-    sections.append(("Headline: the 7-run sequence", headline_sentences(seq) + [
+    sections.append(("Headline: the 7-run sequence", headline_sentences(seq, reference) + [
         "![peak rotation vs PGA](figures/peak_rotation_vs_pga.png)",
         ("table", seq_view),
     ]))
     if len(metrics):
         strong = metrics[metrics["run"] == metrics["run"].max()]
-        sections.append(("Engines against OpenSees (strongest run)", [
-            "Peak ratio = engine peak / OpenSees peak; NRMSE normalised by the OpenSees peak.",
+        ref_label = engine_style(reference)["label"]
+        sections.append((f"Engines against {ref_label} (strongest run)", [
+            f"Peak ratio = engine peak / {ref_label} peak; NRMSE normalised by the {ref_label} "
+            "peak. Displacements are relative to the supports (shake tables, actuators).",
             ("table", strong[["engine", "quantity", "peak", "peak_ref", "peak_ratio", "nrmse",
                               "correlation"]]),
             f"![histories](figures/run{int(metrics['run'].max())}_histories.png)",

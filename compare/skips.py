@@ -167,7 +167,7 @@ def run_skips(base: Scene, out: str | Path, *, quick: bool = False, repeats: int
                                  time_without=t_without, saving=1.0 - t_with / t_without,
                                  speedup=t_without / t_with, us_per_step_with=1e6 * t_with / n,
                                  us_per_step_without=1e6 * t_without / n, max_abs_diff=diff,
-                                 identical=diff == 0.0, contact_events=ref.meta["contact_events"],
+                                 identical=diff == 0.0, gap_closures=ref.gap_closures,
                                  note=note))
 
             for skip in SKIPS:
@@ -212,7 +212,7 @@ def run_skips(base: Scene, out: str | Path, *, quick: bool = False, repeats: int
                            speedup=t_off / row["time_with"],
                            us_per_step_with=1e6 * row["time_with"] / n,
                            us_per_step_without=1e6 * t_off / n, max_abs_diff=diff,
-                           identical=diff == 0.0, contact_events=ref.meta["contact_events"],
+                           identical=diff == 0.0, gap_closures=ref.gap_closures,
                            note="Hysteretic kernel pow short-circuit (child process)")
     table = pd.DataFrame(rows)
     steps = pd.DataFrame(steps_rows)

@@ -20,13 +20,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from deckpound.engines import engine_names, get_engine
 from deckpound.models.scene import Scene
 
 from .guarded import run_guarded
 from .studies import modified
 
-ENGINES = ("opensees", "compliance", "nonsmooth")
-STEP_FIELD = {"opensees": "opensees.dt", "compliance": "compliance.dt", "nonsmooth": "nonsmooth.h"}
+def step_field(engine: str) -> str:
+    """Dotted scene path of an engine's time step (declared by the engine)."""
+    e = get_engine(engine)
+    return f"{e.settings_field}.{e.step_field}"
 
 FULL = dict(stiffness=[1e4, 1e6, 1e8, 1e10], dt=[1e-5, 1e-4, 1e-3, 1e-2],
             pga=[0.05, 0.5, 1.0, 2.0], gap=[0.0, 0.0127, 0.1], friction=[0.0, 0.2, 0.8],
@@ -51,7 +54,7 @@ def cell_scene(base: Scene, engine: str, cell: dict, duration: float) -> Scene:
     if "stiffness" in cell:
         ov.append(f"contact.stiffness={cell['stiffness']!r}")
     if step is not None:
-        ov.append(f"{STEP_FIELD[engine]}={step!r}")
+        ov.append(f"{step_field(engine)}={step!r}")
     if "pga" in cell:
         ov.append(f"excitation.pga={cell['pga']!r}")
     if "gap" in cell:
@@ -108,7 +111,7 @@ def _energy_error(r) -> float:
 
 
 def run_stress(base: Scene, out: str | Path, *, quick: bool = False,
-               engines: tuple[str, ...] = ENGINES, duration: float | None = None,
+               engines: tuple[str, ...] | None = None, duration: float | None = None,
                timeout: float = 300.0, progress: bool = True,
                cells: list[dict] | None = None) -> pd.DataFrame:
     """Run the grid (or the given ``cells``), write stress.csv and heat maps into ``out``;
@@ -126,6 +129,7 @@ def run_stress(base: Scene, out: str | Path, *, quick: bool = False,
     duration = duration if duration is not None else (1.0 if quick else 5.0)
     cells = grid(quick) if cells is None else cells
     rows = []
+    engines = tuple(engines) if engines is not None else engine_names()
     bar = Progress(len(cells) * len(engines), "stress", progress)
     t0 = time.perf_counter()
     for cell in cells:

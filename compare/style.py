@@ -13,12 +13,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-ENGINE_STYLE = {
-    "opensees": dict(color="#000000", linestyle="-", linewidth=1.4, label="OpenSees"),
-    "compliance": dict(color="#1f5fa8", linestyle="--", linewidth=1.2, label="compliance clone"),
-    "nonsmooth": dict(color="#c0392b", linestyle=":", linewidth=1.6, label="nonsmooth"),
-    "measured": dict(color="#777777", linestyle="-.", linewidth=1.0, label="measured"),
-}
 CYCLE = [dict(color=c, linestyle=s, marker=m, markersize=4)
          for c, s, m in (("#000000", "-", "o"), ("#1f5fa8", "--", "s"), ("#c0392b", ":", "^"),
                          ("#27ae60", "-.", "D"), ("#7f7f7f", (0, (5, 1)), "v"),
@@ -32,8 +26,11 @@ RC = {
 
 
 def engine_style(engine: str) -> dict:
-    """Line style of an engine (unknown labels get a neutral style)."""
-    return dict(ENGINE_STYLE.get(engine, dict(color="#555555", linestyle="-", label=engine)))
+    """Line style of an engine, declared by the engine itself (:mod:`deckpound.engines`);
+    ``measured`` and unknown labels get neutral styles."""
+    from deckpound.engines import engine_style as _registry_style
+
+    return _registry_style(engine)
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, width: float = 7.0, height: float = 2.2,

@@ -18,7 +18,7 @@ from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 from deckpound.models.scene_io import scene_from_mapping
 
-from .figures import outlines
+from .figures import OUTLINE_COLUMNS, outlines
 
 BODIES = ("deck", "seat1", "seat2")
 
@@ -66,8 +66,7 @@ def export_vtk(result_dir: str | Path, out: str | Path, every: int = 1) -> list[
         folder.mkdir(parents=True, exist_ok=True)
         entries = []
         for k in range(0, len(r.t), every):
-            row = {q: float(r[q][k]) for q in ("deck_x", "deck_y", "deck_theta", "seat1_x",
-                                               "seat1_theta", "seat2_x", "seat2_theta")}
+            row = {q: float(r[q][k]) for q in OUTLINE_COLUMNS}
             name = f"frame_{k:06d}.vtu"
             meshio.write(folder / name, frame_mesh(scene, row))
             entries.append(f'    <DataSet timestep={quoteattr(repr(float(r.t[k])))} '

@@ -7,33 +7,26 @@ The damping of the damped laws comes from the restitution coefficient e:
 * Hertz-damp (Hunt–Crossley type), Lankarani & Nikravesh (1990), J. Mech. Des. 112:
   F = k_h δ^n (1 + (3(1 − e²)/4) δ̇ / v⁻),  v⁻ the approach velocity when the impact starts.
 
-m_eff of a corner is the mass the contact sees at zero displacement:
-m_eff = 1 / (w_N M⁻¹ w_Nᵀ), w_N the corner's row of ∂g_N/∂u (DESIGN: contact kinematics).
+m_eff of a corner is the mass the contact sees at rest: m_eff = 1 / (w_N M⁻¹ w_Nᵀ), w_N the
+corner's row of ∂g_N/∂u (:meth:`deckpound.models.plan.Plan.effective_masses`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .mechanics import N_DOF, mass_matrix
+from .plan import plan_of
 from .scene import Scene
 
 
 def normal_directions_at_rest(scene: Scene) -> np.ndarray:
     """Rows w_N = ∂g_N/∂u of the four corners at u = 0 (linear kinematics), shape (4, 7)."""
-    W = np.zeros((4, N_DOF))
-    for c, (_, yc) in enumerate(scene.corners):
-        side = 1.0 if c < 2 else -1.0
-        sx, st = (0, 1) if c < 2 else (2, 3)
-        W[c, 4], W[c, 6], W[c, sx], W[c, st] = side, -side * yc, -side, side * yc
-    return W
+    return plan_of(scene).normal_rows()
 
 
 def effective_masses(scene: Scene) -> np.ndarray:
     """Effective mass of each corner contact [t]: 1 / (w_N M⁻¹ w_Nᵀ)."""
-    W = normal_directions_at_rest(scene)
-    Minv = np.diag(1.0 / np.diag(mass_matrix(scene)))
-    return 1.0 / np.einsum("ci,ij,cj->c", W, Minv, W)
+    return plan_of(scene).effective_masses()
 
 
 def kelvin_voigt_ratio(e: float) -> float:

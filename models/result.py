@@ -1,10 +1,21 @@
-"""The one result type every engine returns, and its files.
+"""The one labelled result type every engine returns, and its files.
 
-A :class:`Result` holds time series on the engine's output time base (columns named as in
-:func:`standard_columns`, SI units with tonnes) plus metadata: engine, engine settings, scene
-hash, version, wall time, steps, iterations, contact events, status and message. Files:
-``DIR/<engine>.csv`` (the columns) and ``DIR/<engine>.json`` (the metadata), both written
-atomically (a temporary file renamed into place), so an interruption leaves no partial file.
+A :class:`Result` is frozen: the engine name, time-series columns on the engine's output time
+base (SI units with tonnes; the standard columns of :mod:`deckpound.models.plan` first, then the
+engine's extras) and metadata. Its units come from the plan model's column table
+(:func:`column_unit`). Views: :meth:`Result.to_frame` (pandas, time as the index, units in
+``attrs``) and :meth:`Result.to_xarray` (named dimensions time, corner, bent, direction).
+
+Metadata every engine fills through the shared epilogue (:func:`deckpound.engine_contract.finish`):
+``status`` (``"success"`` or ``"failed"``), ``failure`` (a :class:`~deckpound.engine_contract.Status`
+name), ``message``, ``failed_step``/``failed_time`` on failure, ``steps``, ``newton_iterations``,
+``contact_solves``, ``gap_closures`` (see :func:`gap_closures`), ``failures``, ``wall_time``
+(run time without compilation) and ``compile_time`` [s], ``scene_hash``, ``physics_hash``,
+``settings``, ``settings_hash``, ``version``, ``units``.
+
+Files: ``DIR/<engine>.csv`` (the columns; units in a ``# units:`` comment line) and
+``DIR/<engine>.json`` (the metadata), both written atomically (a temporary file renamed into
+place), so an interruption leaves no partial file.
 """
 
 from __future__ import annotations
@@ -19,66 +30,97 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from ._fields import to_mapping
 from .errors import SceneError
+from .plan import CORNER_NAMES, column_unit, standard_columns
+
+__all__ = ["Result", "column_unit", "standard_columns", "scene_hash", "physics_hash",
+           "physics_mapping", "settings_hash", "gap_closures", "closure_times",
+           "STATUS_SUCCESS", "STATUS_FAILED", "N_CORNERS"]
 
 N_CORNERS = 4
 STATUS_SUCCESS = "success"
 STATUS_FAILED = "failed"
 
-
-def standard_columns(bent_names: list[str] | tuple[str, ...]) -> list[str]:
-    """Column names every engine writes, in order."""
-    cols = ["t", "deck_x", "deck_y", "deck_theta", "seat1_x", "seat1_theta", "seat2_x",
-            "seat2_theta"]
-    cols += [f"gap_c{c}" for c in range(1, N_CORNERS + 1)]
-    cols += [f"fn_c{c}" for c in range(1, N_CORNERS + 1)]
-    cols += [f"ft_c{c}" for c in range(1, N_CORNERS + 1)]
-    for b in bent_names:
-        cols += [f"{b}_fx", f"{b}_fy"]
-    return cols
+#: Scene tables that do not change what an engine computes: engine settings (hashed separately,
+#: per engine), the test sequence (a driver of runs), free text.
+NON_PHYSICS = ("opensees", "compliance", "nonsmooth", "sequence", "notes", "description")
 
 
-def column_unit(name: str) -> str:
-    """SI unit of a result column, from its name."""
-    if name == "t":
-        return "s"
-    if name.endswith("_theta"):
-        return "rad"
-    if name.startswith(("gap_", "deck_", "seat", "ux_", "uy_")) or name.endswith(("_dx", "_dy")):
-        return "m"
-    if name.startswith(("fn_", "ft_")) or name.endswith(("_fx", "_fy")):
-        return "kN"
-    if name.startswith(("pn_", "pt_")):
-        return "kN*s"
-    if name.startswith("state_"):
-        return "0 open, 1 stick, 2 slip"
-    if name.startswith("energy_"):
-        return "kJ"
-    return "-"
-
-
-def scene_hash(scene: Any) -> str:
-    """SHA-256 of the scene's canonical JSON (every field, notes included)."""
-    text = json.dumps(to_mapping(scene), sort_keys=True, separators=(",", ":"))
+def _hash(obj: Any) -> str:
+    text = json.dumps(_jsonable(obj), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-@dataclass
+def scene_hash(scene: Any) -> str:
+    """SHA-256 of the scene's canonical JSON (every field, notes included): provenance."""
+    return _hash(to_mapping(scene))
+
+
+def physics_mapping(scene: Any) -> dict[str, Any]:
+    """The scene without engine settings, sequence and free text: what every engine models."""
+    return {k: v for k, v in to_mapping(scene).items() if k not in NON_PHYSICS}
+
+
+def physics_hash(scene: Any) -> str:
+    """SHA-256 of :func:`physics_mapping`: the part of a cache key shared by every engine."""
+    return _hash(physics_mapping(scene))
+
+
+def settings_hash(settings: Any) -> str:
+    """SHA-256 of an engine's settings (a dataclass or mapping)."""
+    return _hash(to_mapping(settings) if dataclasses.is_dataclass(settings) else settings)
+
+
+def closure_times(t: np.ndarray, gap: np.ndarray, fn: np.ndarray | None = None) -> np.ndarray:
+    """Times of the gap closures of one corner [s] (see :func:`gap_closures`)."""
+    closed = in_contact({"gap_c": gap} | ({"fn_c": fn} if fn is not None else {}), "c")
+    if not len(closed):
+        return t[:0]
+    onset = np.concatenate([[closed[0]], closed[1:] & ~closed[:-1]])
+    return t[onset]
+
+
+def in_contact(columns: dict[str, np.ndarray], corner: str) -> np.ndarray | None:
+    """Whether a corner is in contact at each output row: its gap is closed (g ≤ 0) or it
+    carried a normal force over the row (fn > 0; for the nonsmooth engine fn is the impulse of
+    the output interval divided by its length, so a rigid impact that leaves g ≥ 0 counts)."""
+    g = columns.get(f"gap_{corner}")
+    if g is None:
+        return None
+    closed = g <= 0.0
+    fn = columns.get(f"fn_{corner}")
+    if fn is not None:
+        closed = closed | (fn > 0.0)
+    return closed
+
+
+def gap_closures(columns: dict[str, np.ndarray]) -> dict[str, int]:
+    """Gap closures per corner: the output rows at which a corner goes from out of contact to
+    in contact (:func:`in_contact`), the first row counting when it starts in contact. The one
+    definition of ``gap_closures`` (engine metadata, ``deckpound run``, the report and the
+    studies all read it): counted on the stored output, so it does not depend on an engine's
+    internal step."""
+    out = {}
+    for c in CORNER_NAMES:
+        closed = in_contact(columns, c)
+        if closed is None or not len(closed):
+            out[c] = 0
+            continue
+        out[c] = int(closed[0]) + int(np.count_nonzero(closed[1:] & ~closed[:-1]))
+    return out
+
+
+@dataclass(frozen=True)
 class Result:
-    """Time series of one engine run plus metadata.
+    """Time series of one engine run plus metadata (frozen; columns are read-only arrays).
 
     Attributes
     ----------
-    engine:
-        ``"opensees"``, ``"compliance"`` or ``"nonsmooth"``.
-    columns:
-        Column name → 1-D float array, all the same length; ``"t"`` first [s].
-    meta:
-        Metadata (settings, scene hash, wall_time [s], steps, iterations, contact_events,
-        failures, status, message, failed_time [s], units).
+    engine : the engine's registry name (or ``"measured"``).
+    columns : column name → 1-D float array, all the same length; ``"t"`` first [s].
+    meta : metadata (see the module docstring); ``meta["units"]`` maps every column to its unit.
     """
 
     engine: str
@@ -89,15 +131,24 @@ class Result:
         if "t" not in self.columns:
             raise ValueError("a Result needs a 't' column")
         n = len(self.columns["t"])
+        cols = {}
         for k, v in self.columns.items():
-            arr = np.asarray(v, dtype=float)
+            arr = np.array(v, dtype=float)
             if arr.shape != (n,):
                 raise ValueError(f"column {k!r} has shape {arr.shape}, expected ({n},)")
-            self.columns[k] = arr
-        self.meta.setdefault("engine", self.engine)
-        self.meta.setdefault("status", STATUS_SUCCESS)
-        self.meta.setdefault("message", "")
-        self.meta["units"] = {k: column_unit(k) for k in self.columns}
+            arr.flags.writeable = False
+            cols[k] = arr
+        meta = dict(self.meta)
+        meta.setdefault("engine", self.engine)
+        meta.setdefault("status", STATUS_SUCCESS)
+        meta.setdefault("message", "")
+        meta["units"] = {k: column_unit(k) for k in cols}
+        if "gap_c1" in cols and "gap_closures" not in meta:
+            per = gap_closures(cols)
+            meta["gap_closures"] = sum(per.values())
+            meta["gap_closures_per_corner"] = per
+        object.__setattr__(self, "columns", cols)
+        object.__setattr__(self, "meta", meta)
 
     # -- access ----------------------------------------------------------------------
     def __getitem__(self, name: str) -> np.ndarray:
@@ -111,8 +162,72 @@ class Result:
     def ok(self) -> bool:
         return self.meta.get("status") == STATUS_SUCCESS
 
-    def to_frame(self) -> pd.DataFrame:
-        return pd.DataFrame(self.columns)
+    @property
+    def units(self) -> dict[str, str]:
+        return dict(self.meta["units"])
+
+    @property
+    def gap_closures(self) -> int:
+        """Total gap closures on the output rows (see :func:`gap_closures`)."""
+        return int(self.meta.get("gap_closures", 0))
+
+    def with_meta(self, **changes: Any) -> "Result":
+        """A copy with metadata entries added or replaced."""
+        return Result(engine=self.engine, columns=self.columns, meta={**self.meta, **changes})
+
+    def to_frame(self):
+        """pandas DataFrame with time [s] as the index; ``attrs`` holds units, engine, status."""
+        import pandas as pd
+
+        frame = pd.DataFrame({k: v for k, v in self.columns.items() if k != "t"},
+                             index=pd.Index(self.t, name="t"))
+        frame.attrs = {"units": self.units, "engine": self.engine,
+                       "status": self.meta.get("status")}
+        return frame
+
+    def to_xarray(self):
+        """xarray Dataset with named dimensions ``time``, ``corner``, ``bent``, ``direction``.
+
+        Per-corner columns (``gap_c1``…, ``fn_``, ``ft_``, ``pn_``, ``pt_``, ``state_``) become
+        one variable over (time, corner); bent forces and deformations (``<bent>_fx``…) one
+        variable each over (time, bent, direction); everything else a variable over time.
+        Units are in each variable's ``attrs["units"]``.
+        """
+        import xarray as xr
+
+        t = self.t
+        units = self.meta["units"]
+        data_vars: dict[str, Any] = {}
+        used: set[str] = {"t"}
+        prefixes = sorted({k.rsplit("_c", 1)[0] for k in self.columns
+                           if k.rsplit("_c", 1)[-1] in ("1", "2", "3", "4") and "_c" in k})
+        for p in prefixes:
+            names = [f"{p}_{c}" for c in CORNER_NAMES]
+            if all(n in self.columns for n in names):
+                data_vars[p] = (("time", "corner"), np.column_stack([self[n] for n in names]),
+                                {"units": units[names[0]]})
+                used.update(names)
+        bents = [b for b in self.meta.get("bent_names", []) if f"{b}_fx" in self.columns]
+        for kind, stem in (("f", "bent_force"), ("d", "bent_deformation")):
+            names = [[f"{b}_{kind}x", f"{b}_{kind}y"] for b in bents]
+            if bents and all(n in self.columns for pair in names for n in pair):
+                arr = np.stack([np.column_stack([self[n] for n in pair]) for pair in names],
+                               axis=1)
+                data_vars[stem] = (("time", "bent", "direction"), arr,
+                                   {"units": units[names[0][0]]})
+                used.update(n for pair in names for n in pair)
+        for k, v in self.columns.items():
+            if k not in used:
+                data_vars[k] = (("time",), v, {"units": units[k]})
+        coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}),
+                                  "corner": list(CORNER_NAMES)}
+        if bents:
+            coords["bent"] = bents
+            coords["direction"] = ["x", "y"]
+        ds = xr.Dataset(data_vars, coords=coords)
+        ds.attrs = {"engine": self.engine, "status": str(self.meta.get("status")),
+                    "message": str(self.meta.get("message", ""))}
+        return ds
 
     # -- files -----------------------------------------------------------------------
     def write(self, folder: str | Path) -> tuple[Path, Path]:
@@ -120,37 +235,50 @@ class Result:
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         csv_path, json_path = folder / f"{self.engine}.csv", folder / f"{self.engine}.json"
-        _atomic_write(csv_path, self.to_frame().to_csv(index=False, float_format="%.17g"))
+        _atomic_write(csv_path, self.csv_text())
         _atomic_write(json_path, json.dumps(_jsonable(self.meta), indent=2, sort_keys=True))
         return csv_path, json_path
+
+    def csv_text(self) -> str:
+        """The columns as CSV text: a ``# units:`` comment line, the header, then the rows
+        (17 significant digits: reading back gives the same doubles)."""
+        names = list(self.columns)
+        lines = ["# units: " + ",".join(column_unit(n) for n in names), ",".join(names)]
+        arr = np.column_stack([self.columns[n] for n in names]) if names else np.empty((0, 0))
+        lines += [",".join(repr(float(v)) for v in row) for row in arr]
+        return "\n".join(lines) + "\n"
 
     @classmethod
     def read(cls, folder: str | Path, engine: str) -> "Result":
         """Load a result written by :meth:`write`."""
+        import pandas as pd
+
         folder = Path(folder)
         csv_path, json_path = folder / f"{engine}.csv", folder / f"{engine}.json"
         for p in (csv_path, json_path):
             if not p.is_file():
                 raise SceneError("result", f"file {str(p)!r} does not exist")
-        frame = pd.read_csv(csv_path)
+        frame = pd.read_csv(csv_path, comment="#")
         meta = json.loads(json_path.read_text())
         cols = {k: frame[k].to_numpy(dtype=float) for k in frame.columns}
         return cls(engine=engine, columns=cols, meta=meta)
 
 
 def _jsonable(obj: Any) -> Any:
-    if dataclasses.is_dataclass(obj):
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         return _jsonable(to_mapping(obj))
     if isinstance(obj, dict):
         return {str(k): _jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
         return [_jsonable(v) for v in obj]
     if isinstance(obj, np.generic):
-        return obj.item()
+        return _jsonable(obj.item())
     if isinstance(obj, np.ndarray):
-        return obj.tolist()
+        return _jsonable(obj.tolist())
     if isinstance(obj, float) and not np.isfinite(obj):
         return str(obj)
+    if hasattr(obj, "value") and hasattr(obj, "name") and isinstance(getattr(obj, "value"), str):
+        return obj.value   # enum members
     return obj
 
 
@@ -167,27 +295,3 @@ def _atomic_write(path: Path, text: str) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
-
-
-def set_status(meta: dict[str, Any], *, engine: str, ok: bool, message: str, step: int = 0,
-               dt: float = 0.0, time: float | None = None, raise_on_failure: bool = False) -> None:
-    """Fill ``status``/``message`` (and, on failure, ``failed_step``/``failed_time``) per the
-    engine contract; on failure with ``raise_on_failure`` raise EngineFailure.
-
-    ``message`` is the success summary, or on failure the reason (``"Newton did not
-    converge"``), to which the step and time are appended. The failure time is ``step · dt``
-    (fixed-step engines) unless ``time`` is given (adaptive steps) [s].
-    """
-    if ok:
-        meta["status"] = STATUS_SUCCESS
-        meta["message"] = message
-        return
-    t = step * dt if time is None else time
-    meta["status"] = STATUS_FAILED
-    meta["failed_step"] = step
-    meta["failed_time"] = t
-    meta["message"] = f"{message} at step {step} (t = {t:.6g} s)"
-    if raise_on_failure:
-        from .errors import EngineFailure
-
-        raise EngineFailure(f"{engine} engine: {meta['message']}")

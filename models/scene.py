@@ -374,18 +374,20 @@ class Scene:
                                  f"most {MAX_STEPS:.0e} are allowed, so it must be >= "
                                  f"{duration / MAX_STEPS:.3g} s, got {step}")
 
-    # -- derived geometry (no engine knowledge) ------------------------------------------
+    # -- derived geometry (the plan model is the one definition) ------------------------
     @property
     def bent_x(self) -> tuple[float, ...]:
-        """Bent positions in deck coordinates, x = station − L/2 [m]."""
-        return tuple(b.station - 0.5 * self.deck.length for b in self.bents)
+        """Bent positions in deck coordinates, x = station − L/2 [m] (see the plan model)."""
+        from .plan import plan_of
+
+        return plan_of(self).bent_x
 
     @property
     def corners(self) -> tuple[tuple[float, float], ...]:
-        """Corner coordinates (x_c, y_c) [m]: c1 (−L/2, −W/2), c2 (−L/2, W/2), c3 (L/2, −W/2),
-        c4 (L/2, W/2); c1, c2 face seat 1 and c3, c4 face seat 2."""
-        hl, hw = 0.5 * self.deck.length, 0.5 * self.deck.width
-        return ((-hl, -hw), (-hl, hw), (hl, -hw), (hl, hw))
+        """Corner coordinates (x_c, y_c) [m] of c1 … c4 (see the plan model's corner table)."""
+        from .plan import plan_of
+
+        return tuple((c.x, c.y) for c in plan_of(self).corners)
 
     def replace(self, **changes) -> "Scene":
         """A copy with top-level fields replaced (validated again)."""

@@ -54,15 +54,15 @@ def scene_for_run(scene: Scene, pga: float, state: SpecimenState) -> Scene:
     return scene.replace(seats=seats, bents=bents, excitation=exc)
 
 
-def bent_deformations(scene: Scene, result: Result, motion: SupportMotion) -> np.ndarray:
-    """Bent spring deformations (deck point − table) at the result's times, shape (n, n_bents, 2)."""
-    t = result.t
-    out = np.empty((len(t), len(scene.bents), 2))
-    for i, (b, xb) in enumerate(zip(scene.bents, scene.bent_x)):
-        tx = np.interp(t, motion.t, motion.disp[f"{b.name}_x"])
-        ty = np.interp(t, motion.t, motion.disp[f"{b.name}_y"])
-        out[:, i, 0] = result["deck_x"] - tx
-        out[:, i, 1] = result["deck_y"] + xb * result["deck_theta"] - ty
+def bent_deformations(scene: Scene, result: Result, motion: SupportMotion | None = None
+                      ) -> np.ndarray:
+    """Bent spring deformations (deck point − table) at the result's times, shape
+    (n, n_bents, 2): the result's ``<bent>_dx``/``<bent>_dy`` columns (every engine writes them
+    from the plan model; ``motion`` is not needed and kept for old callers)."""
+    out = np.empty((len(result.t), len(scene.bents), 2))
+    for i, b in enumerate(scene.bents):
+        out[:, i, 0] = result[f"{b.name}_dx"]
+        out[:, i, 1] = result[f"{b.name}_dy"]
     return out
 
 

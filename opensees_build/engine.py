@@ -1,6 +1,7 @@
-"""The OpenSees engine: ``run_opensees(scene, motion=None, *, raise_on_failure=False) -> Result``.
+"""The OpenSees engine: :class:`OpenSeesEngine` (registry name ``opensees``).
 
-Follows the engine contract of :mod:`deckpound.engines`. The step loop (:func:`run_steps`) and
+Follows the engine contract of :mod:`deckpound.engine_contract`; :func:`run_opensees` is the
+same as a function. openseespy is imported only when a model is built. The step loop (:func:`run_steps`) and
 the state sampling (:func:`sample_row`) are plain functions of an ``ops`` object (the
 openseespy module or anything with its functions) and a ``plan`` dict of tags and constants;
 :mod:`.export` copies their source verbatim into the exported Python script, so the script
@@ -8,8 +9,10 @@ and the in-process run execute the same code.
 
 Result columns (sign conventions):
 
-* ``deck_x/y/theta`` — centre node displacement (absolute) [m, m, rad], θ counter-clockwise;
-* ``seat1_x/theta``, ``seat2_x/theta`` — seat node (contact-face mid-point) [m, rad];
+* ``deck_x_abs``, ``deck_y_abs``, ``deck_theta`` — centre node displacement (absolute) [m, m,
+  rad], θ counter-clockwise; velocities ``deck_vx_abs``, ``deck_vy_abs``, ``deck_omega``;
+* ``seat1_x_abs``/``seat1_theta``, ``seat2_…`` — seat node (contact-face mid-point) [m, rad]
+  and their velocities;
 * ``gap_c1..c4`` — g = g₀ + side·(u_deck corner,x − u_seat corner,x), side +1 for c1, c2 (seat 1,
   left) and −1 for c3, c4; negative = penetration;
 * ``fn_c*`` — normal contact force ≥ 0 in compression [kN] (−stress of the gap material);
@@ -27,17 +30,11 @@ import warnings
 
 import numpy as np
 
-from deckpound import __version__
-from deckpound.engines import output_stride
-from deckpound.models.errors import EngineFailure
-from deckpound.models.excitation import analysis_duration, support_motion
-from deckpound.models.result import (STATUS_FAILED, STATUS_SUCCESS, Result, scene_hash,
-                                     standard_columns)
-from deckpound.models._fields import to_mapping
-from deckpound.models.scene import Scene
-
-from .model import ModelInfo, analysis_commands, build_model
-from .ops import OpsSession, openseespy_version
+from deckpound.engine_contract import (Engine, RunOutput, Status, engine_columns,
+                                       output_stride)
+from deckpound.models.excitation import analysis_duration
+from deckpound.models.plan import Plan
+from deckpound.models.scene import OpenSeesSettings, Scene
 
 ENGINE = "opensees"
 
@@ -87,7 +84,11 @@ def sample_row(ops, plan, t):
     dk = ops.nodeDisp(plan["deck"])
     s1 = ops.nodeDisp(plan["seats"][0])
     s2 = ops.nodeDisp(plan["seats"][1])
-    row = [t, dk[0], dk[1], dk[2], s1[0], s1[2], s2[0], s2[2]]
+    vk = ops.nodeVel(plan["deck"])
+    v1 = ops.nodeVel(plan["seats"][0])
+    v2 = ops.nodeVel(plan["seats"][1])
+    row = [t, dk[0], dk[1], dk[2], s1[0], s1[2], s2[0], s2[2],
+           vk[0], vk[1], vk[2], v1[0], v1[2], v2[0], v2[2]]
     row += corner_gaps(ops, plan)
     fn, ft = contact_forces(ops, plan)
     row += fn + ft
@@ -174,9 +175,13 @@ def run_steps(ops, plan, log=None):
 # In-process driver
 # ------------------------------------------------------------------------------------------
 
-def make_plan(scene: Scene, info: ModelInfo, duration: float) -> dict:
+def make_plan(scene: Scene, info, duration: float) -> dict:
     """Tags and constants of the step loop (JSON-able: also written into exported scripts)."""
+    from .model import analysis_commands
+
     s = scene.opensees
+    from deckpound.models.plan import plan_of
+
     return {
         "dt": s.dt,
         "n_steps": int(round(duration / s.dt)),
@@ -193,12 +198,16 @@ def make_plan(scene: Scene, info: ModelInfo, duration: float) -> dict:
         "bent_elements": list(info.bent_elements),
         "friction": info.friction,
         "analysis": [list(c) for c in analysis_commands(scene)],
-        "columns": standard_columns([b.name for b in scene.bents]),
+        "columns": engine_columns(plan_of(scene)),
     }
 
 
-def build(ops: OpsSession, scene: Scene, motion=None) -> tuple[ModelInfo, dict]:
+def build(ops, scene: Scene, motion=None):
     """Build model + analysis in an open session; returns (info, plan)."""
+    from deckpound.models.excitation import support_motion
+
+    from .model import build_model
+
     if motion is None:
         motion = support_motion(scene)
     duration = analysis_duration(scene, motion)
@@ -220,60 +229,92 @@ def build(ops: OpsSession, scene: Scene, motion=None) -> tuple[ModelInfo, dict]:
 
 def command_log(scene: Scene, motion=None):
     """The benchmark-style command log of the scene (model + analysis, no stepping)."""
+    from .ops import OpsSession
+
     with OpsSession() as ops:
         build(ops, scene, motion)
         return list(ops.log)
 
 
-def result_from_rows(scene: Scene, plan: dict, out: dict, wall: float, extra=None) -> Result:
-    cols = plan["columns"]
-    arr = np.array(out["rows"], dtype=float).reshape(-1, len(cols))
-    columns = {c: arr[:, k].copy() for k, c in enumerate(cols)}
-    st = out["stats"]
-    meta = {
-        "wall_time": wall,
-        "steps": st["steps"],
-        "iterations": st["iterations"],
-        "contact_events": st["contact_events"],
-        "failures": st["failures"],
-        "rescued_by_substeps": st["rescued"],
-        "status": STATUS_SUCCESS if st["status"] == "success" else STATUS_FAILED,
-        "message": st["message"],
-        "settings": to_mapping(scene.opensees),
-        "scene_hash": scene_hash(scene),
-        "version": __version__,
-        "openseespy": openseespy_version(),
-        "dt": plan["dt"],
-    }
-    if st["status"] != "success":
-        meta["failed_time"] = st["failed_time"]
-        meta["failed_step"] = st["failed_step"]
-    if extra:
-        meta.update(extra)
-    return Result(engine=ENGINE, columns=columns, meta=meta)
+class OpenSeesEngine(Engine):
+    """The paper's OpenSees stick model, run through openseespy (module docstring)."""
+
+    name = ENGINE
+    title = "OpenSees stick model (openseespy)"
+    Settings = OpenSeesSettings
+    settings_field = "opensees"
+    step_field = "dt"
+    style = dict(color="#000000", linestyle="-", linewidth=1.4, label="OpenSees")
+
+    def reads(self, scene: Scene, settings) -> set[str]:
+        ct = scene.contact
+        read = {"contact.law", "contact.stiffness"}
+        if ct.law == "kelvin-voigt":
+            read.add("contact.restitution")
+        if ct.law == "bilinear":
+            read |= {"contact.bilinear_ratio", "contact.bilinear_yield"}
+        if ct.friction_mode != "none":
+            read.add("contact.friction")
+        if ct.friction > 0.0:
+            read.add("contact.friction_mode")
+            if ct.friction_mode == "stick":
+                read.add("contact.tangential_stiffness")
+        if settings.mode == "stick":
+            read.add("deck.stick_modulus")
+        return read
+
+    def refuse(self, scene: Scene, settings) -> None:
+        from .model import refuse_scene
+
+        refuse_scene(scene)
+
+    def _run(self, plan: Plan, scene: Scene, settings, motion, *, _before_run=None,
+             _ops_wrapper=None) -> RunOutput:
+        """``_before_run(ops_raw, info, plan)`` and ``_ops_wrapper(ops_raw) -> ops`` are test
+        hooks (set initial velocities; inject a failing step)."""
+        from .ops import OpsSession, openseespy_version
+
+        if settings is not scene.opensees:
+            scene = scene.replace(opensees=settings)
+        messages: list[str] = []
+        t0 = time.perf_counter()
+        with OpsSession() as ops:
+            info, splan = build(ops, scene, motion)
+            raw = ops.raw
+            if _before_run is not None:
+                _before_run(raw, info, splan)
+            runner_ops = _ops_wrapper(raw) if _ops_wrapper is not None else raw
+            t1 = time.perf_counter()
+            out = run_steps(runner_ops, splan, log=messages.append)
+            loop = time.perf_counter() - t1
+        cols = splan["columns"]
+        arr = np.array(out["rows"], dtype=float).reshape(-1, len(cols))
+        columns = {c: arr[:, k].copy() for k, c in enumerate(cols)}
+        st = out["stats"]
+        ok = st["status"] == "success"
+        nonfinite = "non-finite" in st["message"]
+        if st["failures"]:
+            warnings.warn(f"OpenSees: {st['failures']} failed step(s), {st['rescued']} rescued "
+                          "by sub-stepping", stacklevel=4)
+        reason = "non-finite state" if nonfinite else (
+            "Newton did not converge" + (f" even with {settings.substeps} sub-steps"
+                                         if settings.fallback == "substep" else ""))
+        return RunOutput(
+            columns=columns,
+            status=Status.SUCCESS if ok else (Status.NONFINITE if nonfinite
+                                              else Status.NOT_CONVERGED),
+            message="" if ok else reason,
+            failed_step=st["failed_step"], failed_time=st["failed_time"],
+            steps=st["steps"], newton_iterations=st["iterations"],
+            failed_steps=st["failures"], rescued_steps=st["rescued"],
+            loop_time=loop,
+            extra={"openseespy": openseespy_version(), "dt": splan["dt"],
+                   "build_time": t1 - t0, "step_log": messages[:100]})
 
 
-def run_opensees(scene: Scene, motion=None, *, raise_on_failure: bool = False,
-                 _before_run=None, _ops_wrapper=None) -> Result:
-    """Run the scene in OpenSees (see the module docstring for the result columns).
+def run_opensees(scene: Scene, motion=None, *, raise_on_failure: bool = False, **options):
+    """Run the scene in OpenSees (keywords of :meth:`OpenSeesEngine._run`)."""
+    from deckpound.engines import get_engine
 
-    ``_before_run(ops_raw, info, plan)`` and ``_ops_wrapper(ops_raw) -> ops`` are test hooks
-    (set initial velocities; inject a failing step).
-    """
-    t0 = time.perf_counter()
-    messages: list[str] = []
-    with OpsSession() as ops:
-        info, plan = build(ops, scene, motion)
-        raw = ops.raw
-        if _before_run is not None:
-            _before_run(raw, info, plan)
-        runner_ops = _ops_wrapper(raw) if _ops_wrapper is not None else raw
-        out = run_steps(runner_ops, plan, log=messages.append)
-    wall = time.perf_counter() - t0
-    result = result_from_rows(scene, plan, out, wall, {"step_log": messages[:100]})
-    if out["stats"]["failures"]:
-        warnings.warn(f"OpenSees: {out['stats']['failures']} failed step(s), "
-                      f"{out['stats']['rescued']} rescued by sub-stepping", stacklevel=2)
-    if not result.ok and raise_on_failure:
-        raise EngineFailure(f"opensees: {result.meta['message']}")
-    return result
+    return get_engine("opensees").run(scene, None, motion, raise_on_failure=raise_on_failure,
+                                      **options)

@@ -185,8 +185,12 @@ proc sampleRow {{t}} {{
     set dk [nodeDisp $deck]
     set s1 [nodeDisp [lindex $seats 0]]
     set s2 [nodeDisp [lindex $seats 1]]
+    set vk [nodeVel $deck]
+    set v1 [nodeVel [lindex $seats 0]]
+    set v2 [nodeVel [lindex $seats 1]]
     set row [list $t [lindex $dk 0] [lindex $dk 1] [lindex $dk 2] [lindex $s1 0] [lindex $s1 2] \\
-             [lindex $s2 0] [lindex $s2 2]]
+             [lindex $s2 0] [lindex $s2 2] [lindex $vk 0] [lindex $vk 1] [lindex $vk 2] \\
+             [lindex $v1 0] [lindex $v1 2] [lindex $v2 0] [lindex $v2 2]]
     set row [concat $row [cornerGaps]]
     set fn {{}}
     set ft {{}}

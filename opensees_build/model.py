@@ -36,13 +36,13 @@ closing direction are mapped to OpenSees' node order and negative (compression) 
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from deckpound.models import mechanics
 from deckpound.models.contact_params import kelvin_voigt_damping
+from deckpound.models.damping import damping_model
+from deckpound.models.plan import plan_of, takeda_hysteretic_args
 from deckpound.models.errors import SceneError
 from deckpound.models.scene import Scene
 
@@ -90,8 +90,12 @@ class GapSpec:
 
 # -- checks -------------------------------------------------------------------------------
 
-def check_scene(scene: Scene) -> None:
-    """Refuse what OpenSees cannot express (SceneError) and warn about options that do nothing."""
+def refuse_scene(scene: Scene) -> None:
+    """Refuse (SceneError) what the OpenSees model cannot express, naming the alternatives.
+
+    The "option does nothing" warnings are derived by the engine contract from
+    :meth:`deckpound.opensees_build.engine.OpenSeesEngine.reads`.
+    """
     c = scene.contact
     if c.law in ("hertz", "hertz-damp"):
         raise SceneError("contact.law", f"OpenSees cannot express the {c.law!r} law of the scene "
@@ -106,23 +110,6 @@ def check_scene(scene: Scene) -> None:
             raise SceneError("contact.law", f"OpenSees cannot combine the {c.law!r} law with "
                              "friction: zeroLengthContact2D is a linear penalty contact; use "
                              "law = 'linear' with friction")
-    if c.geometry == "nonlinear":
-        warnings.warn("contact.geometry = 'nonlinear' does nothing in the OpenSees engine: the "
-                      "gap elements act along the fixed x axis (linear kinematics)", stacklevel=3)
-    if c.friction > 0.0 and c.friction_mode == "none":
-        warnings.warn("contact.friction > 0 does nothing with friction_mode = 'none'", stacklevel=3)
-    unused = []
-    if c.law != "hertz" and c.law != "hertz-damp" and c.exponent != 1.5:
-        unused.append("contact.exponent")
-    if c.law != "kelvin-voigt" and c.restitution != 0.6:
-        unused.append("contact.restitution")
-    if c.law != "bilinear" and (c.bilinear_ratio != 0.35 or c.bilinear_yield != 0.001):
-        unused.append("contact.bilinear_ratio/bilinear_yield")
-    if c.has_friction and c.slip_velocity != 1.0e-3:
-        unused.append("contact.slip_velocity")
-    if unused:
-        warnings.warn(f"{', '.join(unused)} do(es) nothing for contact.law = {c.law!r} in the "
-                      "OpenSees engine", stacklevel=3)
 
 
 # -- the one sign-convention function -------------------------------------------------------
@@ -166,7 +153,7 @@ def stick_stations(scene: Scene) -> list[float]:
     n = scene.opensees.stick_elements
     xs = [-hl + k * hl / n for k in range(n + 1)] + [k * hl / n for k in range(1, n + 1)]
     tol = 1e-9 * scene.deck.length
-    for xb in scene.bent_x:
+    for xb in plan_of(scene).bent_x:
         if all(abs(xb - x) > tol for x in xs):
             xs.append(xb)
     xs = sorted(xs)
@@ -192,10 +179,11 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
     gaps : False leaves the gap elements out (contact-free model, e.g. for eigen).
     supports : ``"motion"`` — MultipleSupport imposed motion; ``"fixed"`` — supports fixed.
     """
-    check_scene(scene)
+    refuse_scene(scene)
     s = scene.opensees
     d = scene.deck
     hl = 0.5 * d.length
+    plan = plan_of(scene)
     friction = gaps and scene.contact.has_friction
     T = ops.tag
     ops.model("basic", "-ndm", 2, "-ndf", 3)
@@ -206,15 +194,15 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
     ops.node(deck, 0.0, 0.0)
     ops.mass(deck, d.mass, d.mass, d.inertia)
     dcorners = []
-    for name, (xc, yc) in zip(CORNER_NAMES, scene.corners):
+    for name, corner in zip(CORNER_NAMES, plan.corners):
         n = T("node", f"deck {name}")
-        ops.node(n, xc, yc)
+        ops.node(n, corner.x, corner.y)
         dcorners.append(n)
     tol = 1e-9 * d.length
     bent_nodes: list[int] = []
     sticks: list[int] = []
     if s.mode == "rigid":
-        for b, xb in zip(scene.bents, scene.bent_x):
+        for b, xb in zip(scene.bents, plan.bent_x):
             if abs(xb) <= tol:
                 bent_nodes.append(deck)
             else:
@@ -248,7 +236,7 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             e = T("element", f"stick {CORNER_NAMES[c]}")
             ops.element("elasticBeamColumn", e, end, n, area, d.stick_modulus, inertia, transf)
             sticks.append(e)
-        for xb in scene.bent_x:
+        for xb in plan.bent_x:
             k = min(range(len(xs)), key=lambda k: abs(xs[k] - xb))
             bent_nodes.append(axis[k])
 
@@ -268,14 +256,14 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         acts.append(a)
         for c in (0, 1) if j == 0 else (2, 3):
             sc = T("node", f"seat{j + 1} {CORNER_NAMES[c]}")
-            ops.node(sc, xf, scene.corners[c][1])
+            ops.node(sc, xf, plan.corners[c].y)
             ops.rigidLink("beam", n, sc)
             scorners.append(sc)
 
     # --- materials and springs ----------------------------------------------------------------
     bent_eles = []
     tables = []
-    for b, xb, dn in zip(scene.bents, scene.bent_x, bent_nodes):
+    for b, xb, dn in zip(scene.bents, plan.bent_x, bent_nodes):
         tn = T("node", f"table {b.name}")
         ops.node(tn, xb, 0.0)
         ops.fix(tn, *((1, 1, 1) if supports == "fixed" else (0, 0, 1)))
@@ -283,11 +271,7 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         mats = []
         for dirn, spring in (("x", b.x), ("y", b.y)):
             m = T("material", f"{b.name} {dirn}")
-            fy, dy = spring.yield_force, spring.yield_displacement
-            du = spring.ultimate_displacement
-            f2 = fy + spring.post_yield_ratio * spring.stiffness * (du - dy)
-            ops.uniaxialMaterial("Hysteretic", m, fy, dy, f2, du, -fy, -dy, -f2, -du,
-                                 1.0, 1.0, 0.0, 0.0, spring.beta)
+            ops.uniaxialMaterial("Hysteretic", m, *takeda_hysteretic_args(spring))
             mats.append(m)
         e = T("element", f"bent {b.name}")
         ops.element("zeroLength", e, tn, dn, "-mat", *mats, "-dir", 1, 2, "-doRayleigh", 1)
@@ -340,7 +324,8 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             gap_eles.append(e)
 
     # --- damping --------------------------------------------------------------------------
-    a0, a1, (wi, wj) = mechanics.rayleigh_coefficients(scene)
+    damping = damping_model(scene, plan)
+    a0, a1, (wi, wj) = damping.a0, damping.a1, damping.omega
     ops.comment(f"Rayleigh: a0 M (absolute velocities) + a1 K0 (bent and seat springs); "
                 f"matched at {wi:.6g} and {wj:.6g} rad/s")
     ops.rayleigh(a0, 0.0, a1, 0.0)
@@ -355,7 +340,7 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         ops.comment("multiple-support excitation: imposed displacement and velocity")
         pat = T("pattern", "supports")
         ops.pattern("MultipleSupport", pat)
-        channels = mechanics.support_channels(scene)
+        channels = plan.channels
         D, V = motion.matrices(channels)
         where = []
         for b, tn in zip(scene.bents, tables):

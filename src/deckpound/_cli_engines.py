@@ -57,7 +57,7 @@ def _run(args) -> int:
     csv_path, _ = result.write(args.output)
     m = result.meta
     print(f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
-          f"{m.get('contact_events', 0)} contact events; wrote {csv_path}")
+          f"{m.get('gap_closures', 0)} gap closures; wrote {csv_path}")
     if not result.ok:
         raise EngineFailure(m.get("message", "run failed"))
     return 0
@@ -116,8 +116,10 @@ def _verify_clone(args) -> int:
     for col, dev in sorted(report["deviation"].items(), key=lambda kv: -kv[1]):
         print(f"{col:16s} {dev:.3e}")
     col, worst = report["worst"]
+    vcol, vworst = report["worst_velocity"]
     us = report["us_per_step"]
-    print(f"largest deviation (relative to the column peak): {worst:.3e} in {col}; "
+    print(f"largest deviation (relative to the column peak): {worst:.3e} in {col} "
+          f"(velocities: {vworst:.3e} in {vcol}); "
           f"Newton iterations OpenSees {report['iterations']['opensees']}, clone "
           f"{report['iterations']['compliance']}")
     print(f"speed: OpenSees {us['opensees']:.1f} us/step, clone {us['compliance']:.2f} us/step "

@@ -31,8 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("compare", help="run engines on one scene, align, compare, plot")
     add_scene_args(p)
-    p.add_argument("--engines", default="opensees,compliance,nonsmooth",
-                   help="comma-separated engine names")
+    p.add_argument("--engines", default=None,
+                   help="comma-separated engine names (default: every registered engine)")
     p.add_argument("--measured", default=None, metavar="CSV",
                    help="measured data (t + result column names) to compare against")
     p.add_argument("-o", "--output", required=True, metavar="DIR")
@@ -66,7 +66,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("stress", help="stability stress test over hard settings, every engine")
     _benchmark_scene_args(p, "deckpound-stress", "a small subset of the grid")
-    p.add_argument("--engines", default="opensees,compliance,nonsmooth")
+    p.add_argument("--engines", default=None,
+                   help="comma-separated engine names (default: every registered engine)")
     p.add_argument("--timeout", type=float, default=300.0, help="seconds per cell")
     p.set_defaults(func=_stress)
 
@@ -77,9 +78,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_export_vtk)
 
 
-def _engines(text: str) -> list[str]:
+def _engines(text: str | None) -> list[str]:
     from .engines import ENGINES
 
+    if text is None:
+        return list(ENGINES)
     names = [e.strip() for e in text.split(",") if e.strip()]
     for e in names:
         if e not in ENGINES:
@@ -119,10 +122,12 @@ def _study(args) -> int:
     cache_dir = Path(args.cache) if args.cache else out / "cache"
     if args.name == "sequence":
         from deckpound.compare import figures
-        from deckpound.compare.paper import ENGINES, sequence_table
+        from deckpound.compare.paper import sequence_table
         from deckpound.compare.sequence_run import run_sequences
 
-        seqs = run_sequences(scene, list(ENGINES), cache_dir, args.workers, args.scheduler,
+        from .engines import engine_names
+
+        seqs = run_sequences(scene, list(engine_names()), cache_dir, args.workers, args.scheduler,
                              not args.no_progress)
         table = sequence_table(seqs)
         out.mkdir(parents=True, exist_ok=True)
@@ -132,7 +137,7 @@ def _study(args) -> int:
         table, _ = run_study(args.name, scene, out, quick=args.quick,
                              cache=ResultCache(cache_dir), workers=args.workers,
                              scheduler=args.scheduler, progress=not args.no_progress)
-    cols = [c for c in ("label", "engine", "run", "pga", "peak_theta", "peak_y", "contact_events",
+    cols = [c for c in ("label", "engine", "run", "pga", "peak_theta", "peak_y", "gap_closures",
                         "wall_time", "status") if c in table]
     print(table[cols].to_string(index=False))
     print(f"wrote {out}")

@@ -1,59 +1,85 @@
-"""Engine registry and the contract every engine fulfils.
+"""The engine registry: engines by name (scipy ``METHODS`` style).
 
-An engine is a function ``run(scene, motion=None, *, raise_on_failure=False) -> Result``:
+:data:`ENGINES` maps a name to ``"module:Class"``; the module is imported on first use, so
+OpenSees or numba load only when their engine runs. The contract every engine fulfils is in
+:mod:`deckpound.engine_contract`. Adding an engine: write its module (a subclass of
+:class:`~deckpound.engine_contract.Engine`) and add one line here — or, from outside the
+package, call :func:`register`.
 
-1. It reads only the scene (including its own settings table: ``scene.opensees``,
-   ``scene.compliance`` or ``scene.nonsmooth``) and the support motion; when ``motion`` is
-   None it builds it with :func:`deckpound.models.excitation.support_motion`.
-2. It runs for :func:`deckpound.models.excitation.analysis_duration` seconds and stores output
-   every ``scene.run.output_dt`` (rounded to a whole number of its own steps, see
-   :func:`output_stride`), starting with t = 0.
-3. It returns a :class:`deckpound.models.result.Result` with every column of
-   :func:`deckpound.models.result.standard_columns` (SI units with tonnes; ``fn`` ≥ 0 is
-   compression) and metadata ``wall_time`` [s], ``steps``, ``iterations``,
-   ``contact_events`` (gap closures), ``failures``, ``status``, ``message`` and, on failure,
-   ``failed_time`` [s] and ``failed_step``.
-4. A failure (non-convergence, unsolved contact problem, non-finite state) never returns
-   NaN silently: the result holds the output up to the failure with ``status = "failed"``;
-   with ``raise_on_failure=True`` it raises :class:`deckpound.models.errors.EngineFailure`.
-5. It warns (``warnings.warn``) about scene options it ignores.
-
-Engines are looked up by name in :data:`ENGINES`; the modules are imported lazily, so that
-OpenSees is loaded only when its engine runs.
+Everything that lists engines (CLI choices, the comparison layer, studies, figures, bench,
+stress) reads them from here; the reference engine of a comparison is a parameter whose
+default is :data:`DEFAULT_REFERENCE`.
 """
 
 from __future__ import annotations
 
 import importlib
-from typing import Callable
+from typing import Any
 
+from deckpound.engine_contract import Engine, output_stride
 from deckpound.models.errors import SceneError
 
+__all__ = ["ENGINES", "DEFAULT_REFERENCE", "get_engine", "engine_names", "register",
+           "run_engine", "output_stride", "engine_style"]
+
 ENGINES: dict[str, str] = {
-    "opensees": "deckpound.opensees_build.engine:run_opensees",
-    "compliance": "deckpound.analytic.compliance:run_compliance",
-    "nonsmooth": "deckpound.analytic.nonsmooth:run_nonsmooth",
+    "opensees": "deckpound.opensees_build.engine:OpenSeesEngine",
+    "compliance": "deckpound.analytic.compliance:ComplianceEngine",
+    "nonsmooth": "deckpound.analytic.nonsmooth:NonsmoothEngine",
 }
+#: The engine other engines are compared against unless a comparison names another.
+DEFAULT_REFERENCE = "opensees"
+
+_INSTANCES: dict[str, Engine] = {}
 
 
-def get_engine(name: str) -> Callable:
-    """The run function of engine ``name`` (unknown names list the valid ones)."""
+def engine_names() -> tuple[str, ...]:
+    """Registered engine names, in registration order."""
+    return tuple(ENGINES)
+
+
+def register(name: str, engine: str | type[Engine]) -> None:
+    """Register an engine class (or ``"module:Class"`` path) under ``name``."""
+    if isinstance(engine, type):
+        if not issubclass(engine, Engine):
+            raise TypeError(f"{engine!r} is not an Engine subclass")
+        ENGINES[name] = f"{engine.__module__}:{engine.__qualname__}"
+        _INSTANCES[name] = engine()
+    else:
+        ENGINES[name] = engine
+        _INSTANCES.pop(name, None)
+
+
+def unregister(name: str) -> None:
+    """Remove an engine (tests register temporary engines)."""
+    ENGINES.pop(name, None)
+    _INSTANCES.pop(name, None)
+
+
+def get_engine(name: str) -> Engine:
+    """The engine registered as ``name`` (unknown names list the valid ones)."""
     if name not in ENGINES:
-        raise SceneError("engine", f"unknown engine {name!r}; valid engines: {', '.join(ENGINES)}")
-    module, func = ENGINES[name].split(":")
-    return getattr(importlib.import_module(module), func)
+        raise SceneError("engine", f"unknown engine {name!r}; valid engines: "
+                         f"{', '.join(ENGINES)}")
+    if name not in _INSTANCES:
+        module, cls = ENGINES[name].split(":")
+        _INSTANCES[name] = getattr(importlib.import_module(module), cls)()
+    return _INSTANCES[name]
 
 
-def output_stride(dt: float, output_dt: float) -> int:
-    """Steps between stored outputs: round(output_dt / dt), at least 1."""
-    return max(1, int(round(output_dt / dt)))
+def engine_style(name: str) -> dict[str, Any]:
+    """Figure line style of an engine (a neutral one for unknown labels such as ``measured``)."""
+    if name == "measured":
+        return dict(color="#777777", linestyle="-.", linewidth=1.0, label="measured")
+    if name in ENGINES:
+        return dict(get_engine(name).style)
+    return dict(color="#555555", linestyle="-", label=name)
 
 
-def run_engine(name: str, scene, motion=None, **kwargs):
+def run_engine(name: str, scene, motion=None, *, settings=None, **kwargs):
     """Run engine ``name`` on ``scene`` and attach the full scene to the result's metadata
     (so a result folder is self-describing: VTK export and re-runs need nothing else)."""
     from deckpound.models._fields import to_mapping
 
-    result = get_engine(name)(scene, motion, **kwargs)
-    result.meta["scene"] = to_mapping(scene)
-    return result
+    result = get_engine(name).run(scene, settings, motion, **kwargs)
+    return result.with_meta(scene=to_mapping(scene))

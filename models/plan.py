@@ -1,0 +1,426 @@
+"""The plan model: the one description of the 7-DOF planar bridge model that every engine builds.
+
+A :class:`Plan` is derived from a scene (:func:`plan_of`) and holds, written once:
+
+* the degrees of freedom (paper Fig. 1b,c): u = [x₁, θ₁, x₂, θ₂, x_d, y_d, θ_d] — seat 1 (left),
+  seat 2 (right), deck; masses at the seats' pivots (the mid-points of their contact faces) and
+  at the deck centre;
+* the **corner table** (:class:`Corner`): position of each deck corner, the seat it faces, the
+  unit normal n along which its gap opens, the tangent t, the lever arm r of the facing seat
+  point about the seat's pivot and the initial clear gap g₀ measured along n;
+* the **springs** (:class:`Spring`): bent springs (Takeda, OpenSees ``Hysteretic`` stand-in) in x
+  and y and seat springs in x and θ, each with its connectivity (deformation
+  d = Σ b_j u_j − s·u_g[channel]), initial stiffness, dashpot and — for bents — the 13 numbers of
+  the OpenSees ``Hysteretic`` material;
+* the support channels (``<bent>_x``, ``<bent>_y`` per shake table, ``seat1_x``, ``seat2_x``);
+* the result **columns** (:class:`Column`) with units and labels.
+
+Geometry (DESIGN, skewed decks): with skew angle φ the deck is a parallelogram whose end faces
+are the lines x = ±L/2 + y·tan φ; the corners sit at (±L/2 + y_c tan φ, y_c), y_c = ∓W/2.
+The right face's outward normal is (cos φ, −sin φ) and the left face's is its opposite; a gap
+opens when the deck corner moves *into* the deck, so the gap-opening normals are
+n = (cos φ, −sin φ) for the left corners and n = (−cos φ, sin φ) for the right ones, and the
+tangent is t = (sin φ, cos φ) for both faces (t = +y for a straight deck). The seats slide along
+the bridge axis (x) and rotate about the mid-point of their contact face.
+
+Geometrically linear contact kinematics (small rotations), for corner c facing seat s::
+
+    g_N = g₀ + n · (u_P − u_S),     u_P = (x_d − y_c θ_d, y_d + x_c θ_d),
+                                    u_S = (x_s − r_y θ_s, r_x θ_s)
+    U_T = t · (u̇_P − u̇_S) = t · u̇_P − t_x ẋ_s     (t · (−r_y, r_x) = 0: r lies along the face)
+
+with r = (y_c tan φ, y_c) the facing seat point relative to the seat pivot. For φ = 0 these are
+the paper's g_N = g₀ ± [(x_d − y_c θ_d) − (x_s − y_c θ_s)] and U_T = ẏ_d + x_c θ̇_d.
+
+Units: m, rad, t, t·m², kN, s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from .scene import Scene, TakedaSpring
+
+__all__ = [
+    "DOF_NAMES", "N_DOF", "SEAT_X", "SEAT_THETA", "DECK_X", "DECK_Y", "DECK_THETA",
+    "N_CORNERS", "CORNER_NAMES", "Corner", "Spring", "Column", "Plan", "plan_of",
+    "support_channels", "takeda_hysteretic_args", "standard_columns", "column_unit",
+]
+
+DOF_NAMES = ("seat1_x", "seat1_theta", "seat2_x", "seat2_theta", "deck_x", "deck_y",
+             "deck_theta")
+N_DOF = 7
+SEAT_X = (0, 2)
+SEAT_THETA = (1, 3)
+DECK_X, DECK_Y, DECK_THETA = 4, 5, 6
+N_CORNERS = 4
+CORNER_NAMES = ("c1", "c2", "c3", "c4")
+
+#: Absolute displacement / rotation columns in output order, with the DOF each one reads.
+#: θ has no ``_abs`` suffix: the supports do not rotate, so absolute and relative rotation agree.
+DOF_COLUMNS = (("deck_x_abs", DECK_X), ("deck_y_abs", DECK_Y), ("deck_theta", DECK_THETA),
+               ("seat1_x_abs", 0), ("seat1_theta", 1), ("seat2_x_abs", 2), ("seat2_theta", 3))
+#: Absolute velocity columns, in the same order as :data:`DOF_COLUMNS`.
+VELOCITY_COLUMNS = (("deck_vx_abs", DECK_X), ("deck_vy_abs", DECK_Y), ("deck_omega", DECK_THETA),
+                    ("seat1_vx_abs", 0), ("seat1_omega", 1), ("seat2_vx_abs", 2),
+                    ("seat2_omega", 3))
+#: Displacements relative to the supports: the deck centre relative to the mean motion of the
+#: shake tables (the table motion itself for coherent input), each seat relative to its actuator.
+RELATIVE_COLUMNS = ("deck_x_rel", "deck_y_rel", "seat1_x_rel", "seat2_x_rel")
+
+
+@dataclass(frozen=True)
+class Corner:
+    """One deck corner and the seat face it meets (see the module docstring for the equations).
+
+    Attributes
+    ----------
+    name : ``c1`` … ``c4``; c1 (−L/2, −W/2) and c2 (−L/2, W/2) face seat 1, c3 and c4 seat 2
+        (for a skewed deck the x coordinates shift by y_c tan φ).
+    index : 0 … 3.
+    seat : 0 (left seat) or 1 (right seat).
+    x, y : corner position at rest, deck coordinates [m].
+    normal : unit vector along which the gap opens (deck corner moving along it opens the gap).
+    tangent : unit tangent of the seat face; the tangential force is reported along it.
+    lever : facing seat point relative to the seat's pivot (contact-face mid-point) [m].
+    gap : initial clear gap g₀ measured along the normal [m].
+    """
+
+    name: str
+    index: int
+    seat: int
+    x: float
+    y: float
+    normal: tuple[float, float]
+    tangent: tuple[float, float]
+    lever: tuple[float, float]
+    gap: float
+
+    @property
+    def seat_dofs(self) -> tuple[int, int]:
+        """DOF indices (x_s, θ_s) of the facing seat."""
+        return SEAT_X[self.seat], SEAT_THETA[self.seat]
+
+    @property
+    def side(self) -> float:
+        """+1 for a corner facing seat 1 (left), −1 for seat 2 (the sign of n_x)."""
+        return 1.0 if self.seat == 0 else -1.0
+
+    def normal_row(self) -> np.ndarray:
+        """∂g_N/∂u at rest (linear kinematics), shape (7,)."""
+        nx, ny = self.normal
+        rx, ry = self.lever
+        sx, st = self.seat_dofs
+        w = np.zeros(N_DOF)
+        w[DECK_X], w[DECK_Y] = nx, ny
+        w[DECK_THETA] = -nx * self.y + ny * self.x
+        w[sx] = -nx
+        w[st] = nx * ry - ny * rx
+        return w
+
+    def tangent_row(self) -> np.ndarray:
+        """∂U_T/∂u̇ (linear kinematics), shape (7,)."""
+        tx, ty = self.tangent
+        sx, _ = self.seat_dofs
+        w = np.zeros(N_DOF)
+        w[DECK_X], w[DECK_Y] = tx, ty
+        w[DECK_THETA] = -tx * self.y + ty * self.x
+        w[sx] = -tx
+        return w
+
+
+@dataclass(frozen=True)
+class Spring:
+    """A spring between the bridge and a support (a bent direction or a seat direction).
+
+    Deformation d = Σ_k coefs[k]·u[dofs[k]] − channel_coef·u_g[channel] (channel −1: none).
+
+    Attributes
+    ----------
+    name : ``<bent>_x``, ``<bent>_y``, ``seat1_x``, ``seat1_theta``, …
+    member : ``"bent"`` or ``"seat"``.
+    owner : bent or seat name.
+    direction : ``"x"``, ``"y"`` or ``"theta"``.
+    kind : ``"takeda"`` (OpenSees Hysteretic) or ``"linear"``.
+    k0 : initial stiffness [kN/m or kN·m/rad]; dashpot : explicit dashpot [kN·s/m or kN·m·s/rad].
+    takeda : the 13 numbers after the tag of ``uniaxialMaterial Hysteretic`` (None if linear).
+    """
+
+    name: str
+    member: str
+    owner: str
+    direction: str
+    kind: str
+    dofs: tuple[int, ...]
+    coefs: tuple[float, ...]
+    channel: int
+    channel_coef: float
+    k0: float
+    dashpot: float
+    takeda: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Column:
+    """One result column: name, unit, one-line meaning and its labels (for named dimensions)."""
+
+    name: str
+    unit: str
+    doc: str
+    group: str
+    labels: tuple[tuple[str, str], ...] = ()
+
+
+def takeda_hysteretic_args(spring: TakedaSpring) -> tuple[float, ...]:
+    """The 13 numbers after the tag of OpenSees ``uniaxialMaterial Hysteretic`` for a bent spring.
+
+    2-point symmetric backbone (F_y, F_y/k0), (F_y + r k0 (d_u − d_y), d_u); pinchX = pinchY = 1,
+    damage1 = damage2 = 0, beta (Takeda unloading exponent). Every engine builds this material.
+    """
+    k0, fy, r, du = (spring.stiffness, spring.yield_force, spring.post_yield_ratio,
+                     spring.ultimate_displacement)
+    dy = fy / k0
+    fu = fy + r * k0 * (du - dy)
+    return (fy, dy, fu, du, -fy, -dy, -fu, -du, 1.0, 1.0, 0.0, 0.0, spring.beta)
+
+
+def support_channels(scene: Scene) -> tuple[str, ...]:
+    """Names of the support motion channels, in engine order: bents (x, y), then seats (x)."""
+    names: list[str] = []
+    for b in scene.bents:
+        names += [f"{b.name}_x", f"{b.name}_y"]
+    return tuple(names) + ("seat1_x", "seat2_x")
+
+
+def _unit_of(name: str) -> str:
+    if name == "t":
+        return "s"
+    if name.endswith(("_theta",)):
+        return "rad"
+    if name.endswith("_omega"):
+        return "rad/s"
+    if name.startswith(("deck_v", "seat1_v", "seat2_v")):
+        return "m/s"
+    if name.startswith(("gap_", "deck_", "seat", "ux_", "uy_")) or name.endswith(("_dx", "_dy")):
+        return "m"
+    if name.startswith(("fn_", "ft_")) or name.endswith(("_fx", "_fy")):
+        return "kN"
+    if name.startswith(("pn_", "pt_")):
+        return "kN*s"
+    if name.startswith("state_"):
+        return "0 open, 1 stick, 2 slip"
+    if name.startswith("energy_"):
+        return "kJ"
+    return "-"
+
+
+def column_unit(name: str) -> str:
+    """SI unit of a result column, from its name (engine-specific extras included)."""
+    return _unit_of(name)
+
+
+def standard_columns(bent_names) -> list[str]:
+    """Names of the columns every engine's result holds, in order (see :meth:`Plan.columns`)."""
+    return [c.name for c in _columns(tuple(bent_names))]
+
+
+def _columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
+    cols = [Column("t", "s", "time", "time")]
+    for name, _ in DOF_COLUMNS:
+        part = name.split("_")[0]
+        cols.append(Column(name, _unit_of(name), f"{part} displacement, absolute", "absolute",
+                           (("body", part),)))
+    for name in RELATIVE_COLUMNS:
+        part = name.split("_")[0]
+        what = "the mean shake-table motion" if part == "deck" else "its actuator"
+        cols.append(Column(name, "m", f"{part} displacement relative to {what}", "relative",
+                           (("body", part),)))
+    for name, _ in VELOCITY_COLUMNS:
+        part = name.split("_")[0]
+        cols.append(Column(name, _unit_of(name), f"{part} velocity, absolute", "velocity",
+                           (("body", part),)))
+    for c in CORNER_NAMES:
+        cols.append(Column(f"gap_{c}", "m", f"gap at corner {c} (< 0: penetration)", "gap",
+                           (("corner", c),)))
+    for c in CORNER_NAMES:
+        cols.append(Column(f"fn_{c}", "kN", f"normal contact force at {c} (compression > 0)",
+                           "normal_force", (("corner", c),)))
+    for c in CORNER_NAMES:
+        cols.append(Column(f"ft_{c}", "kN", f"tangential contact force on the deck at {c} "
+                           "along the face tangent", "tangential_force", (("corner", c),)))
+    for b in bent_names:
+        for d in ("x", "y"):
+            cols.append(Column(f"{b}_f{d}", "kN", f"bent {b} spring force in {d}", "bent_force",
+                               (("bent", b), ("direction", d))))
+    for b in bent_names:
+        for d in ("x", "y"):
+            cols.append(Column(f"{b}_d{d}", "m", f"bent {b} spring deformation in {d} "
+                               "(deck point above the bent − table)", "bent_deformation",
+                               (("bent", b), ("direction", d))))
+    return tuple(cols)
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """The 7-DOF plan model of a scene (build with :func:`plan_of`; see the module docstring).
+
+    Attributes
+    ----------
+    mass : (7,) diagonal of the mass matrix [t, t·m²].
+    corners : the four corners, c1 … c4.
+    springs : bents (x, y each, in scene order), then seat1 x, θ, seat2 x, θ.
+    channels : support channel names (the order of u_g).
+    bent_names : bent names in scene order; bent_x : bent positions x_b = station − L/2 [m].
+    half_length : L/2 [m]; skew : φ [rad].
+    """
+
+    mass: np.ndarray
+    corners: tuple[Corner, ...]
+    springs: tuple[Spring, ...]
+    channels: tuple[str, ...]
+    bent_names: tuple[str, ...]
+    bent_x: tuple[float, ...]
+    half_length: float
+    skew: float
+
+    # -- springs -----------------------------------------------------------------------------
+    @property
+    def n_springs(self) -> int:
+        return len(self.springs)
+
+    @property
+    def n_bent_springs(self) -> int:
+        return 2 * len(self.bent_names)
+
+    @cached_property
+    def spring_matrices(self) -> tuple[np.ndarray, np.ndarray]:
+        """(B, S): deformations d = B u − S u_g, shapes (n_springs, 7), (n_springs, n_channels)."""
+        B = np.zeros((self.n_springs, N_DOF))
+        S = np.zeros((self.n_springs, len(self.channels)))
+        for i, s in enumerate(self.springs):
+            for j, b in zip(s.dofs, s.coefs):
+                B[i, j] = b
+            if s.channel >= 0:
+                S[i, s.channel] = s.channel_coef
+        return B, S
+
+    @property
+    def k0(self) -> np.ndarray:
+        """Initial stiffness of each spring [kN/m, kN·m/rad]."""
+        return np.array([s.k0 for s in self.springs], dtype=float)
+
+    @property
+    def dashpots(self) -> np.ndarray:
+        """Explicit dashpot of each spring [kN·s/m, kN·m·s/rad]."""
+        return np.array([s.dashpot for s in self.springs], dtype=float)
+
+    @property
+    def mass_matrix(self) -> np.ndarray:
+        return np.diag(self.mass)
+
+    @property
+    def initial_stiffness(self) -> np.ndarray:
+        """K0 = Bᵀ diag(k0) B (contact excluded)."""
+        B, _ = self.spring_matrices
+        return B.T @ (self.k0[:, None] * B)
+
+    # -- contact -----------------------------------------------------------------------------
+    @property
+    def gaps(self) -> tuple[float, ...]:
+        return tuple(c.gap for c in self.corners)
+
+    def normal_rows(self) -> np.ndarray:
+        """W_N at rest (linear kinematics), shape (4, 7)."""
+        return np.array([c.normal_row() for c in self.corners])
+
+    def tangent_rows(self) -> np.ndarray:
+        """W_T (linear kinematics), shape (4, 7)."""
+        return np.array([c.tangent_row() for c in self.corners])
+
+    def linear_gaps(self, u: np.ndarray) -> np.ndarray:
+        """Gaps of the four corners for each row of u (n, 7), linear kinematics [m]."""
+        u = np.atleast_2d(np.asarray(u, dtype=float))
+        return np.array([c.gap for c in self.corners])[None, :] + u @ self.normal_rows().T
+
+    def effective_masses(self) -> np.ndarray:
+        """Mass each corner contact sees at rest [t]: 1 / (w_N M⁻¹ w_Nᵀ)."""
+        W = self.normal_rows()
+        return 1.0 / np.einsum("ci,ij,cj->c", W, np.diag(1.0 / self.mass), W)
+
+    # -- columns ---------------------------------------------------------------------------
+    @cached_property
+    def columns(self) -> tuple[Column, ...]:
+        """The standard result columns (every engine), in order."""
+        return _columns(self.bent_names)
+
+    @property
+    def column_names(self) -> list[str]:
+        return [c.name for c in self.columns]
+
+    def deformations(self, U: np.ndarray, UG: np.ndarray) -> np.ndarray:
+        """Spring deformations d = B u − S u_g for rows of U (n, 7) and UG (n, n_channels)."""
+        B, S = self.spring_matrices
+        return U @ B.T - UG @ S.T
+
+    def table_channels(self, axis: str) -> list[int]:
+        """Indices of the shake-table channels along ``axis`` (``x`` or ``y``)."""
+        return [self.channels.index(f"{b}_{axis}") for b in self.bent_names]
+
+
+def _corner_table(scene: Scene, gaps: tuple[float, float]) -> tuple[Corner, ...]:
+    hl, hw = 0.5 * scene.deck.length, 0.5 * scene.deck.width
+    phi = math.radians(getattr(scene.deck, "skew", 0.0))
+    tn, cs, sn = math.tan(phi), math.cos(phi), math.sin(phi)
+    out = []
+    for k, (xs, ys) in enumerate(((-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0))):
+        seat = 0 if xs < 0 else 1
+        yc = ys * hw
+        xc = xs * hl + yc * tn
+        side = 1.0 if seat == 0 else -1.0
+        # φ = 0 gives exactly n = (±1, 0), t = (0, 1), r = (0, y_c): the straight-deck formulae
+        normal = (side * cs, -side * sn)
+        out.append(Corner(name=CORNER_NAMES[k], index=k, seat=seat, x=xc, y=yc, normal=normal,
+                          tangent=(sn, cs), lever=(yc * tn, yc), gap=float(gaps[seat])))
+    return tuple(out)
+
+
+def _springs(scene: Scene) -> tuple[Spring, ...]:
+    hl = 0.5 * scene.deck.length
+    out = []
+    nb = len(scene.bents)
+    for i, b in enumerate(scene.bents):
+        xb = b.station - hl
+        out.append(Spring(f"{b.name}_x", "bent", b.name, "x", "takeda", (DECK_X,), (1.0,),
+                          2 * i, 1.0, b.x.stiffness, 0.0, takeda_hysteretic_args(b.x)))
+        out.append(Spring(f"{b.name}_y", "bent", b.name, "y", "takeda", (DECK_Y, DECK_THETA),
+                          (1.0, xb), 2 * i + 1, 1.0, b.y.stiffness, 0.0,
+                          takeda_hysteretic_args(b.y)))
+    for j, s in enumerate(scene.seats):
+        name = f"seat{j + 1}"
+        out.append(Spring(f"{name}_x", "seat", s.name, "x", "linear", (SEAT_X[j],), (1.0,),
+                          2 * nb + j, 1.0, s.kx, s.cx))
+        out.append(Spring(f"{name}_theta", "seat", s.name, "theta", "linear", (SEAT_THETA[j],),
+                          (1.0,), -1, 0.0, s.ktheta, s.ctheta))
+    return tuple(out)
+
+
+def plan_of(scene: Scene, gaps: tuple[float, float] | None = None) -> Plan:
+    """The plan model of ``scene``; ``gaps`` overrides the seats' initial gaps [m]."""
+    g = gaps if gaps is not None else (scene.seats[0].gap, scene.seats[1].gap)
+    s1, s2, d = scene.seats[0], scene.seats[1], scene.deck
+    hl = 0.5 * d.length
+    return Plan(
+        mass=np.array([s1.mass, s1.inertia, s2.mass, s2.inertia, d.mass, d.mass, d.inertia],
+                      dtype=float),
+        corners=_corner_table(scene, (float(g[0]), float(g[1]))),
+        springs=_springs(scene),
+        channels=support_channels(scene),
+        bent_names=tuple(b.name for b in scene.bents),
+        bent_x=tuple(b.station - hl for b in scene.bents),
+        half_length=hl,
+        skew=math.radians(getattr(scene.deck, "skew", 0.0)),
+    )

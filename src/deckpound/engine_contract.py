@@ -1,0 +1,327 @@
+"""The engine contract: what an engine declares and implements, and the shared epilogue.
+
+An engine is a subclass of :class:`Engine` registered by name in :mod:`deckpound.engines`.
+A new engine is one module plus one registry entry. It must:
+
+1. Declare ``name`` (its registry key), ``title`` (one line), ``Settings`` (a frozen,
+   self-validating settings dataclass, see :mod:`deckpound.models._fields`), ``settings_field``
+   (the scene table holding its settings, or ``None``: then the defaults unless the caller passes
+   ``settings=``), ``step_field`` (the settings field that is its time step) and ``style``
+   (matplotlib line style and legend label for figures).
+2. Implement :meth:`Engine.reads`: the engine-dependent scene options (:data:`OPTION_FIELDS`)
+   its run depends on for this scene. Every option that differs from its default and is not
+   read is warned about once (:class:`OptionIgnored`) — the "option does nothing" warnings are
+   derived from this declaration, never written by hand.
+3. Optionally implement :meth:`Engine.refuse`: raise :class:`~deckpound.models.errors.SceneError`
+   for what the engine cannot express, with the reason and the alternatives. It runs before any
+   work (``deckpound scene validate`` and every run call it).
+4. Optionally implement :meth:`Engine.notes`: sentences on how the engine interprets options it
+   does read differently from the others (warned as :class:`OptionIgnored` too).
+5. Implement :meth:`Engine._run` ``(plan, scene, settings, motion, **options) -> RunOutput``: run
+   for :func:`deckpound.models.excitation.analysis_duration` seconds, store output every
+   :func:`output_stride` steps starting at t = 0, and return the engine columns
+   (:data:`ENGINE_COLUMNS` of the plan: time, absolute displacements, absolute velocities, gaps,
+   normal and tangential contact forces, bent spring forces — ``fn`` ≥ 0 is compression, ``ft``
+   the force on the deck along the corner's face tangent) plus any extras, and its statistics
+   with one meaning each (:class:`RunOutput`).
+6. Never return NaN silently: a failure (no convergence, unsolved contact problem, non-finite
+   state, exhausted step budget, interrupt) ends the run with ``status`` ≠ SUCCESS, the output
+   up to the failure, and the step and time where it happened.
+7. Report compile time apart: time spent compiling or loading compiled kernels goes into
+   ``RunOutput.compile_time`` (see :func:`deckpound.analytic._jit.ensure_compiled`), never into
+   the run time.
+
+:meth:`Engine.run` (not overridden) does the rest the same way for every engine: validation,
+support motion, timing, and the epilogue :func:`finish`, which adds the columns computed from
+the plan and the support motion (displacements relative to the supports, bent deformations),
+counts gap closures once (:func:`deckpound.models.result.gap_closures`), and builds the
+metadata (status, message, failure step/time, statistics, wall and compile time, hashes,
+settings, record provenance, warnings).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import time
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from deckpound import __version__
+from deckpound.models._fields import to_mapping
+from deckpound.models.errors import EngineFailure, SceneError
+from deckpound.models.plan import (CORNER_NAMES, DOF_COLUMNS, RELATIVE_COLUMNS, VELOCITY_COLUMNS,
+                                   Plan, plan_of)
+from deckpound.models.result import (STATUS_FAILED, STATUS_SUCCESS, Result, physics_hash,
+                                     scene_hash, settings_hash)
+from deckpound.models.scene import Contact, Deck, Scene
+
+__all__ = ["Engine", "Status", "RunOutput", "OptionIgnored", "OPTION_FIELDS", "engine_columns",
+           "output_stride", "finish", "ignored_options"]
+
+
+class OptionIgnored(UserWarning):
+    """A scene option that does nothing in the engine that runs the scene."""
+
+
+class Status(str, enum.Enum):
+    """How a run ended (``Result.meta["failure"]`` holds the name for a failed run)."""
+
+    SUCCESS = "success"
+    NOT_CONVERGED = "not_converged"
+    SINGULAR = "singular"
+    NONFINITE = "nonfinite"
+    CONTACT_UNSOLVED = "contact_unsolved"
+    STEP_BUDGET = "step_budget"
+    INTERRUPTED = "interrupted"
+
+    @property
+    def text(self) -> str:
+        return _STATUS_TEXT[self]
+
+
+_STATUS_TEXT = {
+    Status.SUCCESS: "finished",
+    Status.NOT_CONVERGED: "the iteration did not converge",
+    Status.SINGULAR: "singular iteration matrix",
+    Status.NONFINITE: "non-finite state",
+    Status.CONTACT_UNSOLVED: "contact problem not solved (no verified solution)",
+    Status.STEP_BUDGET: "step budget exhausted",
+    Status.INTERRUPTED: "interrupted",
+}
+
+#: Scene options whose meaning depends on the engine (the "option ignored" warnings look here).
+OPTION_FIELDS = tuple(f"contact.{f.name}" for f in dataclasses.fields(Contact)) + (
+    "deck.stick_modulus",)
+_DEFAULTS = {"contact": Contact(), "deck": None}
+_DECK_DEFAULTS = {f.name: f.default for f in dataclasses.fields(Deck)}
+
+
+def engine_columns(plan: Plan) -> list[str]:
+    """Columns an engine's ``_run`` returns: t, absolute displacements and velocities, gaps,
+    fn, ft and the bent spring forces (the epilogue adds the rest of the standard columns)."""
+    cols = ["t"] + [n for n, _ in DOF_COLUMNS] + [n for n, _ in VELOCITY_COLUMNS]
+    cols += [f"gap_{c}" for c in CORNER_NAMES] + [f"fn_{c}" for c in CORNER_NAMES]
+    cols += [f"ft_{c}" for c in CORNER_NAMES]
+    for b in plan.bent_names:
+        cols += [f"{b}_fx", f"{b}_fy"]
+    return cols
+
+
+def output_stride(dt: float, output_dt: float) -> int:
+    """Steps between stored outputs: round(output_dt / dt), at least 1."""
+    return max(1, int(round(output_dt / dt)))
+
+
+@dataclass
+class RunOutput:
+    """What an engine's ``_run`` returns (see the contract, point 5).
+
+    Attributes
+    ----------
+    columns : engine columns (:func:`engine_columns`) plus extras, equal lengths.
+    status : how the run ended; message : success summary or the failure reason (the epilogue
+        appends the step and time).
+    failed_step, failed_time : where a failed run stopped [-, s].
+    steps : time steps completed; newton_iterations : Newton iterations of the smooth
+        (Takeda) problem, summed over steps; contact_solves : contact problems solved (nonsmooth
+        LCPs); failed_steps : steps that failed at least once (rescued or not);
+        rescued_steps : failed steps rescued by sub-stepping.
+    compile_time : compiling / loading kernels [s]; loop_time : the step loop alone [s].
+    extra : engine-specific metadata (documented by the engine).
+    """
+
+    columns: dict[str, np.ndarray]
+    status: Status = Status.SUCCESS
+    message: str = ""
+    failed_step: int | None = None
+    failed_time: float | None = None
+    steps: int = 0
+    newton_iterations: int = 0
+    contact_solves: int = 0
+    failed_steps: int = 0
+    rescued_steps: int = 0
+    compile_time: float = 0.0
+    loop_time: float = 0.0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def ignored_options(engine: "Engine", scene: Scene, settings: Any) -> list[str]:
+    """Engine-dependent options set away from their default that the engine does not read."""
+    read = engine.reads(scene, settings)
+    out = []
+    for path in OPTION_FIELDS:
+        table, name = path.split(".")
+        value = getattr(getattr(scene, table), name)
+        default = getattr(Contact(), name) if table == "contact" else _DECK_DEFAULTS[name]
+        if value != default and path not in read:
+            out.append(path)
+    return out
+
+
+class Engine:
+    """Base class of the engines; see the module docstring for the numbered contract."""
+
+    name: ClassVar[str] = ""
+    title: ClassVar[str] = ""
+    Settings: ClassVar[type] = type(None)
+    settings_field: ClassVar[str | None] = None
+    step_field: ClassVar[str] = "dt"
+    style: ClassVar[dict[str, Any]] = {}
+
+    # -- declarations ---------------------------------------------------------------------
+    def settings_of(self, scene: Scene) -> Any:
+        """The engine's settings in ``scene`` (its table), or the defaults."""
+        if self.settings_field is not None and hasattr(scene, self.settings_field):
+            return getattr(scene, self.settings_field)
+        return self.Settings()
+
+    def step_of(self, settings: Any) -> float:
+        """The engine's time step [s] in ``settings``."""
+        return float(getattr(settings, self.step_field))
+
+    def reads(self, scene: Scene, settings: Any) -> set[str]:
+        """Engine-dependent options (:data:`OPTION_FIELDS`) the run depends on (point 2)."""
+        return set()
+
+    def refuse(self, scene: Scene, settings: Any) -> None:
+        """Raise SceneError for what the engine cannot express (point 3)."""
+
+    def notes(self, scene: Scene, settings: Any) -> list[str]:
+        """How the engine interprets options differently from the others (point 4)."""
+        return []
+
+    # -- validation -------------------------------------------------------------------------
+    def validate(self, scene: Scene, settings: Any = None, *, warn: bool = True) -> list[str]:
+        """Refuse what the engine cannot express; return (and warn) the option notes."""
+        settings = self.settings_of(scene) if settings is None else settings
+        if not isinstance(settings, self.Settings):
+            raise SceneError(self.settings_field or self.name,
+                             f"expects {self.Settings.__name__} settings, got "
+                             f"{type(settings).__name__}")
+        self.refuse(scene, settings)
+        msgs = [f"{p} = {_value(scene, p)!r} does nothing in the {self.name} engine"
+                + _why(self, p, scene) for p in ignored_options(self, scene, settings)]
+        msgs += [f"{self.name} engine: {n}" for n in self.notes(scene, settings)]
+        if warn:
+            for m in msgs:
+                warnings.warn(m, OptionIgnored, stacklevel=3)
+        return msgs
+
+    # -- running ----------------------------------------------------------------------------
+    def run(self, scene: Scene, settings: Any = None, motion=None, *,
+            raise_on_failure: bool = False, **options: Any) -> Result:
+        """Run the engine on ``scene`` and return its Result (the shared template)."""
+        from deckpound.models.excitation import support_motion
+
+        t0 = time.perf_counter()
+        settings = self.settings_of(scene) if settings is None else settings
+        msgs = self.validate(scene, settings)
+        if motion is None:
+            motion = support_motion(scene)
+        plan = plan_of(scene)
+        out = self._run(plan, scene, settings, motion, **options)
+        total = time.perf_counter() - t0
+        return finish(self, scene, settings, motion, plan, out, total, msgs,
+                      raise_on_failure=raise_on_failure)
+
+    def _run(self, plan: Plan, scene: Scene, settings: Any, motion, **options: Any) -> RunOutput:
+        raise NotImplementedError(f"engine {self.name!r} does not implement _run")
+
+
+def _value(scene: Scene, path: str) -> Any:
+    table, name = path.split(".")
+    return getattr(getattr(scene, table), name)
+
+
+def _why(engine: Engine, path: str, scene: Scene) -> str:
+    ct = scene.contact
+    if path == "contact.friction" and ct.friction_mode == "none":
+        return " (contact.friction_mode = 'none')"
+    if path == "contact.friction_mode" and ct.friction == 0.0:
+        return " (contact.friction = 0)"
+    return ""
+
+
+def _relative_columns(plan: Plan, motion, cols: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Displacements relative to the supports and bent deformations at the output times.
+
+    The support motion is interpolated linearly between its own samples (``np.interp``, the
+    same arithmetic as the engines' compiled interpolator), held after the record ends.
+    """
+    t = cols["t"]
+    ug = np.column_stack([np.interp(t, motion.t, motion.disp[ch]) for ch in plan.channels]) \
+        if len(t) else np.zeros((0, len(plan.channels)))
+    out: dict[str, np.ndarray] = {}
+    tx, ty = plan.table_channels("x"), plan.table_channels("y")
+    mean_x = ug[:, tx].mean(axis=1) if tx else np.zeros(len(t))
+    mean_y = ug[:, ty].mean(axis=1) if ty else np.zeros(len(t))
+    out["deck_x_rel"] = cols["deck_x_abs"] - mean_x
+    out["deck_y_rel"] = cols["deck_y_abs"] - mean_y
+    for j in (1, 2):
+        out[f"seat{j}_x_rel"] = cols[f"seat{j}_x_abs"] - ug[:, plan.channels.index(f"seat{j}_x")]
+    U = np.zeros((len(t), 7))
+    for name, dof in DOF_COLUMNS:
+        U[:, dof] = cols[name]
+    d = plan.deformations(U, ug)
+    for i, b in enumerate(plan.bent_names):
+        out[f"{b}_dx"] = d[:, 2 * i]
+        out[f"{b}_dy"] = d[:, 2 * i + 1]
+    return out
+
+
+def finish(engine: Engine, scene: Scene, settings: Any, motion, plan: Plan, out: RunOutput,
+           total_time: float, notes: list[str], *, raise_on_failure: bool = False) -> Result:
+    """The shared epilogue: standard columns in order, statistics, status and metadata."""
+    cols = dict(out.columns)
+    missing = [c for c in engine_columns(plan) if c not in cols]
+    if missing:
+        raise RuntimeError(f"engine {engine.name!r} returned no column {missing[0]!r} "
+                           "(engine contract, point 5)")
+    cols.update(_relative_columns(plan, motion, cols))
+    order = plan.column_names
+    columns = {k: cols[k] for k in order}
+    columns.update({k: v for k, v in cols.items() if k not in columns})
+    ok = out.status == Status.SUCCESS
+    steps = max(out.steps, 1)
+    run_time = max(total_time - out.compile_time, 0.0)
+    meta: dict[str, Any] = {
+        "engine": engine.name,
+        "status": STATUS_SUCCESS if ok else STATUS_FAILED,
+        "failure": None if ok else out.status.value,
+        "message": out.message,
+        "steps": int(out.steps),
+        "newton_iterations": int(out.newton_iterations),
+        "contact_solves": int(out.contact_solves),
+        "failures": int(out.failed_steps),
+        "rescued_by_substeps": int(out.rescued_steps),
+        "wall_time": run_time,
+        "compile_time": float(out.compile_time),
+        "loop_time": float(out.loop_time),
+        "us_per_step": 1e6 * float(out.loop_time or run_time) / steps,
+        "duration": float(cols["t"][-1]) if len(cols["t"]) else 0.0,
+        "scene_hash": scene_hash(scene),
+        "physics_hash": physics_hash(scene),
+        "settings": to_mapping(settings) if dataclasses.is_dataclass(settings) else settings,
+        "settings_hash": settings_hash(settings),
+        "version": __version__,
+        "bent_names": list(plan.bent_names),
+        "warnings": list(notes),
+    }
+    provenance = getattr(motion, "provenance", None)
+    if provenance:
+        meta["record"] = provenance
+    meta.update(out.extra)
+    if not ok:
+        t_fail = out.failed_time if out.failed_time is not None else float("nan")
+        meta["failed_step"] = int(out.failed_step or 0)
+        meta["failed_time"] = t_fail
+        reason = out.message or out.status.text
+        meta["message"] = f"{reason} at step {meta['failed_step']} (t = {t_fail:.6g} s)"
+    result = Result(engine=engine.name, columns=columns, meta=meta)
+    if not ok and raise_on_failure:
+        raise EngineFailure(f"{engine.name} engine: {meta['message']}")
+    return result
