@@ -136,11 +136,13 @@ class ComplianceEngine(Engine):
         """Extra keywords (not scene options): ``kv_clip`` clips the Kelvin–Voigt force at zero
         instead of the OpenSees ViscoelasticGap behaviour (tension allowed until the gap
         reopens); ``initial_state = (u0, v0)`` starts from the given DOF displacements and
-        velocities (default rest, as OpenSees); ``substeps``: sub-steps of the fallback for a
+        velocities (default: the scene's ``initial`` table); ``substeps``: sub-steps of the fallback for a
         failed step (1 disables it); ``channels``: store only these columns besides the engine
         columns (energy work is not accumulated unless an energy column is requested);
         ``_skips`` (private, for measurement): ``{name: False}`` turns off a work-saving skip of
         :data:`SKIPS` (``newmark`` only; results are identical)."""
+        if initial_state is None:
+            initial_state = plan.initial_state(scene.initial)
         if settings.integrator == "adaptive":
             from deckpound.analytic.adaptive import run_adaptive
 

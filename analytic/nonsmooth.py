@@ -130,7 +130,9 @@ class NonsmoothEngine(Engine):
     def _run(self, plan: Plan, scene: Scene, settings, motion, *,
              initial_state=None) -> RunOutput:
         """Extra keyword (not a scene option): ``initial_state = (u0, v0)`` starts from the
-        given DOF displacements and velocities (default rest)."""
+        given DOF displacements and velocities (default: the scene's ``initial`` table)."""
+        if initial_state is None:
+            initial_state = plan.initial_state(scene.initial)
         from deckpound.analytic._jit import ensure_compiled
         from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM
         from deckpound.analytic.kinematics import pack_corners

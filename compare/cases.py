@@ -1,8 +1,12 @@
 """Cases (engine + fully resolved scene), their cache, and the parallel runner.
 
-Every finished case is stored under the SHA-256 of its full description (engine name, the
-whole scene, deckpound version), so an interrupted study resumes without recomputing and a
-repeated one returns at once. Cases run in parallel on local processes (default: one per
+Every finished case is stored under its key: the SHA-256 of the engine name, the scene's
+physics (:func:`deckpound.models.result.physics_hash`: the scene without engine settings,
+sequence and free text), *that engine's* settings and the deckpound version — so changing one
+engine's settings (say ``nonsmooth.h``) re-runs that engine's cases only, an interrupted study
+resumes without recomputing and a repeated one returns at once. Warnings an engine raises in
+a worker travel with its result (``meta["warnings"]``) and are shown once each in the main
+process (:func:`surface_warnings`), never swallowed. Cases run in parallel on local processes (default: one per
 core) or on a Dask distributed cluster (``scheduler="tcp://host:port"``), with a progress bar
 on stderr.
 """
@@ -16,14 +20,14 @@ import shutil
 import sys
 import tempfile
 import time
+import warnings
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from deckpound import __version__
-from deckpound.models._fields import to_mapping
-from deckpound.models.result import Result
+from deckpound.models.result import Result, physics_hash, settings_hash
 from deckpound.models.scene import Scene
 
 
@@ -42,8 +46,12 @@ class Case:
 
 
 def case_key(engine: str, scene: Scene) -> str:
-    """SHA-256 of engine, full scene and version: the cache key."""
-    text = json.dumps({"engine": engine, "scene": to_mapping(scene), "version": __version__},
+    """The cache key: SHA-256 of engine name, physics hash, that engine's settings, version."""
+    from deckpound.engines import get_engine
+
+    settings = get_engine(engine).settings_of(scene)
+    text = json.dumps({"engine": engine, "physics": physics_hash(scene),
+                       "settings": settings_hash(settings), "version": __version__},
                       sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
 
@@ -83,14 +91,33 @@ class ResultCache:
 
 
 def run_case(engine: str, scene: Scene) -> Result:
-    """Run one case in this process (the worker function; picklable arguments)."""
-    import warnings
+    """Run one case in this process (the worker function; picklable arguments).
 
+    Every warning raised during the run is recorded in ``meta["warnings"]`` (the engine's own
+    option notes are there already) so that the main process can show it
+    (:func:`surface_warnings`) — a worker's stderr is not the user's.
+    """
     from deckpound.engines import run_engine
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return run_engine(engine, scene)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = run_engine(engine, scene)
+    notes = list(result.meta.get("warnings", []))
+    notes += [str(w.message) for w in caught if str(w.message) not in notes]
+    return result.with_meta(warnings=notes)
+
+
+_SHOWN: set[str] = set()
+
+
+def surface_warnings(results: Iterable[Result], where: str = "") -> None:
+    """Warn (once per distinct message in this process) about every warning carried by the
+    results — the "option does nothing" notes of the engines and their run warnings."""
+    for r in results:
+        for msg in r.meta.get("warnings", []):
+            if msg not in _SHOWN:
+                _SHOWN.add(msg)
+                warnings.warn(f"{where}{msg}" if where else msg, stacklevel=2)
 
 
 class Progress:
@@ -145,6 +172,7 @@ def run_cases(cases: Iterable[Case], *, cache: ResultCache | None = None,
         bar.advance()
 
     _map_parallel(todo, lambda c: (c.engine, c.scene), run_case, finish, workers, scheduler)
+    surface_warnings(results.values())
     return {c.label: results[c.label] for c in cases}
 
 

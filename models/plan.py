@@ -366,6 +366,15 @@ class Plan:
         B, S = self.spring_matrices
         return U @ B.T - UG @ S.T
 
+    def initial_state(self, initial) -> tuple[np.ndarray, np.ndarray] | None:
+        """(u0, v0) of the 7 DOFs from a scene's ``initial`` table, or None when at rest."""
+        if initial.at_rest:
+            return None
+        u0, v0 = np.zeros(N_DOF), np.zeros(N_DOF)
+        u0[[DECK_X, DECK_Y, DECK_THETA]] = initial.deck
+        v0[[DECK_X, DECK_Y, DECK_THETA]] = initial.deck_velocity
+        return u0, v0
+
     def table_channels(self, axis: str) -> list[int]:
         """Indices of the shake-table channels along ``axis`` (``x`` or ``y``)."""
         return [self.channels.index(f"{b}_{axis}") for b in self.bent_names]

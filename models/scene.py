@@ -316,6 +316,33 @@ class Sequence:
 
 
 @dataclass(frozen=True, kw_only=True)
+class Initial:
+    """Initial state of the deck; the seats start at rest on their actuators.
+
+    ``deck`` is the displacement of the deck centre from its rest position and ``deck_velocity``
+    its velocity (absolute, at t = 0, when the supports are at their first record sample — at
+    rest for every built-in record). Default: at rest. Non-zero values pose textbook problems
+    such as a deck striking an abutment at a corner.
+    """
+
+    deck: tuple[float, ...] = spec((0.0, 0.0, 0.0), unit="m, m, rad",
+                                   doc="initial deck displacement [x, y, theta]")
+    deck_velocity: tuple[float, ...] = spec((0.0, 0.0, 0.0), unit="m/s, m/s, rad/s",
+                                            doc="initial deck velocity [v_x, v_y, omega]")
+
+    def __post_init__(self) -> None:
+        validate(self)
+        for name in ("deck", "deck_velocity"):
+            value = getattr(self, name)
+            if len(value) != 3:
+                raise SceneError(name, f"must hold 3 numbers [x, y, theta], got {list(value)}")
+
+    @property
+    def at_rest(self) -> bool:
+        return not any(self.deck) and not any(self.deck_velocity)
+
+
+@dataclass(frozen=True, kw_only=True)
 class Scene:
     """A complete deck-abutment pounding problem; engines take it and return a Result."""
 
@@ -328,6 +355,7 @@ class Scene:
     damping: Damping = spec(default_factory=Damping, doc="Rayleigh damping")
     excitation: Excitation = spec(default_factory=Excitation, doc="support motion")
     run: RunSettings = spec(default_factory=RunSettings, doc="shared run settings")
+    initial: Initial = spec(default_factory=Initial, doc="initial state of the deck")
     opensees: OpenSeesSettings = spec(default_factory=OpenSeesSettings, doc="OpenSees engine")
     compliance: ComplianceSettings = spec(default_factory=ComplianceSettings,
                                           doc="compliance engine")

@@ -217,7 +217,7 @@ def build(ops, scene: Scene, motion=None):
     # step, so memory does not grow with the number of steps (6e6 steps at dt = 1e-5).
     rec = np.diff(motion.t)
     uniform = len(rec) > 0 and np.allclose(rec, rec[0], rtol=1e-9, atol=0.0)
-    step = float(rec[0]) if uniform and rec[0] > dt else dt
+    step = float(rec[0]) if uniform and dt < rec[0] <= duration else dt
     res = motion.resample(step, duration)
     info = build_model(ops, scene, res)
     plan = make_plan(scene, info, duration)
@@ -234,6 +234,22 @@ def command_log(scene: Scene, motion=None):
     with OpsSession() as ops:
         build(ops, scene, motion)
         return list(ops.log)
+
+
+def _set_initial_velocity(ops, scene: Scene) -> None:
+    """Give every node of the deck the rigid-body velocity of ``scene.initial.deck_velocity``
+    (v_x − ω y, v_y + ω x at the node's coordinates), committed, before the analysis starts.
+    OpenSees then starts Newmark with zero acceleration, as from rest."""
+    vx, vy, om = scene.initial.deck_velocity
+    if not (vx or vy or om):
+        return
+    raw = ops.raw
+    ops.comment(f"initial deck velocity {vx!r} m/s, {vy!r} m/s, {om!r} rad/s")
+    for name, tag in ops.tags("node").items():
+        if name == "deck" or name.startswith(("deck ", "stick ")):
+            x, y = raw.nodeCoord(tag)
+            for dof, v in ((1, vx - om * y), (2, vy + om * x), (3, om)):
+                ops.setNodeVel(tag, dof, v, "-commit")
 
 
 class OpenSeesEngine(Engine):
@@ -264,9 +280,18 @@ class OpenSeesEngine(Engine):
         return read
 
     def refuse(self, scene: Scene, settings) -> None:
+        from deckpound.models.errors import SceneError
+
         from .model import refuse_scene
 
         refuse_scene(scene)
+        if any(scene.initial.deck):
+            raise SceneError("initial.deck", "the OpenSees engine cannot start the deck "
+                             f"displaced (got {list(scene.initial.deck)}): setNodeDisp on a "
+                             "rigidLink retained node does not move the constrained corner nodes "
+                             "in OpenSees 3.7, and a displaced stick deck would start with "
+                             "unbalanced springs; start it at rest with an initial velocity, or "
+                             "use the compliance or nonsmooth engine")
 
     def _run(self, plan: Plan, scene: Scene, settings, motion, *, _before_run=None,
              _ops_wrapper=None) -> RunOutput:
@@ -281,6 +306,7 @@ class OpenSeesEngine(Engine):
         with OpsSession() as ops:
             info, splan = build(ops, scene, motion)
             raw = ops.raw
+            _set_initial_velocity(ops, scene)
             if _before_run is not None:
                 _before_run(raw, info, splan)
             runner_ops = _ops_wrapper(raw) if _ops_wrapper is not None else raw

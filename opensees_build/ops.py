@@ -37,7 +37,7 @@ __all__ = ["ArrayArg", "Command", "OpsSession", "openseespy_version", "render_va
 QUERIES = frozenset({
     "analyze", "nodeDisp", "nodeVel", "nodeAccel", "eleResponse", "testIter", "testNorm",
     "getTime", "nodeEigenvector", "nodeReaction", "reactions", "getNodeTags", "getEleTags",
-    "revertToLastCommit", "printModel", "setNodeVel", "setNodeDisp", "version",
+    "revertToLastCommit", "printModel", "setNodeDisp", "version", "nodeCoord",
 })
 
 

@@ -1,3 +1,55 @@
-"""deckpound: seismic deck-abutment pounding of bridges, simulated three ways from one scene."""
+"""deckpound: seismic deck-abutment pounding of bridges, simulated three ways from one scene.
 
-__version__ = "0.1.0"
+The front door for scripts and notebooks::
+
+    import deckpound as dp
+
+    scene = dp.load_scene("saiidi-4span", set={"contact.friction": 0.2,
+                                                "contact.friction_mode": "stick"})
+    res = dp.run(scene, engine="compliance")          # a frozen, labelled Result
+    res.to_frame()                                    # pandas, time as index, units in attrs
+    cmp = dp.compare(scene, engines=["opensees", "compliance", "nonsmooth"])
+    cmp.metrics                                       # peaks, NRMSE, ... against the reference
+
+Names are imported on first use, so ``import deckpound`` stays cheap (numba, OpenSees,
+matplotlib and pandas load only when something needs them).
+"""
+
+from __future__ import annotations
+
+__version__ = "0.2.0"
+
+__all__ = [
+    "__version__", "load_scene", "run", "compare", "Comparison", "engines", "get_engine",
+    "register_engine", "Result", "Scene", "plan_of", "support_motion", "builtin_scenes",
+]
+
+_LAZY = {
+    "Result": ("deckpound.models.result", "Result"),
+    "Scene": ("deckpound.models.scene", "Scene"),
+    "plan_of": ("deckpound.models.plan", "plan_of"),
+    "support_motion": ("deckpound.models.excitation", "support_motion"),
+    "get_engine": ("deckpound.engines", "get_engine"),
+    "register_engine": ("deckpound.engines", "register"),
+    "Comparison": ("deckpound.api", "Comparison"),
+    "load_scene": ("deckpound.api", "load_scene"),
+    "run": ("deckpound.api", "run"),
+    "compare": ("deckpound.api", "compare"),
+    "engines": ("deckpound.api", "engines"),
+    "builtin_scenes": ("deckpound.api", "builtin_scenes"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        value = getattr(importlib.import_module(module), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'deckpound' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -1,0 +1,131 @@
+"""The Python API behind ``import deckpound as dp`` (see the package docstring).
+
+Four verbs: :func:`load_scene`, :func:`run`, :func:`compare`, :func:`engines`. They are thin:
+scenes come from :mod:`deckpound.models.scene_io`, engines from the registry
+(:mod:`deckpound.engines`), alignment and metrics from :mod:`deckpound.compare`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+__all__ = ["load_scene", "run", "compare", "Comparison", "engines", "builtin_scenes"]
+
+#: the quantities :func:`compare` aligns and scores unless told otherwise (relative
+#: displacements: what the gaps and springs see)
+DEFAULT_QUANTITIES = ("deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel",
+                      "gap_c1", "gap_c3")
+
+
+def _overrides(set_: Mapping[str, Any] | Iterable[str] | None) -> list[str]:
+    """``{"contact.friction": 0.2}`` or ``["contact.friction=0.2"]`` → override strings."""
+    if set_ is None:
+        return []
+    if isinstance(set_, Mapping):
+        import json
+
+        out = []
+        for k, v in set_.items():
+            # TOML values: strings quoted, booleans lower-case, numbers and lists as JSON
+            out.append(f"{k}={json.dumps(v)}")
+        return out
+    return [str(s) for s in set_]
+
+
+def load_scene(ref: str | Path = "saiidi-4span",
+               set: Mapping[str, Any] | Iterable[str] | None = None):  # noqa: A002
+    """A scene by built-in name or TOML path, with field overrides.
+
+    ``set`` maps dotted paths to values (``{"contact.stiffness": 2e6, "bents[1].y.beta": 0.3}``)
+    or is a list of ``"path=value"`` strings, as ``--set`` on the command line.
+    """
+    from deckpound.models.scene_io import load_scene as _load
+
+    return _load(ref, _overrides(set))
+
+
+def builtin_scenes() -> list[str]:
+    """Names of the scenes shipped with deckpound."""
+    from deckpound.models.scene_io import builtin_scene_names
+
+    return builtin_scene_names()
+
+
+def engines() -> dict[str, str]:
+    """Registered engines: name → one-line title."""
+    from deckpound.engines import engine_names, get_engine
+
+    return {name: get_engine(name).title for name in engine_names()}
+
+
+def run(scene, engine: str = "compliance", *, settings: Any = None, motion=None,
+        raise_on_failure: bool = False, **options: Any):
+    """Run one engine on a scene and return its :class:`~deckpound.models.result.Result`.
+
+    ``settings`` replaces the engine's settings table of the scene (an instance of the engine's
+    ``Settings`` class); ``options`` are the engine's extra keywords (e.g. ``initial_state``).
+    """
+    from deckpound.engines import run_engine
+
+    return run_engine(engine, scene, motion, settings=settings,
+                      raise_on_failure=raise_on_failure, **options)
+
+
+@dataclass
+class Comparison:
+    """Several engines on one scene: results, the aligned frames and metrics.
+
+    Attributes
+    ----------
+    results : engine name → Result (each on its own output time base).
+    aligned : engine name → pandas DataFrame on the common time base (``t`` column).
+    metrics : one row per (engine, quantity) against ``reference``: peaks, peak ratio, NRMSE,
+        correlation, residuals (:func:`deckpound.compare.metrics.compare_pair`).
+    reference : the engine the others are compared with.
+    """
+
+    results: dict[str, Any]
+    aligned: dict[str, Any]
+    metrics: Any
+    reference: str
+    quantities: tuple[str, ...] = field(default=DEFAULT_QUANTITIES)
+
+
+def compare(scene, engines: Iterable[str] | None = None, *, reference: str | None = None,
+            quantities: Iterable[str] = DEFAULT_QUANTITIES, dt: float | None = None,
+            cache: str | Path | None = None, workers: int | None = 1) -> Comparison:
+    """Run ``engines`` (default: every registered engine) on ``scene``, align and score them
+    against ``reference`` (default :data:`deckpound.engines.DEFAULT_REFERENCE`, or the first
+    engine when that one is not run). ``cache`` is a result-cache folder (finished cases are
+    never recomputed); ``workers`` local processes (1: in this process)."""
+    import pandas as pd
+
+    from deckpound.compare.align import align
+    from deckpound.compare.cases import Case, ResultCache, run_cases
+    from deckpound.compare.metrics import compare_pair
+    from deckpound.engines import DEFAULT_REFERENCE, engine_names, get_engine
+
+    names = list(engines) if engines is not None else list(engine_names())
+    for n in names:
+        get_engine(n)   # unknown names are refused with the list of valid ones
+    ref = reference or (DEFAULT_REFERENCE if DEFAULT_REFERENCE in names else names[0])
+    if ref not in names:
+        names.insert(0, ref)
+    store = ResultCache(cache) if cache is not None else None
+    results = run_cases([Case(n, n, scene) for n in names], cache=store, workers=workers,
+                        progress=False)
+    qs = tuple(q for q in quantities if all(q in r.columns for r in results.values()))
+    aligned = align(results, dt=dt, columns=list(qs))
+    rows = []
+    for n in names:
+        if n == ref:
+            continue
+        m = compare_pair(results[n], results[ref], aligned[n], aligned[ref], list(qs))
+        m.insert(0, "reference", ref)
+        m.insert(0, "engine", n)
+        rows.append(m)
+    metrics = pd.concat(rows, ignore_index=True) if rows else pd.DataFrame()
+    return Comparison(results=results, aligned=aligned, metrics=metrics, reference=ref,
+                      quantities=qs)
