@@ -24,12 +24,12 @@ import warnings
 
 import numpy as np
 import pytest
-
-from deckpound.engines import run_engine
 from deckpound.opensees_build.export import export_script
 from deckpound.opensees_build.quoting import tcl_word
 from deckpound.opensees_build.recorders import read_columns
 from tests_helpers_scene import short_benchmark
+
+from deckpound.engines import run_engine
 
 HAS_TCL = importlib.util.find_spec("opensees") is not None
 needs_tcl = pytest.mark.skipif(not HAS_TCL, reason="the Tcl OpenSees interpreter (pip package "
@@ -45,7 +45,7 @@ def run_tcl(script, **kw) -> subprocess.CompletedProcess:
     """Source ``script`` in the Tcl OpenSees interpreter (path quoted for Tcl)."""
     return subprocess.run([sys.executable, "-m", "opensees", "-"],
                           input=f"source {tcl_word(str(script))}\n", capture_output=True,
-                          text=True, timeout=600, **kw)
+                          text=True, timeout=600, check=False, **kw)
 
 
 def recorded(script, out_dir) -> dict[str, np.ndarray]:
@@ -87,7 +87,7 @@ def test_python_recorders_equal_the_in_process_run(trip):
     script = export_script(scene, "py", folder / "modèle 1.py")
     out = folder / "py out"
     cp = subprocess.run([sys.executable, str(script), "--out", str(out)], capture_output=True,
-                        text=True, timeout=600)
+                        text=True, timeout=600, check=False)
     assert cp.returncode == 0, cp.stderr[-2000:]
     stats = json.loads((out / "opensees.stats.json").read_text())
     assert (stats["failures"], stats["rescued"]) == (1, 1)
@@ -125,7 +125,7 @@ def test_tcl_csv_block_reproduces_deckpound_csv(trip, tmp_path):
     script = export_script(scene, "tcl", folder / "csv.tcl")
     out = tmp_path / "csv out"
     cp = subprocess.run([sys.executable, "-m", "opensees", "-"], capture_output=True, text=True,
-                        timeout=600, input=f"set writeCsv 1\nset outDir {tcl_word(str(out))}\n"
+                        timeout=600, check=False, input=f"set writeCsv 1\nset outDir {tcl_word(str(out))}\n"
                         f"source {tcl_word(str(script))}\n")
     assert cp.returncode == 0, (cp.stdout + cp.stderr)[-2000:]
     df = pd.read_csv(out / "opensees.csv")
