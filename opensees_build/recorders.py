@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 from deckpound.models.errors import SceneError
 
-from .quoting import py_str, safe_file_name, tcl_word
+from .quoting import comment_text, py_str, safe_file_name, tcl_word
 
 #: significant digits of the recorder files (17: reading back gives the very doubles)
 PRECISION = 17
@@ -86,7 +86,10 @@ class ColumnMap:
         x = (f"{self.file}[{self.a}]" if self.b is None
              else f"({self.file}[{self.a}] - {self.file}[{self.b}])")
         lin = x if self.scale == 1.0 else f"-{x}" if self.scale == -1.0 else f"{self.scale!r}*{x}"
-        rhs = lin if self.offset == 0.0 else f"{self.offset!r} + {lin}"
+        if self.offset == 0.0:
+            rhs = lin
+        else:
+            rhs = f"{self.offset!r} - {lin[1:]}" if lin.startswith("-") else f"{self.offset!r} + {lin}"
         return f"{self.column} = {rhs}"
 
     def apply(self, table: np.ndarray, n_rows: int) -> np.ndarray:
@@ -117,20 +120,19 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
     recs: list[Recorder] = []
     maps: list[ColumnMap] = []
 
-    def node(col: str, tag: int, dof: int, what: str, vel: bool = True) -> None:
+    def node(col: str, tag: int, dof: int, what: str, unit: str) -> None:
         recs.append(Recorder(f"{col}.out", "Node", (tag,), ("disp",), (col,),
-                             f"{what}, absolute displacement", dofs=(dof,)))
+                             f"{what}, absolute displacement [{unit}]", dofs=(dof,)))
         maps.append(ColumnMap(col, f"{col}.out"))
-        if vel:
-            recs.append(Recorder(f"{col}_vel.out", "Node", (tag,), ("vel",), (f"{col} velocity",),
-                                 f"{what}, absolute velocity", dofs=(dof,)))
+        recs.append(Recorder(f"{col}_vel.out", "Node", (tag,), ("vel",), (f"{col} velocity",),
+                             f"{what}, absolute velocity [{unit}/s]", dofs=(dof,)))
 
     maps.append(ColumnMap("t", "deck_x.out", a=0))
     for dof, (name, unit) in enumerate((("x", "m"), ("y", "m"), ("theta", "rad")), start=1):
-        node(f"deck_{name}", plan["deck"], dof, f"deck centre node {plan['deck']} dof {dof} [{unit}]")
+        node(f"deck_{name}", plan["deck"], dof, f"deck centre node {plan['deck']} dof {dof}", unit)
     for j, seat in enumerate(plan["seats"], start=1):
         for dof, name, unit in ((1, "x", "m"), (3, "theta", "rad")):
-            node(f"seat{j}_{name}", seat, dof, f"seat {j} node {seat} dof {dof} [{unit}]")
+            node(f"seat{j}_{name}", seat, dof, f"seat {j} node {seat} dof {dof}", unit)
 
     gaps = plan["gap_elements"]
     for c in range(4):
@@ -187,6 +189,7 @@ def render_recorders(recs: list[Recorder], lang: str) -> list[str]:
     them)."""
     lines = []
     for r in recs:
+        lines.append(f"# {comment_text(f'{r.file}: {r.meaning}', lang)}")
         if lang == "tcl":
             rest = " ".join(tcl_word(a) if isinstance(a, str) else str(a) for a in r.args())
             lines.append(f"recorder {r.kind} -file [file join $outDir {tcl_word(r.file)}] -time "

@@ -133,3 +133,40 @@ def test_tcl_csv_block_reproduces_deckpound_csv(trip, tmp_path):
     dev = deviation({c: df[c].to_numpy() for c in df.columns}, ref)
     assert max(dev.values()) <= 1e-10, dev
     assert (out / "deck_x.out").exists()  # outDir set before source is honoured
+
+
+VARIANTS = {
+    # zeroLengthContact2D: gaps from the corner nodes, fn and ft from the element forces
+    "friction": ("contact.friction=0.2", "contact.friction_mode=stick"),
+    # step 148 fails without a fallback: both scripts stop there and exit 1, the recorders
+    # hold exactly the rows deckpound stored up to the failure
+    "failure": ("opensees.max_iterations=2", "opensees.fallback=none"),
+}
+
+
+@pytest.mark.parametrize("variant", sorted(VARIANTS))
+def test_exports_of_variants_match_the_in_process_run(variant, tmp_path):
+    scene = short_benchmark(2.0, *VARIANTS[variant])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref = run_engine("opensees", scene)
+    assert ref.ok == (variant != "failure")
+    if variant == "friction":
+        assert np.max(np.abs(ref["ft_c1"])) > 1.0  # the corners stick and slip
+    folder = tmp_path / "vari é"
+    py = export_script(scene, "py", folder / "v.py")
+    cp = subprocess.run([sys.executable, str(py), "--out", str(folder / "py")],
+                        capture_output=True, text=True, timeout=600, check=False)
+    assert cp.returncode == (0 if ref.ok else 1), cp.stderr[-2000:]
+    got = recorded(py, folder / "py")
+    for c in ref.columns:
+        if c != "t":
+            assert np.array_equal(got[c], ref[c]), c
+    if not HAS_TCL:
+        return
+    tcl = export_script(scene, "tcl", folder / "v.tcl")
+    cp = run_tcl(tcl)
+    assert cp.returncode == (0 if ref.ok else 1), (cp.stdout + cp.stderr)[-2000:]
+    dev = deviation(recorded(tcl, folder / "v_results"), ref)
+    print(f"{variant}: Tcl recorders vs in-process, worst {max(dev.values()):.2e}")
+    assert max(dev.values()) <= 1e-10
