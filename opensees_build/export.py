@@ -160,6 +160,12 @@ def _check_output(path: Path, fmt: str) -> None:
                          "and is not a plain folder; remove it or choose another name")
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def _write_atomic(path: Path, text: str) -> None:
     """Write ``text`` to a temporary file beside ``path`` and rename it into place (never
     writes through a symlink at ``path``: the rename replaces the link itself)."""
@@ -167,6 +173,7 @@ def _write_atomic(path: Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="ascii", newline="\n") as fh:
             fh.write(text)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it private; a script is not
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -177,6 +184,7 @@ def _write_folder(folder: Path, files: dict[str, str]) -> None:
     """Fill a temporary folder and swap it in for ``folder`` (old content removed)."""
     tmp = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}."))
     try:
+        os.chmod(tmp, 0o777 & ~_umask())
         for name, text in files.items():
             (tmp / name).write_text(text, encoding="ascii", newline="\n")
         old = None

@@ -241,6 +241,29 @@ def test_opsvis_plots_the_exported_model(exported):
     assert {str(n) for n in nodes} | {str(e) for e in eles} <= labels
 
 
+def test_export_replaces_files_and_never_writes_through_a_symlink(bench, tmp_path):
+    """Re-exporting replaces the script and the whole data folder; a symlink at the script path
+    is replaced, its target untouched; files get the usual permissions (not mkstemp's 0600)."""
+    import os
+    import stat
+
+    sc = bench.replace(run=RunSettings(duration=0.02))
+    target = tmp_path / "target.txt"
+    target.write_text("keep")
+    (tmp_path / "m.py").symlink_to(target)
+    (tmp_path / "m_data").mkdir()
+    (tmp_path / "m_data" / "stale.txt").write_text("old")
+    py = export.export_script(sc, "py", tmp_path / "m.py")
+    assert target.read_text() == "keep" and not py.is_symlink()
+    assert not (tmp_path / "m_data" / "stale.txt").exists()
+    assert (tmp_path / "m_data" / "manifest.json").exists()
+    mask = os.umask(0)
+    os.umask(mask)
+    assert stat.S_IMODE(py.stat().st_mode) == 0o666 & ~mask
+    assert stat.S_IMODE((tmp_path / "m_data").stat().st_mode) == 0o777 & ~mask
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.py", "m_data", "target.txt"]
+
+
 def test_readme_shows_the_current_export_head():
     """README's export snippet is the head of the benchmark's Tcl export; regenerate with
     ``python -m deckpound.opensees_build.export --regen-readme``."""
