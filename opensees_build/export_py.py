@@ -37,7 +37,22 @@ def py_literal(v, indent: int = 0) -> str:
         items = ",\n".join(f"{pad}{py_str(k)}: {py_literal(x, indent + 4)}" for k, x in v.items())
         return "{\n" + items + ",\n" + " " * indent + "}"
     if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(py_literal(x, indent) for x in v) + "]"
+        items = [py_literal(x, indent + 4) for x in v]
+        flat = "[" + ", ".join(items) + "]"
+        if indent + len(flat) <= 88:
+            return flat
+        pad = " " * (indent + 4)
+        if any(isinstance(x, (list, tuple, dict)) for x in v):
+            rows = items
+        else:  # fill lines with whole items
+            rows, cur = [], ""
+            for it in items:
+                if cur and len(pad) + len(cur) + len(it) + 2 > 96:
+                    rows.append(cur.rstrip(", "))
+                    cur = ""
+                cur += it + ", "
+            rows.append(cur.rstrip(", "))
+        return "[\n" + ",\n".join(pad + r for r in rows) + ",\n" + " " * indent + "]"
     if isinstance(v, str):
         return py_str(v)
     if isinstance(v, bool) or v is None:
@@ -103,7 +118,6 @@ def add_recorders(out_dir):
 
 
 {runtime}
-
 
 def main(argv=None):
     p = argparse.ArgumentParser(description="Run the exported OpenSees model (see the header).")
