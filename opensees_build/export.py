@@ -1,35 +1,54 @@
 """Export the OpenSees model of a scene as a runnable Tcl or Python script, and the golden log.
 
-``export_script(scene, "py", path)`` writes ``path`` and, beside it, one text file per support
-record (``<stem>.<channel>_disp.txt``, ``..._vel.txt``; 17 significant digits, so OpenSees reads
-back the very doubles used in process). The Python script executes the same commands as the
-in-process run and then the engine's own step loop (its source is copied verbatim from
-:mod:`.engine`), and writes the result columns to ``<stem>.csv`` (or the path given as its first
-argument) plus the run statistics to ``<stem>.stats.json``. The Tcl script holds the same
-commands in Tcl syntax and an equivalent step loop writing ``<stem>.csv``.
+``export_script(scene, "tcl" | "py", path)`` writes ``path`` and ONE data folder beside it,
+``<stem>_data/``: one text file per support record (one value a line, 17 significant digits, so
+OpenSees reads back the very doubles used in process) and ``manifest.json`` (for each record its
+channel, support node and dof, quantity and unit, time step, count and SHA-256; the recorder
+files and how deckpound's columns follow from them; units; scene name and hash). The script
+holds an audit header (:mod:`.export_header`), the same model and analysis commands as the
+in-process run, standard OpenSees recorders named after deckpound's result columns
+(:mod:`.recorders`) and the engine's step loop with its sub-step fallback (:mod:`.export_tcl`,
+:mod:`.export_py`). Scene text is quoted or escaped for the script's language
+(:mod:`.quoting`). Files are written to a temporary name and renamed into place.
 
 Golden command log: :func:`regen_golden` (or ``python -m deckpound.opensees_build.export
 --regen-golden``) rewrites ``data/golden/saiidi-4span.opensees.log``; floats are printed with
 12 significant digits and support records abbreviated to their length and a SHA-256.
+The README's "Exports" snippet: ``--regen-readme`` (a test compares it with :func:`readme_snippet`).
 """
 
 from __future__ import annotations
 
 import argparse
-import inspect
+import hashlib
 import json
+import os
+import shutil
+import tempfile
 from pathlib import Path
+
+from deckpound.models.errors import SceneError
+from deckpound.models.result import scene_hash
 
 from deckpound import __version__
 
 from . import engine
-from .ops import ArrayArg, Command, render_commands
+from .export_header import UNITS, ExportParts
+from .export_py import py_script
+from .export_tcl import tcl_script
+from .ops import ArrayArg, Command, OpsSession, render_commands
+from .quoting import safe_file_name, tcl_word
+from .recorders import PRECISION, manifest_entries, recorder_step, standard_recorders
 
-GOLDEN_DIR = Path(__file__).resolve().parents[1] / "data" / "golden"
+ROOT = Path(__file__).resolve().parents[1]
+GOLDEN_DIR = ROOT / "data" / "golden"
 GOLDEN_SCENE = "saiidi-4span"
-
-_RUNTIME = (engine.define_analysis, engine.corner_gaps, engine.contact_forces,
-            engine.sample_row, engine.run_steps)
+README = ROOT / "README.md"
+README_BEGIN = "<!-- export-snippet: python -m deckpound.opensees_build.export --regen-readme -->"
+README_END = "<!-- end export-snippet -->"
+#: lines of the exported Tcl script shown in the README
+README_LINES = 16
+MANIFEST_FORMAT = "deckpound-opensees-export-data/1"
 
 
 def golden_path(name: str = GOLDEN_SCENE) -> Path:
@@ -51,219 +70,193 @@ def regen_golden(name: str = GOLDEN_SCENE) -> Path:
     return path
 
 
-def _arrays(log: list[Command]) -> list[ArrayArg]:
-    return [a for c in log for a in c.args if isinstance(a, ArrayArg)]
+# -- the parts of an export ------------------------------------------------------------------
+
+def _records(log: list[Command], tags: dict, file_of: dict[str, str]) -> list[dict]:
+    """One manifest entry per support record, from the timeSeries / groundMotion /
+    imposedMotion commands of the log."""
+    series, motions, where = {}, {}, {}
+    for c in log:
+        if c.name == "timeSeries" and any(isinstance(a, ArrayArg) for a in c.args):
+            arr = next(a for a in c.args if isinstance(a, ArrayArg))
+            series[c.args[1]] = (arr, float(c.args[list(c.args).index("-dt") + 1]))
+        elif c.name == "groundMotion":
+            a = list(c.args)
+            motions[c.args[0]] = (a[a.index("-disp") + 1], a[a.index("-vel") + 1])
+        elif c.name == "imposedMotion":
+            where[c.args[2]] = (c.args[0], c.args[1])
+    node_names = {t: n for n, t in tags.get("node", {}).items()}
+    gm_names = {t: n for n, t in tags.get("groundMotion", {}).items()}
+    out = []
+    for gm, (ts_d, ts_v) in motions.items():
+        node, dof = where[gm]
+        for ts, quantity, unit in ((ts_d, "displacement", "m"), (ts_v, "velocity", "m/s")):
+            arr, dt = series[ts]
+            text = arr.file_text()
+            out.append({"file": file_of[arr.name], "channel": gm_names.get(gm, str(gm)),
+                        "quantity": quantity, "unit": unit, "time_series": ts,
+                        "ground_motion": gm, "node": node, "node_name": node_names.get(node, "?"),
+                        "dof": dof, "dt": dt, "count": len(arr.values),
+                        "sha256": hashlib.sha256(text.encode()).hexdigest()})
+    return out
 
 
-def script_and_files(scene, fmt: str, stem: str, motion=None) -> tuple[str, dict[str, str], list]:
-    """(script text, {file name: text} of the records, the command log)."""
+def export_parts(scene, fmt: str, stem: str, motion=None) -> tuple[ExportParts, dict[str, str]]:
+    """(the parts of the ``fmt`` script, {data file name: text})."""
     if fmt not in ("tcl", "py"):
-        raise ValueError(f"fmt must be 'tcl' or 'py', got {fmt!r}")
-    from .ops import OpsSession
+        raise SceneError("--format", f"must be 'tcl' or 'py', got {fmt!r}")
     with OpsSession() as ops:
-        info, plan = engine.build(ops, scene, motion)
+        _, plan = engine.build(ops, scene, motion)
         log = list(ops.log)
-    arrays = _arrays(log)
-    file_of = {a.name: f"{stem}.{a.name}.txt" for a in arrays}
+        tags = {kind: ops.tags(kind) for kind in ops.kinds()}
+    arrays = [a for c in log for a in c.args if isinstance(a, ArrayArg)]
+    file_of = {a.name: safe_file_name(a.name) + ".txt" for a in arrays}
+    if len(set(file_of.values())) != len(file_of):
+        raise AssertionError("two support records map to one file name")
     files = {file_of[a.name]: a.file_text() for a in arrays}
-    body = render_commands(log, fmt, file_of=file_of)
-    text = _py_script(scene, stem, body, plan) if fmt == "py" else _tcl_script(scene, stem, body, plan)
-    return text, files, log
+    recs, maps = standard_recorders(plan, [b.name for b in scene.bents])
+    parts = ExportParts(scene=scene, fmt=fmt, stem=stem, log=log, tags=tags, plan=plan,
+                        records=_records(log, tags, file_of), file_of=file_of, recorders=recs,
+                        maps=maps, rec_dt=recorder_step(plan), scene_hash=scene_hash(scene),
+                        data_dir=f"{stem}_data", out_dir=f"{stem}_results")
+    files["manifest.json"] = json.dumps(manifest(parts), indent=2, ensure_ascii=True) + "\n"
+    return parts, files
+
+
+def manifest(p: ExportParts) -> dict:
+    """The data folder's manifest (JSON-able)."""
+    return {
+        "format": MANIFEST_FORMAT,
+        "generator": f"deckpound {__version__}",
+        "scene": {"name": p.scene.name, "sha256": p.scene_hash},
+        "units": {"force": "kN", "length": "m", "mass": "t", "time": "s", "angle": "rad",
+                  "text": UNITS},
+        "records": p.records,
+        "recorders": {"dT": p.rec_dt, "precision": PRECISION, "dt": p.plan["dt"],
+                      "stride": p.plan["stride"], **manifest_entries(p.recorders, p.maps)},
+    }
+
+
+def script_text(scene, fmt: str, stem: str, motion=None) -> tuple[str, dict[str, str]]:
+    """(script text, {data file name: text})."""
+    parts, files = export_parts(scene, fmt, stem, motion)
+    return (tcl_script(parts) if fmt == "tcl" else py_script(parts)), files
+
+
+# -- writing -------------------------------------------------------------------------------
+
+def _check_output(path: Path, fmt: str) -> None:
+    if path.is_dir():
+        raise SceneError("--output", f"{str(path)!r} is a folder; give a file name")
+    if fmt == "tcl":
+        try:
+            tcl_word(str(path.resolve()))
+        except ValueError as err:
+            raise SceneError("--output", f"{str(path)!r} cannot be used by a Tcl script: {err}; "
+                             "choose a path without such characters") from None
+    data = path.parent / f"{path.stem}_data"
+    if data.is_symlink() or (data.exists() and not data.is_dir()):
+        raise SceneError("--output", f"{str(data)!r} (the data folder of {path.name!r}) exists "
+                         "and is not a plain folder; remove it or choose another name")
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to a temporary file beside ``path`` and rename it into place (never
+    writes through a symlink at ``path``: the rename replaces the link itself)."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="ascii", newline="\n") as fh:
+            fh.write(text)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it private; a script is not
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _write_folder(folder: Path, files: dict[str, str]) -> None:
+    """Fill a temporary folder and swap it in for ``folder`` (old content removed)."""
+    tmp = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}."))
+    try:
+        os.chmod(tmp, 0o777 & ~_umask())
+        for name, text in files.items():
+            (tmp / name).write_text(text, encoding="ascii", newline="\n")
+        old = None
+        if folder.exists():
+            old = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}.old."))
+            old.rmdir()
+            os.rename(folder, old)
+        os.rename(tmp, folder)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
 
 
 def export_script(scene, fmt: str, path, motion=None) -> Path:
-    """Write a complete, runnable ``fmt`` ("tcl" | "py") script for the scene to ``path``,
-    with the support records as files beside it. Returns the script path."""
+    """Write a complete, runnable ``fmt`` ("tcl" | "py") script for the scene to ``path`` and
+    its data folder ``<stem>_data/`` beside it. Returns the script path."""
     path = Path(path)
+    _check_output(path, fmt)
     path.parent.mkdir(parents=True, exist_ok=True)
-    text, files, _ = script_and_files(scene, fmt, path.stem, motion)
-    for name, content in files.items():
-        (path.parent / name).write_text(content)
-    path.write_text(text)
+    text, files = script_text(scene, fmt, path.stem, motion)
+    _write_folder(path.parent / f"{path.stem}_data", files)
+    _write_atomic(path, text)
     return path
 
 
-def _py_script(scene, stem: str, body: str, plan: dict) -> str:
-    runtime = "\n\n".join(inspect.getsource(f) for f in _RUNTIME)
-    return f'''#!/usr/bin/env python3
-"""OpenSees model of scene {scene.name!r}, exported by deckpound {__version__}.
+# -- README snippet ----------------------------------------------------------------------------
 
-Mode {scene.opensees.mode}, dt = {scene.opensees.dt} s. Run:  python {stem}.py [output.csv]
-Writes the result columns (deckpound standard columns) to {stem}.csv and the run statistics
-to {stem}.stats.json. The support records are read from the {stem}.*.txt files beside it.
-"""
-import csv
-import json
-import math
-import os
-import sys
-
-import openseespy.opensees as ops
-
-HERE = os.path.dirname(os.path.abspath(__file__))
+def readme_snippet() -> str:
+    """The README block: the first lines of the benchmark's Tcl export."""
+    from deckpound.models.scene_io import load_scene
+    text, _ = script_text(load_scene(GOLDEN_SCENE), "tcl", GOLDEN_SCENE)
+    head = "\n".join(text.splitlines()[:README_LINES])
+    return f"{README_BEGIN}\n```tcl\n{head}\n...\n```\n{README_END}"
 
 
-def _here(name):
-    return os.path.join(HERE, name)
+def readme_block(text: str) -> str | None:
+    """The snippet block of a README text (None when the markers are missing)."""
+    if README_BEGIN not in text or README_END not in text:
+        return None
+    start = text.index(README_BEGIN)
+    return text[start:text.index(README_END, start) + len(README_END)]
 
 
-# --- model and analysis ---
-{body}# --- end model ---
-
-PLAN = json.loads({json.dumps(json.dumps(plan))})
-
-
-{runtime}
-
-
-if __name__ == "__main__":
-    out_csv = sys.argv[1] if len(sys.argv) > 1 else _here({stem + ".csv"!r})
-    out = run_steps(ops, PLAN, log=lambda m: print(m, file=sys.stderr))
-    with open(out_csv, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(PLAN["columns"])
-        for row in out["rows"]:
-            w.writerow([repr(float(v)) for v in row])
-    with open(os.path.splitext(out_csv)[0] + ".stats.json", "w") as fh:
-        json.dump(out["stats"], fh, indent=2)
-    ops.wipe()
-    print(out["stats"]["status"], out["stats"]["message"])
-    sys.exit(0 if out["stats"]["status"] == "success" else 1)
-'''
-
-
-def _tcl_list(values) -> str:
-    return "{" + " ".join(repr(v) if isinstance(v, float) else str(v) for v in values) + "}"
-
-
-def _tcl_script(scene, stem: str, body: str, plan: dict) -> str:
-    analysis = "\n    ".join(" ".join(str(a) if not isinstance(a, float) else repr(a) for a in c)
-                              for c in plan["analysis"])
-    gap_eles = plan["gap_elements"] or [0, 0, 0, 0]
-    return f'''# OpenSees model of scene {scene.name}, exported by deckpound {__version__}.
-# Mode {scene.opensees.mode}, dt = {scene.opensees.dt} s. Run:  OpenSees {stem}.tcl
-# Writes the result columns (deckpound standard columns) to {stem}.csv; the support records
-# are read from the {stem}.*.txt files beside this script.
-set here [file dirname [file normalize [info script]]]
-
-# --- model and analysis ---
-{body}# --- end model ---
-
-set dt {plan["dt"]!r}
-set nSteps {plan["n_steps"]}
-set stride {plan["stride"]}
-set fallback {plan["fallback"]}
-set nSub {plan["substeps"]}
-set deck {plan["deck"]}
-set seats {_tcl_list(plan["seats"])}
-set deckCorners {_tcl_list(plan["deck_corners"])}
-set seatCorners {_tcl_list(plan["seat_corners"])}
-set gapEles {_tcl_list(gap_eles)}
-set hasGaps {1 if plan["gap_elements"] else 0}
-set g0 {_tcl_list(plan["g0"])}
-set sides {_tcl_list(plan["sides"])}
-set bentEles {_tcl_list(plan["bent_elements"])}
-set friction {1 if plan["friction"] else 0}
-
-proc defineAnalysis {{}} {{
-    {analysis}
-}}
-
-proc cornerGaps {{}} {{
-    global deckCorners seatCorners g0 sides
-    set out {{}}
-    for {{set c 0}} {{$c < 4}} {{incr c}} {{
-        set ud [nodeDisp [lindex $deckCorners $c] 1]
-        set us [nodeDisp [lindex $seatCorners $c] 1]
-        lappend out [expr {{[lindex $g0 $c] + [lindex $sides $c] * ($ud - $us)}}]
-    }}
-    return $out
-}}
-
-proc sampleRow {{t}} {{
-    global deck seats gapEles hasGaps friction sides bentEles
-    set dk [nodeDisp $deck]
-    set s1 [nodeDisp [lindex $seats 0]]
-    set s2 [nodeDisp [lindex $seats 1]]
-    set vk [nodeVel $deck]
-    set v1 [nodeVel [lindex $seats 0]]
-    set v2 [nodeVel [lindex $seats 1]]
-    set row [list $t [lindex $dk 0] [lindex $dk 1] [lindex $dk 2] [lindex $s1 0] [lindex $s1 2] \\
-             [lindex $s2 0] [lindex $s2 2] [lindex $vk 0] [lindex $vk 1] [lindex $vk 2] \\
-             [lindex $v1 0] [lindex $v1 2] [lindex $v2 0] [lindex $v2 2]]
-    set row [concat $row [cornerGaps]]
-    set fn {{}}
-    set ft {{}}
-    for {{set c 0}} {{$c < 4}} {{incr c}} {{
-        set e [lindex $gapEles $c]
-        if {{!$hasGaps}} {{
-            lappend fn 0.0; lappend ft 0.0
-        }} elseif {{$friction}} {{
-            set f [eleResponse $e force]
-            lappend fn [expr {{-[lindex $sides $c] * [lindex $f 3]}}]
-            lappend ft [expr {{-[lindex $f 4]}}]
-        }} else {{
-            lappend fn [expr {{-[lindex [eleResponse $e basicForce] 0]}}]
-            lappend ft 0.0
-        }}
-    }}
-    set row [concat $row $fn $ft]
-    foreach e $bentEles {{
-        set f [eleResponse $e basicForce]
-        lappend row [lindex $f 0] [lindex $f 1]
-    }}
-    return $row
-}}
-
-set fh [open [file join $here {stem}.csv] w]
-puts $fh [join {{{" ".join(plan["columns"])}}} ","]
-puts $fh [join [sampleRow 0.0] ","]
-set failures 0
-set status success
-for {{set n 1}} {{$n <= $nSteps}} {{incr n}} {{
-    set ok [analyze 1 $dt]
-    if {{$ok != 0}} {{
-        incr failures
-        if {{$fallback == "substep"}} {{
-            wipeAnalysis
-            defineAnalysis
-            set h [expr {{$dt / $nSub}}]
-            for {{set k 0}} {{$k < $nSub}} {{incr k}} {{
-                set ok [analyze 1 $h]
-                if {{$ok != 0}} {{ break }}
-            }}
-            wipeAnalysis
-            defineAnalysis
-        }}
-    }}
-    if {{$ok != 0}} {{
-        set status failed
-        puts "step $n (t = [expr {{$n * $dt}}] s) did not converge"
-        break
-    }}
-    if {{$n % $stride == 0}} {{
-        puts $fh [join [sampleRow [expr {{$n * $dt}}]] ","]
-    }}
-}}
-close $fh
-wipe
-puts "$status, failures: $failures"
-'''
+def regen_readme(path: Path = README) -> Path:
+    text = path.read_text(encoding="utf-8")
+    old = readme_block(text)
+    if old is None:
+        raise SystemExit(f"{path}: no '{README_BEGIN}' ... '{README_END}' block")
+    path.write_text(text.replace(old, readme_snippet()), encoding="utf-8")
+    return path
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m deckpound.opensees_build.export",
                                 description=__doc__.splitlines()[0])
     p.add_argument("--regen-golden", action="store_true", help="rewrite the golden command log")
+    p.add_argument("--regen-readme", action="store_true",
+                   help="rewrite the exported-script snippet in README.md")
     p.add_argument("--scene", default=GOLDEN_SCENE, help="built-in scene name or TOML file")
     p.add_argument("--format", choices=("tcl", "py"), default="py")
     p.add_argument("--out", help="script path to write")
     a = p.parse_args(argv)
-    if a.regen_golden:
-        print(regen_golden())
+    if a.regen_golden or a.regen_readme:
+        if a.regen_golden:
+            print(regen_golden())
+        if a.regen_readme:
+            print(regen_readme())
         return 0
     if not a.out:
-        p.error("--out is required unless --regen-golden")
+        p.error("--out is required unless --regen-golden / --regen-readme")
     from deckpound.models.scene_io import load_scene
     print(export_script(load_scene(a.scene), a.format, a.out))
     return 0

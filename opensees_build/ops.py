@@ -18,7 +18,7 @@ Only one session may be open at a time (openseespy holds one global domain).
 
 Long value lists (support records) are passed as :class:`ArrayArg`; in process they expand to
 ``-values v0 v1 ...``, in the log they are abbreviated to their length and SHA-256, and the
-exported scripts read them from files written beside the script (``-filePath``).
+exported scripts read them from files in the script's data folder (``-filePath``).
 """
 
 from __future__ import annotations
@@ -30,6 +30,8 @@ from typing import Any, Iterator
 
 import numpy as np
 import openseespy.opensees as _ops
+
+from .quoting import comment_text, py_str, tcl_word
 
 __all__ = ["ArrayArg", "Command", "OpsSession", "openseespy_version", "render_value"]
 
@@ -95,7 +97,8 @@ def render_value(v: Any, style: str, *, golden: bool = False) -> str:
             return f"{v:.12g}"
         return repr(v)
     if isinstance(v, str):
-        return repr(v) if style == "py" else v
+        # quoted so that no string can start a substitution or a new command (issue 16)
+        return py_str(v) if style == "py" else tcl_word(v)
     raise TypeError(f"cannot render argument {v!r}")
 
 
@@ -151,6 +154,10 @@ class OpsSession:
         """Name → tag of every object of ``kind`` allocated so far."""
         return dict(self._tags.get(kind, {}))
 
+    def kinds(self) -> list[str]:
+        """The kinds that have tags, in order of first use (for the export's tag legend)."""
+        return list(self._tags)
+
     # -- logging control ------------------------------------------------------------------
     @contextlib.contextmanager
     def quiet(self) -> Iterator[None]:
@@ -204,9 +211,10 @@ def render_command(cmd: Command, style: str, *, golden: bool = False,
                    file_of: dict[str, str] | None = None, module: str = "ops") -> str:
     """One command as a line of ``style``: ``log`` (Tcl-like, arrays abbreviated), ``tcl`` or
     ``py`` (arrays read with ``-filePath`` from files named by ``file_of[name]`` in the script's
-    folder: ``$here`` in Tcl, ``_here(name)`` in Python — the scripts define both)."""
+    data folder: ``$dataDir`` in Tcl, ``_data(name)`` in Python — the scripts define both).
+    Strings are quoted for the language and comments escaped (:mod:`.quoting`)."""
     if cmd.name == "#":
-        return f"# {cmd.args[0]}"
+        return f"# {comment_text(cmd.args[0], 'py' if style == 'py' else 'tcl')}"
     parts: list[str] = []
     py_parts: list[str] = []
     for a in cmd.args:
@@ -215,8 +223,8 @@ def render_command(cmd: Command, style: str, *, golden: bool = False,
                 parts.append(f"-values <{a.name}: {len(a.values)} values sha256 {a.digest()}>")
             else:
                 fname = (file_of or {}).get(a.name, f"{a.name}.txt")
-                parts.append(f"-filePath [file join $here {fname}]")
-                py_parts += ["'-filePath'", f"_here({fname!r})"]
+                parts.append(f"-filePath [file join $dataDir {tcl_word(fname)}]")
+                py_parts += ["'-filePath'", f"_data({py_str(fname)})"]
             continue
         parts.append(render_value(a, "tcl" if style != "py" else "py", golden=golden))
         py_parts.append(render_value(a, "py"))

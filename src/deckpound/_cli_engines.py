@@ -19,7 +19,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, metavar="DIR")
     p.set_defaults(func=_run)
 
-    p = sub.add_parser("export", help="write a standalone OpenSees script of a scene")
+    p = sub.add_parser("export", help="write a standalone OpenSees script of a scene (plus its "
+                       "data folder <stem>_data/ with the records and manifest.json)")
     add_scene_args(p)
     p.add_argument("--format", required=True, choices=("tcl", "py"))
     p.add_argument("-o", "--output", required=True, metavar="FILE")
@@ -72,7 +73,8 @@ def _export(args) -> int:
     if out.exists() and out.is_dir():
         raise SceneError("--output", f"{str(out)!r} is a folder; give a file name")
     written = export_script(scene, args.format, out)
-    print(f"wrote {written}")
+    print(f"wrote {written} and {written.parent / (written.stem + '_data')}/ (support records, "
+          f"manifest.json); recorder files go to {written.stem}_results/ when it runs")
     return 0
 
 

@@ -1,0 +1,172 @@
+"""The exported Tcl script: header, model, recorders and the step loop with its fallback.
+
+Layout (each part generated; scene text appears only in the header comments):
+
+1. the audit header (:func:`.export_header.header_lines`) as ``#`` comments;
+2. ``here`` / ``dataDir`` / ``outDir`` / ``writeCsv`` (the last two may be set before
+   ``source``-ing the script);
+3. the model and analysis commands, one per logged command (``# --- model and analysis ---``
+   ... ``# --- end model ---``), support records read with ``-filePath`` from ``$dataDir``;
+4. the step plan as variables and ``defineAnalysis`` (re-issued by the fallback);
+5. the recorders (:mod:`.recorders`) and ``record`` at t = 0;
+6. the step loop: ``analyze 1 $dt`` with every return code checked and the sub-step fallback of
+   :func:`deckpound.opensees_build.engine.run_steps`, optionally writing deckpound's CSV.
+"""
+
+from __future__ import annotations
+
+from .export_header import ExportParts, header_lines
+from .ops import render_commands
+from .quoting import comment_text, tcl_word
+from .recorders import render_recorders
+
+
+def _num(v) -> str:
+    return repr(float(v)) if isinstance(v, float) else str(int(v))
+
+
+def _tcl_list(values) -> str:
+    return "{" + " ".join(_num(v) for v in values) + "}"
+
+
+def _analysis_body(plan: dict) -> str:
+    return "\n    ".join(" ".join(tcl_word(a) if isinstance(a, str) else _num(a) for a in c)
+                         for c in plan["analysis"])
+
+
+def tcl_script(p: ExportParts) -> str:
+    """The complete Tcl script of ``p``."""
+    plan = p.plan
+    head = "\n".join(f"# {comment_text(x, 'tcl')}".rstrip() for x in header_lines(p))
+    body = render_commands(p.log, "tcl", file_of=p.file_of)
+    recorders = "\n".join(render_recorders(p.recorders, "tcl"))
+    gap_eles = plan["gap_elements"] or [0, 0, 0, 0]
+    margin = "0.5 / $nSub" if plan["fallback"] == "substep" else "0.5"
+    columns = " ".join(tcl_word(c) for c in plan["columns"])
+    return f'''{head}
+
+set here [file dirname [file normalize [info script]]]
+set dataDir [file join $here {tcl_word(p.data_dir)}]
+if {{![info exists outDir]}} {{ set outDir [file join $here {tcl_word(p.out_dir)}] }}
+if {{![info exists writeCsv]}} {{ set writeCsv 0 }}
+file mkdir $outDir
+
+# --- model and analysis ---
+{body}# --- end model ---
+
+# step plan (tags from the legend above)
+set dt {_num(plan["dt"])}
+set nSteps {plan["n_steps"]}
+set stride {plan["stride"]}
+set fallback {tcl_word(plan["fallback"])}
+set nSub {plan["substeps"]}
+set deck {plan["deck"]}
+set seats {_tcl_list(plan["seats"])}
+set deckCorners {_tcl_list(plan["deck_corners"])}
+set seatCorners {_tcl_list(plan["seat_corners"])}
+set gapEles {_tcl_list(gap_eles)}
+set hasGaps {1 if plan["gap_elements"] else 0}
+set g0 {_tcl_list(plan["g0"])}
+set sides {_tcl_list(plan["sides"])}
+set bentEles {_tcl_list(plan["bent_elements"])}
+set friction {1 if plan["friction"] else 0}
+
+proc defineAnalysis {{}} {{
+    {_analysis_body(plan)}
+}}
+
+# --- recorders: one file per deckpound column (maps in the header) ---
+# -dT = (stride - half a sub-step) * dt: one row per output step, none from sub-steps
+set recDT [expr {{($stride - {margin}) * $dt}}]
+{recorders}
+# --- end recorders ---
+
+# deckpound's CSV (writeCsv 1): the engine's sample_row, in Tcl
+proc cornerGaps {{}} {{
+    global deckCorners seatCorners g0 sides
+    set out {{}}
+    for {{set c 0}} {{$c < 4}} {{incr c}} {{
+        set ud [nodeDisp [lindex $deckCorners $c] 1]
+        set us [nodeDisp [lindex $seatCorners $c] 1]
+        lappend out [expr {{[lindex $g0 $c] + [lindex $sides $c] * ($ud - $us)}}]
+    }}
+    return $out
+}}
+
+proc sampleRow {{t}} {{
+    global deck seats gapEles hasGaps friction sides bentEles
+    set dk [nodeDisp $deck]
+    set s1 [nodeDisp [lindex $seats 0]]
+    set s2 [nodeDisp [lindex $seats 1]]
+    set vk [nodeVel $deck]
+    set v1 [nodeVel [lindex $seats 0]]
+    set v2 [nodeVel [lindex $seats 1]]
+    set row [list $t [lindex $dk 0] [lindex $dk 1] [lindex $dk 2] [lindex $s1 0] [lindex $s1 2] \\
+             [lindex $s2 0] [lindex $s2 2] [lindex $vk 0] [lindex $vk 1] [lindex $vk 2] \\
+             [lindex $v1 0] [lindex $v1 2] [lindex $v2 0] [lindex $v2 2]]
+    set row [concat $row [cornerGaps]]
+    set fn {{}}
+    set ft {{}}
+    for {{set c 0}} {{$c < 4}} {{incr c}} {{
+        set e [lindex $gapEles $c]
+        if {{!$hasGaps}} {{
+            lappend fn 0.0; lappend ft 0.0
+        }} elseif {{$friction}} {{
+            set f [eleResponse $e force]
+            lappend fn [expr {{-[lindex $sides $c] * [lindex $f 3]}}]
+            lappend ft [expr {{-[lindex $f 4]}}]
+        }} else {{
+            lappend fn [expr {{-[lindex [eleResponse $e basicForce] 0]}}]
+            lappend ft 0.0
+        }}
+    }}
+    set row [concat $row $fn $ft]
+    foreach e $bentEles {{
+        set f [eleResponse $e basicForce]
+        lappend row [lindex $f 0] [lindex $f 1]
+    }}
+    return $row
+}}
+
+# --- step loop (deckpound's run_steps): every analyze checked, sub-step fallback ---
+record
+if {{$writeCsv}} {{
+    set fh [open [file join $outDir opensees.csv] w]
+    puts $fh [join [list {columns}] ","]
+    puts $fh [join [sampleRow 0.0] ","]
+}}
+set failures 0
+set rescued 0
+set status success
+for {{set n 1}} {{$n <= $nSteps}} {{incr n}} {{
+    set ok [analyze 1 $dt]
+    if {{$ok != 0}} {{
+        incr failures
+        puts "step $n (t = [expr {{$n * $dt}}] s) failed with code $ok"
+        if {{$fallback == "substep"}} {{
+            wipeAnalysis
+            defineAnalysis
+            set h [expr {{$dt / $nSub}}]
+            for {{set k 0}} {{$k < $nSub}} {{incr k}} {{
+                set ok [analyze 1 $h]
+                if {{$ok != 0}} {{ break }}
+            }}
+            wipeAnalysis
+            defineAnalysis
+            if {{$ok == 0}} {{ incr rescued }}
+        }}
+    }}
+    if {{$ok != 0}} {{
+        set status failed
+        puts "step $n (t = [expr {{$n * $dt}}] s) did not converge"
+        break
+    }}
+    if {{$writeCsv && $n % $stride == 0}} {{
+        puts $fh [join [sampleRow [expr {{$n * $dt}}]] ","]
+    }}
+}}
+if {{$writeCsv}} {{ close $fh }}
+wipe
+puts "$status, failures: $failures, rescued by sub-steps: $rescued"
+if {{$status != "success"}} {{ exit 1 }}
+'''

@@ -1,0 +1,230 @@
+"""Standard OpenSees recorders of the exported scripts, and the map from their files to
+deckpound's result columns (:func:`deckpound.engine_contract.engine_columns`).
+
+One recorder file per result column the engine writes, named after it (``deck_x_abs.out``,
+``deck_vx_abs.out``, ``gap_c1.out``, ``bent1_fx.out``, ...; the columns deckpound derives from
+these and the support motion — displacements relative to the supports, bent deformations — are
+not recorded). Every file
+starts with the time column (``-time``) and holds raw OpenSees quantities at 17 significant
+digits; :class:`ColumnMap` states how a deckpound column follows from them:
+
+* node displacements are the columns themselves (absolute, as in deckpound);
+* ``gap_cK`` — without friction the gap element's ``deformation`` e = u_j − u_i, and
+  g = g₀ + e (the nodes are ordered so that e = side·(u_deck − u_seat), closing negative); with
+  friction (zeroLengthContact2D) the x displacements of the deck and seat corners,
+  g = g₀ + side·(u_deck − u_seat);
+* ``fn_cK`` — without friction the material stress (``basicForce``, ≤ 0 in compression),
+  fn = −stress; with friction the element's resisting forces [Fx_i, Fy_i, M_i, Fx_j, Fy_j, M_j]
+  (j = deck corner), fn = −side·Fx_j and ``ft_cK`` = −Fy_j (force on the deck, + = +y);
+* ``<bent>_fx/_fy`` — stress of the bent's Hysteretic material 1 (x) and 2 (y).
+
+Alignment with deckpound's rows: the engine stores a row at t = 0 and after every ``stride``-th
+step, while OpenSees records at every commit — including the commits of the sub-steps of the
+fallback. The recorders therefore get ``-dT = (stride − m)·dt`` with a margin m of half a
+sub-step (half a step without the fallback), and the script calls ``record`` once at t = 0: a
+recorder writes at the first commit at or after ``previous record + dT``, which is the output
+step itself (the sub-step before it is ``m`` too early), whether or not the OpenSees build
+applies its relative tolerance (1e-5·dT) to that comparison — as long as that tolerance stays
+below the margin, which :func:`recorder_step` checks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from deckpound.models.errors import SceneError
+from deckpound.models.plan import DOF_COLUMNS, VELOCITY_COLUMNS
+
+from .quoting import comment_text, py_str, safe_file_name, tcl_word
+
+#: significant digits of the recorder files (17: reading back gives the very doubles)
+PRECISION = 17
+#: relative tolerance that newer OpenSees builds apply to ``-dT`` (``relDeltaTTol``, 1e-5);
+#: :func:`recorder_step` keeps it below a tenth of the margin
+OPENSEES_DT_RTOL = 1.0e-5
+
+
+@dataclass(frozen=True)
+class Recorder:
+    """One ``recorder Node|Element`` command writing ``file`` (time, then ``columns``)."""
+
+    file: str
+    kind: str
+    tags: tuple[int, ...]
+    response: tuple
+    columns: tuple[str, ...]
+    meaning: str
+    dofs: tuple[int, ...] = ()
+
+    def args(self) -> list:
+        """The arguments after ``-file PATH -time -precision P -dT DT``."""
+        out: list = ["-node" if self.kind == "Node" else "-ele", *self.tags]
+        if self.kind == "Node":
+            out += ["-dof", *self.dofs]
+        return out + list(self.response)
+
+
+@dataclass(frozen=True)
+class ColumnMap:
+    """deckpound column = offset + scale·(x[a] − x[b]) (or offset + scale·x[a] when ``b`` is
+    None) with x one row of recorder file ``file`` (x[0] is the time); ``file`` None: the
+    constant ``offset``. Evaluated in this order, so the arithmetic is the engine's own."""
+
+    column: str
+    file: str | None
+    a: int = 1
+    b: int | None = None
+    offset: float = 0.0
+    scale: float = 1.0
+
+    def formula(self) -> str:
+        """The map as one line of text for the script header (``file[k]``: column k of the
+        file, 0 = time)."""
+        if self.file is None:
+            return f"{self.column} = {self.offset!r} (no recorder)"
+        if self.a == 0:
+            return f"{self.column} = {self.file}[0]"
+        x = (f"{self.file}[{self.a}]" if self.b is None
+             else f"({self.file}[{self.a}] - {self.file}[{self.b}])")
+        lin = x if self.scale == 1.0 else f"-{x}" if self.scale == -1.0 else f"{self.scale!r}*{x}"
+        if self.offset == 0.0:
+            rhs = lin
+        else:
+            rhs = f"{self.offset!r} - {lin[1:]}" if lin.startswith("-") else f"{self.offset!r} + {lin}"
+        return f"{self.column} = {rhs}"
+
+    def apply(self, table: np.ndarray, n_rows: int) -> np.ndarray:
+        if self.file is None:
+            return np.full(n_rows, self.offset)
+        if self.a == 0:
+            return table[:, 0].copy()
+        x = table[:, self.a] if self.b is None else table[:, self.a] - table[:, self.b]
+        return self.offset + self.scale * x
+
+
+def recorder_step(plan: dict) -> float:
+    """``-dT`` of the recorders [s]: (stride − m)·dt, m = 1/(2·substeps) with the sub-step
+    fallback, 1/2 without (see the module docstring)."""
+    margin = 0.5 / plan["substeps"] if plan["fallback"] == "substep" else 0.5
+    if OPENSEES_DT_RTOL * plan["stride"] > 0.1 * margin:
+        raise SceneError("run.output_dt", f"an output every {plan['stride']} steps with "
+                         f"{plan['substeps']} sub-steps cannot be separated by OpenSees "
+                         "recorders (-dT tolerance 1e-5 of the output step exceeds a tenth of "
+                         "half a sub-step); lower run.output_dt or opensees.substeps so that "
+                         f"stride x substeps <= {int(0.05 / OPENSEES_DT_RTOL)}")
+    return (plan["stride"] - margin) * plan["dt"]
+
+
+def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[ColumnMap]]:
+    """The recorders and column maps for the model described by ``plan``
+    (:func:`deckpound.opensees_build.engine.make_plan`)."""
+    recs: list[Recorder] = []
+    maps: list[ColumnMap] = []
+
+    def node(col: str, vcol: str, tag: int, dof: int, what: str, unit: str) -> None:
+        recs.append(Recorder(f"{col}.out", "Node", (tag,), ("disp",), (col,),
+                             f"{what}, absolute displacement [{unit}]", dofs=(dof,)))
+        maps.append(ColumnMap(col, f"{col}.out"))
+        recs.append(Recorder(f"{vcol}.out", "Node", (tag,), ("vel",), (vcol,),
+                             f"{what}, absolute velocity [{unit}/s]", dofs=(dof,)))
+        maps.append(ColumnMap(vcol, f"{vcol}.out"))
+
+    # the plan model's column names, in DOF order: deck x, y, θ, then seat x, θ per seat
+    names = [(d, v) for (d, _), (v, _) in zip(DOF_COLUMNS, VELOCITY_COLUMNS)]
+    maps.append(ColumnMap("t", f"{names[0][0]}.out", a=0))
+    for dof, (col, vcol) in enumerate(names[:3], start=1):
+        unit = "rad" if dof == 3 else "m"
+        node(col, vcol, plan["deck"], dof, f"deck centre node {plan['deck']} dof {dof}", unit)
+    for j, seat in enumerate(plan["seats"], start=1):
+        for dof, (col, vcol) in zip((1, 3), names[1 + 2 * j:3 + 2 * j]):
+            unit = "rad" if dof == 3 else "m"
+            node(col, vcol, seat, dof, f"seat {j} node {seat} dof {dof}", unit)
+
+    gaps = plan["gap_elements"]
+    for c in range(4):
+        k = c + 1
+        side, g0 = plan["sides"][c], plan["g0"][c]
+        if not gaps:
+            maps += [ColumnMap(f"gap_c{k}", None, offset=g0), ColumnMap(f"fn_c{k}", None),
+                     ColumnMap(f"ft_c{k}", None)]
+            continue
+        e = gaps[c]
+        if plan["friction"]:
+            dn, sn = plan["deck_corners"][c], plan["seat_corners"][c]
+            recs.append(Recorder(f"gap_c{k}.out", "Node", (dn, sn), ("disp",),
+                                 ("u_deck corner", "u_seat corner"),
+                                 f"x displacement of deck corner node {dn} and seat corner node "
+                                 f"{sn} [m]", dofs=(1,)))
+            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0, scale=side))
+            for col, a, scale in ((f"fn_c{k}", 4, -side), (f"ft_c{k}", 5, -1.0)):
+                recs.append(Recorder(f"{col}.out", "Element", (e,), ("force",),
+                                     ("Fx_i", "Fy_i", "M_i", "Fx_j", "Fy_j", "M_j"),
+                                     f"resisting forces of contact element {e} (i = seat, "
+                                     "j = deck corner) [kN, kN*m]"))
+                maps.append(ColumnMap(col, f"{col}.out", a=a, scale=scale))
+        else:
+            recs.append(Recorder(f"gap_c{k}.out", "Element", (e,), ("deformation",),
+                                 ("deformation",), f"deformation u_j - u_i of gap element {e} [m]"))
+            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", offset=g0))
+            recs.append(Recorder(f"fn_c{k}.out", "Element", (e,), ("basicForce",),
+                                 ("stress",), f"material stress of gap element {e}, <= 0 in "
+                                 "compression [kN]"))
+            maps.append(ColumnMap(f"fn_c{k}", f"fn_c{k}.out", scale=-1.0))
+            maps.append(ColumnMap(f"ft_c{k}", None))
+
+    for name, e in zip(bent_names, plan["bent_elements"]):
+        for mat, d in ((1, "x"), (2, "y")):
+            col = f"{name}_f{d}"
+            recs.append(Recorder(f"{col}.out", "Element", (e,), ("material", mat, "stress"),
+                                 ("stress",), f"bent {name} element {e}, Hysteretic stress in "
+                                 f"{d} (deck - table deformation) [kN]"))
+            maps.append(ColumnMap(col, f"{col}.out"))
+    for r in recs:
+        if safe_file_name(r.file) != r.file:  # bent names are validated words; keep it so
+            raise SceneError("bents", f"recorder file name {r.file!r} is not a plain file name")
+    order = {c: k for k, c in enumerate(plan["columns"])}
+    if sorted(order) != sorted(m.column for m in maps):
+        raise AssertionError("recorder maps do not cover the result columns")
+    maps.sort(key=lambda m: order[m.column])
+    return recs, maps
+
+
+def render_recorders(recs: list[Recorder], lang: str) -> list[str]:
+    """The recorder commands as lines of ``lang``: Tcl uses ``$outDir`` and ``$recDT``, Python
+    ``_out(out_dir, name)`` and ``opts`` (-time -precision 17 -dT REC_DT; the script defines
+    them)."""
+    lines = []
+    for r in recs:
+        lines.append(f"# {comment_text(f'{r.file}: {r.meaning}', lang)}")
+        if lang == "tcl":
+            rest = " ".join(tcl_word(a) if isinstance(a, str) else str(a) for a in r.args())
+            lines.append(f"recorder {r.kind} -file [file join $outDir {tcl_word(r.file)}] -time "
+                         f"-precision {PRECISION} -dT $recDT {rest}")
+        else:
+            rest = ", ".join(py_str(a) if isinstance(a, str) else str(a) for a in r.args())
+            lines.append(f"ops.recorder({py_str(r.kind)}, '-file', _out(out_dir, {py_str(r.file)}), "
+                         f"*opts, {rest})")
+    return lines
+
+
+def manifest_entries(recs: list[Recorder], maps: list[ColumnMap]) -> dict:
+    """JSON-able description of the recorder files and the column maps."""
+    return {"files": [{**asdict(r), "columns": ["time", *r.columns]} for r in recs],
+            "columns": [{**asdict(m), "formula": m.formula()} for m in maps]}
+
+
+def read_columns(folder: str | Path, maps: list[ColumnMap] | list[dict]) -> dict[str, np.ndarray]:
+    """deckpound's result columns from the recorder files in ``folder`` (maps as objects or
+    as the dicts of a manifest)."""
+    folder = Path(folder)
+    maps = [m if isinstance(m, ColumnMap) else
+            ColumnMap(**{k: v for k, v in m.items() if k != "formula"}) for m in maps]
+    tables = {m.file: np.loadtxt(folder / m.file, ndmin=2) for m in maps if m.file}
+    n_rows = {len(t) for t in tables.values()}
+    if len(n_rows) != 1:
+        raise ValueError(f"recorder files in {folder} differ in length: {sorted(n_rows)} rows")
+    n = n_rows.pop()
+    return {m.column: m.apply(tables.get(m.file), n) for m in maps}
