@@ -395,7 +395,8 @@ def support_motion(scene: Scene) -> SupportMotion:
                              f"{exc.scaling!r}, scale = {exc.scale:g}); {limit}")
     motion.provenance["applied_pga"] = applied
     for text in motion.provenance.get("warnings", []):
-        warnings.warn(text, RecordWarning, stacklevel=2)
+        # one location for every call: a sequence or several engines print a sentence once
+        warnings.warn(text, RecordWarning, stacklevel=1)
     return motion
 
 

@@ -263,6 +263,10 @@ class Excitation:
             if not record and value != default:
                 raise SceneError(name, f"applies to records (kind = csv, at2, text), not to kind "
                                  f"= {self.kind!r} ({why}); must be {default!r}, got {value!r}")
+        if record and self.incoherence > 0.0:
+            raise SceneError("incoherence", f"applies to the synthetic record only (a record is "
+                             f"applied at every table, delayed by lag); must be 0.0 for kind = "
+                             f"{self.kind!r}, got {self.incoherence}")
         if self.scale != 1.0 and self.scaling != "factor":
             raise SceneError("scale", f"is used only with scaling = 'factor' (scaling is "
                              f"{self.scaling!r}); must be 1.0, got {self.scale}")

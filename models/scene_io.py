@@ -104,7 +104,7 @@ def load_scene(ref: str | Path, overrides: Iterable[str] = ()) -> Scene:
     notices = resolve_record_paths(data, folder) if folder is not None else []
     scene = scene_from_mapping(data)
     for text in notices:
-        warnings.warn(text, RecordPathWarning, stacklevel=2)
+        warnings.warn(text, RecordPathWarning, stacklevel=1)  # one location: printed once
     return scene
 
 

@@ -122,3 +122,17 @@ def test_record_options_refused_where_they_would_do_nothing(override, field, tex
 def test_at2_unit_is_g(unequal_pair):
     with pytest.raises(SceneError, match=r"^excitation.acc_unit: must be 'g' for AT2 records"):
         record_scene("at2", *unequal_pair, None, "excitation.acc_unit=cm/s^2")
+
+
+def test_incoherence_refused_for_records(unequal_pair):
+    with pytest.raises(SceneError, match=r"^excitation.incoherence: applies to the synthetic "
+                                         r"record only"):
+        record_scene("at2", *unequal_pair, None, "excitation.incoherence=0.3")
+
+
+def test_benchmark_notes_give_a_reason_for_every_record_default(bench_scene):
+    """Each new excitation option carries its default's reason in the scene's notes."""
+    for key in ("scaling", "scale", "time_scale", "processing", "acc_unit", "allow_extreme",
+                "highpass"):
+        note = bench_scene.notes[f"excitation.{key}"]
+        assert note.startswith("ASSUMPTION: ") and len(note) > 40, key
