@@ -289,7 +289,7 @@ class Excitation:
                                  f"true, got {pga}")
 
 
-def check_sequence_pgas(scene: "Scene") -> None:
+def check_sequence_pgas(scene: Scene) -> None:
     """Validate every run of the sequence up front: each label through the excitation's PGA
     check (a 6 g run is refused naming ``sequence.pgas[i]``, not half-way through a run)."""
     for i, pga in enumerate(scene.sequence.pgas):
