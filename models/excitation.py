@@ -77,8 +77,9 @@ class SupportMotion:
     def resample(self, dt: float, duration: float | None = None) -> SupportMotion:
         """Motion at t_n = n·dt, n = 0..N, N = round(duration/dt), by linear interpolation.
 
-        Exact for piecewise-linear data; after the record ends the last value is held (the
-        records are baseline-corrected, so that is rest).
+        Exact for piecewise-linear data; after the record ends the last displacement and
+        velocity are held (rest for the generated records and for records that end at rest; a
+        drifting record is stated in a warning when it is loaded).
         """
         if not dt > 0:
             raise SceneError("dt", f"must be > 0 s, got {dt}")
@@ -163,7 +164,10 @@ def _taper(n: int, frac: float = 0.05) -> np.ndarray:
 
 
 def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.ndarray, ...]:
-    """Displacement, velocity and acceleration from a raw acceleration record.
+    """Displacement, velocity and acceleration from the synthetic generator's raw signal.
+
+    Part of the generator (users' records are processed only as their scene's
+    ``processing`` says, in :mod:`deckpound.models.record_motion`).
 
     Zero-phase 4th-order Butterworth high-pass at ``highpass`` Hz, double integration
     (trapezoidal), a cosine taper on the displacement, and velocity and acceleration

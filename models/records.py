@@ -110,6 +110,17 @@ def one_line(text: str, limit: int = 120) -> str:
     return clean[:limit]
 
 
+def resolve_path(path: str | Path, field_name: str, base: Path | None = None) -> Path:
+    """``path`` (relative to ``base`` if given and not absolute) made absolute, ``~`` expanded,
+    symbolic links followed; a path the system cannot use is refused, not a traceback."""
+    try:
+        p = Path(path).expanduser()
+        return ((base / p) if base is not None and not p.is_absolute() else p).resolve()
+    except (ValueError, RuntimeError, OSError) as err:  # NUL byte, unknown ~user, link loop
+        reason = str(err).splitlines()[0][:60] if str(err) else type(err).__name__
+        raise SceneError(field_name, f"is not a usable file path ({reason})") from None
+
+
 def read_capped(path: str | Path | None, field_name: str, what: str,
                 max_lines: int) -> tuple[bytes, RecordFile]:
     """The bytes of a record file with its SHA-256, refused when too big before it is all read.
@@ -119,7 +130,7 @@ def read_capped(path: str | Path | None, field_name: str, what: str,
     """
     if not path:
         raise SceneError(field_name, f"names no {what} file")
-    resolved = Path(path).expanduser().resolve()
+    resolved = resolve_path(path, field_name)
     if not resolved.is_file():
         raise SceneError(field_name, f"{what} {str(resolved)!r} does not exist or is not a file")
     digest, chunks, size, lines = hashlib.sha256(), [], 0, 0

@@ -15,6 +15,7 @@ import tomli_w
 
 from ._fields import from_mapping, json_schema, to_mapping
 from .errors import SceneError
+from .records import resolve_path
 from .scene import Scene
 
 _BUILTIN_PACKAGE = "deckpound.models"
@@ -81,9 +82,11 @@ def resolve_record_paths(data: dict[str, Any], folder: Path) -> list[str]:
         return notices
     for key in ("file", "file_x", "file_y"):
         given = exc.get(key)
-        if not isinstance(given, str) or not given or Path(given).expanduser().is_absolute():
+        if not isinstance(given, str) or not given:
             continue
-        resolved = (folder / given).resolve()
+        resolved = resolve_path(given, f"excitation.{key}", folder)
+        if given.startswith("~") or Path(given).is_absolute():
+            continue  # absolute: read as given (resolved when read)
         exc[key] = str(resolved)
         if not resolved.is_relative_to(folder.resolve()):
             notices.append(f"excitation.{key}: the relative path {given!r} reaches outside the "

@@ -354,3 +354,16 @@ def test_header_line_sanitised_to_one_line(tmp_path):
     header = read_at2(p).header
     assert header.startswith("Station A [31m red x") and len(header) == 120
     assert header.isprintable()
+
+
+@pytest.mark.parametrize("path,reason", [("a\\u0000b.at2", "embedded null byte"),
+                                         ("~no_such_user_xyz/x.at2", "home directory")])
+def test_unusable_path_refused_in_one_line(tmp_path, path, reason):
+    with pytest.raises(SceneError, match=rf"^excitation.file_x: is not a usable file path "
+                                         rf"\(.*{reason}"):
+        support_motion(load_scene("saiidi-4span", ["excitation.kind=at2",
+                                                   f'excitation.file_x="{path}"']))
+    (tmp_path / "s.toml").write_text(scene_to_toml(load_scene("saiidi-4span")).replace(
+        'kind = "synthetic"', f'kind = "at2"\nfile_x = "{path}"'))
+    with pytest.raises(SceneError, match=r"^excitation.file_x: is not a usable file path"):
+        load_scene(tmp_path / "s.toml")
