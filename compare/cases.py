@@ -45,12 +45,32 @@ class Case:
         return case_key(self.engine, self.scene)
 
 
+def record_digests(scene: Scene) -> dict[str, str]:
+    """SHA-256 of every record file the scene reads: a record edited in place changes the key
+    (the scene only names the file)."""
+    out = {}
+    for name in ("file", "file_x", "file_y"):
+        path = getattr(scene.excitation, name, None)
+        if path:
+            h = hashlib.sha256()
+            try:
+                with open(path, "rb") as fh:
+                    for chunk in iter(lambda: fh.read(1 << 20), b""):
+                        h.update(chunk)
+            except OSError:
+                continue   # the run refuses the scene with its own message
+            out[name] = h.hexdigest()
+    return out
+
+
 def case_key(engine: str, scene: Scene) -> str:
-    """The cache key: SHA-256 of engine name, physics hash, that engine's settings, version."""
+    """The cache key: SHA-256 of engine name, physics hash, the record files' digests, that
+    engine's settings and the version."""
     from deckpound.engines import get_engine
 
     settings = get_engine(engine).settings_of(scene)
     text = json.dumps({"engine": engine, "physics": physics_hash(scene),
+                       "records": record_digests(scene),
                        "settings": settings_hash(settings), "version": __version__},
                       sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()

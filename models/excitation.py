@@ -4,26 +4,31 @@ Each support channel (``<bent>_x``, ``<bent>_y`` for every shake table, ``seat1_
 ``seat2_x`` for the actuators) has a displacement [m] and velocity [m/s] history on one time
 base; accelerations [m/s²] are derived. Engines resample onto their own step with
 :meth:`SupportMotion.resample` (linear interpolation, held constant after the record ends).
+
+Sources: the seeded synthetic record and the pulse (here), users' records (AT2, text, CSV:
+:mod:`deckpound.models.records` reads them, :mod:`deckpound.models.record_motion` turns them
+into motion). :func:`support_motion` dispatches, measures the applied PGA per direction,
+refuses more than ``EXTREME_PGA`` unless forced, and states every tolerance as a warning.
 """
 
 from __future__ import annotations
 
-import re
-from dataclasses import dataclass
-from pathlib import Path
+import warnings
+from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
 import scipy.signal
 
 from .errors import SceneError
 from .mechanics import support_channels
-from .scene import Excitation, Scene
+from .records import MAX_SAMPLES, MIN_SAMPLES
+from .scene import ABSURD_PGA, EXTREME_PGA, Excitation, Scene
 
 G = 9.80665  # standard gravity [m/s²]
-_LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
-MIN_SAMPLES = 16  # shortest record the baseline correction (zero-phase filter, taper) can handle
-MAX_SAMPLES = 2_000_000  # longest record held in memory (600 s at 0.3 ms)
+
+
+class RecordWarning(UserWarning):
+    """A tolerance applied to a user's record (also listed in the motion's provenance)."""
 
 
 @dataclass(frozen=True)
@@ -34,12 +39,25 @@ class SupportMotion:
     ----------
     t : (n,) array [s], strictly increasing, starting at 0.
     disp, vel : dict channel → (n,) array [m], [m/s].
+    acc_exact : dict channel → (n,) array [m/s²], the source's own acceleration when known.
+    provenance : JSON-able dict saying what the motion is (copied into results and reports).
+        Its keys, always all present (``None`` where they do not apply):
+
+        ``kind`` (synthetic | pulse | at2 | text | csv); ``files`` (label x / y / csv →
+        {``path`` resolved, ``sha256`` of the file's bytes, ``bytes``}); ``header`` (label →
+        station/event line, one sanitised line); ``npts`` (label → samples declared or held);
+        ``dt_record`` [s] as read; ``time_scale`` [-]; ``dt`` [s] after time scaling;
+        ``duration`` [s]; ``processing``; ``scaling`` (pga | factor | none); ``target_pga``
+        (x, y → [g] or None); ``scale_factor`` (x, y → [-] or None); ``applied_pga`` (x, y →
+        [g], max |a| over the direction's supports, measured on this motion); ``seed``
+        (synthetic); ``warnings`` (every tolerance, one sentence each); ``units``.
     """
 
     t: np.ndarray
     disp: dict[str, np.ndarray]
     vel: dict[str, np.ndarray]
     acc_exact: dict[str, np.ndarray] | None = None
+    provenance: dict = field(default_factory=dict, compare=False)
 
     @property
     def channels(self) -> tuple[str, ...]:
@@ -56,11 +74,12 @@ class SupportMotion:
             return self.acc_exact[channel]
         return np.gradient(self.vel[channel], self.t)
 
-    def resample(self, dt: float, duration: float | None = None) -> "SupportMotion":
+    def resample(self, dt: float, duration: float | None = None) -> SupportMotion:
         """Motion at t_n = n·dt, n = 0..N, N = round(duration/dt), by linear interpolation.
 
-        Exact for piecewise-linear data; after the record ends the last value is held (the
-        records are baseline-corrected, so that is rest).
+        Exact for piecewise-linear data; after the record ends the last displacement and
+        velocity are held (rest for the generated records and for records that end at rest; a
+        drifting record is stated in a warning when it is loaded).
         """
         if not dt > 0:
             raise SceneError("dt", f"must be > 0 s, got {dt}")
@@ -70,11 +89,11 @@ class SupportMotion:
         if total / dt > MAX_STEPS:
             raise SceneError("dt", f"gives {total / dt:.3g} steps over {total:g} s; at most "
                              f"{MAX_STEPS:.0e} are allowed")
-        n = int(round(total / dt))
+        n = round(total / dt)
         t = np.arange(n + 1) * dt
         disp = {k: np.interp(t, self.t, v) for k, v in self.disp.items()}
         vel = {k: np.interp(t, self.t, v) for k, v in self.vel.items()}
-        return SupportMotion(t=t, disp=disp, vel=vel)
+        return SupportMotion(t=t, disp=disp, vel=vel, provenance=self.provenance)
 
     def matrices(self, channels: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
         """(n, n_channels) displacement and velocity arrays in the given channel order."""
@@ -85,10 +104,42 @@ class SupportMotion:
         V = np.column_stack([self.vel[c] for c in channels])
         return np.ascontiguousarray(D), np.ascontiguousarray(V)
 
-    def scaled(self, factor: float) -> "SupportMotion":
+    def scaled(self, factor: float) -> SupportMotion:
+        """The motion × ``factor`` (provenance: scale factors and applied PGA × factor)."""
         acc = None if self.acc_exact is None else {k: v * factor for k, v in self.acc_exact.items()}
+        prov = dict(self.provenance)
+        for key in ("scale_factor", "applied_pga"):
+            if isinstance(prov.get(key), dict):
+                prov[key] = {a: None if v is None else v * factor for a, v in prov[key].items()}
         return SupportMotion(self.t, {k: v * factor for k, v in self.disp.items()},
-                             {k: v * factor for k, v in self.vel.items()}, acc)
+                             {k: v * factor for k, v in self.vel.items()}, acc, prov)
+
+    def applied_pga(self) -> dict[str, float]:
+        """Peak |acceleration| per direction over its supports [g] (x: tables and seats)."""
+        out = {}
+        for axis in ("x", "y"):
+            peaks = [float(np.max(np.abs(self.acc(c)))) for c in self.disp if c.endswith(f"_{axis}")]
+            out[axis] = max(peaks, default=0.0) / G
+        return out
+
+
+def make_provenance(exc: Excitation, *, files: dict, header: dict, npts: dict,
+                    dt_record: float | None, dt: float | None, duration: float,
+                    processing: str, targets: dict, factors: dict, notes: list[str],
+                    seed: int | None = None) -> dict:
+    """The provenance dict (keys in :class:`SupportMotion`); ``applied_pga`` is filled by
+    :func:`support_motion` from the finished motion."""
+    both = ("x", "y")
+    return {
+        "kind": exc.kind, "files": files, "header": header, "npts": npts,
+        "dt_record": dt_record, "time_scale": exc.time_scale, "dt": dt, "duration": duration,
+        "processing": processing, "scaling": exc.scaling,
+        "target_pga": {a: targets.get(a) for a in both},
+        "scale_factor": {a: factors.get(a) for a in both},
+        "applied_pga": None, "seed": seed, "warnings": list(notes),
+        "units": {"dt_record": "s", "dt": "s", "duration": "s", "target_pga": "g",
+                  "applied_pga": "g", "time_scale": "-", "scale_factor": "-"},
+    }
 
 
 # -- signal processing ---------------------------------------------------------------------
@@ -113,7 +164,10 @@ def _taper(n: int, frac: float = 0.05) -> np.ndarray:
 
 
 def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.ndarray, ...]:
-    """Displacement, velocity and acceleration from a raw acceleration record.
+    """Displacement, velocity and acceleration from the synthetic generator's raw signal.
+
+    Part of the generator (users' records are processed only as their scene's
+    ``processing`` says, in :mod:`deckpound.models.record_motion`).
 
     Zero-phase 4th-order Butterworth high-pass at ``highpass`` Hz, double integration
     (trapezoidal), a cosine taper on the displacement, and velocity and acceleration
@@ -161,7 +215,7 @@ def synthetic_component(exc: Excitation, pga: float, rng: np.random.Generator,
     Returns (t, d, v, a) in s, m, m/s, m/s². ``common`` (a white-noise sample) is mixed in
     with weight √(1 − incoherence) to make correlated components at several tables.
     """
-    n = int(round(exc.duration / exc.dt)) + 1
+    n = round(exc.duration / exc.dt) + 1
     t = np.arange(n) * exc.dt
     noise = rng.standard_normal(n)
     if common is not None:
@@ -200,7 +254,7 @@ def _check_samples(n: float, short_field: str, long_field: str, what: str) -> No
 def _check_lag(scene: Scene, dt: float, n: int) -> int:
     """Lag in whole steps; refuses a lag that delays the last table beyond the record."""
     exc = scene.excitation
-    steps = int(round(exc.lag / dt))
+    steps = round(exc.lag / dt)
     last = (len(scene.bents) - 1) * steps
     if last >= n:
         limit = (n - 1) * dt / max(1, len(scene.bents) - 1)
@@ -214,7 +268,7 @@ def _synthetic_samples(exc: Excitation) -> int:
     """Sample count of a generated record (synthetic, pulse), refused when absurd."""
     _check_samples(round(exc.duration / exc.dt) + 1.0, "excitation.duration", "excitation.dt",
                    f"duration {exc.duration} s at dt = {exc.dt} s")
-    return int(round(exc.duration / exc.dt)) + 1
+    return round(exc.duration / exc.dt) + 1
 
 
 def synthetic_motion(scene: Scene) -> SupportMotion:
@@ -253,7 +307,12 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     disp["seat1_x"], vel["seat1_x"] = disp[f"{first}_x"].copy(), vel[f"{first}_x"].copy()
     disp["seat2_x"], vel["seat2_x"] = disp[f"{last}_x"].copy(), vel[f"{last}_x"].copy()
     acc["seat1_x"], acc["seat2_x"] = acc[f"{first}_x"].copy(), acc[f"{last}_x"].copy()
-    return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc)
+    prov = make_provenance(
+        exc, files={}, header={}, npts={"x": n, "y": n}, dt_record=exc.dt, dt=exc.dt,
+        duration=float(t[-1]), targets=pgas, factors={}, notes=[], seed=exc.seed,
+        processing=f"generator (Kanai-Tajimi {exc.dominant_frequency:g} Hz, envelope; built-in "
+        f"baseline correction: highpass {exc.highpass:g} Hz, taper)")
+    return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc, provenance=prov)
 
 
 # -- loaders -------------------------------------------------------------------------------
@@ -270,129 +329,6 @@ def check_time_base(t: np.ndarray, field: str) -> None:
         i = int(np.argmax(dt <= 0)) + 1
         kind = "duplicate" if dt[i - 1] == 0 else "decreasing"
         raise SceneError(field, f"time stamps must increase strictly; stamp {i} ({t[i]} s) is {kind}")
-
-
-def load_csv_motion(scene: Scene) -> SupportMotion:
-    """Support motion from a CSV file: ``time_column`` and ``<channel>_disp`` [+ ``_vel``].
-
-    Displacements in ``disp_unit`` (velocities in disp_unit/s); a missing velocity column is
-    derived by second-order differences. Every support channel must have a displacement column;
-    unknown columns are refused (a misspelt name would otherwise be ignored silently).
-    """
-    exc = scene.excitation
-    path = Path(exc.file or "")
-    field = "excitation.file"
-    if not path.is_file():
-        raise SceneError(field, f"CSV record {str(path)!r} does not exist")
-    try:
-        frame = pd.read_csv(path)
-    except Exception as err:  # pandas raises many types for malformed text
-        first = (str(err).strip().splitlines() or [type(err).__name__])[0]
-        raise SceneError(field, f"cannot read CSV {str(path)!r}: {first}") from None
-    if not isinstance(frame.index, pd.RangeIndex):  # data rows longer than the header
-        raise SceneError(field, f"{str(path)!r}: the data rows hold more values than the header "
-                         f"has columns ({len(frame.columns)})")
-    if exc.time_column not in frame.columns:
-        raise SceneError("excitation.time_column",
-                         f"column {exc.time_column!r} not in {str(path)!r}; columns: "
-                         f"{', '.join(map(repr, frame.columns))}")
-    channels = support_channels(scene)
-    allowed = {exc.time_column} | {f"{c}_disp" for c in channels} | {f"{c}_vel" for c in channels}
-    for col in frame.columns:
-        if col not in allowed:
-            raise SceneError(field, f"unknown column {col!r}; expected {exc.time_column!r} and "
-                             f"<support>_disp / <support>_vel for supports {', '.join(channels)}")
-    for c in channels:
-        if f"{c}_disp" not in frame.columns:
-            raise SceneError(field, f"support {c!r} has no record (column '{c}_disp' missing)")
-    for col in frame.columns:
-        if pd.api.types.is_bool_dtype(frame[col]):
-            raise SceneError(field, f"non-numeric value in {str(path)!r}: column {col!r} holds "
-                             "true/false values, numbers expected")
-    try:
-        numeric = frame.apply(pd.to_numeric, errors="raise").to_numpy(dtype=float)
-    except (ValueError, TypeError) as err:
-        raise SceneError(field, f"non-numeric value in {str(path)!r}: {err}") from None
-    data = pd.DataFrame(numeric, columns=frame.columns)
-    if not np.all(np.isfinite(numeric)):
-        row, col = np.argwhere(~np.isfinite(numeric))[0]
-        raise SceneError(field, f"value in row {row + 2}, column {frame.columns[col]!r} is missing "
-                         "or not finite (records of mismatched length?)")
-    t = data[exc.time_column].to_numpy()
-    check_time_base(t, field)
-    f = _LENGTH_UNITS[exc.disp_unit] * exc.scale
-    disp, vel = {}, {}
-    with np.errstate(all="ignore"):  # overflow is refused by support_motion, not warned about
-        for c in channels:
-            disp[c] = data[f"{c}_disp"].to_numpy() * f
-            vel[c] = (data[f"{c}_vel"].to_numpy() * f if f"{c}_vel" in data
-                      else np.gradient(disp[c], t))
-        t = t - t[0]
-    return SupportMotion(t=t, disp=disp, vel=vel)
-
-
-_NPTS_DT = re.compile(r"NPTS\s*=\s*(\d+)\s*,\s*DT\s*=\s*([0-9.Ee+-]+)", re.IGNORECASE)
-_OLD_NPTS_DT = re.compile(r"^\s*(\d+)\s+([0-9.Ee+-]+)\s+NPTS", re.IGNORECASE)
-
-
-def read_at2(path: str | Path, field: str = "excitation.file_x") -> tuple[float, np.ndarray]:
-    """Read a PEER AT2 file: (dt [s], acceleration [g]).
-
-    Header: three text lines, then ``NPTS= n, DT= dt SEC`` (NGA-West2) or ``n dt NPTS, DT``
-    (older files); then the values, several per line. The value count must equal NPTS.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise SceneError(field, f"AT2 record {str(path)!r} does not exist")
-    try:
-        lines = path.read_text().splitlines()
-    except (OSError, UnicodeDecodeError) as err:
-        raise SceneError(field, f"cannot read {str(path)!r}: {err}") from None
-    if len(lines) < 5:
-        raise SceneError(field, f"{str(path)!r} is not a PEER AT2 file (needs 4 header lines and data)")
-    m = _NPTS_DT.search(lines[3]) or _OLD_NPTS_DT.search(lines[3])
-    if not m:
-        raise SceneError(field, f"{str(path)!r}: line 4 must give NPTS and DT, got {lines[3].strip()!r}")
-    try:
-        npts, dt = int(m.group(1)), float(m.group(2))
-    except ValueError:
-        raise SceneError(field, f"{str(path)!r}: line 4 must give NPTS and DT as numbers, "
-                         f"got {lines[3].strip()!r}") from None
-    if not (np.isfinite(dt) and dt > 0):
-        raise SceneError(field, f"{str(path)!r}: DT must be > 0 s, got {dt}")
-    try:
-        values = np.array([float(tok) for line in lines[4:] for tok in line.split()])
-    except ValueError as err:
-        raise SceneError(field, f"{str(path)!r}: non-numeric value in the data ({err})") from None
-    if len(values) != npts:
-        raise SceneError(field, f"{str(path)!r}: header says NPTS={npts} but the file holds {len(values)} values")
-    if not np.all(np.isfinite(values)):
-        raise SceneError(field, f"{str(path)!r}: the data hold a non-finite value")
-    return dt, values
-
-
-def load_at2_motion(scene: Scene) -> SupportMotion:
-    """Biaxial motion from two AT2 records (x and y), baseline-corrected, at every table."""
-    exc = scene.excitation
-    dtx, ax = read_at2(exc.file_x, "excitation.file_x")
-    dty, ay = read_at2(exc.file_y, "excitation.file_y")
-    _check_samples(len(ax), "excitation.file_x", "excitation.file_x", f"AT2 record {exc.file_x!r}")
-    if dtx != dty or len(ax) != len(ay):
-        raise SceneError("excitation.file_y", f"time base ({len(ay)} values at {dty} s) differs "
-                         f"from file_x ({len(ax)} values at {dtx} s)")
-    t = np.arange(len(ax)) * dtx
-    with np.errstate(all="ignore"):  # overflow is refused by support_motion, not warned about
-        comp = {axis: baseline_corrected(a * G * exc.scale, dtx, exc.highpass)
-                for axis, a in (("x", ax), ("y", ay))}
-    disp, vel = {}, {}
-    lag_steps = _check_lag(scene, dtx, len(t))
-    for k, bent in enumerate(scene.bents):
-        for axis in ("x", "y"):
-            disp[f"{bent.name}_{axis}"] = _shift(comp[axis][0], k * lag_steps)
-            vel[f"{bent.name}_{axis}"] = _shift(comp[axis][1], k * lag_steps)
-    disp["seat1_x"], vel["seat1_x"] = disp[f"{scene.bents[0].name}_x"], vel[f"{scene.bents[0].name}_x"]
-    disp["seat2_x"], vel["seat2_x"] = disp[f"{scene.bents[-1].name}_x"], vel[f"{scene.bents[-1].name}_x"]
-    return SupportMotion(t=t, disp=disp, vel=vel)
 
 
 def pulse_motion(scene: Scene) -> SupportMotion:
@@ -416,28 +352,55 @@ def pulse_motion(scene: Scene) -> SupportMotion:
     for ch in support_channels(scene):
         x = ch.endswith("_x")
         disp[ch], vel[ch], acc[ch] = (d, v, a) if x else (zero, zero, zero)
-    return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc)
+    prov = make_provenance(
+        exc, files={}, header={}, npts={"x": n}, dt_record=exc.dt, dt=exc.dt,
+        duration=float(t[-1]), targets={"x": exc.pga * exc.longitudinal_ratio, "y": 0.0},
+        factors={}, notes=[], processing=f"generator (1 - cos pulse, period "
+        f"{exc.pulse_period:g} s)")
+    return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc, provenance=prov)
 
 
 def support_motion(scene: Scene) -> SupportMotion:
-    """The scene's support motion, whatever its source."""
-    kind = scene.excitation.kind
+    """The scene's support motion, whatever its source, with its provenance.
+
+    Refuses a non-finite motion and, unless ``excitation.allow_extreme``, an applied PGA above
+    ``EXTREME_PGA`` g in either direction (measured on the motion). Only then are the record's
+    tolerances issued as :class:`RecordWarning` (an input refused prints one error, nothing
+    more); they stay listed in ``provenance["warnings"]``.
+    """
+    from .record_motion import acceleration_motion
+
+    exc = scene.excitation
+    kind = exc.kind
     if kind == "synthetic":
-        motion, field = synthetic_motion(scene), "excitation"
+        motion, field_name = synthetic_motion(scene), "excitation"
     elif kind == "pulse":
-        motion, field = pulse_motion(scene), "excitation"
-    elif kind == "csv":
-        motion, field = load_csv_motion(scene), "excitation.file"
+        motion, field_name = pulse_motion(scene), "excitation"
     else:
-        motion, field = load_at2_motion(scene), "excitation.file_x"
+        with np.errstate(all="ignore"):  # an overflow is refused below, not warned about
+            motion = acceleration_motion(scene)
+        field_name = "excitation.file" if kind == "csv" else "excitation.file_x"
     if not np.all(np.isfinite(motion.t)):
-        raise SceneError(field, "the time stamps overflow to a non-finite value")
+        raise SceneError(field_name, "the time stamps overflow to a non-finite value")
     for name, arrays in (("displacement", motion.disp), ("velocity", motion.vel)):
         for ch, x in arrays.items():
             if not np.all(np.isfinite(x)):
-                raise SceneError(field, f"the {name} of support {ch!r} overflows to a non-finite "
-                                 f"value (scale = {scene.excitation.scale}; check the record's "
-                                 "magnitude and units)")
+                raise SceneError(field_name, f"the {name} of support {ch!r} overflows to a "
+                                 f"non-finite value (scaling = {exc.scaling!r}; check the "
+                                 "record's magnitude and units)")
+    applied = motion.applied_pga()
+    for axis, pga in applied.items():
+        if pga > ABSURD_PGA or (pga > EXTREME_PGA and not exc.allow_extreme):
+            where = field_name if kind not in ("at2", "text") else f"excitation.file_{axis}"
+            name = "longitudinal (x)" if axis == "x" else "transverse (y)"
+            limit = (f"more than {EXTREME_PGA:g} g is refused unless excitation.allow_extreme = "
+                     "true" if pga <= ABSURD_PGA else f"more than {ABSURD_PGA:g} g is refused")
+            raise SceneError(where, f"gives a {name} PGA of {pga:.4g} g after scaling (scaling = "
+                             f"{exc.scaling!r}, scale = {exc.scale:g}); {limit}")
+    motion.provenance["applied_pga"] = applied
+    for text in motion.provenance.get("warnings", []):
+        # one location for every call: a sequence or several engines print a sentence once
+        warnings.warn(text, RecordWarning, stacklevel=1)
     return motion
 
 

@@ -7,6 +7,7 @@ import importlib.resources
 import json
 import re
 import tomllib
+import warnings
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -14,6 +15,7 @@ import tomli_w
 
 from ._fields import from_mapping, json_schema, to_mapping
 from .errors import SceneError
+from .records import resolve_path
 from .scene import Scene
 
 _BUILTIN_PACKAGE = "deckpound.models"
@@ -65,20 +67,48 @@ def load_scene_data(ref: str | Path) -> tuple[dict[str, Any], Path | None]:
     return parse_toml(builtin_scene_text(str(ref)), str(ref)), None
 
 
+class RecordPathWarning(UserWarning):
+    """A record path given relative to the scene file reaches outside the scene's folder."""
+
+
+def resolve_record_paths(data: dict[str, Any], folder: Path) -> list[str]:
+    """Resolve relative record paths (``excitation.file``, ``file_x``, ``file_y``) in place
+    against the scene's folder, symbolic links followed; returns a notice for each one that
+    ends outside that folder (``../other/x.at2``): the scene then reads a file it does not
+    ship with, which a reader of the scene should be told."""
+    notices = []
+    exc = data.get("excitation")
+    if not isinstance(exc, dict):
+        return notices
+    for key in ("file", "file_x", "file_y"):
+        given = exc.get(key)
+        if not isinstance(given, str) or not given:
+            continue
+        resolved = resolve_path(given, f"excitation.{key}", folder)
+        if given.startswith("~") or Path(given).is_absolute():
+            continue  # absolute: read as given (resolved when read)
+        exc[key] = str(resolved)
+        if not resolved.is_relative_to(folder.resolve()):
+            notices.append(f"excitation.{key}: the relative path {given!r} reaches outside the "
+                           f"scene's folder {str(folder)!r}; it is read from {str(resolved)!r}")
+    return notices
+
+
 def load_scene(ref: str | Path, overrides: Iterable[str] = ()) -> Scene:
     """Load a scene by built-in name or TOML path and apply ``path=value`` overrides.
 
-    Relative record paths in the excitation are resolved against the scene file's folder.
+    Relative record paths in the excitation are resolved against the scene file's folder
+    (symbolic links followed, so every message shows the file actually read); a relative path
+    reaching outside that folder is accepted with a :class:`RecordPathWarning`, issued once the
+    scene is valid.
     """
     data, folder = load_scene_data(ref)
     data = apply_overrides(data, overrides)
-    if folder is not None:
-        exc = data.get("excitation")
-        if isinstance(exc, dict):
-            for key in ("file", "file_x", "file_y"):
-                if isinstance(exc.get(key), str) and not Path(exc[key]).is_absolute():
-                    exc[key] = str(folder / exc[key])
-    return scene_from_mapping(data)
+    notices = resolve_record_paths(data, folder) if folder is not None else []
+    scene = scene_from_mapping(data)
+    for text in notices:
+        warnings.warn(text, RecordPathWarning, stacklevel=1)  # one location: printed once
+    return scene
 
 
 def scene_to_toml(scene: Scene) -> str:

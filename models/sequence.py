@@ -19,9 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import SceneError
 from .excitation import SupportMotion
 from .result import Result
-from .scene import Scene
+from .scene import RECORD_KINDS, Scene, check_sequence_pgas
 
 
 @dataclass(frozen=True)
@@ -42,9 +43,40 @@ def initial_state(scene: Scene) -> SpecimenState:
     )
 
 
+def check_runs(scene: Scene) -> None:
+    """Refuse, before any run, a sequence whose labels would not be applied or not accepted.
+
+    Every label passes the excitation's PGA check (``sequence.pgas[i]`` named); a record must
+    be scaled to each run's PGA (``scaling = 'pga'``): with ``factor`` or ``none`` the record
+    would be driven unchanged under every label, so such a sequence is refused rather than
+    labelled with PGAs it does not apply.
+    """
+    exc = scene.excitation
+    if exc.kind in RECORD_KINDS and exc.scaling != "pga":
+        raise SceneError("excitation.scaling", f"is {exc.scaling!r}, but a sequence scales the "
+                         "record to each run's PGA (sequence.pgas); set scaling = 'pga' (or run "
+                         "single runs with this scaling)")
+    check_sequence_pgas(scene)
+
+
 def scene_for_run(scene: Scene, pga: float, state: SpecimenState) -> Scene:
-    """The scene of one run: excitation scaled to ``pga`` [g], gaps and stiffness from ``state``."""
+    """The scene of one run: excitation scaled to ``pga`` [g], gaps and stiffness from ``state``.
+
+    Validates the whole sequence first (:func:`check_runs`). A carried stiffness so low that
+    a bent's yield displacement F_y / k passes its ``ultimate_displacement`` is refused naming
+    that bent and the run, not as a bad scene value.
+    """
+    check_runs(scene)
     seats = tuple(dataclasses.replace(s, gap=g) for s, g in zip(scene.seats, state.gaps))
+    for i, (b, ks) in enumerate(zip(scene.bents, state.stiffness)):
+        for axis, k in zip(("x", "y"), ks):
+            spring = getattr(b, axis)
+            if spring.yield_force / k >= spring.ultimate_displacement:
+                raise SceneError(f"bents[{i}].{axis}.ultimate_displacement",
+                                 f"is {spring.ultimate_displacement:g} m, but the stiffness "
+                                 f"carried into the {pga:g} g run, {k:.6g} kN/m, puts the yield "
+                                 f"displacement at {spring.yield_force / k:.6g} m beyond it; "
+                                 "raise it or set sequence.carry_stiffness = false")
     bents = tuple(
         dataclasses.replace(b, x=dataclasses.replace(b.x, stiffness=kx),
                             y=dataclasses.replace(b.y, stiffness=ky))

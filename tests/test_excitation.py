@@ -1,13 +1,12 @@
-"""Excitation: synthetic generator, CSV and AT2 loaders, resampling (issue 2)."""
+"""Excitation: synthetic generator, displacement CSV, pulse, resampling (issue 2); the
+record readers and their processing and scaling are in test_records*.py (issue 13)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from deckpound.models.errors import SceneError
-from deckpound.models.excitation import (G, SupportMotion, load_csv_motion, read_at2,
-                                         support_motion)
+from deckpound.models.excitation import G, SupportMotion, support_motion
 from deckpound.models.mechanics import support_channels
 from deckpound.models.scene_io import load_scene
 
@@ -93,26 +92,26 @@ def _write_csv(path, scene, n=50, dt=0.01, drop=None, extra=None, t_override=Non
 
 def _csv_scene(path, unit="m"):
     return load_scene("saiidi-4span", ["excitation.kind=csv", f"excitation.file='{path}'",
-                                       f"excitation.disp_unit={unit}"])
+                                       f"excitation.disp_unit={unit}", "excitation.scaling=none"])
 
 
 def test_csv_loader_reads_every_support(tmp_path):
     p = tmp_path / "rec.csv"
     scene = _csv_scene(p)
     _write_csv(p, scene)
-    m = load_csv_motion(scene)
+    m = support_motion(scene)
     assert set(m.channels) == set(support_channels(scene))
     np.testing.assert_allclose(m.disp["bent1_x"], 1e-3 * np.sin(m.t))
-    mm = load_csv_motion(_csv_scene(p, "mm"))
+    mm = support_motion(_csv_scene(p, "mm"))
     np.testing.assert_allclose(mm.disp["seat2_x"], 1e-3 * m.disp["seat2_x"])
 
 
 @pytest.mark.parametrize("case,match", [
-    (dict(drop="bent2_y_disp"), "support 'bent2_y' has no record"),
-    (dict(extra="bent9_x_disp"), "unknown column 'bent9_x_disp'"),
-    (dict(t_override=np.array([0.0, 0.1, 0.1, 0.2] + [0.3 + 0.1 * i for i in range(46)])),
+    ({"drop": "bent2_y_disp"}, "support 'bent2_y' has no record"),
+    ({"extra": "bent9_x_disp"}, "unknown column 'bent9_x_disp'"),
+    ({"t_override": np.array([0.0, 0.1, 0.1, 0.2] + [0.3 + 0.1 * i for i in range(46)])},
      "duplicate"),
-    (dict(t_override=np.array([0.0, 0.2, 0.1] + [0.3 + 0.1 * i for i in range(47)])),
+    ({"t_override": np.array([0.0, 0.2, 0.1] + [0.3 + 0.1 * i for i in range(47)])},
      "decreasing"),
 ])
 def test_csv_refusals(tmp_path, case, match):
@@ -120,7 +119,7 @@ def test_csv_refusals(tmp_path, case, match):
     scene = _csv_scene(p)
     _write_csv(p, scene, **case)
     with pytest.raises(SceneError, match=match):
-        load_csv_motion(scene)
+        support_motion(scene)
 
 
 def test_csv_mismatched_length_refused(tmp_path):
@@ -131,42 +130,7 @@ def test_csv_mismatched_length_refused(tmp_path):
     lines[-1] = ",".join(lines[-1].split(",")[:5])  # a short last row
     p.write_text("\n".join(lines) + "\n")
     with pytest.raises(SceneError, match="missing or not finite"):
-        load_csv_motion(scene)
-
-
-AT2_HEADER = """PEER NGA STRONG MOTION DATABASE RECORD
-Northridge-01, 1/17/1994, LA - Century City CC North, 090
-ACCELERATION TIME SERIES IN UNITS OF G
-NPTS=   {n}, DT=   .0100 SEC
-"""
-
-
-def _write_at2(path, acc, n=None):
-    body = "\n".join("  ".join(f"{v: .7E}" for v in acc[i:i + 5]) for i in range(0, len(acc), 5))
-    path.write_text(AT2_HEADER.format(n=len(acc) if n is None else n) + body + "\n")
-
-
-def test_at2_loader_and_baseline_correction(tmp_path):
-    t = np.arange(1000) * 0.01
-    acc = 0.3 * np.sin(2 * np.pi * 2.0 * t) * np.exp(-((t - 4) / 2) ** 2)
-    px, py = tmp_path / "x.at2", tmp_path / "y.at2"
-    _write_at2(px, acc)
-    _write_at2(py, 0.5 * acc)
-    dt, values = read_at2(px)
-    assert dt == 0.01 and len(values) == 1000
-    np.testing.assert_allclose(values, acc, rtol=1e-7, atol=1e-12)
-    scene = load_scene("saiidi-4span", ["excitation.kind=at2", f"excitation.file_x='{px}'",
-                                        f"excitation.file_y='{py}'"])
-    m = support_motion(scene)
-    assert abs(m.disp["bent1_x"][-1]) < 1e-12 and abs(m.vel["bent1_x"][-1]) < 1e-6 * np.abs(m.vel["bent1_x"]).max()
-    assert np.max(np.abs(m.acc("bent1_x"))) / G == pytest.approx(0.3, rel=0.05)
-
-
-def test_at2_count_mismatch_refused(tmp_path):
-    p = tmp_path / "x.at2"
-    _write_at2(p, np.zeros(20), n=25)
-    with pytest.raises(SceneError, match="NPTS=25 but the file holds 20"):
-        read_at2(p)
+        support_motion(scene)
 
 
 def test_pulse_is_one_longitudinal_cycle_at_rest_after():

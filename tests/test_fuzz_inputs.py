@@ -1,8 +1,8 @@
 """Hypothesis-driven malformed inputs against the loaders and the CLI (issue: bad input).
 
-Every malformed scene (TOML), record (CSV, PEER AT2) or ``--set`` override must end in exit
-status 0 (it happened to be valid) or exit status 2 with exactly one stderr line starting
-``deckpound: error:`` — never an exception escaping ``main``, never exit status 1, never a
+Every malformed scene (TOML), record (CSV, PEER AT2, two-column text) or ``--set`` override
+must end in exit status 0 (it happened to be valid) or exit status 2 with exactly one stderr
+line starting ``deckpound: error:`` — never an exception escaping ``main``, never exit status 1, never a
 traceback. When a malformed record is accepted, the loaded motion must be finite.
 
 Bounded for CI: 100 examples per property, no deadline; the whole file runs in well under a
@@ -21,14 +21,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from deckpound.models._fields import to_mapping
+from deckpound.models.mechanics import support_channels
+from deckpound.models.scene_io import load_scene
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from deckpound.cli import main
-from deckpound.models._fields import to_mapping
-from deckpound.models.excitation import support_motion
-from deckpound.models.mechanics import support_channels
-from deckpound.models.scene_io import load_scene
 
 # DECKPOUND_FUZZ_EXAMPLES=3000 for a long hunt; 100 per property by default
 FUZZ = settings(max_examples=int(os.environ.get("DECKPOUND_FUZZ_EXAMPLES", "100")), deadline=None,
@@ -152,203 +151,16 @@ def test_mutated_scene_toml(bench_toml, workdir, data):
         assert ": valid;" in out
 
 
-# -- (b) CSV records -----------------------------------------------------------------------
+# -- records: see test_records_fuzz.py (CSV, PEER AT2, two-column text) ---------------------
 
 @pytest.fixture(scope="module")
 def channels() -> tuple[str, ...]:
     return support_channels(load_scene("saiidi-4span"))
 
 
-def _base_csv(channels, n: int = 40, dt: float = 0.01) -> list[list[str]]:
-    t = np.arange(n) * dt
-    header = ["t"] + [f"{c}_{q}" for c in channels for q in ("disp", "vel")]
-    rows = [header]
-    for k in range(n):
-        row = [repr(float(t[k]))]
-        for i, _ in enumerate(channels):
-            w = i + 1
-            row += [repr(1e-3 * np.sin(w * t[k])), repr(1e-3 * w * np.cos(w * t[k]))]
-        rows.append(row)
-    return rows
-
-
-CELL_JUNK = ["nan", "NaN", "inf", "-inf", "", " ", "abc", "1e400", "-1e400", "1e308", "1e-320",
-             "0x1", "True", "false", "1,2", '"1"', "1.2.3", "--1", "1e", "é", "\x00", "∞",
-             "1_000", "NULL", "#", "'", '"']
-
-
-def _csv_mutation(data: st.DataObject, rows: list[list[str]]) -> list[list[str]]:
-    kind = data.draw(st.sampled_from(["drop_col", "cell", "cell", "shuffle_t", "dup_t", "swap_t",
-                                      "short_row", "long_row", "extra_col", "drop_rows",
-                                      "rename_col", "huge_t"]))
-    rows = [list(r) for r in rows]
-    if not rows or not rows[0]:
-        return rows
-    ncol = len(rows[0])
-    if kind == "drop_col" and ncol > 1:
-        j = data.draw(st.integers(0, ncol - 1))
-        rows = [r[:j] + r[j + 1:] for r in rows]
-    elif kind == "cell" and len(rows) > 1:
-        i = data.draw(st.integers(1, len(rows) - 1))
-        j = data.draw(st.integers(0, len(rows[i]) - 1)) if rows[i] else 0
-        value = data.draw(st.one_of(st.sampled_from(CELL_JUNK), st.text(max_size=6),
-                                    st.floats().map(repr)))
-        if rows[i]:
-            rows[i][j] = value
-    elif kind in ("shuffle_t", "dup_t", "swap_t", "huge_t") and len(rows) > 2:
-        t = [r[0] if r else "" for r in rows[1:]]
-        if kind == "shuffle_t":
-            t = data.draw(st.permutations(t))
-        elif kind == "dup_t":
-            i = data.draw(st.integers(1, len(t) - 1))
-            t[i] = t[i - 1]
-        elif kind == "swap_t":
-            i = data.draw(st.integers(1, len(t) - 1))
-            t[i], t[i - 1] = t[i - 1], t[i]
-        else:
-            t = [f"{x}e306" for x in t]
-        for r, x in zip(rows[1:], t):
-            if r:
-                r[0] = x
-    elif kind == "short_row" and len(rows) > 1:
-        i = data.draw(st.integers(1, len(rows) - 1))
-        rows[i] = rows[i][:data.draw(st.integers(0, len(rows[i])))]
-    elif kind == "long_row" and len(rows) > 1:
-        i = data.draw(st.integers(1, len(rows) - 1))
-        rows[i] = rows[i] + ["0.0"] * data.draw(st.integers(1, 3))
-    elif kind == "extra_col":
-        name = data.draw(st.sampled_from(["bent9_x_disp", "t", "bent1_x_disp", "Unnamed: 0",
-                                          "", "x"]))
-        rows[0].append(name)
-        for r in rows[1:]:
-            r.append("0.0")
-    elif kind == "drop_rows":
-        keep = data.draw(st.integers(0, len(rows)))
-        rows = rows[:keep]
-    elif kind == "rename_col" and ncol:
-        j = data.draw(st.integers(0, ncol - 1))
-        rows[0][j] = data.draw(st.text(max_size=8))
-    return rows
-
-
-@FUZZ
-@given(data=st.data())
-def test_malformed_csv_record(channels, workdir, data):
-    rows = _base_csv(channels)
-    for _ in range(data.draw(st.integers(1, 3), label="mutations")):
-        rows = _csv_mutation(data, rows)
-    text = "".join(",".join(r) + "\n" for r in rows).encode("utf-8", "surrogateescape")
-    special = data.draw(st.sampled_from(["none"] * 6 + ["empty", "junk", "truncate", "header"]))
-    if special == "empty":
-        text = b""
-    elif special == "junk":
-        text = data.draw(st.binary(max_size=300))
-    elif special == "truncate":
-        text = text[:data.draw(st.integers(0, len(text)))]
-    elif special == "header":
-        text = text.split(b"\n", 1)[0] + b"\n"
-    path = workdir / "record.csv"
-    path.write_bytes(text)
-    unit = data.draw(st.sampled_from(["m", "mm", "in"]))
-    args = ["scene", "validate", "saiidi-4span", "--set", "excitation.kind=csv",
-            "--set", f"excitation.file={json.dumps(str(path))}",
-            "--set", f"excitation.disp_unit={unit}"]
-    code, out, err = run_cli(args)
-    assert_contract(code, err, text[:300])
-    if code == 0:  # accepted: every motion array finite, time strictly increasing from 0
-        motion = support_motion(load_scene("saiidi-4span", args[4::2]))
-        assert motion.t[0] == 0.0 and np.all(np.diff(motion.t) > 0)
-        for arrays in (motion.disp, motion.vel):
-            assert set(arrays) == set(channels)
-            assert all(np.all(np.isfinite(x)) for x in arrays.values())
-
-
-# -- (c) PEER AT2 records ------------------------------------------------------------------
-
 AT2_HEADER = ["PEER NGA STRONG MOTION DATABASE RECORD",
               "Northridge-01, 1/17/1994, LA - Century City CC North, 090",
               "ACCELERATION TIME SERIES IN UNITS OF G"]
-
-
-def _at2_lines(n: int = 200, dt: float = 0.01) -> list[str]:
-    t = np.arange(n) * dt
-    acc = 0.3 * np.sin(2 * np.pi * 2.0 * t) * np.exp(-((t - 1.0) / 0.5) ** 2)
-    body = ["  ".join(f"{v: .7E}" for v in acc[i:i + 5]) for i in range(0, n, 5)]
-    return AT2_HEADER + [f"NPTS=   {n}, DT=   {dt:.4f} SEC"] + body
-
-
-dt_tokens = st.one_of(st.sampled_from(["-0.01", "0", "0.0", ".", "-", "e", "1e", "1.2.3", "+-1",
-                                       "1e400", "1e-400", "..01", "0.01", "1e-30", "E5", "--"]),
-                      st.text(alphabet="0123456789.eE+-", min_size=1, max_size=8))
-
-
-def _at2_mutation(data: st.DataObject, lines: list[str]) -> list[str]:
-    kind = data.draw(st.sampled_from(["line4", "line4", "npts", "dt", "old_format", "token",
-                                      "token", "delete", "append", "unicode", "drop_header"]))
-    lines = list(lines)
-    n = 200
-    if kind == "line4":
-        lines[3] = data.draw(st.text(max_size=40))
-    elif kind == "npts":
-        lines[3] = f"NPTS=   {data.draw(st.integers(0, 10 ** 6))}, DT=   .0100 SEC"
-    elif kind == "dt":
-        lines[3] = f"NPTS=   {n}, DT=   {data.draw(dt_tokens)} SEC"
-    elif kind == "old_format":
-        lines[3] = f"{data.draw(st.integers(0, 400))} {data.draw(dt_tokens)} NPTS, DT"
-    elif kind == "token" and len(lines) > 4:
-        i = data.draw(st.integers(4, len(lines) - 1))
-        toks = lines[i].split() or ["0"]
-        j = data.draw(st.integers(0, len(toks) - 1))
-        toks[j] = data.draw(st.one_of(st.sampled_from(["nan", "inf", "-inf", "1e400", "abc",
-                                                       "1,0", "0x1", "1.2.3", "", "1e308"]),
-                                      st.text(max_size=5)))
-        lines[i] = "  ".join(toks)
-    elif kind == "delete" and len(lines) > 4:
-        del lines[data.draw(st.integers(0, len(lines) - 1))]
-    elif kind == "append":
-        lines.append(data.draw(st.text(max_size=30)))
-    elif kind == "unicode":
-        i = data.draw(st.integers(0, len(lines)))
-        lines.insert(i, data.draw(st.text(alphabet=st.characters(min_codepoint=0x80), max_size=20)))
-    elif kind == "drop_header":
-        lines = lines[data.draw(st.integers(1, 4)):]
-    return lines
-
-
-@pytest.fixture(scope="module")
-def good_at2(workdir) -> Path:
-    p = workdir / "good.at2"
-    p.write_text("\n".join(_at2_lines()) + "\n")
-    return p
-
-
-@FUZZ
-@given(data=st.data())
-def test_malformed_at2_record(workdir, good_at2, data):
-    lines = _at2_lines()
-    for _ in range(data.draw(st.integers(1, 3), label="mutations")):
-        lines = _at2_mutation(data, lines)
-    raw = ("\n".join(lines) + "\n").encode("utf-8", "surrogateescape")
-    special = data.draw(st.sampled_from(["none"] * 7 + ["empty", "junk", "truncate"]))
-    if special == "empty":
-        raw = b""
-    elif special == "junk":
-        raw = data.draw(st.binary(max_size=300))
-    elif special == "truncate":
-        raw = raw[:data.draw(st.integers(0, len(raw)))]
-    path = workdir / "bad.at2"
-    path.write_bytes(raw)
-    x_is_bad = data.draw(st.booleans(), label="bad file is x")
-    fx, fy = (path, good_at2) if x_is_bad else (good_at2, path)
-    args = ["scene", "validate", "saiidi-4span", "--set", "excitation.kind=at2",
-            "--set", f"excitation.file_x={json.dumps(str(fx))}",
-            "--set", f"excitation.file_y={json.dumps(str(fy))}"]
-    code, out, err = run_cli(args)
-    assert_contract(code, err, raw[:300])
-    if code == 0:
-        motion = support_motion(load_scene("saiidi-4span", args[4::2]))
-        for arrays in (motion.disp, motion.vel):
-            assert all(np.all(np.isfinite(x)) for x in arrays.values())
 
 
 # -- (d) --set overrides -------------------------------------------------------------------
@@ -396,7 +208,7 @@ def test_random_set_overrides(overrides, no_equals):
     args = ["scene", "validate", "saiidi-4span", "--set", SHORT]
     for item in items:
         args += ["--set", item]
-    code, out, err = run_cli(args)
+    code, _out, err = run_cli(args)
     assert_contract(code, err, items)
 
 
