@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from deckpound._io import write_csv
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
@@ -48,7 +49,7 @@ def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
             m.insert(0, "engine", label)
             rows.append(m)
     metrics = pd.concat(rows, ignore_index=True) if rows else pd.DataFrame()
-    metrics.to_csv(out / "metrics.csv", index=False)
+    write_csv(metrics, out / "metrics.csv")
     figs = out / "figures"
     figures.histories(everything, scene, figs / "histories.png")
     figures.contact_forces(results, scene, figs / "contact_forces.png")

@@ -74,12 +74,12 @@ def script_and_files(scene, fmt: str, stem: str, motion=None) -> tuple[str, dict
 def export_script(scene, fmt: str, path, motion=None) -> Path:
     """Write a complete, runnable ``fmt`` ("tcl" | "py") script for the scene to ``path``,
     with the support records as files beside it. Returns the script path."""
+    from deckpound._io import atomic_write_files
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     text, files, _ = script_and_files(scene, fmt, path.stem, motion)
-    for name, content in files.items():
-        (path.parent / name).write_text(content)
-    path.write_text(text)
+    # all files or none: a full disk leaves no record cut short and no script without records
+    atomic_write_files({**{path.parent / n: c for n, c in files.items()}, path: text})
     return path
 
 
