@@ -43,12 +43,36 @@ def scene_from_mapping(data: dict[str, Any]) -> Scene:
     return from_mapping(Scene, data)
 
 
+#: deepest nesting of tables and arrays a scene may use (the benchmark needs 4)
+MAX_NESTING = 32
+
+
+def _nesting(value: Any, limit: int) -> int:
+    """Depth of nested tables/arrays in ``value``, counted iteratively up to ``limit + 1``."""
+    deepest, stack = 0, [(value, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if isinstance(node, (dict, list)):
+            deepest = max(deepest, depth + 1)
+            if deepest > limit:
+                return deepest
+            stack.extend((v, depth + 1) for v in (node.values() if isinstance(node, dict)
+                                                   else node))
+    return deepest
+
+
 def parse_toml(text: str, source: str = "scene") -> dict[str, Any]:
-    """Parse TOML text, turning syntax errors into a one-line SceneError."""
+    """Parse TOML text, turning syntax errors and absurd nesting into a one-line SceneError."""
     try:
-        return tomllib.loads(text)
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise SceneError(source, f"is not valid TOML: {err}") from None
+    except RecursionError:
+        raise SceneError(source, f"nests arrays or tables too deeply to parse; at most "
+                         f"{MAX_NESTING} levels are allowed") from None
+    if _nesting(data, MAX_NESTING) > MAX_NESTING:
+        raise SceneError(source, f"nests arrays or tables more than {MAX_NESTING} levels deep")
+    return data
 
 
 def load_scene_data(ref: str | Path) -> tuple[dict[str, Any], Path | None]:
@@ -109,9 +133,16 @@ _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
 def _parse_value(text: str) -> Any:
     """A TOML value (number, bool, string, array), or the bare text as a string."""
     try:
-        return tomllib.loads(f"v = {text}")["v"]
+        value = tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
         return text
+    except RecursionError:
+        raise SceneError("--set", f"value nests arrays or tables too deeply; at most "
+                         f"{MAX_NESTING} levels are allowed") from None
+    if _nesting(value, MAX_NESTING) > MAX_NESTING:
+        raise SceneError("--set", f"value nests arrays or tables more than {MAX_NESTING} levels "
+                         "deep")
+    return value
 
 
 def apply_overrides(data: dict[str, Any], overrides: Iterable[str]) -> dict[str, Any]:
