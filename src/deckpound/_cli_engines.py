@@ -43,18 +43,37 @@ def register(sub: argparse._SubParsersAction) -> None:
     q.set_defaults(func=_verify_clone)
 
 
+def check_output_folder(path: str) -> Path:
+    """Refuse, before any work, an output folder that can never be written: a symbolic link,
+    a file in its place, a file among its parents (exit status 2)."""
+    from ._io import check_parent
+
+    out = Path(path)
+    if out.is_symlink():
+        raise SceneError("--output", f"{str(out)!r} is a symbolic link; deckpound never writes "
+                         "through links: give the real folder")
+    if out.exists() and not out.is_dir():
+        raise SceneError("--output", f"{str(out)!r} exists and is not a folder")
+    check_parent(out)
+    return out
+
+
 def _run(args) -> int:
+    from deckpound.models import plausibility
+    from deckpound.models.excitation import support_motion
     from deckpound.models.scene_io import load_scene
 
+    from ._io import output_folder
     from .engines import get_engine, run_engine
 
     get_engine(args.engine)  # refuse an unknown name before any work
-    out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise SceneError("--output", f"{str(out)!r} exists and is not a folder")
+    check_output_folder(args.output)
     scene = load_scene(args.scene, args.overrides)
-    result = run_engine(args.engine, scene)
-    csv_path, _ = result.write(args.output)
+    motion = support_motion(scene)
+    plausibility.enforce(scene, motion, engines=(args.engine,))
+    result = run_engine(args.engine, scene, motion)
+    with output_folder(args.output, f"run {args.engine}") as out:
+        csv_path, _ = result.write(out)
     m = result.meta
     print(f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
           f"{m.get('contact_events', 0)} contact events; wrote {csv_path}")
@@ -64,14 +83,19 @@ def _run(args) -> int:
 
 
 def _export(args) -> int:
+    from deckpound.models import plausibility
+    from deckpound.models.excitation import support_motion
     from deckpound.models.scene_io import load_scene
     from deckpound.opensees_build.export import export_script
 
+    from ._io import check_parent, check_target
+
+    out = check_target(args.output)  # a folder or a symbolic link: refused
+    check_parent(out)
     scene = load_scene(args.scene, args.overrides)
-    out = Path(args.output)
-    if out.exists() and out.is_dir():
-        raise SceneError("--output", f"{str(out)!r} is a folder; give a file name")
-    written = export_script(scene, args.format, out)
+    motion = support_motion(scene)
+    plausibility.enforce(scene, motion, engines=("opensees",))
+    written = export_script(scene, args.format, out, motion)  # all files or none
     print(f"wrote {written}")
     return 0
 
