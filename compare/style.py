@@ -18,12 +18,12 @@ import matplotlib.pyplot as plt
 from deckpound._io import atomic_path
 
 ENGINE_STYLE = {
-    "opensees": dict(color="#000000", linestyle="-", linewidth=1.4, label="OpenSees"),
-    "compliance": dict(color="#1f5fa8", linestyle="--", linewidth=1.2, label="compliance clone"),
-    "nonsmooth": dict(color="#c0392b", linestyle=":", linewidth=1.6, label="nonsmooth"),
-    "measured": dict(color="#777777", linestyle="-.", linewidth=1.0, label="measured"),
+    "opensees": {"color": "#000000", "linestyle": "-", "linewidth": 1.4, "label": "OpenSees"},
+    "compliance": {"color": "#1f5fa8", "linestyle": "--", "linewidth": 1.2, "label": "compliance clone"},
+    "nonsmooth": {"color": "#c0392b", "linestyle": ":", "linewidth": 1.6, "label": "nonsmooth"},
+    "measured": {"color": "#777777", "linestyle": "-.", "linewidth": 1.0, "label": "measured"},
 }
-CYCLE = [dict(color=c, linestyle=s, marker=m, markersize=4)
+CYCLE = [{"color": c, "linestyle": s, "marker": m, "markersize": 4}
          for c, s, m in (("#000000", "-", "o"), ("#1f5fa8", "--", "s"), ("#c0392b", ":", "^"),
                          ("#27ae60", "-.", "D"), ("#7f7f7f", (0, (5, 1)), "v"),
                          ("#8e44ad", (0, (3, 1, 1, 1)), "x"))]
@@ -37,7 +37,7 @@ RC = {
 
 def engine_style(engine: str) -> dict:
     """Line style of an engine (unknown labels get a neutral style)."""
-    return dict(ENGINE_STYLE.get(engine, dict(color="#555555", linestyle="-", label=engine)))
+    return dict(ENGINE_STYLE.get(engine, {"color": "#555555", "linestyle": "-", "label": engine}))
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, *, width: float = 7.0, height: float = 2.2,
@@ -49,6 +49,13 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, width: float = 7.0, height: fl
     for ax in axes.flat:
         ax.grid(True, alpha=0.3)
     return fig, axes
+
+
+def stamp_text(name: str, limit: int = 80) -> str:
+    """A scene name as one printable line for a figure: control characters shown as ``?``,
+    cut to ``limit`` characters (a longer stamp would not fit the figure)."""
+    text = "".join(c if c.isprintable() else "?" for c in str(name))
+    return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
 def literal_text(fig) -> None:
@@ -73,8 +80,8 @@ def save(fig, path: str | Path, scene_name: str, formats: tuple[str, ...] = ()) 
     figure (also when saving fails)."""
     path = Path(path)
     try:
-        fig.text(0.995, 0.005, f"scene: {scene_name}", ha="right", va="bottom", fontsize=7,
-                 color="#555555", parse_math=False)
+        fig.text(0.995, 0.005, f"scene: {stamp_text(scene_name)}", ha="right", va="bottom",
+                 fontsize=7, color="#555555", parse_math=False)
         literal_text(fig)
         fig.tight_layout(rect=(0, 0.02, 1, 1))
         written = []

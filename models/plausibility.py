@@ -4,8 +4,9 @@ Field validation (:mod:`._fields`) checks each value alone; this module checks v
 each other and against the physics of the contact-free model, before any engine runs:
 
 =========================  ================================================================
-analysis vs step           an engine step longer than the analysis (record or run.duration)
-                           gives no step at all: refused, naming both values
+analysis vs step           fewer than :data:`MIN_STEPS` engine steps in the analysis (record
+                           or run.duration; a step longer than the record gives none):
+                           refused, naming both values
 fundamental period T1      a step longer than T1 / 2 cannot represent even the slowest mode:
                            refused
 shortest period T_min      fewer than :data:`STEPS_PER_PERIOD` steps per T_min: warning (the
@@ -36,6 +37,8 @@ import numpy as np
 from .errors import SceneError
 from .scene import Scene
 
+#: fewest steps an analysis may hold (fewer resolve no history at all)
+MIN_STEPS = 10
 #: fewest steps per shortest natural period before a warning
 STEPS_PER_PERIOD = 10
 #: fewest output rows before a warning (a history needs a few points)
@@ -131,11 +134,12 @@ def check(scene: Scene, motion=None, engines: Iterable[str] = ALL_ENGINES) -> Pl
     steps = engine_steps(scene, engines)
 
     for _, name, h, _ in steps:
-        if h >= D:
+        if h * MIN_STEPS > D:
             where = "run.duration" if scene.run.duration is not None else name
-            add(Finding("error", where, f"the analysis ({src}) is not longer than one step of "
-                        f"{name} = {h:g} s: the run would take {int(D // h)} step(s); give a "
-                        f"step <= {D / 100:.3g} s or a longer analysis"))
+            add(Finding("error", where, f"the analysis ({src}) holds only {D / h:.3g} steps of "
+                        f"{name} = {h:g} s (at least {MIN_STEPS} are needed to resolve a "
+                        f"history); give a step <= {D / MIN_STEPS:.3g} s or a longer "
+                        "analysis"))
     if any(f.level == "error" for f in report.findings):
         return report  # the other checks assume at least one step
 

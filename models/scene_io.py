@@ -45,6 +45,8 @@ def scene_from_mapping(data: dict[str, Any]) -> Scene:
 
 #: deepest nesting of tables and arrays a scene may use (the benchmark needs 4)
 MAX_NESTING = 32
+#: largest scene file read (the benchmark is 7 kB; records are separate files)
+MAX_SCENE_BYTES = 16 * 1024 * 1024
 
 
 def _nesting(value: Any, limit: int) -> int:
@@ -61,8 +63,26 @@ def _nesting(value: Any, limit: int) -> int:
     return deepest
 
 
+def _check_dotted_depth(text: str, source: str) -> None:
+    """Refuse dotted keys and table headers nested beyond MAX_NESTING before parsing: tomllib
+    takes time and memory quadratic in their depth (a 200 kB key ``a.a.a...`` exhausts 8 GB)."""
+    for number, line in enumerate(text.splitlines(), 1):
+        stripped = line.lstrip()
+        if stripped.startswith("["):
+            key = stripped.split("]", 1)[0]
+        elif "=" in stripped:
+            key = stripped.split("=", 1)[0]
+        else:
+            continue
+        if key.count(".") >= MAX_NESTING:
+            raise SceneError(source, f"line {number}: a key or table header nested "
+                             f"{key.count('.') + 1} levels deep; at most {MAX_NESTING} levels "
+                             "are allowed")
+
+
 def parse_toml(text: str, source: str = "scene") -> dict[str, Any]:
     """Parse TOML text, turning syntax errors and absurd nesting into a one-line SceneError."""
+    _check_dotted_depth(text, source)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
@@ -82,6 +102,11 @@ def load_scene_data(ref: str | Path) -> tuple[dict[str, Any], Path | None]:
         if not path.is_file():
             raise SceneError("scene", f"file {str(path)!r} does not exist")
         try:
+            size = path.stat().st_size
+            if size > MAX_SCENE_BYTES:
+                raise SceneError("scene", f"file {str(path)!r} holds {size} bytes; a scene file "
+                                 f"may hold at most {MAX_SCENE_BYTES} (records go in their own "
+                                 "files)")
             text = path.read_text()
         except (OSError, UnicodeDecodeError) as err:
             raise SceneError("scene", f"cannot read {str(path)!r}: {err}") from None
@@ -132,6 +157,7 @@ _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
 
 def _parse_value(text: str) -> Any:
     """A TOML value (number, bool, string, array), or the bare text as a string."""
+    _check_dotted_depth(f"v = {text}", "--set")
     try:
         value = tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
