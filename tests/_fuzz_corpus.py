@@ -453,6 +453,10 @@ def _option_family() -> list[Case]:
         cases.append(Case(f"option:bench-repeats={v}", "option",
                           ("bench", "--quick", "--repeats", v, "-o", OUT), target=OUT,
                           target_kind="dir", expect=(2,)))
+    for opt, v in (("--states", "-5"), ("--states", "0"), ("--states", "10000000000000"),
+                   ("--seed", "-1"), ("--seed", "1e3"), ("--states", "nan")):
+        cases.append(Case(f"option:verify-takeda{opt}={v}", "option",
+                          ("verify", "takeda", opt, v), nonsense=True, expect=(2,)))
     return cases
 
 

@@ -9,7 +9,7 @@ from deckpound.models.errors import EngineFailure, SceneError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from .cli import add_scene_args
+    from .cli import add_scene_args, int_in
     from .engines import ENGINES
 
     p = sub.add_parser("run", help="run one engine on a scene and write DIR/<engine>.csv/.json")
@@ -35,8 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     vsub = p.add_subparsers(dest="verify_command", metavar="WHAT")
     vsub.required = True
     q = vsub.add_parser("takeda", help="Hysteretic clone vs OpenSees on random strain histories")
-    q.add_argument("--states", type=int, default=20000)
-    q.add_argument("--seed", type=int, default=0)
+    q.add_argument("--states", type=int_in(1, 10_000_000), default=20000)
+    q.add_argument("--seed", type=int_in(0, 2 ** 63 - 1), default=0)
     q.set_defaults(func=_verify_takeda)
     q = vsub.add_parser("clone", help="compliance newmark vs OpenSees rigid on a scene")
     add_scene_args(q)

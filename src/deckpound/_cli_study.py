@@ -9,17 +9,6 @@ from pathlib import Path
 from deckpound.models.errors import SceneError
 
 
-def _workers(text: str) -> int:
-    """--workers: a whole number in [1, 1024]."""
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-    if not 1 <= n <= 1024:
-        raise argparse.ArgumentTypeError(f"must be in [1, 1024], got {n}")
-    return n
-
-
 def _seconds(text: str) -> float:
     """A positive, finite number of seconds (refuses nan, inf, 0 and negatives)."""
     try:
@@ -41,7 +30,9 @@ def _scheduler(text: str) -> str:
 
 
 def _parallel_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--workers", type=_workers, default=None,
+    from .cli import int_in
+
+    p.add_argument("--workers", type=int_in(1, 1024), default=None,
                    help="local worker processes (default: one per core)")
     p.add_argument("--scheduler", type=_scheduler, default=None, metavar="ADDRESS",
                    help="run cases on a Dask distributed cluster, e.g. tcp://127.0.0.1:8786")
@@ -59,7 +50,7 @@ def _benchmark_scene_args(p: argparse.ArgumentParser, out_default: str, quick_he
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from .cli import add_scene_args
+    from .cli import add_scene_args, int_in
 
     p = sub.add_parser("compare", help="run engines on one scene, align, compare, plot")
     add_scene_args(p)
@@ -90,7 +81,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("bench", help="work-precision benchmark: wall time vs error, every engine")
     _benchmark_scene_args(p, "deckpound-bench", "fewer configurations, shorter records")
-    p.add_argument("--repeats", type=int, default=None, help="runs per configuration (median)")
+    p.add_argument("--repeats", type=int_in(1, 1000), default=None,
+                   help="runs per configuration (median)")
     p.add_argument("--skips", action="store_true",
                    help="instead: time the compliance engine's work-saving skips on and off "
                    "(identical results checked) and the adaptive step sizes in/out of contact")
@@ -105,7 +97,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export-vtk", help="deck and seat outlines over time for ParaView")
     p.add_argument("result_dir", metavar="RESULT_DIR")
     p.add_argument("-o", "--output", required=True, metavar="DIR")
-    p.add_argument("--every", type=int, default=1, help="write every N-th output sample")
+    p.add_argument("--every", type=int_in(1, 10 ** 9), default=1,
+                   help="write every N-th output sample")
     p.set_defaults(func=_export_vtk)
 
 
@@ -220,8 +213,6 @@ def _bench(args) -> int:
 
     from ._cli_engines import check_output_folder
 
-    if args.repeats is not None and not 1 <= args.repeats <= 1000:
-        raise SceneError("--repeats", f"must be in [1, 1000], got {args.repeats}")
     scene = load_scene(args.scene, args.overrides)
     with output_folder(check_output_folder(args.output), "bench"):
         return _bench_body(args, scene)

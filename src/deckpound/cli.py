@@ -232,6 +232,22 @@ def _guarded_main(argv: list[str] | None) -> int:
         return EXIT_BUG
 
 
+def int_in(lo: int, hi: int):
+    """An argparse type: a whole number in [lo, hi] (a negative count never runs silently)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be in [{lo}, {hi}], got {value}")
+        return value
+
+    parse.__name__ = "whole number"
+    return parse
+
+
 def add_scene_args(p: argparse.ArgumentParser) -> None:
     """SCENE positional and repeatable --set PATH=VALUE."""
     p.add_argument("scene", metavar="SCENE", help="built-in scene name or TOML file")
