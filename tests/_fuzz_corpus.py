@@ -337,6 +337,17 @@ def _fault_family() -> list[Case]:
 
 def _engine_family() -> list[Case]:
     cases = []
+    failing = ("opensees.tolerance=1e-30", "opensees.max_iterations=1", "opensees.fallback=none",
+               "compliance.tolerance=1e-30", "compliance.max_iterations=1",
+               "nonsmooth.tolerance=1e-30", "nonsmooth.max_iterations=1", "excitation.pga=2",
+               "seats[0].gap=0")
+    sets = tuple(a for f in failing for a in ("--set", f))
+    for engine in ENGINE_NAMES:  # the engine cannot converge: exit 1, the failed run written
+        for substeps in ("2", "10"):
+            cases.append(Case(f"engine:fails:{engine}:{substeps}", "engine",
+                              ("run", "saiidi-4span", *SHORT, *sets, "--set",
+                               f"opensees.substeps={substeps}", "--engine", engine, "-o", OUT),
+                              target=OUT, target_kind="dir", expect=(1,)))
     # (setting, kind): "field" is refused by field validation whatever the engine, "plaus" by
     # the plausibility checks of the engines that use it, "ok" runs
     grid = [("opensees.dt=30", "plaus"), ("opensees.dt=0.3", "plaus"),

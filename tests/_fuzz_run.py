@@ -350,7 +350,7 @@ def _partial(case, root: Path, target: str, target_before: str, before: dict,
         marked = (tpath / INCOMPLETE).exists()
         if code == 0 and marked:
             return "successful output folder still marked INCOMPLETE"
-        if code != 0 and not marked:
+        if code != 0 and not marked and not (code == 1 and _failed_result(tpath)):
             new = {p for p in after if p not in before and (str(root / p) + os.sep).startswith(
                 target + os.sep)}
             if new:
@@ -361,6 +361,19 @@ def _partial(case, root: Path, target: str, target_before: str, before: dict,
     if case.target_kind == "file" and code != 0 and target_before == "absent" and tpath.exists():
         return f"failed command left the file {target}"
     return ""
+
+
+def _failed_result(folder: Path) -> bool:
+    """An engine failure's folder holds the complete result of the failed run (the history up
+    to the failure, status "failed" in its metadata: the engine contract), not partial output."""
+    for e in ENGINES:
+        try:
+            meta = json.loads((folder / f"{e}.json").read_text())
+        except (OSError, ValueError):
+            continue
+        if meta.get("status") == "failed" and (folder / f"{e}.csv").is_file():
+            return True
+    return False
 
 
 def _damaged_results(folder: Path) -> str:

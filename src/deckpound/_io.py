@@ -136,7 +136,11 @@ def _write_fd(fd: int, data: bytes) -> None:
 def _write_temporary(path: Path, data: bytes) -> Path:
     """``data`` in a new temporary file beside ``path`` (mode 0o666 less the umask)."""
     tmp = _tmp_name(path)
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0),
+                     0o666)
+    except OSError as err:  # name the file the user asked for, not the temporary one
+        raise OSError(err.errno, err.strerror, str(path)) from None
     try:
         _write_fd(fd, data)
     except BaseException as err:
@@ -221,7 +225,12 @@ def atomic_path(path: str | Path, *, field: str = "--output") -> Iterator[Path]:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = _tmp_name(path)
     try:
-        yield tmp
+        try:
+            yield tmp
+        except OSError as err:
+            if err.filename is not None and os.fspath(err.filename) == str(tmp):
+                raise OSError(err.errno, err.strerror, str(path)) from None
+            raise
         if not tmp.is_file():
             raise OSError(errno.ENOENT, "the writer produced no file", str(path))
         with open(tmp, "rb+") as fh:  # flush to disk before the rename makes it visible
@@ -361,10 +370,18 @@ def output_folder(path: str | Path, command: str, *, field: str = "--output") ->
         reason = f"{type(err).__name__}: {err}" if str(err) else type(err).__name__
         with contextlib.suppress(OSError):
             marker.fail(reason)
-            if not existed and _holds_only_marker(folder):
-                with _folder_lock(folder):
-                    lines = [ln for ln in _entries(marker.path) if ln.startswith("running")]
-                if not any(_still_running(ln, marker.host) for ln in lines):
-                    shutil.rmtree(folder)
+        if not existed:
+            with contextlib.suppress(OSError):
+                _remove_if_unused(folder, marker)
         raise
     marker.finish()
+
+
+def _remove_if_unused(folder: Path, marker: _Marker) -> None:
+    """Remove a folder this command created if it holds nothing but the marker and no other
+    command is writing into it."""
+    with _folder_lock(folder):
+        others = [ln for ln in _entries(marker.path) if ln.startswith("running")]
+        if _holds_only_marker(folder) and not any(_still_running(ln, marker.host)
+                                                  for ln in others):
+            shutil.rmtree(folder)

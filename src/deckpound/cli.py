@@ -19,7 +19,9 @@ Every command ends in exactly one of these exit statuses, with at most one line 
 
 An output folder of a command that failed or was interrupted is either removed (if the command
 created it and wrote nothing) or holds a file ``INCOMPLETE`` naming the command; re-running
-the command resumes and removes it (:mod:`deckpound._io`). Subcommands live in small modules
+the command resumes and removes it (:mod:`deckpound._io`). What the engines' libraries print on
+stderr (OpenSees's solver chatter) is held back so that a failure stays one line;
+``DECKPOUND_DEBUG=1`` shows it. Subcommands live in small modules
 (``_cli_*``) that each register themselves on the parser.
 """
 
@@ -44,7 +46,8 @@ EXIT_CODES_HELP = """exit status:
   4    internal error (a bug: re-run with DECKPOUND_DEBUG=1 for the traceback and report it)
   130  interrupted
 A failed command leaves no new output folder, or one marked by a file INCOMPLETE
-(re-run the command to resume)."""
+(re-run the command to resume). Messages of the engines' libraries (OpenSees) are
+shown only with DECKPOUND_DEBUG=1."""
 
 
 class UsageError(Exception):
@@ -125,6 +128,35 @@ class _GuardedStdout:
         return getattr(self._stream, name)
 
 
+class _QuietStderr:
+    """Stderr during a command: deckpound's own lines (``deckpound: ...`` warnings and errors,
+    ``\r`` progress bars) pass; other text — the engines' libraries write theirs here (OpenSees:
+    "WARNING ZeroLengthContact2D ...", "analyze failed ...") — is held back, so a failure is still
+    one line. ``DECKPOUND_DEBUG=1`` lets everything through."""
+
+    def __init__(self, stream, show_all: bool):
+        self._stream, self._show_all = stream, show_all
+        self._passing = True   # the decision for the line being written
+        self._at_start = True  # the next write starts a new line
+        self.held = 0          # lines held back
+
+    def write(self, text):
+        if self._show_all or not text:
+            return self._stream.write(text)
+        if self._at_start:
+            self._passing = text.startswith(("deckpound", "\r", "\n"))
+            self.held += not self._passing
+        self._at_start = text.endswith("\n")
+        if "\n" in text[:-1] and not self._passing:  # several lines in one write
+            rest = text[text.index("\n") + 1:]
+            self._at_start = True
+            return self.write(rest) if rest else len(text)
+        return self._stream.write(text) if self._passing else len(text)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
 def _flush_stdout() -> None:
     """Flush stdout inside the boundary (a full or closed stdout is an I/O failure)."""
     sys.stdout.flush()
@@ -170,13 +202,17 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(argv: list[str] | None) -> int:
-    stdout = sys.stdout
+    stdout, stderr = sys.stdout, sys.stderr
+    debug = os.environ.get("DECKPOUND_DEBUG", "").strip() not in ("", "0")
     sys.stdout = _GuardedStdout(stdout)
+    sys.stderr = _QuietStderr(stderr, show_all=debug)
     try:
         return _guarded_main(argv)
     finally:
         if isinstance(sys.stdout, _GuardedStdout):
             sys.stdout = stdout
+        if isinstance(sys.stderr, _QuietStderr):
+            sys.stderr = stderr
 
 
 def _guarded_main(argv: list[str] | None) -> int:
