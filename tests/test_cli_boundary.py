@@ -97,9 +97,8 @@ def test_library_chatter_on_stderr_is_held_back_unless_debugging(monkeypatch):
     monkeypatch.setattr(cli_scene, "_list", chatty)
     code, _, err = cli("scene", "list")
     assert code == 1
-    assert err.split("\n")[:-1] == ["\rcases [####] 1/1",
-                                "deckpound: engine failure: step 1 (t = 0.0005 s) did not "
-                                "converge"]
+    failure = "deckpound: engine failure: step 1 (t = 0.0005 s) did not converge"
+    assert err.split("\n")[:-1] == ["\rcases [####] 1/1", failure]
     monkeypatch.setenv("DECKPOUND_DEBUG", "1")
     code, _, err = cli("scene", "list")
     assert code == 1 and "analyze failed, returned: -3" in err and err.count("\n") == 5
