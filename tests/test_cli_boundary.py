@@ -308,6 +308,34 @@ def test_run_failing_mid_write_leaves_no_half_result(tmp_path, monkeypatch):
     assert not (tmp_path / "out").exists()  # nothing of value written: no folder at all
 
 
+def test_study_failing_is_marked_incomplete_then_resumes_from_the_cache(tmp_path, monkeypatch):
+    """A study killed while drawing its figure keeps its cases; the re-run resumes."""
+    from deckpound.compare import figures
+
+    def dies(*a, **k):
+        raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "s" / "f.png"))
+
+    monkeypatch.setattr(figures, "study_figure", dies)
+    argv = ["study", "friction", "saiidi-4span", "--quick", *TINY, "--workers", "1",
+            "--no-progress", "-o", str(tmp_path / "s")]
+    code, _, err = cli(*argv)
+    assert code == 3 and "no space left" in one_line(err)
+    marker = (tmp_path / "s" / INCOMPLETE).read_text()
+    assert "failed" in marker and "study friction: OSError" in marker
+    assert len(list((tmp_path / "s" / "cache").iterdir())) == 4  # every case kept
+    monkeypatch.undo()
+    from deckpound.compare import cases
+
+    def no_recompute(*a, **k):
+        raise RuntimeError("a cached case was recomputed")
+
+    monkeypatch.setattr(cases, "run_case", no_recompute)
+    code, _, err = cli(*argv)
+    assert code == 0, err
+    assert not (tmp_path / "s" / INCOMPLETE).exists() and (tmp_path / "s" / "friction.png").exists()
+
+
+@pytest.mark.slow
 def test_paper_failing_is_marked_incomplete_then_resumes(tmp_path, monkeypatch):
     """A failed paper keeps its cache and says so; the re-run resumes and unmarks the folder."""
     from deckpound.compare import paper
