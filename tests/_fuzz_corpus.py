@@ -11,9 +11,10 @@ file          ``scene validate`` of mutated TOML files: deep nesting (arrays, in
 override      malformed ``--set`` paths and values
 path          every output command against hostile ``-o`` targets: below a file, a file in
               place of a folder, symbolic links (to folders, files, nowhere), ``/proc``,
-              ``/sys``, ``/dev/full``, existing folders
+              ``/sys``, ``/dev/full``, existing folders (:mod:`tests._fuzz_outputs`)
 fault         faults injected into a command: full disk at the k-th write or fsync, a failing
-              rename, read-only ``mkdir``, ``EACCES``, out of memory, Ctrl-C, stdout full
+              rename, a read-only folder, ``EACCES``, out of memory, Ctrl-C, stdout full
+              (:mod:`tests._fuzz_outputs`)
 engine        steps and output rates against the analysis length (30 s step on a short record,
               output step longer than the run, record shorter than one step)
 vtk           ``export-vtk`` of damaged result folders
@@ -53,7 +54,7 @@ class Case:
     dirs: tuple[str, ...] = ()
     links: tuple[tuple[str, str], ...] = ()
     setup: tuple[str, ...] = ()        # named steps: "result" copies a tiny run into {tmp}/res
-    fault: str = ""                    # see tests._fuzz_run.FAULTS
+    fault: str = ""                    # see tests._fuzz_outputs.FAULTS
     target: str = ""                   # output path checked for partial output
     target_kind: str = ""              # "dir" | "file"
     nonsense: bool = False             # exit status 0 would be silent nonsense
@@ -206,135 +207,6 @@ def _override_family() -> list[Case]:
     return cases
 
 
-# -- output commands and hostile targets ----------------------------------------------------
-
-def _commands(target: str) -> list[tuple[str, tuple[str, ...], str, tuple[str, ...], int]]:
-    """(name, argv, target kind, setup, weight) of every output-writing command."""
-    tiny = (*SHORT, "--set", "run.output_dt=0.01")
-    return [
-        ("run-opensees", ("run", "saiidi-4span", *tiny, "--engine", "opensees", "-o", target),
-         "dir", (), 1),
-        ("run-compliance", ("run", "saiidi-4span", *tiny, "--engine", "compliance", "-o",
-                            target), "dir", (), 1),
-        ("run-nonsmooth", ("run", "saiidi-4span", *tiny, "--engine", "nonsmooth", "-o", target),
-         "dir", (), 1),
-        ("export-tcl", ("export", "saiidi-4span", *tiny, "--format", "tcl", "-o",
-                        target + "/m.tcl" if not target.endswith((".tcl", "full")) else target),
-         "file", (), 1),
-        ("export-py", ("export", "saiidi-4span", *tiny, "--format", "py", "-o", target),
-         "file", (), 1),
-        ("plot", ("excitation", "plot", "saiidi-4span", *tiny, "-o", target + ".png"),
-         "file", (), 8),
-        ("vtk", ("export-vtk", "{tmp}/res", "--every", "10", "-o", target), "dir", ("result",), 2),
-        ("compare", ("compare", "saiidi-4span", *tiny, "--engines", "compliance,nonsmooth",
-                     "--workers", "1", "--no-progress", "-o", target), "dir", (), 25),
-    ]
-
-
-TARGETS = [  # (id, -o path, dirs, links, files)
-    ("fresh", OUT, (), (), ()),
-    ("nested", "{tmp}/a/b/c/out", (), (), ()),
-    ("existing-empty", OUT, ("out",), (), ()),
-    ("existing-full", OUT, ("out",), (), (("out/keep.txt", b"user data\n"),)),
-    ("below-file", "{tmp}/afile/out", (), (), (("afile", b"x"),)),
-    ("file-in-place", OUT, (), (), (("out", b"precious\n"),)),
-    ("link-to-dir", OUT, ("real",), (("out", "{tmp}/real"),), ()),
-    ("link-to-file", OUT, (), (("out", "{tmp}/victim"),), (("victim", b"victim\n"),)),
-    ("dangling-link", OUT, (), (("out", "{tmp}/nowhere"),), ()),
-    ("proc", "/proc/deckpound-fuzz/out", (), (), ()),
-    ("sys", "/sys/deckpound-fuzz/out", (), (), ()),
-    ("dev-full", "/dev/full", (), (), ()),
-]
-
-# exit status of each command family for each target (the contract: 2 = refused before any
-# work, 3 = the system refused); "dir" commands write a folder -o, "tcl" writes -o/m.tcl,
-# "py" writes the file -o, "png" writes -o.png
-_EXPECT = {
-    "dir": {"fresh": 0, "nested": 0, "existing-empty": 0, "existing-full": 0, "below-file": 2,
-            "file-in-place": 2, "link-to-dir": 2, "link-to-file": 2, "dangling-link": 2,
-            "proc": 3, "sys": 3},
-    "tcl": {"fresh": 0, "nested": 0, "existing-empty": 0, "existing-full": 0, "below-file": 2,
-            "file-in-place": 2, "link-to-dir": 0, "link-to-file": 2, "dangling-link": 2,
-            "proc": 3, "sys": 3, "dev-full": 3},
-    "py": {"fresh": 0, "nested": 0, "existing-empty": 2, "existing-full": 2, "below-file": 2,
-           "file-in-place": 0, "link-to-dir": 2, "link-to-file": 2, "dangling-link": 2,
-           "proc": 3, "sys": 3, "dev-full": 3},
-    "png": {"fresh": 0, "nested": 0, "existing-empty": 0, "existing-full": 0, "below-file": 2,
-            "file-in-place": 0, "link-to-dir": 0, "link-to-file": 0, "dangling-link": 0,
-            "proc": 3, "sys": 3, "dev-full": 2},
-}
-
-
-def _shape(name: str) -> str:
-    return {"export-tcl": "tcl", "export-py": "py", "plot": "png"}.get(name, "dir")
-
-
-def _path_family() -> list[Case]:
-    cases = []
-    for tid, target, dirs, links, files in TARGETS:
-        for name, argv, kind, setup, weight in _commands(target):
-            shape = _shape(name)
-            if tid not in _EXPECT[shape]:
-                continue  # /dev/full as an output folder: the same as file-in-place
-            if tid == "dev-full" and name == "plot":
-                argv = tuple("/dev/full" if a == "/dev/full.png" else a for a in argv)
-            out_path = argv[argv.index("-o") + 1]
-            cases.append(Case(f"path:{tid}:{name}", "path", argv, files=files, dirs=dirs,
-                              links=links, setup=setup, target=out_path, target_kind=kind,
-                              expect=(_EXPECT[shape][tid],), weight=weight))
-    cases.append(Case("path:show-stdout-full", "path", ("scene", "show", "saiidi-4span"),
-                      fault="stdout-full", expect=(3,)))
-    cases.append(Case("path:list-stdout-full", "path", ("scene", "list"), fault="stdout-full",
-                      expect=(3,)))
-    cases.append(Case("path:validate-stdout-full", "path",
-                      ("scene", "validate", "saiidi-4span", *SHORT), fault="stdout-full",
-                      expect=(3,)))
-    cases.append(Case("path:run-into-existing-tmp", "path",
-                      ("run", "saiidi-4span", *SHORT, "--engine", "nonsmooth", "-o", "{tmp}"),
-                      target="{tmp}", target_kind="dir", expect=(0,)))
-    return cases
-
-
-#: (fault, exit status when it strikes, whether the command may finish before it strikes)
-FAULTS = [("enospc-write:1", 3, False), ("enospc-write:2", 3, True), ("enospc-write:3", 3, True),
-          ("enospc-write:5", 3, True), ("enospc-write:9", 3, True), ("enospc-fsync:1", 3, False),
-          ("enospc-fsync:2", 3, True), ("enospc-fsync:4", 3, True), ("eio-replace:1", 3, False),
-          ("eio-replace:2", 3, True), ("eio-replace:4", 3, True), ("readonly:EROFS", 3, False),
-          ("readonly:EACCES", 3, False), ("interrupt-write:1", 130, False),
-          ("interrupt-write:2", 130, True), ("interrupt-write:4", 130, True),
-          ("memory-write:2", 3, True), ("savefig-enospc", 3, False), ("memory-engine", 3, False),
-          ("interrupt-engine", 130, False), ("recursion-engine", 3, False)]
-_COMPARE_FAULTS = ("enospc-write:2", "enospc-fsync:4", "savefig-enospc", "interrupt-write:2",
-                   "memory-engine")
-
-
-def _fault_family() -> list[Case]:
-    cases = []
-    for name, argv, kind, setup, weight in _commands(OUT):
-        for fault, code, may_finish in FAULTS:
-            if fault.endswith("-engine") and not name.startswith(("run", "compare")):
-                continue
-            if fault == "savefig-enospc" and name not in ("plot", "compare"):
-                continue
-            if name == "compare" and fault not in _COMPARE_FAULTS:
-                continue
-            if name == "plot" and fault.split(":")[0] in ("enospc-write", "interrupt-write",
-                                                           "memory-write"):
-                may_finish = True  # matplotlib writes the figure itself: no write of ours
-            expect = (code, 0) if may_finish else (code,)
-            target = argv[argv.index("-o") + 1]
-            cases.append(Case(f"fault:{name}:{fault}", "fault", argv, setup=setup, fault=fault,
-                              target=target, target_kind=kind, expect=expect, weight=weight))
-            if kind == "dir" and name != "compare" and fault in (
-                    "enospc-write:2", "eio-replace:2", "interrupt-write:2", "readonly:EROFS"):
-                cases.append(Case(f"fault:{name}:{fault}:existing-full", "fault", argv,
-                                  setup=setup, dirs=("out",),
-                                  files=(("out/keep.txt", b"user data\n"),), fault=fault,
-                                  target=target, target_kind=kind, expect=expect,
-                                  weight=weight))
-    return cases
-
-
 def _engine_family() -> list[Case]:
     cases = []
     failing = ("opensees.tolerance=1e-30", "opensees.max_iterations=1", "opensees.fallback=none",
@@ -471,14 +343,18 @@ def _option_family() -> list[Case]:
     return cases
 
 
-FAMILIES = {"set": _set_family, "file": _file_family, "override": _override_family,
-            "path": _path_family, "fault": _fault_family, "engine": _engine_family,
+def families() -> dict:
+    """Family name -> case builder (the output families live in tests._fuzz_outputs)."""
+    from _fuzz_outputs import fault_family, path_family
+
+    return {"set": _set_family, "file": _file_family, "override": _override_family,
+            "path": path_family, "fault": fault_family, "engine": _engine_family,
             "vtk": _vtk_family, "name": _name_family, "option": _option_family}
 
 
 def generate() -> list[Case]:
     """Every case of the corpus, in a fixed order; ids are unique."""
-    cases = [c for make in FAMILIES.values() for c in make()]
+    cases = [c for make in families().values() for c in make()]
     seen, out = set(), []
     for c in cases:
         cid, n = c.id, 1

@@ -85,7 +85,7 @@ class _FullStdout(io.StringIO):
 
 
 def _inject(fault: str, root: Path, stack: contextlib.ExitStack) -> None:
-    """Install ``fault`` (see tests._fuzz_corpus.FAULTS) until ``stack`` closes."""
+    """Install ``fault`` (see tests._fuzz_outputs.FAULTS) until ``stack`` closes."""
     import deckpound._io as dio
     from deckpound import engines
 
