@@ -111,6 +111,9 @@ class ComplianceEngine(Engine):
     step_field = "dt"
     style = dict(color="#1f5fa8", linestyle="--", linewidth=1.2, label="compliance clone")
 
+    def fixed_step(self, settings) -> float | None:
+        return settings.dt if settings.integrator == "newmark" else None
+
     def reads(self, scene: Scene, settings) -> set[str]:
         ct = scene.contact
         read = {"contact.law", "contact.stiffness", "contact.geometry"}

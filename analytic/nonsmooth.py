@@ -108,6 +108,7 @@ class NonsmoothEngine(Engine):
     Settings = NonsmoothSettings
     settings_field = "nonsmooth"
     step_field = "h"
+    compliant_contact = False
     style = dict(color="#c0392b", linestyle=":", linewidth=1.6, label="nonsmooth")
 
     def reads(self, scene: Scene, settings) -> set[str]:

@@ -117,15 +117,16 @@ def long_table(aligned: dict[str, pd.DataFrame]) -> pd.DataFrame:
 
 def write_tables(aligned: dict[str, pd.DataFrame], folder: str | Path) -> list[Path]:
     """aligned_long.{parquet,csv} and aligned_<engine>.{parquet,csv} in ``folder``."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    from deckpound._io import atomic_path, ensure_folder
+
+    folder = ensure_folder(folder)
     written = []
     frames = {"aligned_long": long_table(aligned)}
     frames.update({f"aligned_{k}": v for k, v in aligned.items()})
     for name, frame in frames.items():
         for suffix, writer in ((".parquet", frame.to_parquet), (".csv", frame.to_csv)):
             p = folder / f"{name}{suffix}"
-            kwargs = {"index": False}
-            writer(p, **kwargs)
+            with atomic_path(p) as tmp:
+                writer(tmp, index=False)
             written.append(p)
     return written

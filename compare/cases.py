@@ -2,13 +2,16 @@
 
 Every finished case is stored under its key: the SHA-256 of the engine name, the scene's
 physics (:func:`deckpound.models.result.physics_hash`: the scene without engine settings,
-sequence and free text), *that engine's* settings and the deckpound version — so changing one
-engine's settings (say ``nonsmooth.h``) re-runs that engine's cases only, an interrupted study
-resumes without recomputing and a repeated one returns at once. Warnings an engine raises in
-a worker travel with its result (``meta["warnings"]``) and are shown once each in the main
-process (:func:`surface_warnings`), never swallowed. Cases run in parallel on local processes (default: one per
-core) or on a Dask distributed cluster (``scheduler="tcp://host:port"``), with a progress bar
-on stderr.
+sequence and free text), the record files' digests, *that engine's* settings and the
+deckpound version — so changing one engine's settings (say ``nonsmooth.h``) re-runs that
+engine's cases only — in a :class:`~deckpound.compare.result_cache.ResultCache` (re-exported
+here), so an interrupted study resumes without recomputing and a repeated one returns at once.
+Warnings an engine raises in a worker travel with its result (``meta["warnings"]``) and are
+shown once each in the main process (:func:`surface_warnings`), never swallowed. Cases run in
+parallel on local processes (default: one per core; the workers die with the process that
+started them, :mod:`._workers`) or on a Dask distributed cluster (``scheduler="tcp://host:port"``;
+a malformed address is refused, an unreachable one is an OSError naming it), with a progress
+bar on stderr.
 """
 
 from __future__ import annotations
@@ -16,19 +19,29 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import shutil
+import re
 import sys
-import tempfile
 import time
 import warnings
+from collections.abc import Callable, Iterable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any
 
-from deckpound import __version__
+from deckpound.models.errors import SceneError
 from deckpound.models.result import Result, physics_hash, settings_hash
 from deckpound.models.scene import Scene
+
+from deckpound import __version__
+
+from ._workers import die_with_parent
+from .result_cache import ResultCache
+
+__all__ = ["Case", "Progress", "ResultCache", "case_key", "check_scheduler_address",
+           "run_case", "run_cases"]
+
+#: seconds to wait for a Dask scheduler before giving up (exit status 3 on the CLI)
+CONNECT_TIMEOUT = 20.0
 
 
 @dataclass(frozen=True)
@@ -74,40 +87,6 @@ def case_key(engine: str, scene: Scene) -> str:
                        "settings": settings_hash(settings), "version": __version__},
                       sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
-
-
-class ResultCache:
-    """A folder of finished results, one sub-folder per case key (written atomically)."""
-
-    def __init__(self, folder: str | Path):
-        self.folder = Path(folder)
-        self.folder.mkdir(parents=True, exist_ok=True)
-        self.hits = 0
-        self.misses = 0
-
-    def path(self, key: str) -> Path:
-        return self.folder / key
-
-    def get(self, key: str, engine: str) -> Result | None:
-        p = self.path(key)
-        if (p / f"{engine}.json").is_file() and (p / f"{engine}.csv").is_file():
-            self.hits += 1
-            return Result.read(p, engine)
-        self.misses += 1
-        return None
-
-    def put(self, key: str, result: Result) -> None:
-        """Write into a temporary folder, then rename it into place (never half a case)."""
-        tmp = Path(tempfile.mkdtemp(dir=self.folder, prefix=f".{key[:12]}."))
-        try:
-            result.write(tmp)
-            final = self.path(key)
-            if final.exists():
-                shutil.rmtree(final)
-            os.replace(tmp, final)
-        finally:
-            if tmp.exists():
-                shutil.rmtree(tmp, ignore_errors=True)
 
 
 def run_case(engine: str, scene: Scene) -> Result:
@@ -202,19 +181,56 @@ def _map_parallel(items: list, args_of: Callable, func: Callable, on_done: Calla
     if not items:
         return
     if scheduler:
-        from dask.distributed import Client, as_completed as dask_completed
-
-        with Client(scheduler) as client:
-            futures = {client.submit(func, *args_of(it), pure=False): it for it in items}
-            for fut in dask_completed(futures):
-                on_done(futures[fut], fut.result())
+        _map_dask(items, args_of, func, on_done, check_scheduler_address(scheduler))
         return
     n = workers if workers is not None else (os.cpu_count() or 1)
     if n <= 1 or len(items) == 1:
         for it in items:
             on_done(it, func(*args_of(it)))
         return
-    with ProcessPoolExecutor(max_workers=min(n, len(items))) as pool:
+    pool = ProcessPoolExecutor(max_workers=min(n, len(items)), initializer=die_with_parent,
+                               initargs=(os.getpid(),))
+    try:
         futures = {pool.submit(func, *args_of(it)): it for it in items}
         for fut in as_completed(futures):
+            on_done(futures[fut], fut.result())
+    except BaseException:
+        # an error or Ctrl-C: stop the workers now rather than finish the queued cases
+        for proc in list(getattr(pool, "_processes", {}).values()):
+            proc.kill()
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+_ADDRESS = re.compile(r"^(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.\-]+)"
+                      r"(?::(\d{1,5}))?/?$")
+
+
+def check_scheduler_address(address: str) -> str:
+    """Refuse a malformed Dask scheduler address (SceneError naming ``--scheduler``)."""
+    if isinstance(address, str) and address.startswith("inproc://") and len(address) > 9:
+        return address  # in-process schedulers (tests) have their own address form
+    m = _ADDRESS.match(address.strip()) if isinstance(address, str) else None
+    if m is None or m.group(3) is None:
+        raise SceneError("--scheduler", f"must be a Dask scheduler address such as "
+                         f"tcp://127.0.0.1:8786 (scheme://host:port), got {address!r}")
+    if m.group(3) is not None and not 0 < int(m.group(3)) < 65536:
+        raise SceneError("--scheduler", f"port must be in [1, 65535], got {m.group(3)}")
+    return address.strip()
+
+
+def _map_dask(items: list, args_of: Callable, func: Callable, on_done: Callable,
+              scheduler: str) -> None:
+    from dask.distributed import Client
+    from dask.distributed import as_completed as dask_completed
+
+    try:
+        client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError) as err:
+        raise ConnectionError(f"cannot reach the Dask scheduler at {scheduler} within "
+                              f"{CONNECT_TIMEOUT:g} s ({err})") from None
+    with client:
+        futures = {client.submit(func, *args_of(it), pure=False): it for it in items}
+        for fut in dask_completed(futures):
             on_done(futures[fut], fut.result())

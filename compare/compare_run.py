@@ -7,6 +7,7 @@ from pathlib import Path
 import pandas as pd
 
 from deckpound.engines import DEFAULT_REFERENCE
+from deckpound._io import write_csv
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
@@ -46,7 +47,7 @@ def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
         parts.append(metrics_against(everything, aligned, "measured"))
     metrics = pd.concat([p for p in parts if len(p)], ignore_index=True) \
         if any(len(p) for p in parts) else pd.DataFrame()
-    metrics.to_csv(out / "metrics.csv", index=False)
+    write_csv(metrics, out / "metrics.csv")
     figs = out / "figures"
     figures.histories(everything, scene, figs / "histories.png")
     figures.contact_forces(results, scene, figs / "contact_forces.png")

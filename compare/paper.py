@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from deckpound import __version__
+from deckpound._io import atomic_write_text, ensure_folder, write_csv
 from deckpound.engines import DEFAULT_REFERENCE, engine_names, engine_style
 from deckpound.models.result import scene_hash
 from deckpound.models.scene import Scene
@@ -77,14 +78,11 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
     ENGINES = tuple(engines) if engines is not None else engine_names()
     if reference not in ENGINES:
         ENGINES = (reference,) + ENGINES
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = ensure_folder(out)
     cache_dir = Path(cache_dir) if cache_dir is not None else out / "cache"
     cache = ResultCache(cache_dir)
-    figs, tables = out / "figures", out / "tables"
-    figs.mkdir(exist_ok=True)
-    tables.mkdir(exist_ok=True)
-    (out / "scene.toml").write_text(scene_to_toml(scene))
+    figs, tables = ensure_folder(out / "figures"), ensure_folder(out / "tables")
+    atomic_write_text(out / "scene.toml", scene_to_toml(scene))
 
     # 1. the sequence, every engine; and again with the other friction assumption (the paper's
     #    question: frictionless gap elements, common practice, vs frictional contact)
@@ -92,7 +90,7 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
     variant, tag = friction_variant(scene)
     other = run_sequences(variant, list(ENGINES), cache_dir, workers, scheduler, progress)
     seq = sequence_table({**sequences, **{f"{e} {tag}": runs for e, runs in other.items()}})
-    seq.to_csv(tables / "sequence.csv", index=False)
+    write_csv(seq, tables / "sequence.csv")
     figures.peak_vs_pga(seq, scene, figs / "peak_rotation_vs_pga.png")
 
     # 2. per run: histories, alignment, metrics against OpenSees
@@ -113,7 +111,7 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
             m.insert(0, "run", run.index)
             metric_rows.append(m)
     metrics = pd.concat(metric_rows, ignore_index=True) if metric_rows else pd.DataFrame()
-    metrics.to_csv(tables / "metrics_vs_opensees.csv", index=False)
+    write_csv(metrics, tables / "metrics_vs_opensees.csv")
     last = n_runs - 1
     strongest = {e: sequences[e][last].result for e in ENGINES}
     s_scene = sequences[reference][last].scene
@@ -128,7 +126,8 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
     for name in (studies if studies is not None else tuple(STUDIES)):
         table, _ = run_study(name, scene, figs, quick=quick, cache=cache, workers=workers,
                              scheduler=scheduler, progress=progress)
-        (figs / f"{name}.csv").replace(tables / f"study_{name}.csv")
+        write_csv(table, tables / f"study_{name}.csv")  # the table belongs with the tables
+        (figs / f"{name}.csv").unlink(missing_ok=True)
         study_tables[name] = table
 
     wall = time.perf_counter() - t0
@@ -243,11 +242,12 @@ def write_report(out: Path, scene: Scene, seq: pd.DataFrame, metrics: pd.DataFra
             else:
                 md += [item, ""]
                 body.append(f"<p>{html.escape(item).replace('**', '')}</p>")
-    (out / "report.md").write_text("\n".join(md))
+    atomic_write_text(out / "report.md", "\n".join(md))
     style = ("body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#111}"
              "table.t{border-collapse:collapse;font-size:12px}"
              "table.t td,table.t th{border:1px solid #999;padding:2px 6px}")
-    (out / "report.html").write_text(
+    atomic_write_text(
+        out / "report.html",
         f"<!doctype html><html><head><meta charset='utf-8'><title>deckpound report</title>"
         f"<style>{style}</style></head><body>{''.join(body)}</body></html>")
     return out / "report.md"

@@ -165,8 +165,9 @@ def run_study(name: str, scene: Scene, out: str | Path, *, quick: bool = False,
     results = run_cases(cases, cache=cache, workers=workers, scheduler=scheduler,
                         progress=progress, title=f"study {name}")
     table = pd.DataFrame([case_row(c, results[c.label]) for c in cases])
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    table.to_csv(out / f"{name}.csv", index=False)
+    from deckpound._io import ensure_folder, write_csv
+
+    out = ensure_folder(out)
+    write_csv(table, out / f"{name}.csv")
     study_figure(study, scene, cases, results, table, out / f"{name}.png")
     return table, results

@@ -28,6 +28,10 @@ from .errors import SceneError
 # overflow or underflow (to inf, NaN or subnormals) in the engines' arithmetic.
 MIN_MAGNITUDE = 1e-30
 MAX_MAGNITUDE = 1e30
+# Integers beyond this magnitude (2**53) lose exactness as floats and overflow the int64 loop
+# counters of the compiled engines; no count, seed or index of a scene comes near it. Fields
+# with a physical limit declare a tighter ``le`` (e.g. Newton iterations).
+MAX_INT = 2 ** 53
 
 
 def spec(
@@ -108,10 +112,16 @@ def _coerce(name: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> A
         return value
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            if isinstance(value, float) and value.is_integer():
-                value = int(value)
-            else:
+            if not (isinstance(value, float) and value.is_integer()):
                 raise SceneError(name, f"must be an integer{_in_unit(meta)}, got {_fmt(value)}")
+        if abs(value) > MAX_INT:
+            hi = meta["le"] if meta.get("le") is not None else MAX_INT
+            got = f"{value:g}" if isinstance(value, float) else (
+                f"{value}" if len(str(value)) <= 30 else f"an integer of {len(str(value))} digits")
+            raise SceneError(name, f"must be an integer <= {hi}{_unit(meta)}, got {got}"
+                             if value > 0 else f"must be an integer >= {-MAX_INT}"
+                             f"{_unit(meta)}, got {got}")
+        value = int(value)
         _check_number(name, value, meta)
         return value
     if tp is bool:

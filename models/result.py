@@ -14,17 +14,17 @@ name), ``message``, ``failed_step``/``failed_time`` on failure, ``steps``, ``new
 ``settings``, ``settings_hash``, ``version``, ``units``.
 
 Files: ``DIR/<engine>.csv`` (the columns; units in a ``# units:`` comment line) and
-``DIR/<engine>.json`` (the metadata), both written atomically (a temporary file renamed into
-place), so an interruption leaves no partial file.
+``DIR/<engine>.json`` (the metadata), written as a pair all or nothing (temporary files renamed
+into place, :mod:`deckpound._io`), so an interruption or a full disk leaves no partial file; a
+symbolic link in their place is refused.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import hashlib
+import io
 import json
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -231,36 +231,66 @@ class Result:
 
     # -- files -----------------------------------------------------------------------
     def write(self, folder: str | Path) -> tuple[Path, Path]:
-        """Write ``<engine>.csv`` and ``<engine>.json`` into ``folder`` atomically."""
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
+        """Write ``<engine>.csv`` and ``<engine>.json`` into ``folder``, both or neither."""
+        from deckpound._io import atomic_write_files, ensure_folder
+
+        folder = ensure_folder(folder, "result folder")
         csv_path, json_path = folder / f"{self.engine}.csv", folder / f"{self.engine}.json"
-        _atomic_write(csv_path, self.csv_text())
-        _atomic_write(json_path, json.dumps(_jsonable(self.meta), indent=2, sort_keys=True))
+        atomic_write_files({csv_path: self.csv_bytes(), json_path: self.json_bytes()},
+                           field="result folder")
         return csv_path, json_path
 
-    def csv_text(self) -> str:
-        """The columns as CSV text: a ``# units:`` comment line, the header, then the rows
-        (17 significant digits: reading back gives the same doubles)."""
+    def csv_bytes(self) -> bytes:
+        """The columns as CSV: a ``# units:`` comment line, the header, then the rows (17
+        significant digits: reading back gives the same doubles)."""
         names = list(self.columns)
         lines = ["# units: " + ",".join(column_unit(n) for n in names), ",".join(names)]
         arr = np.column_stack([self.columns[n] for n in names]) if names else np.empty((0, 0))
         lines += [",".join(repr(float(v)) for v in row) for row in arr]
-        return "\n".join(lines) + "\n"
+        return ("\n".join(lines) + "\n").encode()
+
+    def json_bytes(self) -> bytes:
+        """The metadata as JSON text."""
+        return json.dumps(_jsonable(self.meta), indent=2, sort_keys=True).encode()
 
     @classmethod
-    def read(cls, folder: str | Path, engine: str) -> "Result":
-        """Load a result written by :meth:`write`."""
-        import pandas as pd
-
+    def read(cls, folder: str | Path, engine: str) -> Result:
+        """Load a result written by :meth:`write` (a damaged file is refused by name)."""
         folder = Path(folder)
         csv_path, json_path = folder / f"{engine}.csv", folder / f"{engine}.json"
         for p in (csv_path, json_path):
             if not p.is_file():
                 raise SceneError("result", f"file {str(p)!r} does not exist")
-        frame = pd.read_csv(csv_path, comment="#")
-        meta = json.loads(json_path.read_text())
-        cols = {k: frame[k].to_numpy(dtype=float) for k in frame.columns}
+        try:
+            csv_data, json_data = csv_path.read_bytes(), json_path.read_bytes()
+        except OSError as err:
+            raise SceneError("result", f"cannot read {str(folder)!r}: {err.strerror or err}") \
+                from None
+        return cls.from_bytes(engine, csv_data, json_data, source=str(folder))
+
+    @classmethod
+    def from_bytes(cls, engine: str, csv_data: bytes, json_data: bytes,
+                   source: str = "result") -> Result:
+        """A result from the contents of its two files; SceneError names what is damaged."""
+        import pandas as pd
+
+        try:
+            meta = json.loads(json_data.decode("utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as err:
+            raise SceneError("result", f"{source}: {engine}.json is not valid JSON "
+                             f"({str(err)[:120]})") from None
+        if not isinstance(meta, dict):
+            raise SceneError("result", f"{source}: {engine}.json must hold an object, got "
+                             f"{type(meta).__name__}")
+        try:
+            frame = pd.read_csv(io.BytesIO(csv_data), comment="#")
+            cols = {str(k): frame[k].to_numpy(dtype=float) for k in frame.columns}
+        except (ValueError, TypeError, pd.errors.ParserError, pd.errors.EmptyDataError,
+                UnicodeDecodeError) as err:
+            raise SceneError("result", f"{source}: {engine}.csv is not a table of numbers "
+                             f"({str(err).splitlines()[0][:120] if str(err) else err!r})") from None
+        if "t" not in cols:
+            raise SceneError("result", f"{source}: {engine}.csv has no time column 't'")
         return cls(engine=engine, columns=cols, meta=meta)
 
 
@@ -282,16 +312,3 @@ def _jsonable(obj: Any) -> Any:
     return obj
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    """Write text to a temporary file in the same folder, then rename it into place."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise

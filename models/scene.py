@@ -26,6 +26,8 @@ SUPPORTS_PER_BENT = ("x", "y")
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
 #: largest number of time steps one run may take (a 60 s record at 1e-5 s is 6e6)
 MAX_STEPS = 50_000_000
+#: largest number of Newton iterations per step (more means the step does not converge)
+MAX_ITERATIONS = 10_000
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -322,7 +324,8 @@ class OpenSeesSettings:
     test: str = spec("NormDispIncr", doc="convergence test",
                      choices=("NormDispIncr", "EnergyIncr", "NormUnbalance"))
     tolerance: float = spec(1.0e-10, unit="m", doc="convergence tolerance", gt=0.0)
-    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1)
+    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1,
+                               le=MAX_ITERATIONS)
     system: str = spec("BandGeneral", doc="linear system",
                        choices=("BandGeneral", "UmfPack", "FullGeneral", "SparseGeneral"))
     fallback: str = spec("substep", doc="on a failed step: none, or rebuild the analysis and "
@@ -343,7 +346,8 @@ class ComplianceSettings:
                            choices=("newmark", "adaptive"))
     dt: float = spec(5.0e-4, unit="s", doc="time step (newmark)", gt=0.0)
     tolerance: float = spec(1.0e-10, unit="m", doc="Newton NormDispIncr tolerance", gt=0.0)
-    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1)
+    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1,
+                               le=MAX_ITERATIONS)
     rtol: float = spec(1.0e-6, unit="-", doc="relative tolerance (adaptive)", gt=0.0)
     atol: float = spec(1.0e-9, unit="m", doc="absolute tolerance (adaptive)", gt=0.0)
     max_step: float = spec(0.01, unit="s", doc="largest step (adaptive)", gt=0.0)
@@ -363,7 +367,8 @@ class NonsmoothSettings:
     theta: float = spec(0.5, unit="-", doc="theta of the Moreau-Jean scheme", ge=0.5, le=1.0)
     solver: str = spec("lemke", doc="contact problem solver", choices=("lemke", "enumeration"))
     tolerance: float = spec(1.0e-10, unit="-", doc="complementarity tolerance", gt=0.0)
-    max_iterations: int = spec(50, doc="Newton iterations per step for the Takeda springs", ge=1)
+    max_iterations: int = spec(50, doc="Newton iterations per step for the Takeda springs", ge=1,
+                               le=MAX_ITERATIONS)
 
     def __post_init__(self) -> None:
         validate(self)

@@ -45,12 +45,56 @@ def scene_from_mapping(data: dict[str, Any]) -> Scene:
     return from_mapping(Scene, data)
 
 
+#: deepest nesting of tables and arrays a scene may use (the benchmark needs 4)
+MAX_NESTING = 32
+#: largest scene file read (the benchmark is 7 kB; records are separate files)
+MAX_SCENE_BYTES = 16 * 1024 * 1024
+
+
+def _nesting(value: Any, limit: int) -> int:
+    """Depth of nested tables/arrays in ``value``, counted iteratively up to ``limit + 1``."""
+    deepest, stack = 0, [(value, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if isinstance(node, (dict, list)):
+            deepest = max(deepest, depth + 1)
+            if deepest > limit:
+                return deepest
+            stack.extend((v, depth + 1) for v in (node.values() if isinstance(node, dict)
+                                                   else node))
+    return deepest
+
+
+def _check_dotted_depth(text: str, source: str) -> None:
+    """Refuse dotted keys and table headers nested beyond MAX_NESTING before parsing: tomllib
+    takes time and memory quadratic in their depth (a 200 kB key ``a.a.a...`` exhausts 8 GB)."""
+    for number, line in enumerate(text.splitlines(), 1):
+        stripped = line.lstrip()
+        if stripped.startswith("["):
+            key = stripped.split("]", 1)[0]
+        elif "=" in stripped:
+            key = stripped.split("=", 1)[0]
+        else:
+            continue
+        if key.count(".") >= MAX_NESTING:
+            raise SceneError(source, f"line {number}: a key or table header nested "
+                             f"{key.count('.') + 1} levels deep; at most {MAX_NESTING} levels "
+                             "are allowed")
+
+
 def parse_toml(text: str, source: str = "scene") -> dict[str, Any]:
-    """Parse TOML text, turning syntax errors into a one-line SceneError."""
+    """Parse TOML text, turning syntax errors and absurd nesting into a one-line SceneError."""
+    _check_dotted_depth(text, source)
     try:
-        return tomllib.loads(text)
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise SceneError(source, f"is not valid TOML: {err}") from None
+    except RecursionError:
+        raise SceneError(source, f"nests arrays or tables too deeply to parse; at most "
+                         f"{MAX_NESTING} levels are allowed") from None
+    if _nesting(data, MAX_NESTING) > MAX_NESTING:
+        raise SceneError(source, f"nests arrays or tables more than {MAX_NESTING} levels deep")
+    return data
 
 
 def load_scene_data(ref: str | Path) -> tuple[dict[str, Any], Path | None]:
@@ -60,6 +104,11 @@ def load_scene_data(ref: str | Path) -> tuple[dict[str, Any], Path | None]:
         if not path.is_file():
             raise SceneError("scene", f"file {str(path)!r} does not exist")
         try:
+            size = path.stat().st_size
+            if size > MAX_SCENE_BYTES:
+                raise SceneError("scene", f"file {str(path)!r} holds {size} bytes; a scene file "
+                                 f"may hold at most {MAX_SCENE_BYTES} (records go in their own "
+                                 "files)")
             text = path.read_text()
         except (OSError, UnicodeDecodeError) as err:
             raise SceneError("scene", f"cannot read {str(path)!r}: {err}") from None
@@ -138,10 +187,18 @@ _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
 
 def _parse_value(text: str) -> Any:
     """A TOML value (number, bool, string, array), or the bare text as a string."""
+    _check_dotted_depth(f"v = {text}", "--set")
     try:
-        return tomllib.loads(f"v = {text}")["v"]
+        value = tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
         return text
+    except RecursionError:
+        raise SceneError("--set", f"value nests arrays or tables too deeply; at most "
+                         f"{MAX_NESTING} levels are allowed") from None
+    if _nesting(value, MAX_NESTING) > MAX_NESTING:
+        raise SceneError("--set", f"value nests arrays or tables more than {MAX_NESTING} levels "
+                         "deep")
+    return value
 
 
 def apply_overrides(data: dict[str, Any], overrides: Iterable[str]) -> dict[str, Any]:

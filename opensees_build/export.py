@@ -22,9 +22,6 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
-import os
-import shutil
-import tempfile
 from pathlib import Path
 
 from deckpound.models.errors import SceneError
@@ -160,55 +157,27 @@ def _check_output(path: Path, fmt: str) -> None:
                          "and is not a plain folder; remove it or choose another name")
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to a temporary file beside ``path`` and rename it into place (never
-    writes through a symlink at ``path``: the rename replaces the link itself)."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="ascii", newline="\n") as fh:
-            fh.write(text)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it private; a script is not
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _write_folder(folder: Path, files: dict[str, str]) -> None:
-    """Fill a temporary folder and swap it in for ``folder`` (old content removed)."""
-    tmp = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}."))
-    try:
-        os.chmod(tmp, 0o777 & ~_umask())
-        for name, text in files.items():
-            (tmp / name).write_text(text, encoding="ascii", newline="\n")
-        old = None
-        if folder.exists():
-            old = Path(tempfile.mkdtemp(dir=folder.parent, prefix=f".{folder.name}.old."))
-            old.rmdir()
-            os.rename(folder, old)
-        os.rename(tmp, folder)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-
-
 def export_script(scene, fmt: str, path, motion=None) -> Path:
     """Write a complete, runnable ``fmt`` ("tcl" | "py") script for the scene to ``path`` and
     its data folder ``<stem>_data/`` beside it. Returns the script path."""
+    from deckpound._io import atomic_write_files
+
     path = Path(path)
     _check_output(path, fmt)
-    path.parent.mkdir(parents=True, exist_ok=True)
     text, files = script_text(scene, fmt, path.stem, motion)
-    _write_folder(path.parent / f"{path.stem}_data", files)
-    _write_atomic(path, text)
+    data = path.parent / f"{path.stem}_data"
+    made = not data.exists()
+    try:
+        # all files or none (deckpound._io): a full disk leaves no record cut short and no
+        # script without its records; a symbolic link or device in their place is handled there
+        atomic_write_files({**{data / n: c for n, c in files.items()}, path: text})
+    except BaseException:
+        if made and data.is_dir() and not any(data.iterdir()):
+            data.rmdir()
+        raise
+    for old in data.iterdir():     # data files of an earlier export that this one has not
+        if old.is_file() and old.name not in files:
+            old.unlink()
     return path
 
 

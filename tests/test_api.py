@@ -50,3 +50,13 @@ def test_load_scene_set_mapping_and_list_agree():
                                            "contact.friction_mode=stick"])
     assert a == b and a.contact.stiffness == 2e6 and a.bents[1].y.beta == 0.3
     assert "compliance" in dp.available_engines() and np.isfinite(a.deck.mass)
+
+
+def test_dp_compare_is_the_function_after_the_package_is_imported():
+    """``deckpound.compare`` is also a subpackage: importing it must not break dp.compare."""
+    import deckpound as dp
+    import deckpound.compare.align  # noqa: F401  (binds deckpound.compare to the package)
+
+    sc = dp.load_scene("saiidi-4span", set={"run.duration": 0.2})
+    cmp = dp.compare(sc, engines=["compliance", "nonsmooth"])
+    assert cmp.reference == "compliance" and len(cmp.metrics)

@@ -247,7 +247,8 @@ def test_opsvis_plots_the_exported_model(exported):
 
 def test_export_replaces_files_and_never_writes_through_a_symlink(bench, tmp_path):
     """Re-exporting replaces the script and the whole data folder; a symlink at the script path
-    is replaced, its target untouched; files get the usual permissions (not mkstemp's 0600)."""
+    is refused (deckpound never writes through links, deckpound._io), its target untouched;
+    files get the usual permissions (not mkstemp's 0600)."""
     import os
     import stat
 
@@ -257,8 +258,11 @@ def test_export_replaces_files_and_never_writes_through_a_symlink(bench, tmp_pat
     (tmp_path / "m.py").symlink_to(target)
     (tmp_path / "m_data").mkdir()
     (tmp_path / "m_data" / "stale.txt").write_text("old")
+    with pytest.raises(SceneError, match="symbolic link"):
+        export.export_script(sc, "py", tmp_path / "m.py")
+    assert target.read_text() == "keep" and (tmp_path / "m.py").is_symlink()
+    (tmp_path / "m.py").unlink()
     py = export.export_script(sc, "py", tmp_path / "m.py")
-    assert target.read_text() == "keep" and not py.is_symlink()
     assert not (tmp_path / "m_data" / "stale.txt").exists()
     assert (tmp_path / "m_data" / "manifest.json").exists()
     mask = os.umask(0)

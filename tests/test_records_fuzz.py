@@ -195,7 +195,7 @@ def _at2_mutation(data: st.DataObject, lines: list[str]) -> list[str]:
         lines.append(data.draw(st.text(max_size=30)))
     elif kind == "unicode":
         i = data.draw(st.integers(0, len(lines)))
-        lines.insert(i, data.draw(st.text(alphabet=st.characters(min_codepoint=0x80), max_size=20)))
+        lines.insert(i, data.draw(st.text(alphabet=st.characters(min_codepoint=0x80, exclude_categories=("Cs",)), max_size=20)))
     elif kind == "drop_header":
         lines = lines[data.draw(st.integers(1, 4)):]
     elif kind == "extra_values":  # downloads hold a value or more beyond NPTS
@@ -283,7 +283,7 @@ def _text_mutation(data: st.DataObject, lines: list[str]) -> list[str]:
     elif kind == "delete" and lines:
         del lines[i]
     elif kind == "unicode":
-        lines.insert(i, data.draw(st.text(alphabet=st.characters(min_codepoint=0x80), max_size=20)))
+        lines.insert(i, data.draw(st.text(alphabet=st.characters(min_codepoint=0x80, exclude_categories=("Cs",)), max_size=20)))
     elif kind == "blank":
         lines.insert(i, "")
     elif kind == "titles":

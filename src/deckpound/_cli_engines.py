@@ -9,7 +9,7 @@ from deckpound.models.errors import EngineFailure, SceneError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from .cli import add_scene_args
+    from .cli import add_scene_args, int_in
     from .engines import ENGINES
 
     p = sub.add_parser("run", help="run one engine on a scene and write DIR/<engine>.csv/.json")
@@ -36,26 +36,45 @@ def register(sub: argparse._SubParsersAction) -> None:
     vsub = p.add_subparsers(dest="verify_command", metavar="WHAT")
     vsub.required = True
     q = vsub.add_parser("takeda", help="Hysteretic clone vs OpenSees on random strain histories")
-    q.add_argument("--states", type=int, default=20000)
-    q.add_argument("--seed", type=int, default=0)
+    q.add_argument("--states", type=int_in(1, 10_000_000), default=20000)
+    q.add_argument("--seed", type=int_in(0, 2 ** 63 - 1), default=0)
     q.set_defaults(func=_verify_takeda)
     q = vsub.add_parser("clone", help="compliance newmark vs OpenSees rigid on a scene")
     add_scene_args(q)
     q.set_defaults(func=_verify_clone)
 
 
+def check_output_folder(path: str) -> Path:
+    """Refuse, before any work, an output folder that can never be written: a symbolic link,
+    a file in its place, a file among its parents (exit status 2)."""
+    from ._io import check_parent
+
+    out = Path(path)
+    if out.is_symlink():
+        raise SceneError("--output", f"{str(out)!r} is a symbolic link; deckpound never writes "
+                         "through links: give the real folder")
+    if out.exists() and not out.is_dir():
+        raise SceneError("--output", f"{str(out)!r} exists and is not a folder")
+    check_parent(out)
+    return out
+
+
 def _run(args) -> int:
+    from deckpound.models import plausibility
+    from deckpound.models.excitation import support_motion
     from deckpound.models.scene_io import load_scene
 
+    from ._io import output_folder
     from .engines import get_engine, run_engine
 
     get_engine(args.engine)  # refuse an unknown name before any work
-    out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise SceneError("--output", f"{str(out)!r} exists and is not a folder")
+    check_output_folder(args.output)
     scene = load_scene(args.scene, args.overrides)
-    result = run_engine(args.engine, scene)
-    csv_path, _ = result.write(args.output)
+    motion = support_motion(scene)
+    plausibility.enforce(scene, motion, engines=(args.engine,))
+    result = run_engine(args.engine, scene, motion)
+    with output_folder(args.output, f"run {args.engine}") as out:
+        csv_path, _ = result.write(out)
     m = result.meta
     print(f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
           f"{m.get('gap_closures', 0)} gap closures; wrote {csv_path}")
@@ -65,14 +84,19 @@ def _run(args) -> int:
 
 
 def _export(args) -> int:
+    from deckpound.models import plausibility
+    from deckpound.models.excitation import support_motion
     from deckpound.models.scene_io import load_scene
     from deckpound.opensees_build.export import export_script
 
+    from ._io import check_parent, check_target
+
+    out = check_target(args.output)  # a folder or a symbolic link: refused
+    check_parent(out)
     scene = load_scene(args.scene, args.overrides)
-    out = Path(args.output)
-    if out.exists() and out.is_dir():
-        raise SceneError("--output", f"{str(out)!r} is a folder; give a file name")
-    written = export_script(scene, args.format, out)
+    motion = support_motion(scene)
+    plausibility.enforce(scene, motion, engines=("opensees",))
+    written = export_script(scene, args.format, out, motion)  # all files or none
     print(f"wrote {written} and {written.parent / (written.stem + '_data')}/ (support records, "
           f"manifest.json); recorder files go to {written.stem}_results/ when it runs")
     return 0

@@ -46,29 +46,25 @@ def _list(args) -> int:
 def _show(args) -> int:
     from deckpound.models.scene_io import load_scene, scene_to_toml
 
-    sys.stdout.write(scene_to_toml(load_scene(args.scene, args.overrides)))
+    text = scene_to_toml(load_scene(args.scene, args.overrides))
+    sys.stdout.write(text)  # a full or closed stdout: OSError, exit status 3 (cli.main)
     return 0
 
 
 def _validate(args) -> int:
-    from deckpound.models.excitation import analysis_duration, support_motion
-    import numpy as np
-
-    from deckpound.models.mechanics import natural_modes, rayleigh_coefficients
+    from deckpound.models import plausibility
+    from deckpound.models.excitation import support_motion
+    from deckpound.models.mechanics import rayleigh_coefficients
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene(args.scene, args.overrides)
     motion = support_motion(scene)
-    periods = natural_modes(scene).periods
+    report = plausibility.enforce(scene, motion)  # steps vs record, periods, contact, output
     rayleigh_coefficients(scene)  # refuses damping.modes beyond the number of modes
-    if not np.all(np.isfinite(periods)):
-        raise SceneError("scene", "the masses and stiffnesses give non-finite natural periods "
-                         f"({', '.join(f'{T:g}' for T in periods)} s); check them for extreme "
-                         "values")
     print(f"{scene.name}: valid; {len(scene.bents)} bents, gaps "
           f"{scene.seats[0].gap:g}/{scene.seats[1].gap:g} m, record {motion.duration:g} s "
-          f"({len(motion.channels)} supports), analysis {analysis_duration(scene, motion):g} s, "
-          f"periods {', '.join(f'{T:.3f}' for T in periods[:3])} s")
+          f"({len(motion.channels)} supports), analysis {report.duration:g} s, "
+          f"periods {', '.join(f'{T:.3f}' for T in report.periods[:3])} s")
     return 0
 
 
@@ -80,21 +76,19 @@ def _schema(args) -> int:
 
 
 def _plot(args) -> int:
+    from deckpound._io import check_parent, check_target
     from deckpound.models.excitation import support_motion
     from deckpound.models.scene_io import load_scene
 
     out = Path(args.output)
     if out.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise SceneError("--output", f"must end in .png, .pdf or .svg, got {str(out)!r}")
-    if out.is_dir():
-        raise SceneError("--output", f"{str(out)!r} is a folder; give a file name")
+    check_target(out)  # a folder or a symbolic link in its place: refused before any work
+    check_parent(out)  # below a regular file: can never be written
     scene = load_scene(args.scene, args.overrides)
     motion = support_motion(scene)
     from deckpound.compare.plotting import plot_excitation
 
-    try:
-        plot_excitation(scene, motion, out)
-    except OSError as err:  # folder not creatable, no permission, disk full
-        raise SceneError("--output", f"cannot write {str(out)!r}: {err}") from None
+    plot_excitation(scene, motion, out)  # atomic (compare.style.save); OSError: exit status 3
     print(f"wrote {out}")
     return 0

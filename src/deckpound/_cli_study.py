@@ -3,15 +3,39 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
+from deckpound.engines import engine_names
 from deckpound.models.errors import SceneError
 
 
+def _seconds(text: str) -> float:
+    """A positive, finite number of seconds (refuses nan, inf, 0 and negatives)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number of seconds, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number of seconds > 0, got {text!r}")
+    return value
+
+
+def _scheduler(text: str) -> str:
+    from deckpound.compare.cases import check_scheduler_address
+
+    try:
+        return check_scheduler_address(text)
+    except SceneError as err:
+        raise argparse.ArgumentTypeError(err.reason) from None
+
+
 def _parallel_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--workers", type=int, default=None,
+    from .cli import int_in
+
+    p.add_argument("--workers", type=int_in(1, 1024), default=None,
                    help="local worker processes (default: one per core)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+    p.add_argument("--scheduler", type=_scheduler, default=None, metavar="ADDRESS",
                    help="run cases on a Dask distributed cluster, e.g. tcp://127.0.0.1:8786")
     p.add_argument("--cache", default=None, metavar="DIR",
                    help="result cache (default: OUT/cache); finished cases are never recomputed")
@@ -27,7 +51,7 @@ def _benchmark_scene_args(p: argparse.ArgumentParser, out_default: str, quick_he
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from .cli import add_scene_args
+    from .cli import add_scene_args, int_in
 
     p = sub.add_parser("compare", help="run engines on one scene, align, compare, plot")
     add_scene_args(p)
@@ -61,7 +85,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("bench", help="work-precision benchmark: wall time vs error, every engine")
     _benchmark_scene_args(p, "deckpound-bench", "fewer configurations, shorter records")
-    p.add_argument("--repeats", type=int, default=None, help="runs per configuration (median)")
+    p.add_argument("--repeats", type=int_in(1, 1000), default=None,
+                   help="runs per configuration (median)")
     p.add_argument("--skips", action="store_true",
                    help="instead: time the compliance engine's work-saving skips on and off "
                    "(identical results checked) and the adaptive step sizes in/out of contact")
@@ -71,13 +96,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     _benchmark_scene_args(p, "deckpound-stress", "a small subset of the grid")
     p.add_argument("--engines", default=None,
                    help="comma-separated engine names (default: every registered engine)")
-    p.add_argument("--timeout", type=float, default=300.0, help="seconds per cell")
+    p.add_argument("--timeout", type=_seconds, default=300.0, help="seconds per cell")
     p.set_defaults(func=_stress)
 
     p = sub.add_parser("export-vtk", help="deck and seat outlines over time for ParaView")
     p.add_argument("result_dir", metavar="RESULT_DIR")
     p.add_argument("-o", "--output", required=True, metavar="DIR")
-    p.add_argument("--every", type=int, default=1, help="write every N-th output sample")
+    p.add_argument("--every", type=int_in(1, 10 ** 9), default=1,
+                   help="write every N-th output sample")
     p.set_defaults(func=_export_vtk)
 
 
@@ -89,59 +115,77 @@ def _engines(text: str | None) -> list[str]:
     names = [e.strip() for e in text.split(",") if e.strip()]
     for e in names:
         if e not in ENGINES:
-            raise SceneError("--engines", f"unknown engine {e!r}; valid engines: {', '.join(ENGINES)}")
+            raise SceneError("--engines", f"unknown engine {e!r}; valid engines: "
+                             f"{', '.join(ENGINES)}")
     if not names:
         raise SceneError("--engines", "names no engine")
     return names
 
 
-def _compare(args) -> int:
-    from deckpound.compare.compare_run import run_compare
+def _checked_scene(args, engines) -> object:
+    """The scene of a whole-study command, with the plausibility checks of its engines."""
+    from deckpound.models import plausibility
+    from deckpound.models.excitation import support_motion
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene(args.scene, args.overrides)
+    plausibility.enforce(scene, support_motion(scene), engines=engines)
+    return scene
+
+
+def _compare(args) -> int:
+    from deckpound.compare.compare_run import run_compare
+
+    from ._cli_engines import check_output_folder
+    from ._io import output_folder
+
     engines = _engines(args.engines)
     if args.reference is not None:
         _engines(args.reference)   # an unknown name is refused with the valid ones
+    check_output_folder(args.output)
+    scene = _checked_scene(args, engines)
     measured = None
     if args.measured:
         from deckpound.compare.metrics import measured_result
 
         measured = measured_result(args.measured)
-    summary = run_compare(scene, engines, args.output, measured=measured, workers=args.workers,
-                          scheduler=args.scheduler, cache_dir=args.cache,
-                          progress=not args.no_progress, reference=args.reference)
+    with output_folder(args.output, "compare") as out:
+        summary = run_compare(scene, engines, out, measured=measured, workers=args.workers,
+                              scheduler=args.scheduler, cache_dir=args.cache,
+                              progress=not args.no_progress,
+                              reference=args.reference)
     print(summary)
     return 0
 
 
 def _study(args) -> int:
+    from deckpound._io import output_folder, write_csv
     from deckpound.compare.cases import ResultCache
     from deckpound.compare.studies import STUDY_NAMES, run_study
-    from deckpound.models.scene_io import load_scene
+
+    from ._cli_engines import check_output_folder
 
     if args.name not in STUDY_NAMES:
-        raise SceneError("study", f"unknown study {args.name!r}; valid studies: {', '.join(STUDY_NAMES)}")
-    scene = load_scene(args.scene, args.overrides)
-    out = Path(args.output or f"study-{args.name}")
-    cache_dir = Path(args.cache) if args.cache else out / "cache"
-    if args.name == "sequence":
-        from deckpound.compare import figures
-        from deckpound.compare.paper import sequence_table
-        from deckpound.compare.sequence_run import run_sequences
+        raise SceneError("study", f"unknown study {args.name!r}; valid studies: "
+                         f"{', '.join(STUDY_NAMES)}")
+    out = check_output_folder(args.output or f"study-{args.name}")
+    scene = _checked_scene(args, engine_names())
+    with output_folder(out, f"study {args.name}") as out:
+        cache_dir = Path(args.cache) if args.cache else out / "cache"
+        if args.name == "sequence":
+            from deckpound.compare import figures
+            from deckpound.compare.paper import sequence_table
+            from deckpound.compare.sequence_run import run_sequences
 
-        from .engines import engine_names
-
-        seqs = run_sequences(scene, list(engine_names()), cache_dir, args.workers, args.scheduler,
-                             not args.no_progress)
-        table = sequence_table(seqs)
-        out.mkdir(parents=True, exist_ok=True)
-        table.to_csv(out / "sequence.csv", index=False)
-        figures.peak_vs_pga(table, scene, out / "sequence.png")
-    else:
-        table, _ = run_study(args.name, scene, out, quick=args.quick,
-                             cache=ResultCache(cache_dir), workers=args.workers,
-                             scheduler=args.scheduler, progress=not args.no_progress)
+            seqs = run_sequences(scene, list(engine_names()), cache_dir, args.workers, args.scheduler,
+                                 not args.no_progress)
+            table = sequence_table(seqs)
+            write_csv(table, out / "sequence.csv")
+            figures.peak_vs_pga(table, scene, out / "sequence.png")
+        else:
+            table, _ = run_study(args.name, scene, out, quick=args.quick,
+                                 cache=ResultCache(cache_dir), workers=args.workers,
+                                 scheduler=args.scheduler, progress=not args.no_progress)
     cols = [c for c in ("label", "engine", "run", "pga", "peak_theta", "peak_y", "gap_closures",
                         "wall_time", "status") if c in table]
     print(table[cols].to_string(index=False))
@@ -150,31 +194,44 @@ def _study(args) -> int:
 
 
 def _paper(args) -> int:
+    from deckpound._io import output_folder
     from deckpound.compare.paper import run_paper
     from deckpound.compare.studies import STUDIES
-    from deckpound.models.scene_io import load_scene
 
-    scene = load_scene(args.scene, args.overrides)
+    from ._cli_engines import check_output_folder
+
     studies = None
     if args.studies:
         studies = tuple(s.strip() for s in args.studies.split(",") if s.strip())
         for s in studies:
             if s not in STUDIES:
                 raise SceneError("--studies", f"unknown study {s!r}; valid: {', '.join(STUDIES)}")
-    report = run_paper(scene, args.output, quick=args.quick, workers=args.workers,
-                       scheduler=args.scheduler, cache_dir=args.cache, studies=studies,
-                       progress=not args.no_progress)
+    check_output_folder(args.output)
+    scene = _checked_scene(args, engine_names())
+    # the folder is marked INCOMPLETE until the report is written; a re-run resumes from the
+    # cache (default DIR/cache) and removes the marker
+    with output_folder(args.output, "paper") as out:
+        report = run_paper(scene, out, quick=args.quick, workers=args.workers,
+                           scheduler=args.scheduler, cache_dir=args.cache, studies=studies,
+                           progress=not args.no_progress)
     print(f"wrote {report} and {report.with_suffix('.html')}")
     return 0
 
 
 def _bench(args) -> int:
-    from deckpound.compare.bench import run_bench
+    from deckpound._io import output_folder
     from deckpound.models.scene_io import load_scene
 
-    if args.repeats is not None and args.repeats < 1:
-        raise SceneError("--repeats", f"must be >= 1, got {args.repeats}")
+    from ._cli_engines import check_output_folder
+
     scene = load_scene(args.scene, args.overrides)
+    with output_folder(check_output_folder(args.output), "bench"):
+        return _bench_body(args, scene)
+
+
+def _bench_body(args, scene) -> int:
+    from deckpound.compare.bench import run_bench
+
     if args.skips:
         from deckpound.compare.skips import run_skips
 
@@ -198,12 +255,17 @@ def _bench(args) -> int:
 
 
 def _stress(args) -> int:
+    from deckpound._io import output_folder
     from deckpound.compare.stress import run_stress
     from deckpound.models.scene_io import load_scene
 
+    from ._cli_engines import check_output_folder
+
+    engines = tuple(_engines(args.engines))
+    out = check_output_folder(args.output)
     scene = load_scene(args.scene, args.overrides)
-    table = run_stress(scene, args.output, quick=args.quick, engines=tuple(_engines(args.engines)),
-                       timeout=args.timeout)
+    with output_folder(out, "stress"):
+        table = run_stress(scene, out, quick=args.quick, engines=engines, timeout=args.timeout)
     bad = table[(table["status"] != "success") | (~table["finite"])]
     print(table.groupby(["engine", "status"]).size().to_string())
     print(f"{len(table)} cells, {len(bad)} not finished with finite output; wrote {args.output}")
@@ -211,8 +273,15 @@ def _stress(args) -> int:
 
 
 def _export_vtk(args) -> int:
-    from deckpound.compare.vtk import export_vtk
+    from deckpound._io import output_folder
+    from deckpound.compare.vtk import check_result_folder, export_vtk
 
-    for p in export_vtk(args.result_dir, args.output, args.every):
+    from ._cli_engines import check_output_folder
+
+    check_output_folder(args.output)
+    results = check_result_folder(args.result_dir, args.every)  # damaged input: exit 2
+    with output_folder(args.output, "export-vtk") as out:
+        written = export_vtk(args.result_dir, out, args.every, results=results)
+    for p in written:
         print(f"wrote {p}")
     return 0

@@ -1,18 +1,53 @@
-"""The ``deckpound`` command line.
+"""The ``deckpound`` command line, and its one error boundary.
 
-Every user error (bad scene, record, option) ends in one line on stderr and exit status 2;
-an engine that fails ends with its status message and exit status 1. Subcommands live in
-small modules (``_cli_*``) that each register themselves on the parser.
+Every command ends in exactly one of these exit statuses, with at most one line on stderr
+(``deckpound: error: ...``) after any warnings, and never a traceback:
+
+===  ==========================================================================================
+0    success
+1    engine failure: an engine could not finish (its status message names step and time)
+2    bad input: scene, record, override or option refused (the line names the field, the
+     value and what is allowed), including output paths that can never be written (below a
+     file, a symbolic link, a folder where a file is expected) — refused before any work
+3    I/O or resource failure: the system refused (read-only or full disk, no permission,
+     ``/proc``, stdout closed or full, out of memory, stack exhausted, an unreachable Dask
+     scheduler)
+4    internal error: a bug in deckpound (please report it with ``DECKPOUND_DEBUG=1``, which
+     prints the traceback)
+130  interrupted (Ctrl-C)
+===  ==========================================================================================
+
+An output folder of a command that failed or was interrupted is either removed (if the command
+created it and wrote nothing) or holds a file ``INCOMPLETE`` naming the command; re-running
+the command resumes and removes it (:mod:`deckpound._io`). What the engines' libraries print on
+stderr (OpenSees's solver chatter) is held back so that a failure stays one line;
+``DECKPOUND_DEBUG=1`` shows it. Subcommands live in small modules
+(``_cli_*``) that each register themselves on the parser.
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
+import os
 import sys
 import warnings
 
 from deckpound import __version__
 from deckpound.models.errors import EngineFailure, SceneError
+
+EXIT_OK, EXIT_ENGINE, EXIT_INPUT, EXIT_IO, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+EXIT_CODES_HELP = """exit status:
+  0    success
+  1    engine failure (the message names the step and time)
+  2    bad input: scene, record, override or option refused (one line names the field)
+  3    I/O or resource failure: read-only or full disk, no permission, out of memory,
+       unreachable Dask scheduler
+  4    internal error (a bug: re-run with DECKPOUND_DEBUG=1 for the traceback and report it)
+  130  interrupted
+A failed command leaves no new output folder, or one marked by a file INCOMPLETE
+(re-run the command to resume). Messages of the engines' libraries (OpenSees) are
+shown only with DECKPOUND_DEBUG=1."""
 
 
 class UsageError(Exception):
@@ -22,7 +57,7 @@ class UsageError(Exception):
 class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line and exit status 2, never a usage dump."""
 
-    def error(self, message: str):  # noqa: D401 - argparse API
+    def error(self, message: str):
         raise UsageError(f"{self.prog}: {message}")
 
 
@@ -30,7 +65,8 @@ def build_parser() -> argparse.ArgumentParser:
     from . import _cli_engines, _cli_scene, _cli_study
 
     parser = _Parser(prog="deckpound", description="Deck-abutment pounding of bridges, three "
-                     "ways from one scene: OpenSees, compliance and nonsmooth engines.")
+                     "ways from one scene: OpenSees, compliance and nonsmooth engines.",
+                     epilog=EXIT_CODES_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"deckpound {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
@@ -39,28 +75,213 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the exit status."""
-    warnings.simplefilter("default")
-    warnings.formatwarning = lambda msg, cat, *a, **k: f"deckpound: warning: {msg}\n"
+def _one_line(text: str, limit: int = 600) -> str:
+    line = " ".join(str(text).split())
+    return line if len(line) <= limit else line[:limit - 3] + "..."
+
+
+def _os_error_text(err: OSError) -> str:
+    """'cannot write 'x': No space left on device' style text of an OSError."""
+    what = err.strerror or (str(err) if str(err) else type(err).__name__)
+    if err.errno == errno.ENOSPC:
+        what = "no space left on the device"
+    names = [n for n in (err.filename, err.filename2) if n is not None]
+    return f"I/O error on {str(names[0])!r}: {what}" if names else what
+
+
+def _report(kind: str, message: str) -> None:
+    text = f"deckpound: {kind}: {_one_line(message)}" if kind else f"deckpound: {message}"
     try:
-        parser = build_parser()
+        print(text, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass  # stderr itself is gone: the exit status is all that is left
+
+
+class StdoutError(OSError):
+    """Writing the command's output to stdout failed (full device, closed, I/O error)."""
+
+
+class _GuardedStdout:
+    """Stdout during a command: an OSError of write/flush becomes :class:`StdoutError`, so the
+    boundary can tell "stdout is full" from a failing output file."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
         try:
-            args = parser.parse_args(argv)
-        except SystemExit as done:  # --help / --version have printed their text
-            return done.code if isinstance(done.code, int) else 0
-        return int(args.func(args) or 0)
-    except (SceneError, UsageError) as err:
-        print(f"deckpound: error: {err}", file=sys.stderr)
-        return 2
-    except EngineFailure as err:
-        print(f"deckpound: engine failure: {err}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print("deckpound: interrupted", file=sys.stderr)
-        return 130
-    except BrokenPipeError:
-        return 0
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as err:
+            raise StdoutError(err.errno, err.strerror or str(err)) from None
+
+    def flush(self):
+        try:
+            return self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as err:
+            raise StdoutError(err.errno, err.strerror or str(err)) from None
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+class _QuietStderr:
+    """Stderr during a command: deckpound's own lines (``deckpound: ...`` warnings and errors,
+    ``\r`` progress bars) pass; other text — the engines' libraries write theirs here (OpenSees:
+    "WARNING ZeroLengthContact2D ...", "analyze failed ...") — is held back, so a failure is still
+    one line. ``DECKPOUND_DEBUG=1`` lets everything through."""
+
+    def __init__(self, stream, show_all: bool):
+        self._stream, self._show_all = stream, show_all
+        self._passing = True   # the decision for the line being written
+        self._at_start = True  # the next write starts a new line
+        self.held = 0          # lines held back
+
+    def write(self, text):
+        if self._show_all or not text:
+            return self._stream.write(text)
+        if self._at_start:
+            self._passing = text.startswith(("deckpound", "\r", "\n"))
+            self.held += not self._passing
+        self._at_start = text.endswith("\n")
+        if "\n" in text[:-1] and not self._passing:  # several lines in one write
+            rest = text[text.index("\n") + 1:]
+            self._at_start = True
+            return self.write(rest) if rest else len(text)
+        return self._stream.write(text) if self._passing else len(text)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def _flush_stdout() -> None:
+    """Flush stdout inside the boundary (a full or closed stdout is an I/O failure)."""
+    sys.stdout.flush()
+
+
+def _silence_stdout() -> None:
+    """After a failed write to stdout, point it at /dev/null so the interpreter's own flush
+    at exit cannot print a second error."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return  # not a real file (tests capture it)
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, fd)
+        os.close(null)
+    except OSError:
+        pass
+
+
+def _quiet_exit() -> None:
+    """In the real process, after the last word: stdout flushed, stderr to /dev/null, so that
+    libraries cannot add lines at interpreter exit (OpenSees prints 'Process 0 Terminating')."""
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError):
+        _silence_stdout()
+    try:
+        sys.stderr.flush()
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stderr.fileno())
+        os.close(null)
+    except (AttributeError, OSError, ValueError):
+        pass
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the exit status (see the module docstring)."""
+    code = _main(argv)
+    if argv is None:  # the program itself (console script, python -m deckpound)
+        _quiet_exit()
+    return code
+
+
+def _main(argv: list[str] | None) -> int:
+    stdout, stderr = sys.stdout, sys.stderr
+    debug = os.environ.get("DECKPOUND_DEBUG", "").strip() not in ("", "0")
+    sys.stdout = _GuardedStdout(stdout)
+    sys.stderr = _QuietStderr(stderr, show_all=debug)
+    try:
+        return _guarded_main(argv)
+    finally:
+        if isinstance(sys.stdout, _GuardedStdout):
+            sys.stdout = stdout
+        if isinstance(sys.stderr, _QuietStderr):
+            sys.stderr = stderr
+
+
+def _guarded_main(argv: list[str] | None) -> int:
+    debug = os.environ.get("DECKPOUND_DEBUG", "").strip() not in ("", "0")
+    warnings.simplefilter("default")
+    warnings.formatwarning = lambda msg, cat, *a, **k: f"deckpound: warning: {_one_line(msg)}\n"
+    try:
+        try:
+            parser = build_parser()
+            try:
+                args = parser.parse_args(argv)
+            except SystemExit as done:  # --help / --version have printed their text
+                _flush_stdout()
+                return done.code if isinstance(done.code, int) else 0
+            code = int(args.func(args) or 0)
+            _flush_stdout()
+            return code
+        except (SceneError, UsageError) as err:
+            _report("error", str(err))
+            return EXIT_INPUT
+        except EngineFailure as err:
+            _report("engine failure", str(err))
+            return EXIT_ENGINE
+        except KeyboardInterrupt:
+            _report("", "interrupted")
+            return EXIT_INTERRUPTED
+        except BrokenPipeError:
+            _silence_stdout()  # `deckpound ... | head`: the reader has all it wanted
+            return EXIT_OK
+        except OSError as err:
+            if debug:
+                raise
+            if isinstance(err, StdoutError):
+                _silence_stdout()
+                _report("error", f"cannot write the output to stdout: {_os_error_text(err)}")
+            else:
+                _report("error", _os_error_text(err))
+            return EXIT_IO
+        except MemoryError:
+            _report("error", "out of memory; reduce the record length, the output rate "
+                    "(run.output_dt) or the number of workers")
+            return EXIT_IO
+        except RecursionError:
+            if debug:
+                raise
+            _report("error", "input nested too deeply (Python's recursion limit was reached)")
+            return EXIT_IO
+    except Exception as err:  # a bug: one line, the traceback only on request
+        if debug:
+            raise
+        _report("internal error", f"{type(err).__name__}: {err} (this is a bug in deckpound "
+                f"{__version__}; re-run with DECKPOUND_DEBUG=1 for the traceback and report it)")
+        return EXIT_BUG
+
+
+def int_in(lo: int, hi: int):
+    """An argparse type: a whole number in [lo, hi] (a negative count never runs silently)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be in [{lo}, {hi}], got {value}")
+        return value
+
+    parse.__name__ = "whole number"
+    return parse
 
 
 def add_scene_args(p: argparse.ArgumentParser) -> None:

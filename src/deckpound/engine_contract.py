@@ -171,6 +171,8 @@ class Engine:
     settings_field: ClassVar[str | None] = None
     step_field: ClassVar[str] = "dt"
     style: ClassVar[dict[str, Any]] = {}
+    #: True for penalty (compliant) contact, whose fixed step must resolve a contact duration
+    compliant_contact: ClassVar[bool] = True
 
     # -- declarations ---------------------------------------------------------------------
     def settings_of(self, scene: Scene) -> Any:
@@ -182,6 +184,10 @@ class Engine:
     def step_of(self, settings: Any) -> float:
         """The engine's time step [s] in ``settings``."""
         return float(getattr(settings, self.step_field))
+
+    def fixed_step(self, settings: Any) -> float | None:
+        """The fixed time step [s] of a run with ``settings``; None for an adaptive one."""
+        return self.step_of(settings)
 
     def reads(self, scene: Scene, settings: Any) -> set[str]:
         """Engine-dependent options (:data:`OPTION_FIELDS`) the run depends on (point 2)."""

@@ -1,0 +1,213 @@
+"""Plausibility of a valid scene: can the engines' steps and the output resolve the answer?
+
+Field validation (:mod:`._fields`) checks each value alone; this module checks values against
+each other and against the physics of the contact-free model, before any engine runs:
+
+=========================  ================================================================
+analysis vs step           fewer than :data:`MIN_STEPS` engine steps in the analysis (record
+                           or run.duration; a step longer than the record gives none):
+                           refused, naming both values
+fundamental period T1      a step longer than T1 / 2 cannot represent even the slowest mode:
+                           refused
+shortest period T_min      fewer than :data:`STEPS_PER_PERIOD` steps per T_min: warning (the
+                           highest modes are distorted; implicit schemes stay stable)
+contact duration t_c       t_c ≈ π √(m_eff / k) (half a period of the stiffest corner's
+                           contact oscillation; :func:`~.contact_params.effective_masses`):
+                           a fixed step longer than t_c skips through impacts: warning with
+                           the step that would resolve them (compliant engines only)
+output step                longer than the analysis (only t = 0 stored): refused; fewer than
+                           :data:`MIN_OUTPUT_ROWS` rows: warning; more than
+                           :data:`MAX_OUTPUT_ROWS` rows (memory): refused
+=========================  ================================================================
+
+The findings are data (:class:`Finding`, :class:`Plausibility`); :func:`enforce` turns them
+into warnings and a :class:`~.errors.SceneError` for the CLI and, later, the engines' shared
+validation. The engines' steps are read from the engine registry (each engine declares its
+step field and whether its contact is compliant).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import SceneError
+from .scene import Scene
+
+#: fewest steps an analysis may hold (fewer resolve no history at all)
+MIN_STEPS = 10
+#: fewest steps per shortest natural period before a warning
+STEPS_PER_PERIOD = 10
+#: fewest output rows before a warning (a history needs a few points)
+MIN_OUTPUT_ROWS = 10
+#: most output rows per run (≈ 0.5 GB in memory at 30 columns, ~1 GB of CSV)
+MAX_OUTPUT_ROWS = 2_000_000
+#: penetration at which the Hertz secant stiffness is taken for the contact duration [m]
+HERTZ_SECANT_DEPTH = 0.01
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One plausibility problem: ``level`` is ``"error"`` (refused) or ``"warning"``."""
+
+    level: str
+    field: str
+    message: str
+
+
+@dataclass
+class Plausibility:
+    """All findings for one scene, plus the numbers they were computed from."""
+
+    findings: list[Finding] = field(default_factory=list)
+    duration: float = math.nan
+    periods: tuple[float, ...] = ()
+    contact_duration: float = math.nan
+
+    @property
+    def errors(self) -> list[Finding]:
+        return [f for f in self.findings if f.level == "error"]
+
+    @property
+    def warnings(self) -> list[Finding]:
+        return [f for f in self.findings if f.level == "warning"]
+
+    @property
+    def ok(self) -> bool:
+        return not self.errors
+
+
+def engine_steps(scene: Scene, engines: Iterable[str]) -> list[tuple[str, str, float, bool]]:
+    """``(engine, step field, step [s], compliant contact?)`` of each fixed-step engine, as the
+    engines declare them (:meth:`deckpound.engine_contract.Engine.fixed_step`)."""
+    from deckpound.engines import get_engine
+
+    out = []
+    for name in engines:
+        e = get_engine(name)
+        settings = e.settings_of(scene)
+        h = e.fixed_step(settings)
+        if h is not None:
+            where = f"{e.settings_field}.{e.step_field}" if e.settings_field else e.step_field
+            out.append((name, where, h, e.compliant_contact))
+    return out
+
+
+def contact_duration(scene: Scene) -> float:
+    """Duration of the shortest corner contact, π √(m_eff / k_eff) [s].
+
+    k_eff is the contact stiffness (K1 of the bilinear law); for the Hertz laws the secant
+    stiffness k·δ^(n−1) at δ = :data:`HERTZ_SECANT_DEPTH`.
+    """
+    from .contact_params import effective_masses
+
+    ct = scene.contact
+    k = ct.stiffness
+    if ct.law in ("hertz", "hertz-damp"):
+        k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
+    m = float(np.min(effective_masses(scene)))
+    return float(math.pi * math.sqrt(m / k)) if k > 0 and m > 0 else math.nan
+
+
+def _source(scene: Scene, motion) -> str:
+    if scene.run.duration is not None:
+        return f"run.duration = {scene.run.duration:g} s"
+    return f"the record length {motion.duration:g} s"
+
+
+def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Plausibility:
+    """Every plausibility finding for ``scene`` run by ``engines`` (see the module table)."""
+    from .excitation import analysis_duration, support_motion
+    from .mechanics import natural_modes
+
+    if engines is None:
+        from deckpound.engines import engine_names
+
+        engines = engine_names()
+    engines = tuple(engines)
+    if motion is None:
+        motion = support_motion(scene)
+    report = Plausibility(duration=analysis_duration(scene, motion))
+    add = report.findings.append
+    D, src = report.duration, _source(scene, motion)
+    steps = engine_steps(scene, engines)
+
+    for _, name, h, _ in steps:
+        if h * MIN_STEPS > D:
+            where = "run.duration" if scene.run.duration is not None else name
+            add(Finding("error", where, f"the analysis ({src}) holds only {D / h:.3g} steps of "
+                        f"{name} = {h:g} s (at least {MIN_STEPS} are needed to resolve a "
+                        f"history); give a step <= {D / MIN_STEPS:.3g} s or a longer "
+                        "analysis"))
+    if any(f.level == "error" for f in report.findings):
+        return report  # the other checks assume at least one step
+
+    periods = natural_modes(scene).periods
+    report.periods = tuple(float(T) for T in periods)
+    if not np.all(np.isfinite(periods)):
+        add(Finding("error", "scene", "the masses and stiffnesses give non-finite natural "
+                    f"periods ({', '.join(f'{T:g}' for T in periods)} s): a mechanism or "
+                    "extreme values; check them"))
+        return report
+    t1, tmin = float(np.max(periods)), float(np.min(periods))
+    for _, name, h, _ in steps:
+        if h > t1 / 2:
+            add(Finding("error", name, f"{name} = {h:g} s cannot represent even the "
+                        f"fundamental period T1 = {t1:.4g} s of the contact-free model "
+                        f"(at least 2 steps per period); it must be <= {t1 / 2:.4g} s"))
+        elif h > tmin / STEPS_PER_PERIOD:
+            add(Finding("warning", name, f"{name} = {h:g} s resolves the shortest natural "
+                        f"period T = {tmin:.4g} s with only {tmin / h:.3g} steps (>= "
+                        f"{STEPS_PER_PERIOD} recommended, i.e. <= "
+                        f"{tmin / STEPS_PER_PERIOD:.3g} s): the highest modes are distorted"))
+
+    tc = contact_duration(scene)
+    report.contact_duration = tc
+    if math.isfinite(tc):
+        for _, name, h, compliant in steps:
+            if compliant and h > tc:
+                add(Finding("warning", name, f"contacts last about {tc:.3g} s "
+                            f"(contact.stiffness = {scene.contact.stiffness:g}, the lightest "
+                            f"corner's effective mass), shorter than {name} = {h:g} s: impacts "
+                            f"are not resolved and their forces depend on the step; use a step "
+                            f"<= {tc / 10:.3g} s, compliance.integrator = 'adaptive', or the "
+                            "nonsmooth engine (rigid limit)"))
+
+    out_dt = scene.run.output_dt
+    if out_dt > D:
+        add(Finding("error", "run.output_dt", f"run.output_dt = {out_dt:g} s is longer than the "
+                    f"analysis ({src}): the result would hold the single row t = 0; it must be "
+                    f"<= {D / MIN_OUTPUT_ROWS:.3g} s for {MIN_OUTPUT_ROWS} rows"))
+    else:
+        # each engine stores every round(output_dt / h)-th step (engines.output_stride)
+        stored = [max(1, round(out_dt / h)) * h for _, _, h, _ in steps] or [out_dt]
+        most, fewest = int(D / min(stored)) + 1, int(D / max(stored)) + 1
+        if most > MAX_OUTPUT_ROWS:
+            add(Finding("error", "run.output_dt", f"run.output_dt = {out_dt:g} s over {D:g} s "
+                        f"stores {most:.3g} rows per run (at most {MAX_OUTPUT_ROWS:.0e}); it "
+                        f"must be >= {D / MAX_OUTPUT_ROWS:.3g} s"))
+        elif fewest < MIN_OUTPUT_ROWS:
+            add(Finding("warning", "run.output_dt", f"run.output_dt = {out_dt:g} s over "
+                        f"{D:g} s stores only {fewest} rows (peaks between them are missed); "
+                        f"use <= {D / MIN_OUTPUT_ROWS:.3g} s"))
+        for _, name, h, _ in steps:
+            if out_dt < 0.5 * h:
+                add(Finding("warning", "run.output_dt", f"run.output_dt = {out_dt:g} s is "
+                            f"shorter than {name} = {h:g} s: output is stored every step "
+                            f"({h:g} s) instead"))
+    return report
+
+
+def enforce(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Plausibility:
+    """:func:`check`, then warn about each warning and raise the first error as SceneError."""
+    report = check(scene, motion, engines)
+    for f in report.warnings:
+        warnings.warn(f"{f.field}: {f.message}", stacklevel=2)
+    if report.errors:
+        first = report.errors[0]
+        raise SceneError(first.field, first.message)
+    return report

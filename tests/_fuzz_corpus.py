@@ -1,0 +1,384 @@
+"""The generated CLI fuzz corpus of issue 16: deterministic cases, no randomness at run time.
+
+:func:`generate` returns every case (> 3,000), grouped in families:
+
+============  ===============================================================================
+set           ``scene validate`` with one ``--set PATH=VALUE`` per leaf field of the benchmark
+              and per hostile value (NaN, ±inf, 2^63, 1e308, a 401-digit integer, wrong types)
+file          ``scene validate`` of mutated TOML files: deep nesting (arrays, inline tables,
+              headers, dotted keys), unknown keys in every table, tables replaced by scalars,
+              tables and keys deleted, truncation, junk bytes, encodings
+override      malformed ``--set`` paths and values
+path          every output command against hostile ``-o`` targets: below a file, a file in
+              place of a folder, symbolic links (to folders, files, nowhere), ``/proc``,
+              ``/sys``, ``/dev/full``, existing folders (:mod:`tests._fuzz_outputs`)
+fault         faults injected into a command: full disk at the k-th write or fsync, a failing
+              rename, a read-only folder, ``EACCES``, out of memory, Ctrl-C, stdout full
+              (:mod:`tests._fuzz_outputs`)
+engine        steps and output rates against the analysis length (30 s step on a short record,
+              output step longer than the run, record shorter than one step)
+vtk           ``export-vtk`` of damaged result folders
+name          hostile scene names (TeX, control characters) through every figure
+option        bad option values (--workers, --every, --timeout, --scheduler, --engines)
+============  ===============================================================================
+
+Each :class:`Case` states its command line (``{tmp}`` is the case's own folder), the files,
+folders and links to create first, an injected fault, the output it must leave whole or
+absent, whether success would be silent nonsense, and (where the contract fixes it) the exit
+statuses allowed. :mod:`tests._fuzz_run` runs and classifies them. Engine runs are tiny
+(0.3 s records).
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+
+import tomli_w
+from deckpound.models._fields import to_mapping
+from deckpound.models.scene_io import load_scene, scene_to_toml
+
+SHORT = ("--set", "excitation.duration=0.3")
+ENGINE_NAMES = ("opensees", "compliance", "nonsmooth")
+OUT = "{tmp}/out"
+
+
+@dataclass(frozen=True)
+class Case:
+    """One fuzz case (see the module docstring)."""
+
+    id: str
+    family: str
+    argv: tuple[str, ...]
+    files: tuple[tuple[str, bytes], ...] = ()
+    dirs: tuple[str, ...] = ()
+    links: tuple[tuple[str, str], ...] = ()
+    setup: tuple[str, ...] = ()        # named steps: "result" copies a tiny run into {tmp}/res
+    fault: str = ""                    # see tests._fuzz_outputs.FAULTS
+    target: str = ""                   # output path checked for partial output
+    target_kind: str = ""              # "dir" | "file"
+    nonsense: bool = False             # exit status 0 would be silent nonsense
+    expect: tuple[int, ...] = ()       # allowed exit statuses (empty: any clean one)
+    weight: int = field(default=1, compare=False)  # rough cost, for the quick subset
+
+
+def _leaves(obj, prefix=""):
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            yield from _leaves(v, f"{prefix}.{k}" if prefix else k)
+    elif isinstance(obj, list) and obj and isinstance(obj[0], dict):
+        for i, v in enumerate(obj):
+            yield from _leaves(v, f"{prefix}[{i}]")
+    else:
+        yield prefix, obj
+
+
+BENCH = to_mapping(load_scene("saiidi-4span", ["excitation.duration=0.3"]))
+LEAVES = [(p, v) for p, v in _leaves(BENCH) if not p.startswith("notes")]
+BENCH_TOML = scene_to_toml(load_scene("saiidi-4span", ["excitation.duration=0.3"]))
+
+# (TOML text, kind): kind "nonfinite" and "type:<t>" make success nonsense for numeric leaves
+VALUES = [("nan", "nonfinite"), ("inf", "nonfinite"), ("-inf", "nonfinite"), ("-1", "number"),
+          ("0", "number"), ("-0.0", "number"), ("1e308", "huge"), ("1e-320", "tiny"),
+          ("9223372036854775808", "number"), ("1" + "0" * 400, "huge"), ("3.5", "number"),
+          ("1e30", "number"), ('"x"', "str"), ("true", "bool"), ("[]", "list"),
+          ("[[1, 2]]", "list"), ("{a = 1}", "table"), ('"$\\\\frac{$"', "str")]
+
+
+def _type_of(value) -> str:
+    if isinstance(value, bool):
+        return "bool"
+    if isinstance(value, (int, float)):
+        return "number"
+    if isinstance(value, str):
+        return "str"
+    return "list"
+
+
+def _set_family() -> list[Case]:
+    cases = []
+    for path, value in LEAVES:
+        leaf = _type_of(value)
+        for text, kind in VALUES:
+            nonsense = leaf == "number" and kind in ("nonfinite", "huge", "str", "bool", "list",
+                                                    "table")
+            nonsense |= leaf in ("str", "bool") and kind not in (leaf,)
+            nonsense &= not (leaf == "str" and kind == "str")
+            cases.append(Case(f"set:{path}={text[:24]}", "set",
+                              ("scene", "validate", "saiidi-4span", *SHORT, "--set",
+                               f"{path}={text}"), nonsense=nonsense, expect=(0, 2)))
+    return cases
+
+
+def _nested(kind: str, depth: int) -> str:
+    if kind == "array":
+        return "name = \"x\"\nv = " + "[" * depth + "1" + "]" * depth + "\n"
+    if kind == "inline":
+        return "v = " + "{a = " * depth + "1" + "}" * depth + "\n"
+    if kind == "header":
+        return "[" + ".".join(["a"] * depth) + "]\nb = 1\n"
+    return ".".join(["a"] * depth) + " = 1\n"
+
+
+def _file_case(cid: str, text: str | bytes, nonsense: bool = False) -> Case:
+    data = text.encode("utf-8", "surrogateescape") if isinstance(text, str) else text
+    return Case(cid, "file", ("scene", "validate", "{tmp}/scene.toml"),
+                files=(("scene.toml", data),), nonsense=nonsense, expect=(0, 2))
+
+
+def _file_family() -> list[Case]:
+    cases = []
+    for kind in ("array", "inline", "header", "dotted"):
+        for depth in (8, 31, 33, 64, 500, 5000, 100_000):
+            cases.append(_file_case(f"file:nest-{kind}-{depth}", BENCH_TOML + _nested(kind, depth),
+                                    nonsense=True))
+            cases.append(_file_case(f"file:nest-only-{kind}-{depth}", _nested(kind, depth),
+                                    nonsense=True))
+    headers = [ln for ln in BENCH_TOML.splitlines() if ln.startswith("[")]
+    for h in sorted(set(headers)):
+        for key in ("colour", "Mass", '"mass "', '"x-y"', "ünïcode", "0"):
+            text = BENCH_TOML.replace(h + "\n", f"{h}\n{key} = 1\n", 1)
+            cases.append(_file_case(f"file:unknown-key-{h}-{key}", text, nonsense=True))
+    for top in BENCH:
+        for value in (1, "x", [], [1, 2], {}, True, 1.5, {"a": {"b": 1}}, [{"a": 1}]):
+            data = dict(BENCH)
+            data[top] = value
+            same_type = type(value) is type(BENCH[top])
+            cases.append(_file_case(f"file:swap-{top}-{value!r}"[:80], tomli_w.dumps(data),
+                                    nonsense=not same_type and top != "notes"))
+        data = dict(BENCH)
+        del data[top]
+        cases.append(_file_case(f"file:drop-{top}", tomli_w.dumps(data)))
+    for path, _ in LEAVES:
+        data = tomllib.loads(BENCH_TOML)
+        node, parts = data, path.replace("]", "").split(".")
+        for part in parts[:-1]:
+            name, _, idx = part.partition("[")
+            node = node[name][int(idx)] if idx else node[name]
+        name, _, idx = parts[-1].partition("[")
+        del node[name]
+        cases.append(_file_case(f"file:delete-{path}", tomli_w.dumps(data)))
+    raw = BENCH_TOML.encode()
+    for i in range(24):
+        cut = (i * 7919) % len(raw)
+        cases.append(_file_case(f"file:truncate-{cut}", raw[:cut]))
+        junk = bytes((i * 37 + j * 11) % 256 for j in range(1 + i % 7))
+        cases.append(_file_case(f"file:junk-{i}", raw[:cut] + junk + raw[cut:]))
+    for cid, data in (("empty", b""), ("spaces", b"   \n\t\n"), ("bom", b"\xef\xbb\xbf" + raw),
+                      ("crlf", raw.replace(b"\n", b"\r\n")), ("utf16", BENCH_TOML.encode("utf-16")),
+                      ("latin1", BENCH_TOML.replace("bridge", "brücke").encode("latin-1")),
+                      ("nul", raw.replace(b"\n", b"\x00\n", 3)),
+                      ("long-description", BENCH_TOML.replace(
+                          'description = "', 'description = "' + "x" * 2_000_000, 1).encode()),
+                      ("dup-table", raw + b"\n[deck]\nlength = 1.0\n"),
+                      ("dup-key", raw.replace(b"mass = 140.5", b"mass = 140.5\nmass = 1.0"))):
+        cases.append(_file_case(f"file:{cid}", data))
+    for n in (0, 1, 2, 40):
+        data = dict(BENCH)
+        data["bents"] = [BENCH["bents"][0]] * n
+        cases.append(_file_case(f"file:bents-{n}-copies", tomli_w.dumps(data)))
+        data = dict(BENCH)
+        data["seats"] = [BENCH["seats"][0]] * n
+        cases.append(_file_case(f"file:seats-{n}", tomli_w.dumps(data)))
+    return cases
+
+
+BAD_PATHS = ["", ".", "..", "a..b", "[0]", "bents[x].station", "bents[-1].station", "bents[0][0]",
+             "deck[0]", "seats[99999999999999999999].gap", "notes", "notes.deck.mass", "notes.x",
+             "bents", "seats", "deck", "0deck", "déck.mass", "deck .mass", " deck.mass",
+             "deck.mass.x", "deck.mass[0]", "excitation.file", "name", "a" * 1000,
+             "bents[0].x.stiffness.y", "sequence.pgas[0]", "sequence.pgas[10]",
+             "damping.modes[1]", "damping.modes[9]", "run", "run.duration.x", "opensees.mode",
+             "contact.law", "bents[3].name", "bents[0].name", "seats[2].gap", "excitation.kind",
+             "excitation.file_x", "notes.deck"]
+BAD_OVERRIDE_VALUES = ["1", "nan", "[" * 50 + "]" * 50, "", '"unterminated', "csv", "{}"]
+
+
+def _override_family() -> list[Case]:
+    cases = []
+    for path in BAD_PATHS:
+        for value in BAD_OVERRIDE_VALUES:
+            cases.append(Case(f"override:{path[:30]}={value[:12]}", "override",
+                              ("scene", "validate", "saiidi-4span", *SHORT, "--set",
+                               f"{path}={value}"), expect=(0, 2)))
+        cases.append(Case(f"override:{path[:30]}-no-equals", "override",
+                          ("scene", "validate", "saiidi-4span", *SHORT, "--set", path),
+                          expect=(2,)))
+    return cases
+
+
+def _engine_family() -> list[Case]:
+    cases = []
+    failing = ("opensees.tolerance=1e-30", "opensees.max_iterations=1", "opensees.fallback=none",
+               "compliance.tolerance=1e-30", "compliance.max_iterations=1",
+               "nonsmooth.tolerance=1e-30", "nonsmooth.max_iterations=1", "excitation.pga=2",
+               "seats[0].gap=0")
+    sets = tuple(a for f in failing for a in ("--set", f))
+    for engine in ENGINE_NAMES:  # the engine cannot converge: exit 1, the failed run written
+        for substeps in ("2", "10"):
+            cases.append(Case(f"engine:fails:{engine}:{substeps}", "engine",
+                              ("run", "saiidi-4span", *SHORT, *sets, "--set",
+                               f"opensees.substeps={substeps}", "--engine", engine, "-o", OUT),
+                              target=OUT, target_kind="dir", expect=(1,)))
+    # (setting, kind): "field" is refused by field validation whatever the engine, "plaus" by
+    # the plausibility checks of the engines that use it, "ok" runs
+    grid = [("opensees.dt=30", "plaus"), ("opensees.dt=0.3", "plaus"),
+            ("opensees.dt=0.31", "plaus"), ("opensees.dt=0.2", "plaus"),
+            ("nonsmooth.h=30", "plaus"), ("nonsmooth.h=0.5", "plaus"),
+            ("compliance.dt=30", "plaus"), ("compliance.dt=0.29", "plaus"),
+            ("run.duration=1e-4", "plaus"), ("run.duration=0.0005", "plaus"),
+            ("run.output_dt=1e25", "plaus"), ("run.output_dt=100", "plaus"),
+            ("run.output_dt=0.31", "plaus"), ("excitation.duration=0.0004", "field"),
+            ("opensees.max_iterations=9223372036854775808", "field"),
+            ("opensees.max_iterations=1e308", "field"),
+            ("compliance.max_iterations=1e308", "field"),
+            ("nonsmooth.max_iterations=18446744073709551616", "field"),
+            ("opensees.substeps=1e9", "field"),
+            ("damping.modes=[1, 9223372036854775807]", "field"),
+            ("run.output_dt=0.001", "ok"), ("run.duration=0.2", "ok"),
+            ("contact.stiffness=1e14", "ok"), ("opensees.dt=0.01", "ok")]
+    for engine in ("opensees", "compliance", "nonsmooth"):
+        for setting, kind in grid:
+            for cmd in ("validate", "run"):
+                argv = (("scene", "validate", "saiidi-4span", *SHORT, "--set", setting)
+                        if cmd == "validate" else
+                        ("run", "saiidi-4span", *SHORT, "--set", setting, "--engine", engine,
+                         "-o", OUT))
+                if cmd == "validate" and engine != "opensees":
+                    continue
+                owner = setting.split(".")[0]
+                # a run checks its own engine's settings (and the shared ones) only
+                bad = kind == "field" or (kind == "plaus" and (
+                    cmd == "validate" or owner not in ENGINE_NAMES or owner == engine))
+                cases.append(Case(f"engine:{cmd}:{engine}:{setting}", "engine", argv,
+                                  target=OUT if cmd == "run" else "", target_kind="dir"
+                                  if cmd == "run" else "", nonsense=bad,
+                                  expect=(2,) if bad else (0, 1)))
+    return cases
+
+
+def _vtk_family() -> list[Case]:
+    damaged = [("json-truncated", "opensees.json", b'{"engine": "opensees", "sce'),
+               ("json-empty", "opensees.json", b""), ("json-list", "opensees.json", b"[1, 2]"),
+               ("json-nested", "opensees.json", b"[" * 100_000 + b"]" * 100_000),
+               ("json-binary", "opensees.json", bytes(range(256))),
+               ("json-no-scene", "opensees.json", b'{"engine": "opensees"}'),
+               ("json-bad-scene", "opensees.json", b'{"scene": {"deck": 1}}'),
+               ("json-scene-nan", "opensees.json", b'{"scene": NaN}'),
+               ("csv-empty", "opensees.csv", b""), ("csv-header-only", "opensees.csv", b"t,deck_x\n"),
+               ("csv-binary", "opensees.csv", bytes(range(256)) * 4),
+               ("csv-nan", "opensees.csv", None), ("csv-text", "opensees.csv", b"t,deck_x\na,b\n"),
+               ("csv-ragged", "opensees.csv", b"t,deck_x\n0,1,2,3\n0.1\n"),
+               ("csv-decreasing", "opensees.csv", None), ("csv-missing-col", "opensees.csv", None)]
+    cases = []
+    for cid, name, data in damaged:
+        for every in ("1", "7"):
+            files = () if data is None else ((f"res/{name}", data),)
+            cases.append(Case(f"vtk:{cid}:every{every}", "vtk",
+                              ("export-vtk", "{tmp}/res", "--every", every, "-o", OUT),
+                              setup=("result", f"damage:{cid}") if data is None else ("result",),
+                              files=files, target=OUT, target_kind="dir", nonsense=True,
+                              expect=(2,), weight=2))
+    for every in ("0", "-3", "1000000000000", "x"):
+        cases.append(Case(f"vtk:every={every}", "vtk",
+                          ("export-vtk", "{tmp}/res", "--every", every, "-o", OUT),
+                          setup=("result",), target=OUT, target_kind="dir", expect=(0, 2)))
+    cases.append(Case("vtk:not-a-folder", "vtk", ("export-vtk", "{tmp}/nothing", "-o", OUT),
+                      target=OUT, target_kind="dir", expect=(2,)))
+    return cases
+
+
+NAMES = ["$\\\\frac{$", "$", "$$", "$x^$", "\\\\$", "$\\\\undefined{x}$", "a\\nb", "\\u0000",
+         "nul\\u0000in", "\\u001b[31mred", "😀 émoji", "\\u202eRTL", "x" * 3000, "%s %d {0}",
+         "<b>&amp;</b>", "_^{}", "\\\\", "'; exec rm -rf /", "\\t\\r"]
+
+
+def _name_family() -> list[Case]:
+    cases = []
+    for i, name in enumerate(NAMES):
+        cases.append(Case(f"name:{i}:plot", "name",
+                          ("excitation", "plot", "saiidi-4span", *SHORT, "--set",
+                           f'name="{name}"', "-o", "{tmp}/out/exc.png"),
+                          target="{tmp}/out/exc.png", target_kind="file", expect=(0,), weight=8))
+        cases.append(Case(f"name:{i}:validate", "name",
+                          ("scene", "validate", "saiidi-4span", *SHORT, "--set", f'name="{name}"'),
+                          expect=(0, 2)))
+    for i in (0, 1, 7, 12):  # every figure of compare, with the worst names
+        cases.append(Case(f"name:{i}:compare", "name",
+                          ("compare", "saiidi-4span", *SHORT, "--set", f'name="{NAMES[i]}"',
+                           "--engines", "compliance,nonsmooth", "--workers", "1",
+                           "--no-progress", "-o", OUT),
+                          target=OUT, target_kind="dir", expect=(0,), weight=25))
+    return cases
+
+
+def _option_family() -> list[Case]:
+    cases = []
+    base = ("compare", "saiidi-4span", *SHORT, "--engines", "nonsmooth", "--no-progress",
+            "-o", OUT)
+    for opt, values in (("--workers", ["0", "-1", "abc", "1e9", "99999", "2.5", ""]),
+                        ("--scheduler", ["foo", "tcp://", "tcp://host", "tcp://h:0",
+                                         "tcp://h:99999", "http://x:1", "tcp://a b:1", "",
+                                         "tcp://127.0.0.1:1"]),
+                        ("--engines", ["", ",,", "x", "opensees,,x", "OpenSees"])):
+        for v in values:
+            argv = tuple(a for a in base if a not in ("--engines", "nonsmooth")) \
+                if opt == "--engines" else base
+            fault = "connect-timeout" if v == "tcp://127.0.0.1:1" else ""
+            cases.append(Case(f"option:{opt}={v[:20]}", "option", (*argv, opt, v), fault=fault,
+                              target=OUT, target_kind="dir",
+                              expect=(3,) if fault else (0, 2), weight=3 if fault else 1))
+    for v in ("nan", "inf", "-1", "0", "abc", "-inf", "1e400"):
+        cases.append(Case(f"option:stress-timeout={v}", "option",
+                          ("stress", "--quick", "--timeout", v, "-o", OUT), target=OUT,
+                          target_kind="dir", expect=(2,)))
+    for v in ("0", "-5", "abc", "100000"):
+        cases.append(Case(f"option:bench-repeats={v}", "option",
+                          ("bench", "--quick", "--repeats", v, "-o", OUT), target=OUT,
+                          target_kind="dir", expect=(2,)))
+    for opt, v in (("--states", "-5"), ("--states", "0"), ("--states", "10000000000000"),
+                   ("--seed", "-1"), ("--seed", "1e3"), ("--states", "nan")):
+        cases.append(Case(f"option:verify-takeda{opt}={v}", "option",
+                          ("verify", "takeda", opt, v), nonsense=True, expect=(2,)))
+    return cases
+
+
+def families() -> dict:
+    """Family name -> case builder (the output families live in tests._fuzz_outputs)."""
+    from _fuzz_outputs import fault_family, path_family
+
+    return {"set": _set_family, "file": _file_family, "override": _override_family,
+            "path": path_family, "fault": fault_family, "engine": _engine_family,
+            "vtk": _vtk_family, "name": _name_family, "option": _option_family}
+
+
+def generate() -> list[Case]:
+    """Every case of the corpus, in a fixed order; ids are unique."""
+    cases = [c for make in families().values() for c in make()]
+    seen, out = set(), []
+    for c in cases:
+        cid, n = c.id, 1
+        while cid in seen:
+            n += 1
+            cid = f"{c.id}#{n}"
+        seen.add(cid)
+        out.append(c if cid == c.id else Case(**{**c.__dict__, "id": cid}))
+    return out
+
+
+def quick_subset(cases: list[Case], budget: int = 200) -> list[Case]:
+    """A deterministic, stratified sample of about ``budget`` cases (every family, costly
+    families thinned by their weight)."""
+    by_family: dict[str, list[Case]] = {}
+    for c in cases:
+        by_family.setdefault(c.family, []).append(c)
+    share = {"set": 45, "file": 30, "override": 15, "path": 30, "fault": 35, "engine": 15,
+             "vtk": 12, "name": 6, "option": 12}
+    out = []
+    for fam, members in by_family.items():
+        cheap = [c for c in members if c.weight <= 2]
+        pool = cheap if fam not in ("name",) else [c for c in members if c.weight <= 8][:4]
+        k = min(share.get(fam, 10), len(pool))
+        step = max(1, len(pool) // max(k, 1))
+        out += pool[::step][:k]
+    return out[:budget]
