@@ -49,7 +49,9 @@ class ResultCache:
     """A folder of finished results, one sub-folder per case key.
 
     ``get(key, engine)`` returns the cached :class:`Result` or None (and counts ``hits`` and
-    ``misses``); ``put(key, result)`` stores one. See the module docstring for the guarantees.
+    ``misses``, in total and per engine in ``by_engine[engine] = [hits, misses]``: the report
+    shows that changing one engine's settings re-runs that engine only); ``put(key, result)``
+    stores one. See the module docstring for the guarantees.
     """
 
     def __init__(self, folder: str | Path):
@@ -57,6 +59,7 @@ class ResultCache:
         self.hits = 0
         self.misses = 0
         self.corrupt = 0
+        self.by_engine: dict[str, list[int]] = {}
 
     def path(self, key: str) -> Path:
         if not key or "/" in key or key.startswith(".") or is_temporary(key):
@@ -73,10 +76,13 @@ class ResultCache:
             warnings.warn(f"result cache entry {key[:16]} in {str(self.folder)!r} is damaged "
                           f"({err}); recomputing it", stacklevel=2)
             result = None
+        counts = self.by_engine.setdefault(engine, [0, 0])
         if result is None:
             self.misses += 1
+            counts[1] += 1
         else:
             self.hits += 1
+            counts[0] += 1
         return result
 
     def _load(self, entry: Path, engine: str) -> Result | None:

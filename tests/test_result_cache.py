@@ -191,3 +191,20 @@ def test_workers_die_with_their_parent(tmp_path, mode):
                 os.kill(int(p.name), signal.SIGKILL)
             except ProcessLookupError:
                 pass
+
+
+def test_changing_one_engines_settings_reruns_only_that_engine(tmp_path):
+    """Issue 11: the cache key is the physics plus that engine's settings, so changing
+    nonsmooth.h re-runs the nonsmooth case and serves the other engines from the cache."""
+    from deckpound.compare.cases import Case, run_cases
+    from deckpound.compare.result_cache import ResultCache
+    from deckpound.models.scene_io import load_scene
+
+    sc = load_scene("saiidi-4span", ["run.duration=0.2"])
+    engines = ("opensees", "compliance", "nonsmooth")
+    run_cases([Case(e, e, sc) for e in engines], cache=ResultCache(tmp_path), workers=1,
+              progress=False)
+    changed = load_scene("saiidi-4span", ["run.duration=0.2", "nonsmooth.h=5e-4"])
+    cache = ResultCache(tmp_path)
+    run_cases([Case(e, e, changed) for e in engines], cache=cache, workers=1, progress=False)
+    assert cache.by_engine == {"opensees": [1, 0], "compliance": [1, 0], "nonsmooth": [0, 1]}
