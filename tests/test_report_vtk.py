@@ -255,3 +255,35 @@ def test_compare_then_vtk_series_readable(tmp_path):
         assert len(sets) == 11
         mesh = meshio.read(pvd / sets[-1].get("file"))
         assert mesh.points.shape == (12, 3) and len(mesh.cells[0].data) == 3
+
+
+def test_report_of_a_real_record_names_its_files_and_applies_its_labels(tmp_path):
+    """Issue 13: a report for an AT2 scene names the record files with their SHA-256, says the
+    labels were applied, never calls the record synthetic, and marks the benchmark's notes on
+    the excitation as written for another record."""
+    import hashlib
+    import warnings
+
+    from _record_helpers import quake, record_scene, write_at2
+
+    px = write_at2(tmp_path / "x.at2", quake(401, 0.005, peak=0.44, seed=1), dt=0.005)
+    py = write_at2(tmp_path / "y.at2", quake(397, 0.005, peak=0.31, seed=2), dt=0.005)
+    scene = record_scene("at2", px, py, None, "sequence.pgas=[0.25, 1.0]", "compliance.dt=0.001",
+                         "run.output_dt=0.01")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        md = run_paper(scene, tmp_path / "rep", quick=True, workers=1, studies=("friction",),
+                       progress=False, engines=("compliance",), reference="compliance")
+    text = md.read_text()
+    exc = section(text, "Excitation")
+    for p in (px, py):
+        assert str(p.resolve()) in exc and hashlib.sha256(p.read_bytes()).hexdigest() in exc
+    assert "PEER AT2 record files" in exc and "padded with zeros" in exc
+    assert "synthetic" not in exc.lower()
+    assert "Applied transverse PGA equals the run's label in every run" in exc
+    assert "| 2 | 1 | 1 | 1 | 1.2 | 1.2 |" in exc   # run 2: label, targets and applied PGA
+    notes = section(text, "The scene's notes")
+    assert "| excitation.kind | at2 | ASSUMPTION: a seeded synthetic" in notes
+    assert "synthetic (built-in saiidi-4span)" in notes
+    seq = read_table(tmp_path / "rep" / "tables" / "sequence.csv")
+    np.testing.assert_allclose(seq["applied_pga_y"], seq["pga"], rtol=0.01)
