@@ -6,13 +6,14 @@ from pathlib import Path
 
 import pandas as pd
 
+from deckpound.engines import DEFAULT_REFERENCE
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
 from . import figures
 from .align import align, write_tables
 from .cases import Case, ResultCache, run_cases
-from .metrics import compare_pair, summary
+from .metrics import metrics_against, summary
 
 QUANTITIES = ["deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel", "gap_c1", "gap_c3"]
 
@@ -20,11 +21,15 @@ QUANTITIES = ["deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_
 def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
                 measured: Result | None = None, workers: int | None = None,
                 scheduler: str | None = None, cache_dir: str | Path | None = None,
-                progress: bool = True) -> str:
-    """Run, write results, aligned tables, metrics (vs the first engine and vs measured data)
-    and figures into ``out``; returns a printable summary."""
+                progress: bool = True, reference: str | None = None) -> str:
+    """Run, write results, aligned tables, metrics (vs ``reference`` — default the registry's
+    reference engine if it runs, else the first — and vs measured data) and figures into
+    ``out``; returns a printable summary."""
     out = Path(out)
     cache = ResultCache(cache_dir if cache_dir is not None else out / "cache")
+    ref = reference or (DEFAULT_REFERENCE if DEFAULT_REFERENCE in engines else engines[0])
+    if ref not in engines:
+        engines = [ref] + list(engines)
     cases = [Case(e, e, scene) for e in engines]
     results = run_cases(cases, cache=cache, workers=workers, scheduler=scheduler,
                         progress=progress, title="engines")
@@ -36,18 +41,11 @@ def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
     aligned = align(everything, columns=[q for q in QUANTITIES
                                          if all(q in r.columns for r in everything.values())])
     write_tables(aligned, out)
-    rows = []
-    refs = [engines[0]] + (["measured"] if measured is not None else [])
-    for ref in refs:
-        for label in everything:
-            if label == ref:
-                continue
-            qs = [q for q in aligned[label].columns if q != "t"]
-            m = compare_pair(everything[label], everything[ref], aligned[label], aligned[ref], qs)
-            m.insert(0, "reference", ref)
-            m.insert(0, "engine", label)
-            rows.append(m)
-    metrics = pd.concat(rows, ignore_index=True) if rows else pd.DataFrame()
+    parts = [metrics_against(everything, aligned, ref)]
+    if measured is not None:
+        parts.append(metrics_against(everything, aligned, "measured"))
+    metrics = pd.concat([p for p in parts if len(p)], ignore_index=True) \
+        if any(len(p) for p in parts) else pd.DataFrame()
     metrics.to_csv(out / "metrics.csv", index=False)
     figs = out / "figures"
     figures.histories(everything, scene, figs / "histories.png")
@@ -56,8 +54,10 @@ def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
     lines = []
     for label, r in results.items():
         s = summary(r, ["deck_theta", "deck_y_rel"])
-        lines.append(f"{label:11s} {r.meta.get('status')}: peak θ {1e3 * s['peak_deck_theta']:.3f} mrad, "
-                     f"peak y rel. tables {1e3 * s['peak_deck_y_rel']:.2f} mm, {s['gap_closures']} gap closures, "
-                     f"{r.meta.get('wall_time', float('nan')):.2f} s")
-    lines.append(f"wrote {out}")
+        lines.append(f"{label:11s} {r.meta.get('status')}: peak θ "
+                     f"{1e3 * s['peak_deck_theta']:.3f} mrad, peak y rel. tables "
+                     f"{1e3 * s['peak_deck_y_rel']:.2f} mm, {s['gap_closures']} gap closures, "
+                     f"run {r.meta.get('wall_time', float('nan')):.2f} s (+ compile "
+                     f"{r.meta.get('compile_time', 0.0):.2f} s)")
+    lines.append(f"metrics against {ref}; wrote {out}")
     return "\n".join(lines)

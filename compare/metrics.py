@@ -80,6 +80,24 @@ def compare_pair(test: Result, ref: Result, aligned_test: pd.DataFrame,
     return pd.DataFrame(rows)
 
 
+def metrics_against(results: dict[str, Result], aligned: dict[str, pd.DataFrame],
+                    reference: str, quantities: list[str] | None = None) -> pd.DataFrame:
+    """:func:`compare_pair` of every result against ``reference``, one frame (columns engine,
+    reference, quantity, ...); quantities default to the aligned columns."""
+    rows = []
+    for label in results:
+        if label == reference:
+            continue
+        qs = quantities if quantities is not None else [
+            q for q in aligned[label].columns if q != "t"]
+        m = compare_pair(results[label], results[reference], aligned[label], aligned[reference],
+                         list(qs))
+        m.insert(0, "reference", reference)
+        m.insert(0, "engine", label)
+        rows.append(m)
+    return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame()
+
+
 def measured_result(path, t_column: str = "t") -> Result:
     """Measured data a user supplies as CSV (columns named as result columns) as a Result."""
     from deckpound.models.errors import SceneError

@@ -20,7 +20,7 @@ from __future__ import annotations
 __version__ = "0.2.0"
 
 __all__ = [
-    "__version__", "load_scene", "run", "compare", "Comparison", "engines", "get_engine",
+    "__version__", "load_scene", "run", "compare", "Comparison", "available_engines", "get_engine",
     "register_engine", "Result", "Scene", "plan_of", "support_motion", "builtin_scenes",
 ]
 
@@ -35,7 +35,7 @@ _LAZY = {
     "load_scene": ("deckpound.api", "load_scene"),
     "run": ("deckpound.api", "run"),
     "compare": ("deckpound.api", "compare"),
-    "engines": ("deckpound.api", "engines"),
+    "available_engines": ("deckpound.api", "available_engines"),
     "builtin_scenes": ("deckpound.api", "builtin_scenes"),
 }
 

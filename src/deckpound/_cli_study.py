@@ -33,6 +33,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_scene_args(p)
     p.add_argument("--engines", default=None,
                    help="comma-separated engine names (default: every registered engine)")
+    p.add_argument("--reference", default=None, metavar="ENGINE",
+                   help="engine the others are compared with (default: opensees if run, "
+                   "else the first)")
     p.add_argument("--measured", default=None, metavar="CSV",
                    help="measured data (t + result column names) to compare against")
     p.add_argument("-o", "--output", required=True, metavar="DIR")
@@ -113,6 +116,8 @@ def _compare(args) -> int:
 
     scene = load_scene(args.scene, args.overrides)
     engines = _engines(args.engines)
+    if args.reference is not None:
+        _engines(args.reference)   # an unknown name is refused with the valid ones
     measured = None
     if args.measured:
         from deckpound.compare.metrics import measured_result
@@ -120,7 +125,7 @@ def _compare(args) -> int:
         measured = measured_result(args.measured)
     summary = run_compare(scene, engines, args.output, measured=measured, workers=args.workers,
                           scheduler=args.scheduler, cache_dir=args.cache,
-                          progress=not args.no_progress)
+                          progress=not args.no_progress, reference=args.reference)
     print(summary)
     return 0
 

@@ -1,6 +1,6 @@
 """The Python API behind ``import deckpound as dp`` (see the package docstring).
 
-Four verbs: :func:`load_scene`, :func:`run`, :func:`compare`, :func:`engines`. They are thin:
+Four verbs: :func:`load_scene`, :func:`run`, :func:`compare`, :func:`available_engines`. They are thin:
 scenes come from :mod:`deckpound.models.scene_io`, engines from the registry
 (:mod:`deckpound.engines`), alignment and metrics from :mod:`deckpound.compare`.
 """
@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-__all__ = ["load_scene", "run", "compare", "Comparison", "engines", "builtin_scenes"]
+__all__ = ["load_scene", "run", "compare", "Comparison", "available_engines", "builtin_scenes"]
 
 #: the quantities :func:`compare` aligns and scores unless told otherwise (relative
 #: displacements: what the gaps and springs see)
@@ -53,7 +53,7 @@ def builtin_scenes() -> list[str]:
     return builtin_scene_names()
 
 
-def engines() -> dict[str, str]:
+def available_engines() -> dict[str, str]:
     """Registered engines: name → one-line title."""
     from deckpound.engines import engine_names, get_engine
 
@@ -100,11 +100,9 @@ def compare(scene, engines: Iterable[str] | None = None, *, reference: str | Non
     against ``reference`` (default :data:`deckpound.engines.DEFAULT_REFERENCE`, or the first
     engine when that one is not run). ``cache`` is a result-cache folder (finished cases are
     never recomputed); ``workers`` local processes (1: in this process)."""
-    import pandas as pd
-
     from deckpound.compare.align import align
     from deckpound.compare.cases import Case, ResultCache, run_cases
-    from deckpound.compare.metrics import compare_pair
+    from deckpound.compare.metrics import metrics_against
     from deckpound.engines import DEFAULT_REFERENCE, engine_names, get_engine
 
     names = list(engines) if engines is not None else list(engine_names())
@@ -118,14 +116,6 @@ def compare(scene, engines: Iterable[str] | None = None, *, reference: str | Non
                         progress=False)
     qs = tuple(q for q in quantities if all(q in r.columns for r in results.values()))
     aligned = align(results, dt=dt, columns=list(qs))
-    rows = []
-    for n in names:
-        if n == ref:
-            continue
-        m = compare_pair(results[n], results[ref], aligned[n], aligned[ref], list(qs))
-        m.insert(0, "reference", ref)
-        m.insert(0, "engine", n)
-        rows.append(m)
-    metrics = pd.concat(rows, ignore_index=True) if rows else pd.DataFrame()
+    metrics = metrics_against(results, aligned, ref, list(qs))
     return Comparison(results=results, aligned=aligned, metrics=metrics, reference=ref,
                       quantities=qs)
