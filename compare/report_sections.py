@@ -169,6 +169,10 @@ def friction(d) -> list:
                  "forces over it (positive: towards the peak rotation), the corners in contact "
                  "at the peak, stick shares and first closures.")
     items.append(Bullets(tuple(_mechanism_sentences(d))))
+    contrast = _state_contrasts(d)
+    if contrast:
+        items.append("**The two start states side by side** (friction study):")
+        items.append(Bullets(tuple(contrast)))
     seq_mech = d.mech[d.mech["source"] == "sequence"] if len(d.mech) else d.mech
     if len(seq_mech):
         items.append(Bullets(tuple(text.impulse_agreement_sentences(eff, seq_mech))))
@@ -205,6 +209,28 @@ def _mechanism_sentences(d) -> list[str]:
         for _, row in rows.iterrows():
             out.append(text.mechanism_sentence(
                 row, f"friction study from {text.state_name(r.state.label)}"))
+    return out
+
+
+def _state_contrasts(d) -> list[str]:
+    """Per engine, the friction study at the sequence's μ from every state it was run from."""
+    runs = [r for r in d.studies if r.name == "friction"]
+    if len(runs) < 2 or not len(d.mech):
+        return []
+    mus = d.seq.loc[d.seq["mu"] > 0, "mu"]
+    mu = float(mus.iloc[0]) if len(mus) else 0.2
+    out = []
+    for engine in runs[0].table["engine"].unique():
+        parts = []
+        for r in runs:
+            eff = text.study_friction_effect(r.table)
+            e = eff[(eff["engine"] == engine) & np.isclose(eff["mu"], mu)]
+            m = d.mech[(d.mech["source"] == "friction study") & (d.mech["state"] == r.state.label)
+                       & (d.mech["engine"] == engine) & np.isclose(d.mech["mu"], mu)]
+            if len(e) and len(m):
+                parts.append((r.state, m.iloc[0], float(e["ratio"].iloc[0])))
+        if len(parts) == len(runs):
+            out.append(text.state_contrast_sentence(engine, mu, parts))
     return out
 
 

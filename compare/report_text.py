@@ -385,3 +385,26 @@ def headline_sentences(seq: pd.DataFrame, effect: pd.DataFrame, strongest: int,
     if never:
         out.append(f"No gap closes in any run for: {', '.join(never)}.")
     return out
+
+
+def state_contrast_sentence(engine: str, mu: float, parts: list[tuple]) -> str:
+    """One engine's friction study at one μ from each start state, side by side: ``parts`` is
+    a list of (StartState, mechanism row, ratio to μ = 0)."""
+    clauses = []
+    for state, row, ratio in parts:
+        sc = state.scene
+        word = direction(ratio)
+        effect = (f"changes the peak rotation by less than {short(100 * TOL)} %"
+                  if word == "unchanged" else f"{word} the peak rotation {ratio_text(ratio)}")
+        if word == "lowers":   # what friction does to the rotation that was the peak without it
+            jt, what = row["friction_impulse_ref"], "the frictionless peak's excursion"
+        else:
+            jt, what = row["friction_impulse"], "the peak excursion"
+        drive = (f", its impulse {'driving' if jt > 0 else 'resisting'} {what} "
+                 f"({jt:+.3g} kN·m·s)" if np.isfinite(jt) else "")
+        c1, c2 = row["contact_seat1"], row["contact_seat2"]
+        share = f", seat 1 taking {100 * c1 / (c1 + c2):.0f} % of the face contact time" \
+            if c1 + c2 > 0 else ""
+        clauses.append(f"from {state_name(state.label)} (gaps {1e3 * sc.seats[0].gap:.2f} and "
+                       f"{1e3 * sc.seats[1].gap:.2f} mm) friction {effect}{drive}{share}")
+    return f"{engine_label(engine)} at μ = {short(mu)}: " + "; ".join(clauses) + "."

@@ -20,7 +20,7 @@ import pytest
 from _report_helpers import check_clauses, claims, expand_runs, mu_values, read_table
 from deckpound.compare.outputs import folder_size, parquet_units
 from deckpound.compare.paper import run_paper
-from deckpound.compare.report_text import engine_label
+from deckpound.compare.report_text import direction, engine_label
 from deckpound.models.scene_io import load_scene
 
 from deckpound.cli import main
@@ -161,7 +161,20 @@ def test_friction_discussion_agrees_with_the_tables_for_every_state(report):
                            / virgin[(virgin["engine"] == e) & (virgin["mu"] == 0)]
                            ["peak_theta"].iloc[0]) for e in ("compliance", "nonsmooth")}
     check_clauses(claims(line), v, lambda t: set(re.split(r", | and ", t)))
-    assert checked == 7
+    # the two start states side by side, per engine
+    side = fric.split("**The two start states side by side**")[1]
+    for engine in ("compliance", "nonsmooth"):
+        line = next(ln for ln in side.splitlines() if ln.startswith(f"- {engine_label(engine)} at"))
+        found = re.findall(r"from (the state carried into run 2|the virgin state) \(gaps [^)]*\) "
+                           r"friction (raises|lowers) the peak rotation ×([\d.]+)", line)
+        assert len(found) == 2
+        for state, word, shown in found:
+            table = read_table(out / "tables" / f"study_friction_{states[state]}.csv")
+            g = table[table["engine"] == engine].set_index("mu")["peak_theta"]
+            ratio = g[0.2] / g[0.0]
+            assert direction(ratio) == word and abs(ratio - float(shown)) <= 6e-3 * ratio
+            checked += 1
+    assert checked == 11
 
 
 def test_each_study_states_its_start_state(report):
