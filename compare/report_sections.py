@@ -272,6 +272,9 @@ def study_sections(d) -> list[tuple[str, list]]:
     for r in d.studies:
         st = r.state
         items = [text.state_sentence(st), text.study_spread_sentence(r.table)]
+        pair = text.mode_pair_sentence(r.table)
+        if pair:
+            items.append(pair)
         if not st.carried:
             carried = [c for c in d.studies if c.name == r.name and c.state.carried]
             if carried:

@@ -408,3 +408,17 @@ def state_contrast_sentence(engine: str, mu: float, parts: list[tuple]) -> str:
         clauses.append(f"from {state_name(state.label)} (gaps {1e3 * sc.seats[0].gap:.2f} and "
                        f"{1e3 * sc.seats[1].gap:.2f} mm) friction {effect}{drive}{share}")
     return f"{engine_label(engine)} at μ = {short(mu)}: " + "; ".join(clauses) + "."
+
+
+def mode_pair_sentence(table: pd.DataFrame) -> str:
+    """For a table with ``friction_mode`` stick and slip cases at equal μ (the sticking
+    study): how sticking changes the peak rotation against sliding only, per μ."""
+    if not {"friction_mode", "mu"} <= set(table.columns):
+        return ""
+    ok = table[table["status"] == "success"]
+    stick = ok[ok["friction_mode"] == "stick"].set_index("mu")["peak_theta"]
+    slip = ok[ok["friction_mode"] == "slip"].set_index("mu")["peak_theta"]
+    items = [(mu, stick[mu] / slip[mu]) for mu in stick.index if mu in slip.index]
+    if not items:
+        return ""
+    return f"Against sliding only, sticking {effect_clauses(items, at_mu)}."

@@ -267,3 +267,17 @@ def test_impulse_agreement_reads_the_right_excursion():
     (s,) = report_text.impulse_agreement_sentences(effect, mech)
     assert "of the 3 run(s)" in s and "explains the change in 2" in s
     assert "(runs 5 and 7)" in s and "it does not in run 6" in s
+
+
+def test_sticking_sentence_pairs_stick_with_slip():
+    rows = [{"label": f"compliance {m} mu={mu}", "engine": "compliance", "mu": mu,
+             "friction_mode": m, "peak_theta": th, "status": "success"}
+            for mu, th_slip, th_stick in ((0.1, 3.277e-3, 3.298e-3), (0.2, 3.138e-3, 3.243e-3),
+                                          (0.4, 3.004e-3, 3.045e-3))
+            for m, th in (("slip", th_slip), ("stick", th_stick))]
+    s = report_text.mode_pair_sentence(pd.DataFrame(rows))
+    assert s == ("Against sliding only, sticking raises the peak rotation at μ = 0.2 (×1.03) "
+                 "and changes it by less than 2 % at μ = 0.1 and 0.4.")
+    check_clauses(claims(s), {0.1: 3.298 / 3.277, 0.2: 3.243 / 3.138, 0.4: 3.045 / 3.004},
+                  mu_values)
+    assert report_text.mode_pair_sentence(pd.DataFrame(rows[:1])) == ""
