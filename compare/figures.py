@@ -103,10 +103,13 @@ def peak_vs_pga(table: pd.DataFrame, scene: Scene, path: str | Path,
     return save(fig, path, scene.name, formats)
 
 
-def friction_ratio(effect: pd.DataFrame, scene: Scene, path: str | Path, tol: float = 0.02,
+def friction_ratio(effect: pd.DataFrame, scene: Scene, path: str | Path, tol: float | None = None,
                    formats: tuple[str, ...] = ()) -> list[Path]:
     """Peak rotation with friction / without, per run and engine (1 = no effect; the band is
     the ±tol within which the report calls the change negligible)."""
+    from .report_text import TOL
+
+    tol = TOL if tol is None else tol
     fig, axes = new_figure(1, 1, width=5.5, height=3.0)
     ax = axes[0, 0]
     ax.axhspan(1 - tol, 1 + tol, color="#dddddd", zorder=0)
@@ -269,8 +272,12 @@ def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.
     return out
 
 
+#: displacement magnification of the plan view
+PLAN_SCALE = 100.0
+
+
 def plan_snapshot(results: dict[str, Result], scene: Scene, path: str | Path,
-                  scale: float = 100.0, formats: tuple[str, ...] = ()) -> list[Path]:
+                  scale: float = PLAN_SCALE, formats: tuple[str, ...] = ()) -> list[Path]:
     """Plan view of deck and seats at each engine's peak rotation (displacements × scale)."""
     fig, axes = new_figure(len(results), 1, width=8.0, height=2.0)
     for i, (label, r) in enumerate(results.items()):

@@ -17,6 +17,7 @@ from deckpound.models.result import scene_hash
 from deckpound import __version__
 from deckpound.engines import get_engine
 
+from . import figures
 from . import report_inputs as inputs
 from . import report_text as text
 from .report_render import Bullets, Figure, Table, render, view
@@ -148,7 +149,7 @@ def friction(d) -> list:
     items.append(Bullets(tuple(text.sequence_friction_sentences(eff))))
     if len(eff):
         items.append(Figure("figures/friction_ratio_vs_run.png", "Peak |θ_d| with friction / "
-                            "without, per run and engine [-]; grey band: ±2 %."))
+                            f"without, per run and engine [-]; grey band: ±{100 * text.TOL:g} %."))
         items.append(Table(view(eff, [("engine", "engine", 1), ("run", "run", 1),
                                       ("pga", "PGA label [g]", 1), ("mu", "μ [-]", 1),
                                       ("peak_theta_0", "peak θ_d, μ = 0 [mrad]", MRAD),
@@ -262,7 +263,8 @@ def engines_vs_reference(d) -> list:
                      f"above the bent relative to its table) [mm], {ref} engine."),
               Figure("figures/plan_at_peak_rotation.png",
                      f"Run {d.strongest}: plan view at each engine's peak rotation; deck and seat "
-                     "displacements relative to their supports (tables, actuators) × 100, so "
+                     "displacements relative to their supports (tables, actuators) × "
+                     f"{figures.PLAN_SCALE:g}, so "
                      "the gaps and the rotation are visible; dashed: at rest.")]
     return items
 
