@@ -5,16 +5,16 @@ Rules
 * Common base: t_k = k·dt from 0 to the earliest end time among the results; dt defaults to
   the finest output step among them.
 * Kinematic columns (displacements, rotations, gaps, spring forces): linear interpolation
-  when the base is at least as fine as the source. When the base is coarser, each base sample takes the source sample of
-  largest magnitude in its bin [t_k − dt/2, t_k + dt/2): the series keeps its peaks exactly
-  instead of interpolating them away.
+  when the base is at least as fine as the source. When the base is coarser, each base sample
+  takes the source sample of largest magnitude in its bin [t_k − dt/2, t_k + dt/2): the series
+  keeps its peaks exactly instead of interpolating them away.
 * Contact forces (``fn_*``, ``ft_*``): averaged over each bin so that the impulse ∫λ dt is
   conserved (the source is integrated as a piecewise-linear signal, the bin average is the
   integral over the bin divided by its length). Impulse columns (``pn_*``, ``pt_*``: impulse
   per output interval of the nonsmooth engine) are summed into bins.
 
 Tables: :func:`long_table` (engine, t, quantity, value) and :func:`wide_tables`
-(one frame per engine), written by :func:`write_tables` as Parquet and CSV.
+(one frame per engine), written by :func:`write_tables` as Parquet and/or CSV with units.
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
 from deckpound.models.result import Result
 
 FORCE_PREFIXES = ("fn_", "ft_")
@@ -115,18 +114,36 @@ def long_table(aligned: dict[str, pd.DataFrame]) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)
 
 
-def write_tables(aligned: dict[str, pd.DataFrame], folder: str | Path) -> list[Path]:
-    """aligned_long.{parquet,csv} and aligned_<engine>.{parquet,csv} in ``folder``."""
-    from deckpound._io import atomic_path, ensure_folder
+def write_tables(aligned: dict[str, pd.DataFrame], folder: str | Path,
+                 formats: tuple[str, ...] = ("parquet", "csv"), long: bool = True) -> list[Path]:
+    """``aligned_<engine>`` (wide) and, with ``long``, ``aligned_long`` tables in ``folder``,
+    in each of ``formats`` (``parquet``: units in the schema metadata; ``csv``: units in the
+    header, ``deck_theta [rad]``; the long table's ``value`` column has the unit of its row's
+    quantity, listed in a ``unit`` column)."""
+    from deckpound.models.result import column_unit
 
-    folder = ensure_folder(folder)
+    from .outputs import folder as make_folder
+    from .outputs import write_csv, write_parquet
+
+    out = make_folder(folder)
+    unknown = set(formats) - {"parquet", "csv"}
+    if unknown:
+        raise ValueError(f"unknown table format(s) {sorted(unknown)}; use parquet or csv")
+    frames = {f"aligned_{k}": v for k, v in aligned.items()}
+    if long:
+        table = long_table(aligned)
+        table.insert(3, "unit", table["quantity"].map(column_unit))
+        frames = {"aligned_long": table, **frames}
     written = []
-    frames = {"aligned_long": long_table(aligned)}
-    frames.update({f"aligned_{k}": v for k, v in aligned.items()})
     for name, frame in frames.items():
-        for suffix, writer in ((".parquet", frame.to_parquet), (".csv", frame.to_csv)):
-            p = folder / f"{name}{suffix}"
-            with atomic_path(p) as tmp:
-                writer(tmp, index=False)
+        units = {c: column_unit(c) for c in frame.columns
+                 if c not in ("engine", "quantity", "unit", "value")}
+        for fmt in formats:
+            p = out / f"{name}.{fmt}"
+            if fmt == "parquet":
+                write_parquet(frame, p, units)
+            else:
+                write_csv(frame, p, units)
             written.append(p)
     return written
+

@@ -1,4 +1,10 @@
-"""Paper-style figures of results (matplotlib; PNG and PDF; one style, greyscale-readable)."""
+"""Paper-style figures of results (matplotlib; PNG, other formats such as PDF on request; one
+style, greyscale-readable).
+
+Displacements are drawn relative to the supports (the deck relative to the shake tables, a seat
+relative to its actuator) unless a column named ``*_abs`` is asked for; every axis names which
+and its unit.
+"""
 
 from __future__ import annotations
 
@@ -6,19 +12,22 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
-from deckpound.engines import engine_names
 from deckpound.models.plan import plan_of
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
+from deckpound.engines import engine_names
+
 from .style import CYCLE, engine_style, new_figure, save
 
-FORMATS = ("pdf",)
 LABELS = {
     "deck_theta": ("deck rotation θ_d", 1e3, "mrad"),
-    "deck_y_rel": ("deck transverse y_d rel. tables", 1e3, "mm"),
-    "deck_x_rel": ("deck longitudinal x_d rel. tables", 1e3, "mm"),
+    "deck_y_rel": ("deck y_d rel. tables", 1e3, "mm"),
+    "deck_x_rel": ("deck x_d rel. tables", 1e3, "mm"),
+    "deck_y_abs": ("deck y_d absolute", 1e3, "mm"),
+    "deck_x_abs": ("deck x_d absolute", 1e3, "mm"),
+    "seat1_x_rel": ("seat 1 x rel. actuator", 1e3, "mm"),
+    "seat2_x_rel": ("seat 2 x rel. actuator", 1e3, "mm"),
 }
 
 
@@ -34,7 +43,8 @@ def _style_for(label: str, k: int) -> dict:
 
 
 def histories(results: dict[str, Result], scene: Scene, path: str | Path,
-              quantities: tuple[str, ...] = ("deck_theta", "deck_y_rel"), title: str = "") -> list[Path]:
+              quantities: tuple[str, ...] = ("deck_theta", "deck_y_rel"), title: str = "",
+              formats: tuple[str, ...] = ()) -> list[Path]:
     """Time histories of quantities overlaid per engine/case (paper Figs. 4–6 style)."""
     fig, axes = new_figure(len(quantities), 1, width=7.5, height=2.2, sharex=True)
     for i, q in enumerate(quantities):
@@ -48,11 +58,11 @@ def histories(results: dict[str, Result], scene: Scene, path: str | Path,
     if title:
         axes[0, 0].set_title(title)
     axes[-1, 0].set_xlabel("time [s]")
-    return save(fig, path, scene.name, FORMATS)
+    return save(fig, path, scene.name, formats)
 
 
 def contact_forces(results: dict[str, Result], scene: Scene, path: str | Path,
-                   title: str = "") -> list[Path]:
+                   title: str = "", formats: tuple[str, ...] = ()) -> list[Path]:
     """Normal contact force per corner (c1, c2 at seat 1; c3, c4 at seat 2)."""
     fig, axes = new_figure(2, 2, width=8.0, height=2.0, sharex=True)
     for c in range(4):
@@ -60,23 +70,25 @@ def contact_forces(results: dict[str, Result], scene: Scene, path: str | Path,
         for k, (label, r) in enumerate(results.items()):
             ax.plot(r.t, 1e-3 * r[f"fn_c{c + 1}"], **_style_for(label, k))
         ax.set_title(f"corner c{c + 1} (seat {1 + c // 2})")
-        ax.set_ylabel("normal force [MN]")
+        ax.set_ylabel("normal force fn [MN]")
     axes[-1, 0].set_xlabel("time [s]")
     axes[-1, 1].set_xlabel("time [s]")
     axes[0, 0].legend(loc="upper right", fontsize=7)
     if title:
         fig.suptitle(title, fontsize=9)
-    return save(fig, path, scene.name, FORMATS)
+    return save(fig, path, scene.name, formats)
 
 
 def peak_vs_pga(table: pd.DataFrame, scene: Scene, path: str | Path,
-                quantity: str = "peak_theta") -> list[Path]:
-    """Peak deck rotation vs run PGA over the sequence, one line per engine (paper Fig. 7)."""
+                quantity: str = "peak_theta", formats: tuple[str, ...] = ()) -> list[Path]:
+    """Peak deck rotation vs run PGA over the sequence, one line per engine and friction
+    assumption (``case`` column: engine name, then a variant tag; paper Fig. 7)."""
     fig, axes = new_figure(1, 1, width=5.5, height=3.2)
     ax = axes[0, 0]
     markers = {e: CYCLE[k % len(CYCLE)]["marker"] for k, e in enumerate(engine_names())}
-    for engine, g in table.groupby("engine", sort=False):
-        base, _, variant = engine.partition(" ")
+    key = "case" if "case" in table else "engine"
+    for case, g in table.groupby(key, sort=False):
+        base, _, variant = case.partition(" ")
         st = engine_style(base)
         if variant:  # the same engine under another assumption: hollow markers, thinner line
             st.update(label=f"{st['label']}, {variant}", markerfacecolor="white",
@@ -85,20 +97,85 @@ def peak_vs_pga(table: pd.DataFrame, scene: Scene, path: str | Path,
     runs = table.drop_duplicates("run")
     ax.set_xticks(runs["run"])
     ax.set_xticklabels([f"{r}\n{p:g} g" for r, p in zip(runs["run"], runs["pga"])])
-    ax.set_xlabel("run (transverse PGA)")
-    ax.set_ylabel("peak deck rotation [mrad]")
-    ax.legend()
-    return save(fig, path, scene.name, FORMATS)
+    ax.set_xlabel("run (transverse PGA label)")
+    ax.set_ylabel("peak deck rotation |θ_d| [mrad]")
+    ax.legend(fontsize=7)
+    return save(fig, path, scene.name, formats)
+
+
+def friction_ratio(effect: pd.DataFrame, scene: Scene, path: str | Path, tol: float | None = None,
+                   formats: tuple[str, ...] = ()) -> list[Path]:
+    """Peak rotation with friction / without, per run and engine (1 = no effect; the band is
+    the ±tol within which the report calls the change negligible)."""
+    from .report_text import TOL
+
+    tol = TOL if tol is None else tol
+    fig, axes = new_figure(1, 1, width=5.5, height=3.0)
+    ax = axes[0, 0]
+    ax.axhspan(1 - tol, 1 + tol, color="#dddddd", zorder=0)
+    ax.axhline(1.0, color="#777777", linewidth=0.8)
+    for k, (engine, g) in enumerate(effect.groupby("engine", sort=False)):
+        st = engine_style(engine)
+        ax.plot(g["run"], g["ratio"], marker=CYCLE[k % len(CYCLE)]["marker"], **st)
+    runs = effect.drop_duplicates("run")
+    ax.set_xticks(runs["run"])
+    ax.set_xticklabels([f"{r}\n{p:g} g" for r, p in zip(runs["run"], runs["pga"])])
+    ax.set_xlabel("run (transverse PGA label)")
+    mu = effect["mu"].iloc[0] if len(effect) else 0.0
+    ax.set_ylabel(f"peak θ_d with μ = {mu:g} / without [-]")
+    ax.legend(fontsize=7)
+    return save(fig, path, scene.name, formats)
+
+
+def friction_mechanism(pairs: dict, path: str | Path, title: str = "",
+                       formats: tuple[str, ...] = ()) -> list[Path]:
+    """Per engine, a sequence run without and with friction (``pairs``: engine →
+    (SequenceRun μ = 0, SequenceRun μ > 0), either order): deck rotation of both (top) and
+    the moment of the tangential contact forces about the deck centre with friction
+    (bottom), the excursion that reaches the frictional peak shaded."""
+    from .mechanism import contact_moments, mechanism_row
+
+    fig, axes = new_figure(2, 1, width=7.5, height=2.3, sharex=True)
+    shaded = False
+    for k, (engine, runs) in enumerate(pairs.items()):
+        plain, rough = sorted(runs, key=lambda r: r.scene.contact.friction)
+        st = engine_style(engine)
+        label = st.pop("label", engine)
+        for run, dash in ((plain, ":"), (rough, "-")):
+            r = run.result
+            axes[0, 0].plot(r.t, 1e3 * r["deck_theta"], **{**st, "linestyle": dash},
+                            label=f"{label}, μ = {run.scene.contact.friction:g}")
+        row = mechanism_row(rough.result, rough.scene)
+        if np.isfinite(row["friction_impulse"]):
+            mt, _ = contact_moments(rough.result, rough.scene)
+            axes[1, 0].plot(rough.result.t, 1e-3 * mt, **st, label=label)
+            if not shaded:
+                for ax in axes[:, 0]:
+                    ax.axvspan(row["t_start"], row["t_peak"], color="#eeeeee", zorder=0)
+                shaded = True
+    axes[0, 0].set_ylabel("deck rotation θ_d [mrad]")
+    axes[0, 0].legend(fontsize=6, ncol=2)
+    axes[1, 0].set_ylabel("friction moment about\ndeck centre [MN·m]")
+    axes[1, 0].set_xlabel("time [s]")
+    if axes[1, 0].get_legend_handles_labels()[0]:
+        axes[1, 0].legend(fontsize=6)
+    if title:
+        axes[0, 0].set_title(f"{title}: shaded, the excursion that reaches the frictional peak",
+                             fontsize=8)
+    scene = next(iter(pairs.values()))[0].scene
+    return save(fig, path, scene.name, formats)
 
 
 def study_figure(study, scene: Scene, cases, results: dict[str, Result], table: pd.DataFrame,
-                 path: str | Path) -> list[Path]:
+                 path: str | Path, formats: tuple[str, ...] = (), subtitle: str = ""
+                 ) -> list[Path]:
     """Left: the study's headline (peak rotation vs parameter); right: rotation histories."""
     fig, axes = new_figure(1, 2, width=9.0, height=3.2)
     ax = axes[0, 0]
     x = study.x
     if x in ("stiffness", "mu"):
-        for k, (engine, g) in enumerate(table.groupby(["engine"] + (["friction_mode"] if "friction_mode" in table else []), sort=False)):
+        keys = ["engine"] + (["friction_mode"] if "friction_mode" in table else [])
+        for k, (engine, g) in enumerate(table.groupby(keys, sort=False)):
             label = " ".join(engine) if isinstance(engine, tuple) else engine
             finite = g[np.isfinite(g[x].astype(float))]
             eng = label.split()[0]
@@ -122,7 +199,7 @@ def study_figure(study, scene: Scene, cases, results: dict[str, Result], table: 
         ax.set_xticks(range(len(labels)))
         ax.set_xticklabels(labels, rotation=30, ha="right", fontsize=7)
     ax.set_ylabel("peak deck rotation [mrad]")
-    ax.set_title(study.title)
+    ax.set_title(study.title + (f"\n{subtitle}" if subtitle else ""), fontsize=8)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=7)
     ax2 = axes[0, 1]
@@ -135,10 +212,11 @@ def study_figure(study, scene: Scene, cases, results: dict[str, Result], table: 
     ax2.set_xlabel("time [s]")
     ax2.set_ylabel("deck rotation [mrad]")
     ax2.legend(fontsize=6, ncol=2)
-    return save(fig, path, scene.name, FORMATS)
+    return save(fig, path, scene.name, formats)
 
 
-def hysteresis(result: Result, scene: Scene, path: str | Path, title: str = "") -> list[Path]:
+def hysteresis(result: Result, scene: Scene, path: str | Path, title: str = "",
+               formats: tuple[str, ...] = ()) -> list[Path]:
     """Bent force–deformation loops (Takeda springs), x and y, one panel per bent (the result's
     ``<bent>_fx``/``<bent>_dx`` columns: nothing is recomputed from the excitation)."""
     fig, axes = new_figure(2, len(scene.bents), width=3.0 * len(scene.bents), height=2.4)
@@ -152,7 +230,7 @@ def hysteresis(result: Result, scene: Scene, path: str | Path, title: str = "") 
             ax.set_ylabel("force [kN]")
     if title:
         fig.suptitle(title, fontsize=9)
-    return save(fig, path, scene.name, FORMATS)
+    return save(fig, path, scene.name, formats)
 
 
 #: the state columns a plan-view outline reads: displacements relative to the supports, so the
@@ -194,8 +272,12 @@ def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.
     return out
 
 
+#: displacement magnification of the plan view
+PLAN_SCALE = 100.0
+
+
 def plan_snapshot(results: dict[str, Result], scene: Scene, path: str | Path,
-                  scale: float = 100.0) -> list[Path]:
+                  scale: float = PLAN_SCALE, formats: tuple[str, ...] = ()) -> list[Path]:
     """Plan view of deck and seats at each engine's peak rotation (displacements × scale)."""
     fig, axes = new_figure(len(results), 1, width=8.0, height=2.0)
     for i, (label, r) in enumerate(results.items()):
@@ -213,4 +295,4 @@ def plan_snapshot(results: dict[str, Result], scene: Scene, path: str | Path,
                      f"(displacements relative to the supports × {scale:g})")
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
-    return save(fig, path, scene.name, FORMATS)
+    return save(fig, path, scene.name, formats)

@@ -2,39 +2,72 @@
 
 ``deckpound paper [-o DIR]`` runs, on the built-in benchmark by default,
 
-1. the 7-run test sequence with all three engines (gap and bent stiffness carried),
-2. per run: aligned histories, metrics of each engine against OpenSees, figures,
-3. the sensitivity studies of :mod:`deckpound.compare.studies`,
+1. the 7-run test sequence with every registered engine (gap and bent stiffness carried), twice:
+   with the scene's friction and with the other assumption (frictionless gap elements as in
+   common practice against μ = 0.2 with sticking);
+2. per run: metrics of each engine against the reference engine, a history figure, and the
+   friction mechanism (:mod:`.mechanism`) of every result;
+3. the sensitivity studies of :mod:`.studies`, those marked ``carried`` from both the strongest
+   run's carried state and the virgin state, the others from the virgin state;
 
-and writes figures (PNG + PDF), tables (CSV, Parquet) and ``report.md`` / ``report.html``
-stating what was run, the settings, the headline comparisons and which inputs are assumptions.
+and writes ``report.md`` / ``report.html`` (:mod:`.report_sections`: every number and direction
+in the text generated from the tables), ``figures/*.png`` (``formats`` adds e.g. PDF) and
+``tables/*.csv`` (units in the headers; displacements relative to the supports unless a column
+says ``_abs``). Full aligned histories per run (Parquet with units in the schema metadata, and
+wide CSV) only with ``full_histories``. The result cache (default ``DIR/cache``) is not part of
+the report; its hits and misses per engine are.
 """
 
 from __future__ import annotations
 
-import html
-import platform
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
-from deckpound import __version__
-from deckpound._io import atomic_write_text, ensure_folder, write_csv
-from deckpound.engines import DEFAULT_REFERENCE, engine_names, engine_style
-from deckpound.models.result import scene_hash
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import scene_to_toml
+
+from deckpound.engines import DEFAULT_REFERENCE, engine_names
 
 from . import figures
 from .align import align, write_tables
 from .cases import ResultCache
-from .metrics import compare_pair, peak
-from .sequence_run import run_sequences
-from .studies import STUDIES, run_study
+from .mechanism import MECHANISM_UNITS, mechanism_row
+from .metrics import closure_times_per_corner, compare_pair, peak
+from .outputs import folder, folder_size, write_csv, write_text
+from .report_text import friction_effect
+from .sequence_run import SequenceRun, run_sequences, strongest_run
+from .studies import (
+    ROW_UNITS,
+    STUDIES,
+    StartState,
+    start_state,
+    state_caption,
+    study_results,
+    study_units,
+)
 
 QUANTITIES = ["deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel"]
+EFFECT_UNITS = {"pga": "g", "mu": "-", "peak_theta_0": "rad", "peak_theta_mu": "rad",
+                "ratio": "-"}
+METRIC_UNITS = {"t_peak": "s", "t_peak_ref": "s", "nrmse": "-", "correlation": "-",
+                "peak_ratio": "-"}
+
+
+class CountingCache(ResultCache):
+    """The result cache, counting its hits and misses per engine (``per_engine``)."""
+
+    def __init__(self, folder_: str | Path):
+        super().__init__(folder_)
+        self.per_engine: dict[str, list[int]] = {}
+
+    def get(self, key: str, engine: str):
+        result = super().get(key, engine)
+        counts = self.per_engine.setdefault(engine, [0, 0])
+        counts[0 if result is not None else 1] += 1
+        return result
 
 
 def friction_variant(scene: Scene) -> tuple[Scene, str]:
@@ -47,207 +80,211 @@ def friction_variant(scene: Scene) -> tuple[Scene, str]:
     return modified(scene, "contact.friction=0.2", "contact.friction_mode=stick"), "μ=0.2"
 
 
-def sequence_table(sequences: dict) -> pd.DataFrame:
+def sequence_table(sequences: dict[str, list[SequenceRun]]) -> pd.DataFrame:
+    """One row per (case, run): ``case`` is the key of ``sequences`` (an engine name, or an
+    engine and a variant tag); peaks of displacements relative to the supports (``_rel``) and
+    absolute (``_abs``); the applied PGA from the result's record provenance; run time without
+    compilation and compilation time apart; whether the result came from the cache."""
     rows = []
-    for engine, runs in sequences.items():
+    for case, runs in sequences.items():
         for run in runs:
             r = run.result
-            row = dict(run=run.index, pga=run.pga, engine=engine, status=r.meta.get("status"),
-                       gap1_start=run.state.gaps[0], gap2_start=run.state.gaps[1])
+            applied = (r.meta.get("record") or {}).get("applied_pga") or {}
+            contact = run.scene.contact
+            row = {"run": run.index, "pga": run.pga, "case": case, "engine": r.engine,
+                   "mu": contact.friction, "friction_mode": contact.friction_mode,
+                   "status": r.meta.get("status"), "applied_pga_x": applied.get("x", np.nan),
+                   "applied_pga_y": applied.get("y", np.nan), "gap1_start": run.state.gaps[0],
+                   "gap2_start": run.state.gaps[1]}
             for b, (kx, ky) in zip(run.scene.bents, run.state.stiffness):
                 row[f"{b.name}_kx"], row[f"{b.name}_ky"] = kx, ky
-            row.update(peak_theta=peak(r["deck_theta"]), peak_y=peak(r["deck_y_rel"]),
-                       peak_x=peak(r["deck_x_rel"]),
+            firsts = [t[0] for t in closure_times_per_corner(r).values() if t]
+            row.update(peak_theta=peak(r["deck_theta"]), peak_y_rel=peak(r["deck_y_rel"]),
+                       peak_x_rel=peak(r["deck_x_rel"]), peak_y_abs=peak(r["deck_y_abs"]),
+                       peak_x_abs=peak(r["deck_x_abs"]),
                        peak_fn=max(peak(r[f"fn_c{c}"]) for c in range(1, 5)),
                        gap_closures=r.gap_closures,
-                       wall_time=r.meta.get("wall_time", np.nan))
+                       first_closure=min(firsts) if firsts else np.nan,
+                       wall_time=r.meta.get("wall_time", np.nan),
+                       compile_time=r.meta.get("compile_time", np.nan),
+                       steps=r.meta.get("steps", 0), cached=run.cached)
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def sequence_units(seq: pd.DataFrame) -> dict[str, str]:
+    units = {**ROW_UNITS, "pga": "g", "applied_pga_x": "g", "applied_pga_y": "g",
+             "first_closure": "s", "steps": "-"}
+    units.update({c: "kN/m" for c in seq.columns if c.endswith(("_kx", "_ky"))})
+    return {k: v for k, v in units.items() if k in seq}
+
+
+@dataclass
+class StudyRun:
+    """One study from one start state: its table and the frictional results' mechanism."""
+
+    name: str
+    state: StartState
+    table: pd.DataFrame
+    figure: str
+
+
+@dataclass
+class PaperData:
+    """Everything the report is written from (see :mod:`.report_sections`)."""
+
+    scene: Scene
+    out: Path
+    engines: tuple[str, ...]
+    reference: str
+    variant_tag: str
+    sequences: dict[str, list[SequenceRun]]
+    seq: pd.DataFrame
+    effect: pd.DataFrame
+    metrics: pd.DataFrame
+    mech: pd.DataFrame
+    strongest: int
+    studies: list[StudyRun] = field(default_factory=list)
+    carried_note: str = ""
+    cache_counts: pd.DataFrame = field(default_factory=pd.DataFrame)
+    formats: tuple[str, ...] = ()
+    full_histories: bool = False
+    wall: float = 0.0
+    sizes: dict[str, int] = field(default_factory=dict)
+
+
+def _mech_rows(source: str, state: str, run: int | None, results, scenes) -> list[dict]:
+    """Mechanism rows of finished results; a frictional one is read against the frictionless
+    result of the same engine among ``results``."""
+    plain = {r.engine: r for label, r in results.items()
+             if r.ok and not scenes[label].contact.friction > 0}
+    rows = []
+    for label, r in results.items():
+        if r.ok:
+            ref = plain.get(r.engine) if scenes[label].contact.friction > 0 else None
+            rows.append(dict(source=source, state=state, run=run, case=label, engine=r.engine,
+                             **mechanism_row(r, scenes[label], reference=ref)))
+    return rows
 
 
 def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: int | None = None,
               scheduler: str | None = None, cache_dir: str | Path | None = None,
               studies: tuple[str, ...] | None = None, progress: bool = True,
-              engines: tuple[str, ...] | None = None, reference: str = DEFAULT_REFERENCE) -> Path:
+              engines: tuple[str, ...] | None = None, reference: str = DEFAULT_REFERENCE,
+              full_histories: bool = False, formats: tuple[str, ...] = ()) -> Path:
     """Run the whole comparison and write the report folder; returns the report.md path.
 
     ``engines`` (default: every registered engine) run the sequence; the others are compared
-    against ``reference``.
+    against ``reference``. ``formats`` adds figure formats to PNG (e.g. ``("pdf",)``).
     """
+    from .report_sections import write_report
+
     t0 = time.perf_counter()
-    ENGINES = tuple(engines) if engines is not None else engine_names()
-    if reference not in ENGINES:
-        ENGINES = (reference,) + ENGINES
-    out = ensure_folder(out)
+    names = tuple(engines) if engines is not None else engine_names()
+    if reference not in names:
+        names = (reference,) + names
+    out = folder(out)
     cache_dir = Path(cache_dir) if cache_dir is not None else out / "cache"
-    cache = ResultCache(cache_dir)
-    figs, tables = ensure_folder(out / "figures"), ensure_folder(out / "tables")
-    atomic_write_text(out / "scene.toml", scene_to_toml(scene))
+    cache = CountingCache(cache_dir)
+    figs, tables = folder(out / "figures"), folder(out / "tables")
+    write_text(out / "scene.toml", scene_to_toml(scene))
 
-    # 1. the sequence, every engine; and again with the other friction assumption (the paper's
-    #    question: frictionless gap elements, common practice, vs frictional contact)
-    sequences = run_sequences(scene, list(ENGINES), cache_dir, workers, scheduler, progress)
+    # 1. the sequence, every engine, with both friction assumptions
+    base = run_sequences(scene, list(names), cache_dir, workers, scheduler, progress)
     variant, tag = friction_variant(scene)
-    other = run_sequences(variant, list(ENGINES), cache_dir, workers, scheduler, progress)
-    seq = sequence_table({**sequences, **{f"{e} {tag}": runs for e, runs in other.items()}})
-    write_csv(seq, tables / "sequence.csv")
-    figures.peak_vs_pga(seq, scene, figs / "peak_rotation_vs_pga.png")
+    other = run_sequences(variant, list(names), cache_dir, workers, scheduler, progress)
+    sequences = {**base, **{f"{e} {tag}": runs for e, runs in other.items()}}
+    seq = sequence_table(sequences)
+    write_csv(seq, tables / "sequence.csv", sequence_units(seq))
+    figures.peak_vs_pga(seq, scene, figs / "peak_rotation_vs_pga.png", formats=formats)
+    effect = friction_effect(seq)
+    write_csv(effect, tables / "friction_effect_sequence.csv", EFFECT_UNITS)
+    if len(effect):
+        figures.friction_ratio(effect, scene, figs / "friction_ratio_vs_run.png",
+                               formats=formats)
 
-    # 2. per run: histories, alignment, metrics against OpenSees
-    metric_rows = []
+    # 2. per run: metrics against the reference, histories, mechanism
+    metric_rows, mech_rows = [], []
     n_runs = min(len(v) for v in sequences.values())
     for i in range(n_runs):
-        results = {e: sequences[e][i].result for e in ENGINES}
-        run = sequences[reference][i]
-        tag = f"run{run.index}"
-        figures.histories(results, run.scene, figs / f"{tag}_histories.png",
-                          title=f"run {run.index}: {run.pga:g} g transverse")
+        results = {e: base[e][i].result for e in names}
+        run = base[reference][i]
+        figures.histories(results, run.scene, figs / f"run{run.index}_histories.png",
+                          title=f"run {run.index}: {run.pga:g} g transverse", formats=formats)
         aligned = align(results)
-        write_tables(aligned, tables / tag)
-        for e in (e for e in ENGINES if e != reference):
+        if full_histories:
+            write_tables(aligned, tables / f"run{run.index}", formats=("parquet",), long=True)
+            write_tables(aligned, tables / f"run{run.index}", formats=("csv",), long=False)
+        for e in (e for e in names if e != reference):
             m = compare_pair(results[e], results[reference], aligned[e], aligned[reference],
                              QUANTITIES)
             m.insert(0, "engine", e)
             m.insert(0, "run", run.index)
             metric_rows.append(m)
+        both = {c: runs[i] for c, runs in sequences.items()}
+        mech_rows += _mech_rows("sequence", f"run{run.index}", run.index,
+                                {c: r.result for c, r in both.items()},
+                                {c: r.scene for c, r in both.items()})
     metrics = pd.concat(metric_rows, ignore_index=True) if metric_rows else pd.DataFrame()
-    write_csv(metrics, tables / "metrics_vs_opensees.csv")
-    last = n_runs - 1
-    strongest = {e: sequences[e][last].result for e in ENGINES}
-    s_scene = sequences[reference][last].scene
-    figures.contact_forces(strongest, s_scene, figs / "contact_forces_strongest.png",
-                           title=f"run {last + 1}: normal contact force per corner")
-    figures.hysteresis(strongest[reference], s_scene, figs / "bent_hysteresis_strongest.png",
-                       title=f"run {last + 1}: bent hysteresis ({reference} engine)")
-    figures.plan_snapshot(strongest, s_scene, figs / "plan_at_peak_rotation.png")
+    write_csv(metrics, tables / f"metrics_vs_{reference}.csv", METRIC_UNITS)
 
-    # 3. studies
-    study_tables = {}
+    k = strongest_run(scene)
+    if n_runs >= k:
+        strong = {e: base[e][k - 1].result for e in names}
+        s_scene = base[reference][k - 1].scene
+        figures.contact_forces(strong, s_scene, figs / "contact_forces_strongest.png",
+                               title=f"run {k}: normal contact force per corner", formats=formats)
+        figures.hysteresis(strong[reference], s_scene, figs / "bent_hysteresis_strongest.png",
+                           title=f"run {k}: bent hysteresis ({reference} engine)", formats=formats)
+        figures.plan_snapshot(strong, s_scene, figs / "plan_at_peak_rotation.png",
+                              formats=formats)
+        pairs = {e: (base[e][k - 1], other[e][k - 1]) for e in names}
+        figures.friction_mechanism(pairs, figs / "friction_mechanism_strongest.png",
+                                   title=f"run {k}", formats=formats)
+
+    # 3. studies, from the stated start states
+    states = [start_state(scene, "virgin")]
+    carried_note = ""
+    ref_runs = base[reference]
+    if len(ref_runs) >= k and all(r.result.ok for r in ref_runs[:k - 1]):
+        states.insert(0, start_state(scene, f"run{k}", sequence=ref_runs))
+    else:
+        carried_note = (f"The {reference} sequence did not reach run {k}, so no study starts "
+                        "from its carried state.")
+    study_runs = []
     for name in (studies if studies is not None else tuple(STUDIES)):
-        table, _ = run_study(name, scene, figs, quick=quick, cache=cache, workers=workers,
-                             scheduler=scheduler, progress=progress)
-        write_csv(table, tables / f"study_{name}.csv")  # the table belongs with the tables
-        (figs / f"{name}.csv").unlink(missing_ok=True)
-        study_tables[name] = table
+        for st in (states if STUDIES[name].carried else states[-1:]):
+            cases, results, table = study_results(name, st, quick=quick, cache=cache,
+                                                  workers=workers, scheduler=scheduler,
+                                                  progress=progress)
+            write_csv(table, tables / f"study_{name}_{st.label}.csv", study_units(name, table))
+            fig = f"study_{name}_{st.label}.png"
+            figures.study_figure(STUDIES[name], st.scene, cases, results, table, figs / fig,
+                                 formats=formats, subtitle=state_caption(st))
+            study_runs.append(StudyRun(name, st, table, fig))
+            if name == "friction":
+                mech_rows += _mech_rows("friction study", st.label, st.run, results,
+                                        {c.label: c.scene for c in cases})
+    mech = pd.DataFrame(mech_rows)
+    write_csv(mech, tables / "friction_mechanism.csv", MECHANISM_UNITS)
 
-    wall = time.perf_counter() - t0
-    return write_report(out, scene, seq, metrics, study_tables, wall, cache, reference)
+    counts = {e: [0, 0] for e in names}
+    for runs in sequences.values():
+        for r in runs:
+            counts.setdefault(r.result.engine, [0, 0])[0 if r.cached else 1] += 1
+    for e, (h, m) in cache.per_engine.items():
+        counts.setdefault(e, [0, 0])
+        counts[e][0] += h
+        counts[e][1] += m
+    cache_counts = pd.DataFrame([{"engine": e, "hits": h, "misses": m}
+                                 for e, (h, m) in counts.items()])
+    write_csv(cache_counts, tables / "cache_counts.csv", {})
 
-
-# -- report --------------------------------------------------------------------------------
-
-def _md_table(frame: pd.DataFrame, floatfmt: str = ".4g") -> str:
-    cols = list(frame.columns)
-    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-    for _, row in frame.iterrows():
-        cells = [format(v, floatfmt) if isinstance(v, (float, np.floating)) else str(v)
-                 for v in row]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-def headline_sentences(seq: pd.DataFrame, reference: str = DEFAULT_REFERENCE) -> list[str]:
-    """The paper's comparison in words: peak rotation of the strongest run per engine/variant."""
-    last = seq[seq["run"] == seq["run"].max()].set_index("engine")
-    base = last.loc[reference, "peak_theta"] if reference in last.index else np.nan
-    out = [f"Strongest run ({last['pga'].iloc[0]:g} g, run {int(seq['run'].max())}): peak deck "
-           "rotation " + "; ".join(f"{e} {1e3 * r['peak_theta']:.3f} mrad"
-                                   f" ({r['peak_theta'] / base:.3f} × {reference})"
-                                   for e, r in last.iterrows()) + "."]
-    closes = seq[seq["gap_closures"] > 0].groupby("engine")["run"].min()
-    if len(closes):
-        out.append("First run in which the gaps close: " + ", ".join(
-            f"{e} run {int(r)}" for e, r in closes.items()) + ".")
-    return out
-
-
-def write_report(out: Path, scene: Scene, seq: pd.DataFrame, metrics: pd.DataFrame,
-                 studies: dict[str, pd.DataFrame], wall: float, cache: ResultCache,
-                 reference: str = DEFAULT_REFERENCE) -> Path:
-    """report.md and report.html from the tables (figures referenced relatively)."""
-    seq_view = seq[["run", "pga", "engine", "gap1_start", "gap2_start", "peak_theta", "peak_y",
-                    "gap_closures", "wall_time", "status"]].copy()
-    seq_view["peak_theta"] = 1e3 * seq_view["peak_theta"]
-    seq_view["peak_y"] = 1e3 * seq_view["peak_y"]
-    seq_view = seq_view.rename(columns={"peak_theta": "peak θ [mrad]",
-                                        "peak_y": "peak y rel. tables [mm]",
-                                        "gap1_start": "gap1 [m]", "gap2_start": "gap2 [m]",
-                                        "wall_time": "wall [s]"})
-    assumptions = {k: v for k, v in scene.notes.items() if v.upper().startswith("ASSUMPTION")}
-    sources = {k: v for k, v in scene.notes.items() if not v.upper().startswith("ASSUMPTION")}
-    sections: list[tuple[str, list]] = []
-    sections.append(("What was run", [
-        f"Scene **{scene.name}** (hash `{scene_hash(scene)[:16]}`), deckpound {__version__}, "
-        f"on {platform.machine()} / Python {platform.python_version()}; total wall time "
-        f"{wall:.1f} s (cache hits {cache.hits}, misses {cache.misses}).",
-        f"Engines: OpenSees ({scene.opensees.mode} mode, dt = {scene.opensees.dt:g} s, "
-        f"{scene.opensees.algorithm}/{scene.opensees.test} {scene.opensees.tolerance:g}), "
-        f"compliance clone ({scene.compliance.integrator}, dt = {scene.compliance.dt:g} s), "
-        f"nonsmooth Moreau–Jean (h = {scene.nonsmooth.h:g} s, θ = {scene.nonsmooth.theta:g}, "
-        f"{scene.nonsmooth.solver}).",
-        f"Contact: {scene.contact.law}, k = {scene.contact.stiffness:g} kN/m, "
-        f"e = {scene.contact.restitution:g}, μ = {scene.contact.friction:g} "
-        f"({scene.contact.friction_mode}), {scene.contact.geometry} geometry. Damping: "
-        f"Rayleigh {100 * scene.damping.ratio:g} % ({scene.damping.method} {list(scene.damping.modes)}).",
-        f"Sequence: PGA {', '.join(f'{p:g}' for p in scene.sequence.pgas)} g transverse "
-        f"(longitudinal × {scene.excitation.longitudinal_ratio:g}); gap carried: "
-        f"{scene.sequence.carry_gap}, stiffness carried: {scene.sequence.carry_stiffness}.",
-    ]))
-    sections.append(("Headline: the 7-run sequence", headline_sentences(seq, reference) + [
-        "![peak rotation vs PGA](figures/peak_rotation_vs_pga.png)",
-        ("table", seq_view),
-    ]))
-    if len(metrics):
-        strong = metrics[metrics["run"] == metrics["run"].max()]
-        ref_label = engine_style(reference)["label"]
-        sections.append((f"Engines against {ref_label} (strongest run)", [
-            f"Peak ratio = engine peak / {ref_label} peak; NRMSE normalised by the {ref_label} "
-            "peak. Displacements are relative to the supports (shake tables, actuators).",
-            ("table", strong[["engine", "quantity", "peak", "peak_ref", "peak_ratio", "nrmse",
-                              "correlation"]]),
-            f"![histories](figures/run{int(metrics['run'].max())}_histories.png)",
-            "![contact forces](figures/contact_forces_strongest.png)",
-            "![hysteresis](figures/bent_hysteresis_strongest.png)",
-            "![plan](figures/plan_at_peak_rotation.png)",
-        ]))
-    for name, table in studies.items():
-        view = table.drop(columns=[c for c in ("status",) if c in table]).copy()
-        view["peak_theta"] = 1e3 * view["peak_theta"]
-        view = view.rename(columns={"peak_theta": "peak θ [mrad]"})
-        sections.append((f"Study: {STUDIES[name].title}", [
-            f"![{name}](figures/{name}.png)", ("table", view)]))
-    sections.append(("Inputs that are assumptions", [
-        "These values are not given by the paper; each carries its reason in the scene file.",
-        ("table", pd.DataFrame({"field": list(assumptions), "note": list(assumptions.values())})),
-    ]))
-    sections.append(("Inputs from the paper and the test", [
-        ("table", pd.DataFrame({"field": list(sources), "note": list(sources.values())})),
-    ]))
-
-    md = [f"# deckpound report: {scene.name}", ""]
-    body = [f"<h1>deckpound report: {html.escape(scene.name)}</h1>"]
-    for title, items in sections:
-        md += [f"## {title}", ""]
-        body.append(f"<h2>{html.escape(title)}</h2>")
-        for item in items:
-            if isinstance(item, tuple):
-                md += [_md_table(item[1]), ""]
-                body.append(item[1].to_html(index=False, float_format=lambda v: f"{v:.4g}",
-                                            border=0, classes="t"))
-            elif item.startswith("!["):
-                alt, src = item[2:].split("](")
-                md += [item, ""]
-                body.append(f'<p><img src="{html.escape(src[:-1])}" alt="{html.escape(alt)}" '
-                            'style="max-width:100%"></p>')
-            else:
-                md += [item, ""]
-                body.append(f"<p>{html.escape(item).replace('**', '')}</p>")
-    atomic_write_text(out / "report.md", "\n".join(md))
-    style = ("body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#111}"
-             "table.t{border-collapse:collapse;font-size:12px}"
-             "table.t td,table.t th{border:1px solid #999;padding:2px 6px}")
-    atomic_write_text(
-        out / "report.html",
-        f"<!doctype html><html><head><meta charset='utf-8'><title>deckpound report</title>"
-        f"<style>{style}</style></head><body>{''.join(body)}</body></html>")
-    return out / "report.md"
+    data = PaperData(scene=scene, out=out, engines=names, reference=reference, variant_tag=tag,
+                     sequences=sequences, seq=seq, effect=effect, metrics=metrics, mech=mech,
+                     strongest=k, studies=study_runs, carried_note=carried_note,
+                     cache_counts=cache_counts, formats=formats, full_histories=full_histories)
+    data.sizes = {"report": folder_size(out, exclude=("cache",)),
+                  "cache": folder_size(cache_dir) if cache_dir.is_dir() else 0}
+    data.wall = time.perf_counter() - t0
+    return write_report(data)

@@ -1,7 +1,13 @@
 """The paper's sensitivity studies (Section 3), one function of the scene each.
 
 A study turns a scene into cases (engine + modified scene), runs them through the cache and
-the parallel runner, and writes a table (CSV) and a figure (PNG and PDF):
+the parallel runner, and writes a table (CSV, units in the header) and a figure (PNG; PDF on
+request). Every study starts from a stated :class:`StartState`: the scene as given
+(``virgin``) or the gap and bent stiffness the sequence carries into one of its runs (``run7``:
+runs 1–6 of the sequence driven by the reference engine, then run 7's PGA), see
+:func:`start_state`. Studies marked ``carried`` (friction, sticking, stiffness, law) are run by
+``deckpound paper`` from both the strongest run's carried state and the virgin state;
+``deckpound study NAME SCENE`` runs the scene as given unless ``--state runK`` is asked.
 
 ==============  ============================================================================
 stiffness       peak deck rotation vs contact stiffness (≥ 4 decades), nonsmooth = rigid limit
@@ -19,13 +25,13 @@ Compliance cases resolve the contact: their step is at most the contact period /
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 import pandas as pd
-
 from deckpound.models._fields import to_mapping
 from deckpound.models.contact_params import effective_masses
 from deckpound.models.errors import SceneError
@@ -58,17 +64,94 @@ def _compliance(scene: Scene, *overrides: str) -> Scene:
     return modified(s, f"compliance.dt={contact_step(s)!r}")
 
 
-def case_row(case: Case, result: Result) -> dict:
-    """Headline numbers of one case."""
+#: units of the columns of :func:`case_row` (and of the sequence table, which adds its own)
+ROW_UNITS = {"peak_theta": "rad", "peak_x_rel": "m", "peak_y_rel": "m", "peak_x_abs": "m",
+             "peak_y_abs": "m", "peak_fn": "kN", "gap1_start": "m", "gap2_start": "m",
+             "wall_time": "s", "compile_time": "s", "gap_closures": "-", "stiffness": "kN/m",
+             "mu": "-"}
+
+
+def case_row(case: Case, result: Result, state: str = "virgin") -> dict:
+    """Headline numbers of one case: peaks of the deck displacements relative to the supports
+    (``_rel``) and absolute (``_abs``), the start state and gaps, the run time without
+    compilation (``wall_time``) and the compilation time apart."""
     row = dict(label=case.label, engine=case.engine, **case.params)
     row.update(
-        peak_theta=peak(result["deck_theta"]), peak_x=peak(result["deck_x_rel"]),
-        peak_y=peak(result["deck_y_rel"]),
+        state=state, gap1_start=case.scene.seats[0].gap, gap2_start=case.scene.seats[1].gap,
+        peak_theta=peak(result["deck_theta"]), peak_x_rel=peak(result["deck_x_rel"]),
+        peak_y_rel=peak(result["deck_y_rel"]), peak_x_abs=peak(result["deck_x_abs"]),
+        peak_y_abs=peak(result["deck_y_abs"]),
         peak_fn=max(peak(result[f"fn_c{c}"]) for c in range(1, 5)),
         gap_closures=result.gap_closures,
-        wall_time=result.meta.get("wall_time", float("nan")), status=result.meta.get("status"),
+        wall_time=result.meta.get("wall_time", float("nan")),
+        compile_time=result.meta.get("compile_time", float("nan")),
+        status=result.meta.get("status"),
     )
     return row
+
+
+# -- the state a study starts from -------------------------------------------------------
+
+@dataclass(frozen=True)
+class StartState:
+    """The state a study's cases start from.
+
+    label : ``virgin`` (the scene as given) or ``run<k>`` (carried into run k).
+    scene : the scene the study's case builders receive (for ``run<k>``: the sequence's gaps
+        and bent stiffness after runs 1 … k − 1, excitation at run k's PGA).
+    run, engine : run k (1-based) and the engine whose sequence carried the state.
+    base : the scene as given (its gaps and stiffness are the reference of the description).
+    """
+
+    label: str
+    scene: Scene
+    base: Scene
+    run: int | None = None
+    engine: str | None = None
+
+    @property
+    def carried(self) -> bool:
+        return self.run is not None
+
+    def stiffness_ratios(self) -> list[float]:
+        """Carried / original bent stiffness, every bent and direction [-]."""
+        return [getattr(b, a).stiffness / getattr(b0, a).stiffness
+                for b, b0 in zip(self.scene.bents, self.base.bents) for a in ("x", "y")]
+
+
+_RUN = re.compile(r"run(\d+)")
+
+
+def start_state(scene: Scene, spec: str = "virgin", *, engine: str | None = None,
+                cache_folder: str | Path | None = None, sequence: list | None = None
+                ) -> StartState:
+    """Resolve ``virgin``, ``strongest`` or ``run<k>`` into a :class:`StartState`.
+
+    A carried state comes from ``sequence`` (the :class:`~.sequence_run.SequenceRun` list of
+    one engine, when the caller has run it) or else from running the sequence's first k − 1
+    runs with ``engine`` (default: the reference engine) through the cache in
+    ``cache_folder``.
+    """
+    from deckpound.engines import DEFAULT_REFERENCE
+
+    from .sequence_run import state_before, strongest_run
+
+    if spec == "virgin":
+        return StartState("virgin", scene, scene)
+    if spec == "strongest":
+        k = strongest_run(scene)
+    else:
+        m = _RUN.fullmatch(spec)
+        if m is None:
+            raise SceneError("--state", f"must be 'virgin', 'strongest' or 'run<k>' (e.g. run7), "
+                             f"got {spec!r}")
+        k = int(m.group(1))
+    if sequence is not None and len(sequence) >= k:
+        run = sequence[k - 1]
+        return StartState(f"run{k}", run.scene, scene, k, run.result.engine)
+    engine = engine or DEFAULT_REFERENCE
+    _, run_scene = state_before(scene, k, engine, cache_folder)
+    return StartState(f"run{k}", run_scene, scene, k, engine)
 
 
 # -- case builders -----------------------------------------------------------------------
@@ -131,17 +214,25 @@ def opensees_mode_cases(scene: Scene, quick: bool = False) -> list[Case]:
 
 @dataclass(frozen=True)
 class Study:
+    """A sensitivity study: ``cases(scene, quick)`` builds its cases from the start state's
+    scene; ``x`` is the parameter on the figure's horizontal axis (``unit`` its unit);
+    ``carried``: ``deckpound paper`` runs it from the strongest run's carried state as well
+    as from the virgin state."""
+
     name: str
     title: str
     cases: Callable[[Scene, bool], list[Case]]
-    x: str            # parameter on the figure's horizontal axis
+    x: str
+    unit: str = ""
+    carried: bool = False
 
 
 STUDIES: dict[str, Study] = {s.name: s for s in (
-    Study("stiffness", "Contact stiffness", stiffness_cases, "stiffness"),
-    Study("friction", "Friction on/off", friction_cases, "mu"),
-    Study("sticking", "Coulomb friction with and without sticking", sticking_cases, "mu"),
-    Study("law", "Contact law", law_cases, "law"),
+    Study("stiffness", "Contact stiffness", stiffness_cases, "stiffness", "kN/m", True),
+    Study("friction", "Friction on/off", friction_cases, "mu", "-", True),
+    Study("sticking", "Coulomb friction with and without sticking", sticking_cases, "mu", "-",
+          True),
+    Study("law", "Contact law", law_cases, "law", "", True),
     Study("geometry", "Geometrically linear vs nonlinear contact", geometry_cases, "geometry"),
     Study("opensees-mode", "OpenSees stick vs rigid deck", opensees_mode_cases, "mode"),
 )}
@@ -150,24 +241,60 @@ STUDY_NAMES = tuple(STUDIES) + ("sequence",)
 
 def get_study(name: str) -> Study:
     if name not in STUDIES:
-        raise SceneError("study", f"unknown study {name!r}; valid studies: {', '.join(STUDY_NAMES)}")
+        raise SceneError("study", f"unknown study {name!r}; valid studies: "
+                         f"{', '.join(STUDY_NAMES)}")
     return STUDIES[name]
+
+
+def study_results(name: str, start: StartState, *, quick: bool = False,
+                  cache: ResultCache | None = None, workers: int | None = None,
+                  scheduler: str | None = None, progress: bool = True
+                  ) -> tuple[list[Case], dict[str, Result], pd.DataFrame]:
+    """Run a study from a start state: its cases, their results and its table."""
+    study = get_study(name)
+    cases = study.cases(start.scene, quick)
+    results = run_cases(cases, cache=cache, workers=workers, scheduler=scheduler,
+                        progress=progress, title=f"study {name} ({start.label})")
+    table = pd.DataFrame([case_row(c, results[c.label], start.label) for c in cases])
+    return cases, results, table
+
+
+def study_units(name: str, table: pd.DataFrame) -> dict[str, str]:
+    """Units of a study table's columns."""
+    units = {k: v for k, v in ROW_UNITS.items() if k in table}
+    study = get_study(name)
+    if study.unit and study.x in table:
+        units[study.x] = study.unit
+    return units
 
 
 def run_study(name: str, scene: Scene, out: str | Path, *, quick: bool = False,
               cache: ResultCache | None = None, workers: int | None = None,
-              scheduler: str | None = None, progress: bool = True) -> tuple[pd.DataFrame, dict]:
-    """Run a study, write ``<name>.csv`` and ``<name>.png/.pdf`` in ``out``; return the table."""
+              scheduler: str | None = None, progress: bool = True,
+              state: str | StartState = "virgin", state_engine: str | None = None,
+              formats: tuple[str, ...] = ()) -> tuple[pd.DataFrame, dict]:
+    """Run a study from ``state`` (default: the scene as given) and write ``<name>.csv`` and
+    ``<name>.png`` (``<name>_<state>.*`` for a carried state; ``formats`` adds e.g. PDF) in
+    ``out``; return the table and the results."""
     from .figures import study_figure
+    from .outputs import folder, write_csv
 
-    study = get_study(name)
-    cases = study.cases(scene, quick)
-    results = run_cases(cases, cache=cache, workers=workers, scheduler=scheduler,
-                        progress=progress, title=f"study {name}")
-    table = pd.DataFrame([case_row(c, results[c.label]) for c in cases])
-    from deckpound._io import ensure_folder, write_csv
-
-    out = ensure_folder(out)
-    write_csv(table, out / f"{name}.csv")
-    study_figure(study, scene, cases, results, table, out / f"{name}.png")
+    if not isinstance(state, StartState):
+        cache_folder = cache.folder if cache is not None else None
+        state = start_state(scene, state, engine=state_engine, cache_folder=cache_folder)
+    cases, results, table = study_results(name, state, quick=quick, cache=cache,
+                                          workers=workers, scheduler=scheduler,
+                                          progress=progress)
+    out = folder(out)
+    stem = name if not state.carried else f"{name}_{state.label}"
+    write_csv(table, out / f"{stem}.csv", study_units(name, table))
+    study_figure(get_study(name), state.scene, cases, results, table, out / f"{stem}.png",
+                 formats=formats, subtitle=state_caption(state))
     return table, results
+
+
+def state_caption(state: StartState) -> str:
+    """One line naming a start state (for figure titles)."""
+    if not state.carried:
+        return "virgin state (the scene as given)"
+    return f"state carried into run {state.run} by the {state.engine} sequence"

@@ -1,14 +1,23 @@
-"""ParaView export: deck and seat outlines over time as a VTK time series (meshio).
+"""ParaView export: deck and seat outlines over time (meshio).
 
 For each result in a folder (``<engine>.csv`` + ``<engine>.json`` with the scene in its
-metadata, as ``deckpound run`` writes it) this writes ``<engine>/frame_NNNNN.vtu`` (polygons
-of the deck and both seats, true scale, with point data ``displacement`` and cell data
-``body``) and ``<engine>.pvd``, the collection ParaView opens as one time series.
+metadata, as ``deckpound run`` and ``deckpound compare`` write them):
+
+* ``fmt = "xdmf"`` (default): ONE file, ``<engine>.xdmf``, an XDMF temporal collection with
+  its data inline (no companion files), that ParaView opens in one step as a time series. The
+  geometry is the outline of the deck and both seats at rest (three quadrilaterals, metres);
+  each time step carries the point data ``displacement`` (relative to the supports: the deck to
+  the shake tables, a seat to its actuator, true scale [m]; apply *Warp By Vector* with a scale
+  factor of about 100 to see the gaps and the rotation), ``displacement_abs`` (absolute [m])
+  and the cell data ``body`` (0 deck, 1 seat 1, 2 seat 2). meshio reads it back with
+  :class:`meshio.xdmf.TimeSeriesReader`.
+* ``fmt = "pvd"``: the older layout, only when asked: ``<engine>/frame_NNNNNN.vtu`` (displaced
+  outlines, true scale, one file per output time) and ``<engine>.pvd`` collecting them.
 
 The input is checked whole before anything is written (:func:`check_result_folder`): files
 that are not valid JSON or CSV, a missing or invalid scene, missing columns, non-finite values
 or a time base that does not increase are refused by name (exit status 2). Every file is
-written atomically.
+written atomically (:mod:`.outputs`, backed by :mod:`deckpound._io`).
 """
 
 from __future__ import annotations
@@ -22,13 +31,17 @@ from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 from deckpound.models.scene_io import scene_from_mapping
 
-from deckpound._io import atomic_path, atomic_write_text, ensure_folder
-
 from .figures import OUTLINE_COLUMNS, outlines
+from .outputs import folder as make_folder
+from .outputs import target, write_text
 
 BODIES = ("deck", "seat1", "seat2")
+FORMATS = ("xdmf", "pvd")
+#: the absolute counterpart of each outline column (θ is the same: the supports do not rotate)
+ABSOLUTE = {"deck_x_rel": "deck_x_abs", "deck_y_rel": "deck_y_abs", "seat1_x_rel": "seat1_x_abs",
+            "seat2_x_rel": "seat2_x_abs"}
 STATE = OUTLINE_COLUMNS
-#: most frames one export may write per result (each frame is one file)
+#: most frames one ``pvd`` export may write per result (each frame is one file)
 MAX_FRAMES = 100_000
 
 
@@ -36,25 +49,67 @@ def result_engines(folder: Path) -> list[str]:
     return sorted(p.stem for p in folder.glob("*.json") if (folder / f"{p.stem}.csv").is_file())
 
 
+def _points(scene, row: dict[str, float]) -> np.ndarray:
+    """The 12 outline points (deck, seat 1, seat 2; 4 corners each) at one state [m]."""
+    polys = outlines(scene, row, 1.0)
+    return np.concatenate([polys[name][:-1] for name in BODIES])
+
+
+def _cells() -> np.ndarray:
+    return np.arange(4 * len(BODIES)).reshape(len(BODIES), 4)
+
+
 def frame_mesh(scene, row: dict[str, float]) -> meshio.Mesh:
     """One frame: each body's outline as a polygon (true-scale displacements)."""
-    polys = outlines(scene, row, 1.0)
-    rest = outlines(scene, {k: 0.0 for k in row}, 1.0)
-    points, cells, body, disp = [], [], [], []
-    for b, name in enumerate(BODIES):
-        p = polys[name][:-1]
-        start = len(points)
-        points.extend(p)
-        disp.extend(p - rest[name][:-1])
-        cells.append(list(range(start, start + len(p))))
-        body.append(b)
-    pts = np.column_stack([np.asarray(points), np.zeros(len(points))])
-    d = np.column_stack([np.asarray(disp), np.zeros(len(disp))])
-    return meshio.Mesh(pts, [("polygon", np.array(cells))], point_data={"displacement": d},
-                       cell_data={"body": [np.array(body, dtype=float)]})
+    p = _points(scene, row)
+    rest = _points(scene, {k: 0.0 for k in row})
+    pts = np.column_stack([p, np.zeros(len(p))])
+    d = np.column_stack([p - rest, np.zeros(len(p))])
+    return meshio.Mesh(pts, [("polygon", _cells())], point_data={"displacement": d},
+                       cell_data={"body": [np.arange(len(BODIES), dtype=float)]})
 
 
-def check_result_folder(result_dir: str | Path, every: int = 1) -> dict[str, tuple]:
+def _rows(r: Result, k: int) -> tuple[dict[str, float], dict[str, float]]:
+    rel = {q: float(r[q][k]) for q in OUTLINE_COLUMNS}
+    absolute = {q: float(r[ABSOLUTE.get(q, q)][k]) for q in OUTLINE_COLUMNS}
+    return rel, absolute
+
+
+def write_xdmf(scene, r: Result, path: Path, every: int = 1) -> Path:
+    """The XDMF time series of one result (see the module docstring)."""
+    rest = _points(scene, {q: 0.0 for q in OUTLINE_COLUMNS})
+    z = np.zeros((len(rest), 1))
+    body = np.arange(len(BODIES), dtype=np.float32)
+    with target(path) as p, meshio.xdmf.TimeSeriesWriter(p, data_format="XML") as writer:
+        writer.write_points_cells(np.hstack([rest, z]), [("quad", _cells())])
+        for k in range(0, len(r.t), every):
+            rel, absolute = _rows(r, k)
+            d_rel = np.hstack([_points(scene, rel) - rest, z]).astype(np.float32)
+            d_abs = np.hstack([_points(scene, absolute) - rest, z]).astype(np.float32)
+            writer.write_data(float(r.t[k]),
+                              point_data={"displacement": d_rel, "displacement_abs": d_abs},
+                              cell_data={"body": [body]})
+    return path
+
+
+def write_pvd(scene, r: Result, out: Path, engine: str, every: int = 1) -> Path:
+    """One .vtu per output time and the .pvd collection (see the module docstring)."""
+    frames = make_folder(out / engine)
+    entries = []
+    for k in range(0, len(r.t), every):
+        rel, _ = _rows(r, k)
+        name = f"frame_{k:06d}.vtu"
+        with target(frames / name) as p:
+            meshio.write(p, frame_mesh(scene, rel))
+        entries.append(f'    <DataSet timestep={quoteattr(repr(float(r.t[k])))} '
+                       f'part="0" file={quoteattr(f"{engine}/{name}")}/>')
+    return write_text(out / f"{engine}.pvd",
+                      '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                      "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
+
+
+def check_result_folder(result_dir: str | Path, every: int = 1,
+                        fmt: str = "xdmf") -> dict[str, tuple]:
     """Load and check every result in ``result_dir``: ``{engine: (Result, Scene)}``.
 
     Refuses (SceneError, field ``RESULT_DIR`` or ``--every``) a folder without results,
@@ -84,7 +139,7 @@ def check_result_folder(result_dir: str | Path, every: int = 1) -> dict[str, tup
             scene = scene_from_mapping(r.meta["scene"])
         except SceneError as err:
             raise SceneError("RESULT_DIR", f"{engine}.json: its scene is invalid: {err}") from None
-        missing = [q for q in STATE if q not in r.columns]
+        missing = [q for q in STATE + tuple(ABSOLUTE.values()) if q not in r.columns]
         if missing:
             raise SceneError("RESULT_DIR", f"{engine}.csv lacks the column {missing[0]!r}")
         if len(r.t) < 1:
@@ -97,35 +152,29 @@ def check_result_folder(result_dir: str | Path, every: int = 1) -> dict[str, tup
         if len(r.t) > 1 and not np.all(np.diff(r.t) > 0):
             raise SceneError("RESULT_DIR", f"{engine}.csv: the time column 't' does not increase")
         frames = (len(r.t) + every - 1) // every
-        if frames > MAX_FRAMES:
+        if fmt == "pvd" and frames > MAX_FRAMES:
             raise SceneError("--every", f"gives {frames} frames for {engine} (one file each; at "
                              f"most {MAX_FRAMES}); use --every >= {len(r.t) // MAX_FRAMES + 1}")
         out[engine] = (r, scene)
     return out
 
 
-def export_vtk(result_dir: str | Path, out: str | Path, every: int = 1,
+def export_vtk(result_dir: str | Path, out: str | Path, every: int = 1, fmt: str = "xdmf",
                results: dict[str, tuple] | None = None) -> list[Path]:
-    """Write the VTK series of every result in ``result_dir``; returns the .pvd files.
+    """Write the time series of every result in ``result_dir``; returns the files ParaView
+    opens (``<engine>.xdmf``, or ``<engine>.pvd`` with ``fmt = "pvd"``).
 
-    ``results``: the output of :func:`check_result_folder` when the caller already has it."""
+    The input is checked whole before anything is written (:func:`check_result_folder`;
+    ``results``: its output when the caller already has it)."""
+    if fmt not in FORMATS:
+        raise SceneError("--format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
     if results is None:
-        results = check_result_folder(result_dir, every)
-    out = ensure_folder(out)
+        results = check_result_folder(result_dir, every, fmt)
+    out = make_folder(out)
     written = []
     for engine, (r, scene) in results.items():
-        folder = ensure_folder(out / engine)
-        entries = []
-        for k in range(0, len(r.t), every):
-            row = {q: float(r[q][k]) for q in OUTLINE_COLUMNS}
-            name = f"frame_{k:06d}.vtu"
-            with atomic_path(folder / name) as tmp:
-                meshio.write(tmp, frame_mesh(scene, row), file_format="vtu")
-            entries.append(f'    <DataSet timestep={quoteattr(repr(float(r.t[k])))} '
-                           f'part="0" file={quoteattr(f"{engine}/{name}")}/>')
-        pvd = out / f"{engine}.pvd"
-        atomic_write_text(pvd, '<?xml version="1.0"?>\n<VTKFile type="Collection" '
-                          'version="0.1">\n  <Collection>\n' + "\n".join(entries)
-                          + "\n  </Collection>\n</VTKFile>\n")
-        written.append(pvd)
+        if fmt == "xdmf":
+            written.append(write_xdmf(scene, r, out / f"{engine}.xdmf", every))
+        else:
+            written.append(write_pvd(scene, r, out, engine, every))
     return written

@@ -73,6 +73,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", default=None, metavar="DIR",
                    help="output folder (default: study-NAME)")
     p.add_argument("--quick", action="store_true", help="fewer cases")
+    p.add_argument("--state", default="virgin", metavar="STATE",
+                   help="start state: virgin (the scene as given, default), runK (the gap and "
+                   "bent stiffness the sequence carries into run K, at run K's PGA) or strongest")
+    p.add_argument("--state-engine", default=None, metavar="ENGINE",
+                   help="engine whose sequence carries the state (default: the reference, "
+                   "opensees)")
+    p.add_argument("--pdf", action="store_true", help="figures also as PDF")
     _parallel_args(p)
     p.set_defaults(func=_study)
 
@@ -80,6 +87,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     _benchmark_scene_args(p, "deckpound-report", "fewer study cases")
     p.add_argument("--studies", default=None,
                    help="comma-separated subset of studies (default: all)")
+    p.add_argument("--full-histories", action="store_true",
+                   help="also write every run's aligned histories (Parquet and CSV, ~120 MB "
+                   "on the benchmark)")
+    p.add_argument("--pdf", action="store_true", help="figures also as PDF")
     _parallel_args(p)
     p.set_defaults(func=_paper)
 
@@ -104,6 +115,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, metavar="DIR")
     p.add_argument("--every", type=int_in(1, 10 ** 9), default=1,
                    help="write every N-th output sample")
+    p.add_argument("--format", dest="fmt", choices=("xdmf", "pvd"), default="xdmf",
+                   help="xdmf: one time-series file per engine (default); pvd: a .pvd "
+                   "collection with one .vtu file per output time")
     p.set_defaults(func=_export_vtk)
 
 
@@ -170,25 +184,35 @@ def _study(args) -> int:
                          f"{', '.join(STUDY_NAMES)}")
     out = check_output_folder(args.output or f"study-{args.name}")
     scene = _checked_scene(args, engine_names())
+    formats = ("pdf",) if args.pdf else ()
     with output_folder(out, f"study {args.name}") as out:
         cache_dir = Path(args.cache) if args.cache else out / "cache"
         if args.name == "sequence":
             from deckpound.compare import figures
-            from deckpound.compare.paper import sequence_table
+            from deckpound.compare.outputs import write_csv
+            from deckpound.compare.paper import sequence_table, sequence_units
             from deckpound.compare.sequence_run import run_sequences
 
-            seqs = run_sequences(scene, list(engine_names()), cache_dir, args.workers, args.scheduler,
-                                 not args.no_progress)
+            if args.state != "virgin":
+                raise SceneError("--state", "applies to the sensitivity studies; the sequence "
+                                 "starts from the scene as given")
+            seqs = run_sequences(scene, list(engine_names()), cache_dir, args.workers,
+                                 args.scheduler, not args.no_progress)
             table = sequence_table(seqs)
-            write_csv(table, out / "sequence.csv")
-            figures.peak_vs_pga(table, scene, out / "sequence.png")
+            write_csv(table, out / "sequence.csv", sequence_units(table))
+            figures.peak_vs_pga(table, scene, out / "sequence.png", formats=formats)
         else:
             table, _ = run_study(args.name, scene, out, quick=args.quick,
                                  cache=ResultCache(cache_dir), workers=args.workers,
-                                 scheduler=args.scheduler, progress=not args.no_progress)
-    cols = [c for c in ("label", "engine", "run", "pga", "peak_theta", "peak_y", "gap_closures",
-                        "wall_time", "status") if c in table]
-    print(table[cols].to_string(index=False))
+                                 scheduler=args.scheduler, progress=not args.no_progress,
+                                 state=args.state, state_engine=args.state_engine,
+                                 formats=formats)
+    cols = [c for c in ("label", "engine", "state", "run", "pga", "peak_theta", "peak_y_rel",
+                        "gap_closures", "wall_time", "status") if c in table]
+    from deckpound.compare.outputs import unit_header
+    from deckpound.compare.paper import sequence_units
+
+    print(unit_header(table[cols], sequence_units(table)).to_string(index=False))
     print(f"wrote {out}")
     return 0
 
@@ -213,7 +237,8 @@ def _paper(args) -> int:
     with output_folder(args.output, "paper") as out:
         report = run_paper(scene, out, quick=args.quick, workers=args.workers,
                            scheduler=args.scheduler, cache_dir=args.cache, studies=studies,
-                           progress=not args.no_progress)
+                           progress=not args.no_progress, full_histories=args.full_histories,
+                           formats=("pdf",) if args.pdf else ())
     print(f"wrote {report} and {report.with_suffix('.html')}")
     return 0
 
@@ -281,7 +306,7 @@ def _export_vtk(args) -> int:
     check_output_folder(args.output)
     results = check_result_folder(args.result_dir, args.every)  # damaged input: exit 2
     with output_folder(args.output, "export-vtk") as out:
-        written = export_vtk(args.result_dir, out, args.every, results=results)
+        written = export_vtk(args.result_dir, out, args.every, fmt=args.fmt, results=results)
     for p in written:
         print(f"wrote {p}")
     return 0
