@@ -28,9 +28,29 @@ _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
 MAX_STEPS = 50_000_000
 
 
+#: largest skew angle accepted [degrees]: beyond it the acute corners are sharper than 15°
+#: and the end faces longer than 3.9 W, far outside bridge practice (and tan φ → ∞ at 90°)
+MAX_SKEW = 75.0
+
+
 @dataclass(frozen=True, kw_only=True)
 class Deck:
-    """Rigid deck in plan: size, mass and polar inertia about its centre."""
+    """Rigid deck in plan: size, mass and polar inertia about its centre, and its skew.
+
+    Skew (``skew`` = φ, in **degrees** in the scene, radians inside the engines): the deck is
+    a parallelogram whose end faces make the angle φ with the transverse (y) axis, i.e. the
+    end faces are the lines x = ±L/2 + y·tan φ, so the corners sit at (±L/2 + y_c tan φ, y_c),
+    y_c = ±W/2 (φ > 0: corner c1 at (−L/2, −W/2) and c4 at (L/2, W/2) are the acute ones).
+    ``length`` L is measured along the bridge axis between the end faces' mid-points and
+    ``width`` W across it, so the plan area is L·W whatever φ (``mass`` and ``inertia`` are
+    given for the actual deck and are not rescaled with φ). The abutment seats' contact faces
+    are parallel to the end faces, but the seats still **slide along the bridge axis x** (their
+    actuators push along x) and rotate about the mid-point of their contact face; the initial
+    gap ``seats[i].gap`` is the clear distance **along the face normal** n = (cos φ, −sin φ),
+    not along x (the x distance is gap / cos φ). The corner table of
+    :mod:`deckpound.models.plan` is the one place where these geometric facts are turned into
+    positions, normals and tangents.
+    """
 
     length: float = spec(unit="m", doc="deck length along x", gt=0.0)
     width: float = spec(unit="m", doc="deck width along y", gt=0.0)
@@ -39,6 +59,9 @@ class Deck:
     stick_modulus: float = spec(3.0e9, unit="kN/m^2",
                                 doc="Young's modulus of the stiff stick elements (OpenSees stick mode)",
                                 gt=0.0)
+    skew: float = spec(0.0, unit="deg", doc="skew angle φ of the end faces from the transverse "
+                       "axis (degrees; 0 = straight deck); the gap is measured along the face "
+                       "normal", ge=0.0, lt=MAX_SKEW)
 
     def __post_init__(self) -> None:
         validate(self)
