@@ -10,6 +10,7 @@ sticking        Coulomb with vs without sticking, compliance
 law             contact law: linear, Kelvin–Voigt, Hertz, Hertz-damp, bilinear
 geometry        geometrically linear vs nonlinear contact kinematics
 opensees-mode   OpenSees stick vs rigid deck
+skew            skew angle 0–60° with and without friction, every engine (:mod:`.skew`)
 sequence        the 7-run sequence with carried gap and stiffness, every engine
 ==============  ============================================================================
 
@@ -35,6 +36,7 @@ from deckpound.models.scene_io import apply_overrides, scene_from_mapping
 
 from .cases import Case, ResultCache, run_cases
 from .metrics import peak
+from .skew import skew_cases, skew_figure, skew_row
 
 ENGINES_ALL = ("opensees", "compliance", "nonsmooth")
 
@@ -131,10 +133,16 @@ def opensees_mode_cases(scene: Scene, quick: bool = False) -> list[Case]:
 
 @dataclass(frozen=True)
 class Study:
+    """A study: its cases, the parameter on the figure's horizontal axis and, optionally, its
+    own table row (default :func:`case_row`) and figure (default
+    :func:`.figures.study_figure`, same signature)."""
+
     name: str
     title: str
     cases: Callable[[Scene, bool], list[Case]]
     x: str            # parameter on the figure's horizontal axis
+    row: Callable[[Case, Result], dict] | None = None
+    figure: Callable | None = None
 
 
 STUDIES: dict[str, Study] = {s.name: s for s in (
@@ -144,6 +152,8 @@ STUDIES: dict[str, Study] = {s.name: s for s in (
     Study("law", "Contact law", law_cases, "law"),
     Study("geometry", "Geometrically linear vs nonlinear contact", geometry_cases, "geometry"),
     Study("opensees-mode", "OpenSees stick vs rigid deck", opensees_mode_cases, "mode"),
+    Study("skew", "Skewed deck: skew angle, with and without friction", skew_cases, "skew",
+          row=skew_row, figure=skew_figure),
 )}
 STUDY_NAMES = tuple(STUDIES) + ("sequence",)
 
@@ -164,9 +174,10 @@ def run_study(name: str, scene: Scene, out: str | Path, *, quick: bool = False,
     cases = study.cases(scene, quick)
     results = run_cases(cases, cache=cache, workers=workers, scheduler=scheduler,
                         progress=progress, title=f"study {name}")
-    table = pd.DataFrame([case_row(c, results[c.label]) for c in cases])
+    row = study.row or case_row
+    table = pd.DataFrame([row(c, results[c.label]) for c in cases])
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     table.to_csv(out / f"{name}.csv", index=False)
-    study_figure(study, scene, cases, results, table, out / f"{name}.png")
+    (study.figure or study_figure)(study, scene, cases, results, table, out / f"{name}.png")
     return table, results

@@ -9,12 +9,12 @@ starts with the time column (``-time``) and holds raw OpenSees quantities at 17 
 digits; :class:`ColumnMap` states how a deckpound column follows from them:
 
 * node displacements are the columns themselves (absolute, as in deckpound);
-* ``gap_cK`` — without friction the gap element's ``deformation`` e = a·(u_j − u_i) along its
-  local x axis a, and g = g₀ + e (the nodes are ordered so that e = n·(u_deck − u_seat), closing
-  negative); with friction (zeroLengthContact2D) the displacements of the deck corner and the
-  seat point, g = g₀ + n·(u_deck − u_seat) with the corner's gap-opening normal n — the x
-  displacements alone, g₀ + side·(u_deck − u_seat), for a straight deck, the x and y ones
-  (``-dof 1 2``) for a skewed deck;
+* ``gap_cK`` — straight deck without friction: the gap element's ``deformation``
+  e = u_j − u_i, and g = g₀ + e (the nodes are ordered so that e = side·(u_deck − u_seat),
+  closing negative); straight deck with friction (zeroLengthContact2D): the x displacements
+  of the deck corner and the seat point, g = g₀ + side·(u_deck − u_seat); skewed deck (either
+  element): their x and y displacements (``-dof 1 2``), g = g₀ + n·(u_deck − u_seat) with the
+  corner's gap-opening normal n — the engine's own arithmetic;
 * ``fn_cK`` — without friction the material stress (``basicForce``, ≤ 0 in compression),
   fn = −stress; with friction the element's resisting forces [Fx_i, Fy_i, M_i, Fx_j, Fy_j, M_j]
   (j = deck corner), fn = −n·(Fx_j, Fy_j) and ``ft_cK`` = −t·(Fx_j, Fy_j) (force on the deck
@@ -170,26 +170,37 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
                      ColumnMap(f"ft_c{k}", None)]
             continue
         e = gaps[c]
+        dn, sn = plan["deck_corners"][c], plan["seat_corners"][c]
+        (nx, ny), (tx, ty) = plan["normals"][c], plan["tangents"][c]
+        if ny != 0.0:
+            # skewed deck, any element: the gap is the engine's own projection of the node
+            # displacements on n (the zeroLength's deformation a.(u_j - u_i) is the same gap
+            # but in other arithmetic: its last bits would differ from the engine's column)
+            recs.append(Recorder(f"gap_c{k}.out", "Node", (dn, sn), ("disp",),
+                                 ("ux_deck corner", "uy_deck corner", "ux_seat point",
+                                  "uy_seat point"),
+                                 f"x and y displacements of deck corner node {dn} and seat "
+                                 f"point node {sn} [m]", dofs=(1, 2)))
+            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=3, offset=g0,
+                                  scale=nx, a2=2, b2=4, scale2=ny))
+        elif plan["friction"]:   # straight deck: x displacements only, n = (side, 0)
+            recs.append(Recorder(f"gap_c{k}.out", "Node", (dn, sn), ("disp",),
+                                 ("u_deck corner", "u_seat corner"),
+                                 f"x displacement of deck corner node {dn} and seat corner "
+                                 f"node {sn} [m]", dofs=(1,)))
+            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0,
+                                  scale=side))
+        else:
+            recs.append(Recorder(f"gap_c{k}.out", "Element", (e,), ("deformation",),
+                                 ("deformation",), f"deformation u_j - u_i of gap element {e} "
+                                 "[m]"))
+            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", offset=g0))
         if plan["friction"]:
-            dn, sn = plan["deck_corners"][c], plan["seat_corners"][c]
-            (nx, ny), (tx, ty) = plan["normals"][c], plan["tangents"][c]
-            if ny == 0.0:   # straight deck: x displacements only, n = (side, 0), t = (0, 1)
-                recs.append(Recorder(f"gap_c{k}.out", "Node", (dn, sn), ("disp",),
-                                     ("u_deck corner", "u_seat corner"),
-                                     f"x displacement of deck corner node {dn} and seat corner "
-                                     f"node {sn} [m]", dofs=(1,)))
-                maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0,
-                                      scale=side))
-                terms = ((f"fn_c{k}", 4, -side, None, 0.0), (f"ft_c{k}", 5, -1.0, None, 0.0))
-            else:           # skewed deck: project on the face normal n and tangent t
-                recs.append(Recorder(f"gap_c{k}.out", "Node", (dn, sn), ("disp",),
-                                     ("ux_deck corner", "uy_deck corner", "ux_seat point",
-                                      "uy_seat point"),
-                                     f"x and y displacements of deck corner node {dn} and seat "
-                                     f"point node {sn} [m]", dofs=(1, 2)))
-                maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=3, offset=g0,
-                                      scale=nx, a2=2, b2=4, scale2=ny))
-                terms = ((f"fn_c{k}", 4, -nx, 5, -ny), (f"ft_c{k}", 4, -tx, 5, -ty))
+            # fn = -n.(Fx_j, Fy_j), ft = -t.(Fx_j, Fy_j) (j = deck corner); straight: -side*Fx_j,
+            # -Fy_j
+            terms = (((f"fn_c{k}", 4, -side, None, 0.0), (f"ft_c{k}", 5, -1.0, None, 0.0))
+                     if ny == 0.0 else
+                     ((f"fn_c{k}", 4, -nx, 5, -ny), (f"ft_c{k}", 4, -tx, 5, -ty)))
             for col, a, scale, a2, scale2 in terms:
                 recs.append(Recorder(f"{col}.out", "Element", (e,), ("force",),
                                      ("Fx_i", "Fy_i", "M_i", "Fx_j", "Fy_j", "M_j"),
@@ -198,10 +209,6 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
                 maps.append(ColumnMap(col, f"{col}.out", a=a, scale=scale, a2=a2,
                                       scale2=scale2))
         else:
-            recs.append(Recorder(f"gap_c{k}.out", "Element", (e,), ("deformation",),
-                                 ("deformation",), f"deformation a.(u_j - u_i) of gap element {e} "
-                                 "along its local x axis a [m]"))
-            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", offset=g0))
             recs.append(Recorder(f"fn_c{k}.out", "Element", (e,), ("basicForce",),
                                  ("stress",), f"material stress of gap element {e}, <= 0 in "
                                  "compression [kN]"))
