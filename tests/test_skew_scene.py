@@ -61,3 +61,33 @@ def test_run_skew_30_with_every_engine(engine, tmp_path, capsys):
     data = pd.read_csv(tmp_path / engine / f"{engine}.csv", comment="#")
     assert np.all(np.isfinite(data["deck_theta"]))
     assert data["t"].iloc[-1] == pytest.approx(2.0)
+
+
+def test_skew_study_table_on_a_tiny_scene(tmp_path):
+    """The skew study's own columns on a 1 s record: every angle × friction × engine, the
+    first corner and the impulse share of the acute corners, stick + slip = 1 with friction
+    (NaN without), and OpenSees = its clone without friction (same step, same model)."""
+    from deckpound.compare.skew import skew_headlines
+    from deckpound.compare.studies import run_study
+
+    tiny = load_scene(
+        "saiidi-4span", ["excitation.duration=1.0", "run.output_dt=0.01", "nonsmooth.h=0.001"]
+    )
+    table, _ = run_study("skew", tiny, tmp_path, quick=True, workers=2, progress=False)
+    assert (table["status"] == "success").all()
+    assert sorted(table["skew"].unique()) == [0.0, 30.0, 60.0]
+    assert len(table) == 3 * 2 * len(engine_names())
+    assert set(table["first_corner"]) <= {"c1", "c2", "c3", "c4"}
+    assert ((table["share_acute"] >= 0) & (table["share_acute"] <= 1)).all()
+    fr = table[table["mu"] > 0]
+    np.testing.assert_allclose(fr["stick_share"] + fr["slip_share"], 1.0, rtol=1e-12)
+    assert table[table["mu"] == 0]["stick_share"].isna().all()
+    free = table[table["mu"] == 0].set_index(["engine", "skew"])
+    for phi in (0.0, 30.0, 60.0):
+        a, b = (
+            free.loc[("opensees", phi), "peak_theta"],
+            free.loc[("compliance", phi), "peak_theta"],
+        )
+        assert a == pytest.approx(b, rel=1e-6)
+    words = skew_headlines(table)
+    assert len(words) == 2 * len(engine_names()) + 1 and "First corner" in words[-1]
