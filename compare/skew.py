@@ -20,7 +20,12 @@ Table (:func:`skew_row`, one row per case), besides the common headline numbers
 * ``stick_share``, ``slip_share`` — of the output rows with a corner in contact (summed over
   corners), the share sticking and slipping: the nonsmooth engine's ``state_c*`` (1 stick,
   2 slip); for the penalty engines a contact row slips when |f_T| ≥ (1 − 1e-6) μ f_N, else it
-  sticks (NaN without friction).
+  sticks (NaN without friction). ``stick_source`` says which. An engine whose sampled f_T is
+  exactly 0 on more than 1 % of its loaded rows does not report the step's friction force
+  (OpenSees' zeroLengthContact2D moves its stick point to the current slip at the commit of a
+  sliding step, so the force read after the step is 0): its shares are NaN and
+  ``stick_source`` says why — an elastic-plastic stick law under load is never exactly 0
+  otherwise.
 
 Figure (:func:`skew_figure`): peak deck rotation and peak transverse displacement relative to
 the tables against φ, one line per engine × friction.
@@ -146,14 +151,16 @@ def first_strike(result: Result) -> tuple[str, float]:
     return best
 
 
-def stick_slip_shares(result: Result, mu: float) -> tuple[float, float]:
-    """(stick share, slip share) of the contact rows (module docstring); NaN without
-    friction or contact."""
+def stick_slip_shares(result: Result, mu: float) -> tuple[float, float, str]:
+    """(stick share, slip share, source) of the contact rows (module docstring); NaN without
+    friction or contact, or when the engine's f_T is not the step's friction force."""
+    nan = float("nan")
     if mu <= 0.0:
-        return float("nan"), float("nan")
-    stick = slip = 0
+        return nan, nan, "no friction"
+    stick = slip = zero = 0
+    states = all(f"state_{c}" in result.columns for c in CORNER_NAMES)
     for c in CORNER_NAMES:
-        if f"state_{c}" in result.columns:
+        if states:
             s = result[f"state_{c}"]
             stick += int(np.count_nonzero(s == 1))
             slip += int(np.count_nonzero(s == 2))
@@ -163,10 +170,22 @@ def stick_slip_shares(result: Result, mu: float) -> tuple[float, float]:
         sliding = np.abs(ft) >= (1.0 - 1e-6) * mu * fn
         stick += int(np.count_nonzero(on & ~sliding))
         slip += int(np.count_nonzero(on & sliding))
+        zero += int(np.count_nonzero(on & (ft == 0.0)))
     total = stick + slip
     if total == 0:
-        return float("nan"), float("nan")
-    return stick / total, slip / total
+        return nan, nan, "no contact"
+    if states:
+        return stick / total, slip / total, "state_c*"
+    if zero > 0.01 * total:
+        return (
+            nan,
+            nan,
+            (
+                f"n/a: f_T = 0 on {100 * zero / total:.0f} % of loaded rows "
+                "(reset at a sliding commit)"
+            ),
+        )
+    return stick / total, slip / total, "|f_T| vs mu f_N"
 
 
 def skew_row(case: Case, result: Result) -> dict:
@@ -177,13 +196,14 @@ def skew_row(case: Case, result: Result) -> dict:
     corner, when = first_strike(result)
     imp = _impulses(result)
     total = sum(imp.values())
-    stick, slip = stick_slip_shares(result, case.params["mu"])
+    stick, slip, source = stick_slip_shares(result, case.params["mu"])
     row.update(
         first_corner=corner,
         first_time=when,
         share_acute=sum(imp[c] for c in ACUTE) / total if total > 0 else float("nan"),
         stick_share=stick,
         slip_share=slip,
+        stick_source=source,
     )
     return row
 
@@ -247,8 +267,10 @@ def skew_headlines(table: pd.DataFrame) -> list[str]:
             + ", ".join(f"{100 * s:.0f} %" for s in g["share_acute"])
             + " of the impulse"
         )
-        if mu > 0:
+        if mu > 0 and g["stick_share"].notna().any():
             text += " (stick share " + ", ".join(f"{100 * s:.0f} %" for s in g["stick_share"]) + ")"
+        elif mu > 0:
+            text += f" (stick share {g['stick_source'].iloc[0]})"
         out.append(text + " over φ = " + ", ".join(f"{p:g}" for p in g.index) + "°.")
     firsts = table.groupby("skew")["first_corner"].agg(lambda s: "/".join(sorted(set(s))))
     out.append(

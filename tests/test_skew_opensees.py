@@ -220,3 +220,38 @@ def test_clone_agrees_with_opensees_on_a_skewed_benchmark(phi_deg):
     )
     assert row["ok"], row
     assert row["iterations"]["opensees"] == row["iterations"]["compliance"]
+
+
+def test_sliding_contact2d_reads_zero_friction_after_its_commit():
+    """Why the skew study cannot take OpenSees' stick/slip share from its f_T: a
+    zeroLengthContact2D that slid in a step moves its stick point to the current slip at the
+    commit, so the force read after the step (what the engine samples) has no tangential part,
+    although the step was solved with |f_T| = μ p."""
+    import openseespy.opensees as ops
+
+    ops.wipe()
+    ops.model("basic", "-ndm", 2, "-ndf", 3)
+    ops.node(1, 0.0, 0.0)
+    ops.node(2, 0.0, 0.0)
+    ops.fix(1, 1, 1, 1)
+    ops.fix(2, 0, 0, 1)
+    ops.element("zeroLengthContact2D", 1, 1, 2, 1e6, 1e6, 0.2, "-normal", 0.0, 1.0)
+    ops.timeSeries("Linear", 1)
+    ops.pattern("Plain", 1, 1)
+    ops.sp(2, 1, 0.01)  # 10 mm along the tangent: k_t·slip ≫ μ p, it slides
+    ops.sp(2, 2, 0.001)  # 1 mm overlap: p = 1000 kN at the end
+    for cmd in (
+        ("constraints", "Transformation"),
+        ("numberer", "Plain"),
+        ("system", "UmfPack"),
+        ("test", "NormDispIncr", 1e-12, 10),
+        ("algorithm", "Newton"),
+        ("integrator", "LoadControl", 0.1),
+        ("analysis", "Static"),
+    ):
+        getattr(ops, cmd[0])(*cmd[1:])
+    for _ in range(10):
+        assert ops.analyze(1) == 0
+        fx, fy = ops.eleResponse(1, "force")[3:5]
+        assert fy > 0.0 and fx == 0.0
+    ops.wipe()

@@ -80,7 +80,11 @@ def test_skew_study_table_on_a_tiny_scene(tmp_path):
     assert set(table["first_corner"]) <= {"c1", "c2", "c3", "c4"}
     assert ((table["share_acute"] >= 0) & (table["share_acute"] <= 1)).all()
     fr = table[table["mu"] > 0]
-    np.testing.assert_allclose(fr["stick_share"] + fr["slip_share"], 1.0, rtol=1e-12)
+    known = fr[fr["stick_share"].notna()]
+    assert set(known["engine"]) >= {"compliance", "nonsmooth"}
+    np.testing.assert_allclose(known["stick_share"] + known["slip_share"], 1.0, rtol=1e-12)
+    # OpenSees reads f_T after the commit, which zeroes a sliding zeroLengthContact2D's force
+    assert fr[fr["stick_share"].isna()]["stick_source"].str.startswith("n/a").all()
     assert table[table["mu"] == 0]["stick_share"].isna().all()
     free = table[table["mu"] == 0].set_index(["engine", "skew"])
     for phi in (0.0, 30.0, 60.0):
