@@ -28,8 +28,7 @@ _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
 MAX_STEPS = 50_000_000
 
 
-#: largest skew angle accepted [degrees]: beyond it the acute corners are sharper than 15°
-#: and the end faces longer than 3.9 W, far outside bridge practice (and tan φ → ∞ at 90°)
+#: largest skew angle [degrees]: acute corners sharper than 15° are far outside bridge practice
 MAX_SKEW = 75.0
 
 
@@ -37,19 +36,15 @@ MAX_SKEW = 75.0
 class Deck:
     """Rigid deck in plan: size, mass and polar inertia about its centre, and its skew.
 
-    Skew (``skew`` = φ, in **degrees** in the scene, radians inside the engines): the deck is
-    a parallelogram whose end faces make the angle φ with the transverse (y) axis, i.e. the
-    end faces are the lines x = ±L/2 + y·tan φ, so the corners sit at (±L/2 + y_c tan φ, y_c),
-    y_c = ±W/2 (φ > 0: corner c1 at (−L/2, −W/2) and c4 at (L/2, W/2) are the acute ones).
-    ``length`` L is measured along the bridge axis between the end faces' mid-points and
-    ``width`` W across it, so the plan area is L·W whatever φ (``mass`` and ``inertia`` are
-    given for the actual deck and are not rescaled with φ). The abutment seats' contact faces
-    are parallel to the end faces, but the seats still **slide along the bridge axis x** (their
-    actuators push along x) and rotate about the mid-point of their contact face; the initial
-    gap ``seats[i].gap`` is the clear distance **along the face normal** n = (cos φ, −sin φ),
-    not along x (the x distance is gap / cos φ). The corner table of
-    :mod:`deckpound.models.plan` is the one place where these geometric facts are turned into
-    positions, normals and tangents.
+    Skew φ (``skew``, in **degrees** in the scene, radians inside the engines): the deck is a
+    parallelogram whose end faces are the lines x = ±L/2 + y tan φ, so the corners sit at
+    (±L/2 + y_c tan φ, y_c), y_c = ±W/2 (c1 and c4 acute for φ > 0); L is measured along the
+    axis between the end faces' mid-points and W across it (plan area L·W; mass and inertia
+    are given, not rescaled). The seats' contact faces are parallel to the end faces, but the
+    seats still **slide along the bridge axis x** and rotate about their face mid-point; the
+    gap ``seats[i].gap`` is measured **along the face normal** n = (cos φ, −sin φ) (x
+    clearance gap / cos φ). The plan model's corner table turns this into positions, normals
+    and tangents (:mod:`deckpound.models.plan`).
     """
 
     length: float = spec(unit="m", doc="deck length along x", gt=0.0)

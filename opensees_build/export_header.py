@@ -142,17 +142,17 @@ def sign_lines(p: ExportParts) -> list[str]:
     out = ["Sign conventions (gap g, contact force fn, as deckpound reports them):",
            "  side = +1 for corners c1, c2 (seat 1, left), -1 for c3, c4 (seat 2, right);"]
     if skewed:
-        out += ["  skewed deck: n = gap-opening normal of each corner's end face (c1, c2: "
-                f"{_fmt(normals[0][0])}, {_fmt(normals[0][1])}; c3, c4: {_fmt(normals[2][0])}, "
-                f"{_fmt(normals[2][1])}), t = face tangent {_fmt(p.plan['tangents'][0][0])}, "
-                f"{_fmt(p.plan['tangents'][0][1])};",
-                "  physical gap g = g0 + n.(u_deck corner - u_seat point): open > 0, "
-                "penetration < 0 (g0 measured along n);",
+        out += [("  skewed deck: n = gap-opening normal of each corner's end face (c1, c2: "
+                 f"{_fmt(normals[0][0])}, {_fmt(normals[0][1])}; c3, c4: {_fmt(normals[2][0])}, "
+                 f"{_fmt(normals[2][1])}), t = face tangent {_fmt(p.plan['tangents'][0][0])}, "
+                 f"{_fmt(p.plan['tangents'][0][1])};"),
+                ("  physical gap g = g0 + n.(u_deck corner - u_seat point): open > 0, "
+                 "penetration < 0 (g0 measured along n);"),
                 "  fn >= 0 is compression; ft is the tangential force ON the deck corner along t."]
     else:
         out += ["  physical gap g = g0 + side*(u_deck,x - u_seat,x): open > 0, penetration < 0;",
-                "  fn >= 0 is compression; ft is the tangential (y) force ON the deck corner, "
-                "+ = +y."]
+                ("  fn >= 0 is compression; ft is the tangential (y) force ON the deck corner, "
+                 "+ = +y.")]
     friction = p.plan["friction"]
     for c, e in enumerate(p.plan["gap_elements"]):
         cmd = _first(p.log, "element", 1, e)

@@ -259,7 +259,6 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
     refuse_scene(scene)
     s = scene.opensees
     d = scene.deck
-    hl = 0.5 * d.length
     plan = plan_of(scene)
     friction = gaps and scene.contact.has_friction
     T = ops.tag
