@@ -36,7 +36,7 @@ from deckpound.models.scene_io import apply_overrides, scene_from_mapping
 
 from .cases import Case, ResultCache, run_cases
 from .metrics import peak
-from .skew import skew_cases, skew_figure, skew_row
+from .skew import skew_cases, skew_figure, skew_headlines, skew_row
 
 ENGINES_ALL = ("opensees", "compliance", "nonsmooth")
 
@@ -134,8 +134,9 @@ def opensees_mode_cases(scene: Scene, quick: bool = False) -> list[Case]:
 @dataclass(frozen=True)
 class Study:
     """A study: its cases, the parameter on the figure's horizontal axis and, optionally, its
-    own table row (default :func:`case_row`) and figure (default
-    :func:`.figures.study_figure`, same signature)."""
+    own table row (default :func:`case_row`), figure (default :func:`.figures.study_figure`,
+    same signature) and ``summary(table) -> list[str]``: sentences stating the result from the
+    table's numbers, for the report."""
 
     name: str
     title: str
@@ -143,6 +144,7 @@ class Study:
     x: str            # parameter on the figure's horizontal axis
     row: Callable[[Case, Result], dict] | None = None
     figure: Callable | None = None
+    summary: Callable[[pd.DataFrame], list[str]] | None = None
 
 
 STUDIES: dict[str, Study] = {s.name: s for s in (
@@ -153,7 +155,7 @@ STUDIES: dict[str, Study] = {s.name: s for s in (
     Study("geometry", "Geometrically linear vs nonlinear contact", geometry_cases, "geometry"),
     Study("opensees-mode", "OpenSees stick vs rigid deck", opensees_mode_cases, "mode"),
     Study("skew", "Skewed deck: skew angle, with and without friction", skew_cases, "skew",
-          row=skew_row, figure=skew_figure),
+          row=skew_row, figure=skew_figure, summary=skew_headlines),
 )}
 STUDY_NAMES = tuple(STUDIES) + ("sequence",)
 
