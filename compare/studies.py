@@ -16,6 +16,7 @@ sticking        Coulomb with vs without sticking, compliance
 law             contact law: linear, Kelvin–Voigt, Hertz, Hertz-damp, bilinear
 geometry        geometrically linear vs nonlinear contact kinematics
 opensees-mode   OpenSees stick vs rigid deck
+skew            skew angle 0–60° with and without friction, every engine (:mod:`.skew`)
 sequence        the 7-run sequence with carried gap and stiffness, every engine
 ==============  ============================================================================
 
@@ -41,6 +42,7 @@ from deckpound.models.scene_io import apply_overrides, scene_from_mapping
 
 from .cases import Case, ResultCache, run_cases
 from .metrics import peak
+from .skew import skew_cases, skew_figure, skew_headlines, skew_row
 
 ENGINES_ALL = ("opensees", "compliance", "nonsmooth")
 
@@ -217,7 +219,9 @@ class Study:
     """A sensitivity study: ``cases(scene, quick)`` builds its cases from the start state's
     scene; ``x`` is the parameter on the figure's horizontal axis (``unit`` its unit);
     ``carried``: ``deckpound paper`` runs it from the strongest run's carried state as well
-    as from the virgin state."""
+    as from the virgin state. Optionally its own table row (default :func:`case_row`), figure
+    (default :func:`.figures.study_figure`, same signature) and ``summary(table) -> list[str]``:
+    sentences stating the result from the table's numbers, for the report."""
 
     name: str
     title: str
@@ -225,6 +229,9 @@ class Study:
     x: str
     unit: str = ""
     carried: bool = False
+    row: Callable[[Case, Result], dict] | None = None
+    figure: Callable | None = None
+    summary: Callable[[pd.DataFrame], list[str]] | None = None
 
 
 STUDIES: dict[str, Study] = {s.name: s for s in (
@@ -235,6 +242,8 @@ STUDIES: dict[str, Study] = {s.name: s for s in (
     Study("law", "Contact law", law_cases, "law", "", True),
     Study("geometry", "Geometrically linear vs nonlinear contact", geometry_cases, "geometry"),
     Study("opensees-mode", "OpenSees stick vs rigid deck", opensees_mode_cases, "mode"),
+    Study("skew", "Skewed deck: skew angle, with and without friction", skew_cases, "skew",
+          row=skew_row, figure=skew_figure, summary=skew_headlines),
 )}
 STUDY_NAMES = tuple(STUDIES) + ("sequence",)
 
@@ -255,8 +264,11 @@ def study_results(name: str, start: StartState, *, quick: bool = False,
     cases = study.cases(start.scene, quick)
     results = run_cases(cases, cache=cache, workers=workers, scheduler=scheduler,
                         progress=progress, title=f"study {name} ({start.label})")
-    table = pd.DataFrame([case_row(c, results[c.label], start.label) for c in cases])
-    return cases, results, table
+    if study.row is not None:
+        rows = [{**study.row(c, results[c.label]), "state": start.label} for c in cases]
+    else:
+        rows = [case_row(c, results[c.label], start.label) for c in cases]
+    return cases, results, pd.DataFrame(rows)
 
 
 def study_units(name: str, table: pd.DataFrame) -> dict[str, str]:
@@ -288,8 +300,10 @@ def run_study(name: str, scene: Scene, out: str | Path, *, quick: bool = False,
     out = folder(out)
     stem = name if not state.carried else f"{name}_{state.label}"
     write_csv(table, out / f"{stem}.csv", study_units(name, table))
-    study_figure(get_study(name), state.scene, cases, results, table, out / f"{stem}.png",
-                 formats=formats, subtitle=state_caption(state))
+    study = get_study(name)
+    (study.figure or study_figure)(study, state.scene, cases, results, table,
+                                   out / f"{stem}.png", formats=formats,
+                                   subtitle=state_caption(state))
     return table, results
 
 

@@ -382,7 +382,7 @@ class Plan:
 
 def _corner_table(scene: Scene, gaps: tuple[float, float]) -> tuple[Corner, ...]:
     hl, hw = 0.5 * scene.deck.length, 0.5 * scene.deck.width
-    phi = math.radians(getattr(scene.deck, "skew", 0.0))
+    phi = math.radians(scene.deck.skew)
     tn, cs, sn = math.tan(phi), math.cos(phi), math.sin(phi)
     out = []
     for k, (xs, ys) in enumerate(((-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0))):
@@ -431,5 +431,5 @@ def plan_of(scene: Scene, gaps: tuple[float, float] | None = None) -> Plan:
         bent_names=tuple(b.name for b in scene.bents),
         bent_x=tuple(b.station - hl for b in scene.bents),
         half_length=hl,
-        skew=math.radians(getattr(scene.deck, "skew", 0.0)),
+        skew=math.radians(scene.deck.skew),
     )

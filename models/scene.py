@@ -30,9 +30,24 @@ MAX_STEPS = 50_000_000
 MAX_ITERATIONS = 10_000
 
 
+#: largest skew angle [degrees]: acute corners sharper than 15° are far outside bridge practice
+MAX_SKEW = 75.0
+
+
 @dataclass(frozen=True, kw_only=True)
 class Deck:
-    """Rigid deck in plan: size, mass and polar inertia about its centre."""
+    """Rigid deck in plan: size, mass and polar inertia about its centre, and its skew.
+
+    Skew φ (``skew``, in **degrees** in the scene, radians inside the engines): the deck is a
+    parallelogram whose end faces are the lines x = ±L/2 + y tan φ, so the corners sit at
+    (±L/2 + y_c tan φ, y_c), y_c = ±W/2 (c1 and c4 acute for φ > 0); L is measured along the
+    axis between the end faces' mid-points and W across it (plan area L·W; mass and inertia
+    are given, not rescaled). The seats' contact faces are parallel to the end faces, but the
+    seats still **slide along the bridge axis x** and rotate about their face mid-point; the
+    gap ``seats[i].gap`` is measured **along the face normal** n = (cos φ, −sin φ) (x
+    clearance gap / cos φ). The plan model's corner table turns this into positions, normals
+    and tangents (:mod:`deckpound.models.plan`).
+    """
 
     length: float = spec(unit="m", doc="deck length along x", gt=0.0)
     width: float = spec(unit="m", doc="deck width along y", gt=0.0)
@@ -41,6 +56,9 @@ class Deck:
     stick_modulus: float = spec(3.0e9, unit="kN/m^2",
                                 doc="Young's modulus of the stiff stick elements (OpenSees stick mode)",
                                 gt=0.0)
+    skew: float = spec(0.0, unit="deg", doc="skew angle φ of the end faces from the transverse "
+                       "axis (degrees; 0 = straight deck); the gap is measured along the face "
+                       "normal", ge=0.0, lt=MAX_SKEW)
 
     def __post_init__(self) -> None:
         validate(self)

@@ -13,11 +13,14 @@ Result columns (sign conventions):
   rad], θ counter-clockwise; velocities ``deck_vx_abs``, ``deck_vy_abs``, ``deck_omega``;
 * ``seat1_x_abs``/``seat1_theta``, ``seat2_…`` — seat node (contact-face mid-point) [m, rad]
   and their velocities;
-* ``gap_c1..c4`` — g = g₀ + side·(u_deck corner,x − u_seat corner,x), side +1 for c1, c2 (seat 1,
-  left) and −1 for c3, c4; negative = penetration;
-* ``fn_c*`` — normal contact force ≥ 0 in compression [kN] (−stress of the gap material);
-* ``ft_c*`` — tangential (y) contact force acting ON THE DECK corner, + = +y [kN] (0 without
-  friction);
+* ``gap_c1..c4`` — g = g₀ + n·(u_deck corner − u_seat point) with n the corner's gap-opening
+  normal of the plan's corner table (``plan["normals"]``; n = (side, 0), side +1 for c1, c2 at
+  seat 1 and −1 for c3, c4, for a straight deck, where only the x displacements are read);
+  negative = penetration;
+* ``fn_c*`` — normal contact force ≥ 0 in compression [kN] (−stress of the gap material, or the
+  contact element's force on the deck projected on n);
+* ``ft_c*`` — tangential contact force acting ON THE DECK corner along the face tangent
+  t = (sin φ, cos φ) (+y for a straight deck) [kN] (0 without friction);
 * ``<bent>_fx/_fy`` — Hysteretic material stress of the bent spring for the deformation
   deck − table [kN] (+ = the deck is pulled back towards −x / −y).
 """
@@ -50,17 +53,22 @@ def define_analysis(ops, plan):
 
 
 def corner_gaps(ops, plan):
-    """Physical gaps g = g0 + side*(u_deck,x - u_seat,x) of the four corners [m]."""
+    """Physical gaps g = g0 + n.(u_deck corner - u_seat point) of the four corners [m], n the
+    gap-opening normal plan['normals'][c] (a straight deck has n_y = 0: x displacements only)."""
     out = []
     for c in range(4):
-        ud = ops.nodeDisp(plan["deck_corners"][c], 1)
-        us = ops.nodeDisp(plan["seat_corners"][c], 1)
-        out.append(plan["g0"][c] + plan["sides"][c] * (ud - us))
+        nx, ny = plan["normals"][c]
+        dk, st = plan["deck_corners"][c], plan["seat_corners"][c]
+        g = plan["g0"][c] + nx * (ops.nodeDisp(dk, 1) - ops.nodeDisp(st, 1))
+        if ny != 0.0:
+            g += ny * (ops.nodeDisp(dk, 2) - ops.nodeDisp(st, 2))
+        out.append(g)
     return out
 
 
 def contact_forces(ops, plan):
-    """(fn, ft) of the four corners: fn >= 0 compression, ft on the deck along +y [kN]."""
+    """(fn, ft) of the four corners [kN]: fn >= 0 compression, ft the force on the deck along
+    the face tangent plan['tangents'][c] (+y for a straight deck)."""
     fn, ft = [], []
     for c in range(4):
         e = plan["gap_elements"][c] if plan["gap_elements"] else 0
@@ -69,10 +77,12 @@ def contact_forces(ops, plan):
             ft.append(0.0)
         elif plan["friction"]:
             f = ops.eleResponse(e, "force")   # resisting forces [Fx_i, Fy_i, M_i, Fx_j, Fy_j, M_j]
-            # force ON the deck (node j) is minus its resisting force; the normal points from
-            # the seat to the deck (+x at seat 1, -x at seat 2)
-            fn.append(-plan["sides"][c] * f[3] + 0.0)
-            ft.append(-f[4] + 0.0)
+            # the force ON the deck (node j) is minus its resisting force; compression pushes
+            # the deck along the gap-opening normal n (+x at seat 1, -x at seat 2 when straight)
+            nx, ny = plan["normals"][c]
+            tx, ty = plan["tangents"][c]
+            fn.append(-(nx * f[3] + ny * f[4]) + 0.0)
+            ft.append(-(tx * f[3] + ty * f[4]) + 0.0)
         else:
             fn.append(-ops.eleResponse(e, "basicForce")[0] + 0.0)
             ft.append(0.0)
@@ -195,6 +205,8 @@ def make_plan(scene: Scene, info, duration: float) -> dict:
         "gap_elements": list(info.gap_elements),
         "g0": list(info.g0),
         "sides": list(info.sides),
+        "normals": [list(n) for n in info.normals],
+        "tangents": [list(t) for t in info.tangents],
         "bent_elements": list(info.bent_elements),
         "friction": info.friction,
         "analysis": [list(c) for c in analysis_commands(scene)],

@@ -137,25 +137,52 @@ def tag_legend(p: ExportParts) -> list[str]:
 
 def sign_lines(p: ExportParts) -> list[str]:
     """Gap and bent sign conventions, per corner from the element and material commands."""
+    normals = p.plan.get("normals") or [[s, 0.0] for s in p.plan["sides"]]
+    skewed = any(n[1] != 0.0 for n in normals)
     out = ["Sign conventions (gap g, contact force fn, as deckpound reports them):",
-           "  side = +1 for corners c1, c2 (seat 1, left), -1 for c3, c4 (seat 2, right);",
-           "  physical gap g = g0 + side*(u_deck,x - u_seat,x): open > 0, penetration < 0;",
-           "  fn >= 0 is compression; ft is the tangential (y) force ON the deck corner, + = +y."]
+           "  side = +1 for corners c1, c2 (seat 1, left), -1 for c3, c4 (seat 2, right);"]
+    if skewed:
+        out += [("  skewed deck: n = gap-opening normal of each corner's end face (c1, c2: "
+                 f"{_fmt(normals[0][0])}, {_fmt(normals[0][1])}; c3, c4: {_fmt(normals[2][0])}, "
+                 f"{_fmt(normals[2][1])}), t = face tangent {_fmt(p.plan['tangents'][0][0])}, "
+                 f"{_fmt(p.plan['tangents'][0][1])};"),
+                ("  physical gap g = g0 + n.(u_deck corner - u_seat point): open > 0, "
+                 "penetration < 0 (g0 measured along n);"),
+                "  fn >= 0 is compression; ft is the tangential force ON the deck corner along t."]
+    else:
+        out += ["  physical gap g = g0 + side*(u_deck,x - u_seat,x): open > 0, penetration < 0;",
+                ("  fn >= 0 is compression; ft is the tangential (y) force ON the deck corner, "
+                 "+ = +y.")]
     friction = p.plan["friction"]
     for c, e in enumerate(p.plan["gap_elements"]):
         cmd = _first(p.log, "element", 1, e)
         i, j = p.name("node", cmd.args[2]), p.name("node", cmd.args[3])
         side, g0 = p.plan["sides"][c], p.plan["g0"][c]
         if friction:
-            nx = cmd.args[cmd.args.index("-normal") + 1]
-            out.append(f"  c{c + 1}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
-                       f"({_fmt(nx)}, 0) from the deck to the seat; g0 = {g0!r} m (the nodes sit "
-                       f"g0 apart); fn = -side*Fx_j = {_fmt(-side)}*Fx_j, ft = -Fy_j")
+            k = cmd.args.index("-normal")
+            nx, ny = cmd.args[k + 1], cmd.args[k + 2]
+            if skewed:
+                out.append(f"  c{c + 1}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
+                           f"({_fmt(nx)}, {_fmt(ny)}) = -n, from the deck to the seat; g0 = "
+                           f"{g0!r} m (the nodes sit g0 apart along n); fn = -n.(Fx_j, Fy_j), "
+                           "ft = -t.(Fx_j, Fy_j)")
+            else:
+                out.append(f"  c{c + 1}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
+                           f"({_fmt(nx)}, 0) from the deck to the seat; g0 = {g0!r} m (the nodes "
+                           f"sit g0 apart); fn = -side*Fx_j = {_fmt(-side)}*Fx_j, ft = -Fy_j")
         else:
             mat = _first(p.log, "uniaxialMaterial", 1, cmd.args[5])
             args = " ".join(_fmt(a) for a in mat.args[2:])
-            out.append(f"  c{c + 1}: zeroLength {e} along x, i = {i}, j = {j}: deformation "
-                       f"e = u_j - u_i = {'+' if side > 0 else '-'}(u_deck - u_seat) = g - g0, "
+            if "-orient" in cmd.args:
+                k = cmd.args.index("-orient")
+                along = (f"along its local x axis a = ({_fmt(cmd.args[k + 1])}, "
+                         f"{_fmt(cmd.args[k + 2])}) (-orient)")
+                strain = f"a.(u_j - u_i) = {'+' if side > 0 else '-'}a.(u_deck - u_seat)"
+            else:
+                along = "along x"
+                strain = f"u_j - u_i = {'+' if side > 0 else '-'}(u_deck - u_seat)"
+            out.append(f"  c{c + 1}: zeroLength {e} {along}, i = {i}, j = {j}: deformation "
+                       f"e = {strain} = g - g0, "
                        f"closing negative; material {mat.args[1]} {mat.args[0]} {args} (negative "
                        f"gap and yield: compression only); g = {g0!r} + e, fn = -stress")
     if not p.plan["gap_elements"]:

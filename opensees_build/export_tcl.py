@@ -68,6 +68,10 @@ set gapEles {_tcl_list(gap_eles)}
 set hasGaps {1 if plan["gap_elements"] else 0}
 set g0 {_tcl_list(plan["g0"])}
 set sides {_tcl_list(plan["sides"])}
+set nX {_tcl_list([n[0] for n in plan["normals"]])}
+set nY {_tcl_list([n[1] for n in plan["normals"]])}
+set tX {_tcl_list([t[0] for t in plan["tangents"]])}
+set tY {_tcl_list([t[1] for t in plan["tangents"]])}
 set bentEles {_tcl_list(plan["bent_elements"])}
 set friction {1 if plan["friction"] else 0}
 
@@ -83,18 +87,22 @@ set recDT [expr {{($stride - {margin}) * $dt}}]
 
 # deckpound's CSV (writeCsv 1): the engine's sample_row, in Tcl
 proc cornerGaps {{}} {{
-    global deckCorners seatCorners g0 sides
+    global deckCorners seatCorners g0 nX nY
     set out {{}}
     for {{set c 0}} {{$c < 4}} {{incr c}} {{
-        set ud [nodeDisp [lindex $deckCorners $c] 1]
-        set us [nodeDisp [lindex $seatCorners $c] 1]
-        lappend out [expr {{[lindex $g0 $c] + [lindex $sides $c] * ($ud - $us)}}]
+        set dk [lindex $deckCorners $c]
+        set st [lindex $seatCorners $c]
+        set g [expr {{[lindex $g0 $c] + [lindex $nX $c] * ([nodeDisp $dk 1] - [nodeDisp $st 1])}}]
+        if {{[lindex $nY $c] != 0.0}} {{
+            set g [expr {{$g + [lindex $nY $c] * ([nodeDisp $dk 2] - [nodeDisp $st 2])}}]
+        }}
+        lappend out $g
     }}
     return $out
 }}
 
 proc sampleRow {{t}} {{
-    global deck seats gapEles hasGaps friction sides bentEles
+    global deck seats gapEles hasGaps friction nX nY tX tY bentEles
     set dk [nodeDisp $deck]
     set s1 [nodeDisp [lindex $seats 0]]
     set s2 [nodeDisp [lindex $seats 1]]
@@ -113,8 +121,10 @@ proc sampleRow {{t}} {{
             lappend fn 0.0; lappend ft 0.0
         }} elseif {{$friction}} {{
             set f [eleResponse $e force]
-            lappend fn [expr {{-[lindex $sides $c] * [lindex $f 3]}}]
-            lappend ft [expr {{-[lindex $f 4]}}]
+            set fx [lindex $f 3]
+            set fy [lindex $f 4]
+            lappend fn [expr {{-([lindex $nX $c] * $fx + [lindex $nY $c] * $fy) + 0.0}}]
+            lappend ft [expr {{-([lindex $tX $c] * $fx + [lindex $tY $c] * $fy) + 0.0}}]
         }} else {{
             lappend fn [expr {{-[lindex [eleResponse $e basicForce] 0]}}]
             lappend ft 0.0

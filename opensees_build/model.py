@@ -3,11 +3,15 @@
 Nodes (tags by name through :meth:`OpsSession.tag`):
 
 * ``deck`` — deck centre (0, 0) carrying all the deck mass (M_d, M_d, I_d);
-* ``deck c1..c4`` — deck corners at (±L/2, ±W/2) (c1 (−,−), c2 (−,+), c3 (+,−), c4 (+,+));
+* ``deck c1..c4`` — deck corners at (±L/2 + y_c tan φ, y_c), y_c = ±W/2 (c1 (−,−), c2 (−,+),
+  c3 (+,−), c4 (+,+)), the plan model's corner table (φ = ``deck.skew``, 0 for a straight deck);
 * the deck node above each bent at (x_b, 0) (the centre node itself when x_b = 0);
-* ``seat1``/``seat2`` — contact-face mid-points (∓L/2, 0) with mass (m_s, 0, I_s); with
-  friction they sit at ∓(L/2 + g₀) so that zeroLengthContact2D sees the physical gap;
-* ``seat1 c1``, ... — seat corners, rigidLinked (beam) to their seat node;
+* ``seat1``/``seat2`` — the seats' pivots (contact-face mid-points) (∓L/2, 0) with mass
+  (m_s, 0, I_s); with friction they sit at the physical pivot F₀ = (∓L/2, 0) − g₀ n (n the
+  face's gap-opening normal; ∓(L/2 + g₀) for a straight deck) so that zeroLengthContact2D,
+  whose gap includes the node coordinates, sees the clear gap g₀ along n;
+* ``seat1 c1``, ... — seat points facing the deck corners, at pivot + lever r = (y_c tan φ, y_c)
+  (the plan's ``Corner.lever``), rigidLinked (beam) to their seat node;
 * ``actuator1``/``actuator2`` — at the seat nodes, imposed x motion, y and θ fixed;
 * ``table <bent>`` — at (x_b, 0), imposed x and y motion, θ fixed.
 
@@ -31,11 +35,16 @@ part acts on the absolute velocities of the deck and seat nodes. Gap elements an
 no Rayleigh damping.
 
 Gaps: see :func:`gap_mapping` — the ONE place where the positive physical gap g₀ and the
-closing direction are mapped to OpenSees' node order and negative (compression) parameters.
+closing direction are mapped to OpenSees' node order, element orientation and negative
+(compression) parameters. Skewed decks (φ ≠ 0): the gap elements act along the face normal
+(zeroLength ``-orient``, zeroLengthContact2D ``-normal``), the seats still slide along x; the
+seat guide spring then carries the normal force's y component n_y·f_N, so its stiffness is
+:data:`SKEW_GUIDE_STIFFNESS` (see there).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -50,6 +59,16 @@ from .ops import ArrayArg, OpsSession
 
 #: stiffness of the seat y guide springs [kN/m] (seat y stays ~ F_t / k ≈ 0)
 GUIDE_STIFFNESS = 1.0e10
+#: guide stiffness of a skewed deck's seats [kN/m]. The plan model's seats cannot move in y;
+#: OpenSees cannot ``fix`` them (a retained node of a rigidLink, see the module docstring), so
+#: a guide spring holds them. With skew the normal force has a y component n_y f_N = sin φ f_N
+#: on the seat (zero for a straight deck), and a 1e10 guide would put a series compliance
+#: n_y²/k_guide ≈ 2.5e-11 m/kN (φ = 30°) behind each 1e6 kN/m contact: a 2.5e-5 relative
+#: difference from the plan model. 1e16 makes it 2.5e-11, below the round-off the clone
+#: comparison resolves (1e-9 of each column's peak), and the massless y DOF it restrains is
+#: only coupled through the contacts (LU pivots on it harmlessly; checked by the skew
+#: clone-vs-OpenSees test). Kept separate so a straight deck's command log is unchanged.
+SKEW_GUIDE_STIFFNESS = 1.0e16
 #: "infinite" yield force of the linear gap (ElasticPPGap) [kN]
 HUGE_FORCE = 1.0e20
 #: samples of the last value appended to every support record (a Path series returns 0 at and
@@ -61,7 +80,11 @@ SIDES = (1.0, 1.0, -1.0, -1.0)
 
 @dataclass
 class ModelInfo:
-    """Tags and constants the runner needs to read the model's state."""
+    """Tags and constants the runner needs to read the model's state.
+
+    ``normals``/``tangents``: per corner the gap-opening normal n and the face tangent t of the
+    plan's corner table (gap g = g₀ + n·(u_deck corner − u_seat point); ft along t on the deck).
+    """
 
     mode: str
     deck: int
@@ -74,18 +97,25 @@ class ModelInfo:
     bent_names: tuple[str, ...]
     bent_elements: tuple[int, ...]
     friction: bool
+    normals: tuple[tuple[float, float], ...] = ()
+    tangents: tuple[tuple[float, float], ...] = ()
     stick_elements: tuple[int, ...] = ()
     notes: list[str] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
 class GapSpec:
-    """One corner's gap element: node order and material (OpenSees signs)."""
+    """One corner's gap element: node order, orientation and material (OpenSees signs).
+
+    ``orient``: the six numbers of zeroLength ``-orient x1 x2 x3 yp1 yp2 yp3``, or None for
+    OpenSees' default (local x = global X), which is what a straight deck uses.
+    """
 
     i_node: int
     j_node: int
     material: str
     args: tuple[float, ...]
+    orient: tuple[float, ...] | None = None
 
 
 # -- checks -------------------------------------------------------------------------------
@@ -114,29 +144,56 @@ def refuse_scene(scene: Scene) -> None:
 
 # -- the one sign-convention function -------------------------------------------------------
 
+def gap_orientation(scene: Scene) -> tuple[float, ...] | None:
+    """zeroLength ``-orient`` of the gap elements: local x = a = (cos φ, −sin φ), the right end
+    face's outward normal (= side·n for every corner, n the gap-opening normal), local y' =
+    t = (sin φ, cos φ) (so local z = a × t = +Z and direction 3 stays the plan rotation).
+    None for a straight deck: OpenSees' default orientation is then the same a = X."""
+    if scene.deck.skew == 0.0:
+        return None
+    phi = math.radians(scene.deck.skew)
+    cs, sn = math.cos(phi), math.sin(phi)
+    return (cs, -sn, 0.0, sn, cs, 0.0)
+
+
 def gap_mapping(scene: Scene, corner: int, deck_node: int, seat_node: int,
                 mat_tag: int) -> GapSpec:
-    """Node order and OpenSees material of corner ``corner`` (0..3) for the scene's law.
+    """Node order, orientation and OpenSees material of corner ``corner`` (0..3).
 
-    Physical gap (positive when open): g = g₀ + side·(u_deck,x − u_seat,x), side = +1 for c1, c2
-    (seat 1, left) and −1 for c3, c4. zeroLength strain is u_j − u_i, so the nodes are ordered
-    (seat, deck) for side +1 and (deck, seat) for side −1: strain = side·(u_deck − u_seat) = g − g₀
-    and closing is negative (compression). The materials take a negative gap −g₀ (and negative
-    yield values), so their stress is ≤ 0 and the contact force fn = −stress ≥ 0.
+    Physical gap (positive when open), measured along the corner's gap-opening normal n of the
+    plan's corner table: g = g₀ + n·(u_deck − u_seat); n = side·a with a = (cos φ, −sin φ),
+    side = +1 for c1, c2 (seat 1, left) and −1 for c3, c4 (a = X for a straight deck). The
+    zeroLength element's direction-1 strain is a·(u_j − u_i) with a its local x axis
+    (:func:`gap_orientation`; checked against openseespy in ``tests/test_skew_opensees.py``),
+    so the nodes are ordered (seat, deck) for side +1 and (deck, seat) for side −1:
+    strain = side·a·(u_deck − u_seat) = g − g₀, and closing is negative (compression). The
+    materials take a negative gap −g₀ (and negative yield values), so their stress is ≤ 0 and
+    the contact force fn = −stress ≥ 0 acts on the deck along n.
     """
     side = SIDES[corner]
     g0 = scene.seats[0].gap if corner < 2 else scene.seats[1].gap
     i, j = (seat_node, deck_node) if side > 0 else (deck_node, seat_node)
+    orient = gap_orientation(scene)
     c = scene.contact
     if c.law == "linear":
-        return GapSpec(i, j, "ElasticPPGap", (mat_tag, c.stiffness, -HUGE_FORCE, -g0))
+        return GapSpec(i, j, "ElasticPPGap", (mat_tag, c.stiffness, -HUGE_FORCE, -g0), orient)
     if c.law == "bilinear":
         return GapSpec(i, j, "ImpactMaterial",
-                       (mat_tag, c.stiffness, c.bilinear_ratio * c.stiffness, -c.bilinear_yield, -g0))
+                       (mat_tag, c.stiffness, c.bilinear_ratio * c.stiffness, -c.bilinear_yield,
+                        -g0), orient)
     if c.law == "kelvin-voigt":
         damp = float(kelvin_voigt_damping(scene)[corner])
-        return GapSpec(i, j, "ViscoelasticGap", (mat_tag, c.stiffness, damp, -g0))
+        return GapSpec(i, j, "ViscoelasticGap", (mat_tag, c.stiffness, damp, -g0), orient)
     raise SceneError("contact.law", f"OpenSees cannot express the {c.law!r} law")
+
+
+def contact_normal(corner) -> tuple[float, float]:
+    """zeroLengthContact2D ``-normal`` of a corner: −n, from the deck corner towards the seat
+    (the element's gap is −(−n)·(X_j + u_j − X_i − u_i) with i = seat point, j = deck corner,
+    so it is g₀ + n·(u_deck − u_seat) when the nodes sit g₀ apart along n). ``+ 0.0`` keeps a
+    straight deck's (±1, 0) free of a −0.0 in the command log."""
+    nx, ny = corner.normal
+    return (-nx + 0.0, -ny + 0.0)
 
 
 # -- geometry helpers ---------------------------------------------------------------------
@@ -161,6 +218,26 @@ def stick_stations(scene: Scene) -> list[float]:
     return xs
 
 
+def seat_pivot(plan, seat: int, friction: bool) -> tuple[float, float]:
+    """Coordinates of seat ``seat``'s node (its pivot) [m].
+
+    Without friction the gap elements are zeroLength (node coordinates do not enter them), so
+    the node sits at the deck face's mid-point (∓L/2, 0); only the lever to the seat points
+    (the plan's ``Corner.lever``) matters. With friction (zeroLengthContact2D, whose gap
+    includes the coordinates) it sits at the physical pivot F₀ = (∓L/2, 0) − g₀ n, n the face's
+    gap-opening normal — ∓(L/2 + g₀) for a straight deck, written so that the arithmetic (and
+    the command log) of a straight deck is unchanged.
+    """
+    corner = plan.corners[0 if seat == 0 else 2]
+    mid = -plan.half_length if seat == 0 else plan.half_length
+    if not friction:
+        return mid, 0.0
+    nx, ny = corner.normal
+    if ny == 0.0:
+        return -(plan.half_length + corner.gap) if seat == 0 else plan.half_length + corner.gap, 0.0
+    return mid - corner.gap * nx, 0.0 - corner.gap * ny
+
+
 def padded(values: np.ndarray) -> np.ndarray:
     return np.concatenate([values, np.full(RECORD_PAD, values[-1])])
 
@@ -182,7 +259,6 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
     refuse_scene(scene)
     s = scene.opensees
     d = scene.deck
-    hl = 0.5 * d.length
     plan = plan_of(scene)
     friction = gaps and scene.contact.has_friction
     T = ops.tag
@@ -243,20 +319,20 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
     # --- seats ----------------------------------------------------------------------------
     seats, scorners, acts = [], [], []
     for j, seat in enumerate(scene.seats):
-        sgn = -1.0 if j == 0 else 1.0
-        xf = sgn * (hl + (seat.gap if friction else 0.0))
+        xf, yf = seat_pivot(plan, j, friction)
         ops.comment(f"seat {j + 1}: contact-face mid-point, guided in y by a stiff spring")
         n = T("node", f"seat{j + 1}")
-        ops.node(n, xf, 0.0)
+        ops.node(n, xf, yf)
         ops.mass(n, seat.mass, 0.0, seat.inertia)
         seats.append(n)
         a = T("node", f"actuator{j + 1}")
-        ops.node(a, xf, 0.0)
+        ops.node(a, xf, yf)
         ops.fix(a, 1 if supports == "fixed" else 0, 1, 1)
         acts.append(a)
         for c in (0, 1) if j == 0 else (2, 3):
             sc = T("node", f"seat{j + 1} {CORNER_NAMES[c]}")
-            ops.node(sc, xf, plan.corners[c].y)
+            rx, ry = plan.corners[c].lever
+            ops.node(sc, xf + rx, yf + ry)
             ops.rigidLink("beam", n, sc)
             scorners.append(sc)
 
@@ -293,7 +369,7 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         e = T("element", f"seat{j + 1} dashpot")
         ops.element("zeroLength", e, acts[j], seats[j], "-mat", cx, ct, "-dir", 1, 3)
     mg = T("material", "seat guide")
-    ops.uniaxialMaterial("Elastic", mg, GUIDE_STIFFNESS)
+    ops.uniaxialMaterial("Elastic", mg, GUIDE_STIFFNESS if d.skew == 0.0 else SKEW_GUIDE_STIFFNESS)
     for j in range(2):
         e = T("element", f"seat{j + 1} guide")
         ops.element("zeroLength", e, acts[j], seats[j], "-mat", mg, "-dir", 2)
@@ -307,20 +383,22 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         for c in range(4):
             e = T("element", f"gap {CORNER_NAMES[c]}")
             if friction:
-                # i = seat corner, j = deck corner; zeroLengthContact2D (3.7) measures the gap
-                # as n·(x_i + u_i − x_j − u_j) (verified), so n points from the deck to the
-                # seat: −x at seat 1, +x at seat 2. Its nodes are g₀ apart (it warns that
-                # L > tolerance: harmless, the gap is the geometric one).
-                nx = -1.0 if SIDES[c] > 0 else 1.0
+                # i = seat point, j = deck corner; zeroLengthContact2D (3.7) measures the gap
+                # as n_c·(x_i + u_i − x_j − u_j) (verified), so n_c = −n points from the deck to
+                # the seat: −x at seat 1, +x at seat 2 for a straight deck. Its nodes are g₀
+                # apart along n (it warns that L > tolerance: harmless, the gap is the
+                # geometric one).
+                nx, ny = contact_normal(plan.corners[c])
                 ct = scene.contact
                 ops.element("zeroLengthContact2D", e, scorners[c], dcorners[c], ct.stiffness,
-                            ct.tangential_stiffness, ct.friction, "-normal", nx, 0.0)
+                            ct.tangential_stiffness, ct.friction, "-normal", nx, ny)
             else:
                 spec = gap_mapping(scene, c, dcorners[c], scorners[c],
                                    T("material", f"gap {CORNER_NAMES[c]}"))
                 ops.uniaxialMaterial(spec.material, *spec.args)
+                orient = ("-orient", *spec.orient) if spec.orient is not None else ()
                 ops.element("zeroLength", e, spec.i_node, spec.j_node, "-mat", spec.args[0],
-                            "-dir", 1)
+                            "-dir", 1, *orient)
             gap_eles.append(e)
 
     # --- damping --------------------------------------------------------------------------
@@ -359,6 +437,8 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
                      seat_corners=tuple(scorners), gap_elements=tuple(gap_eles), g0=g0,
                      sides=SIDES, bent_names=tuple(b.name for b in scene.bents),
                      bent_elements=tuple(bent_eles), friction=friction,
+                     normals=tuple(c.normal for c in plan.corners),
+                     tangents=tuple(c.tangent for c in plan.corners),
                      stick_elements=tuple(sticks))
 
 

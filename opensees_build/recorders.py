@@ -9,13 +9,16 @@ starts with the time column (``-time``) and holds raw OpenSees quantities at 17 
 digits; :class:`ColumnMap` states how a deckpound column follows from them:
 
 * node displacements are the columns themselves (absolute, as in deckpound);
-* ``gap_cK`` — without friction the gap element's ``deformation`` e = u_j − u_i, and
-  g = g₀ + e (the nodes are ordered so that e = side·(u_deck − u_seat), closing negative); with
-  friction (zeroLengthContact2D) the x displacements of the deck and seat corners,
-  g = g₀ + side·(u_deck − u_seat);
+* ``gap_cK`` — straight deck without friction: the gap element's ``deformation``
+  e = u_j − u_i, and g = g₀ + e (the nodes are ordered so that e = side·(u_deck − u_seat),
+  closing negative); straight deck with friction (zeroLengthContact2D): the x displacements
+  of the deck corner and the seat point, g = g₀ + side·(u_deck − u_seat); skewed deck (either
+  element): their x and y displacements (``-dof 1 2``), g = g₀ + n·(u_deck − u_seat) with the
+  corner's gap-opening normal n — the engine's own arithmetic;
 * ``fn_cK`` — without friction the material stress (``basicForce``, ≤ 0 in compression),
   fn = −stress; with friction the element's resisting forces [Fx_i, Fy_i, M_i, Fx_j, Fy_j, M_j]
-  (j = deck corner), fn = −side·Fx_j and ``ft_cK`` = −Fy_j (force on the deck, + = +y);
+  (j = deck corner), fn = −n·(Fx_j, Fy_j) and ``ft_cK`` = −t·(Fx_j, Fy_j) (force on the deck
+  along the face tangent t; −side·Fx_j and −Fy_j for a straight deck);
 * ``<bent>_fx/_fy`` — stress of the bent's Hysteretic material 1 (x) and 2 (y).
 
 Alignment with deckpound's rows: the engine stores a row at t = 0 and after every ``stride``-th
@@ -70,8 +73,10 @@ class Recorder:
 @dataclass(frozen=True)
 class ColumnMap:
     """deckpound column = offset + scale·(x[a] − x[b]) (or offset + scale·x[a] when ``b`` is
-    None) with x one row of recorder file ``file`` (x[0] is the time); ``file`` None: the
-    constant ``offset``. Evaluated in this order, so the arithmetic is the engine's own."""
+    None) with x one row of recorder file ``file`` (x[0] is the time), plus, when ``a2`` is
+    given, a second term scale2·(x[a2] − x[b2]) (or scale2·x[a2]) — a skewed deck's gap and
+    forces project x and y components on the face normal; ``file`` None: the constant
+    ``offset``. Evaluated in this order, so the arithmetic is the engine's own."""
 
     column: str
     file: str | None
@@ -79,6 +84,14 @@ class ColumnMap:
     b: int | None = None
     offset: float = 0.0
     scale: float = 1.0
+    a2: int | None = None
+    b2: int | None = None
+    scale2: float = 0.0
+
+    @staticmethod
+    def _term(file: str, a: int, b: int | None, scale: float) -> str:
+        x = f"{file}[{a}]" if b is None else f"({file}[{a}] - {file}[{b}])"
+        return x if scale == 1.0 else f"-{x}" if scale == -1.0 else f"{scale!r}*{x}"
 
     def formula(self) -> str:
         """The map as one line of text for the script header (``file[k]``: column k of the
@@ -87,13 +100,14 @@ class ColumnMap:
             return f"{self.column} = {self.offset!r} (no recorder)"
         if self.a == 0:
             return f"{self.column} = {self.file}[0]"
-        x = (f"{self.file}[{self.a}]" if self.b is None
-             else f"({self.file}[{self.a}] - {self.file}[{self.b}])")
-        lin = x if self.scale == 1.0 else f"-{x}" if self.scale == -1.0 else f"{self.scale!r}*{x}"
+        lin = self._term(self.file, self.a, self.b, self.scale)
         if self.offset == 0.0:
             rhs = lin
         else:
             rhs = f"{self.offset!r} - {lin[1:]}" if lin.startswith("-") else f"{self.offset!r} + {lin}"
+        if self.a2 is not None:
+            two = self._term(self.file, self.a2, self.b2, self.scale2)
+            rhs += f" - {two[1:]}" if two.startswith("-") else f" + {two}"
         return f"{self.column} = {rhs}"
 
     def apply(self, table: np.ndarray, n_rows: int) -> np.ndarray:
@@ -102,7 +116,11 @@ class ColumnMap:
         if self.a == 0:
             return table[:, 0].copy()
         x = table[:, self.a] if self.b is None else table[:, self.a] - table[:, self.b]
-        return self.offset + self.scale * x
+        out = self.offset + self.scale * x
+        if self.a2 is not None:
+            x2 = table[:, self.a2] if self.b2 is None else table[:, self.a2] - table[:, self.b2]
+            out = out + self.scale2 * x2
+        return out
 
 
 def recorder_step(plan: dict) -> float:
@@ -152,23 +170,45 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
                      ColumnMap(f"ft_c{k}", None)]
             continue
         e = gaps[c]
-        if plan["friction"]:
-            dn, sn = plan["deck_corners"][c], plan["seat_corners"][c]
+        dn, sn = plan["deck_corners"][c], plan["seat_corners"][c]
+        (nx, ny), (tx, ty) = plan["normals"][c], plan["tangents"][c]
+        if ny != 0.0:
+            # skewed deck, any element: the gap is the engine's own projection of the node
+            # displacements on n (the zeroLength's deformation a.(u_j - u_i) is the same gap
+            # but in other arithmetic: its last bits would differ from the engine's column)
+            recs.append(Recorder(f"gap_c{k}.out", "Node", (dn, sn), ("disp",),
+                                 ("ux_deck corner", "uy_deck corner", "ux_seat point",
+                                  "uy_seat point"),
+                                 f"x and y displacements of deck corner node {dn} and seat "
+                                 f"point node {sn} [m]", dofs=(1, 2)))
+            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=3, offset=g0,
+                                  scale=nx, a2=2, b2=4, scale2=ny))
+        elif plan["friction"]:   # straight deck: x displacements only, n = (side, 0)
             recs.append(Recorder(f"gap_c{k}.out", "Node", (dn, sn), ("disp",),
                                  ("u_deck corner", "u_seat corner"),
-                                 f"x displacement of deck corner node {dn} and seat corner node "
-                                 f"{sn} [m]", dofs=(1,)))
-            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0, scale=side))
-            for col, a, scale in ((f"fn_c{k}", 4, -side), (f"ft_c{k}", 5, -1.0)):
+                                 f"x displacement of deck corner node {dn} and seat corner "
+                                 f"node {sn} [m]", dofs=(1,)))
+            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0,
+                                  scale=side))
+        else:
+            recs.append(Recorder(f"gap_c{k}.out", "Element", (e,), ("deformation",),
+                                 ("deformation",), f"deformation u_j - u_i of gap element {e} "
+                                 "[m]"))
+            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", offset=g0))
+        if plan["friction"]:
+            # fn = -n.(Fx_j, Fy_j), ft = -t.(Fx_j, Fy_j) (j = deck corner); straight: -side*Fx_j,
+            # -Fy_j
+            terms = (((f"fn_c{k}", 4, -side, None, 0.0), (f"ft_c{k}", 5, -1.0, None, 0.0))
+                     if ny == 0.0 else
+                     ((f"fn_c{k}", 4, -nx, 5, -ny), (f"ft_c{k}", 4, -tx, 5, -ty)))
+            for col, a, scale, a2, scale2 in terms:
                 recs.append(Recorder(f"{col}.out", "Element", (e,), ("force",),
                                      ("Fx_i", "Fy_i", "M_i", "Fx_j", "Fy_j", "M_j"),
                                      f"resisting forces of contact element {e} (i = seat, "
                                      "j = deck corner) [kN, kN*m]"))
-                maps.append(ColumnMap(col, f"{col}.out", a=a, scale=scale))
+                maps.append(ColumnMap(col, f"{col}.out", a=a, scale=scale, a2=a2,
+                                      scale2=scale2))
         else:
-            recs.append(Recorder(f"gap_c{k}.out", "Element", (e,), ("deformation",),
-                                 ("deformation",), f"deformation u_j - u_i of gap element {e} [m]"))
-            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", offset=g0))
             recs.append(Recorder(f"fn_c{k}.out", "Element", (e,), ("basicForce",),
                                  ("stress",), f"material stress of gap element {e}, <= 0 in "
                                  "compression [kN]"))
