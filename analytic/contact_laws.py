@@ -308,24 +308,32 @@ def _linear_gaps(u, v, corners, g, gd):
 
 
 @kernel
-def gaps_and_rates(u, v, geom, nonlinear, g, gd, WN, WT):
-    """Gaps g and rates ġ = W_N u̇ of the four corners (fills WN, WT when nonlinear)."""
-    if not nonlinear:
-        _linear_gaps(u, v, geom, g, gd)
+def gaps_and_rates(contact, u, v, cw):
+    """Gaps cw.g and rates cw.gd = W_N u̇ of the four corners (fills cw.WN, cw.WT when
+    nonlinear). ``contact``: the Contact bundle, ``cw``: ContactWork
+    (:mod:`deckpound.analytic.bundles`)."""
+    if not contact.nonlinear:
+        _linear_gaps(u, v, contact.corners, cw.g, cw.gd)
     else:
-        contact_kinematics(u, geom, True, g, WN, WT)
+        contact_kinematics(u, contact.corners, True, cw.g, cw.WN, cw.WT)
         for c in range(4):
             s = 0.0
             for j in range(7):
-                s += WN[c, j] * v[j]
-            gd[c] = s
+                s += cw.WN[c, j] * v[j]
+            cw.gd[c] = s
 
 
 @kernel
-def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                 evaluated):
-    if nonlinear:
-        gaps_and_rates(u, v, geom, True, g, gd, WN, WT)
+def eval_closed(contact, cs, cw, u, v, un):
+    """Evaluate the laws of the corners flagged in cw.evaluated (all closed ones for nonlinear
+    kinematics) at the trial (u, u̇); fills cw (see :func:`eval_contacts`). Returns the
+    number of closed corners."""
+    cp = contact.params
+    geom = contact.corners
+    g, gd, WN, WT, fc, lam, lt, der, evaluated = (cw.g, cw.gd, cw.WN, cw.WT, cw.fc, cw.lam,
+                                                  cw.lt, cw.der, cw.evaluated)
+    if contact.nonlinear:
+        gaps_and_rates(contact, u, v, cw)
         for j in range(7):
             fc[j] = 0.0
         for c in range(4):
@@ -361,20 +369,22 @@ def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, d
 
 
 @kernel
-def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                  evaluated):
+def eval_contacts(contact, cs, cw, u, v, un):
     """Gap check (call-free, cheap); returns 0 when every corner is open (fc, lam, lt zeroed),
     −1 when :func:`eval_closed` must evaluate the laws (some g ≤ 0, or nonlinear kinematics).
 
-    Contact forces at the trial (u, u̇); un: displacement at the start of the step.
-
-    Fills g, gd (4,), fc (7,) = Σ W_Nᵀ λ_N + W_Tᵀ λ_T, lam, lt (4,), der (4, 7): per corner
+    Contact forces at the trial (u, u̇); un: displacement at the start of the step; cs: the
+    corner states (4, N_CS); ``cw`` (ContactWork of :mod:`deckpound.analytic.bundles`) is
+    filled: g, gd (4,), fc (7,) = Σ W_Nᵀ λ_N + W_Tᵀ λ_T, lam, lt (4,), der (4, 7): per corner
     [∂λ_N/∂g, ∂λ_N/∂ġ, ∂λ_T/∂Δs, ∂λ_T/∂U_T, ∂λ_T/∂λ_N, Δs, U_T], evaluated (4,) bool, and WN,
     WT (when some corner is closed). Corners with g > 0 are open for every law and are skipped
     (the laws are not evaluated at all while every gap is open).
     """
+    nonlinear = contact.nonlinear
     anyc = nonlinear
     if not nonlinear:
+        geom = contact.corners
+        g, gd, lam, lt, evaluated, fc = cw.g, cw.gd, cw.lam, cw.lt, cw.evaluated, cw.fc
         for c in range(4):
             gc = linear_gap(geom[c], u)
             g[c] = gc
@@ -392,13 +402,14 @@ def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt,
 
 
 @kernel
-def contact_tangent(cp, u, geom, nonlinear, lam, der, evaluated, WN, WT, c2, Keff, H):
-    """Add −∂F_c/∂u − c2 ∂F_c/∂u̇ to Keff (Newmark: ∂u̇/∂u = c2).
+def contact_tangent(contact, cw, u, c2, Keff, H):
+    """Add −∂F_c/∂u − c2 ∂F_c/∂u̇ to Keff (Newmark: ∂u̇/∂u = c2); H (7, 7) scratch.
 
     Includes the geometric term −λ_N ∂²g/∂u² for nonlinear kinematics; the derivative of W_T
     (friction, nonlinear kinematics only) is neglected (quasi-Newton; the converged solution
     is unaffected).
     """
+    lam, der, evaluated, WN, WT = cw.lam, cw.der, cw.evaluated, cw.WN, cw.WT
     for c in range(4):
         if not evaluated[c]:
             continue
@@ -413,8 +424,8 @@ def contact_tangent(cp, u, geom, nonlinear, lam, der, evaluated, WN, WT, c2, Kef
                     continue
                 for j in range(7):
                     Keff[i, j] += kn * wni * WN[c, j] - wti * (kt * WT[c, j] + tn * WN[c, j])
-        if nonlinear and lam[c] != 0.0:
-            gap_hessian(u, geom, c, H)
+        if contact.nonlinear and lam[c] != 0.0:
+            gap_hessian(u, contact.corners, c, H)
             for i in range(7):
                 for j in range(7):
                     Keff[i, j] -= lam[c] * H[i, j]

@@ -97,11 +97,13 @@ KIND_HYSTERETIC = 1
 #: sval (ns,): the ≤ 1 non-zero of each row of S; k0 (ns,) initial stiffness; cdash (ns,) explicit
 #: dashpot; crate (ns,) = a1·k0 + cdash, the total rate coefficient of each spring; kind (ns,)
 #: int (0 linear, 1 Hysteretic); hparams (ns, 26) Hysteretic params (zero rows for linear
-#: springs); scal (2,) = [a0, a1].
+#: springs); scal (2,) = [a0, a1]; C (7, 7) the constant damping matrix a0 M + Bᵀ diag(crate) B
+#: [kN·s/m]; nbs (int) the number of bent springs (the first rows of B). The ``system`` bundle
+#: of the step loops (:mod:`deckpound.analytic.bundles`).
 SystemArrays = namedtuple(
     "SystemArrays",
     ["mass", "B", "S", "bidx", "bval", "bnnz", "schan", "sval", "k0", "cdash", "crate", "kind",
-     "hparams", "scal"],
+     "hparams", "scal", "C", "nbs"],
 )
 
 
@@ -171,11 +173,12 @@ def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
     cdash = damping.dashpots.astype(float)
     crate = damping.rate_coefficients(plan)
     a0, a1 = damping.a0, damping.a1
+    C = np.diag(a0 * mass) + B.T @ (crate[:, None] * B)
     arrays = SystemArrays(mass=mass, B=np.ascontiguousarray(B), S=np.ascontiguousarray(S),
                           bidx=bidx, bval=bval, bnnz=bnnz, schan=schan, sval=sval,
                           k0=k0.astype(float), cdash=cdash, crate=crate,
-                          kind=kind, hparams=hparams, scal=np.array([a0, a1]))
-    C = np.diag(a0 * mass) + B.T @ (crate[:, None] * B)
+                          kind=kind, hparams=hparams, scal=np.array([a0, a1]),
+                          C=np.ascontiguousarray(C), nbs=int(plan.n_bent_springs))
     K0 = B.T @ (k0[:, None] * B)
     return PackedSystem(arrays=arrays, C=C, K0=K0, a0=float(a0), a1=float(a1),
                         omega=(float(damping.omega[0]), float(damping.omega[1])),

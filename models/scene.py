@@ -275,6 +275,10 @@ class ComplianceSettings:
     commit_step: float = spec(1.0e-4, unit="s",
                               doc="largest step (adaptive) once a Takeda spring has yielded: "
                               "the Hysteretic state depends on where it is committed", gt=0.0)
+    max_steps: int = spec(10_000_000, doc="step budget (adaptive): Runge-Kutta steps tried, "
+                          "accepted or rejected, before the run stops with status step_budget; "
+                          "about 50x the 0.2 million steps of the 20 s benchmark, 1-3 min of "
+                          "loop at 6-20 us per step", ge=1, le=10**12)
 
     def __post_init__(self) -> None:
         validate(self)
