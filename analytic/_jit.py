@@ -56,8 +56,9 @@ def use_source_keyed_cache() -> Path | None:
     numba checks a cached function against its *own* file only; a kernel it calls from another
     module is compiled into it, so after a change to e.g. ``_hysteretic_kernel.py`` the cached
     Newmark loop of ``compliance.py`` would still run the old Takeda arithmetic, silently. Keying
-    the cache directory by a hash of every source file of this package (and of the environment
-    switches the kernels freeze at compile time) makes any change start a fresh cache.
+    the cache directory by a hash of every source file of this package, of the modules whose
+    constants the kernels freeze (:data:`FROZEN_MODULES`) and of the environment switches the
+    kernels freeze at compile time makes any change start a fresh cache.
 
     The directory is ``$XDG_CACHE_HOME/deckpound/numba/<hash>`` (default ``~/.cache``). A
     ``NUMBA_CACHE_DIR`` set by the user wins; an unwritable location leaves numba's default.
@@ -67,7 +68,7 @@ def use_source_keyed_cache() -> Path | None:
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     h = hashlib.sha256()
-    for src in sorted(_HERE.glob("*.py")):
+    for src in sorted(_HERE.glob("*.py")) + _frozen_sources():
         h.update(src.name.encode())
         h.update(src.read_bytes())
     h.update(os.environ.get("DECKPOUND_TAKEDA_SHORTCUT", "1").encode())
@@ -82,6 +83,22 @@ def use_source_keyed_cache() -> Path | None:
         return None
     numba.config.CACHE_DIR = str(target)
     return target
+
+
+#: Modules outside this package whose constants the kernels freeze at compile time (DOF
+#: indices and output layout of the plan model; the contact-law codes): part of the cache key.
+FROZEN_MODULES = ("deckpound.models.plan", "deckpound.models.contact_laws_table")
+
+
+def _frozen_sources() -> list[Path]:
+    from importlib.util import find_spec
+
+    out = []
+    for name in FROZEN_MODULES:
+        spec = find_spec(name)
+        if spec is not None and spec.origin:
+            out.append(Path(spec.origin))
+    return out
 
 
 def ensure_compiled(dispatcher, *args) -> float:

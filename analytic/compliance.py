@@ -97,6 +97,7 @@ def pack_run(plan: Plan, scene: Scene, motion: SupportMotion, *, kv_clip: bool =
     ps = pack_system(plan, damping_model(scene, plan))
     record = support_record(motion, ps.channels)
     cp = cl.pack_contact(scene, kv_clip=kv_clip)
+    cl.check_kernel_branches(cp)
     corners = pack_corners(plan)
     cs = cl.new_contact_state(corners[:, K_G0])
     return ps, record, cp, cs, corners
@@ -113,22 +114,18 @@ class ComplianceEngine(Engine):
     style = dict(color="#1f5fa8", linestyle="--", linewidth=1.2, label="compliance clone")
 
     def reads(self, scene: Scene, settings) -> set[str]:
+        """The law's and the friction model's parameters, from their rows of
+        :mod:`deckpound.models.contact_laws_table`."""
+        from deckpound.models.contact_laws_table import contact_law, friction_model
+
         ct = scene.contact
         read = {"contact.law", "contact.stiffness", "contact.geometry"}
-        if ct.law in ("hertz", "hertz-damp"):
-            read.add("contact.exponent")
-        if ct.law in ("kelvin-voigt", "hertz-damp"):
-            read.add("contact.restitution")
-        if ct.law == "bilinear":
-            read |= {"contact.bilinear_ratio", "contact.bilinear_yield"}
+        read |= set(contact_law(ct.law).params)
         if ct.friction_mode != "none":
             read.add("contact.friction")
         if ct.friction > 0.0:
             read.add("contact.friction_mode")
-            if ct.friction_mode == "stick":
-                read.add("contact.tangential_stiffness")
-            if ct.friction_mode == "slip":
-                read.add("contact.slip_velocity")
+            read |= set(friction_model(ct.friction_mode).params)
         return read
 
     def _run(self, plan: Plan, scene: Scene, settings, motion, *, kv_clip: bool = False,
@@ -176,7 +173,7 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
     ps, record, cp, cs, corners = pack_run(plan, scene, motion, kv_clip=kv_clip)
     if not on["friction"]:
         # the slip law with μ = 0 wherever friction was switched off: same (zero) forces
-        off = cp[:, cl.P_FMODE] == 0
+        off = cp[:, cl.P_FMODE] == cl.FRICTION_NONE
         cp[off, cl.P_FMODE] = cl.FRICTION_CODES["slip"]
         cp[off, cl.P_MU] = 0.0
     stride = output_stride(dt, scene.run.output_dt)

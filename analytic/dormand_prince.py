@@ -171,9 +171,9 @@ def _events(y, sa, contact, ws, ev):
         ev[4 + i] = ws.dd[i]
     k = 4 + nbs
     for c in range(4):
-        ev[k + c] = cw.gd[c] if (cp[c, cl.P_LAW] == 4 and cw.g[c] < 0.0) else 0.0
+        ev[k + c] = cw.gd[c] if (cp[c, cl.P_EVENT] != 0.0 and cw.g[c] < 0.0) else 0.0
         ut = 0.0
-        if cp[c, cl.P_FMODE] == 2 and cw.g[c] < 0.0:
+        if cp[c, cl.P_FMODE] == cl.FRICTION_STICK and cw.g[c] < 0.0:
             for j in range(7):
                 ut += cw.WT[c, j] * v[j]
         ev[k + 4 + c] = ut
@@ -467,7 +467,7 @@ def _adaptive_store(sa, contact, ws, output, row, t):
     ec = cl.contact_stored_energy(cp, cs)
     efs = 0.0
     for c in range(4):
-        if cp[c, cl.P_FMODE] == 2 and cs[c, cl.S_CFT] != 0.0:
+        if cp[c, cl.P_FMODE] == cl.FRICTION_STICK and cs[c, cl.S_CFT] != 0.0:
             efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
     W0, W1, W2, W3, W4 = y[14], y[15], y[16], y[17], y[18]
     buf[base + 0] = W0

@@ -120,7 +120,7 @@ def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
     ec = cl.contact_stored_energy(cp, cs)
     efs = 0.0                                        # stick-spring part of ec
     for c in range(4):
-        if cp[c, cl.P_FMODE] == 2 and cs[c, cl.S_CFT] != 0.0:
+        if cp[c, cl.P_FMODE] == cl.FRICTION_STICK and cs[c, cl.S_CFT] != 0.0:
             efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
     energy[0] = W[0]
     energy[1] = ke

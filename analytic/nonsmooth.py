@@ -111,8 +111,17 @@ class NonsmoothEngine(Engine):
     style = dict(color="#c0392b", linestyle=":", linewidth=1.6, label="nonsmooth")
 
     def reads(self, scene: Scene, settings) -> set[str]:
+        """Restitution, geometry and the friction coefficient; the contact law and its
+        parameters only where the law's row of :mod:`deckpound.models.contact_laws_table` says
+        the engine expresses it (``ContactLaw.nonsmooth``; no compliant law: rigid contact
+        replaces them, so a non-default law is warned about)."""
+        from deckpound.models.contact_laws_table import contact_law
+
         ct = scene.contact
         read = {"contact.restitution", "contact.geometry"}
+        law = contact_law(ct.law)
+        if law.nonsmooth:
+            read |= {"contact.law", *law.params}
         if ct.friction_mode != "none":
             read.add("contact.friction")
         if ct.friction > 0.0:
@@ -120,11 +129,13 @@ class NonsmoothEngine(Engine):
         return read
 
     def notes(self, scene: Scene, settings) -> list[str]:
+        from deckpound.models.contact_laws_table import RIGID_CONTACT, friction_model
+
         ct = scene.contact
-        if ct.has_friction:
-            return [f"contact.friction_mode = {ct.friction_mode!r} means set-valued Coulomb "
-                    f"friction (mu = {ct.friction:g}): contact is rigid, so the slip/stick "
-                    "distinction of the compliance laws does not apply"]
+        how = friction_model(ct.friction_mode).nonsmooth
+        if ct.has_friction and how:
+            return [f"contact.friction_mode = {ct.friction_mode!r} means {how} "
+                    f"(mu = {ct.friction:g}): {RIGID_CONTACT}"]
         return []
 
     def _run(self, plan: Plan, scene: Scene, settings, motion, *,

@@ -17,10 +17,11 @@ from dataclasses import dataclass
 import re
 
 from ._fields import spec, validate
+from .contact_laws_table import FRICTION_CODES, LAW_CODES
 from .errors import SceneError
 
-CONTACT_LAWS = ("linear", "kelvin-voigt", "hertz", "hertz-damp", "bilinear")
-FRICTION_MODES = ("none", "slip", "stick")
+CONTACT_LAWS = tuple(LAW_CODES)          # the rows of contact_laws_table, in code order
+FRICTION_MODES = tuple(FRICTION_CODES)
 GEOMETRIES = ("linear", "nonlinear")
 SUPPORTS_PER_BENT = ("x", "y")
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
