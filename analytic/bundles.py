@@ -165,23 +165,29 @@ def run_loop(loop, args, stats: Stats) -> bool:
         loop(*args)
         return False
     failure: list[BaseException] = []
+    done = threading.Event()
 
     def target():
         try:
             loop(*args)
         except BaseException as exc:   # re-raised in the caller's thread
             failure.append(exc)
+        finally:
+            done.set()
 
+    # waiting on an Event, not Thread.join: a join interrupted by KeyboardInterrupt marks the
+    # thread finished although it still runs (CPython 3.11, the bpo-45274 lock handling)
     worker = threading.Thread(target=target, name="deckpound-loop", daemon=True)
     interrupted = False
     worker.start()
     try:
-        while worker.is_alive():
-            worker.join(0.05)
+        while not done.wait(0.05):
+            pass
     except KeyboardInterrupt:
         interrupted = True
         stats.halt[0] = 1
-        worker.join()
+        while not done.wait(0.05):     # the loop stops within one iteration
+            pass
     if failure:
         raise failure[0]
     return interrupted

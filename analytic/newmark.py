@@ -162,7 +162,9 @@ def _form_unbalance(sa, contact, wk, skip_contact):
 
 @kernel
 def _set_stats(stats, status, rows, failed, steps, total_it, events, reused, maxit_seen,
-               rescued):
+               rescued, dt):
+    """Write the loop's statistics (time reached = steps · dt [s])."""
+    stats.value[bd.VAL_TIME] = steps * dt
     cnt = stats.count
     cnt[bd.CNT_STATUS] = status
     cnt[bd.CNT_ROWS] = rows
@@ -242,7 +244,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
         for j in range(7):
             LUel[i, j] = Kel[i, j]
     if not lu_factor(LUel, pivel):
-        _set_stats(stats, RUN_SINGULAR, 0, 0, 0, 0, 0, 0, 0, 0)
+        _set_stats(stats, RUN_SINGULAR, 0, 0, 0, 0, 0, 0, 0, 0, dt)
         return
     jrec = record_at(tb, DG, VGR, 0.0, 0, ug1, vg1)
     for k in range(nch):
@@ -287,7 +289,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     for n in range(nsteps):
         if halt[0] != 0:
             _set_stats(stats, RUN_INTERRUPTED, row, n + 1, n, total_it, events, reused,
-                       maxit_seen, rescued)
+                       maxit_seen, rescued, dt)
             return
         for j in range(7):
             us[j] = u[j]
@@ -452,7 +454,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
             nsub = substeps
         if status != RUN_OK:
             _set_stats(stats, status, row, n + 1, n, total_it, events, reused, maxit_seen,
-                       rescued)
+                       rescued, dt)
             return
         # --- output
         if (n + 1) % stride == 0:
@@ -460,4 +462,5 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
             _store(output, row, (n + 1) * dt, u, v, cw, fs, nbs, energy)
             row += 1
-    _set_stats(stats, RUN_OK, row, 0, nsteps, total_it, events, reused, maxit_seen, rescued)
+    _set_stats(stats, RUN_OK, row, 0, nsteps, total_it, events, reused, maxit_seen, rescued,
+               dt)
