@@ -36,7 +36,7 @@ from pathlib import Path
 import numba
 from numba import njit
 
-__all__ = ["kernel", "use_source_keyed_cache", "ensure_compiled"]
+__all__ = ["ensure_compiled", "kernel", "use_source_keyed_cache"]
 
 _HERE = Path(__file__).resolve().parent
 

@@ -35,15 +35,20 @@ from __future__ import annotations
 import time as _time
 
 import numpy as np
-
 from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import ensure_compiled
 from deckpound.analytic.compliance import _STATUS_TEXT, ENERGY_COLUMNS, pack_run
-from deckpound.analytic.dormand_prince import H_BINS_PER_DECADE, H_LOG_MIN, AdaptiveOptions, \
-    adaptive_run, adaptive_workspace
+from deckpound.analytic.dormand_prince import (
+    H_BINS_PER_DECADE,
+    H_LOG_MIN,
+    AdaptiveOptions,
+    adaptive_run,
+    adaptive_workspace,
+)
 from deckpound.analytic.system import initial_dofs
-from deckpound.engine_contract import RunOutput, Status, engine_columns
 from deckpound.models.excitation import analysis_duration
+
+from deckpound.engine_contract import RunOutput, Status, engine_columns
 
 __all__ = ["run_adaptive"]
 
@@ -84,7 +89,7 @@ def run_adaptive(plan, scene, settings, motion, *, kv_clip: bool = False,
     UG, VG = res.matrices(ps.channels)
     tb = np.arange(UG.shape[0]) * dtr
     out_dt = scene.run.output_dt
-    nout = int(round(duration / out_dt)) + 1
+    nout = round(duration / out_dt) + 1
     cols = engine_columns(plan) + list(ENERGY_COLUMNS)
     bd.check_output_size(nout, len(cols))
     output = bd.Output(np.zeros((nout, len(cols))), np.arange(len(cols), dtype=np.int64),

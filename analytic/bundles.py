@@ -41,15 +41,15 @@ import threading
 from collections import namedtuple
 
 import numpy as np
-
-from deckpound.engine_contract import Status
 from deckpound.models.errors import SceneError
 
-__all__ = ["Contact", "Record", "Output", "Stats", "ContactWork", "new_stats", "stats_dict",
-           "new_contact_work", "run_loop", "status_of", "check_output_size", "row_views",
-           "MAX_OUTPUT_BYTES", "RUN_OK", "RUN_NOT_CONVERGED", "RUN_SINGULAR", "RUN_NONFINITE",
-           "RUN_CONTACT_UNSOLVED", "RUN_STEP_BUDGET", "RUN_INTERRUPTED", "RUN_STEP_UNDERFLOW",
-           "RUN_UNKNOWN_LAW", "COUNT_NAMES", "VALUE_NAMES"]
+from deckpound.engine_contract import Status
+
+__all__ = ["COUNT_NAMES", "MAX_OUTPUT_BYTES", "RUN_CONTACT_UNSOLVED", "RUN_INTERRUPTED",
+           "RUN_NONFINITE", "RUN_NOT_CONVERGED", "RUN_OK", "RUN_SINGULAR", "RUN_STEP_BUDGET",
+           "RUN_STEP_UNDERFLOW", "RUN_UNKNOWN_LAW", "VALUE_NAMES", "Contact", "ContactWork",
+           "Output", "Record", "Stats", "check_output_size", "new_contact_work", "new_stats",
+           "row_views", "run_loop", "stats_dict", "status_of"]
 
 # Each namedtuple class lives at module level under its own typename: a class made per call
 # would be a new numba type (a fresh compilation every run), and a typename differing from the
@@ -170,7 +170,7 @@ def run_loop(loop, args, stats: Stats) -> bool:
     def target():
         try:
             loop(*args)
-        except BaseException as exc:   # re-raised in the caller's thread
+        except BaseException as exc:  # noqa: BLE001 (re-raised in the caller's thread)
             failure.append(exc)
         finally:
             done.set()

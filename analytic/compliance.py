@@ -35,15 +35,16 @@ acceleration scheme exactly up to the Newton residual.
 from __future__ import annotations
 
 import time as _time
+from typing import ClassVar
 
 import numpy as np
-
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import ComplianceSettings, Scene
 
-__all__ = ["ComplianceEngine", "run_compliance", "ENERGY_COLUMNS", "output_columns", "SKIPS"]
+from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
+
+__all__ = ["ENERGY_COLUMNS", "SKIPS", "ComplianceEngine", "output_columns", "run_compliance"]
 
 #: Energy columns of the compliance result, in the order the kernels write them [kJ].
 ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
@@ -111,7 +112,8 @@ class ComplianceEngine(Engine):
     Settings = ComplianceSettings
     settings_field = "compliance"
     step_field = "dt"
-    style = dict(color="#1f5fa8", linestyle="--", linewidth=1.2, label="compliance clone")
+    style: ClassVar[dict] = {"color": "#1f5fa8", "linestyle": "--", "linewidth": 1.2,
+                             "label": "compliance clone"}
 
     def reads(self, scene: Scene, settings) -> set[str]:
         """The law's and the friction model's parameters, from their rows of
@@ -159,8 +161,13 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
     from deckpound.analytic import bundles as bd
     from deckpound.analytic import contact_laws as cl
     from deckpound.analytic._jit import ensure_compiled
-    from deckpound.analytic.newmark import (BETA, GAMMA, NewmarkOptions, newmark_run,
-                                            newmark_workspace)
+    from deckpound.analytic.newmark import (
+        BETA,
+        GAMMA,
+        NewmarkOptions,
+        newmark_run,
+        newmark_workspace,
+    )
     from deckpound.analytic.system import initial_dofs
 
     on = {k: True for k in SKIPS}
@@ -178,7 +185,7 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
         cp[off, cl.P_MU] = 0.0
     stride = output_stride(dt, scene.run.output_dt)
     kstride = stride if on["decimate"] else 1
-    nsteps = int(round(duration / dt))
+    nsteps = round(duration / dt)
     all_cols = output_columns(scene)
     engine_cols = engine_columns(plan)
     if channels is None:

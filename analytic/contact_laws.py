@@ -44,18 +44,15 @@ Friction (``scene.contact.friction_mode``):
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
-
 from deckpound.analytic._jit import kernel
 from deckpound.models import contact_params
 from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_CODES, LAW_CODES
 from deckpound.models.scene import Scene
+from numba import njit
 
-__all__ = [
-    "LAW_CODES", "FRICTION_CODES", "N_CP", "N_CS", "V_IMPACT_MIN",
-    "pack_contact", "new_contact_state", "normal_law", "friction_law", "contact_commit",
-    "contact_revert", "contact_stored_energy", "check_kernel_branches", "law_parameters",
-]
+__all__ = ["FRICTION_CODES", "LAW_CODES", "N_CP", "N_CS", "V_IMPACT_MIN", "check_kernel_branches",
+           "contact_commit", "contact_revert", "contact_stored_energy", "friction_law",
+           "law_parameters", "new_contact_state", "normal_law", "pack_contact"]
 
 # the kernel codes, by name (numba freezes them into the compiled branches)
 LAW_LINEAR = LAW_CODES["linear"]
@@ -155,8 +152,7 @@ def normal_law(cp, cs, g, gd):
             closed = True
             if cs[S_CCLOSED] == 0.0:
                 vimp = -cs[S_CGD]
-                if vimp < V_IMPACT_MIN:
-                    vimp = V_IMPACT_MIN
+                vimp = max(vimp, V_IMPACT_MIN)
             else:
                 vimp = cs[S_CVIMP]
             cs[S_TVIMP] = vimp
@@ -313,8 +309,7 @@ def contact_stored_energy(cp, cs):
                 k2 = cp[c, P_K2]
                 if k > k2:
                     gs = (k * g + lam) / (k - k2)
-                    if gs > 0.0:
-                        gs = 0.0
+                    gs = min(gs, 0.0)
                 else:
                     gs = g
                 lam_s = -k2 * gs
@@ -359,8 +354,12 @@ def check_kernel_branches(cp) -> None:
 
 
 # --------------------------------------------------------------------------- assembly helpers
-from deckpound.analytic.kinematics import (contact_kinematics, gap_hessian,  # noqa: E402
-                                           linear_gap, linear_gap_rate)
+from deckpound.analytic.kinematics import (
+    contact_kinematics,
+    gap_hessian,
+    linear_gap,
+    linear_gap_rate,
+)
 
 
 @njit(cache=True, inline="always")

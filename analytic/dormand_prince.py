@@ -14,18 +14,29 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-
 from deckpound.analytic import bundles as bd
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._hysteretic_kernel import C_ROTMAX, C_ROTMIN, T_STRESS
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.bundles import RUN_INTERRUPTED, RUN_NONFINITE, RUN_OK, \
-    RUN_STEP_BUDGET, RUN_STEP_UNDERFLOW
-from deckpound.analytic.system import C_BENT, spring_assemble, spring_commit, \
-    spring_deformations, spring_stored_energy, spring_update_materials, store_standard
+from deckpound.analytic.bundles import (
+    RUN_INTERRUPTED,
+    RUN_NONFINITE,
+    RUN_OK,
+    RUN_STEP_BUDGET,
+    RUN_STEP_UNDERFLOW,
+)
+from deckpound.analytic.system import (
+    C_BENT,
+    spring_assemble,
+    spring_commit,
+    spring_deformations,
+    spring_stored_energy,
+    spring_update_materials,
+    store_standard,
+)
 
-__all__ = ["adaptive_run", "adaptive_workspace", "AdaptiveOptions", "AdaptiveWork", "TABLEAU",
-           "H_NBINS", "H_LOG_MIN", "H_BINS_PER_DECADE"]
+__all__ = ["H_BINS_PER_DECADE", "H_LOG_MIN", "H_NBINS", "TABLEAU", "AdaptiveOptions",
+           "AdaptiveWork", "adaptive_run", "adaptive_workspace"]
 
 # Dormand–Prince 5(4) tableau
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
@@ -248,10 +259,9 @@ def _any_yielded(sa, hstate):
     paths (OpenSees Hysteretic arithmetic), so the loop caps its steps at ``commit_step``.
     """
     for i in range(hstate.shape[0]):
-        if sa.kind[i] == 1:
-            if (hstate[i, C_ROTMAX] > sa.hparams[i, 1] or
-                    hstate[i, C_ROTMIN] < sa.hparams[i, 7]):
-                return True
+        if sa.kind[i] == 1 and (hstate[i, C_ROTMAX] > sa.hparams[i, 1]
+                                or hstate[i, C_ROTMIN] < sa.hparams[i, 7]):
+            return True
     return False
 
 
@@ -322,13 +332,11 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
         if kseg < ntb and tb[kseg] < tbreak:
             tbreak = tb[kseg]
         tout = row * out_dt
-        if tout < tbreak:
-            tbreak = tout
+        tbreak = min(tbreak, tout)
         hmax = min(max_step, tbreak - t)
         if yielded and hmax > commit_step:
             hmax = commit_step
-        if h > hmax:
-            h = hmax
+        h = min(h, hmax)
         hit_break = abs((t + h) - tbreak) <= tiny * max(1.0, tbreak)
         if h <= 1e-14:
             status = RUN_STEP_UNDERFLOW
@@ -348,9 +356,8 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
         th_ev = 2.0
         for q in range(nev):
             a_, b_ = ev0[q], ev1[q]
-            if a_ == 0.0 or (a_ < 0.0) == (b_ < 0.0):
-                if not (b_ == 0.0 and a_ != 0.0):
-                    continue
+            if (a_ == 0.0 or (a_ < 0.0) == (b_ < 0.0)) and not (b_ == 0.0 and a_ != 0.0):
+                continue   # no sign change in (t, t+h] (a zero at t+h counts)
             # bisection on the Hermite interpolant
             lo = 0.0
             hi = 1.0
@@ -367,8 +374,7 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
                     hi = mid
                 if (hi - lo) * h < 1e-13:
                     break
-            if hi < th_ev:
-                th_ev = hi
+            th_ev = min(th_ev, hi)
         if th_ev < 1.0 and th_ev * h > 1e-12:
             he = th_ev * h
             _rk_step(t, y, he, sa, contact, record, ws, atol, rtol)
@@ -404,15 +410,13 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
         ic = 1 if in_contact else 0
         if hs > 0.0:
             b = int((np.log10(hs) - H_LOG_MIN) * H_BINS_PER_DECADE)
-            if b < 0:
-                b = 0
+            b = max(b, 0)
             if b >= H_NBINS:
                 b = H_NBINS - 1
             hist[ic, b] += 1
             if hstat[ic, 0] == 0.0 or hs < hstat[ic, 0]:
                 hstat[ic, 0] = hs
-            if hs > hstat[ic, 1]:
-                hstat[ic, 1] = hs
+            hstat[ic, 1] = max(hstat[ic, 1], hs)
             hstat[ic, 2] += hs
         finite = True
         for j in range(NT):
@@ -426,10 +430,8 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
             row += 1
         if err > 0.0:
             fac = 0.9 * err ** -0.2
-            if fac > 5.0:
-                fac = 5.0
-            if fac < 0.2:
-                fac = 0.2
+            fac = min(fac, 5.0)
+            fac = max(fac, 0.2)
             hn = h * fac
         else:
             hn = h * 5.0

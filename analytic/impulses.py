@@ -14,10 +14,9 @@ kernel compiled without it (:mod:`deckpound.analytic._jit`).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
-
 from deckpound.analytic.dense import lu_solve
 from deckpound.analytic.frictional_contact import solve_contact_impulses_into
+from numba import njit
 
 __all__ = ["solve_active_impulses"]
 

@@ -70,23 +70,35 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-
 from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.bundles import RUN_CONTACT_UNSOLVED, RUN_INTERRUPTED, RUN_NONFINITE, \
-    RUN_NOT_CONVERGED, RUN_OK, RUN_SINGULAR
+from deckpound.analytic.bundles import (
+    RUN_CONTACT_UNSOLVED,
+    RUN_INTERRUPTED,
+    RUN_NONFINITE,
+    RUN_NOT_CONVERGED,
+    RUN_OK,
+    RUN_SINGULAR,
+)
 from deckpound.analytic.dense import lu_factor, lu_solve
-from deckpound.analytic.nonsmooth import ENERGY_COLUMNS
 from deckpound.analytic.frictional_contact import STATUS_FAILED
 from deckpound.analytic.impulses import solve_active_impulses
 from deckpound.analytic.kinematics import contact_kinematics
+from deckpound.analytic.nonsmooth import ENERGY_COLUMNS
 from deckpound.analytic.support_motion import record_at
 from deckpound.analytic.system import C_BENT as _C_BENT
-from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
-    spring_stored_energy, spring_tangent, spring_update_materials, store_standard
+from deckpound.analytic.system import (
+    spring_assemble,
+    spring_commit,
+    spring_deformations,
+    spring_stored_energy,
+    spring_tangent,
+    spring_update_materials,
+    store_standard,
+)
 
-__all__ = ["moreau_jean_run", "moreau_jean_workspace", "MoreauJeanOptions", "MoreauJeanWork",
-           "ENERGY_COLUMNS", "N_ENERGY"]
+__all__ = ["ENERGY_COLUMNS", "N_ENERGY", "MoreauJeanOptions", "MoreauJeanWork", "moreau_jean_run",
+           "moreau_jean_workspace"]
 
 N_ENERGY = len(ENERGY_COLUMNS)
 
@@ -356,10 +368,8 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
                 if cst == STATUS_FAILED:
                     status = RUN_CONTACT_UNSOLVED
                     break
-                if comp > max_comp:
-                    max_comp = comp
-                if cone > max_cone:
-                    max_cone = cone
+                max_comp = max(max_comp, comp)
+                max_cone = max(max_cone, cone)
                 for j in range(7):
                     v[j] = vnew[j]
             else:
@@ -376,8 +386,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
             for i in range(ns):
                 if kind[i] == 1:
                     r_i = abs(fs[i] - fs_lin[i] - kt_lin[i] * (d[i] - d_lin[i]))
-                    if r_i > rmax:
-                        rmax = r_i
+                    rmax = max(rmax, r_i)
             if not np.isfinite(rmax):
                 status = RUN_NONFINITE
                 break
@@ -398,8 +407,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
                 fs_lin[i] = fs[i]
                 kt_lin[i] = kt[i]
         newton += it
-        if it > maxit_seen:
-            maxit_seen = it
+        maxit_seen = max(maxit_seen, it)
         if converged:
             for j in range(7):
                 if not np.isfinite(v[j]) or not np.isfinite(q[j]):

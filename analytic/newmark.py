@@ -32,21 +32,33 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-
 from deckpound.analytic import bundles as bd
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.bundles import RUN_INTERRUPTED, RUN_NONFINITE, RUN_NOT_CONVERGED, \
-    RUN_OK, RUN_SINGULAR
+from deckpound.analytic.bundles import (
+    RUN_INTERRUPTED,
+    RUN_NONFINITE,
+    RUN_NOT_CONVERGED,
+    RUN_OK,
+    RUN_SINGULAR,
+)
 from deckpound.analytic.compliance import ENERGY_COLUMNS
 from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.support_motion import record_at
 from deckpound.analytic.system import C_BENT as _C_BENT
-from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
-    spring_revert, spring_stored_energy, spring_tangent, spring_update_materials, store_standard
+from deckpound.analytic.system import (
+    spring_assemble,
+    spring_commit,
+    spring_deformations,
+    spring_revert,
+    spring_stored_energy,
+    spring_tangent,
+    spring_update_materials,
+    store_standard,
+)
 
-__all__ = ["newmark_run", "newmark_workspace", "NewmarkOptions", "NewmarkWork",
-           "ENERGY_COLUMNS", "N_ENERGY", "GAMMA", "BETA"]
+__all__ = ["BETA", "ENERGY_COLUMNS", "GAMMA", "N_ENERGY", "NewmarkOptions", "NewmarkWork",
+           "newmark_run", "newmark_workspace"]
 
 N_ENERGY = len(ENERGY_COLUMNS)
 GAMMA, BETA = 0.5, 0.25
@@ -390,8 +402,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                         status = RUN_INTERRUPTED
                         break
                 total_it += it
-                if it > maxit_seen:
-                    maxit_seen = it
+                maxit_seen = max(maxit_seen, it)
                 if not converged:
                     sub_ok = False
                     break

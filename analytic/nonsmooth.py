@@ -56,17 +56,17 @@ velocities at the last accepted step, DOF order of :mod:`deckpound.models.mechan
 
 from __future__ import annotations
 
-import dataclasses
 import time as _time
+from typing import ClassVar
 
 import numpy as np
-
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import NonsmoothSettings, Scene
 
-__all__ = ["NonsmoothEngine", "run_nonsmooth", "output_columns", "ENERGY_COLUMNS"]
+from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
+
+__all__ = ["ENERGY_COLUMNS", "NonsmoothEngine", "output_columns", "run_nonsmooth"]
 
 #: Energy columns of the nonsmooth result, in the order the kernel writes them [kJ].
 ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
@@ -108,7 +108,8 @@ class NonsmoothEngine(Engine):
     Settings = NonsmoothSettings
     settings_field = "nonsmooth"
     step_field = "h"
-    style = dict(color="#c0392b", linestyle=":", linewidth=1.6, label="nonsmooth")
+    style: ClassVar[dict] = {"color": "#c0392b", "linestyle": ":", "linewidth": 1.6,
+                             "label": "nonsmooth"}
 
     def reads(self, scene: Scene, settings) -> set[str]:
         """Restitution, geometry and the friction coefficient; the contact law and its
@@ -134,8 +135,8 @@ class NonsmoothEngine(Engine):
         ct = scene.contact
         how = friction_model(ct.friction_mode).nonsmooth
         if ct.has_friction and how:
-            return [f"contact.friction_mode = {ct.friction_mode!r} means {how} "
-                    f"(mu = {ct.friction:g}): {RIGID_CONTACT}"]
+            return [(f"contact.friction_mode = {ct.friction_mode!r} means {how} "
+                     f"(mu = {ct.friction:g}): {RIGID_CONTACT}")]
         return []
 
     def _run(self, plan: Plan, scene: Scene, settings, motion, *,
@@ -150,8 +151,11 @@ class NonsmoothEngine(Engine):
         from deckpound.analytic.contact_laws import pack_contact
         from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM
         from deckpound.analytic.kinematics import pack_corners
-        from deckpound.analytic.moreau_jean import (MoreauJeanOptions, moreau_jean_run,
-                                                    moreau_jean_workspace)
+        from deckpound.analytic.moreau_jean import (
+            MoreauJeanOptions,
+            moreau_jean_run,
+            moreau_jean_workspace,
+        )
         from deckpound.analytic.support_motion import support_record
         from deckpound.analytic.system import initial_dofs, pack_system
         from deckpound.models.damping import damping_model
@@ -170,7 +174,7 @@ class NonsmoothEngine(Engine):
         ct = scene.contact
         mu = float(ct.friction) if ct.has_friction else 0.0
         stride = output_stride(h, scene.run.output_dt)
-        nsteps = int(round(duration / h))
+        nsteps = round(duration / h)
         cols = engine_columns(plan) + list(IMPULSE_COLUMNS) + list(ENERGY_COLUMNS)
         bd.check_output_size(nsteps // stride + 1, len(cols))
         output = bd.Output(np.zeros((nsteps // stride + 1, len(cols))),

@@ -45,8 +45,6 @@ from collections import namedtuple
 from dataclasses import dataclass
 
 import numpy as np
-from deckpound.analytic._jit import kernel
-
 from deckpound.analytic._hysteretic_kernel import (
     C_ROTMAX,
     C_ROTMIN,
@@ -54,11 +52,11 @@ from deckpound.analytic._hysteretic_kernel import (
     C_STRESS,
     N_PARAMS,
     N_STATE,
+    P_BETA,
     P_E1N,
     P_E1P,
     P_EUN,
     P_EUP,
-    P_BETA,
     T_STRESS,
     T_TANGENT,
     hyst_commit,
@@ -66,25 +64,14 @@ from deckpound.analytic._hysteretic_kernel import (
     hyst_revert,
     hyst_set_trial,
 )
+from deckpound.analytic._jit import kernel
 from deckpound.analytic.hysteretic import pack_hysteretic
 from deckpound.models.damping import DampingModel
 from deckpound.models.plan import DOF_COLUMNS, N_CORNERS, VELOCITY_COLUMNS, Plan
 
-__all__ = [
-    "SystemArrays",
-    "PackedSystem",
-    "pack_system",
-    "spring_deformations",
-    "spring_update_materials",
-    "spring_assemble",
-    "spring_tangent",
-    "spring_commit",
-    "spring_revert",
-    "spring_stored_energy",
-    "N_DOF",
-    "KIND_LINEAR",
-    "KIND_HYSTERETIC",
-]
+__all__ = ["KIND_HYSTERETIC", "KIND_LINEAR", "N_DOF", "PackedSystem", "SystemArrays", "pack_system",
+           "spring_assemble", "spring_commit", "spring_deformations", "spring_revert",
+           "spring_stored_energy", "spring_tangent", "spring_update_materials"]
 
 N_DOF = 7
 KIND_LINEAR = 0
@@ -285,8 +272,7 @@ def _unloading_stiffness(p, st, stress):
     k = 1.0
     if ratio > 1.0:
         k = ratio ** p[P_BETA]
-        if k < 1.0:
-            k = 1.0
+        k = max(k, 1.0)
     return e / k
 
 

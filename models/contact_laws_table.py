@@ -25,11 +25,11 @@ Units: forces kN, gaps and penetrations δ = −g ≥ 0 m, rates δ̇ = −ġ m/
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
-__all__ = ["ContactLaw", "FrictionModel", "CONTACT_LAW_TABLE", "FRICTION_MODEL_TABLE",
-           "LAW_CODES", "FRICTION_CODES", "RIGID_CONTACT", "contact_law", "friction_model"]
+__all__ = ["CONTACT_LAW_TABLE", "FRICTION_CODES", "FRICTION_MODEL_TABLE", "LAW_CODES",
+           "RIGID_CONTACT", "ContactLaw", "FrictionModel", "contact_law", "friction_model"]
 
 
 @dataclass(frozen=True)

@@ -17,10 +17,10 @@ import time
 
 import numpy as np
 import pytest
-
-from deckpound.engines import run_engine
 from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene
+
+from deckpound.engines import run_engine
 
 # long runs (minutes if not interrupted): 4e7 Newmark / Moreau-Jean steps, stiff adaptive
 LONG = {

@@ -6,14 +6,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
+from _compliance_helpers import base_scene, with_contact, with_run
 from deckpound.analytic import contact_laws as cl
-from deckpound.engines import get_engine, run_engine
-from deckpound.models.contact_laws_table import (CONTACT_LAW_TABLE, FRICTION_MODEL_TABLE,
-                                                 contact_law)
+from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_MODEL_TABLE, contact_law
 from deckpound.models.errors import SceneError
 from deckpound.models.scene import CONTACT_LAWS, FRICTION_MODES
-from _compliance_helpers import base_scene, with_contact, with_run
+
+from deckpound.engines import get_engine, run_engine
 
 LAWS = [law.name for law in CONTACT_LAW_TABLE]
 MODELS = [m.name for m in FRICTION_MODEL_TABLE]
