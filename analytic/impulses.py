@@ -14,14 +14,14 @@ kernel compiled without it (:mod:`deckpound.analytic._jit`).
 from __future__ import annotations
 
 import numpy as np
+from deckpound.analytic._jit import compiled
 from deckpound.analytic.dense import lu_solve
 from deckpound.analytic.frictional_contact import solve_contact_impulses_into
-from numba import njit
 
 __all__ = ["solve_active_impulses"]
 
 
-@njit(cache=True, _nrt=True)   # allocates: keeps numba's runtime when called from a kernel
+@compiled(_nrt=True)   # allocates: keeps numba's runtime when called from a kernel
 def solve_active_impulses(LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu, mode, rtol,
                           P_N, P_T, state, vnew):
     """Solve the frictional impact problem of the active corners act[:nact].

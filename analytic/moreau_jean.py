@@ -116,21 +116,27 @@ _NS = ("kt_fact", "d_k", "dd_k", "fs_k", "kt_k", "d_lin", "fs_lin", "kt_lin", "d
        "kt", "sdu", "sdv")
 _V4 = ("gap", "gapo", "P_N", "P_T", "pn_acc", "pt_acc", "fn_out", "ft_out")
 _CH = ("ug", "vg", "ugo", "vgo")
-#: The workspace of :func:`moreau_jean_run` (:func:`moreau_jean_workspace`): u0, v0 initial
-#: state; hstate (ns, 17) Takeda states; final (2, 7) displacement and velocity at the last
-#: accepted step; q, v iterate, qk, vk start of step, qM mid-step prediction, vfree, vnew free
-#: and post-contact velocities, R residual, dv, Fk smooth force at the start, f at the iterate
-#: (7,); K, LU tangent and iteration-matrix factors (7, 7), piv; per spring (ns,): kt_fact
-#: tangents of the factors held (NaN: none), committed d_k, dd_k, fs_k, kt_k, linearisation
-#: point d_lin, fs_lin, kt_lin, iterate d, dd, fs, kt, and sdu, sdv = S Δu_g, S Δu̇_g; per
-#: corner (4,): gap (mid-step), gapo (output), impulses P_N, P_T, accumulated pn_acc, pt_acc,
-#: output forces fn_out, ft_out; WN, WT (mid-step) and WNo, WTo (output) rows (4, 7); act,
-#: state (4,) int64 active corners and contact states, was_active (4,) bool; ug, vg, ugo, vgo
-#: supports now and at the last step; W (6,) running work totals [kJ]; energy (N_ENERGY,).
-MoreauJeanWork = namedtuple("MoreauJeanWork", ("u0", "v0", "hstate", "final") + _V7
-                            + ("K", "LU", "piv") + _NS + _V4 + ("WN", "WT", "WNo", "WTo", "act",
-                                                                "state", "was_active") + _CH
-                            + ("W", "energy"))
+_CORNER = _V4 + ("WN", "WT", "WNo", "WTo", "act", "state", "was_active")
+#: DOF vectors (7,): q, v iterate, qk, vk start of step, qM mid-step prediction, vfree, vnew
+#: free and post-contact velocities, R residual, dv, Fk smooth force at the start, f at the
+#: iterate; K, LU tangent and iteration-matrix factors (7, 7), piv (7,) int64.
+MoreauJeanDofs = namedtuple("MoreauJeanDofs", _V7 + ("K", "LU", "piv"))
+#: Per spring (ns,): kt_fact tangents of the factors held (NaN: none), committed d_k, dd_k,
+#: fs_k, kt_k, linearisation point d_lin, fs_lin, kt_lin, iterate d, dd, fs, kt, and sdu, sdv =
+#: S Δu_g, S Δu̇_g.
+MoreauJeanSprings = namedtuple("MoreauJeanSprings", _NS)
+#: Per corner (4,): gap (mid-step), gapo (output), impulses P_N, P_T, accumulated pn_acc,
+#: pt_acc, output forces fn_out, ft_out; rows WN, WT (mid-step) and WNo, WTo (output) (4, 7);
+#: act, state int64 active corners and contact states, was_active bool.
+MoreauJeanCorners = namedtuple("MoreauJeanCorners", _CORNER)
+#: The workspace of :func:`moreau_jean_run` (:func:`moreau_jean_workspace`), one named field
+#: per array, grouped (a group is loaded as one value in the compiled code: small groups keep
+#: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states; final (2, 7)
+#: displacement and velocity at the last accepted step; dof, spring, corner the groups above;
+#: ug, vg, ugo, vgo supports now and at the last step; W (6,) running work totals [kJ];
+#: energy (N_ENERGY,).
+MoreauJeanWork = namedtuple("MoreauJeanWork", ("u0", "v0", "hstate", "final", "dof", "spring",
+                                               "corner") + _CH + ("W", "energy"))
 
 
 @kernel
@@ -191,13 +197,15 @@ def moreau_jean_workspace(u0, v0, hstate, ns: int, nch: int) -> MoreauJeanWork:
     runs without numba's runtime."""
     wns = bd.row_views(_NS, ns)
     wns["kt_fact"][:] = np.nan         # no factorisation held yet
-    return MoreauJeanWork(u0=u0, v0=v0, hstate=hstate, final=np.zeros((2, 7)),
-                          **bd.row_views(_V7, 7), **bd.row_views(("K", "LU"), 7, 7),
-                          piv=np.zeros(7, dtype=np.int64), **wns, **bd.row_views(_V4, 4),
-                          **bd.row_views(("WN", "WT", "WNo", "WTo"), 4, 7),
-                          **bd.row_views(("act", "state"), 4, dtype=np.int64),
-                          was_active=np.zeros(4, dtype=np.bool_), **bd.row_views(_CH, nch),
-                          W=np.zeros(6), energy=np.zeros(N_ENERGY))
+    dof = MoreauJeanDofs(**bd.row_views(_V7, 7), **bd.row_views(("K", "LU"), 7, 7),
+                         piv=np.zeros(7, dtype=np.int64))
+    corner = MoreauJeanCorners(**bd.row_views(_V4, 4),
+                               **bd.row_views(("WN", "WT", "WNo", "WTo"), 4, 7),
+                               **bd.row_views(("act", "state"), 4, dtype=np.int64),
+                               was_active=np.zeros(4, dtype=np.bool_))
+    return MoreauJeanWork(u0=u0, v0=v0, hstate=hstate, final=np.zeros((2, 7)), dof=dof,
+                          spring=MoreauJeanSprings(**wns), corner=corner,
+                          **bd.row_views(_CH, nch), W=np.zeros(6), energy=np.zeros(N_ENERGY))
 
 
 @kernel(nogil=True)
@@ -236,19 +244,21 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     a0 = sa.scal[0]
     wk = work
     hstate, uv_end, u0, v0 = wk.hstate, wk.final, wk.u0, wk.v0
-    q, v, qk, vk, qM, vfree, vnew, R, dv, Fk, f = (wk.q, wk.v, wk.qk, wk.vk, wk.qM, wk.vfree,
-                                                  wk.vnew, wk.R, wk.dv, wk.Fk, wk.f)
-    K, LU, piv = wk.K, wk.LU, wk.piv
+    dof, spr, cor = wk.dof, wk.spring, wk.corner
+    q, v, qk, vk, qM, vfree, vnew, R, dv, Fk, f = (dof.q, dof.v, dof.qk, dof.vk, dof.qM,
+                                                  dof.vfree, dof.vnew, dof.R, dof.dv, dof.Fk,
+                                                  dof.f)
+    K, LU, piv = dof.K, dof.LU, dof.piv
     # spring quantities: committed start of step (k), linearisation point (lin), new iterate;
     # kt_fact: tangents of the factors held in LU (NaN: none); sdu, sdv: S Δu_g, S Δu̇_g
     (kt_fact, d_k, dd_k, fs_k, kt_k, d_lin, fs_lin, kt_lin, d, dd, fs, kt, sdu,
-     sdv) = (wk.kt_fact, wk.d_k, wk.dd_k, wk.fs_k, wk.kt_k, wk.d_lin, wk.fs_lin, wk.kt_lin,
-             wk.d, wk.dd, wk.fs, wk.kt, wk.sdu, wk.sdv)
-    gap, gapo, P_N, P_T, pn_acc, pt_acc, fn_out, ft_out = (wk.gap, wk.gapo, wk.P_N, wk.P_T,
-                                                          wk.pn_acc, wk.pt_acc, wk.fn_out,
-                                                          wk.ft_out)
-    WN, WT, WNo, WTo = wk.WN, wk.WT, wk.WNo, wk.WTo
-    act, state, was_active = wk.act, wk.state, wk.was_active
+     sdv) = (spr.kt_fact, spr.d_k, spr.dd_k, spr.fs_k, spr.kt_k, spr.d_lin, spr.fs_lin,
+             spr.kt_lin, spr.d, spr.dd, spr.fs, spr.kt, spr.sdu, spr.sdv)
+    gap, gapo, P_N, P_T, pn_acc, pt_acc, fn_out, ft_out = (cor.gap, cor.gapo, cor.P_N, cor.P_T,
+                                                          cor.pn_acc, cor.pt_acc, cor.fn_out,
+                                                          cor.ft_out)
+    WN, WT, WNo, WTo = cor.WN, cor.WT, cor.WNo, cor.WTo
+    act, state, was_active = cor.act, cor.state, cor.was_active
     ug, vg, ugo, vgo = wk.ug, wk.vg, wk.ugo, wk.vgo
     W, energy = wk.W, wk.energy
     th = theta

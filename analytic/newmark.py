@@ -81,18 +81,26 @@ _PIV = ("piv", "pivel")
 _NS = ("fs", "kt", "kt_fact", "d_prev", "dd_prev", "fs_prev", "d_new", "dd_new")
 _V4 = ("lam_prev", "lt_prev", "g_prev")
 _CH = ("ug", "vg", "ugo", "ug0", "vg0", "ug1", "vg1")
-#: The workspace of :func:`newmark_run` (one field per array; :func:`newmark_workspace`):
-#: u0, v0 initial state; hstate (ns, 17) Takeda states, cstate (4, N_CS) corner states;
-#: cw the ContactWork; u, v, a trial state, un, vn, an start of the (sub)step, us, vs, as_
-#: start of the step, du Newton increment, R residual, f internal force (7,); K, Keff, LU
-#: (tangent, effective tangent, its factors), H gap Hessian, Kel, LUel (elastic effective
-#: tangent and factors); piv, pivel; fs, kt spring forces and tangents, kt_fact tangents of the
-#: factors held in LU, d/dd/fs_prev last committed, d/dd_new trial deformations (ns,);
-#: lam/lt/g_prev last committed contact forces and gaps (4,); supports: ug, vg trial, ugo last
-#: (sub)step, ug0, vg0 start and ug1, vg1 end of the step; W (5,) running work [input, springs,
-#: viscous, contact, friction] [kJ]; energy (N_ENERGY,) the output energies.
-NewmarkWork = namedtuple("NewmarkWork", ("u0", "v0", "hstate", "cstate", "cw") + _V7 + _M77
-                         + _PIV + _NS + _V4 + _CH + ("W", "energy"))
+#: DOF vectors (7,): u, v, a trial state, un, vn, an start of the (sub)step, us, vs, as_ start
+#: of the step, du Newton increment, R residual, f internal force.
+NewmarkDofs = namedtuple("NewmarkDofs", _V7)
+#: (7, 7) matrices: K, Keff, LU (tangent, effective tangent, its factors), H gap Hessian, Kel,
+#: LUel (elastic effective tangent and factors); pivots piv, pivel (7,) int64.
+NewmarkMatrices = namedtuple("NewmarkMatrices", _M77 + _PIV)
+#: Per spring (ns,): fs, kt forces and tangents, kt_fact tangents of the factors held in LU,
+#: d/dd/fs_prev last committed, d/dd_new trial deformations and rates.
+NewmarkSprings = namedtuple("NewmarkSprings", _NS)
+#: Supports (n_channels,): ug, vg trial, ugo last (sub)step, ug0, vg0 start and ug1, vg1 end of
+#: the step.
+NewmarkSupports = namedtuple("NewmarkSupports", _CH)
+#: The workspace of :func:`newmark_run` (:func:`newmark_workspace`), one named field per array,
+#: grouped by shape (a group is loaded as one value in the compiled code: small groups keep
+#: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states, cstate (4, N_CS)
+#: corner states; cw the ContactWork; dof, mat, spring, support the groups above;
+#: lam/lt/g_prev last committed contact forces and gaps (4,); W (5,) running work [input,
+#: springs, viscous, contact, friction] [kJ]; energy (N_ENERGY,) the output energies.
+NewmarkWork = namedtuple("NewmarkWork", ("u0", "v0", "hstate", "cstate", "cw", "dof", "mat",
+                                         "spring", "support") + _V4 + ("W", "energy"))
 
 
 def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
@@ -100,10 +108,12 @@ def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
     the initial state u0, v0 (7,) and the virgin material and corner states. Allocated here
     because the kernel runs without numba's runtime."""
     return NewmarkWork(u0=u0, v0=v0, hstate=hstate, cstate=cstate, cw=bd.new_contact_work(),
-                       **bd.row_views(_V7, 7), **bd.row_views(_M77, 7, 7),
-                       **bd.row_views(_PIV, 7, dtype=np.int64), **bd.row_views(_NS, ns),
-                       **bd.row_views(_V4, 4), **bd.row_views(_CH, nch), W=np.zeros(5),
-                       energy=np.zeros(N_ENERGY))
+                       dof=NewmarkDofs(**bd.row_views(_V7, 7)),
+                       mat=NewmarkMatrices(**bd.row_views(_M77, 7, 7),
+                                           **bd.row_views(_PIV, 7, dtype=np.int64)),
+                       spring=NewmarkSprings(**bd.row_views(_NS, ns)),
+                       support=NewmarkSupports(**bd.row_views(_CH, nch)),
+                       **bd.row_views(_V4, 4), W=np.zeros(5), energy=np.zeros(N_ENERGY))
 
 
 @kernel
@@ -146,29 +156,32 @@ def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
 
 
 @kernel(inline="always")
-def _form_unbalance(sa, contact, wk, skip_contact):
-    """OpenSees ``formUnbalance`` at the trial (u, u̇, ü) and supports (u_g, u̇_g) of ``wk``.
+def _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact):
+    """OpenSees ``formUnbalance`` at the trial (u, u̇, ü) of ``dof`` and the supports (u_g,
+    u̇_g) of ``sup``.
 
-    Springs: trial material state, F (into wk.f), restoring forces wk.fs and tangents wk.kt.
+    Springs: trial material state, F (into dof.f), restoring forces spr.fs and tangents spr.kt.
     Contacts: the gap check, then the laws of the closed corners (every corner when
-    ``skip_contact`` is off, linear kinematics). Residual R = F_c − F − M ü. wk.un:
+    ``skip_contact`` is off, linear kinematics). Residual R = F_c − F − M ü. dof.un:
     displacement at the step start. Returns (number of springs off their elastic tangent, any
     corner evaluated).
     """
-    cw = wk.cw
-    spring_deformations(sa, wk.u, wk.v, wk.ug, wk.vg, wk.d_new, wk.dd_new)
-    spring_update_materials(sa.hparams, wk.hstate, sa.kind, wk.d_new)
-    nonel = spring_assemble(sa, wk.hstate, wk.d_new, wk.dd_new, wk.v, wk.f, wk.fs, wk.kt)
-    ncl = cl.eval_contacts(contact, wk.cstate, cw, wk.u, wk.v, wk.un)
+    u, v = dof.u, dof.v
+    d, dd = spr.d_new, spr.dd_new
+    spring_deformations(sa, u, v, sup.ug, sup.vg, d, dd)
+    spring_update_materials(sa.hparams, hstate, sa.kind, d)
+    nonel = spring_assemble(sa, hstate, d, dd, v, dof.f, spr.fs, spr.kt)
+    ncl = cl.eval_contacts(contact, cs, cw, u, v, dof.un)
     evaluated = cw.evaluated
     if not skip_contact and not contact.nonlinear:
         for c in range(4):
             evaluated[c] = True
         ncl = -1
     if ncl < 0:
-        cl.eval_closed(contact, wk.cstate, cw, wk.u, wk.v, wk.un)
+        cl.eval_closed(contact, cs, cw, u, v, dof.un)
+    R, f, a = dof.R, dof.f, dof.a
     for j in range(7):
-        wk.R[j] = cw.fc[j] - wk.f[j] - sa.mass[j] * wk.a[j]
+        R[j] = cw.fc[j] - f[j] - sa.mass[j] * a[j]
     return nonel, evaluated[0] or evaluated[1] or evaluated[2] or evaluated[3]
 
 
@@ -228,18 +241,21 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     halt = stats.halt
     wk = work
     hstate, cs, cw = wk.hstate, wk.cstate, wk.cw
+    dof, mat, spr, sup = wk.dof, wk.mat, wk.spring, wk.support
     mass = sa.mass
-    u, v, a, un, vn, an, us, vs, as_, du, R, f = (wk.u, wk.v, wk.a, wk.un, wk.vn, wk.an, wk.us,
-                                                   wk.vs, wk.as_, wk.du, wk.R, wk.f)
-    K, Keff, LU, H, Kel, LUel = wk.K, wk.Keff, wk.LU, wk.H, wk.Kel, wk.LUel
-    piv, pivel = wk.piv, wk.pivel
+    u, v, a, un, vn, an, us, vs, as_, du, R, f = (dof.u, dof.v, dof.a, dof.un, dof.vn, dof.an,
+                                                   dof.us, dof.vs, dof.as_, dof.du, dof.R, dof.f)
+    K, Keff, LU, H, Kel, LUel = mat.K, mat.Keff, mat.LU, mat.H, mat.Kel, mat.LUel
+    piv, pivel = mat.piv, mat.pivel
     fs, kt, kt_fact, d_prev, dd_prev, fs_prev, d_new, dd_new = (
-        wk.fs, wk.kt, wk.kt_fact, wk.d_prev, wk.dd_prev, wk.fs_prev, wk.d_new, wk.dd_new)
+        spr.fs, spr.kt, spr.kt_fact, spr.d_prev, spr.dd_prev, spr.fs_prev, spr.d_new,
+        spr.dd_new)
     g, gd, lam, lt, evaluated = cw.g, cw.gd, cw.lam, cw.lt, cw.evaluated
     lam_prev, lt_prev, g_prev = wk.lam_prev, wk.lt_prev, wk.g_prev
     WT = cw.WT
     # supports: at the trial, at the last (sub)step, at t_n and t_{n+1} (start and end of step)
-    ug, vg, ugo, ug0, vg0, ug1, vg1 = wk.ug, wk.vg, wk.ugo, wk.ug0, wk.vg0, wk.ug1, wk.vg1
+    ug, vg, ugo, ug0, vg0, ug1, vg1 = (sup.ug, sup.vg, sup.ugo, sup.ug0, sup.vg0, sup.ug1,
+                                       sup.vg1)
     W, energy = wk.W, wk.energy
     # kt_fact: spring tangents of the factors held in LU; Kel, LUel, pivel: the elastic
     # effective tangent of the main step and its factors
@@ -267,7 +283,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
         u[j] = wk.u0[j]
         v[j] = wk.v0[j]
         un[j] = wk.u0[j]
-    _form_unbalance(sa, contact, wk, skip_contact)
+    _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact)
     for j in range(7):
         a[j] = (cw.fc[j] - f[j]) / mass[j]
     spring_commit(sa, hstate)
@@ -339,7 +355,8 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 for j in range(7):
                     v[j] = a1p * vn[j] + a2p * an[j]
                     a[j] = a4p * an[j] + a3p * vn[j]
-                nonel, anyev = _form_unbalance(sa, contact, wk, skip_contact)
+                nonel, anyev = _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup,
+                                               skip_contact)
                 it = 0
                 converged = False
                 while True:
@@ -387,7 +404,8 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                         a[j] += c3 * du[j]
                         nrm += du[j] * du[j]
                     nrm = np.sqrt(nrm)
-                    nonel, anyev = _form_unbalance(sa, contact, wk, skip_contact)
+                    nonel, anyev = _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup,
+                                               skip_contact)
                     it += 1
                     if not np.isfinite(nrm):
                         status = RUN_NONFINITE
