@@ -25,20 +25,67 @@ from __future__ import annotations
 import os
 
 import numpy as np
-from numba import njit
-
 from deckpound.analytic import _hysteretic_layout as _layout
 from deckpound.analytic._hysteretic_layout import (  # noqa: F401 (re-exported: data format)
-    C_ENERGYD, C_LOADIND, C_ROTMAX, C_ROTMIN, C_ROTNU, C_ROTPU, C_STRAIN, C_STRESS, DBL_EPSILON,
-    K_KN, K_KN_ROT, K_KP, K_KP_ROT, N_PARAMS, N_STATE, NEG_INF_STRAIN, P_BETA, P_DAMAGE1,
-    P_DAMAGE2, P_E1N, P_E1N_SLOPE, P_E1P, P_E1P_SLOPE, P_E2N, P_E2N_SLOPE, P_E2P, P_E2P_SLOPE,
-    P_E3N, P_E3N_SLOPE, P_E3P, P_E3P_SLOPE, P_ENERGYA, P_EUN, P_EUP, P_PINCHX, P_PINCHY, P_S1N,
-    P_S1P, P_S2N, P_S2P, P_S3N, P_S3P, POS_INF_STRAIN, T_ENERGYD, T_LOADIND, T_ROTMAX, T_ROTMIN,
-    T_ROTNU, T_ROTPU, T_STRAIN, T_STRESS, T_TANGENT, pack_hysteretic_params,
+    C_ENERGYD,
+    C_LOADIND,
+    C_ROTMAX,
+    C_ROTMIN,
+    C_ROTNU,
+    C_ROTPU,
+    C_STRAIN,
+    C_STRESS,
+    DBL_EPSILON,
+    K_KN,
+    K_KN_ROT,
+    K_KP,
+    K_KP_ROT,
+    N_PARAMS,
+    N_STATE,
+    NEG_INF_STRAIN,
+    P_BETA,
+    P_DAMAGE1,
+    P_DAMAGE2,
+    P_E1N,
+    P_E1N_SLOPE,
+    P_E1P,
+    P_E1P_SLOPE,
+    P_E2N,
+    P_E2N_SLOPE,
+    P_E2P,
+    P_E2P_SLOPE,
+    P_E3N,
+    P_E3N_SLOPE,
+    P_E3P,
+    P_E3P_SLOPE,
+    P_ENERGYA,
+    P_EUN,
+    P_EUP,
+    P_PINCHX,
+    P_PINCHY,
+    P_S1N,
+    P_S1P,
+    P_S2N,
+    P_S2P,
+    P_S3N,
+    P_S3P,
+    POS_INF_STRAIN,
+    T_ENERGYD,
+    T_LOADIND,
+    T_ROTMAX,
+    T_ROTMIN,
+    T_ROTNU,
+    T_ROTPU,
+    T_STRAIN,
+    T_STRESS,
+    T_TANGENT,
+    pack_hysteretic_params,
 )
-from deckpound.analytic._jit import kernel
+from deckpound.analytic._jit import compiled, kernel
+from numba import njit
 
-__all__ = [*_layout.__all__, "ELASTIC_SHORTCUT", "hyst_init_state", "hyst_set_trial",
+__all__ = [*_layout.__all__, "ELASTIC_SHORTCUT",  # noqa: PLE0604 (re-exported layout)
+           "hyst_init_state", "hyst_set_trial",
            "hyst_commit", "hyst_revert", "hyst_revert_to_start"]
 
 #: The elastic short-circuit of :func:`_degradation` (``pow`` skipped while the ductility is
@@ -114,9 +161,7 @@ def _pos_env_rotlim(p, strain):
         limit = p[P_E1P] - p[P_S1P] / p[P_E2P_SLOPE]
     if strain > p[P_E2P] and p[P_E3P_SLOPE] < 0.0:
         limit = p[P_E2P] - p[P_S2P] / p[P_E3P_SLOPE]
-    if limit == POS_INF_STRAIN:
-        return POS_INF_STRAIN
-    elif _pos_env_stress(p, limit) > 0.0:
+    if limit == POS_INF_STRAIN or _pos_env_stress(p, limit) > 0.0:
         return POS_INF_STRAIN
     else:
         return limit
@@ -132,9 +177,7 @@ def _neg_env_rotlim(p, strain):
         limit = p[P_E1N] - p[P_S1N] / p[P_E2N_SLOPE]
     if strain < p[P_E2N] and p[P_E3N_SLOPE] < 0.0:
         limit = p[P_E2N] - p[P_S2N] / p[P_E3N_SLOPE]
-    if limit == NEG_INF_STRAIN:
-        return NEG_INF_STRAIN
-    elif _neg_env_stress(p, limit) < 0.0:
+    if limit == NEG_INF_STRAIN or _neg_env_stress(p, limit) < 0.0:
         return NEG_INF_STRAIN
     else:
         return limit
@@ -171,7 +214,7 @@ def _cached_degradation(p, s, rot, rot1, ik, irot):
 
 
 # ------------------------------------------------------------------- kernels
-@njit(cache=True)
+@compiled
 def hyst_init_state(params):
     """Return a fresh state array (OpenSees constructor: revertToStart +
     revertToLastCommit).  ``params`` as built by ``pack_hysteretic``."""
@@ -238,7 +281,7 @@ def _positive_increment(p, s, d_strain):
     kn = _cached_degradation(p, s, c_rot_min, rot1n, K_KN, K_KN_ROT)
     kp = _cached_degradation(p, s, c_rot_max, rot1p, K_KP, K_KP_ROT)
 
-    if s[T_LOADIND] == 2.0:
+    if s[T_LOADIND] == 2.0:  # noqa: SIM102 (OpenSees's branch structure, kept)
         if c_stress <= 0.0:
             s[T_ROTNU] = s[C_STRAIN] - c_stress / (e_un * kn)
             energy = s[C_ENERGYD] - 0.5 * c_stress / (e_un * kn) * c_stress
@@ -250,16 +293,15 @@ def _positive_increment(p, s, d_strain):
     s[T_LOADIND] = 1.0
 
     t_rot_max = s[T_ROTMAX]
-    if t_rot_max > POS_INF_STRAIN:
-        t_rot_max = POS_INF_STRAIN
-    t_rot_max = t_rot_max if t_rot_max > rot1p else rot1p
+    t_rot_max = min(t_rot_max, POS_INF_STRAIN)
+    t_rot_max = max(rot1p, t_rot_max)
     s[T_ROTMAX] = t_rot_max
 
     t_rot_nu = s[T_ROTNU]
     pinch_y = p[P_PINCHY]
     maxmom = _pos_env_stress(p, t_rot_max)
     rotlim = _neg_env_rotlim(p, c_rot_min)
-    rotrel = rotlim if rotlim > t_rot_nu else t_rot_nu
+    rotrel = max(t_rot_nu, rotlim)
     rotmp2 = t_rot_max - (1.0 - pinch_y) * maxmom / (e_up * kp)
     rotch = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
 
@@ -308,7 +350,7 @@ def _negative_increment(p, s, d_strain):
     kn = _cached_degradation(p, s, c_rot_min, rot1n, K_KN, K_KN_ROT)
     kp = _cached_degradation(p, s, c_rot_max, rot1p, K_KP, K_KP_ROT)
 
-    if s[T_LOADIND] == 1.0:
+    if s[T_LOADIND] == 1.0:  # noqa: SIM102 (OpenSees's branch structure, kept)
         if c_stress >= 0.0:
             s[T_ROTPU] = s[C_STRAIN] - c_stress / (e_up * kp)
             energy = s[C_ENERGYD] - 0.5 * c_stress / (e_up * kp) * c_stress
@@ -320,16 +362,15 @@ def _negative_increment(p, s, d_strain):
     s[T_LOADIND] = 2.0
 
     t_rot_min = s[T_ROTMIN]
-    if t_rot_min < NEG_INF_STRAIN:
-        t_rot_min = NEG_INF_STRAIN
-    t_rot_min = t_rot_min if t_rot_min < rot1n else rot1n
+    t_rot_min = max(t_rot_min, NEG_INF_STRAIN)
+    t_rot_min = min(rot1n, t_rot_min)
     s[T_ROTMIN] = t_rot_min
 
     t_rot_pu = s[T_ROTPU]
     pinch_y = p[P_PINCHY]
     minmom = _neg_env_stress(p, t_rot_min)
     rotlim = _pos_env_rotlim(p, c_rot_max)
-    rotrel = rotlim if rotlim < t_rot_pu else t_rot_pu
+    rotrel = min(t_rot_pu, rotlim)
     rotmp2 = t_rot_min - (1.0 - pinch_y) * minmom / (e_un * kn)
     rotch = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
 

@@ -74,18 +74,58 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "N_PARAMS", "N_STATE", "POS_INF_STRAIN", "NEG_INF_STRAIN", "DBL_EPSILON",
-    "P_S1P", "P_E1P", "P_S2P", "P_E2P", "P_S3P", "P_E3P",
-    "P_S1N", "P_E1N", "P_S2N", "P_E2N", "P_S3N", "P_E3N",
-    "P_PINCHX", "P_PINCHY", "P_DAMAGE1", "P_DAMAGE2", "P_BETA",
-    "P_E1P_SLOPE", "P_E2P_SLOPE", "P_E3P_SLOPE",
-    "P_E1N_SLOPE", "P_E2N_SLOPE", "P_E3N_SLOPE",
-    "P_EUP", "P_EUN", "P_ENERGYA",
-    "C_ROTMAX", "C_ROTMIN", "C_ROTPU", "C_ROTNU", "C_ENERGYD", "C_LOADIND",
-    "C_STRESS", "C_STRAIN",
-    "T_ROTMAX", "T_ROTMIN", "T_ROTPU", "T_ROTNU", "T_ENERGYD", "T_LOADIND",
-    "T_STRESS", "T_STRAIN", "T_TANGENT",
-    "K_KN", "K_KN_ROT", "K_KP", "K_KP_ROT",
+    "C_ENERGYD",
+    "C_LOADIND",
+    "C_ROTMAX",
+    "C_ROTMIN",
+    "C_ROTNU",
+    "C_ROTPU",
+    "C_STRAIN",
+    "C_STRESS",
+    "DBL_EPSILON",
+    "K_KN",
+    "K_KN_ROT",
+    "K_KP",
+    "K_KP_ROT",
+    "NEG_INF_STRAIN",
+    "N_PARAMS",
+    "N_STATE",
+    "POS_INF_STRAIN",
+    "P_BETA",
+    "P_DAMAGE1",
+    "P_DAMAGE2",
+    "P_E1N",
+    "P_E1N_SLOPE",
+    "P_E1P",
+    "P_E1P_SLOPE",
+    "P_E2N",
+    "P_E2N_SLOPE",
+    "P_E2P",
+    "P_E2P_SLOPE",
+    "P_E3N",
+    "P_E3N_SLOPE",
+    "P_E3P",
+    "P_E3P_SLOPE",
+    "P_ENERGYA",
+    "P_EUN",
+    "P_EUP",
+    "P_PINCHX",
+    "P_PINCHY",
+    "P_S1N",
+    "P_S1P",
+    "P_S2N",
+    "P_S2P",
+    "P_S3N",
+    "P_S3P",
+    "T_ENERGYD",
+    "T_LOADIND",
+    "T_ROTMAX",
+    "T_ROTMIN",
+    "T_ROTNU",
+    "T_ROTPU",
+    "T_STRAIN",
+    "T_STRESS",
+    "T_TANGENT",
     "pack_hysteretic_params",
 ]
 
@@ -144,15 +184,11 @@ def pack_hysteretic_params(s1p, e1p, s2p, e2p, s3p, e3p,
     e2n_s = (s2n - s1n) / (e2n - e1n)
     e3n_s = (s3n - s2n) / (e3n - e2n)
     eup = e1p_s
-    if e2p_s > eup:
-        eup = e2p_s
-    if e3p_s > eup:
-        eup = e3p_s
+    eup = max(eup, e2p_s)
+    eup = max(eup, e3p_s)
     eun = e1n_s
-    if e2n_s > eun:
-        eun = e2n_s
-    if e3n_s > eun:
-        eun = e3n_s
+    eun = max(eun, e2n_s)
+    eun = max(eun, e3n_s)
     p[P_E1P_SLOPE], p[P_E2P_SLOPE], p[P_E3P_SLOPE] = e1p_s, e2p_s, e3p_s
     p[P_E1N_SLOPE], p[P_E2N_SLOPE], p[P_E3N_SLOPE] = e1n_s, e2n_s, e3n_s
     p[P_EUP], p[P_EUN], p[P_ENERGYA] = eup, eun, energy_a

@@ -35,14 +35,20 @@ from __future__ import annotations
 import time as _time
 
 import numpy as np
-
+from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import ensure_compiled
-from deckpound.analytic.compliance import ENERGY_COLUMNS, pack_run
-from deckpound.analytic.dormand_prince import H_BINS_PER_DECADE, H_LOG_MIN, H_NBINS, TABLEAU, \
-    adaptive_run, workspace
+from deckpound.analytic.compliance import _STATUS_TEXT, ENERGY_COLUMNS, pack_run
+from deckpound.analytic.dormand_prince import (
+    H_BINS_PER_DECADE,
+    H_LOG_MIN,
+    AdaptiveOptions,
+    adaptive_run,
+    adaptive_workspace,
+)
 from deckpound.analytic.system import initial_dofs
-from deckpound.engine_contract import RunOutput, Status, engine_columns
 from deckpound.models.excitation import analysis_duration
+
+from deckpound.engine_contract import RunOutput, Status, engine_columns
 
 __all__ = ["run_adaptive"]
 
@@ -71,8 +77,9 @@ def step_size_summary(hist: np.ndarray, hstat: np.ndarray) -> dict:
 
 
 def run_adaptive(plan, scene, settings, motion, *, kv_clip: bool = False,
-                 initial_state=None) -> RunOutput:
-    """Adaptive compliance run (see the module docstring); called by the compliance engine."""
+                 initial_state=None, on_interrupt: str = "raise") -> RunOutput:
+    """Adaptive compliance run (see the module docstring); called by the compliance engine
+    (``on_interrupt``: see :meth:`deckpound.analytic.compliance.ComplianceEngine._run`)."""
     cset = settings
     duration = analysis_duration(scene, motion)
     # the record at its own samples, resampled on its finest step (breakpoints every sample)
@@ -82,43 +89,55 @@ def run_adaptive(plan, scene, settings, motion, *, kv_clip: bool = False,
     UG, VG = res.matrices(ps.channels)
     tb = np.arange(UG.shape[0]) * dtr
     out_dt = scene.run.output_dt
-    nout = int(round(duration / out_dt)) + 1
+    nout = round(duration / out_dt) + 1
     cols = engine_columns(plan) + list(ENERGY_COLUMNS)
-    out = np.zeros((nout, len(cols)))
-    info = np.zeros(6, dtype=np.int64)
-    nbs = ps.n_bent_springs
-    ws = workspace(ps.n_springs, UG.shape[1], nbs)
-    hstate = ps.new_state()
+    bd.check_output_size(nout, len(cols))
+    output = bd.Output(np.zeros((nout, len(cols))), np.arange(len(cols), dtype=np.int64),
+                       np.zeros(len(cols)))
     u0, v0 = initial_dofs(initial_state)
-    hist = np.zeros((2, H_NBINS), dtype=np.int64)
-    hstat = np.zeros((2, 3))
-    args = (ps.arrays, hstate, cp, cs, corners, scene.contact.geometry == "nonlinear", tb, UG,
-            VG, (nout - 1) * out_dt, out_dt, nbs, cset.rtol, cset.atol, cset.max_step,
-            cset.commit_step, out, info, ws, u0, v0, *TABLEAU, hist, hstat)
+    work = adaptive_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, UG.shape[1],
+                              ps.n_bent_springs)
+    opts = AdaptiveOptions(t_end=(nout - 1) * out_dt, out_dt=float(out_dt),
+                           rtol=float(cset.rtol), atol=float(cset.atol),
+                           max_step=float(cset.max_step), commit_step=float(cset.commit_step),
+                           max_steps=int(cset.max_steps))
+    contact = bd.Contact(corners, cp, scene.contact.geometry == "nonlinear")
+    stats = bd.new_stats()
+    args = (ps.arrays, contact, bd.Record(tb, UG, VG), opts, output, work, stats)
     compile_time = ensure_compiled(adaptive_run, *args)
     t1 = _time.perf_counter()
-    adaptive_run(*args)
+    interrupted = bd.run_loop(adaptive_run, args, stats)
     loop = _time.perf_counter() - t1
-    rows = int(info[1])
-    columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
+    if interrupted and on_interrupt == "raise":
+        raise KeyboardInterrupt
+    st = bd.stats_dict(stats)
+    rows = st["rows"]
+    columns = {k: output.table[:rows, i].copy() for i, k in enumerate(cols)}
     ein = np.max(np.abs(columns["energy_input"])) if rows else 0.0
-    ok = info[0] == 0 and rows == nout
+    code = st["status"]
+    ok = code == bd.RUN_OK and rows == nout
+    status = Status.SUCCESS if ok else (bd.status_of(code) if code != bd.RUN_OK
+                                        else Status.NONFINITE)
     extra = {
         "integrator": "adaptive", "kv_clip": kv_clip,
         "scheme": "Dormand-Prince 5(4) with events",
-        "rejected_steps": int(info[3]), "events": int(info[4]), "rhs_calls": int(info[5]),
+        "rejected_steps": st["rejected_steps"], "events": st["contact_events"],
+        "rhs_calls": st["rhs_calls"],
         "energy_closure": float(np.max(np.abs(columns["energy_error"])) / ein) if ein > 0
         else 0.0,
         "energy_columns": list(ENERGY_COLUMNS),
-        "step_sizes": step_size_summary(hist, hstat),
+        "step_sizes": step_size_summary(work.hist, work.hstat),
     }
-    t_fail = (rows - 1) * out_dt if rows else 0.0
+    if ok:
+        message = f"{st['steps']} steps ({st['rejected_steps']} rejected, " \
+                  f"{st['contact_events']} events)"
+    elif code == bd.RUN_STEP_BUDGET:
+        message = (f"step budget exhausted: compliance.max_steps = {cset.max_steps} steps tried "
+                   f"reached t = {st['time']:.6g} s of {opts.t_end:g} s")
+    else:
+        message = _STATUS_TEXT.get(code, "non-finite state")
     return RunOutput(
-        columns=columns,
-        status=Status.SUCCESS if ok else (Status.NOT_CONVERGED if info[0] == 1
-                                          else Status.NONFINITE),
-        message=(f"{int(info[2])} steps ({int(info[3])} rejected, {int(info[4])} events)" if ok
-                 else "step size underflow" if info[0] == 1 else "non-finite state"),
-        failed_step=None if ok else int(info[2]), failed_time=None if ok else t_fail,
-        steps=int(info[2]), failed_steps=0 if ok else 1, compile_time=compile_time,
+        columns=columns, status=status, message=message,
+        failed_step=None if ok else st["failed_step"], failed_time=None if ok else st["time"],
+        steps=st["steps"], failed_steps=0 if ok else 1, compile_time=compile_time,
         loop_time=loop, extra=extra)

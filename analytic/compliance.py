@@ -35,15 +35,16 @@ acceleration scheme exactly up to the Newton residual.
 from __future__ import annotations
 
 import time as _time
+from typing import ClassVar
 
 import numpy as np
-
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import ComplianceSettings, Scene
 
-__all__ = ["ComplianceEngine", "run_compliance", "ENERGY_COLUMNS", "output_columns", "SKIPS"]
+from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
+
+__all__ = ["ENERGY_COLUMNS", "SKIPS", "ComplianceEngine", "output_columns", "run_compliance"]
 
 #: Energy columns of the compliance result, in the order the kernels write them [kJ].
 ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
@@ -69,9 +70,10 @@ SUBSTEPS = 10   # sub-steps of the fallback for a failed step (OpenSees engine d
 #:   result decimated afterwards.
 SKIPS = ("contact", "friction", "factor_reuse", "decimate")
 
-_STATUS = {1: Status.NOT_CONVERGED, 2: Status.SINGULAR, 3: Status.NONFINITE}
+#: failure messages by loop status code (:mod:`deckpound.analytic.bundles` ``RUN_*``)
 _STATUS_TEXT = {1: "Newton did not converge (NormDispIncr)", 2: "singular tangent",
-                3: "non-finite state"}
+                3: "non-finite state", 5: "step budget exhausted (compliance.max_steps)",
+                6: "interrupted", 7: "step size underflow"}
 
 
 def output_columns(scene: Scene) -> list[str]:
@@ -96,6 +98,7 @@ def pack_run(plan: Plan, scene: Scene, motion: SupportMotion, *, kv_clip: bool =
     ps = pack_system(plan, damping_model(scene, plan))
     record = support_record(motion, ps.channels)
     cp = cl.pack_contact(scene, kv_clip=kv_clip)
+    cl.check_kernel_branches(cp)
     corners = pack_corners(plan)
     cs = cl.new_contact_state(corners[:, K_G0])
     return ps, record, cp, cs, corners
@@ -109,59 +112,67 @@ class ComplianceEngine(Engine):
     Settings = ComplianceSettings
     settings_field = "compliance"
     step_field = "dt"
-    style = dict(color="#1f5fa8", linestyle="--", linewidth=1.2, label="compliance clone")
+    style: ClassVar[dict] = {"color": "#1f5fa8", "linestyle": "--", "linewidth": 1.2,
+                             "label": "compliance clone"}
 
     def fixed_step(self, settings) -> float | None:
         return settings.dt if settings.integrator == "newmark" else None
 
     def reads(self, scene: Scene, settings) -> set[str]:
+        """The law's and the friction model's parameters, from their rows of
+        :mod:`deckpound.models.contact_laws_table`."""
+        from deckpound.models.contact_laws_table import contact_law, friction_model
+
         ct = scene.contact
         read = {"contact.law", "contact.stiffness", "contact.geometry"}
-        if ct.law in ("hertz", "hertz-damp"):
-            read.add("contact.exponent")
-        if ct.law in ("kelvin-voigt", "hertz-damp"):
-            read.add("contact.restitution")
-        if ct.law == "bilinear":
-            read |= {"contact.bilinear_ratio", "contact.bilinear_yield"}
+        read |= set(contact_law(ct.law).params)
         if ct.friction_mode != "none":
             read.add("contact.friction")
         if ct.friction > 0.0:
             read.add("contact.friction_mode")
-            if ct.friction_mode == "stick":
-                read.add("contact.tangential_stiffness")
-            if ct.friction_mode == "slip":
-                read.add("contact.slip_velocity")
+            read |= set(friction_model(ct.friction_mode).params)
         return read
 
     def _run(self, plan: Plan, scene: Scene, settings, motion, *, kv_clip: bool = False,
              initial_state=None, substeps: int = SUBSTEPS, channels=None,
-             _skips: dict | None = None) -> RunOutput:
+             on_interrupt: str = "raise", _skips: dict | None = None) -> RunOutput:
         """Extra keywords (not scene options): ``kv_clip`` clips the Kelvin–Voigt force at zero
         instead of the OpenSees ViscoelasticGap behaviour (tension allowed until the gap
         reopens); ``initial_state = (u0, v0)`` starts from the given DOF displacements and
         velocities (default: the scene's ``initial`` table); ``substeps``: sub-steps of the fallback for a
         failed step (1 disables it); ``channels``: store only these columns besides the engine
         columns (energy work is not accumulated unless an energy column is requested);
-        ``_skips`` (private, for measurement): ``{name: False}`` turns off a work-saving skip of
-        :data:`SKIPS` (``newmark`` only; results are identical)."""
+        ``on_interrupt``: what Ctrl-C during the step loop does (it stops the loop within one
+        Newton iteration, see :mod:`deckpound.analytic.bundles`): ``"raise"`` (default)
+        re-raises KeyboardInterrupt, ``"return"`` returns ``Status.INTERRUPTED`` with the rows
+        computed so far; ``_skips`` (private, for measurement): ``{name: False}`` turns off a
+        work-saving skip of :data:`SKIPS` (``newmark`` only; results are identical)."""
+        if on_interrupt not in ("raise", "return"):
+            raise ValueError(f"on_interrupt must be 'raise' or 'return', got {on_interrupt!r}")
         if initial_state is None:
             initial_state = plan.initial_state(scene.initial)
         if settings.integrator == "adaptive":
             from deckpound.analytic.adaptive import run_adaptive
 
             return run_adaptive(plan, scene, settings, motion, kv_clip=kv_clip,
-                                initial_state=initial_state)
+                                initial_state=initial_state, on_interrupt=on_interrupt)
         return _run_newmark(plan, scene, settings, motion, kv_clip=kv_clip,
                             initial_state=initial_state, substeps=substeps, channels=channels,
-                            skips=_skips)
+                            skips=_skips, on_interrupt=on_interrupt)
 
 
 def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, substeps, channels,
-                 skips) -> RunOutput:
+                 skips, on_interrupt) -> RunOutput:
+    from deckpound.analytic import bundles as bd
     from deckpound.analytic import contact_laws as cl
     from deckpound.analytic._jit import ensure_compiled
-    from deckpound.analytic.newmark import (BETA, F_CONTACT_SKIP, F_ENERGY, F_FACTOR_REUSE,
-                                            GAMMA, N_FLAGS, newmark_run, newmark_workspace)
+    from deckpound.analytic.newmark import (
+        BETA,
+        GAMMA,
+        NewmarkOptions,
+        newmark_run,
+        newmark_workspace,
+    )
     from deckpound.analytic.system import initial_dofs
 
     on = {k: True for k in SKIPS}
@@ -171,16 +182,15 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
         on[k] = bool(v)
     dt = settings.dt
     duration = analysis_duration(scene, motion)
-    ps, (tb, DG, VGR), cp, cs, corners = pack_run(plan, scene, motion, kv_clip=kv_clip)
+    ps, record, cp, cs, corners = pack_run(plan, scene, motion, kv_clip=kv_clip)
     if not on["friction"]:
         # the slip law with μ = 0 wherever friction was switched off: same (zero) forces
-        off = cp[:, cl.P_FMODE] == 0
+        off = cp[:, cl.P_FMODE] == cl.FRICTION_NONE
         cp[off, cl.P_FMODE] = cl.FRICTION_CODES["slip"]
         cp[off, cl.P_MU] = 0.0
     stride = output_stride(dt, scene.run.output_dt)
     kstride = stride if on["decimate"] else 1
-    nsteps = int(round(duration / dt))
-    nbs = ps.n_bent_springs
+    nsteps = round(duration / dt)
     all_cols = output_columns(scene)
     engine_cols = engine_columns(plan)
     if channels is None:
@@ -193,34 +203,38 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
         cols = [c for c in all_cols if c in want and (c in engine_cols or c in ENERGY_COLUMNS)]
     full = engine_cols + list(ENERGY_COLUMNS)
     colsel = np.array([full.index(c) for c in cols], dtype=np.int64)
-    want_energy = any(c in ENERGY_COLUMNS for c in cols)
-    flags = np.ones(N_FLAGS, dtype=np.int64)
-    flags[F_CONTACT_SKIP] = on["contact"]
-    flags[F_FACTOR_REUSE] = on["factor_reuse"]
-    flags[F_ENERGY] = want_energy
-    out = np.zeros((nsteps // kstride + 1, len(cols)))
-    info = np.zeros(8, dtype=np.int64)
-    hstate = ps.new_state()
+    rows_max = nsteps // kstride + 1
+    bd.check_output_size(rows_max, len(cols))
+    opts = NewmarkOptions(nsteps=nsteps, dt=float(dt), tol=float(settings.tolerance),
+                          maxit=int(settings.max_iterations), stride=int(kstride),
+                          substeps=int(substeps), skip_contact=on["contact"],
+                          reuse_factors=on["factor_reuse"],
+                          want_energy=any(c in ENERGY_COLUMNS for c in cols))
+    output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(len(full)))
     u0, v0 = initial_dofs(initial_state)
-    work = newmark_workspace(ps.n_springs, DG.shape[1], nbs)
-    args = (ps.arrays, ps.C, hstate, cp, cs, corners, scene.contact.geometry == "nonlinear",
-            tb, DG, VGR, nsteps, dt, settings.tolerance, settings.max_iterations, kstride, nbs,
-            out, info, u0, v0, substeps, flags, colsel, work)
+    work = newmark_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, len(ps.channels))
+    contact = bd.Contact(corners, cp, scene.contact.geometry == "nonlinear")
+    stats = bd.new_stats()
+    args = (ps.arrays, contact, bd.Record(*record), opts, output, work, stats)
     compile_time = ensure_compiled(newmark_run, *args)
     t1 = _time.perf_counter()
-    newmark_run(*args)
+    interrupted = bd.run_loop(newmark_run, args, stats)
     loop = _time.perf_counter() - t1
-    status_code, rows = int(info[0]), int(info[1])
+    if interrupted and on_interrupt == "raise":
+        raise KeyboardInterrupt
+    st = bd.stats_dict(stats)
+    status = bd.status_of(st["status"])
+    out, rows = output.table, st["rows"]
     if kstride != stride:
         out = out[:rows:stride]
         rows = out.shape[0]
     columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
-    ok = status_code == 0
+    ok = status == Status.SUCCESS
     extra = {
         "integrator": "newmark",
         "gamma": GAMMA, "beta": BETA, "kv_clip": kv_clip, "skips": on,
-        "max_step_iterations": int(info[6]),
-        "elastic_factor_reuses": int(info[5]),
+        "max_step_iterations": st["max_step_iterations"],
+        "elastic_factor_reuses": st["factor_reuses"],
         "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
         "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
                        "contact_stored + contact_dissipated + friction) [kJ]",
@@ -229,15 +243,14 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
         ein = np.max(np.abs(columns["energy_input"])) if rows else 0.0
         extra["energy_closure"] = float(np.max(np.abs(columns["energy_error"])) / ein) \
             if ein > 0 else 0.0
-    failed_step = int(info[2])
+    failed_step = st["failed_step"]
     return RunOutput(
-        columns=columns, status=Status.SUCCESS if ok else _STATUS.get(status_code,
-                                                                      Status.NONFINITE),
-        message=(f"{nsteps} steps, {int(info[3])} Newton iterations" if ok
-                 else _STATUS_TEXT.get(status_code, "failure")),
+        columns=columns, status=status,
+        message=(f"{nsteps} steps, {st['newton_iterations']} Newton iterations" if ok
+                 else _STATUS_TEXT.get(st["status"], status.text)),
         failed_step=None if ok else failed_step, failed_time=None if ok else failed_step * dt,
-        steps=nsteps if ok else failed_step - 1, newton_iterations=int(info[3]),
-        failed_steps=int(info[7]) + (0 if ok else 1), rescued_steps=int(info[7]),
+        steps=st["steps"], newton_iterations=st["newton_iterations"],
+        failed_steps=st["rescued_steps"] + (0 if ok else 1), rescued_steps=st["rescued_steps"],
         compile_time=compile_time, loop_time=loop, extra=extra)
 
 

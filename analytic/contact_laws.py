@@ -6,6 +6,11 @@ increment Δs of the step; the law returns the normal force λ_N (compression > 
 force λ_T (force on the deck along +t, i.e. +y for linear kinematics) and their derivatives for
 Newton. The generalised contact force on the 7 DOF is W_Nᵀ λ_N + W_Tᵀ λ_T (right-hand side).
 
+The laws and friction models, their codes, parameters and OpenSees counterparts are rows of
+:mod:`deckpound.models.contact_laws_table`; the kernels dispatch on the named codes ``LAW_*`` and
+``FRICTION_*`` derived from it, one branch per row, and a code without a branch gives a
+non-finite force (the run fails; :func:`check_kernel_branches` refuses it before the run).
+
 Normal laws (``scene.contact.law``), each the arithmetic of the OpenSees material the OpenSees
 engine uses (strain ε = g − g₀, OpenSees gap = −g₀, so ε − gap = g):
 
@@ -39,27 +44,33 @@ Friction (``scene.contact.friction_mode``):
 from __future__ import annotations
 
 import numpy as np
+from deckpound.analytic._jit import kernel
+from deckpound.models import contact_params
+from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_CODES, LAW_CODES
+from deckpound.models.scene import Scene
 from numba import njit
 
-from deckpound.analytic._jit import kernel
+__all__ = ["FRICTION_CODES", "LAW_CODES", "N_CP", "N_CS", "V_IMPACT_MIN", "check_kernel_branches",
+           "contact_commit", "contact_revert", "contact_stored_energy", "friction_law",
+           "law_parameters", "new_contact_state", "normal_law", "pack_contact"]
 
-from deckpound.models import contact_params
-from deckpound.models.scene import CONTACT_LAWS, FRICTION_MODES, Scene
-
-__all__ = [
-    "LAW_CODES", "FRICTION_CODES", "N_CP", "N_CS", "V_IMPACT_MIN",
-    "pack_contact", "new_contact_state", "normal_law", "friction_law", "contact_commit",
-    "contact_revert", "contact_stored_energy",
-]
-
-# linear 0, kelvin-voigt 1, hertz 2, hertz-damp 3, bilinear 4
-LAW_CODES = {name: i for i, name in enumerate(CONTACT_LAWS)}
-FRICTION_CODES = {name: i for i, name in enumerate(FRICTION_MODES)}  # none 0, slip 1, stick 2
+# the kernel codes, by name (numba freezes them into the compiled branches)
+LAW_LINEAR = LAW_CODES["linear"]
+LAW_KELVIN_VOIGT = LAW_CODES["kelvin-voigt"]
+LAW_HERTZ = LAW_CODES["hertz"]
+LAW_HERTZ_DAMP = LAW_CODES["hertz-damp"]
+LAW_BILINEAR = LAW_CODES["bilinear"]
+FRICTION_NONE = FRICTION_CODES["none"]
+FRICTION_SLIP = FRICTION_CODES["slip"]
+FRICTION_STICK = FRICTION_CODES["stick"]
 V_IMPACT_MIN = 1.0e-3   # m/s, floor of the Hunt–Crossley approach velocity
 
-# parameters per corner (cp[c, :])
-P_LAW, P_K, P_N, P_C, P_D, P_K2, P_DY, P_MU, P_FMODE, P_KT, P_V0, P_CLIP, P_IMPQ = range(13)
-N_CP = 13
+# parameters per corner (cp[c, :]): law code, k, exponent n, Kelvin–Voigt c, Hunt–Crossley
+# factor, K2, δ_y, μ, friction code, k_t, v₀, clip flag, ImpactMaterial quirk flag,
+# restitution e, rate-event flag (the law's ContactLaw.rate_event)
+(P_LAW, P_K, P_N, P_C, P_D, P_K2, P_DY, P_MU, P_FMODE, P_KT, P_V0, P_CLIP, P_IMPQ, P_E,
+ P_EVENT) = range(15)
+N_CP = 15
 # state per corner (cs[c, :])
 S_CG, S_CGD, S_CLAM, S_CFT, S_CCLOSED, S_CVIMP, S_TLAM, S_TTAN, S_TFT, S_TVIMP, S_TCLOSED = \
     range(11)
@@ -77,7 +88,10 @@ def pack_contact(scene: Scene, *, kv_clip: bool = False,
     """
     ct = scene.contact
     cp = np.zeros((4, N_CP))
-    cp[:, P_LAW] = LAW_CODES[ct.law]
+    law = CONTACT_LAW_TABLE[LAW_CODES[ct.law]]
+    cp[:, P_LAW] = law.code
+    cp[:, P_EVENT] = 1.0 if law.rate_event else 0.0
+    cp[:, P_E] = ct.restitution
     cp[:, P_K] = ct.stiffness
     cp[:, P_N] = ct.exponent
     cp[:, P_C] = contact_params.kelvin_voigt_damping(scene)
@@ -111,12 +125,12 @@ def normal_law(cp, cs, g, gd):
     dg = 0.0
     dgd = 0.0
     closed = False
-    if law == 0:                                  # ElasticPPGap, Fy -> inf
+    if law == LAW_LINEAR:                         # ElasticPPGap, Fy -> inf
         if g <= 0.0:
             closed = True
             lam = -cp[P_K] * g
             dg = -cp[P_K]
-    elif law == 1:                                # ViscoelasticGap
+    elif law == LAW_KELVIN_VOIGT:                 # ViscoelasticGap
         if g < 0.0:
             closed = True
             lam = cp[P_K] * (-g) + cp[P_C] * (-gd)
@@ -126,20 +140,19 @@ def normal_law(cp, cs, g, gd):
                 lam = 0.0
                 dg = 0.0
                 dgd = 0.0
-    elif law == 2:                                # Hertz
+    elif law == LAW_HERTZ:
         if g < 0.0:
             closed = True
             n = cp[P_N]
             dlt = -g
             lam = cp[P_K] * dlt ** n
             dg = -n * cp[P_K] * dlt ** (n - 1.0)
-    elif law == 3:                                # Hertz-damp (Lankarani-Nikravesh)
+    elif law == LAW_HERTZ_DAMP:                   # Lankarani–Nikravesh
         if g < 0.0:
             closed = True
             if cs[S_CCLOSED] == 0.0:
                 vimp = -cs[S_CGD]
-                if vimp < V_IMPACT_MIN:
-                    vimp = V_IMPACT_MIN
+                vimp = max(vimp, V_IMPACT_MIN)
             else:
                 vimp = cs[S_CVIMP]
             cs[S_TVIMP] = vimp
@@ -153,7 +166,7 @@ def normal_law(cp, cs, g, gd):
                 dgd = -cp[P_K] * dn * cp[P_D] / vimp
             else:
                 lam = 0.0
-    else:                                         # ImpactMaterial (stress = -lambda)
+    elif law == LAW_BILINEAR:                     # ImpactMaterial (stress = -lambda)
         k1 = cp[P_K]
         k2 = cp[P_K2]
         dy = -cp[P_DY]
@@ -187,6 +200,11 @@ def normal_law(cp, cs, g, gd):
         lam = -stress
         dg = -tan
         cs[S_TTAN] = tan
+    else:                                         # no branch for this code: fail, loudly
+        closed = True
+        lam = np.nan
+        dg = np.nan
+        dgd = np.nan
     cs[S_TLAM] = lam
     cs[S_TCLOSED] = 1.0 if closed else 0.0
     return closed, lam, dg, dgd
@@ -207,15 +225,18 @@ def friction_law(cp, cs, lam_n, ds, ut):
     d_ds = 0.0
     d_ut = 0.0
     d_lam = 0.0
-    if mode != 0 and lam_n > 0.0:
-        mu = cp[P_MU]
-        if mode == 1:
+    mu = cp[P_MU]
+    if mode == FRICTION_NONE:
+        pass
+    elif mode == FRICTION_SLIP:
+        if lam_n > 0.0:
             th = np.tanh(ut / cp[P_V0])
             lt = -mu * lam_n * th
             d_ut = -mu * lam_n * (1.0 - th * th) / cp[P_V0]
             d_lam = -mu * th
             state = 2
-        else:
+    elif mode == FRICTION_STICK:
+        if lam_n > 0.0:
             trial = cs[S_CFT] - cp[P_KT] * ds
             lim = mu * lam_n
             if abs(trial) <= lim:
@@ -227,6 +248,11 @@ def friction_law(cp, cs, lam_n, ds, ut):
                 lt = sg * lim
                 d_lam = sg * mu
                 state = 2
+    else:                                         # no branch for this code: fail, loudly
+        lt = np.nan
+        d_ds = np.nan
+        d_ut = np.nan
+        d_lam = np.nan
     cs[S_TFT] = lt
     return state, lt, d_ds, d_ut, d_lam
 
@@ -273,30 +299,67 @@ def contact_stored_energy(cp, cs):
         lam = cs[c, S_CLAM]
         if lam > 0.0 and g < 0.0:
             k = cp[c, P_K]
-            if law == 0 or law == 1:
+            if law == LAW_LINEAR or law == LAW_KELVIN_VOIGT:
                 e += 0.5 * k * g * g
-            elif law == 2 or law == 3:
+            elif law == LAW_HERTZ or law == LAW_HERTZ_DAMP:
                 n = cp[c, P_N]
                 e += k * (-g) ** (n + 1.0) / (n + 1.0)
-            else:
+            elif law == LAW_BILINEAR:
                 # unload along K1 from (g, -lam) to the K2 line through the origin, then along it
                 k2 = cp[c, P_K2]
                 if k > k2:
                     gs = (k * g + lam) / (k - k2)
-                    if gs > 0.0:
-                        gs = 0.0
+                    gs = min(gs, 0.0)
                 else:
                     gs = g
                 lam_s = -k2 * gs
                 e += 0.5 * (lam + lam_s) * (gs - g) + 0.5 * k2 * gs * gs
-        if cp[c, P_FMODE] == 2 and cs[c, S_CFT] != 0.0:
+            else:                                 # no branch for this code
+                e = np.nan
+        if cp[c, P_FMODE] == FRICTION_STICK and cs[c, S_CFT] != 0.0:
             e += 0.5 * cs[c, S_CFT] ** 2 / cp[c, P_KT]
     return e
 
 
+def law_parameters(cp_row, cs_row) -> dict:
+    """The packed parameters of one corner by the names the table's ``force`` functions use
+    (:mod:`deckpound.models.contact_laws_table`); ``v_impact``: the committed approach
+    velocity −ġ."""
+    return {"k": cp_row[P_K], "n": cp_row[P_N], "c": cp_row[P_C], "hc": cp_row[P_D],
+            "k2": cp_row[P_K2], "dy": cp_row[P_DY], "e": cp_row[P_E], "mu": cp_row[P_MU],
+            "kt": cp_row[P_KT], "v0": cp_row[P_V0], "v_min": V_IMPACT_MIN,
+            "v_impact": -cs_row[S_CGD]}
+
+
+def check_kernel_branches(cp) -> None:
+    """Raise NotImplementedError if a corner's law or friction code has no kernel branch.
+
+    Probes :func:`normal_law` and :func:`friction_law` (the compiled dispatch itself, on a
+    scratch state) at a closed state; the final branch of each gives a non-finite force.
+    """
+    for row in cp:
+        cs = np.zeros(N_CS)
+        closed, lam, dg, _ = normal_law(row, cs, -1.0e-3, 0.0)
+        if not (closed and np.isfinite(lam) and np.isfinite(dg)):
+            raise NotImplementedError(
+                f"contact law code {int(row[P_LAW])} has no branch in "
+                "deckpound.analytic.contact_laws.normal_law (table: "
+                "deckpound.models.contact_laws_table)")
+        _, lt, *_ = friction_law(row, cs, 1.0, 0.0, 0.0)
+        if not np.isfinite(lt):
+            raise NotImplementedError(
+                f"friction code {int(row[P_FMODE])} has no branch in "
+                "deckpound.analytic.contact_laws.friction_law (table: "
+                "deckpound.models.contact_laws_table)")
+
+
 # --------------------------------------------------------------------------- assembly helpers
-from deckpound.analytic.kinematics import (contact_kinematics, gap_hessian,  # noqa: E402
-                                           linear_gap, linear_gap_rate)
+from deckpound.analytic.kinematics import (
+    contact_kinematics,
+    gap_hessian,
+    linear_gap,
+    linear_gap_rate,
+)
 
 
 @njit(cache=True, inline="always")
@@ -308,24 +371,32 @@ def _linear_gaps(u, v, corners, g, gd):
 
 
 @kernel
-def gaps_and_rates(u, v, geom, nonlinear, g, gd, WN, WT):
-    """Gaps g and rates ġ = W_N u̇ of the four corners (fills WN, WT when nonlinear)."""
-    if not nonlinear:
-        _linear_gaps(u, v, geom, g, gd)
+def gaps_and_rates(contact, u, v, cw):
+    """Gaps cw.g and rates cw.gd = W_N u̇ of the four corners (fills cw.WN, cw.WT when
+    nonlinear). ``contact``: the Contact bundle, ``cw``: ContactWork
+    (:mod:`deckpound.analytic.bundles`)."""
+    if not contact.nonlinear:
+        _linear_gaps(u, v, contact.corners, cw.g, cw.gd)
     else:
-        contact_kinematics(u, geom, True, g, WN, WT)
+        contact_kinematics(u, contact.corners, True, cw.g, cw.WN, cw.WT)
         for c in range(4):
             s = 0.0
             for j in range(7):
-                s += WN[c, j] * v[j]
-            gd[c] = s
+                s += cw.WN[c, j] * v[j]
+            cw.gd[c] = s
 
 
 @kernel
-def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                 evaluated):
-    if nonlinear:
-        gaps_and_rates(u, v, geom, True, g, gd, WN, WT)
+def eval_closed(contact, cs, cw, u, v, un):
+    """Evaluate the laws of the corners flagged in cw.evaluated (all closed ones for nonlinear
+    kinematics) at the trial (u, u̇); fills cw (see :func:`eval_contacts`). Returns the
+    number of closed corners."""
+    cp = contact.params
+    geom = contact.corners
+    g, gd, WN, WT, fc, lam, lt, der, evaluated = (cw.g, cw.gd, cw.WN, cw.WT, cw.fc, cw.lam,
+                                                  cw.lt, cw.der, cw.evaluated)
+    if contact.nonlinear:
+        gaps_and_rates(contact, u, v, cw)
         for j in range(7):
             fc[j] = 0.0
         for c in range(4):
@@ -361,20 +432,22 @@ def eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, d
 
 
 @kernel
-def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                  evaluated):
+def eval_contacts(contact, cs, cw, u, v, un):
     """Gap check (call-free, cheap); returns 0 when every corner is open (fc, lam, lt zeroed),
     −1 when :func:`eval_closed` must evaluate the laws (some g ≤ 0, or nonlinear kinematics).
 
-    Contact forces at the trial (u, u̇); un: displacement at the start of the step.
-
-    Fills g, gd (4,), fc (7,) = Σ W_Nᵀ λ_N + W_Tᵀ λ_T, lam, lt (4,), der (4, 7): per corner
+    Contact forces at the trial (u, u̇); un: displacement at the start of the step; cs: the
+    corner states (4, N_CS); ``cw`` (ContactWork of :mod:`deckpound.analytic.bundles`) is
+    filled: g, gd (4,), fc (7,) = Σ W_Nᵀ λ_N + W_Tᵀ λ_T, lam, lt (4,), der (4, 7): per corner
     [∂λ_N/∂g, ∂λ_N/∂ġ, ∂λ_T/∂Δs, ∂λ_T/∂U_T, ∂λ_T/∂λ_N, Δs, U_T], evaluated (4,) bool, and WN,
     WT (when some corner is closed). Corners with g > 0 are open for every law and are skipped
     (the laws are not evaluated at all while every gap is open).
     """
+    nonlinear = contact.nonlinear
     anyc = nonlinear
     if not nonlinear:
+        geom = contact.corners
+        g, gd, lam, lt, evaluated, fc = cw.g, cw.gd, cw.lam, cw.lt, cw.evaluated, cw.fc
         for c in range(4):
             gc = linear_gap(geom[c], u)
             g[c] = gc
@@ -392,13 +465,14 @@ def eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt,
 
 
 @kernel
-def contact_tangent(cp, u, geom, nonlinear, lam, der, evaluated, WN, WT, c2, Keff, H):
-    """Add −∂F_c/∂u − c2 ∂F_c/∂u̇ to Keff (Newmark: ∂u̇/∂u = c2).
+def contact_tangent(contact, cw, u, c2, Keff, H):
+    """Add −∂F_c/∂u − c2 ∂F_c/∂u̇ to Keff (Newmark: ∂u̇/∂u = c2); H (7, 7) scratch.
 
     Includes the geometric term −λ_N ∂²g/∂u² for nonlinear kinematics; the derivative of W_T
     (friction, nonlinear kinematics only) is neglected (quasi-Newton; the converged solution
     is unaffected).
     """
+    lam, der, evaluated, WN, WT = cw.lam, cw.der, cw.evaluated, cw.WN, cw.WT
     for c in range(4):
         if not evaluated[c]:
             continue
@@ -413,8 +487,8 @@ def contact_tangent(cp, u, geom, nonlinear, lam, der, evaluated, WN, WT, c2, Kef
                     continue
                 for j in range(7):
                     Keff[i, j] += kn * wni * WN[c, j] - wti * (kt * WT[c, j] + tn * WN[c, j])
-        if nonlinear and lam[c] != 0.0:
-            gap_hessian(u, geom, c, H)
+        if contact.nonlinear and lam[c] != 0.0:
+            gap_hessian(u, contact.corners, c, H)
             for i in range(7):
                 for j in range(7):
                     Keff[i, j] -= lam[c] * H[i, j]

@@ -46,14 +46,12 @@ whose matrix is copositive for symmetric PSD G (Anitescu & Potra 1997).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from deckpound.analytic._jit import compiled, kernel
 
-from deckpound.analytic._jit import kernel
-
-__all__ = ["build_lcp3", "extract3", "build_lcp_st", "extract_st"]
+__all__ = ["build_lcp3", "build_lcp_st", "extract3", "extract_st"]
 
 
-@njit(cache=True)
+@compiled
 def build_lcp3(G, qN, uT_free, mu, fidx, nf, s):
     """3-unknown LCP (scaled impulses).  fidx[k] = contact of k-th
     frictional contact."""
@@ -99,7 +97,7 @@ def extract3(z, mu, fidx, nf, s, P_N, P_T):
         P_T[i] = s * (z[nc + k] - mu[i] * z[i])
 
 
-@njit(cache=True)
+@compiled
 def build_lcp_st(G, qN, uT_free, mu, fidx, nf, s):
     """Stewart-Trinkle / Anitescu-Potra LCP: unknowns (P_N, b+, b-, lam)."""
     nc = qN.shape[0]

@@ -3,7 +3,10 @@
 Driven by :func:`deckpound.analytic.adaptive.run_adaptive`, where the scheme, the breakpoints,
 the events and the commit rule are described. One numba function (:func:`adaptive_run`) runs
 the whole record; the right-hand side, the event functions, the Hermite interpolant and one
-Runge–Kutta step are kernels (:mod:`deckpound.analytic._jit`).
+Runge–Kutta step are kernels (:mod:`deckpound.analytic._jit`, no numba runtime: every array is
+in the workspace of :func:`adaptive_workspace`). It takes the named bundles of
+:mod:`deckpound.analytic.bundles`; its scalars are :data:`AdaptiveOptions`. The tableau is a
+module constant (numba freezes global arrays into the compiled code).
 """
 
 from __future__ import annotations
@@ -11,15 +14,29 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
-
+from deckpound.analytic import bundles as bd
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._hysteretic_kernel import C_ROTMAX, C_ROTMIN, T_STRESS
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.system import C_BENT, spring_assemble, spring_commit, \
-    spring_deformations, spring_stored_energy, spring_update_materials, store_standard
+from deckpound.analytic.bundles import (
+    RUN_INTERRUPTED,
+    RUN_NONFINITE,
+    RUN_OK,
+    RUN_STEP_BUDGET,
+    RUN_STEP_UNDERFLOW,
+)
+from deckpound.analytic.system import (
+    C_BENT,
+    spring_assemble,
+    spring_commit,
+    spring_deformations,
+    spring_stored_energy,
+    spring_update_materials,
+    store_standard,
+)
 
-__all__ = ["adaptive_run", "workspace", "TABLEAU", "H_NBINS", "H_LOG_MIN", "H_BINS_PER_DECADE"]
+__all__ = ["H_BINS_PER_DECADE", "H_LOG_MIN", "H_NBINS", "TABLEAU", "AdaptiveOptions",
+           "AdaptiveWork", "adaptive_run", "adaptive_workspace"]
 
 # Dormand–Prince 5(4) tableau
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
@@ -41,6 +58,37 @@ NT = NY + NE
 H_LOG_MIN = -14.0
 H_BINS_PER_DECADE = 20
 H_NBINS = int(-H_LOG_MIN) * H_BINS_PER_DECADE
+
+
+#: The scalars of :func:`adaptive_run`: end time ``t_end`` and output interval ``out_dt`` [s];
+#: error tolerances ``rtol`` [-] and ``atol`` [m, m/s]; largest step ``max_step`` and, once a
+#: Takeda spring has yielded, ``commit_step`` [s]; step budget ``max_steps`` (Runge–Kutta steps
+#: tried, accepted or rejected: each costs the same work).
+AdaptiveOptions = namedtuple("AdaptiveOptions", ["t_end", "out_dt", "rtol", "atol", "max_step",
+                                                 "commit_step", "max_steps"])
+_NS = ("d", "dd", "fs", "kt")
+_NT = ("y", "k1", "ytmp", "ynew", "yev")
+#: The workspace of :func:`adaptive_run` (:func:`adaptive_workspace`): u0, v0 initial state;
+#: hstate, cstate material and corner states; cw the ContactWork; uc (7,) displacement at the
+#: last commit; ug, vg supports; d, dd, fs, kt (ns,) spring deformations, rates, forces,
+#: tangents; f (7,) internal force; y, k1, ytmp, ynew, yev (NT,) state [u, u̇, energy
+#: integrals], its rate, stage / new / interpolated states; K (7, NT) stage rates; ev0, ev1 event
+#: values at the step's ends; hist (2, H_NBINS) int64 and hstat (2, 3) accepted-step-size
+#: statistics (row 0 out of contact, row 1 in contact; hstat = [min, max, sum]).
+AdaptiveWork = namedtuple("AdaptiveWork", ("u0", "v0", "hstate", "cstate", "cw", "uc", "ug",
+                                           "vg", "f") + _NS + _NT + ("K", "ev0", "ev1", "hist",
+                                                                     "hstat"))
+
+
+def adaptive_workspace(u0, v0, hstate, cstate, ns: int, nch: int, nbs: int) -> AdaptiveWork:
+    """The workspace of :func:`adaptive_run` (zeroed) around the initial state u0, v0 (7,) and
+    the virgin material and corner states; ns springs, nch channels, nbs bent springs."""
+    nev = 4 + nbs + 8
+    return AdaptiveWork(u0=u0, v0=v0, hstate=hstate, cstate=cstate, cw=bd.new_contact_work(),
+                        uc=np.zeros(7), ug=np.zeros(nch), vg=np.zeros(nch), f=np.zeros(7),
+                        **bd.row_views(_NS, ns), **bd.row_views(_NT, NT), K=np.zeros((7, NT)),
+                        ev0=np.zeros(nev), ev1=np.zeros(nev),
+                        hist=np.zeros((2, H_NBINS), dtype=np.int64), hstat=np.zeros((2, 3)))
 
 
 @kernel
@@ -70,25 +118,24 @@ def _support(t, tb, D, V, ug, vg):
 
 
 @kernel
-def _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, dy):
+def _rhs(t, y, sa, contact, record, ws, dy):
     """dy = [u̇, ü, powers] at (t, y); trial material/contact states relative to committed."""
     ns = sa.k0.shape[0]
+    cw = ws.cw
     u = y[0:7]
     v = y[7:14]
     ug = ws.ug
     vg = ws.vg
-    _support(t, tb, D, V, ug, vg)
+    _support(t, record.t, record.disp, record.vel, ug, vg)
     spring_deformations(sa, u, v, ug, vg, ws.d, ws.dd)
-    spring_update_materials(sa.hparams, hstate, sa.kind, ws.d)
-    spring_assemble(sa, hstate, ws.d, ws.dd, v, ws.f, ws.fs, ws.kt)
-    n = cl.eval_contacts(cp, cs, u, v, uc, geom, nonlinear, ws.g, ws.gd, ws.WN, ws.WT, ws.fc,
-                         ws.lam, ws.lt, ws.der, ws.ev)
+    spring_update_materials(sa.hparams, ws.hstate, sa.kind, ws.d)
+    spring_assemble(sa, ws.hstate, ws.d, ws.dd, v, ws.f, ws.fs, ws.kt)
+    n = cl.eval_contacts(contact, ws.cstate, cw, u, v, ws.uc)
     if n < 0:
-        cl.eval_closed(cp, cs, u, v, uc, geom, nonlinear, ws.g, ws.gd, ws.WN, ws.WT, ws.fc,
-                       ws.lam, ws.lt, ws.der, ws.ev)
+        cl.eval_closed(contact, ws.cstate, cw, u, v, ws.uc)
     for j in range(7):
         dy[j] = v[j]
-        dy[7 + j] = (ws.fc[j] - ws.f[j]) / sa.mass[j]
+        dy[7 + j] = (cw.fc[j] - ws.f[j]) / sa.mass[j]
     # powers: input (supports), springs (f_s ḋ), viscous, contact (λ_N δ̇), friction (−λ_T U_T)
     pin = 0.0
     psp = 0.0
@@ -106,12 +153,12 @@ def _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, dy):
     pco = 0.0
     pfr = 0.0
     for c in range(4):
-        pco -= ws.lam[c] * ws.gd[c]
-        if ws.lt[c] != 0.0:
+        pco -= cw.lam[c] * cw.gd[c]
+        if cw.lt[c] != 0.0:
             ut = 0.0
             for j in range(7):
-                ut += ws.WT[c, j] * v[j]
-            pfr -= ws.lt[c] * ut
+                ut += cw.WT[c, j] * v[j]
+            pfr -= cw.lt[c] * ut
     dy[14] = pin
     dy[15] = psp
     dy[16] = pvi
@@ -120,23 +167,26 @@ def _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, dy):
 
 
 @kernel
-def _events(y, dy, sa, cp, geom, nonlinear, nbs, ws, ev):
+def _events(y, sa, contact, ws, ev):
     """Event function values at a state: gaps (4), Takeda ḋ (nbs), ġ (4, bilinear), U_T (4,
-    stick friction); unused entries 0."""
+    stick friction); unused entries 0. ws.dd: the spring rates of the last :func:`_rhs` call."""
+    cp = contact.params
+    cw = ws.cw
+    nbs = sa.nbs
     u = y[0:7]
     v = y[7:14]
-    cl.gaps_and_rates(u, v, geom, nonlinear, ws.g, ws.gd, ws.WN, ws.WT)
+    cl.gaps_and_rates(contact, u, v, cw)
     for c in range(4):
-        ev[c] = ws.g[c]
+        ev[c] = cw.g[c]
     for i in range(nbs):
         ev[4 + i] = ws.dd[i]
     k = 4 + nbs
     for c in range(4):
-        ev[k + c] = ws.gd[c] if (cp[c, cl.P_LAW] == 4 and ws.g[c] < 0.0) else 0.0
+        ev[k + c] = cw.gd[c] if (cp[c, cl.P_EVENT] != 0.0 and cw.g[c] < 0.0) else 0.0
         ut = 0.0
-        if cp[c, cl.P_FMODE] == 2 and ws.g[c] < 0.0:
+        if cp[c, cl.P_FMODE] == cl.FRICTION_STICK and cw.g[c] < 0.0:
             for j in range(7):
-                ut += ws.WT[c, j] * v[j]
+                ut += cw.WT[c, j] * v[j]
         ev[k + 4 + c] = ut
 
 
@@ -150,63 +200,52 @@ def _hermite(y0, f0, y1, f1, h, th):
 
 
 @kernel
-def _event_value(kind_idx, y, sa, geom, nonlinear, cp, tb, D, V, t, ws):
+def _event_value(kind_idx, y, sa, contact, record, t, ws):
     """Value of event kind_idx at an interpolated state y (t for the supports)."""
+    cw = ws.cw
     u = y[0:7]
     v = y[7:14]
-    cl.gaps_and_rates(u, v, geom, nonlinear, ws.g, ws.gd, ws.WN, ws.WT)
+    cl.gaps_and_rates(contact, u, v, cw)
     nbs2 = kind_idx - 4
     if kind_idx < 4:
-        return ws.g[kind_idx]
-    ns_ev = ws.nbs
+        return cw.g[kind_idx]
+    ns_ev = sa.nbs
     if nbs2 < ns_ev:
-        _support(t, tb, D, V, ws.ug, ws.vg)
+        _support(t, record.t, record.disp, record.vel, ws.ug, ws.vg)
         spring_deformations(sa, u, v, ws.ug, ws.vg, ws.d, ws.dd)
         return ws.dd[nbs2]
     c = nbs2 - ns_ev
     if c < 4:
-        return ws.gd[c]
+        return cw.gd[c]
     c -= 4
     ut = 0.0
     for j in range(7):
-        ut += ws.WT[c, j] * v[j]
+        ut += cw.WT[c, j] * v[j]
     return ut
 
 
-# module level: a namedtuple class made per call would be a new numba type each time (a fresh
-# compilation of the whole loop on every run, ~7 s); its typename must equal its module
-# attribute name, or numba pickles the class by value and the on-disk cache never hits
-_WS = namedtuple("_WS", "ug vg d dd f fs kt g gd WN WT fc lam lt der ev nbs")
-
-
-def workspace(ns, nch, nbs):
-    return _WS(np.zeros(nch), np.zeros(nch), np.zeros(ns), np.zeros(ns), np.zeros(7), np.zeros(ns),
-             np.zeros(ns), np.zeros(4), np.zeros(4), np.zeros((4, 7)), np.zeros((4, 7)),
-             np.zeros(7), np.zeros(4), np.zeros(4), np.zeros((4, 7)),
-             np.zeros(4, dtype=np.bool_), nbs)
-
-
 @kernel
-def _rk_step(t, y, k1, h, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, K, ytmp,
-             ynew, A, C, B5, E, atol, rtol):
-    """One DP5(4) step; returns the scaled error norm (ynew filled, K[6] = f(t+h, ynew))."""
+def _rk_step(t, y, h, sa, contact, record, ws, atol, rtol):
+    """One DP5(4) step from (t, y) with slope ws.k1; returns the scaled error norm (ws.ynew
+    filled, ws.K[6] = f(t+h, ynew))."""
+    K, k1, ytmp, ynew = ws.K, ws.k1, ws.ytmp, ws.ynew
     for j in range(NT):
         K[0, j] = k1[j]
     for s in range(1, 7):
         for j in range(NT):
             acc = y[j]
             for r in range(s):
-                acc += h * A[s, r] * K[r, j]
+                acc += h * _A[s, r] * K[r, j]
             ytmp[j] = acc
         if s == 6:
             for j in range(NT):
                 ynew[j] = ytmp[j]
-        _rhs(t + C[s] * h, ytmp, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, K[s])
+        _rhs(t + _C[s] * h, ytmp, sa, contact, record, ws, K[s])
     err = 0.0
     for j in range(NY):
         e = 0.0
         for s in range(7):
-            e += h * E[s] * K[s, j]
+            e += h * _E[s] * K[s, j]
         sc = atol + rtol * max(abs(y[j]), abs(ynew[j]))
         err += (e / sc) ** 2
     return np.sqrt(err / NY)
@@ -220,59 +259,72 @@ def _any_yielded(sa, hstate):
     paths (OpenSees Hysteretic arithmetic), so the loop caps its steps at ``commit_step``.
     """
     for i in range(hstate.shape[0]):
-        if sa.kind[i] == 1:
-            if (hstate[i, C_ROTMAX] > sa.hparams[i, 1] or
-                    hstate[i, C_ROTMIN] < sa.hparams[i, 7]):
-                return True
+        if sa.kind[i] == 1 and (hstate[i, C_ROTMAX] > sa.hparams[i, 1]
+                                or hstate[i, C_ROTMIN] < sa.hparams[i, 7]):
+            return True
     return False
 
 
-@njit(cache=True)
-def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, nbs, rtol, atol,
-                 max_step, commit_step, out, info, ws, u0, v0, A, C, B5, E, hist, hstat):
-    """The adaptive loop; fills out (rows at k·out_dt) and info = [status, rows, steps,
-    rejected, events, rhs calls]; hist (2, H_NBINS) counts of accepted step sizes and
-    hstat (2, 3) = [min, max, sum] of them, row 0 out of contact, row 1 in contact."""
-    y = np.zeros(NT)
+@kernel(nogil=True)
+def adaptive_run(system, contact, record, opt, output, work, stats):
+    """The adaptive loop over [0, opt.t_end] (bundles of :mod:`deckpound.analytic.bundles`,
+    scalars :data:`AdaptiveOptions`, workspace :data:`AdaptiveWork`).
+
+    Fills ``output.table`` (rows at k·out_dt) and ``stats``: count = status (RUN_OK,
+    RUN_STEP_UNDERFLOW, RUN_NONFINITE, RUN_STEP_BUDGET, RUN_INTERRUPTED), rows, steps
+    (accepted), rejected, events, rhs calls; value[VAL_TIME] = the time reached [s]; work.hist,
+    work.hstat: accepted step sizes. ``stats.halt[0]`` ≠ 0 stops the loop before the next step
+    attempt (RUN_INTERRUPTED); so does ``opt.max_steps`` attempts (RUN_STEP_BUDGET).
+    """
+    sa = system
+    ws = work
+    hstate, cs, cw = ws.hstate, ws.cstate, ws.cw
+    y, k1, ytmp, ynew, yev, uc = ws.y, ws.k1, ws.ytmp, ws.ynew, ws.yev, ws.uc
+    ev0, ev1, hist, hstat = ws.ev0, ws.ev1, ws.hist, ws.hstat
+    t_end, out_dt, rtol, atol = opt.t_end, opt.out_dt, opt.rtol, opt.atol
+    max_step, commit_step = opt.max_step, opt.commit_step
+    tb = record.t
+    halt = stats.halt
     for j in range(7):
-        y[j] = u0[j]
-        y[7 + j] = v0[j]
-    uc = y[0:7].copy()
-    K = np.zeros((7, NT))
-    k1 = np.zeros(NT)
-    ytmp = np.zeros(NT)
-    ynew = np.zeros(NT)
-    yev = np.zeros(NT)
-    nev = 4 + nbs + 8
-    ev0 = np.zeros(nev)
-    ev1 = np.zeros(nev)
+        y[j] = ws.u0[j]
+        y[7 + j] = ws.v0[j]
+    for j in range(7):
+        uc[j] = y[j]
+    nev = ev0.shape[0]
     tiny = 1e-13
     t = 0.0
-    _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, k1)
+    _rhs(t, y, sa, contact, record, ws, k1)
     spring_commit(sa, hstate)
-    cl.contact_commit(cs, ws.g, ws.gd, ws.ev)
+    cl.contact_commit(cs, cw.g, cw.gd, cw.evaluated)
     # initial energy
     ke = 0.0
     for j in range(7):
         ke += 0.5 * sa.mass[j] * y[7 + j] ** 2
     es0 = spring_stored_energy(sa, hstate, y[0:7], ws.ug)
-    ec0 = cl.contact_stored_energy(cp, cs)
+    ec0 = cl.contact_stored_energy(contact.params, cs)
     y[14] = ke + es0 + ec0
     y[15] = es0
     y[17] = ec0
-    _adaptive_store(sa, hstate, cp, cs, y, ws, out, 0, 0.0, nbs)
+    _adaptive_store(sa, contact, ws, output, 0, 0.0)
     row = 1
-    nout = out.shape[0]
+    nout = output.table.shape[0]
     h = min(max_step, out_dt, 1e-4)
     yielded = _any_yielded(sa, hstate)
+    status = RUN_OK
     steps = 0
     rejected = 0
     events = 0
     calls = 1
     kseg = 0
     ntb = tb.shape[0]
-    _events(y, k1, sa, cp, geom, nonlinear, nbs, ws, ev0)
+    _events(y, sa, contact, ws, ev0)
     while t < t_end - tiny * max(1.0, t_end):
+        if halt[0] != 0:
+            status = RUN_INTERRUPTED
+            break
+        if steps + rejected >= opt.max_steps:
+            status = RUN_STEP_BUDGET
+            break
         # next breakpoint: record sample or output time
         while kseg < ntb and tb[kseg] <= t + tiny * max(1.0, t):
             kseg += 1
@@ -280,19 +332,16 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
         if kseg < ntb and tb[kseg] < tbreak:
             tbreak = tb[kseg]
         tout = row * out_dt
-        if tout < tbreak:
-            tbreak = tout
+        tbreak = min(tbreak, tout)
         hmax = min(max_step, tbreak - t)
         if yielded and hmax > commit_step:
             hmax = commit_step
-        if h > hmax:
-            h = hmax
+        h = min(h, hmax)
         hit_break = abs((t + h) - tbreak) <= tiny * max(1.0, tbreak)
         if h <= 1e-14:
-            info[0] = 1
+            status = RUN_STEP_UNDERFLOW
             break
-        err = _rk_step(t, y, k1, h, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, K,
-                       ytmp, ynew, A, C, B5, E, atol, rtol)
+        err = _rk_step(t, y, h, sa, contact, record, ws, atol, rtol)
         calls += 6
         if not np.isfinite(err):
             err = 1e10
@@ -301,15 +350,14 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
             h *= max(0.2, 0.9 * err ** -0.2)
             continue
         # events inside (t, t+h]
-        _rhs(t + h, ynew, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, ytmp)
+        _rhs(t + h, ynew, sa, contact, record, ws, ytmp)
         calls += 1
-        _events(ynew, ytmp, sa, cp, geom, nonlinear, nbs, ws, ev1)
+        _events(ynew, sa, contact, ws, ev1)
         th_ev = 2.0
         for q in range(nev):
             a_, b_ = ev0[q], ev1[q]
-            if a_ == 0.0 or (a_ < 0.0) == (b_ < 0.0):
-                if not (b_ == 0.0 and a_ != 0.0):
-                    continue
+            if (a_ == 0.0 or (a_ < 0.0) == (b_ < 0.0)) and not (b_ == 0.0 and a_ != 0.0):
+                continue   # no sign change in (t, t+h] (a zero at t+h counts)
             # bisection on the Hermite interpolant
             lo = 0.0
             hi = 1.0
@@ -318,7 +366,7 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
                 mid = 0.5 * (lo + hi)
                 for j in range(NY):
                     yev[j] = _hermite(y[j], k1[j], ynew[j], ytmp[j], h, mid)
-                fm = _event_value(q, yev, sa, geom, nonlinear, cp, tb, D, V, t + mid * h, ws)
+                fm = _event_value(q, yev, sa, contact, record, t + mid * h, ws)
                 if (fm < 0.0) == (flo < 0.0) and fm != 0.0:
                     lo = mid
                     flo = fm
@@ -326,12 +374,10 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
                     hi = mid
                 if (hi - lo) * h < 1e-13:
                     break
-            if hi < th_ev:
-                th_ev = hi
+            th_ev = min(th_ev, hi)
         if th_ev < 1.0 and th_ev * h > 1e-12:
             he = th_ev * h
-            _rk_step(t, y, k1, he, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, K,
-                     ytmp, ynew, A, C, B5, E, atol, rtol)
+            _rk_step(t, y, he, sa, contact, record, ws, atol, rtol)
             calls += 6
             events += 1
             h_acc = he
@@ -346,17 +392,17 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
             t = tbreak
         for j in range(NT):
             y[j] = ynew[j]
-        _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, k1)
+        _rhs(t, y, sa, contact, record, ws, k1)
         calls += 1
         spring_commit(sa, hstate)
-        cl.contact_commit(cs, ws.g, ws.gd, ws.ev)
+        cl.contact_commit(cs, cw.g, cw.gd, cw.evaluated)
         if not yielded:
             yielded = _any_yielded(sa, hstate)
         for j in range(7):
             uc[j] = y[j]
-        _rhs(t, y, tb, D, V, sa, hstate, cp, cs, geom, nonlinear, uc, ws, k1)
+        _rhs(t, y, sa, contact, record, ws, k1)
         calls += 1
-        _events(y, k1, sa, cp, geom, nonlinear, nbs, ws, ev0)
+        _events(y, sa, contact, ws, ev0)
         steps += 1
         if ev0[0] <= 0.0 or ev0[1] <= 0.0 or ev0[2] <= 0.0 or ev0[3] <= 0.0:
             in_contact = True
@@ -364,48 +410,57 @@ def adaptive_run(sa, hstate, cp, cs, geom, nonlinear, tb, D, V, t_end, out_dt, n
         ic = 1 if in_contact else 0
         if hs > 0.0:
             b = int((np.log10(hs) - H_LOG_MIN) * H_BINS_PER_DECADE)
-            if b < 0:
-                b = 0
+            b = max(b, 0)
             if b >= H_NBINS:
                 b = H_NBINS - 1
             hist[ic, b] += 1
             if hstat[ic, 0] == 0.0 or hs < hstat[ic, 0]:
                 hstat[ic, 0] = hs
-            if hs > hstat[ic, 1]:
-                hstat[ic, 1] = hs
+            hstat[ic, 1] = max(hstat[ic, 1], hs)
             hstat[ic, 2] += hs
         finite = True
         for j in range(NT):
             if not np.isfinite(y[j]):
                 finite = False
         if not finite:
-            info[0] = 3
+            status = RUN_NONFINITE
             break
         if row < nout and abs(t - row * out_dt) <= 1e-9 * out_dt:
-            _adaptive_store(sa, hstate, cp, cs, y, ws, out, row, row * out_dt, nbs)
+            _adaptive_store(sa, contact, ws, output, row, row * out_dt)
             row += 1
         if err > 0.0:
             fac = 0.9 * err ** -0.2
-            if fac > 5.0:
-                fac = 5.0
-            if fac < 0.2:
-                fac = 0.2
+            fac = min(fac, 5.0)
+            fac = max(fac, 0.2)
             hn = h * fac
         else:
             hn = h * 5.0
         if h_acc < h and hn > h:
             hn = h
         h = hn
-    info[1] = row
-    info[2] = steps
-    info[3] = rejected
-    info[4] = events
-    info[5] = calls
+    cnt = stats.count
+    cnt[bd.CNT_STATUS] = status
+    cnt[bd.CNT_ROWS] = row
+    cnt[bd.CNT_STEPS] = steps
+    cnt[bd.CNT_FAILED_STEP] = 0 if status == RUN_OK else steps + 1
+    cnt[bd.CNT_REJECTED] = rejected
+    cnt[bd.CNT_EVENTS] = events
+    cnt[bd.CNT_RHS_CALLS] = calls
+    stats.value[bd.VAL_TIME] = t
 
 
 @kernel
-def _adaptive_store(sa, hstate, cp, cs, y, ws, out, row, t, nbs):
-    store_standard(out[row], t, y[0:7], y[7:14], ws.g, ws.lam, ws.lt, hstate[:, T_STRESS], nbs)
+def _adaptive_store(sa, contact, ws, output, row, t):
+    """Output row ``row`` at time t: the full row into ``output.row`` (standard columns, then
+    the energies from the integrals y[14:19]), the selected columns into ``output.table``."""
+    cp = contact.params
+    cs = ws.cstate
+    cw = ws.cw
+    hstate = ws.hstate
+    y = ws.y
+    buf = output.row
+    nbs = sa.nbs
+    store_standard(buf, t, y[0:7], y[7:14], cw.g, cw.lam, cw.lt, hstate[:, T_STRESS], nbs)
     base = C_BENT + nbs
     ke = 0.0
     for j in range(7):
@@ -414,19 +469,23 @@ def _adaptive_store(sa, hstate, cp, cs, y, ws, out, row, t, nbs):
     ec = cl.contact_stored_energy(cp, cs)
     efs = 0.0
     for c in range(4):
-        if cp[c, cl.P_FMODE] == 2 and cs[c, cl.S_CFT] != 0.0:
+        if cp[c, cl.P_FMODE] == cl.FRICTION_STICK and cs[c, cl.S_CFT] != 0.0:
             efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
     W0, W1, W2, W3, W4 = y[14], y[15], y[16], y[17], y[18]
-    out[row, base + 0] = W0
-    out[row, base + 1] = ke
-    out[row, base + 2] = es
-    out[row, base + 3] = W2
-    out[row, base + 4] = W1 - es
-    out[row, base + 5] = ec
-    out[row, base + 6] = W3 - (ec - efs)
-    out[row, base + 7] = W4 - efs
-    out[row, base + 8] = W0 - (ke + W1 + W2 + W3 + W4)
+    buf[base + 0] = W0
+    buf[base + 1] = ke
+    buf[base + 2] = es
+    buf[base + 3] = W2
+    buf[base + 4] = W1 - es
+    buf[base + 5] = ec
+    buf[base + 6] = W3 - (ec - efs)
+    buf[base + 7] = W4 - efs
+    buf[base + 8] = W0 - (ke + W1 + W2 + W3 + W4)
+    sel = output.select
+    table = output.table
+    for q in range(sel.shape[0]):
+        table[row, q] = buf[sel[q]]
 
 
-#: (A, C, B5, E) of the tableau, in the order adaptive_run takes them
+#: (A, C, B5, E) of the tableau (module constants of the kernels)
 TABLEAU = (_A, _C, _B5, _E)

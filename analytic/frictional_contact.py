@@ -94,30 +94,28 @@ C. Glocker, "Concepts for modeling impacts without friction", Acta Mech.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
-
-from deckpound.analytic._jit import kernel
+from deckpound.analytic._jit import compiled, kernel
 
 from .coulomb_lcp import build_lcp3, build_lcp_st, extract3, extract_st
 from .lcp import ENUM_MAX_N, lcp_enumerate, lcp_lemke
 
 __all__ = [
     "CONTACT_OPEN",
-    "CONTACT_STICK",
     "CONTACT_SLIP",
-    "STATUS_LEMKE",
-    "STATUS_LEMKE_ST",
-    "STATUS_ENUM",
-    "STATUS_FAILED",
+    "CONTACT_STICK",
     "MODE_AUTO",
+    "MODE_ENUM",
     "MODE_LEMKE3",
     "MODE_LEMKE_ST",
-    "MODE_ENUM",
-    "delassus",
-    "velocity_update",
+    "STATUS_ENUM",
+    "STATUS_FAILED",
+    "STATUS_LEMKE",
+    "STATUS_LEMKE_ST",
     "contact_residuals",
+    "delassus",
     "solve_contact_impulses",
     "solve_contact_impulses_into",
+    "velocity_update",
 ]
 
 CONTACT_OPEN = 0
@@ -137,7 +135,7 @@ MODE_ENUM = 3
 _VTOL = 1e-9   # default relative acceptance tolerance (velocity units)
 
 
-@njit(cache=True)
+@compiled
 def delassus(M, W_N, W_T):
     """G = W^T M^-1 W with W = [W_N  W_T]; M (ndof, ndof) invertible,
     W_N, W_T (ndof, nc).  Returns G (2nc, 2nc), order N_0..N_{nc-1},
@@ -150,7 +148,7 @@ def delassus(M, W_N, W_T):
     return W.T @ X
 
 
-@njit(cache=True)
+@compiled
 def velocity_update(M, W_N, W_T, U_free, P_N, P_T):
     """U+ = U_free + M^-1 (W_N P_N + W_T P_T)."""
     r = W_N @ P_N + W_T @ P_T
@@ -182,21 +180,19 @@ def contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus):
             gN = 1.0
         xi = uN_plus[i] + e[i] * uN_minus[i]
         a = gN * P_N[i]
-        m = a if a < xi else xi
-        if abs(m) > comp:
-            comp = abs(m)
+        m = min(xi, a)
+        comp = max(comp, abs(m))
         gT = G[nc + i, nc + i]
         if not gT > 0.0:
             gT = gN
-        bound = gT * mu[i] * (P_N[i] if P_N[i] > 0.0 else 0.0)
+        bound = gT * mu[i] * (max(0.0, P_N[i]))
         y = gT * P_T[i] - uT_plus[i]
         if y > bound:
             y = bound
         elif y < -bound:
             y = -bound
         r = abs(gT * P_T[i] - y)
-        if r > cone:
-            cone = r
+        cone = max(cone, r)
     return comp, cone
 
 
@@ -240,7 +236,7 @@ def _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT
     return r <= tolv
 
 
-@njit(cache=True)
+@compiled
 def _split_shared_tangents(G, mu, P_N, P_T):
     """Contacts whose tangent columns of W coincide (||W_Ti - W_Tj||^2_M^-1
     = G_TiTi + G_TjTj - 2 G_TiTj = 0) share one tangential velocity; only
@@ -271,19 +267,19 @@ def _split_shared_tangents(G, mu, P_N, P_T):
         for j in range(i, nc):
             if group[j] == i:
                 tot += P_T[j]
-                pn = P_N[j] if P_N[j] > 0.0 else 0.0
+                pn = max(0.0, P_N[j])
                 cap += mu[j] * pn
         if not cap > 0.0:
             continue
         for j in range(i, nc):
             if group[j] == i:
-                pn = P_N[j] if P_N[j] > 0.0 else 0.0
+                pn = max(0.0, P_N[j])
                 P_T[j] = tot * (mu[j] * pn / cap)
         changed = True
     return changed
 
 
-@njit(cache=True)
+@compiled
 def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
                                 P_N, P_T, uN_plus, uT_plus, state,
                                 mode=0, rtol=1e-9):
@@ -344,27 +340,27 @@ def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
     # 1. Lemke, 3-unknown formulation
     A3, q3 = build_lcp3(G, qN, uT_free, mu, fidx, nf, s)
     if mode == MODE_AUTO or mode == MODE_LEMKE3:
-        z, w, st, npiv = lcp_lemke(A3, q3)
+        z, _w, _st, _npiv = lcp_lemke(A3, q3)
         extract3(z, mu, fidx, nf, s, cN, cT)
         done = _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT,
                                best, STATUS_LEMKE, tolv)
     # 2. Lemke, Stewart-Trinkle formulation (copositive)
     if (not done) and nf > 0 and (mode == MODE_AUTO or mode == MODE_LEMKE_ST):
         Ast, qst = build_lcp_st(G, qN, uT_free, mu, fidx, nf, s)
-        z, w, st, npiv = lcp_lemke(Ast, qst)
+        z, _w, _st, _npiv = lcp_lemke(Ast, qst)
         extract_st(z, fidx, nf, s, cN, cT)
         done = _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT,
                                best, STATUS_LEMKE_ST, tolv)
     elif mode == MODE_LEMKE_ST and nf == 0:
         # frictionless: the ST form is the normal LCP
-        z, w, st, npiv = lcp_lemke(A3, q3)
+        z, _w, _st, _npiv = lcp_lemke(A3, q3)
         extract3(z, mu, fidx, nf, s, cN, cT)
         done = _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT,
                                best, STATUS_LEMKE_ST, tolv)
     # 3. enumeration of the 3-unknown LCP
     if (not done) and (mode == MODE_AUTO or mode == MODE_ENUM) and \
             nc + 2 * nf <= ENUM_MAX_N:
-        z, w, st, res = lcp_enumerate(A3, q3)
+        z, _w, _st, _res = lcp_enumerate(A3, q3)
         extract3(z, mu, fidx, nf, s, cN, cT)
         _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best,
                         STATUS_ENUM, tolv)
@@ -401,7 +397,7 @@ def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
     return best_status, best_comp, best_cone
 
 
-@njit(cache=True)
+@compiled
 def solve_contact_impulses(G, uN_free, uT_free, uN_minus, e, mu, mode=0,
                            rtol=1e-9):
     """Allocating wrapper of :func:`solve_contact_impulses_into`.

@@ -56,7 +56,6 @@ import math
 from numbers import Real
 
 import numpy as np
-
 from deckpound.analytic._hysteretic_kernel import (
     N_PARAMS,
     N_STATE,
@@ -72,7 +71,7 @@ from deckpound.analytic._hysteretic_kernel import (
     pack_hysteretic_params,
 )
 
-__all__ = ["HystereticMaterial", "pack_hysteretic", "N_PARAMS", "N_STATE"]
+__all__ = ["N_PARAMS", "N_STATE", "HystereticMaterial", "pack_hysteretic"]
 
 _NAMES_3PT = ("s1p", "e1p", "s2p", "e2p", "s3p", "e3p",
               "s1n", "e1n", "s2n", "e2n", "s3n", "e3n",
@@ -102,8 +101,8 @@ def _parse(args, beta, element_copy):
     out = {}
     for name, v in zip(names, vals):
         if isinstance(v, bool) or not isinstance(v, (Real, np.floating, np.integer)):
-            raise ValueError(f"Hysteretic argument {name} must be a real "
-                             f"number, got {v!r}")
+            raise ValueError(  # noqa: TRY004 (ValueError is the documented refusal)
+                f"Hysteretic argument {name} must be a real number, got {v!r}")
         fv = float(v)
         if not math.isfinite(fv):
             raise ValueError(f"Hysteretic argument {name} must be finite, "

@@ -28,11 +28,10 @@ arrays, usable inside the engines' step loops and from Python alike.
 from __future__ import annotations
 
 import numpy as np
-
 from deckpound.analytic._jit import kernel
 from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, N_CORNERS, Plan
 
-__all__ = ["pack_corners", "contact_kinematics", "linear_gap", "N_K", "K_G0"]
+__all__ = ["K_G0", "N_K", "contact_kinematics", "linear_gap", "pack_corners"]
 
 # DOF indices
 XD, YD, TD = DECK_X, DECK_Y, DECK_THETA

@@ -47,16 +47,14 @@ K. G. Murty, "Linear Complementarity, Linear and Nonlinear Programming",
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
-
-from deckpound.analytic._jit import kernel
+from deckpound.analytic._jit import compiled, kernel
 
 __all__ = [
-    "LEMKE_SOLVED",
-    "LEMKE_RAY",
     "LEMKE_MAX_PIVOTS",
-    "lcp_lemke",
+    "LEMKE_RAY",
+    "LEMKE_SOLVED",
     "lcp_enumerate",
+    "lcp_lemke",
     "lcp_residual",
     "solve_dense_cp",
 ]
@@ -82,15 +80,14 @@ def lcp_residual(z, w):
     for i in range(z.shape[0]):
         a = z[i]
         b = w[i]
-        m = a if a < b else b
-        if abs(m) > nat:
-            nat = abs(m)
+        m = min(b, a)
+        nat = max(nat, abs(m))
         phi = a + b - np.sqrt(a * a + b * b)
         fb2 += phi * phi
     return nat, np.sqrt(fb2)
 
 
-@njit(cache=True)
+@compiled
 def solve_dense_cp(A, b, x, rtol):
     """Solve A x = b in place (x is output) by Gaussian elimination with
     complete pivoting.  A (m x m) and b (m,) are overwritten.
@@ -106,11 +103,9 @@ def solve_dense_cp(A, b, x, rtol):
     amax = 0.0
     bmax = 0.0
     for i in range(m):
-        if abs(b[i]) > bmax:
-            bmax = abs(b[i])
+        bmax = max(bmax, abs(b[i]))
         for j in range(m):
-            if abs(A[i, j]) > amax:
-                amax = abs(A[i, j])
+            amax = max(amax, abs(A[i, j]))
     for i in range(m):
         x[i] = 0.0
     if m == 0:
@@ -174,7 +169,7 @@ def solve_dense_cp(A, b, x, rtol):
     return rank, consistent
 
 
-@njit(cache=True)
+@compiled
 def _polish(M, q, basic_z, z):
     """Direct solve on the complementary basis: z_a = -M_aa^{-1} q_a, z = 0
     off a.  ``basic_z`` is a boolean mask.  Writes z; returns consistency."""
@@ -222,7 +217,7 @@ def _pivot(T, r, c):
                 T[i, c] = 0.0
 
 
-@njit(cache=True)
+@compiled
 def _lex_select(T, rows, nrows, c, n, rtol):
     """Among candidate rows (first nrows entries of ``rows``, all tied in the
     minimum ratio), pick the lexicographic minimum of T[i, 0:n] / T[i, c]
@@ -237,10 +232,8 @@ def _lex_select(T, rows, nrows, c, n, rtol):
         for k in range(nc):
             i = cand[k]
             v = T[i, j] / T[i, c]
-            if v < vmin:
-                vmin = v
-            if v > vmax:
-                vmax = v
+            vmin = min(vmin, v)
+            vmax = max(vmax, v)
         tol = rtol * max(1.0, abs(vmin))
         nn = 0
         for k in range(nc):
@@ -253,7 +246,7 @@ def _lex_select(T, rows, nrows, c, n, rtol):
     return cand[0]
 
 
-@njit(cache=True)
+@compiled
 def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
     """Lemke's method for w = M z + q, 0 <= w _|_ z >= 0.
 
@@ -282,10 +275,8 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
     qmin = 0.0
     qscale = 0.0
     for i in range(n):
-        if q[i] < qmin:
-            qmin = q[i]
-        if abs(q[i]) > qscale:
-            qscale = abs(q[i])
+        qmin = min(qmin, q[i])
+        qscale = max(qscale, abs(q[i]))
     if qmin >= 0.0:
         for i in range(n):
             w[i] = q[i]
@@ -293,8 +284,7 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
     mscale = 0.0
     for i in range(n):
         for j in range(n):
-            if abs(M[i, j]) > mscale:
-                mscale = abs(M[i, j])
+            mscale = max(mscale, abs(M[i, j]))
     # columns: [w_0..w_{n-1}, z_0..z_{n-1}, z0, rhs]
     # variable ids: 0..n-1 -> w_i, n..2n-1 -> z_i, 2n -> z0
     ncol = 2 * n + 2
@@ -326,8 +316,7 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
             vmin = np.inf
             for k in range(ncand):
                 v = T[cand[k], j]
-                if v < vmin:
-                    vmin = v
+                vmin = min(vmin, v)
             nn = 0
             for k in range(ncand):
                 if T[cand[k], j] <= vmin + tol:
@@ -355,8 +344,7 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
             a = T[i, c]
             if a > ptol:
                 ratio = T[i, 2 * n + 1] / a
-                if ratio < rmin:
-                    rmin = ratio
+                rmin = min(rmin, ratio)
         if rmin == np.inf:
             status = LEMKE_RAY
             break
@@ -390,7 +378,7 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
         v = basis[i]
         val = T[i, 2 * n + 1] * qscale
         if v >= n and v < 2 * n:
-            z[v - n] = val if val > 0.0 else 0.0
+            z[v - n] = max(0.0, val)
     for i in range(n):
         s = q[i]
         for j in range(n):
@@ -407,8 +395,7 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
         ok = _polish(M, q, mask, zp)
         if ok:
             for i in range(n):
-                if zp[i] < 0.0:
-                    zp[i] = 0.0
+                zp[i] = max(zp[i], 0.0)
             wp = np.empty(n)
             for i in range(n):
                 s = q[i]
@@ -423,7 +410,7 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
     return z, w, status, npiv
 
 
-@njit(cache=True)
+@compiled
 def lcp_enumerate(M, q, tol=1e-10):
     """Solve LCP(q, M) by enumerating all 2^n complementary index sets.
 
@@ -440,8 +427,7 @@ def lcp_enumerate(M, q, tol=1e-10):
     wbest = q.copy()
     qscale = 0.0
     for i in range(n):
-        if abs(q[i]) > qscale:
-            qscale = abs(q[i])
+        qscale = max(qscale, abs(q[i]))
     if n > ENUM_MAX_N:
         nat, _ = lcp_residual(zbest, wbest)
         return zbest, wbest, ENUM_TOO_LARGE, nat

@@ -67,25 +67,76 @@ combined with Coulomb friction can gain energy in an impact (Kane's paradox, see
 
 from __future__ import annotations
 
-import numpy as np
-from numba import njit
+from collections import namedtuple
 
+import numpy as np
+from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import kernel
+from deckpound.analytic.bundles import (
+    RUN_CONTACT_UNSOLVED,
+    RUN_INTERRUPTED,
+    RUN_NONFINITE,
+    RUN_NOT_CONVERGED,
+    RUN_OK,
+    RUN_SINGULAR,
+)
 from deckpound.analytic.dense import lu_factor, lu_solve
-from deckpound.analytic.nonsmooth import ENERGY_COLUMNS
-from deckpound.analytic.frictional_contact import STATUS_FAILED, solve_contact_impulses_into
+from deckpound.analytic.frictional_contact import STATUS_FAILED
+from deckpound.analytic.impulses import solve_active_impulses
 from deckpound.analytic.kinematics import contact_kinematics
+from deckpound.analytic.nonsmooth import ENERGY_COLUMNS
 from deckpound.analytic.support_motion import record_at
 from deckpound.analytic.system import C_BENT as _C_BENT
-from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
-    spring_stored_energy, spring_tangent, spring_update_materials, store_standard
+from deckpound.analytic.system import (
+    spring_assemble,
+    spring_commit,
+    spring_deformations,
+    spring_stored_energy,
+    spring_tangent,
+    spring_update_materials,
+    store_standard,
+)
 
-__all__ = ["moreau_jean_run", "moreau_jean_workspace", "ENERGY_COLUMNS", "N_ENERGY", "ST_OK",
-           "ST_NEWTON", "ST_CONTACT", "ST_NONFINITE", "ST_SINGULAR"]
+__all__ = ["ENERGY_COLUMNS", "N_ENERGY", "MoreauJeanOptions", "MoreauJeanWork", "moreau_jean_run",
+           "moreau_jean_workspace"]
 
 N_ENERGY = len(ENERGY_COLUMNS)
-# info codes
-ST_OK, ST_NEWTON, ST_CONTACT, ST_NONFINITE, ST_SINGULAR = 0, 1, 2, 3, 4
+
+#: The scalars of :func:`moreau_jean_run`: ``nsteps`` steps of length ``h`` [s], ``theta``;
+#: restitution ``ecoef`` of approaching corners and ``esep`` of separating ones
+#: (:func:`deckpound.analytic.nonsmooth.separating_restitution`); friction coefficient ``mu``;
+#: contact solver ``mode`` (:mod:`deckpound.analytic.frictional_contact` ``MODE_*``); ``rtol``
+#: relative acceptance of the contact solution; ``ftol`` [kN] Newton acceptance of the spring
+#: forces and ``maxit`` Newton iterations; output every ``stride`` steps.
+MoreauJeanOptions = namedtuple("MoreauJeanOptions", ["nsteps", "h", "theta", "ecoef", "esep",
+                                                     "mu", "mode", "rtol", "ftol", "maxit",
+                                                     "stride"])
+_V7 = ("q", "v", "qk", "vk", "qM", "vfree", "vnew", "R", "dv", "Fk", "f")
+_NS = ("kt_fact", "d_k", "dd_k", "fs_k", "kt_k", "d_lin", "fs_lin", "kt_lin", "d", "dd", "fs",
+       "kt", "sdu", "sdv")
+_V4 = ("gap", "gapo", "P_N", "P_T", "pn_acc", "pt_acc", "fn_out", "ft_out")
+_CH = ("ug", "vg", "ugo", "vgo")
+_CORNER = _V4 + ("WN", "WT", "WNo", "WTo", "act", "state", "was_active")
+#: DOF vectors (7,): q, v iterate, qk, vk start of step, qM mid-step prediction, vfree, vnew
+#: free and post-contact velocities, R residual, dv, Fk smooth force at the start, f at the
+#: iterate; K, LU tangent and iteration-matrix factors (7, 7), piv (7,) int64.
+MoreauJeanDofs = namedtuple("MoreauJeanDofs", _V7 + ("K", "LU", "piv"))
+#: Per spring (ns,): kt_fact tangents of the factors held (NaN: none), committed d_k, dd_k,
+#: fs_k, kt_k, linearisation point d_lin, fs_lin, kt_lin, iterate d, dd, fs, kt, and sdu, sdv =
+#: S Δu_g, S Δu̇_g.
+MoreauJeanSprings = namedtuple("MoreauJeanSprings", _NS)
+#: Per corner (4,): gap (mid-step), gapo (output), impulses P_N, P_T, accumulated pn_acc,
+#: pt_acc, output forces fn_out, ft_out; rows WN, WT (mid-step) and WNo, WTo (output) (4, 7);
+#: act, state int64 active corners and contact states, was_active bool.
+MoreauJeanCorners = namedtuple("MoreauJeanCorners", _CORNER)
+#: The workspace of :func:`moreau_jean_run` (:func:`moreau_jean_workspace`), one named field
+#: per array, grouped (a group is loaded as one value in the compiled code: small groups keep
+#: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states; final (2, 7)
+#: displacement and velocity at the last accepted step; dof, spring, corner the groups above;
+#: ug, vg, ugo, vgo supports now and at the last step; W (6,) running work totals [kJ];
+#: energy (N_ENERGY,).
+MoreauJeanWork = namedtuple("MoreauJeanWork", ("u0", "v0", "hstate", "final", "dof", "spring",
+                                               "corner") + _CH + ("W", "energy"))
 
 
 @kernel
@@ -99,80 +150,6 @@ def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
             LU[i, j] = c1 * Cmat[i, j] + c2 * K[i, j]
         LU[i, i] += sa.mass[i]
     return lu_factor(LU, piv)
-
-
-@njit(cache=True, _nrt=True)   # allocates: keeps numba's runtime when called from a kernel
-def _contact_solve(LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu, mode, rtol,
-                   P_N, P_T, state, vnew):
-    """Solve the frictional impact problem of the active corners act[:nact].
-
-    G = W Ŵ⁻¹ Wᵀ, u_free = W v_free, U_N⁻ = W_N v0; vnew = v_free + Ŵ⁻¹ Wᵀ P. Restitution
-    ``ecoef`` for approaching corners (U_N⁻ ≤ 0), ``esep`` for separating ones.
-    P_N, P_T, state (4,) are written per corner (zero / open for inactive corners).
-    Returns (status, comp_res, cone_res).
-    """
-    nc = nact
-    X = np.empty((2 * nc, 7))       # rows: Ŵ⁻¹ w for each column w of W
-    Wr = np.empty((2 * nc, 7))
-    col = np.empty(7)
-    for a in range(nc):
-        c = act[a]
-        for j in range(7):
-            Wr[a, j] = WN[c, j]
-            Wr[nc + a, j] = WT[c, j]
-    for r in range(2 * nc):
-        for j in range(7):
-            col[j] = Wr[r, j]
-        lu_solve(LU, piv, col, col)
-        for j in range(7):
-            X[r, j] = col[j]
-    G = np.empty((2 * nc, 2 * nc))
-    for r in range(2 * nc):
-        for s in range(r, 2 * nc):
-            acc = 0.0
-            for j in range(7):
-                acc += Wr[r, j] * X[s, j]
-            G[r, s] = acc
-            G[s, r] = acc
-    uNf = np.empty(nc)
-    uTf = np.empty(nc)
-    uNm = np.empty(nc)
-    ea = np.empty(nc)
-    ma = np.empty(nc)
-    for a in range(nc):
-        sN = 0.0
-        sT = 0.0
-        sm = 0.0
-        for j in range(7):
-            sN += Wr[a, j] * vfree[j]
-            sT += Wr[nc + a, j] * vfree[j]
-            sm += Wr[a, j] * v0[j]
-        uNf[a] = sN
-        uTf[a] = sT
-        uNm[a] = sm
-        ea[a] = ecoef if sm <= 0.0 else esep
-        ma[a] = mu
-    pN = np.zeros(nc)
-    pT = np.zeros(nc)
-    uNp = np.zeros(nc)
-    uTp = np.zeros(nc)
-    st = np.zeros(nc, dtype=np.int64)
-    status, comp, cone = solve_contact_impulses_into(G, uNf, uTf, uNm, ea, ma, pN, pT, uNp,
-                                                     uTp, st, mode, rtol)
-    for c in range(4):
-        P_N[c] = 0.0
-        P_T[c] = 0.0
-        state[c] = 0
-    for j in range(7):
-        vnew[j] = vfree[j]
-    for a in range(nc):
-        c = act[a]
-        P_N[c] = pN[a]
-        P_T[c] = pT[a]
-        state[c] = st[a]
-        for j in range(7):
-            vnew[j] += X[a, j] * pN[a] + X[nc + a, j] * pT[a]
-    return status, comp, cone
 
 
 @kernel
@@ -195,65 +172,95 @@ def _energies(sa, hstate, q, v, ug, W, energy):
 
 
 @kernel
-def _store(out, row, t, q, v, g, fn, ft, fs, nbs, pn, pt, state, energy):
-    store_standard(out[row], t, q, v, g, fn, ft, fs, nbs)
+def _store(output, row, t, q, v, g, fn, ft, fs, nbs, pn, pt, state, energy):
+    """Output row ``row``: standard columns, impulses, contact states and energies into the
+    full-row buffer ``output.row``, the selected columns into ``output.table``."""
+    buf = output.row
+    store_standard(buf, t, q, v, g, fn, ft, fs, nbs)
     base = _C_BENT + nbs
     for c in range(4):
-        out[row, base + c] = pn[c]
-        out[row, base + 4 + c] = pt[c]
-        out[row, base + 8 + c] = state[c]
+        buf[base + c] = pn[c]
+        buf[base + 4 + c] = pt[c]
+        buf[base + 8 + c] = state[c]
     base += 12
     for k in range(energy.shape[0]):
-        out[row, base + k] = energy[k]
+        buf[base + k] = energy[k]
+    sel = output.select
+    table = output.table
+    for k in range(sel.shape[0]):
+        table[row, k] = buf[sel[k]]
 
 
-def moreau_jean_workspace(ns: int, nch: int) -> tuple:
-    """The arrays :func:`moreau_jean_run` works in (ns springs, nch support channels).
-    Allocated here because the kernel runs without numba's runtime."""
-    wns = np.zeros((14, ns))
-    wns[0] = np.nan                  # no factorisation held yet
-    return (np.zeros((11, 7)), np.zeros((2, 7, 7)), np.zeros(7, dtype=np.int64), wns,
-            np.zeros((8, 4)), np.zeros((4, 4, 7)), np.zeros((2, 4), dtype=np.int64),
-            np.zeros(4, dtype=np.bool_), np.zeros((4, nch)), np.zeros(6), np.zeros(N_ENERGY))
+def moreau_jean_workspace(u0, v0, hstate, ns: int, nch: int) -> MoreauJeanWork:
+    """The workspace of :func:`moreau_jean_run` (ns springs, nch support channels) around the
+    initial state u0, v0 (7,) and the virgin Takeda states. Allocated here because the kernel
+    runs without numba's runtime."""
+    wns = bd.row_views(_NS, ns)
+    wns["kt_fact"][:] = np.nan         # no factorisation held yet
+    dof = MoreauJeanDofs(**bd.row_views(_V7, 7), **bd.row_views(("K", "LU"), 7, 7),
+                         piv=np.zeros(7, dtype=np.int64))
+    corner = MoreauJeanCorners(**bd.row_views(_V4, 4),
+                               **bd.row_views(("WN", "WT", "WNo", "WTo"), 4, 7),
+                               **bd.row_views(("act", "state"), 4, dtype=np.int64),
+                               was_active=np.zeros(4, dtype=np.bool_))
+    return MoreauJeanWork(u0=u0, v0=v0, hstate=hstate, final=np.zeros((2, 7)), dof=dof,
+                          spring=MoreauJeanSprings(**wns), corner=corner,
+                          **bd.row_views(_CH, nch), W=np.zeros(6), energy=np.zeros(N_ENERGY))
 
 
-@kernel
-def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, theta, ecoef,
-                    esep, mu, mode, rtol,
-                    ftol, maxit, stride, nbs, out, info, rinfo, u0, v0, uv_end, work):
-    """The Moreau–Jean step loop over ``nsteps`` steps of length h.
+@kernel(nogil=True)
+def moreau_jean_run(system, contact, record, opt, output, work, stats):
+    """The Moreau–Jean step loop over ``opt.nsteps`` steps of length opt.h.
 
-    Support motion: the record (tb, DG, VGR) of
-    :func:`deckpound.analytic.support_motion.support_record`, interpolated at t_n = n·h in the
-    loop (identical to ``motion.resample(h)``, bounded memory).
+    Bundles of :mod:`deckpound.analytic.bundles` (``system``, ``contact`` — its corner table
+    and kinematics flag —, ``record``, ``output``, ``stats``), scalars
+    :data:`MoreauJeanOptions`, workspace :data:`MoreauJeanWork`.
 
-    Fills ``out`` (one row per output) and ``info`` = [status (0 ok, 1 Newton, 2 contact,
-    3 non-finite, 4 singular), rows written, failed step, contact solves, contact events
-    (corner activations), contact steps, Newton iterations, max iterations of a step,
-    iteration-matrix factorisations]; ``rinfo`` = [max complementarity residual, max cone
-    residual]; ``uv_end`` (2, 7) = displacement and velocity at the last accepted step.
+    Support motion: the record of :func:`deckpound.analytic.support_motion.support_record`,
+    interpolated at t_n = n·h in the loop (identical to ``motion.resample(h)``, bounded memory).
+
+    Fills ``output.table`` (one row per output), ``stats.count``: status (RUN_OK,
+    RUN_NOT_CONVERGED, RUN_CONTACT_UNSOLVED, RUN_NONFINITE, RUN_SINGULAR, RUN_INTERRUPTED),
+    rows written, failed step, steps, contact solves, contact events (corner activations),
+    contact steps, Newton iterations, max iterations of a step, iteration-matrix
+    factorisations; ``stats.value``: max complementarity and cone residuals;
+    ``work.final`` (2, 7) = displacement and velocity at the last accepted step.
+    ``stats.halt[0]`` ≠ 0 stops the loop at the next Newton iteration (RUN_INTERRUPTED).
     """
+    sa = system
+    Cmat = sa.C
+    nbs = sa.nbs
+    geom = contact.corners
+    nonlinear = contact.nonlinear
+    tb, DG, VGR = record.t, record.disp, record.vel
+    nsteps, h, theta, ecoef, esep, mu = opt.nsteps, opt.h, opt.theta, opt.ecoef, opt.esep, opt.mu
+    mode, rtol, ftol, maxit, stride = opt.mode, opt.rtol, opt.ftol, opt.maxit, opt.stride
+    halt = stats.halt
     ns = sa.k0.shape[0]
     nch = DG.shape[1]
     mass = sa.mass
     hp = sa.hparams
     kind = sa.kind
     a0 = sa.scal[0]
-    # workspace (allocated by moreau_jean_workspace: this kernel runs without numba's runtime)
-    w7, w77, piv, wns, w4, w47, wi4, was_active, wch, W, energy = work
-    q, v, qk, vk, qM, vfree, vnew, R, dv, Fk, f = (w7[0], w7[1], w7[2], w7[3], w7[4], w7[5],
-                                                  w7[6], w7[7], w7[8], w7[9], w7[10])
-    K, LU = w77[0], w77[1]
+    wk = work
+    hstate, uv_end, u0, v0 = wk.hstate, wk.final, wk.u0, wk.v0
+    dof, spr, cor = wk.dof, wk.spring, wk.corner
+    q, v, qk, vk, qM, vfree, vnew, R, dv, Fk, f = (dof.q, dof.v, dof.qk, dof.vk, dof.qM,
+                                                  dof.vfree, dof.vnew, dof.R, dof.dv, dof.Fk,
+                                                  dof.f)
+    K, LU, piv = dof.K, dof.LU, dof.piv
     # spring quantities: committed start of step (k), linearisation point (lin), new iterate;
     # kt_fact: tangents of the factors held in LU (NaN: none); sdu, sdv: S Δu_g, S Δu̇_g
     (kt_fact, d_k, dd_k, fs_k, kt_k, d_lin, fs_lin, kt_lin, d, dd, fs, kt, sdu,
-     sdv) = (wns[0], wns[1], wns[2], wns[3], wns[4], wns[5], wns[6], wns[7], wns[8], wns[9],
-             wns[10], wns[11], wns[12], wns[13])
-    gap, gapo, P_N, P_T, pn_acc, pt_acc, fn_out, ft_out = (w4[0], w4[1], w4[2], w4[3], w4[4],
-                                                          w4[5], w4[6], w4[7])
-    WN, WT, WNo, WTo = w47[0], w47[1], w47[2], w47[3]
-    act, state = wi4[0], wi4[1]
-    ug, vg, ugo, vgo = wch[0], wch[1], wch[2], wch[3]
+     sdv) = (spr.kt_fact, spr.d_k, spr.dd_k, spr.fs_k, spr.kt_k, spr.d_lin, spr.fs_lin,
+             spr.kt_lin, spr.d, spr.dd, spr.fs, spr.kt, spr.sdu, spr.sdv)
+    gap, gapo, P_N, P_T, pn_acc, pt_acc, fn_out, ft_out = (cor.gap, cor.gapo, cor.P_N, cor.P_T,
+                                                          cor.pn_acc, cor.pt_acc, cor.fn_out,
+                                                          cor.ft_out)
+    WN, WT, WNo, WTo = cor.WN, cor.WT, cor.WNo, cor.WTo
+    act, state, was_active = cor.act, cor.state, cor.was_active
+    ug, vg, ugo, vgo = wk.ug, wk.vg, wk.ugo, wk.vgo
+    W, energy = wk.W, wk.energy
     th = theta
     th1 = 1.0 - theta
     # ---- initial state
@@ -273,7 +280,7 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
     W[1] = es0
     contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
     _energies(sa, hstate, q, v, ug, W, energy)
-    _store(out, 0, 0.0, q, v, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state,
+    _store(output, 0, 0.0, q, v, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state,
            energy)
     row = 1
     solves = 0
@@ -284,9 +291,17 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
     nfact = 0
     max_comp = 0.0
     max_cone = 0.0
-    status = ST_OK
+    status = RUN_OK
+    failed = 0
     inv_out = 1.0 / (stride * h)
     for n in range(nsteps):
+        if halt[0] != 0:
+            status = RUN_INTERRUPTED
+            failed = n + 1
+            for j in range(7):
+                uv_end[0, j] = q[j]
+                uv_end[1, j] = v[j]
+            break
         # ---- support motion at t_{n+1} and its increment (per spring)
         for k in range(nch):
             ugo[k] = ug[k]
@@ -345,7 +360,7 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
                     break
             if not same:
                 if not _iteration_matrix(sa, Cmat, kt_lin, h, theta, K, LU, piv):
-                    status = ST_SINGULAR
+                    status = RUN_SINGULAR
                     break
                 nfact += 1
                 for i in range(ns):
@@ -356,16 +371,15 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
                 vfree[j] = v[j] - dv[j]
             # ---- contact
             if nact > 0:
-                cst, comp, cone = _contact_solve(LU, piv, WN, WT, act, nact, vk, vfree, ecoef,
-                                                 esep, mu, mode, rtol, P_N, P_T, state, vnew)
+                cst, comp, cone = solve_active_impulses(LU, piv, WN, WT, act, nact, vk, vfree,
+                                                        ecoef, esep, mu, mode, rtol, P_N, P_T,
+                                                        state, vnew)
                 solves += 1
                 if cst == STATUS_FAILED:
-                    status = ST_CONTACT
+                    status = RUN_CONTACT_UNSOLVED
                     break
-                if comp > max_comp:
-                    max_comp = comp
-                if cone > max_cone:
-                    max_cone = cone
+                max_comp = max(max_comp, comp)
+                max_cone = max(max_cone, cone)
                 for j in range(7):
                     v[j] = vnew[j]
             else:
@@ -382,16 +396,18 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
             for i in range(ns):
                 if kind[i] == 1:
                     r_i = abs(fs[i] - fs_lin[i] - kt_lin[i] * (d[i] - d_lin[i]))
-                    if r_i > rmax:
-                        rmax = r_i
+                    rmax = max(rmax, r_i)
             if not np.isfinite(rmax):
-                status = ST_NONFINITE
+                status = RUN_NONFINITE
                 break
             if rmax <= ftol:
                 converged = True
                 break
             if it >= maxit:
-                status = ST_NEWTON
+                status = RUN_NOT_CONVERGED
+                break
+            if halt[0] != 0:
+                status = RUN_INTERRUPTED
                 break
             # ---- Newton: residual of the θ-equation at the iterate (contact impulse excluded)
             for j in range(7):
@@ -401,17 +417,16 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
                 fs_lin[i] = fs[i]
                 kt_lin[i] = kt[i]
         newton += it
-        if it > maxit_seen:
-            maxit_seen = it
+        maxit_seen = max(maxit_seen, it)
         if converged:
             for j in range(7):
                 if not np.isfinite(v[j]) or not np.isfinite(q[j]):
-                    status = ST_NONFINITE
-        if status != ST_OK:
+                    status = RUN_NONFINITE
+        if status != RUN_OK:
             for j in range(7):
                 uv_end[0, j] = qk[j]
                 uv_end[1, j] = vk[j]
-            info[2] = n + 1
+            failed = n + 1
             break
         spring_commit(sa, hstate)
         # ---- energy (exact work of the θ-scheme over the step)
@@ -457,23 +472,27 @@ def moreau_jean_run(sa, Cmat, hstate, geom, nonlinear, tb, DG, VGR, nsteps, h, t
                 fn_out[c] = pn_acc[c] * inv_out
                 ft_out[c] = pt_acc[c] * inv_out
             _energies(sa, hstate, q, v, ug, W, energy)
-            _store(out, row, (n + 1) * h, q, v, gapo, fn_out, ft_out, fs, nbs, pn_acc, pt_acc,
-                   state, energy)
+            _store(output, row, (n + 1) * h, q, v, gapo, fn_out, ft_out, fs, nbs, pn_acc,
+                   pt_acc, state, energy)
             row += 1
             for c in range(4):
                 pn_acc[c] = 0.0
                 pt_acc[c] = 0.0
-    if status == ST_OK:
+    if status == RUN_OK:
         for j in range(7):
             uv_end[0, j] = q[j]
             uv_end[1, j] = v[j]
-    info[0] = status
-    info[1] = row
-    info[3] = solves
-    info[4] = events
-    info[5] = csteps
-    info[6] = newton
-    info[7] = maxit_seen
-    info[8] = nfact
-    rinfo[0] = max_comp
-    rinfo[1] = max_cone
+    cnt = stats.count
+    cnt[bd.CNT_STATUS] = status
+    cnt[bd.CNT_ROWS] = row
+    cnt[bd.CNT_FAILED_STEP] = failed
+    cnt[bd.CNT_STEPS] = nsteps if status == RUN_OK else failed - 1
+    cnt[bd.CNT_SOLVES] = solves
+    cnt[bd.CNT_EVENTS] = events
+    cnt[bd.CNT_CONTACT_STEPS] = csteps
+    cnt[bd.CNT_NEWTON] = newton
+    cnt[bd.CNT_MAX_IT] = maxit_seen
+    cnt[bd.CNT_FACTORISATIONS] = nfact
+    stats.value[bd.VAL_MAX_COMP] = max_comp
+    stats.value[bd.VAL_MAX_CONE] = max_cone
+    stats.value[bd.VAL_TIME] = (nsteps if status == RUN_OK else failed - 1) * h

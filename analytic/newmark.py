@@ -19,8 +19,9 @@ The OpenSees transient algorithm, step for step: Newmark γ = ½, β = ¼
 * a step that does not converge is redone from its start in 10 sub-steps (the OpenSees
   engine's ``fallback = "substep"``); counted in ``failures`` / ``rescued_by_substeps``.
 
-The whole step loop is one numba kernel compiled without numba's runtime (:mod:`._jit`, in
-arrays from :func:`newmark_workspace`); the contact laws are skipped while every corner's
+The whole step loop is one numba kernel compiled without numba's runtime (:mod:`._jit`) that
+takes the named bundles of :mod:`.bundles` (workspace from :func:`newmark_workspace`, scalars
+in :data:`NewmarkOptions`); the contact laws are skipped while every corner's
 gap is open (g > 0, where every law gives zero force) and the tangent factorisation is reused
 while it is bitwise the elastic one (identical matrix → identical factors, so results do not
 change). Output every :func:`deckpound.engines.output_stride` steps.
@@ -28,37 +29,106 @@ change). Output every :func:`deckpound.engines.output_stride` steps.
 
 from __future__ import annotations
 
-import numpy as np
+from collections import namedtuple
 
+import numpy as np
+from deckpound.analytic import bundles as bd
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._jit import kernel
+from deckpound.analytic.bundles import (
+    RUN_INTERRUPTED,
+    RUN_NONFINITE,
+    RUN_NOT_CONVERGED,
+    RUN_OK,
+    RUN_SINGULAR,
+)
 from deckpound.analytic.compliance import ENERGY_COLUMNS
 from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.support_motion import record_at
 from deckpound.analytic.system import C_BENT as _C_BENT
-from deckpound.analytic.system import spring_assemble, spring_commit, spring_deformations, \
-    spring_revert, spring_stored_energy, spring_tangent, spring_update_materials, store_standard
+from deckpound.analytic.system import (
+    spring_assemble,
+    spring_commit,
+    spring_deformations,
+    spring_revert,
+    spring_stored_energy,
+    spring_tangent,
+    spring_update_materials,
+    store_standard,
+)
 
-__all__ = ["newmark_run", "newmark_workspace", "ENERGY_COLUMNS", "N_ENERGY", "GAMMA", "BETA",
-           "F_CONTACT_SKIP", "F_FACTOR_REUSE", "F_ENERGY", "N_FLAGS"]
+__all__ = ["BETA", "ENERGY_COLUMNS", "GAMMA", "N_ENERGY", "NewmarkOptions", "NewmarkWork",
+           "newmark_run", "newmark_workspace"]
 
 N_ENERGY = len(ENERGY_COLUMNS)
 GAMMA, BETA = 0.5, 0.25
-# work-saving skips of the kernel (flags array; 1 = skip active, the default), see
-# deckpound.analytic.compliance.SKIPS
-F_CONTACT_SKIP, F_FACTOR_REUSE, F_ENERGY = 0, 1, 2
-N_FLAGS = 3
+
+#: The scalars of :func:`newmark_run`: ``nsteps`` steps of ``dt`` [s]; Newton ``tol`` [m]
+#: (NormDispIncr) and ``maxit``; output every ``stride`` steps; ``substeps`` of the fallback
+#: for a failed step (≤ 1: none); the work-saving skips (bool, True = on, the default; results
+#: are identical either way, see ``compliance.SKIPS``): ``skip_contact`` (contact laws and
+#: contact tangent skipped while every gap is open), ``reuse_factors`` (the tangent
+#: factorisation reused while the matrix is bitwise the last one); ``want_energy`` (energy work
+#: terms accumulated; False when no energy column is requested).
+NewmarkOptions = namedtuple("NewmarkOptions", ["nsteps", "dt", "tol", "maxit", "stride",
+                                               "substeps", "skip_contact", "reuse_factors",
+                                               "want_energy"])
+# workspace rows by shape: (7,) DOF vectors, (7, 7) matrices, (7,) pivots, (ns,) per spring,
+# (4,) per corner, (n_channels,) supports
+_V7 = ("u", "v", "a", "un", "vn", "an", "us", "vs", "as_", "du", "R", "f")
+_M77 = ("K", "Keff", "LU", "H", "Kel", "LUel")
+_PIV = ("piv", "pivel")
+_NS = ("fs", "kt", "kt_fact", "d_prev", "dd_prev", "fs_prev", "d_new", "dd_new")
+_V4 = ("lam_prev", "lt_prev", "g_prev")
+_CH = ("ug", "vg", "ugo", "ug0", "vg0", "ug1", "vg1")
+#: DOF vectors (7,): u, v, a trial state, un, vn, an start of the (sub)step, us, vs, as_ start
+#: of the step, du Newton increment, R residual, f internal force.
+NewmarkDofs = namedtuple("NewmarkDofs", _V7)
+#: (7, 7) matrices: K, Keff, LU (tangent, effective tangent, its factors), H gap Hessian, Kel,
+#: LUel (elastic effective tangent and factors); pivots piv, pivel (7,) int64.
+NewmarkMatrices = namedtuple("NewmarkMatrices", _M77 + _PIV)
+#: Per spring (ns,): fs, kt forces and tangents, kt_fact tangents of the factors held in LU,
+#: d/dd/fs_prev last committed, d/dd_new trial deformations and rates.
+NewmarkSprings = namedtuple("NewmarkSprings", _NS)
+#: Supports (n_channels,): ug, vg trial, ugo last (sub)step, ug0, vg0 start and ug1, vg1 end of
+#: the step.
+NewmarkSupports = namedtuple("NewmarkSupports", _CH)
+#: The workspace of :func:`newmark_run` (:func:`newmark_workspace`), one named field per array,
+#: grouped by shape (a group is loaded as one value in the compiled code: small groups keep
+#: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states, cstate (4, N_CS)
+#: corner states; cw the ContactWork; dof, mat, spring, support the groups above;
+#: lam/lt/g_prev last committed contact forces and gaps (4,); W (5,) running work [input,
+#: springs, viscous, contact, friction] [kJ]; energy (N_ENERGY,) the output energies.
+NewmarkWork = namedtuple("NewmarkWork", ("u0", "v0", "hstate", "cstate", "cw", "dof", "mat",
+                                         "spring", "support") + _V4 + ("W", "energy"))
+
+
+def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
+    """The workspace of :func:`newmark_run` (zeroed; ns springs, nch support channels) around
+    the initial state u0, v0 (7,) and the virgin material and corner states. Allocated here
+    because the kernel runs without numba's runtime."""
+    return NewmarkWork(u0=u0, v0=v0, hstate=hstate, cstate=cstate, cw=bd.new_contact_work(),
+                       dof=NewmarkDofs(**bd.row_views(_V7, 7)),
+                       mat=NewmarkMatrices(**bd.row_views(_M77, 7, 7),
+                                           **bd.row_views(_PIV, 7, dtype=np.int64)),
+                       spring=NewmarkSprings(**bd.row_views(_NS, ns)),
+                       support=NewmarkSupports(**bd.row_views(_CH, nch)),
+                       **bd.row_views(_V4, 4), W=np.zeros(5), energy=np.zeros(N_ENERGY))
 
 
 @kernel
-def _store(out, row, t, u, v, g, lam, lt, fs, nbs, energy, buf, colsel):
-    """Output row ``row``: the full row into ``buf``, then the selected columns into ``out``."""
-    store_standard(buf, t, u, v, g, lam, lt, fs, nbs)
+def _store(output, row, t, u, v, cw, fs, nbs, energy):
+    """Output row ``row``: the full row into ``output.row``, then the selected columns into
+    ``output.table``."""
+    buf = output.row
+    store_standard(buf, t, u, v, cw.g, cw.lam, cw.lt, fs, nbs)
     base = _C_BENT + nbs
     for k in range(energy.shape[0]):
         buf[base + k] = energy[k]
-    for q in range(colsel.shape[0]):
-        out[row, q] = buf[colsel[q]]
+    sel = output.select
+    table = output.table
+    for q in range(sel.shape[0]):
+        table[row, q] = buf[sel[q]]
 
 
 @kernel
@@ -72,7 +142,7 @@ def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
     ec = cl.contact_stored_energy(cp, cs)
     efs = 0.0                                        # stick-spring part of ec
     for c in range(4):
-        if cp[c, cl.P_FMODE] == 2 and cs[c, cl.S_CFT] != 0.0:
+        if cp[c, cl.P_FMODE] == cl.FRICTION_STICK and cs[c, cl.S_CFT] != 0.0:
             efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
     energy[0] = W[0]
     energy[1] = ke
@@ -85,89 +155,108 @@ def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
     energy[8] = W[0] - (ke + W[1] + W[2] + W[3] + W[4])
 
 
-def newmark_workspace(ns: int, nch: int, nbs: int) -> tuple:
-    """The arrays :func:`newmark_run` works in (zeroed): ns springs, nch support channels, nbs
-    bent springs. Allocated here because the kernel runs without numba's runtime."""
-    return (np.zeros(_C_BENT + nbs + N_ENERGY), np.zeros((13, 7)), np.zeros((6, 7, 7)),
-            np.zeros((2, 7), dtype=np.int64), np.zeros((8, ns)), np.zeros((7, 4)),
-            np.zeros((3, 4, 7)), np.zeros(4, dtype=np.bool_), np.zeros((7, nch)), np.zeros(5),
-            np.zeros(N_ENERGY))
-
-
 @kernel(inline="always")
-def _form_unbalance(sa, hstate, cp, cs, geom, nonlinear, skip_contact, u, v, a, un, ug, vg,
-                    d, dd, f, fs, kt, g, gd, WN, WT, fc, lam, lt, der, evaluated, R):
-    """OpenSees ``formUnbalance`` at the trial (u, u̇, ü) and supports (u_g, u̇_g).
+def _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact):
+    """OpenSees ``formUnbalance`` at the trial (u, u̇, ü) of ``dof`` and the supports (u_g,
+    u̇_g) of ``sup``.
 
-    Springs: trial material state, F (into f), restoring forces fs and tangents kt. Contacts:
-    the gap check, then the laws of the closed corners (every corner when ``skip_contact`` is
-    off, linear kinematics). Residual R = F_c − F − M ü. un: displacement at the step start.
-    Returns (number of springs off their elastic tangent, any corner evaluated).
+    Springs: trial material state, F (into dof.f), restoring forces spr.fs and tangents spr.kt.
+    Contacts: the gap check, then the laws of the closed corners (every corner when
+    ``skip_contact`` is off, linear kinematics). Residual R = F_c − F − M ü. dof.un:
+    displacement at the step start. Returns (number of springs off their elastic tangent, any
+    corner evaluated).
     """
-    spring_deformations(sa, u, v, ug, vg, d, dd)
+    u, v = dof.u, dof.v
+    d, dd = spr.d_new, spr.dd_new
+    spring_deformations(sa, u, v, sup.ug, sup.vg, d, dd)
     spring_update_materials(sa.hparams, hstate, sa.kind, d)
-    nonel = spring_assemble(sa, hstate, d, dd, v, f, fs, kt)
-    ncl = cl.eval_contacts(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                           evaluated)
-    if not skip_contact and not nonlinear:
+    nonel = spring_assemble(sa, hstate, d, dd, v, dof.f, spr.fs, spr.kt)
+    ncl = cl.eval_contacts(contact, cs, cw, u, v, dof.un)
+    evaluated = cw.evaluated
+    if not skip_contact and not contact.nonlinear:
         for c in range(4):
             evaluated[c] = True
         ncl = -1
     if ncl < 0:
-        cl.eval_closed(cp, cs, u, v, un, geom, nonlinear, g, gd, WN, WT, fc, lam, lt, der,
-                       evaluated)
+        cl.eval_closed(contact, cs, cw, u, v, dof.un)
+    R, f, a = dof.R, dof.f, dof.a
     for j in range(7):
-        R[j] = fc[j] - f[j] - sa.mass[j] * a[j]
+        R[j] = cw.fc[j] - f[j] - sa.mass[j] * a[j]
     return nonel, evaluated[0] or evaluated[1] or evaluated[2] or evaluated[3]
 
 
 @kernel
-def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, dt, tol, maxit,
-                stride, nbs, out, info, u0, v0, substeps, flags, colsel, work):
-    """Run the OpenSees-clone Newmark–Newton loop over ``nsteps`` steps of size dt.
+def _set_stats(stats, status, rows, failed, steps, total_it, events, reused, maxit_seen,
+               rescued, dt):
+    """Write the loop's statistics (time reached = steps · dt [s])."""
+    stats.value[bd.VAL_TIME] = steps * dt
+    cnt = stats.count
+    cnt[bd.CNT_STATUS] = status
+    cnt[bd.CNT_ROWS] = rows
+    cnt[bd.CNT_FAILED_STEP] = failed
+    cnt[bd.CNT_STEPS] = steps
+    cnt[bd.CNT_NEWTON] = total_it
+    cnt[bd.CNT_EVENTS] = events
+    cnt[bd.CNT_REUSED] = reused
+    cnt[bd.CNT_MAX_IT] = maxit_seen
+    cnt[bd.CNT_RESCUED] = rescued
 
-    Support motion: the record's own samples (tb, DG, VGR from
-    :func:`deckpound.analytic.support_motion.support_record`), interpolated at t_n = n·dt in
-    the loop exactly as ``np.interp`` (memory independent of the number of steps).
 
-    ``flags`` (int64, :data:`N_FLAGS`): the work-saving skips, 1 = on (default), 0 = off for
-    measurement (results identical either way): [F_CONTACT_SKIP] contact laws and contact
-    tangent skipped while every gap is open; [F_FACTOR_REUSE] the tangent factorisation
-    reused while the matrix is bitwise the last one (elastic Takeda springs, no contact);
-    [F_ENERGY] energy work terms accumulated (0: energies not requested, not computed).
-    ``colsel`` (int64): indices of the stored columns in the full column order of
-    :func:`output_columns`; ``out`` has one column per entry.
+@kernel(nogil=True)
+def newmark_run(system, contact, record, opt, output, work, stats):
+    """Run the OpenSees-clone Newmark–Newton loop over ``opt.nsteps`` steps of size opt.dt.
 
-    u0, v0: initial displacement and velocity (7,); the initial acceleration solves
+    Bundles of :mod:`deckpound.analytic.bundles`: ``system`` (SystemArrays), ``contact``
+    (Contact), ``record`` (Record), ``opt`` (:data:`NewmarkOptions`), ``output`` (Output: the
+    selected columns of the full row of :func:`deckpound.analytic.compliance.output_columns`),
+    ``work`` (:data:`NewmarkWork`), ``stats`` (Stats).
+
+    Support motion: the record's own samples, interpolated at t_n = n·dt in the loop exactly as
+    ``np.interp`` (memory independent of the number of steps).
+
+    work.u0, work.v0: initial displacement and velocity (7,); the initial acceleration solves
     M ü₀ = F_c − F (zero when starting at rest with the supports at rest, as OpenSees).
-    A step that fails is redone from its start in ``substeps`` sub-steps (supports linearly
-    interpolated), as the OpenSees engine's ``fallback = "substep"``; ``substeps`` ≤ 1 disables
-    that.
+    A step that fails is redone from its start in ``opt.substeps`` sub-steps (supports
+    linearly interpolated), as the OpenSees engine's ``fallback = "substep"``.
 
-    Fills ``out`` (one row per output) and ``info`` = [status (0 ok, 1 no convergence,
-    2 singular tangent, 3 non-finite), rows written, failed step, iterations, contact events,
-    factorisations reused (same matrix), max iterations of a step, steps rescued by
-    sub-stepping].
+    Fills ``output.table`` (one row per output) and ``stats.count``: status (RUN_OK,
+    RUN_NOT_CONVERGED, RUN_SINGULAR, RUN_NONFINITE, RUN_INTERRUPTED), rows written, failed
+    step, steps completed, Newton iterations, contact events, factorisations reused (same
+    matrix), max iterations of a step, steps rescued by sub-stepping. ``stats.halt[0]`` ≠ 0
+    stops the loop at the next Newton iteration (status RUN_INTERRUPTED).
     """
+    sa = system
+    Cmat = sa.C
+    nbs = sa.nbs
+    cp = contact.params
+    nonlinear = contact.nonlinear
+    tb, DG, VGR = record.t, record.disp, record.vel
+    nsteps, dt, tol, maxit, stride = opt.nsteps, opt.dt, opt.tol, opt.maxit, opt.stride
+    substeps = opt.substeps
     ns = sa.k0.shape[0]
     nch = DG.shape[1]
-    skip_contact = flags[F_CONTACT_SKIP] != 0
-    reuse_factors = flags[F_FACTOR_REUSE] != 0
-    want_energy = flags[F_ENERGY] != 0
-    # workspace (allocated by newmark_workspace: this kernel runs without numba's runtime)
-    buf, w7, w77, wpiv, wns, w4, w47, evaluated, wch, W, energy = work
+    skip_contact = opt.skip_contact
+    reuse_factors = opt.reuse_factors
+    want_energy = opt.want_energy
+    halt = stats.halt
+    wk = work
+    hstate, cs, cw = wk.hstate, wk.cstate, wk.cw
+    dof, mat, spr, sup = wk.dof, wk.mat, wk.spring, wk.support
     mass = sa.mass
-    u, v, a, un, vn, an, us, vs, as_, du, R, f, fc = (w7[0], w7[1], w7[2], w7[3], w7[4], w7[5],
-                                                      w7[6], w7[7], w7[8], w7[9], w7[10],
-                                                      w7[11], w7[12])
-    K, Keff, LU, H, Kel, LUel = w77[0], w77[1], w77[2], w77[3], w77[4], w77[5]
-    piv, pivel = wpiv[0], wpiv[1]
-    fs, kt, kt_fact, d_prev, dd_prev, fs_prev, d_new, dd_new = (wns[0], wns[1], wns[2], wns[3],
-                                                                wns[4], wns[5], wns[6], wns[7])
-    g, gd, lam, lt, lam_prev, lt_prev, g_prev = w4[0], w4[1], w4[2], w4[3], w4[4], w4[5], w4[6]
-    WN, WT, der = w47[0], w47[1], w47[2]
+    u, v, a, un, vn, an, us, vs, as_, du, R, f = (dof.u, dof.v, dof.a, dof.un, dof.vn, dof.an,
+                                                   dof.us, dof.vs, dof.as_, dof.du, dof.R, dof.f)
+    K, Keff, LU, H, Kel, LUel = mat.K, mat.Keff, mat.LU, mat.H, mat.Kel, mat.LUel
+    piv, pivel = mat.piv, mat.pivel
+    fs, kt, kt_fact, d_prev, dd_prev, fs_prev, d_new, dd_new = (
+        spr.fs, spr.kt, spr.kt_fact, spr.d_prev, spr.dd_prev, spr.fs_prev, spr.d_new,
+        spr.dd_new)
+    g, gd, lam, lt, evaluated = cw.g, cw.gd, cw.lam, cw.lt, cw.evaluated
+    lam_prev, lt_prev, g_prev = wk.lam_prev, wk.lt_prev, wk.g_prev
+    WT = cw.WT
     # supports: at the trial, at the last (sub)step, at t_n and t_{n+1} (start and end of step)
-    ug, vg, ugo, ug0, vg0, ug1, vg1 = wch[0], wch[1], wch[2], wch[3], wch[4], wch[5], wch[6]
+    ug, vg, ugo, ug0, vg0, ug1, vg1 = (sup.ug, sup.vg, sup.ugo, sup.ug0, sup.vg0, sup.ug1,
+                                       sup.vg1)
+    W, energy = wk.W, wk.energy
     # kt_fact: spring tangents of the factors held in LU; Kel, LUel, pivel: the elastic
     # effective tangent of the main step and its factors
     lu_springs_only = False         # LU holds a factorisation without contact terms
@@ -183,7 +272,7 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
         for j in range(7):
             LUel[i, j] = Kel[i, j]
     if not lu_factor(LUel, pivel):
-        info[0] = 2
+        _set_stats(stats, RUN_SINGULAR, 0, 0, 0, 0, 0, 0, 0, 0, dt)
         return
     jrec = record_at(tb, DG, VGR, 0.0, 0, ug1, vg1)
     for k in range(nch):
@@ -191,13 +280,12 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
         vg[k] = vg1[k]
     # initial state (OpenSees: at rest, ü₀ = 0 — the same as equilibrium then)
     for j in range(7):
-        u[j] = u0[j]
-        v[j] = v0[j]
-        un[j] = u0[j]
-    _form_unbalance(sa, hstate, cp, cs, geom, nonlinear, skip_contact, u, v, a, un, ug, vg,
-                    d_new, dd_new, f, fs, kt, g, gd, WN, WT, fc, lam, lt, der, evaluated, R)
+        u[j] = wk.u0[j]
+        v[j] = wk.v0[j]
+        un[j] = wk.u0[j]
+    _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact)
     for j in range(7):
-        a[j] = (fc[j] - f[j]) / mass[j]
+        a[j] = (cw.fc[j] - f[j]) / mass[j]
     spring_commit(sa, hstate)
     cl.contact_commit(cs, g, gd, evaluated)
     for c in range(4):
@@ -218,15 +306,19 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
     W[1] = es0
     W[3] = ec0
     _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
-    _store(out, 0, 0.0, u, v, g, lam, lt, fs, nbs, energy, buf, colsel)
+    _store(output, 0, 0.0, u, v, cw, fs, nbs, energy)
     row = 1
     total_it = 0
     events = 0
     reused = 0
     maxit_seen = 0
     rescued = 0
-    status = 0
+    status = RUN_OK
     for n in range(nsteps):
+        if halt[0] != 0:
+            _set_stats(stats, RUN_INTERRUPTED, row, n + 1, n, total_it, events, reused,
+                       maxit_seen, rescued, dt)
+            return
         for j in range(7):
             us[j] = u[j]
             vs[j] = v[j]
@@ -263,9 +355,8 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                 for j in range(7):
                     v[j] = a1p * vn[j] + a2p * an[j]
                     a[j] = a4p * an[j] + a3p * vn[j]
-                nonel, anyev = _form_unbalance(sa, hstate, cp, cs, geom, nonlinear, skip_contact,
-                                               u, v, a, un, ug, vg, d_new, dd_new, f, fs, kt, g,
-                                               gd, WN, WT, fc, lam, lt, der, evaluated, R)
+                nonel, anyev = _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup,
+                                               skip_contact)
                 it = 0
                 converged = False
                 while True:
@@ -292,8 +383,7 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                                 Keff[i, j] = K[i, j] + c2 * Cmat[i, j]
                             Keff[i, i] += c3 * mass[i]
                         if anyev:
-                            cl.contact_tangent(cp, u, geom, nonlinear, lam, der, evaluated, WN,
-                                               WT, c2, Keff, H)
+                            cl.contact_tangent(contact, cw, u, c2, Keff, H)
                         for i in range(7):
                             for j in range(7):
                                 LU[i, j] = Keff[i, j]
@@ -303,7 +393,7 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                             kt_fact[i] = kt[i]
                         if not lu_factor(LU, piv):
                             lu_springs_only = False
-                            status = 2
+                            status = RUN_SINGULAR
                             break
                         lu_solve(LU, piv, R, du)
                     # --- Newmark::update
@@ -314,34 +404,34 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                         a[j] += c3 * du[j]
                         nrm += du[j] * du[j]
                     nrm = np.sqrt(nrm)
-                    nonel, anyev = _form_unbalance(sa, hstate, cp, cs, geom, nonlinear,
-                                                   skip_contact, u, v, a, un, ug, vg, d_new,
-                                                   dd_new, f, fs, kt, g, gd, WN, WT, fc, lam, lt,
-                                                   der, evaluated, R)
+                    nonel, anyev = _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup,
+                                               skip_contact)
                     it += 1
                     if not np.isfinite(nrm):
-                        status = 3
+                        status = RUN_NONFINITE
                         break
                     if nrm <= tol:
                         converged = True
                         break
                     if it >= maxit:
-                        status = 1
+                        status = RUN_NOT_CONVERGED
+                        break
+                    if halt[0] != 0:
+                        status = RUN_INTERRUPTED
                         break
                 total_it += it
-                if it > maxit_seen:
-                    maxit_seen = it
+                maxit_seen = max(maxit_seen, it)
                 if not converged:
                     sub_ok = False
                     break
-                status = 0
+                status = RUN_OK
                 # --- commit
                 spring_commit(sa, hstate)
                 for c in range(4):
                     if cs[c, cl.S_CCLOSED] == 0.0 and cs[c, cl.S_TCLOSED] != 0.0 and evaluated[c]:
                         events += 1
                 if nonlinear and not anyev:
-                    cl.gaps_and_rates(u, v, geom, nonlinear, g, gd, WN, WT)
+                    cl.gaps_and_rates(contact, u, v, cw)
                 cl.contact_commit(cs, g, gd, evaluated)
                 # --- energy (trapezoidal work over the (sub)step)
                 if not want_energy:
@@ -377,7 +467,8 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                 if nsub > 1:
                     rescued += 1
                 break
-            if nsub > 1 or substeps <= 1 or status == 3:
+            if (nsub > 1 or substeps <= 1 or status == RUN_NONFINITE
+                    or status == RUN_INTERRUPTED):
                 break
             # --- revert to the start of the step and sub-step it
             spring_revert(sa, hstate)
@@ -390,26 +481,15 @@ def newmark_run(sa, Cmat, hstate, cp, cs, geom, nonlinear, tb, DG, VGR, nsteps, 
                 ug[k] = ug0[k]
                 vg[k] = vg0[k]
             nsub = substeps
-        if status != 0:
-            info[0] = status
-            info[1] = row
-            info[2] = n + 1
-            info[3] = total_it
-            info[4] = events
-            info[6] = maxit_seen
-            info[7] = rescued
+        if status != RUN_OK:
+            _set_stats(stats, status, row, n + 1, n, total_it, events, reused, maxit_seen,
+                       rescued, dt)
             return
         # --- output
         if (n + 1) % stride == 0:
             if want_energy:
                 _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
-            _store(out, row, (n + 1) * dt, u, v, g, lam, lt, fs, nbs, energy, buf,
-                       colsel)
+            _store(output, row, (n + 1) * dt, u, v, cw, fs, nbs, energy)
             row += 1
-    info[0] = 0
-    info[1] = row
-    info[3] = total_it
-    info[4] = events
-    info[5] = reused
-    info[6] = maxit_seen
-    info[7] = rescued
+    _set_stats(stats, RUN_OK, row, 0, nsteps, total_it, events, reused, maxit_seen, rescued,
+               dt)

@@ -56,17 +56,17 @@ velocities at the last accepted step, DOF order of :mod:`deckpound.models.mechan
 
 from __future__ import annotations
 
-import dataclasses
 import time as _time
+from typing import ClassVar
 
 import numpy as np
-
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import NonsmoothSettings, Scene
 
-__all__ = ["NonsmoothEngine", "run_nonsmooth", "output_columns", "ENERGY_COLUMNS"]
+from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
+
+__all__ = ["ENERGY_COLUMNS", "NonsmoothEngine", "output_columns", "run_nonsmooth"]
 
 #: Energy columns of the nonsmooth result, in the order the kernel writes them [kJ].
 ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
@@ -109,11 +109,21 @@ class NonsmoothEngine(Engine):
     settings_field = "nonsmooth"
     step_field = "h"
     compliant_contact = False
-    style = dict(color="#c0392b", linestyle=":", linewidth=1.6, label="nonsmooth")
+    style: ClassVar[dict] = {"color": "#c0392b", "linestyle": ":", "linewidth": 1.6,
+                             "label": "nonsmooth"}
 
     def reads(self, scene: Scene, settings) -> set[str]:
+        """Restitution, geometry and the friction coefficient; the contact law and its
+        parameters only where the law's row of :mod:`deckpound.models.contact_laws_table` says
+        the engine expresses it (``ContactLaw.nonsmooth``; no compliant law: rigid contact
+        replaces them, so a non-default law is warned about)."""
+        from deckpound.models.contact_laws_table import contact_law
+
         ct = scene.contact
         read = {"contact.restitution", "contact.geometry"}
+        law = contact_law(ct.law)
+        if law.nonsmooth:
+            read |= {"contact.law", *law.params}
         if ct.friction_mode != "none":
             read.add("contact.friction")
         if ct.friction > 0.0:
@@ -121,97 +131,109 @@ class NonsmoothEngine(Engine):
         return read
 
     def notes(self, scene: Scene, settings) -> list[str]:
+        from deckpound.models.contact_laws_table import RIGID_CONTACT, friction_model
+
         ct = scene.contact
-        if ct.has_friction:
-            return [f"contact.friction_mode = {ct.friction_mode!r} means set-valued Coulomb "
-                    f"friction (mu = {ct.friction:g}): contact is rigid, so the slip/stick "
-                    "distinction of the compliance laws does not apply"]
+        how = friction_model(ct.friction_mode).nonsmooth
+        if ct.has_friction and how:
+            return [(f"contact.friction_mode = {ct.friction_mode!r} means {how} "
+                     f"(mu = {ct.friction:g}): {RIGID_CONTACT}")]
         return []
 
     def _run(self, plan: Plan, scene: Scene, settings, motion, *,
-             initial_state=None) -> RunOutput:
-        """Extra keyword (not a scene option): ``initial_state = (u0, v0)`` starts from the
-        given DOF displacements and velocities (default: the scene's ``initial`` table)."""
-        if initial_state is None:
-            initial_state = plan.initial_state(scene.initial)
+             initial_state=None, on_interrupt: str = "raise") -> RunOutput:
+        """Extra keywords (not scene options): ``initial_state = (u0, v0)`` starts from the
+        given DOF displacements and velocities (default: the scene's ``initial`` table);
+        ``on_interrupt``: Ctrl-C during the step loop stops it within one Newton iteration
+        (:mod:`deckpound.analytic.bundles`) and then re-raises KeyboardInterrupt (``"raise"``,
+        default) or returns ``Status.INTERRUPTED`` with the rows so far (``"return"``)."""
+        from deckpound.analytic import bundles as bd
         from deckpound.analytic._jit import ensure_compiled
+        from deckpound.analytic.contact_laws import pack_contact
         from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM
         from deckpound.analytic.kinematics import pack_corners
-        from deckpound.analytic.moreau_jean import (ST_CONTACT, ST_NEWTON, ST_NONFINITE, ST_OK,
-                                                    ST_SINGULAR, moreau_jean_run,
-                                                    moreau_jean_workspace)
+        from deckpound.analytic.moreau_jean import (
+            MoreauJeanOptions,
+            moreau_jean_run,
+            moreau_jean_workspace,
+        )
         from deckpound.analytic.support_motion import support_record
         from deckpound.analytic.system import initial_dofs, pack_system
         from deckpound.models.damping import damping_model
 
-        status_of = {ST_NEWTON: Status.NOT_CONVERGED, ST_CONTACT: Status.CONTACT_UNSOLVED,
-                     ST_NONFINITE: Status.NONFINITE, ST_SINGULAR: Status.SINGULAR}
-        text_of = {ST_NEWTON: "Newton iteration of the Takeda springs did not converge",
-                   ST_CONTACT: "contact problem not solved (no verified solution)",
-                   ST_NONFINITE: "non-finite state", ST_SINGULAR: "singular iteration matrix"}
+        text_of = {bd.RUN_NOT_CONVERGED: "Newton iteration of the Takeda springs did not converge",
+                   bd.RUN_CONTACT_UNSOLVED: "contact problem not solved (no verified solution)",
+                   bd.RUN_NONFINITE: "non-finite state", bd.RUN_SINGULAR: "singular iteration matrix",
+                   bd.RUN_INTERRUPTED: "interrupted"}
+        if on_interrupt not in ("raise", "return"):
+            raise ValueError(f"on_interrupt must be 'raise' or 'return', got {on_interrupt!r}")
+        if initial_state is None:
+            initial_state = plan.initial_state(scene.initial)
         ns_set = settings
         h, theta = ns_set.h, ns_set.theta
         duration = analysis_duration(scene, motion)
         ps = pack_system(plan, damping_model(scene, plan))
-        tb, DG, VGR = support_record(motion, ps.channels)
-        corners = pack_corners(plan)
+        record = bd.Record(*support_record(motion, ps.channels))
         ct = scene.contact
         mu = float(ct.friction) if ct.has_friction else 0.0
-        mode = MODE_ENUM if ns_set.solver == "enumeration" else MODE_AUTO
         stride = output_stride(h, scene.run.output_dt)
-        nsteps = int(round(duration / h))
-        nbs = ps.n_bent_springs
+        nsteps = round(duration / h)
         cols = engine_columns(plan) + list(IMPULSE_COLUMNS) + list(ENERGY_COLUMNS)
-        out = np.zeros((nsteps // stride + 1, len(cols)))
-        info = np.zeros(9, dtype=np.int64)
-        rinfo = np.zeros(2)
-        uv_end = np.zeros((2, 7))
-        hstate = ps.new_state()
+        bd.check_output_size(nsteps // stride + 1, len(cols))
+        output = bd.Output(np.zeros((nsteps // stride + 1, len(cols))),
+                           np.arange(len(cols), dtype=np.int64), np.zeros(len(cols)))
         u0, v0 = initial_dofs(initial_state)
-        ftol = _force_tolerance(ps, ns_set.tolerance)
-        work = moreau_jean_workspace(ps.n_springs, DG.shape[1])
-        args = (ps.arrays, ps.C, hstate, corners, ct.geometry == "nonlinear", tb, DG, VGR,
-                nsteps, h, theta, float(ct.restitution),
-                separating_restitution(ct.restitution, theta), mu, mode,
-                float(ns_set.tolerance), ftol, int(ns_set.max_iterations), stride, nbs, out,
-                info, rinfo, u0, v0, uv_end, work)
+        work = moreau_jean_workspace(u0, v0, ps.new_state(), ps.n_springs, len(ps.channels))
+        opts = MoreauJeanOptions(
+            nsteps=nsteps, h=float(h), theta=float(theta), ecoef=float(ct.restitution),
+            esep=separating_restitution(ct.restitution, theta), mu=mu,
+            mode=MODE_ENUM if ns_set.solver == "enumeration" else MODE_AUTO,
+            rtol=float(ns_set.tolerance), ftol=_force_tolerance(ps, ns_set.tolerance),
+            maxit=int(ns_set.max_iterations), stride=int(stride))
+        contact = bd.Contact(pack_corners(plan), pack_contact(scene),
+                             ct.geometry == "nonlinear")
+        stats = bd.new_stats()
+        args = (ps.arrays, contact, record, opts, output, work, stats)
         compile_time = ensure_compiled(moreau_jean_run, *args)
         t1 = _time.perf_counter()
-        moreau_jean_run(*args)
+        interrupted = bd.run_loop(moreau_jean_run, args, stats)
         loop = _time.perf_counter() - t1
-        status_code, rows = int(info[0]), int(info[1])
-        ok = status_code == ST_OK
-        steps = nsteps if ok else int(info[2]) - 1
-        columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
+        if interrupted and on_interrupt == "raise":
+            raise KeyboardInterrupt
+        st = bd.stats_dict(stats)
+        status = bd.status_of(st["status"])
+        ok = status == Status.SUCCESS
+        rows = st["rows"]
+        columns = {k: output.table[:rows, i].copy() for i, k in enumerate(cols)}
         gaps = np.column_stack([columns[f"gap_c{c}"] for c in range(1, 5)])
         ein = float(np.max(np.abs(columns["energy_input"]))) if rows else 0.0
         eerr = float(np.max(np.abs(columns["energy_error"]))) if rows else 0.0
         extra = {
             "restitution": float(ct.restitution), "friction": mu,
-            "contact_steps": int(info[5]),
-            "max_step_iterations": int(info[7]),
-            "factorisations": int(info[8]),
-            "max_complementarity": float(rinfo[0]),
-            "max_cone_residual": float(rinfo[1]),
+            "contact_steps": st["contact_steps"],
+            "max_step_iterations": st["max_step_iterations"],
+            "factorisations": st["factorisations"],
+            "max_complementarity": st["max_complementarity"],
+            "max_cone_residual": st["max_cone_residual"],
             "max_penetration": float(max(0.0, -np.min(gaps))) if rows else 0.0,
             "energy_error": eerr,
             "energy_closure": eerr / ein if ein > 0 else 0.0,
-            "final_u": uv_end[0].tolist(),
-            "final_v": uv_end[1].tolist(),
+            "final_u": work.final[0].tolist(),
+            "final_v": work.final[1].tolist(),
             "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
             "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
                            "impact + friction + numerical) [kJ]",
         }
         return RunOutput(
-            columns=columns, status=Status.SUCCESS if ok else status_of.get(status_code,
-                                                                            Status.NONFINITE),
-            message=(f"{nsteps} steps, {int(info[5])} with contact, {int(info[3])} contact "
-                     "solves") if ok else text_of.get(status_code, "failure"),
-            failed_step=None if ok else int(info[2]),
-            failed_time=None if ok else int(info[2]) * h,
-            steps=steps, newton_iterations=int(info[6]), contact_solves=int(info[3]),
-            failed_steps=0 if ok else 1, compile_time=compile_time, loop_time=loop,
-            extra=extra)
+            columns=columns, status=status,
+            message=(f"{nsteps} steps, {st['contact_steps']} with contact, "
+                     f"{st['contact_solves']} contact solves") if ok
+            else text_of.get(st["status"], status.text),
+            failed_step=None if ok else st["failed_step"],
+            failed_time=None if ok else st["failed_step"] * h,
+            steps=st["steps"], newton_iterations=st["newton_iterations"],
+            contact_solves=st["contact_solves"], failed_steps=0 if ok else 1,
+            compile_time=compile_time, loop_time=loop, extra=extra)
 
 
 def run_nonsmooth(scene: Scene, motion: SupportMotion | None = None, *,

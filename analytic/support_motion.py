@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from deckpound.analytic._jit import kernel
 
-__all__ = ["support_record", "record_at", "record_at_times"]
+__all__ = ["record_at", "record_at_times", "support_record"]
 
 
 def support_record(motion, channels) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -52,10 +52,8 @@ def record_at(tb, D, V, t, j, ug, vg):
             ug[k] = D[0, k]
             vg[k] = V[0, k]
         return 0
-    if j < 0:
-        j = 0
-    if j > n - 2:
-        j = n - 2
+    j = max(j, 0)
+    j = min(j, n - 2)
     while tb[j] > t:
         j -= 1
     while tb[j + 1] <= t:

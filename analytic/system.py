@@ -45,8 +45,6 @@ from collections import namedtuple
 from dataclasses import dataclass
 
 import numpy as np
-from deckpound.analytic._jit import kernel
-
 from deckpound.analytic._hysteretic_kernel import (
     C_ROTMAX,
     C_ROTMIN,
@@ -54,11 +52,11 @@ from deckpound.analytic._hysteretic_kernel import (
     C_STRESS,
     N_PARAMS,
     N_STATE,
+    P_BETA,
     P_E1N,
     P_E1P,
     P_EUN,
     P_EUP,
-    P_BETA,
     T_STRESS,
     T_TANGENT,
     hyst_commit,
@@ -66,25 +64,14 @@ from deckpound.analytic._hysteretic_kernel import (
     hyst_revert,
     hyst_set_trial,
 )
+from deckpound.analytic._jit import kernel
 from deckpound.analytic.hysteretic import pack_hysteretic
 from deckpound.models.damping import DampingModel
 from deckpound.models.plan import DOF_COLUMNS, N_CORNERS, VELOCITY_COLUMNS, Plan
 
-__all__ = [
-    "SystemArrays",
-    "PackedSystem",
-    "pack_system",
-    "spring_deformations",
-    "spring_update_materials",
-    "spring_assemble",
-    "spring_tangent",
-    "spring_commit",
-    "spring_revert",
-    "spring_stored_energy",
-    "N_DOF",
-    "KIND_LINEAR",
-    "KIND_HYSTERETIC",
-]
+__all__ = ["KIND_HYSTERETIC", "KIND_LINEAR", "N_DOF", "PackedSystem", "SystemArrays", "pack_system",
+           "spring_assemble", "spring_commit", "spring_deformations", "spring_revert",
+           "spring_stored_energy", "spring_tangent", "spring_update_materials"]
 
 N_DOF = 7
 KIND_LINEAR = 0
@@ -97,11 +84,13 @@ KIND_HYSTERETIC = 1
 #: sval (ns,): the ≤ 1 non-zero of each row of S; k0 (ns,) initial stiffness; cdash (ns,) explicit
 #: dashpot; crate (ns,) = a1·k0 + cdash, the total rate coefficient of each spring; kind (ns,)
 #: int (0 linear, 1 Hysteretic); hparams (ns, 26) Hysteretic params (zero rows for linear
-#: springs); scal (2,) = [a0, a1].
+#: springs); scal (2,) = [a0, a1]; C (7, 7) the constant damping matrix a0 M + Bᵀ diag(crate) B
+#: [kN·s/m]; nbs (int) the number of bent springs (the first rows of B). The ``system`` bundle
+#: of the step loops (:mod:`deckpound.analytic.bundles`).
 SystemArrays = namedtuple(
     "SystemArrays",
     ["mass", "B", "S", "bidx", "bval", "bnnz", "schan", "sval", "k0", "cdash", "crate", "kind",
-     "hparams", "scal"],
+     "hparams", "scal", "C", "nbs"],
 )
 
 
@@ -171,11 +160,12 @@ def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
     cdash = damping.dashpots.astype(float)
     crate = damping.rate_coefficients(plan)
     a0, a1 = damping.a0, damping.a1
+    C = np.diag(a0 * mass) + B.T @ (crate[:, None] * B)
     arrays = SystemArrays(mass=mass, B=np.ascontiguousarray(B), S=np.ascontiguousarray(S),
                           bidx=bidx, bval=bval, bnnz=bnnz, schan=schan, sval=sval,
                           k0=k0.astype(float), cdash=cdash, crate=crate,
-                          kind=kind, hparams=hparams, scal=np.array([a0, a1]))
-    C = np.diag(a0 * mass) + B.T @ (crate[:, None] * B)
+                          kind=kind, hparams=hparams, scal=np.array([a0, a1]),
+                          C=np.ascontiguousarray(C), nbs=int(plan.n_bent_springs))
     K0 = B.T @ (k0[:, None] * B)
     return PackedSystem(arrays=arrays, C=C, K0=K0, a0=float(a0), a1=float(a1),
                         omega=(float(damping.omega[0]), float(damping.omega[1])),
@@ -282,8 +272,7 @@ def _unloading_stiffness(p, st, stress):
     k = 1.0
     if ratio > 1.0:
         k = ratio ** p[P_BETA]
-        if k < 1.0:
-            k = 1.0
+        k = max(k, 1.0)
     return e / k
 
 

@@ -15,11 +15,10 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-
 from deckpound.models.plan import column_unit, standard_columns
 from deckpound.models.scene import Scene
 
-__all__ = ["verify_clone", "column_deviations"]
+__all__ = ["column_deviations", "verify_clone"]
 
 
 def column_deviations(a, b, columns) -> dict[str, float]:

@@ -191,7 +191,9 @@ def law_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """Every law with the error-controlled ``adaptive`` integrator (events at closure, opening
     and the bilinear law's load/unload switches): differences are then the laws', not the
     discretisation's — and Newton on the bilinear law's kinks can stall at a fixed step."""
-    laws = ("linear", "kelvin-voigt", "hertz", "hertz-damp", "bilinear")
+    from deckpound.models.contact_laws_table import LAW_CODES
+
+    laws = tuple(LAW_CODES)       # every row of the contact-law table
     return [Case(f"compliance {law}", "compliance",
                  _compliance(scene, f"contact.law={law}", "compliance.integrator=adaptive"),
                  {"law": law}) for law in laws]

@@ -126,17 +126,17 @@ def refuse_scene(scene: Scene) -> None:
     The "option does nothing" warnings are derived by the engine contract from
     :meth:`deckpound.opensees_build.engine.OpenSeesEngine.reads`.
     """
+    from deckpound.models.contact_laws_table import contact_law, friction_model
+
     c = scene.contact
-    if c.law in ("hertz", "hertz-damp"):
-        raise SceneError("contact.law", f"OpenSees cannot express the {c.law!r} law of the scene "
-                         "(F = k δ^n (1 + 3(1−e²)/4 δ̇/v⁻)): its Hertzdamp material has not been "
-                         "shown to be the same law; use linear, bilinear or kelvin-voigt")
+    law = contact_law(c.law)
+    if law.opensees is None:
+        raise SceneError("contact.law", law.opensees_refusal)
     if c.has_friction:
-        if c.friction_mode == "slip":
-            raise SceneError("contact.friction_mode", "OpenSees cannot express 'slip' (regularised "
-                             "friction without sticking); zeroLengthContact2D always has a stick "
-                             "spring: use friction_mode = 'stick'")
-        if c.law != "linear":
+        model = friction_model(c.friction_mode)
+        if model.opensees is None:
+            raise SceneError("contact.friction_mode", model.opensees_refusal)
+        if c.law not in model.opensees_laws:
             raise SceneError("contact.law", f"OpenSees cannot combine the {c.law!r} law with "
                              "friction: zeroLengthContact2D is a linear penalty contact; use "
                              "law = 'linear' with friction")

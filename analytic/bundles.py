@@ -1,0 +1,193 @@
+"""The named bundles the compiled step loops take, their statistics and how a loop is run.
+
+Every step-loop kernel (:func:`~deckpound.analytic.newmark.newmark_run`,
+:func:`~deckpound.analytic.moreau_jean.moreau_jean_run`,
+:func:`~deckpound.analytic.dormand_prince.adaptive_run`) takes the same seven bundles, all
+numba-compatible namedtuples of arrays and scalars (STYLE: "hot kernels are pure functions of
+arrays"; the kernels run without numba's runtime, see :mod:`deckpound.analytic._jit`, and
+namedtuples of arrays need none)::
+
+    loop(system, contact, record, options, output, work, stats)
+
+* ``system`` — :class:`~deckpound.analytic.system.SystemArrays`: springs, mass, damping (the
+  constant damping matrix ``C`` [kN·s/m] and the number of bent springs ``nbs`` included).
+* ``contact`` — :data:`Contact`: the packed corner table (:mod:`.kinematics`), the per-corner
+  law parameters (:mod:`.contact_laws`) and the kinematics flag.
+* ``record`` — :data:`Record`: the support record at its own samples (t [s], displacement
+  [m], velocity [m/s] per channel, :mod:`.support_motion`).
+* ``options`` — the loop's own scalars (step, tolerances, stride, switches), a namedtuple
+  defined next to the loop.
+* ``output`` — :data:`Output`: the output table, the selected columns, a row buffer.
+* ``work`` — the loop's workspace, a namedtuple with one named field per array (built by one
+  function per loop; this also holds the evolving state: material and contact states).
+* ``stats`` — :data:`Stats`: integer counts and float values with named indices
+  (``CNT_*``, ``VAL_*``, decoded by :func:`stats_dict`) and the ``halt`` flag.
+
+Interrupts (:func:`run_loop`). A compiled loop holds the interpreter lock, so a Python signal
+handler (Ctrl-C → KeyboardInterrupt) cannot run until it returns. :func:`run_loop` therefore
+runs the loop in a helper thread with the lock released (the loops are compiled ``nogil``),
+waits for it in the main thread, and on KeyboardInterrupt sets ``stats.halt[0]``; every loop
+polls that flag once per Newton iteration / Runge–Kutta step attempt and ends with status
+:data:`RUN_INTERRUPTED`, its output rows written so far intact. The wait is therefore one
+iteration (microseconds to milliseconds), not the rest of the run. The engines then re-raise
+KeyboardInterrupt (default: the CLI exits 130, no partial result is cached) or, with the engine
+keyword ``on_interrupt="return"``, return ``Status.INTERRUPTED`` with the rows so far. The flag
+is a plain memory load per iteration, and running in the thread changes no arithmetic.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import namedtuple
+
+import numpy as np
+from deckpound.models.errors import SceneError
+
+from deckpound.engine_contract import Status
+
+__all__ = ["COUNT_NAMES", "MAX_OUTPUT_BYTES", "RUN_CONTACT_UNSOLVED", "RUN_INTERRUPTED",
+           "RUN_NONFINITE", "RUN_NOT_CONVERGED", "RUN_OK", "RUN_SINGULAR", "RUN_STEP_BUDGET",
+           "RUN_STEP_UNDERFLOW", "RUN_UNKNOWN_LAW", "VALUE_NAMES", "Contact", "ContactWork",
+           "Output", "Record", "Stats", "check_output_size", "new_contact_work", "new_stats",
+           "row_views", "run_loop", "stats_dict", "status_of"]
+
+# Each namedtuple class lives at module level under its own typename: a class made per call
+# would be a new numba type (a fresh compilation every run), and a typename differing from the
+# attribute name makes numba pickle the class by value (the on-disk cache never hits).
+
+#: The contact description of a loop: ``corners`` (4, N_K) corner table
+#: (:func:`deckpound.analytic.kinematics.pack_corners`), ``params`` (4, N_CP) law parameters
+#: (:func:`deckpound.analytic.contact_laws.pack_contact`), ``nonlinear`` (bool) exact
+#: kinematics.
+Contact = namedtuple("Contact", ["corners", "params", "nonlinear"])
+#: The support record: ``t`` (n,) [s], ``disp`` (n, n_channels) [m or rad], ``vel`` (n,
+#: n_channels) [m/s or rad/s] (:func:`deckpound.analytic.support_motion.support_record`).
+Record = namedtuple("Record", ["t", "disp", "vel"])
+#: The output: ``table`` (rows, n_selected) written row by row, ``select`` (n_selected,) int64
+#: indices into the loop's full row, ``row`` the full-row buffer.
+Output = namedtuple("Output", ["table", "select", "row"])
+#: Statistics: ``count`` int64 (:data:`COUNT_NAMES`, indices ``CNT_*``), ``value`` float64
+#: (:data:`VALUE_NAMES`, indices ``VAL_*``), ``halt`` int64 (1,) — set to 1 to stop the loop.
+Stats = namedtuple("Stats", ["count", "value", "halt"])
+#: Per-corner contact arrays of the compliance loops (:mod:`.contact_laws`): gaps ``g`` [m],
+#: rates ``gd`` [m/s], rows ``WN``, ``WT`` (4, 7), generalised contact force ``fc`` (7,),
+#: forces ``lam``, ``lt`` (4,) [kN], law derivatives ``der`` (4, 7) and ``evaluated`` (4,) bool.
+ContactWork = namedtuple("ContactWork", ["g", "gd", "WN", "WT", "fc", "lam", "lt", "der",
+                                         "evaluated"])
+
+#: Names of ``Stats.count`` entries, in index order.
+COUNT_NAMES = ("status", "rows", "failed_step", "steps", "newton_iterations", "contact_events",
+               "factor_reuses", "max_step_iterations", "rescued_steps", "contact_solves",
+               "contact_steps", "factorisations", "rejected_steps", "rhs_calls")
+(CNT_STATUS, CNT_ROWS, CNT_FAILED_STEP, CNT_STEPS, CNT_NEWTON, CNT_EVENTS, CNT_REUSED,
+ CNT_MAX_IT, CNT_RESCUED, CNT_SOLVES, CNT_CONTACT_STEPS, CNT_FACTORISATIONS, CNT_REJECTED,
+ CNT_RHS_CALLS) = range(len(COUNT_NAMES))
+#: Names of ``Stats.value`` entries, in index order: largest verified complementarity and cone
+#: residuals of the contact solves [m/s], time reached [s].
+VALUE_NAMES = ("max_complementarity", "max_cone_residual", "time")
+VAL_MAX_COMP, VAL_MAX_CONE, VAL_TIME = range(len(VALUE_NAMES))
+
+# how a loop ended (Stats.count[CNT_STATUS])
+RUN_OK = 0
+RUN_NOT_CONVERGED = 1      # Newton did not converge
+RUN_SINGULAR = 2           # singular tangent / iteration matrix
+RUN_NONFINITE = 3          # non-finite state
+RUN_CONTACT_UNSOLVED = 4   # no verified solution of the contact problem
+RUN_STEP_BUDGET = 5        # step budget exhausted (adaptive)
+RUN_INTERRUPTED = 6        # Stats.halt set (Ctrl-C)
+RUN_STEP_UNDERFLOW = 7     # adaptive step size below 1e-14 s
+RUN_UNKNOWN_LAW = 8        # a contact law or friction code without a kernel branch
+
+_STATUS = {RUN_OK: Status.SUCCESS, RUN_NOT_CONVERGED: Status.NOT_CONVERGED,
+           RUN_SINGULAR: Status.SINGULAR, RUN_NONFINITE: Status.NONFINITE,
+           RUN_CONTACT_UNSOLVED: Status.CONTACT_UNSOLVED, RUN_STEP_BUDGET: Status.STEP_BUDGET,
+           RUN_INTERRUPTED: Status.INTERRUPTED, RUN_STEP_UNDERFLOW: Status.NOT_CONVERGED}
+
+#: Largest output table a run may allocate [bytes] (1 GiB; the engine's result copies it once
+#: more): a run storing every step of 10⁷ steps would need ~2.6 GiB and is refused up front.
+MAX_OUTPUT_BYTES = 1 << 30
+
+
+def new_stats() -> Stats:
+    """Zeroed statistics (halt flag down)."""
+    return Stats(np.zeros(len(COUNT_NAMES), dtype=np.int64), np.zeros(len(VALUE_NAMES)),
+                 np.zeros(1, dtype=np.int64))
+
+
+def stats_dict(stats: Stats) -> dict:
+    """The statistics as ``{name: int or float}`` (the one decoder of ``Stats``)."""
+    out = {n: int(stats.count[i]) for i, n in enumerate(COUNT_NAMES)}
+    out.update({n: float(stats.value[i]) for i, n in enumerate(VALUE_NAMES)})
+    return out
+
+
+def status_of(code: int) -> Status:
+    """The engine-contract status of a loop's status code (unknown codes: NONFINITE)."""
+    if code == RUN_UNKNOWN_LAW:
+        raise NotImplementedError("a contact law or friction model of the scene has no branch "
+                                  "in deckpound.analytic.contact_laws (normal_law / "
+                                  "friction_law): add it there (see "
+                                  "deckpound.models.contact_laws_table)")
+    return _STATUS.get(code, Status.NONFINITE)
+
+
+def new_contact_work() -> ContactWork:
+    """Zeroed :data:`ContactWork` (views of two blocks)."""
+    v4 = row_views(("g", "gd", "lam", "lt"), 4)
+    w47 = row_views(("WN", "WT", "der"), 4, 7)
+    return ContactWork(fc=np.zeros(7), evaluated=np.zeros(4, dtype=np.bool_), **v4, **w47)
+
+
+def row_views(names, *shape, dtype=np.float64) -> dict:
+    """``{name: zeroed array of shape}``, all views of one contiguous block (locality)."""
+    block = np.zeros((len(names),) + shape, dtype=dtype)
+    return {n: block[i] for i, n in enumerate(names)}
+
+
+def check_output_size(rows: int, columns: int, field: str = "run.output_dt") -> None:
+    """Refuse (SceneError naming ``field``) an output table above :data:`MAX_OUTPUT_BYTES`."""
+    size = 8 * int(rows) * int(columns)
+    if size > MAX_OUTPUT_BYTES:
+        raise SceneError(field, f"gives {rows} output rows x {columns} columns = "
+                         f"{size / 2**30:.2f} GiB of output; at most "
+                         f"{MAX_OUTPUT_BYTES / 2**30:g} GiB is allowed: store fewer rows "
+                         f"(a larger {field})")
+
+
+def run_loop(loop, args, stats: Stats) -> bool:
+    """Run the compiled ``loop(*args)`` so that Ctrl-C stops it; True if it was interrupted.
+
+    In the main thread the loop runs in a helper thread (it releases the interpreter lock) while
+    this thread waits and turns a KeyboardInterrupt into ``stats.halt[0] = 1`` (module
+    docstring); elsewhere (no signals are delivered there) it is called directly.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        loop(*args)
+        return False
+    failure: list[BaseException] = []
+    done = threading.Event()
+
+    def target():
+        try:
+            loop(*args)
+        except BaseException as exc:  # noqa: BLE001 (re-raised in the caller's thread)
+            failure.append(exc)
+        finally:
+            done.set()
+
+    # waiting on an Event, not Thread.join: a join interrupted by KeyboardInterrupt marks the
+    # thread finished although it still runs (CPython 3.11, the bpo-45274 lock handling)
+    worker = threading.Thread(target=target, name="deckpound-loop", daemon=True)
+    interrupted = False
+    worker.start()
+    try:
+        while not done.wait(0.05):
+            pass
+    except KeyboardInterrupt:
+        interrupted = True
+        stats.halt[0] = 1
+        while not done.wait(0.05):     # the loop stops within one iteration
+            pass
+    if failure:
+        raise failure[0]
+    return interrupted

@@ -1,0 +1,180 @@
+"""The one table of contact laws and friction models: every dispatch on a law reads it.
+
+Each normal contact law (``scene.contact.law``) and friction model (``scene.contact.
+friction_mode``) is one row: its name, the integer code the compiled kernels dispatch on, the
+scene parameters it uses, its OpenSees counterpart or why OpenSees refuses it, how the
+nonsmooth engine treats it, and its force equation as plain Python (the executable statement
+of the law, against which a test runs the compiled kernel branch). Readers:
+
+* the scene's allowed values (:data:`deckpound.models.scene.CONTACT_LAWS`, ``FRICTION_MODES``);
+* the compiled kernels (:mod:`deckpound.analytic.contact_laws`: named code constants, one
+  branch per law, a final branch that fails: non-finite force, never a fall-through);
+* the compliance and nonsmooth engines' ``reads()`` (the "option does nothing" warnings) and
+  notes;
+* the OpenSees refusals (:func:`deckpound.opensees_build.model.refuse_scene`);
+* the contact-law study (:func:`deckpound.compare.studies.law_cases`).
+
+Adding a law: a row here (code = the next integer), its branch in
+:func:`deckpound.analytic.contact_laws.normal_law` (and its recoverable energy in
+``contact_stored_energy``), tests. ``tests/test_contact_law_table.py`` runs every row through
+the kernel against ``force``. Importable without numba.
+
+Units: forces kN, gaps and penetrations δ = −g ≥ 0 m, rates δ̇ = −ġ m/s.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+__all__ = ["CONTACT_LAW_TABLE", "FRICTION_CODES", "FRICTION_MODEL_TABLE", "LAW_CODES",
+           "RIGID_CONTACT", "ContactLaw", "FrictionModel", "contact_law", "friction_model"]
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """One normal contact law.
+
+    Attributes
+    ----------
+    name, code : scene value and kernel code (``contact_laws.LAW_*``).
+    params : scene fields the compliance engine's force depends on.
+    equation : the force law in one line (docs, messages).
+    force : λ_N(δ, δ̇, p) [kN] on first loading from the open state (virgin corner; δ > 0
+        closed), p the packed parameters by name (:func:`deckpound.analytic.contact_laws.
+        law_parameters`); the executable form of ``equation`` the kernel is tested against.
+    opensees : OpenSees uniaxial material expressing it, or None; opensees_refusal : the
+        refusal message when None.
+    rate_event : the force switches branch with the sign of ġ while closed (loading /
+        unloading): the adaptive integrator locates ġ = 0 as an event.
+    nonsmooth : the nonsmooth engine expresses the law (it then reads ``contact.law`` and
+        ``params``); False for every compliant law: rigid contact with Newton's impact law
+        replaces it there (:data:`RIGID_CONTACT`) and a non-default law is warned as ignored.
+    """
+
+    name: str
+    code: int
+    params: tuple[str, ...]
+    equation: str
+    force: Callable[[float, float, dict], float]
+    opensees: str | None = None
+    opensees_refusal: str | None = None
+    rate_event: bool = False
+    nonsmooth: bool = False
+
+
+@dataclass(frozen=True)
+class FrictionModel:
+    """One tangential (friction) model; ``params`` are read only when contact.friction > 0.
+
+    force : λ_T(λ_N, Δs, U_T, p) [kN] from an unloaded tangential state (force on the deck
+    along +t). opensees / opensees_refusal / opensees_laws: the OpenSees counterpart, why it is
+    refused, and the normal laws it combines with. nonsmooth : how the nonsmooth engine treats
+    the model (None: it does nothing there), said in the engine's notes with
+    :data:`RIGID_CONTACT`.
+    """
+
+    name: str
+    code: int
+    params: tuple[str, ...]
+    equation: str
+    force: Callable[[float, float, float, dict], float]
+    opensees: str | None = None
+    opensees_refusal: str | None = None
+    opensees_laws: tuple[str, ...] = ()
+    nonsmooth: str | None = None
+
+
+def _hertz_damp(d: float, r: float, p: dict) -> float:
+    return max(p["k"] * d ** p["n"] * (1.0 + p["hc"] * r / max(p["v_impact"], p["v_min"])), 0.0)
+
+
+def _bilinear(d: float, r: float, p: dict) -> float:
+    # first loading from the closure point: K1 up to the yield line K1 δy + K2 (δ − δy)
+    return min(p["k"] * d, p["k"] * p["dy"] + p["k2"] * (d - p["dy"]))
+
+
+_OPENSEES_LAWS = "use linear, bilinear or kelvin-voigt"
+_HERTZ_REFUSAL = ("OpenSees cannot express the {name!r} law of the scene (F = k δ^n (1 + "
+                  "3(1−e²)/4 δ̇/v⁻)): its Hertzdamp material has not been shown to be the same "
+                  "law; " + _OPENSEES_LAWS)
+
+#: The normal contact laws, in code order.
+CONTACT_LAW_TABLE: tuple[ContactLaw, ...] = (
+    ContactLaw("linear", 0, ("contact.stiffness",), "λ = k δ for δ ≥ 0",
+               lambda d, r, p: p["k"] * d, opensees="ElasticPPGap"),
+    ContactLaw("kelvin-voigt", 1, ("contact.stiffness", "contact.restitution"),
+               "λ = k δ + c δ̇ for δ > 0, c = 2ζ(e)√(k m_eff) (tension allowed unless kv_clip)",
+               lambda d, r, p: p["k"] * d + p["c"] * r, opensees="ViscoelasticGap"),
+    ContactLaw("hertz", 2, ("contact.stiffness", "contact.exponent"), "λ = k δ^n for δ > 0",
+               lambda d, r, p: p["k"] * d ** p["n"],
+               opensees_refusal=_HERTZ_REFUSAL.format(name="hertz")),
+    ContactLaw("hertz-damp", 3, ("contact.stiffness", "contact.exponent", "contact.restitution"),
+               "λ = k δ^n (1 + 3(1 − e²)/4 · δ̇/v⁻) ≥ 0, v⁻ the approach velocity",
+               _hertz_damp, opensees_refusal=_HERTZ_REFUSAL.format(name="hertz-damp")),
+    ContactLaw("bilinear", 4, ("contact.stiffness", "contact.bilinear_ratio",
+                               "contact.bilinear_yield"),
+               "Muthukumar: loading K1 capped by K1 δy + K2 (δ − δy), unloading K1 floored by K2 δ",
+               _bilinear, opensees="ImpactMaterial", rate_event=True),
+)
+
+
+def _slip(lam_n: float, ds: float, ut: float, p: dict) -> float:
+    return -p["mu"] * lam_n * math.tanh(ut / p["v0"])
+
+
+def _stick(lam_n: float, ds: float, ut: float, p: dict) -> float:
+    trial = -p["kt"] * ds
+    lim = p["mu"] * lam_n
+    return trial if abs(trial) <= lim else math.copysign(lim, trial)
+
+
+#: Why the nonsmooth engine reads no compliant law nor the slip/stick distinction.
+RIGID_CONTACT = ("contact is rigid, so the slip/stick distinction of the compliance laws does "
+                 "not apply")
+_NONSMOOTH_COULOMB = "set-valued Coulomb friction"
+
+#: The friction models, in code order.
+FRICTION_MODEL_TABLE: tuple[FrictionModel, ...] = (
+    FrictionModel("none", 0, (), "λ_T = 0", lambda lam_n, ds, ut, p: 0.0,
+                  opensees="(no tangential element)"),
+    FrictionModel("slip", 1, ("contact.slip_velocity",), "λ_T = −μ λ_N tanh(U_T / v₀)", _slip,
+                  opensees_refusal="OpenSees cannot express 'slip' (regularised friction without "
+                  "sticking); zeroLengthContact2D always has a stick spring: use "
+                  "friction_mode = 'stick'", nonsmooth=_NONSMOOTH_COULOMB),
+    FrictionModel("stick", 2, ("contact.tangential_stiffness",),
+                  "λ_T = λ_T,n − k_t Δs, returned to |λ_T| ≤ μ λ_N", _stick,
+                  opensees="zeroLengthContact2D", opensees_laws=("linear",),
+                  nonsmooth=_NONSMOOTH_COULOMB),
+)
+
+#: name → kernel code
+LAW_CODES = {law.name: law.code for law in CONTACT_LAW_TABLE}
+FRICTION_CODES = {m.name: m.code for m in FRICTION_MODEL_TABLE}
+
+
+def contact_law(name: str) -> ContactLaw:
+    """The row of law ``name`` (KeyError naming the valid laws otherwise)."""
+    for law in CONTACT_LAW_TABLE:
+        if law.name == name:
+            return law
+    raise KeyError(f"unknown contact law {name!r}; valid: {', '.join(LAW_CODES)}")
+
+
+def friction_model(name: str) -> FrictionModel:
+    """The row of friction model ``name`` (KeyError naming the valid models otherwise)."""
+    for m in FRICTION_MODEL_TABLE:
+        if m.name == name:
+            return m
+    raise KeyError(f"unknown friction model {name!r}; valid: {', '.join(FRICTION_CODES)}")
+
+
+def _check_codes() -> None:
+    for table in (CONTACT_LAW_TABLE, FRICTION_MODEL_TABLE):
+        codes = [row.code for row in table]
+        if codes != list(range(len(table))):
+            raise RuntimeError(f"codes of {[r.name for r in table]} must be 0, 1, ... in order")
+
+
+_check_codes()

@@ -1,0 +1,170 @@
+"""Bounded work (issue 16 item 5): Ctrl-C stops every analytic engine within a second, the
+adaptive integrator has a step budget, and output tables are sized before they are allocated.
+
+The compiled loops poll ``Stats.halt`` once per Newton iteration / Runge–Kutta attempt while
+:func:`deckpound.analytic.bundles.run_loop` waits for them in the main thread
+(:mod:`deckpound.analytic.bundles`)."""
+
+from __future__ import annotations
+
+import _thread
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+from deckpound.models.errors import SceneError
+from deckpound.models.scene_io import load_scene
+
+from deckpound.engines import run_engine
+
+# long runs (minutes if not interrupted): 4e7 Newmark / Moreau-Jean steps, stiff adaptive
+LONG = {
+    "compliance": ("compliance", ["excitation.duration=400", "compliance.dt=1e-5",
+                                  "run.output_dt=0.01"]),
+    "adaptive": ("compliance", ["compliance.integrator=adaptive", "contact.stiffness=1e12",
+                                "excitation.duration=60", "run.output_dt=0.01"]),
+    "nonsmooth": ("nonsmooth", ["excitation.duration=400", "nonsmooth.h=1e-5",
+                                "run.output_dt=0.01"]),
+}
+
+CHILD = r"""
+import sys, time, warnings
+warnings.simplefilter("ignore")
+from deckpound.cli import main
+engine, overrides = sys.argv[1], sys.argv[2:]
+sets = [a for o in overrides for a in ("--set", o)]
+# warm-up: compile or load the kernels, so that the long run starts at once
+main(["run", "saiidi-4span", "--engine", engine, "--set", "run.duration=0.05",
+      *[a for o in overrides if o.startswith("compliance.integrator") for a in ("--set", o)],
+      "-o", sys.argv[0] + ".warm"])
+print("ready", flush=True)
+sys.exit(main(["run", "saiidi-4span", "--engine", engine, *sets, "-o", sys.argv[0] + ".out"]))
+"""
+
+
+@pytest.mark.parametrize("which", list(LONG))
+def test_ctrl_c_stops_a_long_run_within_two_seconds(which, tmp_path):
+    engine, overrides = LONG[which]
+    script = tmp_path / "child.py"
+    script.write_text(CHILD)
+    errfile = tmp_path / "stderr.txt"
+    with open(errfile, "w") as err_out:
+        proc = subprocess.Popen([sys.executable, str(script), engine, *overrides],
+                                stdout=subprocess.PIPE, stderr=err_out, text=True, cwd=tmp_path)
+    try:
+        for line in proc.stdout:                 # the warm-up run prints its summary first
+            if line.strip() == "ready":
+                break
+        assert proc.poll() is None, errfile.read_text()
+        time.sleep(1.5)                          # well inside the long loop
+        assert proc.poll() is None, "the long run ended before it was interrupted"
+        t0 = time.perf_counter()
+        os.kill(proc.pid, signal.SIGINT)
+        latency = None
+        while latency is None and time.perf_counter() - t0 < 30.0:
+            if "deckpound: interrupted" in errfile.read_text():
+                latency = time.perf_counter() - t0   # the loop stopped, the CLI said so
+            else:
+                time.sleep(0.01)
+        code = proc.wait(timeout=30)
+        exited = time.perf_counter() - t0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    err = errfile.read_text()
+    print(f"{which}: 'interrupted' {latency} s after SIGINT, process gone after {exited:.2f} s "
+          f"(interpreter teardown), exit {code}")
+    assert code == 130, err
+    assert "Traceback" not in err, err
+    assert latency is not None and latency < 2.0
+    assert exited < 10.0
+
+
+def _interrupt_after(seconds: float) -> threading.Timer:
+    timer = threading.Timer(seconds, _thread.interrupt_main)
+    timer.start()
+    return timer
+
+
+@pytest.mark.parametrize("which", list(LONG))
+def test_interrupt_can_return_the_rows_so_far(which):
+    """``on_interrupt="return"``: status interrupted, the rows computed so far, finite."""
+    engine, overrides = LONG[which]
+    scene = load_scene("saiidi-4span", overrides)
+    run_engine(engine, load_scene("saiidi-4span", ["run.duration=0.05"] + overrides[:1]))
+    timer = _interrupt_after(1.0)
+    t0 = time.perf_counter()
+    res = run_engine(engine, scene, on_interrupt="return")
+    elapsed = time.perf_counter() - t0
+    timer.cancel()
+    assert res.meta["failure"] == "interrupted", res.meta["message"]
+    assert elapsed < 5.0
+    t = np.asarray(res.columns["t"])
+    assert 1 < len(t) < 6001 and np.all(np.diff(t) > 0)
+    assert res.meta["failed_time"] >= t[-1]
+    for k in ("deck_x_abs", "gap_c1", "bent1_fx"):
+        assert np.all(np.isfinite(res.columns[k])), k
+
+
+def test_interrupt_raises_keyboard_interrupt_by_default():
+    engine, overrides = LONG["compliance"]
+    scene = load_scene("saiidi-4span", overrides)
+    run_engine(engine, load_scene("saiidi-4span", ["run.duration=0.05"]))
+    timer = _interrupt_after(0.5)
+    with pytest.raises(KeyboardInterrupt):
+        run_engine(engine, scene)
+    timer.cancel()
+
+
+@pytest.mark.parametrize("engine,integrator", [("compliance", "newmark"),
+                                               ("compliance", "adaptive"),
+                                               ("nonsmooth", None)])
+def test_the_loop_thread_changes_no_result(engine, integrator, monkeypatch):
+    """Running the compiled loop in the helper thread (interruptible) and calling it directly
+    give bit-identical results."""
+    from deckpound.analytic import bundles
+
+    ov = ["run.duration=3"] + ([f"compliance.integrator={integrator}"] if integrator else [])
+    scene = load_scene("saiidi-4span", ov + ["contact.friction=0.2",
+                                             "contact.friction_mode=stick"])
+    threaded = run_engine(engine, scene)
+
+    def direct(loop, args, stats):
+        loop(*args)
+        return False
+
+    monkeypatch.setattr(bundles, "run_loop", direct)
+    plain = run_engine(engine, scene)
+    assert threaded.meta["gap_closures"] == plain.meta["gap_closures"] > 0
+    for k, v in plain.columns.items():
+        assert np.array_equal(np.asarray(v), np.asarray(threaded.columns[k]), equal_nan=True), k
+
+
+def test_adaptive_step_budget_stops_with_the_time_reached():
+    scene = load_scene("saiidi-4span", ["compliance.integrator=adaptive", "run.duration=2",
+                                        "compliance.max_steps=3000"])
+    res = run_engine("compliance", scene)
+    assert res.meta["failure"] == "step_budget"
+    assert "compliance.max_steps = 3000" in res.meta["message"]
+    assert res.meta["steps"] + res.meta["rejected_steps"] == 3000
+    t_end = res.meta["failed_time"]
+    assert 0.0 < t_end < 2.0 and f"t = {t_end:.6g} s" in res.meta["message"]
+    assert res.columns["t"][-1] <= t_end
+
+
+def test_output_table_is_sized_before_allocating():
+    """10⁷ rows of ~45 columns (3.4 GiB) are refused up front, naming run.output_dt."""
+    scene = load_scene("saiidi-4span", ["excitation.duration=100", "compliance.dt=1e-5",
+                                        "run.output_dt=1e-5"])
+    t0 = time.perf_counter()
+    with pytest.raises(SceneError, match=r"run\.output_dt.*GiB"):
+        run_engine("compliance", scene)
+    with pytest.raises(SceneError, match=r"run\.output_dt"):
+        run_engine("nonsmooth", scene.replace(nonsmooth=scene.nonsmooth.__class__(h=1e-5)))
+    assert time.perf_counter() - t0 < 30.0

@@ -1,0 +1,114 @@
+"""The contact-law table drives every dispatch (issue 11 item 4): every row has a kernel branch
+that computes its equation, an unknown code fails loudly instead of running another law, and
+the engines' reads, the OpenSees refusals and the law study come from the table."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from _compliance_helpers import base_scene, with_contact, with_run
+from deckpound.analytic import contact_laws as cl
+from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_MODEL_TABLE, contact_law
+from deckpound.models.errors import SceneError
+from deckpound.models.scene import CONTACT_LAWS, FRICTION_MODES
+
+from deckpound.engines import get_engine, run_engine
+
+LAWS = [law.name for law in CONTACT_LAW_TABLE]
+MODELS = [m.name for m in FRICTION_MODEL_TABLE]
+
+
+def _packed(law: str, **contact):
+    sc = with_contact(base_scene(), law=law, **contact)
+    return sc, cl.pack_contact(sc)
+
+
+def test_scene_choices_are_the_table():
+    assert CONTACT_LAWS == tuple(LAWS)
+    assert FRICTION_MODES == tuple(MODELS)
+    assert [law.code for law in CONTACT_LAW_TABLE] == list(range(len(LAWS)))
+
+
+@pytest.mark.parametrize("law", LAWS)
+def test_every_law_has_a_kernel_branch_computing_its_equation(law):
+    """First loading of a virgin corner (committed open, approach velocity v) at several
+    penetrations and rates: the compiled branch gives the table's force, open gives zero."""
+    _, cp = _packed(law, stiffness=2.0e6, restitution=0.7)
+    cl.check_kernel_branches(cp)
+    row = cp[0]
+    for delta in (1e-5, 4e-4, 3e-3):            # below and above the bilinear yield (1 mm)
+        for rate in (0.0, 0.05, -0.02):
+            cs = cl.new_contact_state(np.full(4, 0.01))[0]
+            cs[cl.S_CGD] = -0.3                  # committed approach velocity 0.3 m/s
+            closed, lam, dg, dgd = cl.normal_law(row, cs, -delta, -rate)
+            want = contact_law(law).force(delta, rate, cl.law_parameters(row, cs))
+            assert closed, (law, delta)
+            assert lam == pytest.approx(want, rel=1e-12, abs=1e-9), (law, delta, rate)
+            assert np.isfinite(dg) and np.isfinite(dgd)
+        cs = cl.new_contact_state(np.full(4, 0.01))[0]
+        closed, lam, _, _ = cl.normal_law(row, cs, +delta, 0.0)
+        assert not closed and lam == 0.0, law
+
+
+@pytest.mark.parametrize("mode", MODELS)
+def test_every_friction_model_has_a_kernel_branch_computing_its_equation(mode):
+    _, cp = _packed("linear", friction=0.3, friction_mode=mode, tangential_stiffness=1e5)
+    row = cp[0]
+    for lam_n, ds, ut in ((100.0, 1e-5, 0.01), (100.0, -1e-3, -0.5), (0.0, 1e-4, 0.1)):
+        cs = np.zeros(cl.N_CS)
+        _, lt, *_ = cl.friction_law(row, cs, lam_n, ds, ut)
+        model = FRICTION_MODEL_TABLE[int(row[cl.P_FMODE])]
+        want = model.force(lam_n, ds, ut, cl.law_parameters(row, cs)) if lam_n > 0 else 0.0
+        assert lt == pytest.approx(want, rel=1e-12, abs=1e-12), (mode, lam_n, ds, ut)
+
+
+def test_unknown_codes_fail_loudly():
+    """A code without a branch gives a non-finite force (never another law's) and is refused
+    before a run with the kernel named."""
+    _, cp = _packed("bilinear")
+    bad = cp.copy()
+    bad[:, cl.P_LAW] = len(LAWS)
+    cs = np.zeros(cl.N_CS)
+    closed, lam, dg, _ = cl.normal_law(bad[0], cs, -1e-3, 0.0)
+    assert closed and np.isnan(lam) and np.isnan(dg)
+    with pytest.raises(NotImplementedError, match="normal_law"):
+        cl.check_kernel_branches(bad)
+    bad = cp.copy()
+    bad[:, cl.P_FMODE] = len(MODELS)
+    with pytest.raises(NotImplementedError, match="friction_law"):
+        cl.check_kernel_branches(bad)
+
+
+def test_a_run_with_an_unknown_code_is_refused(monkeypatch):
+    pack = cl.pack_contact
+
+    def broken(scene, **kw):
+        cp = pack(scene, **kw)
+        cp[:, cl.P_LAW] = 99
+        return cp
+
+    monkeypatch.setattr(cl, "pack_contact", broken)
+    with pytest.raises(NotImplementedError, match="code 99 has no branch"):
+        run_engine("compliance", with_run(base_scene(), duration=0.05))
+
+
+@pytest.mark.parametrize("law", LAWS)
+def test_reads_and_refusals_follow_the_table(law):
+    row = contact_law(law)
+    sc = with_contact(base_scene(), law=law)
+    read = get_engine("compliance").reads(sc, sc.compliance)
+    assert set(row.params) <= read and "contact.law" in read
+    ns_read = get_engine("nonsmooth").reads(sc, sc.nonsmooth)
+    assert ("contact.law" in ns_read) == row.nonsmooth
+    opensees = get_engine("opensees")
+    if row.opensees is None:
+        with pytest.raises(SceneError, match="OpenSees cannot express"):
+            opensees.refuse(sc, sc.opensees)
+    else:
+        opensees.refuse(sc, sc.opensees)
+
+
+def test_law_study_has_one_case_per_row():
+    from deckpound.compare.studies import law_cases
+
+    assert [c.params["law"] for c in law_cases(base_scene())] == LAWS
