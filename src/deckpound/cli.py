@@ -227,7 +227,10 @@ def _guarded_main(argv: list[str] | None) -> int:
             except SystemExit as done:  # --help / --version have printed their text
                 _flush_stdout()
                 return done.code if isinstance(done.code, int) else 0
-            code = int(args.func(args) or 0)
+            from deckpound.compare.pool import pool_scope
+
+            with pool_scope():  # sweeps of this command share one set of worker processes
+                code = int(args.func(args) or 0)
             _flush_stdout()
             return code
         except (SceneError, UsageError) as err:
@@ -236,8 +239,8 @@ def _guarded_main(argv: list[str] | None) -> int:
         except EngineFailure as err:
             _report("engine failure", str(err))
             return EXIT_ENGINE
-        except KeyboardInterrupt:
-            _report("", "interrupted")
+        except KeyboardInterrupt as err:  # a sweep says what is cached and how to resume
+            _report("", f"interrupted: {err}" if str(err) else "interrupted")
             return EXIT_INTERRUPTED
         except BrokenPipeError:
             _silence_stdout()  # `deckpound ... | head`: the reader has all it wanted
