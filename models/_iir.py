@@ -14,9 +14,9 @@ same to the last bit (``tests/test_iir.py`` checks it against scipy):
   (``sosfilt_zi``), the direct-form-II-transposed recursion forwards and backwards.
 
 The recursion runs as a Python loop over plain floats (0.3–0.7 µs per sample and section,
-~15 ms for a 20 s synthetic component); where ``scipy.signal`` is loaded already (a long-lived
-worker imports it once, see :mod:`deckpound.compare.pool`) its compiled recursion is used —
-the same bits, 6× faster.
+~20 ms for a 20 s synthetic component); where ``scipy.signal`` is loaded already its compiled
+recursion is used — the same bits, 6× faster — and a process that has filtered
+:data:`SCIPY_AFTER` signals (a sweep's long-lived worker) imports it for the rest.
 """
 
 from __future__ import annotations
@@ -27,6 +27,11 @@ import sys
 import numpy as np
 
 __all__ = ["butter_highpass_sos", "sosfilt_zi", "sosfiltfilt"]
+
+#: signals filtered in pure Python before this process imports scipy.signal for the rest (a
+#: sweep's worker: its 0.5–1 s import is then paid once for hundreds of records)
+SCIPY_AFTER = 16
+_CALLS = [0]
 
 
 def butter_highpass_sos(order: int, wn: float) -> np.ndarray:
@@ -107,6 +112,9 @@ def sosfiltfilt(sos: np.ndarray, x: np.ndarray) -> np.ndarray:
     edge = 3 * ntaps
     if x.ndim != 1 or x.shape[0] <= edge:
         raise ValueError(f"the signal needs more than {edge} samples, got {x.shape}")
+    _CALLS[0] += 1
+    if _CALLS[0] == SCIPY_AFTER and "scipy.signal" not in sys.modules:
+        import scipy.signal  # noqa: F401  (a long sweep: worth its import from now on)
     signal = sys.modules.get("scipy.signal")
     if signal is not None:  # already paid for: its compiled loop gives the same bits
         return signal.sosfiltfilt(sos, x)

@@ -17,6 +17,7 @@ def test_design_and_filter_equal_scipy_bitwise(wn, order, monkeypatch):
     assert np.array_equal(sos, scipy.signal.butter(order, wn, btype="highpass", output="sos"))
     x = np.random.default_rng(order).standard_normal(2000)
     monkeypatch.delitem(sys.modules, "scipy.signal")  # the pure numpy path
+    monkeypatch.setattr(_iir, "_CALLS", [-(10**9)])  # and no switch to scipy on the way
     mine = _iir.sosfiltfilt(sos, x)
     monkeypatch.undo()
     assert np.array_equal(mine, scipy.signal.sosfiltfilt(sos, x))
@@ -40,3 +41,19 @@ def test_synthetic_record_needs_no_scipy_signal():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_a_long_sweep_switches_to_scipy_with_the_same_bits():
+    code = (
+        "import sys, numpy as np; from deckpound.models import _iir\n"
+        "sos = _iir.butter_highpass_sos(4, 0.01)\n"
+        "x = np.random.default_rng(1).standard_normal(500)\n"
+        "outs, seen = [], []\n"
+        "for _ in range(_iir.SCIPY_AFTER + 2):\n"
+        "    seen.append('scipy.signal' in sys.modules); outs.append(_iir.sosfiltfilt(sos, x))\n"
+        "print(seen.index(True), all(np.array_equal(o, outs[0]) for o in outs))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    from deckpound.models._iir import SCIPY_AFTER
+
+    assert out.stdout.split() == [str(SCIPY_AFTER), "True"]

@@ -68,12 +68,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("study", help="a sensitivity study: table + figure")
     p.add_argument("name", metavar="NAME", help="stiffness, friction, sticking, law, geometry, "
-                   "opensees-mode or sequence")
+                   "opensees-mode, sequence or variability")
     add_scene_args(p)
     p.add_argument("-o", "--output", default=None, metavar="DIR",
                    help="output folder (default: study-NAME)")
     p.add_argument("--quick", action="store_true", help="fewer cases")
     _parallel_args(p)
+    _variability_args(p)
     p.set_defaults(func=_study)
 
     p = sub.add_parser("paper", help="the main job: sequence x 3 engines + studies + report")
@@ -165,6 +166,8 @@ def _study(args) -> int:
 
     from ._cli_engines import check_output_folder
 
+    if args.name == "variability":
+        return _variability(args)
     if args.name not in STUDY_NAMES:
         raise SceneError("study", f"unknown study {args.name!r}; valid studies: "
                          f"{', '.join(STUDY_NAMES)}")
@@ -285,3 +288,45 @@ def _export_vtk(args) -> int:
     for p in written:
         print(f"wrote {p}")
     return 0
+
+
+# -- the record-to-record variability study (issue 14: speed owner) ---------------------------
+
+def _variability_args(p: argparse.ArgumentParser) -> None:
+    from .cli import int_in
+
+    g = p.add_argument_group("variability study")
+    g.add_argument("--cases", type=int_in(1, 1_000_000), default=None,
+                   help="variability: N seeds of the synthetic record (default 1000)")
+    g.add_argument("--records", default=None, metavar="DIR",
+                   help="variability: every record file in DIR instead of seeds")
+    g.add_argument("--engine", default="compliance", metavar="NAME",
+                   help="variability: the engine (default: compliance)")
+
+
+def _variability(args) -> int:
+    from deckpound._io import output_folder
+    from deckpound.compare.variability import QUANTITIES, run_variability
+
+    from ._cli_engines import check_output_folder
+    from .engines import get_engine
+
+    get_engine(args.engine)   # an unknown name is refused before any work
+    if args.cases is not None and args.records is not None:
+        raise SceneError("--cases", "give either --cases N or --records DIR, not both")
+    cases = args.cases if args.records is None else None
+    if cases is None and args.records is None:
+        cases = 20 if args.quick else 1000
+    out = check_output_folder(args.output or "study-variability")
+    scene = _checked_scene(args, (args.engine,))
+    with output_folder(out, "study variability") as out:
+        table, summary = run_variability(
+            scene, out, engine=args.engine, cases=cases, records=args.records,
+            cache_dir=args.cache, workers=args.workers, scheduler=args.scheduler,
+            progress=not args.no_progress)
+    view = summary.set_index("quantity").loc[list(QUANTITIES)]
+    print(view[["unit", "n", "median", "p16", "p84"]].to_string(float_format=lambda v: f"{v:.4g}"))
+    failed = summary.attrs.get("failed", 0)
+    print(f"{len(table)} cases ({failed} not finished) in {summary.attrs['wall']:.1f} s; "
+          f"wrote {out}")
+    return 0 if not failed else 1
