@@ -21,6 +21,7 @@ SHORT = ["excitation.duration=2.0"]
 
 
 def _pid(_x):
+    time.sleep(0.05)  # long enough that both workers take cases
     return os.getpid()
 
 
@@ -40,7 +41,7 @@ def test_pool_scope_reuses_workers_across_maps():
 
     with pool.pool_scope():
         first, second = pids(6), pids(6)
-        assert first == second and os.getpid() not in first  # the same two workers
+        assert second == first and os.getpid() not in first  # the same two workers
     assert pool._SCOPE.pool is None  # closed with the scope
     assert pids(6).isdisjoint(first)  # outside: a pool per map
 

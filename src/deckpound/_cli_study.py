@@ -91,6 +91,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--skips", action="store_true",
                    help="instead: time the compliance engine's work-saving skips on and off "
                    "(identical results checked) and the adaptive step sizes in/out of contact")
+    _speed_args(p)
     p.set_defaults(func=_bench)
 
     p = sub.add_parser("stress", help="stability stress test over hard settings, every engine")
@@ -248,11 +249,14 @@ def _bench_body(args, scene) -> int:
         print(f"wrote {args.output}; " + ("every skip gives identical results" if not len(bad)
                                           else f"{len(bad)} skip(s) changed a result"))
         return 0 if not len(bad) else 1
-    table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
-    cols = [c for c in ("scene", "config", "status", "wall", "us_per_step", "err_primary",
-                        "err_peak_theta", "err_peak_y", "nrmse_theta", "speedup_bound",
-                        "speedup_vs_opensees_equal_error") if c in table]
-    print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    if not args.speed_only:
+        table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
+        cols = [c for c in ("scene", "config", "status", "wall", "compile_time", "us_per_step",
+                            "err_primary",
+                            "err_peak_theta", "err_peak_y", "nrmse_theta", "speedup_bound",
+                            "speedup_vs_opensees_equal_error") if c in table]
+        print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    _speed_table(args)
     print(f"wrote {args.output}")
     return 0
 
@@ -330,3 +334,33 @@ def _variability(args) -> int:
     print(f"{len(table)} cases ({failed} not finished) in {summary.attrs['wall']:.1f} s; "
           f"wrote {out}")
     return 0 if not failed else 1
+
+
+# -- the README's speed table (issue 14: speed owner) ----------------------------------------
+
+def _speed_args(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("speed table")
+    g.add_argument("--speed-only", action="store_true",
+                   help="only the speed table (processes and in-process runs of every engine)")
+    g.add_argument("--write-readme", nargs="?", const="README.md", default=None, metavar="PATH",
+                   help="put the speed table into the README (default ./README.md) in place "
+                   "of the previous one")
+
+
+def _speed_table(args) -> None:
+    import sys
+
+    from deckpound._io import atomic_write_text
+    from deckpound.compare import speed
+
+    if args.write_readme is not None and not Path(args.write_readme).is_file():
+        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
+    repeats = args.repeats if args.repeats is not None else 3
+    rows, context = speed.measure(args.scene, args.overrides, repeats=repeats,
+                                  progress=lambda t: print(f"deckpound bench: {t}", file=sys.stderr,
+                                                         flush=True))
+    block = speed.markdown(rows, context)
+    print(block)
+    atomic_write_text(Path(args.output) / "speed.md", block + "\n")
+    if args.write_readme is not None:
+        print(f"wrote the speed table into {speed.write_readme(args.write_readme, block)}")
