@@ -118,13 +118,13 @@ def surface_warnings(results: Iterable[Result], where: str = "") -> None:
                 warnings.warn(f"{where}{msg}" if where else msg, stacklevel=2)
 
 
-def interrupted(err: KeyboardInterrupt, title: str, done: int, total: int,
-                folder) -> KeyboardInterrupt:
+def interrupted(err: KeyboardInterrupt, title: str, done: int, total: int, folder,
+                what: str = "cases", item: str = "case") -> KeyboardInterrupt:
     """The interrupt to raise after a sweep was stopped: an :class:`Interrupted` saying what is
     cached and how to resume (an inner sweep's message is kept as it is)."""
     if isinstance(err, Interrupted) or folder is None:
         return err
-    return Interrupted(f"{title}: {done} of {total} cases finished; every finished case is "
+    return Interrupted(f"{title}: {done} of {total} {what} finished; every finished {item} is "
                        f"cached in {folder}: run the same command again to resume")
 
 

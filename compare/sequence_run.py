@@ -68,6 +68,7 @@ def run_sequences(scene: Scene, engines: list[str], cache_folder: str | Path | N
                       scheduler)
     except KeyboardInterrupt as err:   # each finished run is cached: say so (issue 14)
         bar.close()
-        raise interrupted(err, "sequence", len(out), len(engines), cache_folder) from None
+        raise interrupted(err, "sequence", len(out), len(engines), cache_folder,
+                          "engines' sequences", "run") from None
     surface_warnings(r.result for runs in out.values() for r in runs)
     return {e: out[e] for e in engines}
