@@ -56,3 +56,24 @@ def test_after_warm_up_user_variants_compile_nothing():
             scene = load_scene("saiidi-4span", ["run.duration=0.02", *overrides])
             assert run_engine(engine, scene, **options).ok
     assert counter.compiled == set()
+
+
+def test_numba_caching_warnings_are_reported(monkeypatch, capsys):
+    """A kernel numba cannot cache (e.g. an unwritable cache folder) compiles in every
+    process: the set-up says so instead of reporting success silently."""
+    from numba.core.errors import NumbaWarning
+
+    def warn_like_numba():
+        warnings.warn(
+            "Cannot cache compiled function 'k' as it uses dynamic globals",
+            NumbaWarning,
+            stacklevel=1,
+        )
+
+    monkeypatch.setattr(warmup, "_warm_takeda", warn_like_numba)
+    res = warmup.warm_item(warmup.Item("takeda", "material"))
+    assert res.notes == ["Cannot cache compiled function 'k' as it uses dynamic globals"]
+    monkeypatch.setattr(warmup, "ITEMS", (warmup.Item("takeda", "material"),))
+    assert cli.main(["compile"]) == 0
+    err = capsys.readouterr().err
+    assert "deckpound: warning: Cannot cache compiled function 'k'" in err

@@ -52,6 +52,11 @@ def _compile(args) -> int:
     results = warmup.warm(engines=engines, report=report)
     total = time.perf_counter() - t0
     compiled = sum(r.compiled for r in results)
+    for note in sorted({n for r in results for n in r.notes}):
+        print(
+            f"deckpound: warning: {note} (the kernel will compile in every process)",
+            file=sys.stderr,
+        )
     failed = [r for r in results if r.status != "success"]
     print(
         f"deckpound compile: {len(results)} items in {total:.1f} s, {compiled} kernels "

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 __all__ = ["ITEMS", "Item", "WarmResult", "cache_location", "warm", "warm_item"]
 
@@ -85,13 +85,14 @@ ITEMS: tuple[Item, ...] = (
 @dataclass(frozen=True)
 class WarmResult:
     """What warming one item took: wall seconds, kernels compiled (0: all from the cache),
-    the engine-reported compile/load time and the run's status."""
+    the engine-reported compile/load time, the run's status and numba's caching warnings."""
 
     item: Item
     seconds: float
     compiled: int
     compile_time: float
     status: str
+    notes: list[str] = field(default_factory=list)
 
 
 def cache_location() -> str:
@@ -152,13 +153,15 @@ def _warm_takeda() -> None:
 
 
 def warm_item(item: Item) -> WarmResult:
-    """Run one item in this process; compile or load what it needs."""
+    """Run one item in this process; compile or load what it needs. numba's warnings that a
+    kernel could not be cached (an unwritable cache folder) are kept in ``notes``."""
     import warnings
 
     from deckpound._kernel_load import install
 
     install()
-    with _CompileCounter() as counter:
+    with _CompileCounter() as counter, warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")  # the variants' option notes are dropped below
         t0 = time.perf_counter()
         if item.engine == "takeda":
             _warm_takeda()
@@ -166,23 +169,29 @@ def warm_item(item: Item) -> WarmResult:
         else:
             from deckpound.engines import run_engine
 
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # option notes of the variants: not news here
-                result = run_engine(item.engine, _scene(item.overrides))
+            result = run_engine(item.engine, _scene(item.overrides))
             status = str(result.meta.get("status"))
             compile_time = float(result.meta.get("compile_time", 0.0))
         seconds = time.perf_counter() - t0
-    return WarmResult(item, seconds, len(counter.compiled), compile_time, status)
+    notes = sorted(
+        {
+            " ".join(str(w.message).split())[:300]
+            for w in caught
+            if "cach" in str(w.message).lower() and type(w.message).__module__.startswith("numba")
+        }
+    )
+    return WarmResult(item, seconds, len(counter.compiled), compile_time, status, notes)
 
 
 def warm(
-    items: Iterable[Item] = ITEMS,
+    items: Iterable[Item] | None = None,
     engines: Iterable[str] | None = None,
     report: Callable[[str, str], None] | None = None,
 ) -> list[WarmResult]:
     """Warm ``items`` (those of ``engines`` only, if given). ``report(start, end)`` is called
     before each item with the item's name and ``end = ""``, after it with ``start = ""`` and
     the outcome: together one line per item."""
+    items = ITEMS if items is None else items
     wanted = None if engines is None else set(engines)
     chosen = [
         it
