@@ -3,7 +3,8 @@
 #   ./run.sh paper [-o DIR]   the main job on the built-in benchmark
 #   ./run.sh test [ARGS]      the test suite (ARGS go to pytest, e.g. -m slow)
 #   ./run.sh <any deckpound command>
-# Idempotent: a re-run only reinstalls when pyproject.toml changed.
+# Idempotent: a re-run only reinstalls when pyproject.toml changed, and only recompiles the
+# numba kernels when their sources changed.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 cd "$here"
@@ -29,7 +30,23 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   echo "$want" > "$stamp"
 fi
 
-# 3. the job
+# 3. the numba kernels, compiled once (deckpound compile): the stamp holds a hash of the
+#    kernels' sources (content, path, mtime), the compile-time switches and the install, and the
+#    cache folder it filled; a change of any of them (or a removed cache) compiles again. DECKPOUND_SKIP_COMPILE=1 skips.
+if [ "${DECKPOUND_SKIP_COMPILE:-0}" != "1" ]; then
+  cstamp="$venv/.deckpound-compiled"
+  ckey="$( { cat "$stamp"; echo "${DECKPOUND_TAKEDA_SHORTCUT:-1} ${NUMBA_CACHE_DIR:-} ${XDG_CACHE_HOME:-$HOME/.cache}";
+            echo "$here"; stat -c '%n %Y' analytic/*.py;   # numba's index checks path and mtime
+            for f in analytic/*.py; do echo "$f"; cat "$f"; done; } | sha256sum | cut -d' ' -f1)"
+  cdir="$(sed -n 2p "$cstamp" 2>/dev/null || true)"
+  if [ "$(head -n 1 "$cstamp" 2>/dev/null || true)" != "$ckey" ] || [ ! -d "$cdir" ]; then
+    echo "run.sh: compiling the numba kernels once (deckpound compile; a few minutes)" >&2
+    "$venv/bin/deckpound" compile --stamp "$cstamp" --key "$ckey" >&2 \
+      || echo "run.sh: warning: deckpound compile failed; kernels compile on first use" >&2
+  fi
+fi
+
+# 4. the job
 cmd="${1:-paper}"; shift || true
 case "$cmd" in
   test) exec "$venv/bin/python" -m pytest -q -p no:cacheprovider "$@" ;;

@@ -24,7 +24,6 @@ import sys
 import time
 import warnings
 from collections.abc import Callable, Iterable
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -34,7 +33,7 @@ from deckpound.models.scene import Scene
 
 from deckpound import __version__
 
-from ._workers import die_with_parent
+from .pool import Interrupted, map_local
 from .result_cache import ResultCache
 
 __all__ = ["Case", "Progress", "ResultCache", "case_key", "check_scheduler_address",
@@ -119,6 +118,16 @@ def surface_warnings(results: Iterable[Result], where: str = "") -> None:
                 warnings.warn(f"{where}{msg}" if where else msg, stacklevel=2)
 
 
+def interrupted(err: KeyboardInterrupt, title: str, done: int, total: int, folder,
+                what: str = "cases", item: str = "case") -> KeyboardInterrupt:
+    """The interrupt to raise after a sweep was stopped: an :class:`Interrupted` saying what is
+    cached and how to resume (an inner sweep's message is kept as it is)."""
+    if isinstance(err, Interrupted) or folder is None:
+        return err
+    return Interrupted(f"{title}: {done} of {total} {what} finished; every finished {item} is "
+                       f"cached in {folder}: run the same command again to resume")
+
+
 class Progress:
     """A one-line text progress bar on stderr (silent when ``enabled`` is False)."""
 
@@ -147,6 +156,12 @@ class Progress:
             sys.stderr.write("\n")
         sys.stderr.flush()
 
+    def close(self) -> None:
+        """End a bar left unfinished (an interrupt) so the next message starts a line."""
+        if self.enabled and self.done < self.total and sys.stderr.isatty():
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+
 
 def run_cases(cases: Iterable[Case], *, cache: ResultCache | None = None,
               workers: int | None = None, scheduler: str | None = None,
@@ -170,7 +185,12 @@ def run_cases(cases: Iterable[Case], *, cache: ResultCache | None = None,
         results[case.label] = result
         bar.advance()
 
-    _map_parallel(todo, lambda c: (c.engine, c.scene), run_case, finish, workers, scheduler)
+    try:
+        _map_parallel(todo, lambda c: (c.engine, c.scene), run_case, finish, workers, scheduler)
+    except KeyboardInterrupt as err:
+        bar.close()
+        raise interrupted(err, title, len(results), len(cases),
+                          cache.folder if cache is not None else None) from None
     surface_warnings(results.values())
     return {c.label: results[c.label] for c in cases}
 
@@ -188,19 +208,7 @@ def _map_parallel(items: list, args_of: Callable, func: Callable, on_done: Calla
         for it in items:
             on_done(it, func(*args_of(it)))
         return
-    pool = ProcessPoolExecutor(max_workers=min(n, len(items)), initializer=die_with_parent,
-                               initargs=(os.getpid(),))
-    try:
-        futures = {pool.submit(func, *args_of(it)): it for it in items}
-        for fut in as_completed(futures):
-            on_done(futures[fut], fut.result())
-    except BaseException:
-        # an error or Ctrl-C: stop the workers now rather than finish the queued cases
-        for proc in list(getattr(pool, "_processes", {}).values()):
-            proc.kill()
-        pool.shutdown(wait=True, cancel_futures=True)
-        raise
-    pool.shutdown(wait=True)
+    map_local(items, args_of, func, on_done, n)
 
 
 _ADDRESS = re.compile(r"^(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.\-]+)"
@@ -231,6 +239,20 @@ def _map_dask(items: list, args_of: Callable, func: Callable, on_done: Callable,
         raise ConnectionError(f"cannot reach the Dask scheduler at {scheduler} within "
                               f"{CONNECT_TIMEOUT:g} s ({err})") from None
     with client:
+        # every worker loads cached kernels the fast way; a worker keeps them for its lifetime
+        client.run(_dask_worker_setup)
         futures = {client.submit(func, *args_of(it), pure=False): it for it in items}
-        for fut in dask_completed(futures):
-            on_done(futures[fut], fut.result())
+        try:
+            for fut in dask_completed(futures):
+                on_done(futures[fut], fut.result())
+        except BaseException:
+            # an error or Ctrl-C: drop the queued cases from the cluster (a worker's running
+            # case ends on its own; the cluster is not ours to kill)
+            client.cancel(list(futures), force=True)
+            raise
+
+
+def _dask_worker_setup() -> bool:
+    from deckpound._kernel_load import install
+
+    return install()

@@ -15,7 +15,8 @@ from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 from deckpound.models.sequence import SpecimenState, initial_state, next_state, scene_for_run
 
-from .cases import Progress, ResultCache, _map_parallel, case_key, run_case, surface_warnings
+from .cases import (Progress, ResultCache, _map_parallel, case_key, interrupted, run_case,
+                    surface_warnings)
 
 
 @dataclass
@@ -92,7 +93,12 @@ def run_sequences(scene: Scene, engines: list[str], cache_folder: str | Path | N
         out[engine] = runs
         bar.advance()
 
-    _map_parallel(engines, lambda e: (scene, e, cache_folder), run_sequence, done, workers,
-                  scheduler)
+    try:
+        _map_parallel(engines, lambda e: (scene, e, cache_folder), run_sequence, done, workers,
+                      scheduler)
+    except KeyboardInterrupt as err:   # each finished run is cached: say so (issue 14)
+        bar.close()
+        raise interrupted(err, "sequence", len(out), len(engines), cache_folder,
+                          "engines' sequences", "run") from None
     surface_warnings(r.result for runs in out.values() for r in runs)
     return {e: out[e] for e in engines}

@@ -17,8 +17,8 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.signal
 
+from ._iir import butter_highpass_sos, sosfiltfilt
 from .errors import SceneError
 from .mechanics import support_channels
 from .records import MAX_SAMPLES, MIN_SAMPLES
@@ -179,9 +179,9 @@ def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.
         raise SceneError("excitation.highpass",
                          f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
                          f"of the record, got {highpass}")
-    sos = scipy.signal.butter(4, highpass / nyq, btype="highpass", output="sos")
+    sos = butter_highpass_sos(4, highpass / nyq)
     pad = len(acc)
-    a = scipy.signal.sosfiltfilt(sos, np.concatenate([np.zeros(pad), acc, np.zeros(pad)]))
+    a = sosfiltfilt(sos, np.concatenate([np.zeros(pad), acc, np.zeros(pad)]))
     v = np.concatenate([[0.0], np.cumsum(0.5 * (a[1:] + a[:-1]) * dt)])
     d = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)])
     d = d[pad:2 * pad]

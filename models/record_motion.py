@@ -36,8 +36,8 @@ displacement are its trapezoidal integrals, so the three agree exactly on the re
 from __future__ import annotations
 
 import numpy as np
-import scipy.signal
 
+from ._iir import butter_highpass_sos, sosfiltfilt
 from .errors import SceneError
 from .excitation import G, SupportMotion, _check_lag, _shift, make_provenance
 from .mechanics import support_channels
@@ -92,10 +92,10 @@ def highpass_filtered(a: np.ndarray, dt: float, corner: float) -> np.ndarray:
         raise SceneError("excitation.highpass",
                          f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
                          f"of the record (after time scaling), got {corner}")
-    sos = scipy.signal.butter(4, corner / nyq, btype="highpass", output="sos")
+    sos = butter_highpass_sos(4, corner / nyq)
     n = len(a)
     padded = np.concatenate([np.zeros(n), a, np.zeros(n)])
-    return scipy.signal.sosfiltfilt(sos, padded)[n:2 * n]
+    return sosfiltfilt(sos, padded)[n:2 * n]
 
 
 def processing_label(exc: Excitation) -> str:

@@ -7,6 +7,7 @@ The front door for scripts and notebooks::
     scene = dp.load_scene("saiidi-4span", set={"contact.friction": 0.2,
                                                 "contact.friction_mode": "stick"})
     res = dp.run(scene, engine="compliance")          # a frozen, labelled Result
+    many = dp.run_batch([scene, scene2], engine="compliance", workers=2)  # kernels loaded once
     res.to_frame()                                    # pandas, time as index, units in attrs
     cmp = dp.compare(scene, engines=["opensees", "compliance", "nonsmooth"])
     cmp.metrics                                       # peaks, NRMSE, ... against the reference
@@ -20,8 +21,8 @@ from __future__ import annotations
 __version__ = "0.2.0"
 
 __all__ = [
-    "__version__", "load_scene", "run", "compare", "Comparison", "available_engines", "get_engine",
-    "register_engine", "Result", "Scene", "plan_of", "support_motion", "builtin_scenes",
+    "__version__", "load_scene", "run", "run_batch", "run_many", "compare", "Comparison",
+    "available_engines", "get_engine", "register_engine", "Result", "Scene", "plan_of", "support_motion", "builtin_scenes",
 ]
 
 _LAZY = {
@@ -34,6 +35,8 @@ _LAZY = {
     "Comparison": ("deckpound.api", "Comparison"),
     "load_scene": ("deckpound.api", "load_scene"),
     "run": ("deckpound.api", "run"),
+    "run_batch": ("deckpound.api", "run_batch"),
+    "run_many": ("deckpound.api", "run_many"),
     "compare": ("deckpound.api", "compare"),
     "available_engines": ("deckpound.api", "available_engines"),
     "builtin_scenes": ("deckpound.api", "builtin_scenes"),

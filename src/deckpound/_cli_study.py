@@ -68,7 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("study", help="a sensitivity study: table + figure")
     p.add_argument("name", metavar="NAME", help="stiffness, friction, sticking, law, geometry, "
-                   "opensees-mode, skew or sequence")
+                   "opensees-mode, skew, sequence or variability")
     add_scene_args(p)
     p.add_argument("-o", "--output", default=None, metavar="DIR",
                    help="output folder (default: study-NAME)")
@@ -81,6 +81,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "opensees)")
     p.add_argument("--pdf", action="store_true", help="figures also as PDF")
     _parallel_args(p)
+    _variability_args(p)
     p.set_defaults(func=_study)
 
     p = sub.add_parser("paper", help="the main job: sequence x 3 engines + studies + report")
@@ -101,6 +102,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--skips", action="store_true",
                    help="instead: time the compliance engine's work-saving skips on and off "
                    "(identical results checked) and the adaptive step sizes in/out of contact")
+    _speed_args(p)
     p.set_defaults(func=_bench)
 
     p = sub.add_parser("stress", help="stability stress test over hard settings, every engine")
@@ -179,6 +181,8 @@ def _study(args) -> int:
 
     from ._cli_engines import check_output_folder
 
+    if args.name == "variability":
+        return _variability(args)
     if args.name not in STUDY_NAMES:
         raise SceneError("study", f"unknown study {args.name!r}; valid studies: "
                          f"{', '.join(STUDY_NAMES)}")
@@ -270,11 +274,14 @@ def _bench_body(args, scene) -> int:
         print(f"wrote {args.output}; " + ("every skip gives identical results" if not len(bad)
                                           else f"{len(bad)} skip(s) changed a result"))
         return 0 if not len(bad) else 1
-    table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
-    cols = [c for c in ("scene", "config", "status", "wall", "us_per_step", "err_primary",
-                        "err_peak_theta", "err_peak_y", "nrmse_theta", "speedup_bound",
-                        "speedup_vs_opensees_equal_error") if c in table]
-    print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    if not args.speed_only:
+        table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
+        cols = [c for c in ("scene", "config", "status", "wall", "compile_time", "us_per_step",
+                            "err_primary",
+                            "err_peak_theta", "err_peak_y", "nrmse_theta", "speedup_bound",
+                            "speedup_vs_opensees_equal_error") if c in table]
+        print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    _speed_table(args)
     print(f"wrote {args.output}")
     return 0
 
@@ -310,3 +317,75 @@ def _export_vtk(args) -> int:
     for p in written:
         print(f"wrote {p}")
     return 0
+
+
+# -- the record-to-record variability study (issue 14: speed owner) ---------------------------
+
+def _variability_args(p: argparse.ArgumentParser) -> None:
+    from .cli import int_in
+
+    g = p.add_argument_group("variability study")
+    g.add_argument("--cases", type=int_in(1, 1_000_000), default=None,
+                   help="variability: N seeds of the synthetic record (default 1000)")
+    g.add_argument("--records", default=None, metavar="DIR",
+                   help="variability: every record file in DIR instead of seeds")
+    g.add_argument("--engine", default="compliance", metavar="NAME",
+                   help="variability: the engine (default: compliance)")
+
+
+def _variability(args) -> int:
+    from deckpound._io import output_folder
+    from deckpound.compare.variability import QUANTITIES, run_variability
+
+    from ._cli_engines import check_output_folder
+    from .engines import get_engine
+
+    get_engine(args.engine)   # an unknown name is refused before any work
+    if args.cases is not None and args.records is not None:
+        raise SceneError("--cases", "give either --cases N or --records DIR, not both")
+    cases = args.cases if args.records is None else None
+    if cases is None and args.records is None:
+        cases = 20 if args.quick else 1000
+    out = check_output_folder(args.output or "study-variability")
+    scene = _checked_scene(args, (args.engine,))
+    with output_folder(out, "study variability") as out:
+        table, summary = run_variability(
+            scene, out, engine=args.engine, cases=cases, records=args.records,
+            cache_dir=args.cache, workers=args.workers, scheduler=args.scheduler,
+            progress=not args.no_progress)
+    view = summary.set_index("quantity").loc[list(QUANTITIES)]
+    print(view[["unit", "n", "median", "p16", "p84"]].to_string(float_format=lambda v: f"{v:.4g}"))
+    failed = summary.attrs.get("failed", 0)
+    print(f"{len(table)} cases ({failed} not finished) in {summary.attrs['wall']:.1f} s; "
+          f"wrote {out}")
+    return 0 if not failed else 1
+
+
+# -- the README's speed table (issue 14: speed owner) ----------------------------------------
+
+def _speed_args(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("speed table")
+    g.add_argument("--speed-only", action="store_true",
+                   help="only the speed table (processes and in-process runs of every engine)")
+    g.add_argument("--write-readme", nargs="?", const="README.md", default=None, metavar="PATH",
+                   help="put the speed table into the README (default ./README.md) in place "
+                   "of the previous one")
+
+
+def _speed_table(args) -> None:
+    import sys
+
+    from deckpound._io import atomic_write_text
+    from deckpound.compare import speed
+
+    if args.write_readme is not None and not Path(args.write_readme).is_file():
+        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
+    repeats = args.repeats if args.repeats is not None else 3
+    rows, context = speed.measure(args.scene, args.overrides, repeats=repeats,
+                                  progress=lambda t: print(f"deckpound bench: {t}", file=sys.stderr,
+                                                         flush=True))
+    block = speed.markdown(rows, context)
+    print(block)
+    atomic_write_text(Path(args.output) / "speed.md", block + "\n")
+    if args.write_readme is not None:
+        print(f"wrote the speed table into {speed.write_readme(args.write_readme, block)}")

@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-__all__ = ["load_scene", "run", "compare", "Comparison", "available_engines", "builtin_scenes"]
+__all__ = ["load_scene", "run", "run_batch", "run_many", "compare", "Comparison",
+           "available_engines", "builtin_scenes"]
 
 #: the quantities :func:`compare` aligns and scores unless told otherwise (relative
 #: displacements: what the gaps and springs see)
@@ -71,6 +72,35 @@ def run(scene, engine: str = "compliance", *, settings: Any = None, motion=None,
 
     return run_engine(engine, scene, motion, settings=settings,
                       raise_on_failure=raise_on_failure, **options)
+
+
+def run_batch(scenes: Iterable, engine: str = "compliance", *, workers: int | None = None,
+              scheduler: str | None = None, cache: str | Path | None = None,
+              progress: bool = False) -> list:
+    """Run one engine on many scenes; the results in the order of ``scenes``.
+
+    The cases run on ``workers`` local processes (default: one per core; 1: in this process)
+    or on the Dask cluster at ``scheduler``; each worker loads the compiled kernels once for
+    the whole batch (:mod:`deckpound.compare.pool`). ``cache`` is a result-cache folder:
+    finished cases are never recomputed, so an interrupted batch resumes. Failed runs are
+    returned as failed results (``result.ok`` is False), not raised.
+    """
+    from deckpound.compare.cases import Case, ResultCache, run_cases
+    from deckpound.compare.pool import pool_scope
+    from deckpound.engines import get_engine
+
+    get_engine(engine)   # an unknown name is refused with the list of valid ones
+    scenes = list(scenes)
+    cases = [Case(f"{i}", engine, sc) for i, sc in enumerate(scenes)]
+    store = ResultCache(cache) if cache is not None else None
+    with pool_scope():
+        results = run_cases(cases, cache=store, workers=workers, scheduler=scheduler,
+                            progress=progress, title=f"{engine} batch")
+    return [results[c.label] for c in cases]
+
+
+#: ``dp.run_many`` is :func:`run_batch`
+run_many = run_batch
 
 
 @dataclass

@@ -62,6 +62,9 @@ def get_engine(name: str) -> Engine:
         raise SceneError("engine", f"unknown engine {name!r}; valid engines: "
                          f"{', '.join(ENGINES)}")
     if name not in _INSTANCES:
+        from deckpound._kernel_load import install
+
+        install()  # cached numba kernels load without numba's full set-up (_kernel_load)
         module, cls = ENGINES[name].split(":")
         _INSTANCES[name] = getattr(importlib.import_module(module), cls)()
     return _INSTANCES[name]

@@ -1,0 +1,141 @@
+"""Long-lived workers for the sweeps of one command, and clean interrupts.
+
+A sweep's cases run in worker processes. Starting a worker costs its imports and loading the
+compiled kernels (about a second); a command such as ``paper`` maps cases many times (two
+sequences, six studies). Inside :func:`pool_scope` (the CLI opens one around every command;
+:func:`deckpound.api.run_batch` around its batch) the first parallel map starts the pool and
+the later ones reuse it, so each worker imports and loads its kernels once per command. Outside a
+scope a map starts its own pool and stops it when done.
+
+Workers (:func:`worker_init`) die with their parent (:mod:`._workers`), ignore SIGINT — a Ctrl-C
+in a terminal reaches the whole process group; the parent alone decides — and load cached
+kernels the fast way (:mod:`deckpound._kernel_load`).
+
+Interrupts: on Ctrl-C (or any error) while a map runs, the parent kills every worker at once
+(SIGKILL: a worker inside a compiled loop cannot be asked), cancels what is queued and re-raises;
+callers that keep a cache turn it into :class:`Interrupted`, whose text says what is cached and
+how to resume — the CLI prints it as its one line and exits 130.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+from collections.abc import Callable, Iterator
+
+__all__ = ["Interrupted", "map_local", "pool_scope", "worker_init"]
+
+#: seconds to wait for killed workers to be reaped
+REAP_TIMEOUT = 5.0
+
+
+class Interrupted(KeyboardInterrupt):
+    """A Ctrl-C, with one sentence on what is cached and how to resume (``str(err)``)."""
+
+
+def worker_init(parent_pid: int) -> None:
+    """Pool initializer: die with the parent, leave SIGINT to it, load kernels fast."""
+    from ._workers import die_with_parent
+
+    die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    from deckpound._kernel_load import install
+
+    install()
+
+
+class _Scope:
+    def __init__(self):
+        self.active = 0
+        self.pool = None
+        self.size = 0
+
+
+_SCOPE = _Scope()
+
+
+@contextlib.contextmanager
+def pool_scope() -> Iterator[None]:
+    """Keep the local pool of the first parallel map for the later ones until the scope ends
+    (nested scopes share the outermost one's pool)."""
+    _SCOPE.active += 1
+    try:
+        yield
+    except BaseException:
+        if _SCOPE.active == 1:
+            _close(kill=True)  # an error or Ctrl-C: workers killed, nothing waited for
+        raise
+    finally:
+        _SCOPE.active -= 1
+        if _SCOPE.active == 0:
+            _close(kill=False)
+
+
+def _new_pool(n: int):
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=n, initializer=worker_init, initargs=(os.getpid(),))
+
+
+def _close(kill: bool) -> None:
+    pool, _SCOPE.pool, _SCOPE.size = _SCOPE.pool, None, 0
+    if pool is not None:
+        _stop(pool, kill)
+
+
+def _stop(pool, kill: bool) -> None:
+    """Shut a pool down; ``kill``: SIGKILL its workers first and never wait for queued work."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    if kill:
+        for proc in procs:
+            with contextlib.suppress(Exception):
+                proc.kill()
+        pool.shutdown(wait=False, cancel_futures=True)
+        for proc in procs:
+            with contextlib.suppress(Exception):
+                proc.join(REAP_TIMEOUT)
+        return
+    pool.shutdown(wait=True)
+
+
+def _acquire(n: int):
+    """(pool, owned): the scope's pool when it has ``n`` workers, else a new one; ``owned``:
+    the caller stops it when done."""
+    if _SCOPE.active:
+        if _SCOPE.pool is not None and _SCOPE.size != n:
+            _close(kill=False)
+        if _SCOPE.pool is None:
+            _SCOPE.pool, _SCOPE.size = _new_pool(n), n
+        return _SCOPE.pool, False
+    return _new_pool(n), True
+
+
+def map_local(items: list, args_of: Callable, func: Callable, on_done: Callable, n: int) -> None:
+    """Apply ``func(*args_of(item))`` on ``n`` local worker processes; ``on_done(item, value)``
+    in this process as each finishes (in completion order). An exception of ``func`` or of
+    ``on_done``, and Ctrl-C, kill the workers and propagate."""
+    from concurrent.futures import FIRST_COMPLETED, wait
+
+    pool, owned = _acquire(min(n, len(items)) if not _SCOPE.active else n)
+    # the workers are forked during the first submit: SIGINT blocked meanwhile, so that no
+    # worker can take a Ctrl-C before its initializer ignores it
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        futures = {pool.submit(func, *args_of(it)): it for it in items}
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+    try:
+        pending = set(futures)
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in done:
+                on_done(futures[fut], fut.result())
+    except BaseException:
+        if pool is _SCOPE.pool:
+            _SCOPE.pool, _SCOPE.size = None, 0
+        _stop(pool, kill=True)
+        raise
+    if owned:
+        _stop(pool, kill=False)

@@ -1,0 +1,275 @@
+"""Record-to-record variability: one engine over many ground motions of one scene.
+
+``deckpound study variability SCENE --cases N`` runs the scene with N seeds of its synthetic
+record (``excitation.seed``, ``seed + 1``, ...); ``--records DIR`` runs it with every record
+file of a folder instead (``*.at2`` as AT2, ``*.txt``/``*.dat`` as two-column text records; the
+record is applied in both directions, scaled as the scene says — by default to ``pga``
+transverse and ``longitudinal_ratio`` · pga longitudinal; files ``NAME_x.*`` and ``NAME_y.*``
+form one biaxial pair). Per case it writes a row: peak deck rotation, peak transverse and
+longitudinal deck displacement relative to the tables, gap closures (total and per corner),
+status and times; then the summary statistics (median, 16 % and 84 % fractiles, mean, standard
+deviation, min, max of each quantity over the finished cases) and a figure (empirical
+distributions with the median and the 16/84 % band).
+
+Speed: the cases run in long-lived workers (:mod:`.pool`, or the Dask cluster given
+``--scheduler``) that load the kernels once; a worker returns only the row, never the
+histories, and the rows are cached one small JSON file each (``CACHE/variability/<key>.json``,
+written atomically), so an interrupted study resumes where it stopped and a repeated one
+returns at once.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+from deckpound.models.errors import SceneError
+from deckpound.models.scene import Scene
+
+#: quantities of a row that the summary describes
+QUANTITIES = ("peak_theta", "peak_y", "peak_x", "gap_closures")
+UNITS = {"peak_theta": "rad", "peak_y": "m", "peak_x": "m", "gap_closures": "-"}
+RECORD_SUFFIXES = {".at2": "at2", ".txt": "text", ".dat": "text"}
+#: version of the row format (part of the row cache key)
+ROW_FORMAT = 1
+MAX_CASES = 1_000_000
+
+
+def seed_cases(scene: Scene, cases: int) -> list[tuple[str, dict, Scene]]:
+    """``cases`` copies of the scene with seeds ``excitation.seed + i`` of its synthetic
+    record: (label, params, scene)."""
+    import dataclasses
+
+    if scene.excitation.kind != "synthetic":
+        raise SceneError(
+            "--cases",
+            f"varies the seed of the synthetic record; the scene's "
+            f"excitation.kind is {scene.excitation.kind!r}: give --records DIR",
+        )
+    if not 1 <= cases <= MAX_CASES:
+        raise SceneError("--cases", f"must be in [1, {MAX_CASES}], got {cases}")
+    base = scene.excitation.seed
+    out = []
+    for i in range(cases):
+        exc = dataclasses.replace(scene.excitation, seed=base + i)
+        out.append(
+            (f"seed {base + i}", {"seed": base + i, "record": ""}, scene.replace(excitation=exc))
+        )
+    return out
+
+
+def record_cases(scene: Scene, folder: str | Path) -> list[tuple[str, dict, Scene]]:
+    """One case per record (or ``_x``/``_y`` pair) in ``folder``."""
+    from .studies import modified
+
+    root = Path(folder)
+    if not root.is_dir():
+        raise SceneError("--records", f"{str(root)!r} is not a folder")
+    files = sorted(p for p in root.iterdir() if p.is_file() and p.suffix.lower() in RECORD_SUFFIXES)
+    if not files:
+        raise SceneError("--records", f"{str(root)!r} holds no record (*.at2, *.txt, *.dat)")
+    groups: dict[str, dict[str, Path]] = {}
+    for p in files:
+        stem = p.stem
+        axis = stem[-2:].lower() if stem[-2:].lower() in ("_x", "_y") else ""
+        name = stem[:-2] if axis else stem
+        groups.setdefault(f"{name}{p.suffix.lower()}", {})[axis[1:] or "xy"] = p
+    out = []
+    for name, parts in sorted(groups.items()):
+        kind = RECORD_SUFFIXES[Path(name).suffix]
+        fx = parts.get("x", parts.get("xy"))
+        fy = parts.get("y", parts.get("xy"))
+        ov = [f"excitation.kind={kind}"]
+        ov += [f"excitation.file_x={json.dumps(str(fx.resolve()))}"] if fx else []
+        ov += [f"excitation.file_y={json.dumps(str(fy.resolve()))}"] if fy else []
+        out.append((f"record {name}", {"seed": None, "record": name}, modified(scene, *ov)))
+    return out
+
+
+def case_row(engine: str, scene: Scene) -> dict:
+    """Run one case (in a worker) and return its row; a refused or failed case gives a row
+    with its status and message, never an exception."""
+    from deckpound.compare.cases import run_case
+    from deckpound.compare.metrics import peak
+
+    t0 = time.perf_counter()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            r = run_case(engine, scene)
+    except SceneError as err:
+        return {"status": "refused", "message": str(err), "process_time": 0.0}
+    per = r.meta.get("gap_closures_per_corner", {})
+    row = {
+        "peak_theta": peak(r["deck_theta"]),
+        "peak_y": peak(r["deck_y_rel"]),
+        "peak_x": peak(r["deck_x_rel"]),
+        "gap_closures": int(r.meta.get("gap_closures", 0)),
+        **{f"closures_{c}": int(v) for c, v in sorted(per.items())},
+        "status": str(r.meta.get("status")),
+        "message": str(r.meta.get("message", "")),
+        "wall_time": float(r.meta.get("wall_time", np.nan)),
+        "compile_time": float(r.meta.get("compile_time", 0.0)),
+        "steps": int(r.meta.get("steps", 0)),
+    }
+    row["process_time"] = time.perf_counter() - t0
+    return row
+
+
+def row_key(engine: str, scene: Scene) -> str:
+    """Cache key of a case's row: the result cache's key, the row format."""
+    from .cases import case_key
+
+    text = f"{case_key(engine, scene)}:variability-row:{ROW_FORMAT}"
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _read_row(path: Path) -> dict | None:
+    try:
+        row = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None  # absent or damaged: recomputed
+    return row if isinstance(row, dict) and row.get("status") == "success" else None
+
+
+def run_variability(
+    scene: Scene,
+    out: str | Path,
+    *,
+    engine: str = "compliance",
+    cases: int | None = None,
+    records: str | Path | None = None,
+    cache_dir: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+):
+    """Run the study, write ``variability.csv``, ``variability_summary.csv`` and
+    ``variability.png`` in ``out``; return (table, summary)."""
+    import pandas as pd
+
+    from deckpound._io import atomic_write_text, ensure_folder, write_csv
+
+    from .cases import Progress, _map_parallel, interrupted
+
+    if (cases is None) == (records is None):
+        raise SceneError(
+            "--cases", "give either --cases N (seeds of the synthetic record) or --records DIR"
+        )
+    specs = record_cases(scene, records) if records is not None else seed_cases(scene, cases)
+    out = ensure_folder(out)
+    rows_dir = ensure_folder(Path(cache_dir) if cache_dir else out / "cache", "--cache")
+    rows_dir = ensure_folder(rows_dir / "variability", "--cache")
+    t0 = time.perf_counter()
+    keys = [row_key(engine, sc) for _, _, sc in specs]
+    rows: dict[int, dict] = {}
+    for i, k in enumerate(keys):
+        cached = _read_row(rows_dir / f"{k}.json")
+        if cached is not None:
+            rows[i] = cached
+    todo = [i for i in range(len(specs)) if i not in rows]
+    bar = Progress(len(specs), "study variability", progress)
+    bar.advance(len(rows))
+
+    def done(i: int, row: dict) -> None:
+        rows[i] = row
+        if row.get("status") == "success":
+            atomic_write_text(rows_dir / f"{keys[i]}.json", json.dumps(row), field="--cache")
+        bar.advance()
+
+    try:
+        _map_parallel(todo, lambda i: (engine, specs[i][2]), case_row, done, workers, scheduler)
+    except KeyboardInterrupt as err:
+        bar.close()
+        raise interrupted(err, "study variability", len(rows), len(specs), rows_dir) from None
+    table = pd.DataFrame(
+        [
+            {"case": i, "label": specs[i][0], "engine": engine, **specs[i][1], **rows[i]}
+            for i in range(len(specs))
+        ]
+    )
+    summary = summarize(table)
+    summary.attrs["wall"] = time.perf_counter() - t0
+    write_csv(table, out / "variability.csv")
+    write_csv(summary, out / "variability_summary.csv")
+    figure(table, summary, scene, out / "variability.png")
+    atomic_write_text(
+        out / "variability.json",
+        json.dumps(
+            {
+                "cases": len(specs),
+                "computed": len(todo),
+                "from_cache": len(specs) - len(todo),
+                "engine": engine,
+                "wall_time": summary.attrs["wall"],
+                "workers": workers,
+                "scheduler": scheduler,
+                "cpu_count": os.cpu_count(),
+            },
+            indent=2,
+        ),
+    )
+    return table, summary
+
+
+def summarize(table) -> object:
+    """Median, 16 % / 84 % fractiles, mean, std, min, max per quantity (finished cases)."""
+    import pandas as pd
+
+    ok = table[table["status"] == "success"] if "status" in table else table
+    rows = []
+    for q in QUANTITIES:
+        x = ok[q].to_numpy(float) if q in ok and len(ok) else np.zeros(0)
+        stats = {"quantity": q, "unit": UNITS[q], "n": len(x)}
+        if len(x):
+            stats.update(
+                median=float(np.median(x)),
+                p16=float(np.percentile(x, 16)),
+                p84=float(np.percentile(x, 84)),
+                mean=float(np.mean(x)),
+                std=float(np.std(x, ddof=1)) if len(x) > 1 else 0.0,
+                min=float(np.min(x)),
+                max=float(np.max(x)),
+            )
+        rows.append(stats)
+    frame = pd.DataFrame(rows)
+    frame.attrs["failed"] = int(len(table) - len(ok))
+    return frame
+
+
+def figure(table, summary, scene: Scene, path: Path) -> list[Path]:
+    """Empirical distributions of peak rotation, transverse displacement and gap closures,
+    with the median and the 16–84 % band."""
+    from .style import new_figure, save
+
+    ok = table[table["status"] == "success"]
+    panels = (
+        ("peak_theta", 1e3, "peak deck rotation [mrad]"),
+        ("peak_y", 1e3, "peak transverse displacement [mm]"),
+        ("gap_closures", 1.0, "gap closures [-]"),
+    )
+    fig, axes = new_figure(1, 3, width=10.0, height=3.0)
+    stats = summary.set_index("quantity")
+    for ax, (q, scale, label) in zip(axes[0], panels):
+        x = np.sort(ok[q].to_numpy(float)) * scale if len(ok) else np.zeros(0)
+        if len(x):
+            ax.step(x, np.arange(1, len(x) + 1) / len(x), where="post", color="#000000")
+            s = stats.loc[q]
+            ax.axvspan(
+                s["p16"] * scale, s["p84"] * scale, color="#1f5fa8", alpha=0.15, label="16-84 %"
+            )
+            ax.axvline(s["median"] * scale, color="#c0392b", linestyle="--", label="median")
+            ax.legend(loc="lower right")
+        ax.set_xlabel(label)
+        ax.set_ylabel("fraction of cases [-]")
+    axes[0, 0].set_title(
+        f"{len(ok)} of {len(table)} cases, {table['engine'].iloc[0]} engine"
+        if len(table)
+        else "no case"
+    )
+    return save(fig, path, scene.name)

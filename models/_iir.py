@@ -1,0 +1,127 @@
+"""Zero-phase Butterworth high-pass filtering in numpy alone (no ``scipy.signal``).
+
+Importing ``scipy.signal`` costs 0.6–1.7 s, more than a whole compliance run; the synthetic
+generator and the records' ``processing = highpass`` need one filter of it. This module is that
+filter, written with the same arithmetic as scipy, step for step, so that its output is the
+same to the last bit (``tests/test_iir.py`` checks it against scipy):
+
+* :func:`butter_highpass_sos` — ``scipy.signal.butter(order, wn, "highpass", output="sos")``:
+  analogue prototype poles, high-pass transform, bilinear transform, then second-order
+  sections with the pole closest to the unit circle last and the gain in the first section
+  (scipy's ``zpk2sos`` with ``pairing="nearest"``), for an even order;
+* :func:`sosfiltfilt` — ``scipy.signal.sosfiltfilt(sos, x)`` for 1-D ``x``: odd extension of
+  3·(2·sections + 1) samples at both ends, steady-state initial conditions
+  (``sosfilt_zi``), the direct-form-II-transposed recursion forwards and backwards.
+
+The recursion runs as a Python loop over plain floats (0.3–0.7 µs per sample and section,
+~20 ms for a 20 s synthetic component); where ``scipy.signal`` is loaded already its compiled
+recursion is used — the same bits, 6× faster — and a process that has filtered
+:data:`SCIPY_AFTER` signals (a sweep's long-lived worker) imports it for the rest.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import numpy as np
+
+__all__ = ["butter_highpass_sos", "sosfilt_zi", "sosfiltfilt"]
+
+#: signals filtered in pure Python before this process imports scipy.signal for the rest (a
+#: sweep's worker: its 0.5–1 s import is then paid once for hundreds of records)
+SCIPY_AFTER = 16
+_CALLS = [0]
+
+
+def butter_highpass_sos(order: int, wn: float) -> np.ndarray:
+    """Second-order sections of a digital Butterworth high-pass of even ``order`` at ``wn``
+    (a fraction of the Nyquist frequency, 0 < wn < 1); shape (order // 2, 6)."""
+    if order < 2 or order % 2:
+        raise ValueError(f"order must be even and >= 2, got {order}")
+    if not 0.0 < wn < 1.0:
+        raise ValueError(f"wn must lie in (0, 1), got {wn}")
+    # analogue prototype (scipy.signal.buttap): unit cut-off, no zeros, gain 1
+    p = -np.exp(1j * np.pi * np.arange(-order + 1, order, 2) / (2 * order))
+    fs = 2.0
+    warped = 2 * fs * math.tan(math.pi * wn / fs)
+    # low-pass to high-pass (lp2hp_zpk): zeros at s = 0, poles wo / p
+    z_hp = np.zeros(order)
+    p_hp = warped / p
+    k_hp = float(np.real(1.0 / np.prod(-p)))
+    # bilinear transform (bilinear_zpk) at fs = 2
+    fs2 = 2.0 * fs
+    z_z = (fs2 + z_hp) / (fs2 - z_hp)
+    p_z = (fs2 + p_hp) / (fs2 - p_hp)
+    k_z = k_hp * np.real(np.prod(fs2 - z_hp) / np.prod(fs2 - p_hp))
+    # sections (zpk2sos, nearest pairing): one conjugate pair and two zeros (all at z = 1) each
+    upper = p_z[p_z.imag > 0]
+    upper = upper[np.lexsort((np.abs(upper.imag), upper.real))]
+    n_sections = order // 2
+    sos = np.zeros((n_sections, 6))
+    zeros = list(z_z.real)
+    for si in range(n_sections - 1, -1, -1):
+        worst = int(np.argmin(np.abs(1 - np.abs(upper))))
+        p1 = upper[worst]
+        upper = np.delete(upper, worst)
+        z1, z2 = zeros.pop(), zeros.pop()
+        sos[si, :3] = np.poly([z1, z2])
+        sos[si, 3:] = np.poly([p1, p1.conj()]).real
+    sos[0, :3] *= k_z
+    return sos
+
+
+def sosfilt_zi(sos: np.ndarray) -> np.ndarray:
+    """Initial conditions of each section for the steady state of a unit step
+    (``scipy.signal.sosfilt_zi``); shape (sections, 2)."""
+    zi = np.empty((sos.shape[0], 2))
+    scale = 1.0
+    for s in range(sos.shape[0]):
+        b, a = sos[s, :3], sos[s, 3:]
+        if a[0] != 1.0:
+            b, a = b / a[0], a / a[0]
+        # lfilter_zi: solve (I - A) zi = b[1:] - a[1:] b[0], A the transposed companion matrix
+        i_minus_a = np.eye(2) - np.array([[-a[1], 1.0], [-a[2], 0.0]])
+        zi[s] = scale * np.linalg.solve(i_minus_a, b[1:] - a[1:] * b[0])
+        scale *= b.sum() / a.sum()
+    return zi
+
+
+def _sosfilt(sos: np.ndarray, x: np.ndarray, zi: np.ndarray) -> np.ndarray:
+    """Direct form II transposed, section after section for each sample (scipy's order)."""
+    coeffs = [tuple(float(c) for c in row) for row in sos]
+    state = [[float(zi[s, 0]), float(zi[s, 1])] for s in range(len(coeffs))]
+    out = x.tolist()
+    for s, (b0, b1, b2, _a0, a1, a2) in enumerate(coeffs):
+        z0, z1 = state[s]
+        for i, xc in enumerate(out):
+            xn = b0 * xc + z0
+            z0 = b1 * xc - a1 * xn + z1
+            z1 = b2 * xc - a2 * xn
+            out[i] = xn
+    return np.array(out)
+
+
+def sosfiltfilt(sos: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Forward-backward filtering of a 1-D signal (``scipy.signal.sosfiltfilt`` with its
+    defaults: odd padding of 3 · (2 · sections + 1) samples)."""
+    sos = np.asarray(sos, dtype=float)
+    x = np.asarray(x, dtype=float)
+    ntaps = 2 * sos.shape[0] + 1
+    ntaps -= min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
+    edge = 3 * ntaps
+    if x.ndim != 1 or x.shape[0] <= edge:
+        raise ValueError(f"the signal needs more than {edge} samples, got {x.shape}")
+    _CALLS[0] += 1
+    if _CALLS[0] == SCIPY_AFTER and "scipy.signal" not in sys.modules:
+        import scipy.signal  # noqa: F401  (a long sweep: worth its import from now on)
+    signal = sys.modules.get("scipy.signal")
+    if signal is not None:  # already paid for: its compiled loop gives the same bits
+        return signal.sosfiltfilt(sos, x)
+    ext = np.concatenate((2 * x[0] - x[edge:0:-1], x, 2 * x[-1] - x[-2 : -(edge + 2) : -1]))
+    zi = sosfilt_zi(sos)
+    # sections are applied one after the other on the whole signal: the same numbers as
+    # scipy's sample-by-sample interleaving (each section only sees its predecessor's output)
+    y = _sosfilt(sos, ext, zi * ext[0])
+    y = _sosfilt(sos, y[::-1], zi * y[-1])[::-1]
+    return y[edge:-edge]

@@ -1,0 +1,216 @@
+"""``deckpound compile``: compile every kernel a user can reach, once, off the critical path.
+
+numba compiles a kernel for the argument types it is called with and keeps the machine code in
+its on-disk cache (``~/.cache/deckpound/numba/<hash of the kernels' sources>``, see
+:func:`deckpound.analytic._jit.use_source_keyed_cache`). Which types a run produces depends on
+the scene and the engine settings, and the kernels' signatures change as the kernels do; so the
+warm-up does not list signatures: it *runs* each analytic engine on tiny versions of the
+benchmark that cover the type specialisations a user can reach (:data:`ITEMS`: linear and
+nonlinear contact geometry, each friction mode, the newmark and adaptive integrators, the
+nonsmooth engine's lemke and enumeration solvers; the Hysteretic material used by
+``deckpound verify takeda``). Each item runs in this process through the public engine
+registry, exactly as a user's run would, so whatever those runs compile is what the users'
+runs load.
+
+The numba compile events are counted per item (``compiled``: kernels numba had to compile,
+0 when everything came from the cache). ``./run.sh`` runs the command once after installing
+(its stamp file holds a hash of the kernels' sources; a change re-runs it), ``pip install``
+users run ``deckpound compile`` once (README).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+
+__all__ = ["ITEMS", "Item", "WarmResult", "cache_location", "warm", "warm_item"]
+
+#: length of the warm-up runs [s]: a few output steps; compiling does not depend on it
+WARM_DURATION = 0.02
+
+_FRICTION = ("contact.friction=0.2",)
+
+
+@dataclass(frozen=True)
+class Item:
+    """One warm-up run: an engine on the benchmark with ``overrides`` (``engine = "takeda"``:
+    the standalone Hysteretic material of ``deckpound verify takeda``)."""
+
+    engine: str
+    label: str
+    overrides: tuple[str, ...] = ()
+
+
+ITEMS: tuple[Item, ...] = (
+    Item("compliance", "newmark, linear geometry, frictionless"),
+    Item(
+        "compliance",
+        "newmark, nonlinear geometry, slip friction",
+        ("contact.geometry=nonlinear", *_FRICTION, "contact.friction_mode=slip"),
+    ),
+    Item(
+        "compliance",
+        "newmark, linear geometry, stick friction",
+        (*_FRICTION, "contact.friction_mode=stick"),
+    ),
+    Item(
+        "compliance", "adaptive, linear geometry, frictionless", ("compliance.integrator=adaptive",)
+    ),
+    Item(
+        "compliance",
+        "adaptive, nonlinear geometry, stick friction",
+        (
+            "compliance.integrator=adaptive",
+            "contact.geometry=nonlinear",
+            *_FRICTION,
+            "contact.friction_mode=stick",
+        ),
+    ),
+    Item("nonsmooth", "lemke, linear geometry, frictionless"),
+    Item(
+        "nonsmooth",
+        "lemke, nonlinear geometry, friction",
+        ("contact.geometry=nonlinear", *_FRICTION, "contact.friction_mode=stick"),
+    ),
+    Item(
+        "nonsmooth",
+        "enumeration, linear geometry, friction",
+        ("nonsmooth.solver=enumeration", *_FRICTION, "contact.friction_mode=stick"),
+    ),
+    Item("takeda", "Hysteretic material (verify takeda)"),
+)
+
+
+@dataclass(frozen=True)
+class WarmResult:
+    """What warming one item took: wall seconds, kernels compiled (0: all from the cache),
+    the engine-reported compile/load time, the run's status and numba's caching warnings."""
+
+    item: Item
+    seconds: float
+    compiled: int
+    compile_time: float
+    status: str
+    notes: list[str] = field(default_factory=list)
+
+
+def cache_location() -> str:
+    """Where numba keeps the kernels (the source-keyed directory, or NUMBA_CACHE_DIR)."""
+    import numba
+
+    import deckpound.analytic  # noqa: F401  (places the source-keyed cache)
+
+    return str(numba.config.CACHE_DIR or "numba's default (__pycache__ beside the sources)")
+
+
+class _CompileCounter:
+    """Counts numba's compile events (a cache hit broadcasts none)."""
+
+    def __init__(self):
+        from numba.core import event
+
+        class Listener(event.Listener):
+            def __init__(self):
+                self.compiled = set()
+
+            def on_start(self, ev):
+                pass
+
+            def on_end(self, ev):
+                data = ev.data or {}
+                self.compiled.add((id(data.get("dispatcher")), str(data.get("args"))))
+
+        self.listener = Listener()
+        self._event = event
+
+    def __enter__(self):
+        self._event.register("numba:compile", self.listener)
+        return self.listener
+
+    def __exit__(self, *exc):
+        self._event.unregister("numba:compile", self.listener)
+
+
+def _scene(overrides: Iterable[str]):
+    from deckpound.models.scene_io import load_scene
+
+    return load_scene("saiidi-4span", [f"run.duration={WARM_DURATION!r}", *overrides])
+
+
+def _warm_takeda() -> None:
+    from deckpound.analytic.hysteretic import HystereticMaterial
+    from deckpound.opensees_build.verify import PARAMETER_SETS
+
+    for args in PARAMETER_SETS:
+        m = HystereticMaterial(*args, element_copy=False)
+        for strain in (0.0, 1e-4, abs(args[1]) * 3.0, -abs(args[1]) * 3.0):
+            m.set_trial_strain(float(strain))
+            m.commit()
+        m.revert_to_last_commit()
+        m.revert_to_start()
+        _ = (m.stress, m.tangent, m.strain, m.initial_tangent, m.copy())
+
+
+def warm_item(item: Item) -> WarmResult:
+    """Run one item in this process; compile or load what it needs. numba's warnings that a
+    kernel could not be cached (an unwritable cache folder) are kept in ``notes``."""
+    import warnings
+
+    from deckpound._kernel_load import install
+
+    install()
+    with _CompileCounter() as counter, warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")  # the variants' option notes are dropped below
+        t0 = time.perf_counter()
+        if item.engine == "takeda":
+            _warm_takeda()
+            status, compile_time = "success", 0.0
+        else:
+            from deckpound.engines import run_engine
+
+            result = run_engine(item.engine, _scene(item.overrides))
+            status = str(result.meta.get("status"))
+            compile_time = float(result.meta.get("compile_time", 0.0))
+        seconds = time.perf_counter() - t0
+    notes = sorted(
+        {
+            " ".join(str(w.message).split())[:300]
+            for w in caught
+            if "cach" in str(w.message).lower() and type(w.message).__module__.startswith("numba")
+        }
+    )
+    return WarmResult(item, seconds, len(counter.compiled), compile_time, status, notes)
+
+
+def warm(
+    items: Iterable[Item] | None = None,
+    engines: Iterable[str] | None = None,
+    report: Callable[[str, str], None] | None = None,
+) -> list[WarmResult]:
+    """Warm ``items`` (those of ``engines`` only, if given). ``report(start, end)`` is called
+    before each item with the item's name and ``end = ""``, after it with ``start = ""`` and
+    the outcome: together one line per item."""
+    items = ITEMS if items is None else items
+    wanted = None if engines is None else set(engines)
+    chosen = [
+        it
+        for it in items
+        if wanted is None
+        or it.engine in wanted
+        or (it.engine == "takeda" and "compliance" in wanted)
+    ]
+    out = []
+    for k, item in enumerate(chosen, 1):
+        if report is not None:
+            report(f"[{k}/{len(chosen)}] {item.engine}: {item.label}: ", "")
+        res = warm_item(item)
+        out.append(res)
+        if report is not None:
+            what = (
+                f"compiled {res.compiled} kernel{'s' * (res.compiled != 1)}"
+                if res.compiled
+                else "loaded from the cache"
+            )
+            report("", f"{res.seconds:.2f} s ({what}; {res.status})")
+    return out

@@ -1,0 +1,59 @@
+"""Cached kernels load without numba's full context set-up (src/deckpound/_kernel_load.py),
+with results identical to numba's own loading path."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+CODE = """
+import json, sys
+import numpy as np
+import deckpound as dp
+scene = dp.load_scene("saiidi-4span", set={"run.duration": 0.5})
+out = {}
+for engine in ("compliance", "nonsmooth"):
+    r = dp.run(scene, engine=engine)
+    out[engine] = {k: np.asarray(v).tolist() for k, v in r.columns.items()}
+from deckpound._kernel_load import installed
+print(json.dumps({"installed": installed(), "refreshed": "numba.np.linalg" in sys.modules,
+                  "columns": out}))
+"""
+
+
+def _run(fast: bool) -> dict:
+    env = dict(os.environ, DECKPOUND_NUMBA_FASTLOAD="1" if fast else "0")
+    p = subprocess.run(
+        [sys.executable, "-c", CODE],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=900,
+        check=False,
+    )
+    assert p.returncode == 0, p.stderr[-2000:]
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.skipif(os.environ.get("DECKPOUND_NUMBA_FASTLOAD") == "0", reason="turned off")
+def test_fast_load_skips_the_refresh_and_gives_identical_results():
+    slow = _run(False)  # numba's own path (also fills the cache when it is cold)
+    fast = _run(True)
+    assert not slow["installed"] and slow["refreshed"]
+    assert fast["installed"] and not fast["refreshed"]  # numba's registries were not loaded
+    assert fast["columns"] == slow["columns"]
+
+
+def test_compiling_after_a_fast_load_still_works():
+    """A kernel missing from the cache after fast loads: numba's compiler refreshes itself."""
+    code = (
+        "from deckpound._kernel_load import install; install()\n"
+        "import numba\n"
+        "@numba.njit\n"
+        "def f(x):\n    return x.sum() + 1.0\n"
+        "import numpy as np; print(f(np.ones(3)))"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert p.stdout.strip() == "4.0"

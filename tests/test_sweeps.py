@@ -1,0 +1,194 @@
+"""Sweeps in long-lived workers (compare/pool.py), the batch API, the variability study on a
+local process pool and on a Dask cluster over TCP, and a clean Ctrl-C."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+from deckpound.compare import pool
+from deckpound.compare.cases import _map_parallel
+
+import deckpound as dp
+from deckpound import cli
+
+SHORT = ["excitation.duration=2.0"]
+
+
+def _pid(_x):
+    time.sleep(0.05)  # long enough that both workers take cases
+    return os.getpid()
+
+
+def _boom(x):
+    if x == 3:
+        raise ValueError("case 3 failed")
+    return x
+
+
+def test_pool_scope_reuses_workers_across_maps():
+    def pids(n_items):
+        out = []
+        _map_parallel(
+            list(range(n_items)), lambda i: (i,), _pid, lambda it, v: out.append(v), 2, None
+        )
+        return set(out)
+
+    with pool.pool_scope():
+        first, second = pids(6), pids(6)
+        assert second == first and os.getpid() not in first  # the same two workers
+    assert pool._SCOPE.pool is None  # closed with the scope
+    assert pids(6).isdisjoint(first)  # outside: a pool per map
+
+
+def test_worker_error_propagates_and_kills_the_workers():
+    with pool.pool_scope():
+        with pytest.raises(ValueError, match="case 3 failed"):
+            _map_parallel(list(range(8)), lambda i: (i,), _boom, lambda *a: None, 2, None)
+        assert pool._SCOPE.pool is None
+
+
+def test_run_batch_equals_single_runs(tmp_path):
+    scenes = [
+        dp.load_scene("saiidi-4span", set=[*SHORT, f"excitation.seed={s}"]) for s in (1, 2, 3)
+    ]
+    batch = dp.run_batch(scenes, engine="compliance", workers=2, cache=tmp_path)
+    assert dp.run_many is dp.run_batch
+    for sc, r in zip(scenes, batch):
+        one = dp.run(sc, engine="compliance")
+        np.testing.assert_array_equal(r["deck_theta"], one["deck_theta"])
+    again = dp.run_batch(scenes, engine="compliance", workers=2, cache=tmp_path)  # cached
+    assert [r.meta["scene_hash"] for r in again] == [r.meta["scene_hash"] for r in batch]
+
+
+def _variability(tmp_path, name, *extra):
+    out = tmp_path / name
+    code = cli.main(
+        [
+            "study",
+            "variability",
+            "saiidi-4span",
+            "--cases",
+            "3",
+            "--no-progress",
+            "-o",
+            str(out),
+            *[a for s in SHORT for a in ("--set", s)],
+            *extra,
+        ]
+    )
+    assert code == 0
+    return out, pd.read_csv(out / "variability.csv"), pd.read_csv(out / "variability_summary.csv")
+
+
+def test_variability_study_table_summary_figure_and_resume(tmp_path, capsys):
+    out, table, summary = _variability(tmp_path, "v", "--workers", "2")
+    assert list(table["seed"]) == [1994, 1995, 1996] and (table["status"] == "success").all()
+    assert {"peak_theta", "peak_y", "gap_closures", "closures_c1"} <= set(table.columns)
+    s = summary.set_index("quantity")
+    for q in ("peak_theta", "peak_y", "gap_closures"):
+        x = table[q].to_numpy(float)
+        assert s.loc[q, "median"] == pytest.approx(np.median(x))
+        assert s.loc[q, "p16"] == pytest.approx(np.percentile(x, 16))
+        assert s.loc[q, "p84"] == pytest.approx(np.percentile(x, 84))
+    assert (out / "variability.png").stat().st_size > 5000
+    printed = capsys.readouterr().out
+    assert "median" in printed and "3 cases (0 not finished)" in printed
+    # a second run takes every row from the cache
+    _variability(tmp_path, "v", "--workers", "2")
+    assert json.loads((out / "variability.json").read_text())["from_cache"] == 3
+
+
+def test_variability_on_a_dask_cluster_over_tcp_equals_local(tmp_path):
+    distributed = pytest.importorskip("dask.distributed")
+    _, local, _ = _variability(tmp_path, "local", "--workers", "1")
+    with distributed.LocalCluster(
+        n_workers=1,
+        threads_per_worker=1,
+        processes=True,
+        protocol="tcp",
+        host="127.0.0.1",
+        dashboard_address=None,
+    ) as cluster:
+        assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")
+        _, remote, _ = _variability(tmp_path, "dask", "--scheduler", cluster.scheduler_address)
+    for q in ("peak_theta", "peak_y", "gap_closures"):
+        np.testing.assert_array_equal(remote[q], local[q])
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        with open(f"/proc/{pid}/task/{pid}/children") as fh:
+            return [int(p) for p in fh.read().split()]
+    except OSError:
+        return []
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
+    except FileNotFoundError:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc needed")
+def test_ctrl_c_stops_every_worker_with_one_line_and_resumes(tmp_path):
+    argv = [
+        sys.executable,
+        "-m",
+        "deckpound",
+        "study",
+        "variability",
+        "saiidi-4span",
+        "--cases",
+        "400",
+        "--workers",
+        "2",
+        "--no-progress",
+        "-o",
+        "out",
+        "--set",
+        "excitation.duration=4.0",
+    ]
+    # a terminal's Ctrl-C reaches the whole process group: the command in a group of its own
+    proc = subprocess.Popen(
+        argv,
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    rows = tmp_path / "out" / "cache" / "variability"
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and proc.poll() is None:
+        if rows.is_dir() and len(list(rows.glob("*.json"))) >= 3:
+            break
+        time.sleep(0.2)
+    workers = _children(proc.pid)
+    assert proc.poll() is None and len(workers) >= 2, "the study ended before the interrupt"
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and "Traceback" not in err + out, err
+    assert lines[0].startswith("deckpound: interrupted: study variability: ")
+    assert "cached in" in lines[0] and "run the same command again to resume" in lines[0]
+    time.sleep(0.5)
+    assert not [p for p in workers if _alive(p)]  # every worker is gone
+    cached = len(list(rows.glob("*.json")))
+    assert (tmp_path / "out" / "INCOMPLETE").is_file()
+    # resume: the same command computes only the missing cases
+    done = subprocess.run(
+        argv, cwd=tmp_path, capture_output=True, text=True, timeout=600, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    report = json.loads((tmp_path / "out" / "variability.json").read_text())
+    assert report["from_cache"] == cached and report["computed"] == 400 - cached
+    assert not (tmp_path / "out" / "INCOMPLETE").exists()
