@@ -19,11 +19,6 @@ from .plan import plan_of
 from .scene import Scene
 
 
-def normal_directions_at_rest(scene: Scene) -> np.ndarray:
-    """Rows w_N = ∂g_N/∂u of the four corners at u = 0 (linear kinematics), shape (4, 7)."""
-    return plan_of(scene).normal_rows()
-
-
 def effective_masses(scene: Scene) -> np.ndarray:
     """Effective mass of each corner contact [t]: 1 / (w_N M⁻¹ w_Nᵀ)."""
     return plan_of(scene).effective_masses()

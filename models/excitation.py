@@ -104,16 +104,6 @@ class SupportMotion:
         V = np.column_stack([self.vel[c] for c in channels])
         return np.ascontiguousarray(D), np.ascontiguousarray(V)
 
-    def scaled(self, factor: float) -> SupportMotion:
-        """The motion × ``factor`` (provenance: scale factors and applied PGA × factor)."""
-        acc = None if self.acc_exact is None else {k: v * factor for k, v in self.acc_exact.items()}
-        prov = dict(self.provenance)
-        for key in ("scale_factor", "applied_pga"):
-            if isinstance(prov.get(key), dict):
-                prov[key] = {a: None if v is None else v * factor for a, v in prov[key].items()}
-        return SupportMotion(self.t, {k: v * factor for k, v in self.disp.items()},
-                             {k: v * factor for k, v in self.vel.items()}, acc, prov)
-
     def applied_pga(self) -> dict[str, float]:
         """Peak |acceleration| per direction over its supports [g] (x: tables and seats)."""
         out = {}

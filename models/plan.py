@@ -337,10 +337,6 @@ class Plan:
         """W_N at rest (linear kinematics), shape (4, 7)."""
         return np.array([c.normal_row() for c in self.corners])
 
-    def tangent_rows(self) -> np.ndarray:
-        """W_T (linear kinematics), shape (4, 7)."""
-        return np.array([c.tangent_row() for c in self.corners])
-
     def linear_gaps(self, u: np.ndarray) -> np.ndarray:
         """Gaps of the four corners for each row of u (n, 7), linear kinematics [m]."""
         u = np.atleast_2d(np.asarray(u, dtype=float))

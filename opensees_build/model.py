@@ -454,8 +454,3 @@ def analysis_commands(scene: Scene) -> list[tuple]:
         ("integrator", "Newmark", s.gamma, s.beta),
         ("analysis", "Transient"),
     ]
-
-
-def define_analysis(ops: OpsSession, scene: Scene) -> None:
-    for cmd in analysis_commands(scene):
-        ops.call(*cmd)

@@ -23,10 +23,9 @@ exported scripts read them from files in the script's data folder (``-filePath``
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 from dataclasses import dataclass, field
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
 import openseespy.opensees as _ops
@@ -157,17 +156,6 @@ class OpsSession:
     def kinds(self) -> list[str]:
         """The kinds that have tags, in order of first use (for the export's tag legend)."""
         return list(self._tags)
-
-    # -- logging control ------------------------------------------------------------------
-    @contextlib.contextmanager
-    def quiet(self) -> Iterator[None]:
-        """Execute without logging (runtime rebuilds of the analysis objects)."""
-        old = self._logging
-        self._logging = False
-        try:
-            yield
-        finally:
-            self._logging = old
 
     def comment(self, text: str) -> None:
         """A comment line in the log and the exported scripts (not executed)."""
