@@ -1,1 +1,1 @@
-"""deckpound.models."""
+"""deckpound.models: the engine-independent description (scene, plan model, excitation, result)."""
