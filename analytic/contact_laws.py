@@ -60,6 +60,7 @@ LAW_KELVIN_VOIGT = LAW_CODES["kelvin-voigt"]
 LAW_HERTZ = LAW_CODES["hertz"]
 LAW_HERTZ_DAMP = LAW_CODES["hertz-damp"]
 LAW_BILINEAR = LAW_CODES["bilinear"]
+LAW_FLORES = LAW_CODES["flores"]
 FRICTION_NONE = FRICTION_CODES["none"]
 FRICTION_SLIP = FRICTION_CODES["slip"]
 FRICTION_STICK = FRICTION_CODES["stick"]
@@ -95,7 +96,7 @@ def pack_contact(scene: Scene, *, kv_clip: bool = False,
     cp[:, P_K] = ct.stiffness
     cp[:, P_N] = ct.exponent
     cp[:, P_C] = contact_params.kelvin_voigt_damping(scene)
-    cp[:, P_D] = contact_params.hunt_crossley_factor(ct.restitution)
+    cp[:, P_D] = law.hysteresis(ct.restitution) if law.hysteresis is not None else 0.0
     cp[:, P_K2] = ct.bilinear_ratio * ct.stiffness
     cp[:, P_DY] = ct.bilinear_yield
     cp[:, P_MU] = ct.friction
@@ -147,7 +148,7 @@ def normal_law(cp, cs, g, gd):
             dlt = -g
             lam = cp[P_K] * dlt ** n
             dg = -n * cp[P_K] * dlt ** (n - 1.0)
-    elif law == LAW_HERTZ_DAMP:                   # Lankarani–Nikravesh
+    elif law == LAW_HERTZ_DAMP or law == LAW_FLORES:   # Hunt–Crossley type, factor cp[P_D]
         if g < 0.0:
             closed = True
             if cs[S_CCLOSED] == 0.0:
@@ -301,7 +302,7 @@ def contact_stored_energy(cp, cs):
             k = cp[c, P_K]
             if law == LAW_LINEAR or law == LAW_KELVIN_VOIGT:
                 e += 0.5 * k * g * g
-            elif law == LAW_HERTZ or law == LAW_HERTZ_DAMP:
+            elif law == LAW_HERTZ or law == LAW_HERTZ_DAMP or law == LAW_FLORES:
                 n = cp[c, P_N]
                 e += k * (-g) ** (n + 1.0) / (n + 1.0)
             elif law == LAW_BILINEAR:

@@ -51,6 +51,10 @@ class ContactLaw:
     nonsmooth : the nonsmooth engine expresses the law (it then reads ``contact.law`` and
         ``params``); False for every compliant law: rigid contact with Newton's impact law
         replaces it there (:data:`RIGID_CONTACT`) and a non-default law is warned as ignored.
+    hysteresis : d(e), the factor of δ̇/v⁻ in a Hunt–Crossley-type law
+        λ = k δ^n (1 + d(e) δ̇/v⁻) (packed for the kernel), or None.
+    refuse : a scene check of the law's parameters: the refusal (field, message) or None;
+        :class:`deckpound.models.scene.Contact` runs it at validation.
     """
 
     name: str
@@ -62,6 +66,8 @@ class ContactLaw:
     opensees_refusal: str | None = None
     rate_event: bool = False
     nonsmooth: bool = False
+    hysteresis: Callable[[float], float] | None = None
+    refuse: Callable[[object], tuple[str, str] | None] | None = None
 
 
 @dataclass(frozen=True)
@@ -90,6 +96,24 @@ def _hertz_damp(d: float, r: float, p: dict) -> float:
     return max(p["k"] * d ** p["n"] * (1.0 + p["hc"] * r / max(p["v_impact"], p["v_min"])), 0.0)
 
 
+def _lankarani_nikravesh(e: float) -> float:
+    # Lankarani & Nikravesh (1990), J. Mech. Des. 112: d = 3(1 − e²)/4, valid for e near 1
+    return 0.75 * (1.0 - e * e)
+
+
+def _flores(e: float) -> float:
+    # Flores, Machado, Silva & Martins (2011), Multibody Syst. Dyn. 25: d = 8(1 − e)/(5e),
+    # derived for the whole range 0 < e ≤ 1 (energy lost over the whole impact, not e → 1)
+    return 8.0 * (1.0 - e) / (5.0 * e)
+
+
+def _needs_positive_restitution(contact) -> tuple[str, str] | None:
+    if contact.restitution <= 0.0:
+        return ("contact.restitution", "the flores law needs e > 0 (its damping factor "
+                "8(1 − e)/(5e) is infinite at e = 0); use hertz-damp for a fully plastic impact")
+    return None
+
+
 def _bilinear(d: float, r: float, p: dict) -> float:
     # first loading from the closure point: K1 up to the yield line K1 δy + K2 (δ − δy)
     return min(p["k"] * d, p["k"] * p["dy"] + p["k2"] * (d - p["dy"]))
@@ -112,11 +136,17 @@ CONTACT_LAW_TABLE: tuple[ContactLaw, ...] = (
                opensees_refusal=_HERTZ_REFUSAL.format(name="hertz")),
     ContactLaw("hertz-damp", 3, ("contact.stiffness", "contact.exponent", "contact.restitution"),
                "λ = k δ^n (1 + 3(1 − e²)/4 · δ̇/v⁻) ≥ 0, v⁻ the approach velocity",
-               _hertz_damp, opensees_refusal=_HERTZ_REFUSAL.format(name="hertz-damp")),
+               _hertz_damp, opensees_refusal=_HERTZ_REFUSAL.format(name="hertz-damp"),
+               hysteresis=_lankarani_nikravesh),
     ContactLaw("bilinear", 4, ("contact.stiffness", "contact.bilinear_ratio",
                                "contact.bilinear_yield"),
                "Muthukumar: loading K1 capped by K1 δy + K2 (δ − δy), unloading K1 floored by K2 δ",
                _bilinear, opensees="ImpactMaterial", rate_event=True),
+    ContactLaw("flores", 5, ("contact.stiffness", "contact.exponent", "contact.restitution"),
+               "λ = k δ^n (1 + 8(1 − e)/(5e) · δ̇/v⁻) ≥ 0, v⁻ the approach velocity (Flores 2011)",
+               _hertz_damp, opensees_refusal=_HERTZ_REFUSAL.format(name="flores").replace(
+                   "3(1−e²)/4", "8(1−e)/(5e)"),
+               hysteresis=_flores, refuse=_needs_positive_restitution),
 )
 
 

@@ -36,8 +36,3 @@ def kelvin_voigt_damping(scene: Scene) -> np.ndarray:
     """Dashpot of each corner [kN·s/m]: c = 2 ζ(e) √(k m_eff)."""
     z = kelvin_voigt_ratio(scene.contact.restitution)
     return 2.0 * z * np.sqrt(scene.contact.stiffness * effective_masses(scene))
-
-
-def hunt_crossley_factor(e: float) -> float:
-    """Lankarani–Nikravesh factor 3(1 − e²)/4 (multiplies δ̇ / v⁻) [-]."""
-    return 0.75 * (1.0 - e * e)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import re
 
 from ._fields import spec, validate
-from .contact_laws_table import FRICTION_CODES, LAW_CODES
+from .contact_laws_table import FRICTION_CODES, LAW_CODES, contact_law
 from .errors import SceneError
 
 CONTACT_LAWS = tuple(LAW_CODES)          # the rows of contact_laws_table, in code order
@@ -158,6 +158,10 @@ class Contact:
 
     def __post_init__(self) -> None:
         validate(self)
+        refuse = contact_law(self.law).refuse
+        problem = refuse(self) if refuse is not None else None
+        if problem is not None:
+            raise SceneError(*problem)
 
     @property
     def has_friction(self) -> bool:
