@@ -143,7 +143,7 @@ def test_tcl_csv_block_reproduces_deckpound_csv(trip, tmp_path):
 
 VARIANTS = {
     # zeroLengthContact2D: gaps from the corner nodes, fn and ft from the element forces
-    "friction": ("contact.friction=0.2", "contact.friction_mode=stick"),
+    "friction": ("contact.friction=0.2", "contact.friction_mode=contact2d"),
     # step 148 fails without a fallback: both scripts stop there and exit 1, the recorders
     # hold exactly the rows deckpound stored up to the failure
     "failure": ("opensees.max_iterations=2", "opensees.fallback=none"),
