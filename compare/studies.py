@@ -42,6 +42,7 @@ from deckpound.models.scene_io import apply_overrides, scene_from_mapping
 
 from .cases import Case, ResultCache, run_cases
 from .metrics import peak
+from .damping_study import damping_cases, damping_figure, damping_headlines, damping_row
 from .skew import skew_cases, skew_figure, skew_headlines, skew_row
 
 ENGINES_ALL = ("opensees", "compliance", "nonsmooth")
@@ -255,6 +256,8 @@ STUDIES: dict[str, Study] = {s.name: s for s in (
     Study("opensees-mode", "OpenSees stick vs rigid deck", opensees_mode_cases, "mode"),
     Study("skew", "Skewed deck: skew angle, with and without friction", skew_cases, "skew",
           row=skew_row, figure=skew_figure, summary=skew_headlines),
+    Study("damping", "Damping choices: members × stiffness × mass velocities", damping_cases,
+          "damping", row=damping_row, figure=damping_figure, summary=damping_headlines),
 )}
 STUDY_NAMES = tuple(STUDIES) + ("sequence",)
 

@@ -150,7 +150,10 @@ class Contact:
     bilinear_yield: float = spec(0.001, unit="m", doc="yield deformation of the bilinear law",
                                  gt=0.0)
     friction: float = spec(0.0, unit="-", doc="Coulomb friction coefficient mu", ge=0.0)
-    friction_mode: str = spec("none", doc="none | slip (no sticking) | stick (stick spring)",
+    friction_mode: str = spec("none", doc="none | slip (no sticking) | stick (the project's "
+                              "return-mapping stick spring) | contact2d (OpenSees "
+                              "zeroLengthContact2D's algorithm; what OpenSees expresses and "
+                              "the package uses when it switches friction on)",
                               choices=FRICTION_MODES)
     tangential_stiffness: float = spec(1.0e6, unit="kN/m",
                                        doc="tangential stick spring per corner (stick mode)",

@@ -29,10 +29,13 @@ from its actuator, without Rayleigh damping; the seat has no y mass.
 
 Springs: bents — zeroLength table → deck bent node, Hysteretic (Takeda stand-in) in x and y;
 seats — zeroLength actuator → seat, Elastic k in x and θ, and a second zeroLength with
-Viscous(c, α = 1) dashpots (no Rayleigh on it: see the comment in :func:`build_model`). The
-bent and seat springs take the Rayleigh stiffness part on the initial stiffness (``rayleigh a0 0 a1 0`` + ``-doRayleigh 1``); the mass
-part acts on the absolute velocities of the deck and seat nodes. Gap elements and sticks take
-no Rayleigh damping.
+Viscous(c, α = 1) dashpots (no Rayleigh on it: see the comment in :func:`build_model`).
+Damping (:mod:`deckpound.models.damping`, the scene's ``[damping]``): ``rayleigh αM βK βKinit
+βKc`` (:func:`rayleigh_factors`: a1 on the stiffness the scene names), ``-doRayleigh 1`` on the
+members the scene names (:func:`rayleigh_members`: the bents by default, the seat springs too
+with ``bents+seats``); αM = a0 on the absolute velocities of the deck and seat nodes, or, with
+``mass = relative``, Viscous dashpots from support reference nodes (:func:`mass_dampers`). Gap
+elements, guides and sticks take no Rayleigh damping.
 
 Gaps: see :func:`gap_mapping` — the ONE place where the positive physical gap g₀ and the
 closing direction are mapped to OpenSees' node order, element orientation and negative
