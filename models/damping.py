@@ -33,7 +33,8 @@ The damping force on the 7 DOF is then
           + Bᵀ [(β0_i k0_i + βK_i k_t,i + βKc_i k_c,i + c_i) ḋ_i],   ḋ = B u̇ − S u̇_g,
 
 with β0, βK, βKc = a1 or 0 per spring as chosen and c_i the explicit dashpots (the seats'
-identified c_x, c_θ).
+identified c_x, c_θ; ``bents[i].cx``, ``cy``, 0 unless given — OpenSees: Viscous zeroLength
+elements beside the springs).
 """
 
 from __future__ import annotations

@@ -106,6 +106,9 @@ class Bent:
     station: float = spec(unit="m", doc="distance from the deck's left end (x = -L/2)", ge=0.0)
     x: TakedaSpring = spec(doc="longitudinal spring")
     y: TakedaSpring = spec(doc="transverse spring")
+    cx: float = spec(0.0, unit="kN*s/m", doc="explicit dashpot deck-table in x (e.g. from a "
+                     "system identification; adds to any Rayleigh damping)", ge=0.0)
+    cy: float = spec(0.0, unit="kN*s/m", doc="explicit dashpot deck-table in y", ge=0.0)
 
     def __post_init__(self) -> None:
         validate(self)

@@ -358,6 +358,16 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         ops.element("zeroLength", e, tn, dn, "-mat", *mats, "-dir", 1, 2,
                     *(("-doRayleigh", 1) if ray_bents else ()))
         bent_eles.append(e)
+        # explicit bent dashpots (bents[i].cx, cy), in their own element like the seats'
+        dash = [(dirn, c) for dirn, c in ((1, b.cx), (2, b.cy)) if c > 0.0]
+        if dash:
+            dmats = []
+            for dirn, c in dash:
+                m = T("material", f"{b.name} c{'xy'[dirn - 1]}")
+                ops.uniaxialMaterial("Viscous", m, c, 1.0)
+                dmats.append(m)
+            ops.element("zeroLength", T("element", f"bent {b.name} dashpot"), tn, dn, "-mat",
+                        *dmats, "-dir", *(dirn for dirn, _ in dash))
     for j, seat in enumerate(scene.seats):
         mx = T("material", f"seat{j + 1} kx")
         ops.uniaxialMaterial("Elastic", mx, seat.kx)

@@ -26,6 +26,7 @@ CHOICES = [
     ("damping.stiffness=current",),
     ("damping.mass=relative",),
     ("damping.members=bents+seats", "damping.stiffness=current", "damping.mass=relative"),
+    ("bents[0].cx=150", "bents[2].cy=300"),   # explicit bent dashpots (Viscous elements)
 ]
 
 
@@ -53,7 +54,7 @@ def test_damping_choices_change_the_answer():
     from deckpound.analytic.compliance import run_compliance
 
     peak = {}
-    for ov in CHOICES[:7]:
+    for ov in CHOICES[:7] + CHOICES[8:]:
         r = run_compliance(_scene(*ov))
         assert r.ok
         peak[ov] = (np.max(np.abs(r["fn_c1"])), np.max(np.abs(r["deck_theta"])))
