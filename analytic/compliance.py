@@ -133,6 +133,31 @@ class ComplianceEngine(Engine):
             read |= set(friction_model(ct.friction_mode).params)
         return read
 
+    def refuse(self, scene: Scene, settings) -> None:
+        """contact2d is OpenSees's discrete, step-by-step algorithm (its stick point moves at
+        every sliding commit, so the answer depends on where the steps fall) on the element's
+        fixed normal and tangent: it needs the fixed-step ``newmark`` integrator and the linear
+        contact kinematics."""
+        from deckpound.models.damping import refuse_tangent_damping
+        from deckpound.models.errors import SceneError
+
+        if settings.integrator != "newmark":
+            refuse_tangent_damping(scene, "compliance engine's adaptive", "its explicit "
+                                   "Dormand–Prince stages and energy work use the constant "
+                                   "damping matrix")
+        ct = scene.contact
+        if ct.has_friction and ct.friction_mode == "contact2d":
+            if settings.integrator != "newmark":
+                raise SceneError("compliance.integrator", "friction_mode = 'contact2d' "
+                                 "(OpenSees zeroLengthContact2D's step-by-step algorithm) needs "
+                                 "integrator = 'newmark'; use friction_mode = 'stick' or "
+                                 "'slip' with the adaptive integrator")
+            if ct.geometry != "linear":
+                raise SceneError("contact.geometry", "friction_mode = 'contact2d' "
+                                 "(zeroLengthContact2D: fixed normal and tangent) needs "
+                                 "geometry = 'linear'; use friction_mode = 'stick' or 'slip' "
+                                 "with the nonlinear geometry")
+
     def _run(self, plan: Plan, scene: Scene, settings, motion, *, kv_clip: bool = False,
              initial_state=None, substeps: int = SUBSTEPS, channels=None,
              on_interrupt: str = "raise", _skips: dict | None = None) -> RunOutput:

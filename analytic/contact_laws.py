@@ -36,9 +36,25 @@ engine uses (strain ε = g − g₀, OpenSees gap = −g₀, so ε − gap = g):
 Friction (``scene.contact.friction_mode``):
 
 * ``slip`` — λ_T = −μ λ_N⁺ tanh(U_T / v₀): Coulomb without sticking.
-* ``stick`` — elastic-plastic tangential spring (return mapping), the law of OpenSees
-  zeroLengthContact2D: trial λ_T = λ_T,n − k_t Δs; if |trial| ≤ μ λ_N⁺ stick, else slip with
-  λ_T = μ λ_N⁺ sign(trial). The tangential force is released when the corner opens.
+* ``stick`` — the project's own elastic-plastic tangential spring (return mapping): trial
+  λ_T = λ_T,n − k_t Δs (Δs the tangential relative displacement of the step); if
+  |trial| ≤ μ λ_N⁺ stick, else slide with λ_T = μ λ_N⁺ sign(trial) (the committed force stays
+  on the slip surface). The tangential force is released when the corner opens. OpenSees has
+  no element with this law.
+* ``contact2d`` — OpenSees ``zeroLengthContact2D`` (Wang & Sitar; ZeroLengthContact2D.cpp,
+  ``formResidAndTangent`` / ``commitState``), step for step. With s = t·(u_deck corner −
+  u_seat point) the total tangential relative displacement (the element's ξ, from the
+  reference configuration) and s_p the committed stick point (0 initially): in contact
+  (g ≤ 0, pressure p = k δ = λ_N) the trial force is λ_T = −k_t (s − s_p); Φ = |λ_T| − μ p ≤ 0
+  sticks (tangent ∂λ_T/∂s = −k_t), else it slides with λ_T = μ p sign(−(s − s_p)) and the
+  consistent, non-symmetric tangent ∂λ_T/∂g = μ sign · ∂p/∂g (the element's
+  −μ K_n (t/|t|) T Nᵀ). The element keeps no committed force: at a commit whose last
+  evaluation slid, s_p := s (so the next step's trial restarts from λ_T = 0, and the force the
+  element reports after that commit is 0); a stick or open commit keeps s_p, also while the
+  corner is open (the stick point is never reset on separation). The committed force stored
+  in the state (``S_CFT``, the engine's ``ft`` column) is the element's force at the committed
+  state, i.e. 0 after a sliding commit, as OpenSees reports it; the force that acted during the
+  step (μ λ_N) enters the equations of motion and the energy work.
 """
 
 from __future__ import annotations
@@ -64,7 +80,15 @@ LAW_FLORES = LAW_CODES["flores"]
 FRICTION_NONE = FRICTION_CODES["none"]
 FRICTION_SLIP = FRICTION_CODES["slip"]
 FRICTION_STICK = FRICTION_CODES["stick"]
+FRICTION_CONTACT2D = FRICTION_CODES["contact2d"]
 V_IMPACT_MIN = 1.0e-3   # m/s, floor of the Hunt–Crossley approach velocity
+
+
+@njit(cache=True, inline="always")
+def has_stick_spring(mode):
+    """True for the friction codes with an elastic stick spring k_t (stick, contact2d)."""
+    return mode == FRICTION_STICK or mode == FRICTION_CONTACT2D
+
 
 # parameters per corner (cp[c, :]): law code, k, exponent n, Kelvin–Voigt c, Hunt–Crossley
 # factor, K2, δ_y, μ, friction code, k_t, v₀, clip flag, ImpactMaterial quirk flag,
@@ -72,10 +96,11 @@ V_IMPACT_MIN = 1.0e-3   # m/s, floor of the Hunt–Crossley approach velocity
 (P_LAW, P_K, P_N, P_C, P_D, P_K2, P_DY, P_MU, P_FMODE, P_KT, P_V0, P_CLIP, P_IMPQ, P_E,
  P_EVENT) = range(15)
 N_CP = 15
-# state per corner (cs[c, :])
-S_CG, S_CGD, S_CLAM, S_CFT, S_CCLOSED, S_CVIMP, S_TLAM, S_TTAN, S_TFT, S_TVIMP, S_TCLOSED = \
-    range(11)
-N_CS = 11
+# state per corner (cs[c, :]); the last four are contact2d's: committed stick point s_p, trial
+# total tangential displacement s and the trial slide flag
+(S_CG, S_CGD, S_CLAM, S_CFT, S_CCLOSED, S_CVIMP, S_TLAM, S_TTAN, S_TFT, S_TVIMP, S_TCLOSED,
+ S_CSTICK, S_TS, S_TSLIDE) = range(14)
+N_CS = 14
 
 
 def pack_contact(scene: Scene, *, kv_clip: bool = False,
@@ -216,7 +241,8 @@ def friction_law(cp, cs, lam_n, ds, ut):
     """Trial tangential force of one corner (force on the deck along +t).
 
     lam_n : trial normal force; ds : tangential relative displacement increment of the step
-    (stick mode); ut : tangential relative velocity (slip mode).
+    (stick mode) or, for contact2d, the total tangential relative displacement s (the
+    element's ξ; see the module docstring); ut : tangential relative velocity (slip mode).
     Returns (state, λ_T, ∂λ_T/∂Δs, ∂λ_T/∂U_T, ∂λ_T/∂λ_N); state 0 open/no friction, 1 stick,
     2 slip.
     """
@@ -249,6 +275,22 @@ def friction_law(cp, cs, lam_n, ds, ut):
                 lt = sg * lim
                 d_lam = sg * mu
                 state = 2
+    elif mode == FRICTION_CONTACT2D:              # zeroLengthContact2D::formResidAndTangent
+        cs[S_TS] = ds
+        cs[S_TSLIDE] = 0.0
+        if lam_n > 0.0 or cs[S_TCLOSED] != 0.0:   # contactDetect: gap ≥ 0 (g ≤ 0)
+            trial = -cp[P_KT] * (ds - cs[S_CSTICK])
+            lim = mu * lam_n
+            if abs(trial) - lim <= 0.0:           # Φ ≤ 0: stick
+                lt = trial
+                d_ds = -cp[P_KT]
+                state = 1
+            else:                                 # slide (ContactFlag = 2)
+                sg = 1.0 if trial > 0.0 else -1.0
+                lt = sg * lim
+                d_lam = sg * mu
+                state = 2
+                cs[S_TSLIDE] = 1.0
     else:                                         # no branch for this code: fail, loudly
         lt = np.nan
         d_ds = np.nan
@@ -264,7 +306,9 @@ def contact_commit(cs, g, gd, evaluated):
 
     ``evaluated[c]`` False means the law was skipped (corner open by a margin): its trial is the
     open state. Committed gaps are updated for every corner (the bilinear law and the impact
-    velocity need them, as OpenSees updates every element every step).
+    velocity need them, as OpenSees updates every element every step). contact2d
+    (``ZeroLengthContact2D::commitState``): a corner whose last evaluation slid moves its stick
+    point to the trial s, and its committed force becomes the element's force there (0).
     """
     for c in range(4):
         if not evaluated[c]:
@@ -272,6 +316,11 @@ def contact_commit(cs, g, gd, evaluated):
             cs[c, S_TFT] = 0.0
             cs[c, S_TCLOSED] = 0.0
             cs[c, S_TTAN] = 0.0
+            cs[c, S_TSLIDE] = 0.0
+        if cs[c, S_TSLIDE] != 0.0:
+            cs[c, S_CSTICK] = cs[c, S_TS]
+            cs[c, S_TFT] = 0.0
+            cs[c, S_TSLIDE] = 0.0
         cs[c, S_CG] = g[c]
         cs[c, S_CGD] = gd[c]
         cs[c, S_CLAM] = cs[c, S_TLAM]
@@ -317,9 +366,10 @@ def contact_stored_energy(cp, cs):
                 e += 0.5 * (lam + lam_s) * (gs - g) + 0.5 * k2 * gs * gs
             else:                                 # no branch for this code
                 e = np.nan
-        if cp[c, P_FMODE] == FRICTION_STICK and cs[c, S_CFT] != 0.0:
+        if has_stick_spring(cp[c, P_FMODE]) and cs[c, S_CFT] != 0.0:
             e += 0.5 * cs[c, S_CFT] ** 2 / cp[c, P_KT]
     return e
+
 
 
 def law_parameters(cp_row, cs_row) -> dict:
@@ -421,7 +471,13 @@ def eval_closed(contact, cs, cw, u, v, un):
             for j in range(7):
                 ds += WT[c, j] * (u[j] - un[j])
                 ut += WT[c, j] * v[j]
-            _, lt[c], der[c, 2], der[c, 3], der[c, 4] = friction_law(cp[c], cs[c], lam[c], ds,
+            arg = ds
+            if cp[c, P_FMODE] == FRICTION_CONTACT2D:
+                # the element's ξ: total displacements (linear kinematics, constant W_T)
+                arg = 0.0
+                for j in range(7):
+                    arg += WT[c, j] * u[j]
+            _, lt[c], der[c, 2], der[c, 3], der[c, 4] = friction_law(cp[c], cs[c], lam[c], arg,
                                                                       ut)
             der[c, 5] = ds
             der[c, 6] = ut

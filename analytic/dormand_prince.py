@@ -469,7 +469,7 @@ def _adaptive_store(sa, contact, ws, output, row, t):
     ec = cl.contact_stored_energy(cp, cs)
     efs = 0.0
     for c in range(4):
-        if cp[c, cl.P_FMODE] == cl.FRICTION_STICK and cs[c, cl.S_CFT] != 0.0:
+        if cl.has_stick_spring(cp[c, cl.P_FMODE]) and cs[c, cl.S_CFT] != 0.0:
             efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
     W0, W1, W2, W3, W4 = y[14], y[15], y[16], y[17], y[18]
     buf[base + 0] = W0

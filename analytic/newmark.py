@@ -46,9 +46,11 @@ from deckpound.analytic.compliance import ENERGY_COLUMNS
 from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.support_motion import record_at
 from deckpound.analytic.system import C_BENT as _C_BENT
+from deckpound.analytic.system import C_FT as _C_FT
 from deckpound.analytic.system import (
     spring_assemble,
     spring_commit,
+    spring_damping_tangent,
     spring_deformations,
     spring_revert,
     spring_stored_energy,
@@ -78,7 +80,7 @@ NewmarkOptions = namedtuple("NewmarkOptions", ["nsteps", "dt", "tol", "maxit", "
 _V7 = ("u", "v", "a", "un", "vn", "an", "us", "vs", "as_", "du", "R", "f")
 _M77 = ("K", "Keff", "LU", "H", "Kel", "LUel")
 _PIV = ("piv", "pivel")
-_NS = ("fs", "kt", "kt_fact", "d_prev", "dd_prev", "fs_prev", "d_new", "dd_new")
+_NS = ("fs", "kt", "kt_fact", "d_prev", "dd_prev", "fs_prev", "d_new", "dd_new", "cv_prev")
 _V4 = ("lam_prev", "lt_prev", "g_prev")
 _CH = ("ug", "vg", "ugo", "ug0", "vg0", "ug1", "vg1")
 #: DOF vectors (7,): u, v, a trial state, un, vn, an start of the (sub)step, us, vs, as_ start
@@ -88,7 +90,8 @@ NewmarkDofs = namedtuple("NewmarkDofs", _V7)
 #: LUel (elastic effective tangent and factors); pivots piv, pivel (7,) int64.
 NewmarkMatrices = namedtuple("NewmarkMatrices", _M77 + _PIV)
 #: Per spring (ns,): fs, kt forces and tangents, kt_fact tangents of the factors held in LU,
-#: d/dd/fs_prev last committed, d/dd_new trial deformations and rates.
+#: d/dd/fs_prev last committed, d/dd_new trial deformations and rates, cv_prev the last committed
+#: tangent-dependent damping coefficient βK k_t + βKc k_c.
 NewmarkSprings = namedtuple("NewmarkSprings", _NS)
 #: Supports (n_channels,): ug, vg trial, ugo last (sub)step, ug0, vg0 start and ug1, vg1 end of
 #: the step.
@@ -117,11 +120,15 @@ def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
 
 
 @kernel
-def _store(output, row, t, u, v, cw, fs, nbs, energy):
+def _store(output, row, t, u, v, cw, cs, fs, nbs, energy):
     """Output row ``row``: the full row into ``output.row``, then the selected columns into
     ``output.table``."""
     buf = output.row
     store_standard(buf, t, u, v, cw.g, cw.lam, cw.lt, fs, nbs)
+    # ft: the committed tangential force (the trial one for every model but contact2d, whose
+    # element reports 0 after a sliding commit, as OpenSees's recorders see it)
+    for c in range(4):
+        buf[_C_FT + c] = cs[c, cl.S_CFT]
     base = _C_BENT + nbs
     for k in range(energy.shape[0]):
         buf[base + k] = energy[k]
@@ -142,7 +149,7 @@ def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
     ec = cl.contact_stored_energy(cp, cs)
     efs = 0.0                                        # stick-spring part of ec
     for c in range(4):
-        if cp[c, cl.P_FMODE] == cl.FRICTION_STICK and cs[c, cl.S_CFT] != 0.0:
+        if cl.has_stick_spring(cp[c, cl.P_FMODE]) and cs[c, cl.S_CFT] != 0.0:
             efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
     energy[0] = W[0]
     energy[1] = ke
@@ -236,7 +243,8 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     ns = sa.k0.shape[0]
     nch = DG.shape[1]
     skip_contact = opt.skip_contact
-    reuse_factors = opt.reuse_factors
+    # tangent-dependent damping: the matrix changes with k_t and k_c, never the elastic one
+    reuse_factors = opt.reuse_factors and sa.scal[2] == 0.0
     want_energy = opt.want_energy
     halt = stats.halt
     wk = work
@@ -296,6 +304,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
         fs_prev[i] = fs[i]
         d_prev[i] = d_new[i]
         dd_prev[i] = dd_new[i]
+        spr.cv_prev[i] = sa.cvar[i]
     # initial mechanical energy counts as input (zero from rest)
     es0 = spring_stored_energy(sa, hstate, u, ug)
     ec0 = cl.contact_stored_energy(cp, cs)
@@ -306,7 +315,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     W[1] = es0
     W[3] = ec0
     _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
-    _store(output, 0, 0.0, u, v, cw, fs, nbs, energy)
+    _store(output, 0, 0.0, u, v, cw, cs, fs, nbs, energy)
     row = 1
     total_it = 0
     events = 0
@@ -382,6 +391,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                             for j in range(7):
                                 Keff[i, j] = K[i, j] + c2 * Cmat[i, j]
                             Keff[i, i] += c3 * mass[i]
+                        spring_damping_tangent(sa, c2, Keff)
                         if anyev:
                             cl.contact_tangent(contact, cw, u, c2, Keff, H)
                         for i in range(7):
@@ -436,6 +446,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 # --- energy (trapezoidal work over the (sub)step)
                 if not want_energy:
                     continue
+                var = sa.scal[2] != 0.0
                 for i in range(ns):
                     di = d_new[i]
                     vi = dd_new[i]
@@ -443,10 +454,16 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                     if ch >= 0:
                         ftot_o = fs_prev[i] + sa.crate[i] * dd_prev[i]
                         ftot_n = fs[i] + sa.crate[i] * vi
+                        if var:
+                            ftot_o += spr.cv_prev[i] * dd_prev[i]
+                            ftot_n += sa.cvar[i] * vi
                         W[0] -= sa.sval[i] * (ug[ch] - ugo[ch]) * 0.5 * (ftot_o + ftot_n)
                     dlt = di - d_prev[i]
                     W[1] += dlt * 0.5 * (fs_prev[i] + fs[i])
                     W[2] += dlt * 0.5 * sa.crate[i] * (dd_prev[i] + vi)
+                    if var:
+                        W[2] += dlt * 0.5 * (spr.cv_prev[i] * dd_prev[i] + sa.cvar[i] * vi)
+                        spr.cv_prev[i] = sa.cvar[i]
                     d_prev[i] = di
                     dd_prev[i] = vi
                     fs_prev[i] = fs[i]
@@ -489,7 +506,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
         if (n + 1) % stride == 0:
             if want_energy:
                 _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
-            _store(output, row, (n + 1) * dt, u, v, cw, fs, nbs, energy)
+            _store(output, row, (n + 1) * dt, u, v, cw, cs, fs, nbs, energy)
             row += 1
     _set_stats(stats, RUN_OK, row, 0, nsteps, total_it, events, reused, maxit_seen, rescued,
                dt)

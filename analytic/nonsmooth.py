@@ -112,6 +112,14 @@ class NonsmoothEngine(Engine):
     style: ClassVar[dict] = {"color": "#c0392b", "linestyle": ":", "linewidth": 1.6,
                              "label": "nonsmooth"}
 
+    def refuse(self, scene: Scene, settings) -> None:
+        """Damping on the committed or current tangent is not implemented in the Moreau–Jean
+        smooth-force step (its θ-linearisation uses the constant damping matrix)."""
+        from deckpound.models.damping import refuse_tangent_damping
+
+        refuse_tangent_damping(scene, "nonsmooth", "its θ-method step linearises the smooth "
+                               "forces with the constant damping matrix")
+
     def reads(self, scene: Scene, settings) -> set[str]:
         """Restitution, geometry and the friction coefficient; the contact law and its
         parameters only where the law's row of :mod:`deckpound.models.contact_laws_table` says

@@ -13,13 +13,17 @@ DOFs u = [x₁, θ₁, x₂, θ₂, x_d, y_d, θ_d]. Spring deformations and rat
 (u_g, u̇_g: support displacement and velocity per channel of
 :func:`deckpound.models.mechanics.support_channels`). The generalised internal force is
 
-    F(u, u̇) = Bᵀ [ f_s(d) + (a1·k0 + c_dash) ḋ ] + a0 · M u̇
+    F(u, u̇) = Bᵀ [ f_s(d) + (β0 k0 + βK k_t + βKc k_c + c_dash) ḋ ] + a0_abs · M u̇
 
 with f_s the OpenSees ``Hysteretic`` clone (Takeda stand-in, ``element_copy=True``) for the bent
-springs and linear k0·d for the seat springs; a1·k0 is the stiffness-proportional Rayleigh part on
-the spring deformation rates with the *initial* stiffness (OpenSees ``rayleigh(a0, 0, a1, 0)``
-with ``-doRayleigh 1`` on the zeroLength elements) and a0·M the mass part on absolute velocities.
-The equation of motion is ``M ü + F(u, u̇) = (contact forces)``.
+springs and linear k0·d for the seat springs; β0 k0, βK k_t, βKc k_c the stiffness-proportional
+Rayleigh part on the spring deformation rates with the initial, current (trial) or committed
+tangent of the members the scene names (:mod:`deckpound.models.damping`: OpenSees ``rayleigh
+αM βK βKinit βKc`` with ``-doRayleigh 1`` on those zeroLength elements), and a0_abs·M the mass
+part on absolute velocities. The mass part on relative velocities (``damping.mass =
+relative``) is packed as extra dashpot-only rows after the plan's springs (k0 = 0, a DOF
+against a support channel; :class:`deckpound.models.damping.MassDamper`), so every kernel
+treats it as one more dashpot. The equation of motion is ``M ü + F(u, u̇) = (contact forces)``.
 
 Usage (Python side)::
 
@@ -70,7 +74,8 @@ from deckpound.models.damping import DampingModel
 from deckpound.models.plan import DOF_COLUMNS, N_CORNERS, VELOCITY_COLUMNS, Plan
 
 __all__ = ["KIND_HYSTERETIC", "KIND_LINEAR", "N_DOF", "PackedSystem", "SystemArrays", "pack_system",
-           "spring_assemble", "spring_commit", "spring_deformations", "spring_revert",
+           "spring_assemble", "spring_commit", "spring_damping_tangent", "spring_deformations",
+           "spring_revert",
            "spring_stored_energy", "spring_tangent", "spring_update_materials"]
 
 N_DOF = 7
@@ -84,13 +89,16 @@ KIND_HYSTERETIC = 1
 #: sval (ns,): the ≤ 1 non-zero of each row of S; k0 (ns,) initial stiffness; cdash (ns,) explicit
 #: dashpot; crate (ns,) = a1·k0 + cdash, the total rate coefficient of each spring; kind (ns,)
 #: int (0 linear, 1 Hysteretic); hparams (ns, 26) Hysteretic params (zero rows for linear
-#: springs); scal (2,) = [a0, a1]; C (7, 7) the constant damping matrix a0 M + Bᵀ diag(crate) B
-#: [kN·s/m]; nbs (int) the number of bent springs (the first rows of B). The ``system`` bundle
-#: of the step loops (:mod:`deckpound.analytic.bundles`).
+#: springs); scal (3,) = [a0_abs, a1, tangent-dependent flag]; C (7, 7) the constant damping
+#: matrix a0_abs M + Bᵀ diag(crate) B [kN·s/m]; nbs (int) the number of bent springs (the first
+#: rows of B); bk, bkc (ns,) the coefficients of the current and the committed tangent [s];
+#: kc (ns,) the committed tangent k_c (state: written by :func:`spring_commit`), cvar (ns,)
+#: βK k_t + βKc k_c at the last trial (state: written by :func:`spring_assemble`). The
+#: ``system`` bundle of the step loops (:mod:`deckpound.analytic.bundles`).
 SystemArrays = namedtuple(
     "SystemArrays",
     ["mass", "B", "S", "bidx", "bval", "bnnz", "schan", "sval", "k0", "cdash", "crate", "kind",
-     "hparams", "scal", "C", "nbs"],
+     "hparams", "scal", "C", "nbs", "bk", "bkc", "kc", "cvar"],
 )
 
 
@@ -133,11 +141,15 @@ class PackedSystem:
 
 
 def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
-    """Pack the plan model's mass, springs, dashpots, damping and Takeda materials."""
+    """Pack the plan model's mass, springs, dashpots, damping and Takeda materials.
+
+    The relative mass dampers (if any) follow the plan's springs as dashpot-only rows."""
     B, S = plan.spring_matrices
-    k0 = plan.k0
+    dampers = damping.mass_dampers
+    nd = len(dampers)
+    k0 = np.concatenate([plan.k0, np.zeros(nd)])
     mass = plan.mass.copy()
-    ns = plan.n_springs
+    ns = plan.n_springs + nd
     bidx = np.zeros((ns, 2), dtype=np.int64)
     bval = np.zeros((ns, 2))
     bnnz = np.zeros(ns, dtype=np.int64)
@@ -157,20 +169,42 @@ def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
         if spring.kind == "takeda":
             kind[i] = KIND_HYSTERETIC
             hparams[i] = pack_hysteretic(*spring.takeda, element_copy=True)
-    cdash = damping.dashpots.astype(float)
-    crate = damping.rate_coefficients(plan)
-    a0, a1 = damping.a0, damping.a1
+    B = np.vstack([B, np.zeros((nd, B.shape[1]))])
+    S = np.vstack([S, np.zeros((nd, S.shape[1]))])
+    for r, m in enumerate(dampers):
+        i = plan.n_springs + r
+        B[i, m.dof] = 1.0
+        bnnz[i] = 1
+        bidx[i, 0] = m.dof
+        bval[i, 0] = 1.0
+        if m.channel >= 0:
+            S[i, m.channel] = 1.0
+            schan[i] = m.channel
+            sval[i] = 1.0
+    pad = np.zeros(nd)
+    cdash = np.concatenate([damping.dashpots.astype(float), [m.c for m in dampers]])
+    crate = np.concatenate([damping.rate_coefficients(plan), [m.c for m in dampers]])
+    bk = np.concatenate([_or_zero(damping.beta_current, plan), pad])
+    bkc = np.concatenate([_or_zero(damping.beta_committed, plan), pad])
+    a0, a1 = damping.a0_absolute, damping.a1
+    var = 1.0 if damping.tangent_dependent else 0.0
     C = np.diag(a0 * mass) + B.T @ (crate[:, None] * B)
     arrays = SystemArrays(mass=mass, B=np.ascontiguousarray(B), S=np.ascontiguousarray(S),
                           bidx=bidx, bval=bval, bnnz=bnnz, schan=schan, sval=sval,
                           k0=k0.astype(float), cdash=cdash, crate=crate,
-                          kind=kind, hparams=hparams, scal=np.array([a0, a1]),
-                          C=np.ascontiguousarray(C), nbs=int(plan.n_bent_springs))
+                          kind=kind, hparams=hparams, scal=np.array([a0, a1, var]),
+                          C=np.ascontiguousarray(C), nbs=int(plan.n_bent_springs),
+                          bk=bk, bkc=bkc, kc=k0.astype(float).copy(), cvar=np.zeros(ns))
     K0 = B.T @ (k0[:, None] * B)
     return PackedSystem(arrays=arrays, C=C, K0=K0, a0=float(a0), a1=float(a1),
                         omega=(float(damping.omega[0]), float(damping.omega[1])),
-                        spring_names=tuple(sp.name for sp in plan.springs),
+                        spring_names=tuple(sp.name for sp in plan.springs)
+                        + tuple(f"mass damper {k + 1}" for k in range(nd)),
                         channels=plan.channels, n_bent_springs=plan.n_bent_springs)
+
+
+def _or_zero(beta, plan: Plan) -> np.ndarray:
+    return np.zeros(plan.n_springs) if beta is None else np.asarray(beta, dtype=float)
 
 
 # --------------------------------------------------------------------------- kernels
@@ -205,10 +239,12 @@ def spring_update_materials(hparams, hstate, kind, d):
 def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
     """Spring forces from deformations d, rates dd and the materials' trial state.
 
-    f (7,) out = Bᵀ[f_s + crate·ḋ] + a0 M u̇; fs, kt (ns,) out: restoring force and tangent.
+    f (7,) out = Bᵀ[f_s + (crate + βK k_t + βKc k_c)·ḋ] + a0 M u̇; fs, kt (ns,) out: restoring
+    force and tangent; sa.cvar (ns,) out: βK k_t + βKc k_c (tangent-dependent damping only).
     Returns the number of springs whose tangent differs from k0.
     """
     a0 = sa.scal[0]
+    var = sa.scal[2] != 0.0
     for j in range(7):
         f[j] = a0 * sa.mass[j] * v[j]
     nonel = 0
@@ -224,6 +260,10 @@ def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
         fs[i] = fsi
         kt[i] = kti
         fi = fsi + sa.crate[i] * dd[i]
+        if var:
+            cv = sa.bk[i] * kti + sa.bkc[i] * sa.kc[i]
+            sa.cvar[i] = cv
+            fi += cv * dd[i]
         for q in range(sa.bnnz[i]):
             f[sa.bidx[i, q]] += sa.bval[i, q] * fi
     return nonel
@@ -245,8 +285,32 @@ def spring_tangent(sa, kt, K):
 
 
 @kernel
+def spring_damping_tangent(sa, c2, Keff):
+    """Keff += c2 · Bᵀ diag(βK k_t + βKc k_c) B at the last trial (OpenSees's getDamp with the
+    current and the committed tangent; nothing when the damping is tangent-independent)."""
+    if sa.scal[2] == 0.0:
+        return
+    for i in range(sa.k0.shape[0]):
+        cv = c2 * sa.cvar[i]
+        if cv == 0.0:
+            continue
+        nnz = sa.bnnz[i]
+        for q in range(nnz):
+            j = sa.bidx[i, q]
+            bj = sa.bval[i, q] * cv
+            for r in range(nnz):
+                Keff[j, sa.bidx[i, r]] += bj * sa.bval[i, r]
+
+
+@kernel
 def spring_commit(sa, hstate):
-    """Commit the trial state of every Hysteretic spring (OpenSees commitState)."""
+    """Commit the trial state of every Hysteretic spring (OpenSees commitState); with
+    committed-tangent damping, k_c := the trial tangent first (``Element::commitState`` runs
+    before the materials commit)."""
+    if sa.scal[2] != 0.0:
+        for i in range(sa.k0.shape[0]):
+            if sa.kind[i] == 1:
+                sa.kc[i] = hstate[i, T_TANGENT]
     for i in range(sa.k0.shape[0]):
         if sa.kind[i] == 1:
             hyst_commit(hstate[i])

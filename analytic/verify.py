@@ -18,7 +18,7 @@ import numpy as np
 from deckpound.models.plan import column_unit, standard_columns
 from deckpound.models.scene import Scene
 
-__all__ = ["column_deviations", "verify_clone"]
+__all__ = ["column_deviations", "opensees_friction", "verify_clone"]
 
 
 def column_deviations(a, b, columns) -> dict[str, float]:
@@ -33,17 +33,36 @@ def column_deviations(a, b, columns) -> dict[str, float]:
     return out
 
 
+def opensees_friction(scene: Scene) -> tuple[Scene, list[str]]:
+    """The scene OpenSees can verify, and a note for every change made.
+
+    The project's ``stick`` law has no OpenSees element (the OpenSees engine refuses it); the
+    clone verifies the friction algorithm OpenSees does have, zeroLengthContact2D, which the
+    compliance engine runs as ``contact2d``. So ``friction_mode = stick`` is verified as
+    ``contact2d``, and the returned note says so (never silently)."""
+    ct = scene.contact
+    if ct.has_friction and ct.friction_mode == "stick":
+        sc = scene.replace(contact=dataclasses.replace(ct, friction_mode="contact2d"))
+        return sc, ["friction_mode = 'stick' (the project's stick law) has no OpenSees "
+                    "counterpart; verifying friction_mode = 'contact2d' (OpenSees's "
+                    "zeroLengthContact2D algorithm, in both engines) instead"]
+    return scene, []
+
+
 def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) -> dict:
     """Run OpenSees (rigid) and the Newmark clone on ``scene``; report their agreement.
 
     The clone takes the OpenSees step, tolerance and iteration limit (``tolerance`` overrides
-    both when given). Returns ``{"deviation": {column: rel. dev.}, "worst": (column, dev),
+    both when given). ``friction_mode = stick`` is verified as ``contact2d``
+    (:func:`opensees_friction`). Returns ``{"notes": [...], "peaks": {column: OpenSees peak},
+    "deviation": {column: rel. dev.}, "worst": (column, dev),
     "speed_ratio": OpenSees wall time / clone wall time (clone compiled beforehand),
     "us_per_step": {...}, "iterations": {...}, "status": {...}}``.
     """
     from deckpound.analytic.compliance import run_compliance
     from deckpound.opensees_build.engine import run_opensees
 
+    scene, notes = opensees_friction(scene)
     os_set = scene.opensees
     if tolerance is not None:
         os_set = dataclasses.replace(os_set, tolerance=tolerance)
@@ -68,6 +87,8 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
                          key=lambda kv: kv[1])
     steps = max(int(ro.meta.get("steps", 1)), 1)
     return {
+        "notes": notes,
+        "peaks": {c: float(np.max(np.abs(np.asarray(ro.columns[c])))) for c in cols},
         "deviation": dev,
         "worst": worst,
         "worst_velocity": worst_velocity,

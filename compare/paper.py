@@ -71,13 +71,17 @@ class CountingCache(ResultCache):
 
 
 def friction_variant(scene: Scene) -> tuple[Scene, str]:
-    """The scene with the other friction assumption: μ = 0.2 with sticking if it has none,
+    """The scene with the other friction assumption: μ = 0.2 with OpenSees's zeroLengthContact2D
+    friction (:data:`~deckpound.models.contact_laws_table.DEFAULT_FRICTION`) if it has none,
     frictionless otherwise; and a short label for it."""
     from .studies import modified
 
     if scene.contact.has_friction:
         return modified(scene, "contact.friction=0.0", "contact.friction_mode=none"), "μ=0"
-    return modified(scene, "contact.friction=0.2", "contact.friction_mode=stick"), "μ=0.2"
+    from deckpound.models.contact_laws_table import DEFAULT_FRICTION
+
+    return (modified(scene, "contact.friction=0.2", f"contact.friction_mode={DEFAULT_FRICTION}"),
+            "μ=0.2")
 
 
 def sequence_table(sequences: dict[str, list[SequenceRun]]) -> pd.DataFrame:

@@ -274,6 +274,8 @@ def study_sections(d) -> list[tuple[str, list]]:
     for r in d.studies:
         st = r.state
         items = [text.state_sentence(st), text.study_spread_sentence(r.table)]
+        if STUDIES[r.name].summary is not None:   # the study's own sentences from its table
+            items += STUDIES[r.name].summary(r.table)
         pair = text.mode_pair_sentence(r.table)
         if pair:
             items.append(pair)

@@ -131,7 +131,9 @@ def friction_effect(seq: pd.DataFrame) -> pd.DataFrame:
 
 
 def friction_model_text(mu: float, mode: str) -> str:
-    how = {"stick": "with sticking", "slip": "sliding only, no sticking"}.get(mode, mode)
+    how = {"stick": "with sticking",
+           "contact2d": "with sticking, OpenSees's zeroLengthContact2D algorithm",
+           "slip": "sliding only, no sticking"}.get(mode, mode)
     return f"μ = {short(mu)}, {how}"
 
 
@@ -416,9 +418,12 @@ def mode_pair_sentence(table: pd.DataFrame) -> str:
     if not {"friction_mode", "mu"} <= set(table.columns):
         return ""
     ok = table[table["status"] == "success"]
-    stick = ok[ok["friction_mode"] == "stick"].set_index("mu")["peak_theta"]
     slip = ok[ok["friction_mode"] == "slip"].set_index("mu")["peak_theta"]
-    items = [(mu, stick[mu] / slip[mu]) for mu in stick.index if mu in slip.index]
-    if not items:
-        return ""
-    return f"Against sliding only, sticking {effect_clauses(items, at_mu)}."
+    out = []
+    for mode, what in (("stick", "the project's stick law"),
+                       ("contact2d", "OpenSees's zeroLengthContact2D algorithm")):
+        stick = ok[ok["friction_mode"] == mode].set_index("mu")["peak_theta"]
+        items = [(mu, stick[mu] / slip[mu]) for mu in stick.index if mu in slip.index]
+        if items:
+            out.append(f"Against sliding only, {what} {effect_clauses(items, at_mu)}.")
+    return " ".join(out)

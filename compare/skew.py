@@ -31,7 +31,7 @@ Figure (:func:`skew_figure`): peak deck rotation and peak transverse displacemen
 the tables against φ, one line per engine × friction.
 
 :func:`verify_skew` runs :func:`deckpound.analytic.verify.verify_clone` at φ = 30° and 45° on a
-scene (the straight deck's tolerances: 1e-9 of each displacement/force column's peak,
+scene (the straight deck's tolerances: 1e-8 of each displacement/force column's peak,
 velocities 1e-8) and returns one row per angle, ready to join a ``verify clone`` matrix.
 """
 
@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import CORNER_NAMES
 from deckpound.models.result import Result, in_contact
@@ -72,8 +73,10 @@ FRICTION = 0.2
 ACUTE = ("c1", "c4")
 #: skew angles of the clone-vs-OpenSees check [degrees]
 SKEW_VERIFY_ANGLES = (30.0, 45.0)
-#: tolerances of the check: the straight deck's (``tests/test_clone_vs_opensees.py``)
-VERIFY_TOLERANCE = 1e-9
+#: tolerances of the check: the straight deck's (``tests/test_clone_vs_opensees.py``). 1e-8
+#: since issue 12: with the seats damped by their dashpots only (damping.members = bents) the
+#: light seats ring more and the contact forces carry ~2e-9 of round-off (4e-10 before)
+VERIFY_TOLERANCE = 1e-8
 VERIFY_VELOCITY_TOLERANCE = 1e-8
 
 
@@ -101,7 +104,7 @@ def skew_cases(scene: Scene, quick: bool = False) -> list[Case]:
     cases = []
     for phi in SKEWS_QUICK if quick else SKEWS:
         for mu in (0.0, FRICTION):
-            mode = "stick" if mu > 0 else "none"
+            mode = DEFAULT_FRICTION if mu > 0 else "none"
             base = modified(
                 scene,
                 f"deck.skew={phi!r}",
@@ -114,7 +117,8 @@ def skew_cases(scene: Scene, quick: bool = False) -> list[Case]:
                 sc = base if engine == "nonsmooth" else penalty
                 if not _can_run(engine, sc):
                     continue
-                friction = "none" if mu == 0 else ("Coulomb" if engine == "nonsmooth" else "stick")
+                friction = ("none" if mu == 0 else
+                            "Coulomb" if engine == "nonsmooth" else DEFAULT_FRICTION)
                 cases.append(
                     Case(
                         f"{engine} skew={phi:g} mu={mu:g}",

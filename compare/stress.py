@@ -61,7 +61,10 @@ def cell_scene(base: Scene, engine: str, cell: dict, duration: float) -> Scene:
         ov += [f"seats[0].gap={cell['gap']!r}", f"seats[1].gap={cell['gap']!r}"]
     if "friction" in cell:
         mu = cell["friction"]
-        ov += [f"contact.friction={mu!r}", f"contact.friction_mode={'stick' if mu > 0 else 'none'}"]
+        from deckpound.models.contact_laws_table import DEFAULT_FRICTION
+
+        mode = DEFAULT_FRICTION if mu > 0 else "none"
+        ov += [f"contact.friction={mu!r}", f"contact.friction_mode={mode}"]
     if "restitution" in cell:
         ov.append(f"contact.restitution={cell['restitution']!r}")
     return modified(base, *ov)

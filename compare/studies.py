@@ -42,6 +42,7 @@ from deckpound.models.scene_io import apply_overrides, scene_from_mapping
 
 from .cases import Case, ResultCache, run_cases
 from .metrics import peak
+from .damping_study import damping_cases, damping_figure, damping_headlines, damping_row
 from .skew import skew_cases, skew_figure, skew_headlines, skew_row
 
 ENGINES_ALL = ("opensees", "compliance", "nonsmooth")
@@ -168,23 +169,30 @@ def stiffness_cases(scene: Scene, quick: bool = False) -> list[Case]:
 
 
 def friction_cases(scene: Scene, quick: bool = False) -> list[Case]:
+    from deckpound.models.contact_laws_table import DEFAULT_FRICTION
+
     mus = [0.0, 0.2] if quick else [0.0, 0.1, 0.2, 0.3, 0.5]
     cases = []
     for mu in mus:
-        mode = "stick" if mu > 0 else "none"
+        mode = DEFAULT_FRICTION if mu > 0 else "none"
         ov = (f"contact.friction={mu!r}", f"contact.friction_mode={mode}")
-        cases.append(Case(f"compliance mu={mu}", "compliance", _compliance(scene, *ov),
-                          {"mu": mu}))
+        # newmark: the contact2d algorithm is OpenSees's fixed-step one (the engine refuses it
+        # with the adaptive integrator)
+        cases.append(Case(f"compliance mu={mu}", "compliance",
+                          _compliance(scene, *ov, "compliance.integrator=newmark"), {"mu": mu}))
         cases.append(Case(f"nonsmooth mu={mu}", "nonsmooth", modified(scene, *ov), {"mu": mu}))
     return cases
 
 
 def sticking_cases(scene: Scene, quick: bool = False) -> list[Case]:
+    """Sliding only (slip), the project's stick law and OpenSees's zeroLengthContact2D
+    algorithm (contact2d) at equal μ, compliance engine (newmark: contact2d needs it)."""
     mus = [0.2] if quick else [0.1, 0.2, 0.4]
     return [Case(f"compliance {mode} mu={mu}", "compliance",
-                 _compliance(scene, f"contact.friction={mu!r}", f"contact.friction_mode={mode}"),
+                 _compliance(scene, f"contact.friction={mu!r}", f"contact.friction_mode={mode}",
+                             "compliance.integrator=newmark"),
                  {"mu": mu, "friction_mode": mode})
-            for mu in mus for mode in ("slip", "stick")]
+            for mu in mus for mode in ("slip", "stick", "contact2d")]
 
 
 def law_cases(scene: Scene, quick: bool = False) -> list[Case]:
@@ -200,6 +208,8 @@ def law_cases(scene: Scene, quick: bool = False) -> list[Case]:
 
 
 def geometry_cases(scene: Scene, quick: bool = False) -> list[Case]:
+    # the project's stick law: contact2d (zeroLengthContact2D) has a fixed normal and tangent,
+    # so it cannot run with the nonlinear kinematics this study compares
     mu = scene.contact.friction if scene.contact.has_friction else 0.2
     ov = (f"contact.friction={mu!r}", "contact.friction_mode=stick")
     cases = []
@@ -246,6 +256,8 @@ STUDIES: dict[str, Study] = {s.name: s for s in (
     Study("opensees-mode", "OpenSees stick vs rigid deck", opensees_mode_cases, "mode"),
     Study("skew", "Skewed deck: skew angle, with and without friction", skew_cases, "skew",
           row=skew_row, figure=skew_figure, summary=skew_headlines),
+    Study("damping", "Damping choices: members × stiffness × mass velocities", damping_cases,
+          "damping", row=damping_row, figure=damping_figure, summary=damping_headlines),
 )}
 STUDY_NAMES = tuple(STUDIES) + ("sequence",)
 

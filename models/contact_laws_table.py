@@ -28,7 +28,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-__all__ = ["CONTACT_LAW_TABLE", "FRICTION_CODES", "FRICTION_MODEL_TABLE", "LAW_CODES",
+__all__ = ["CONTACT_LAW_TABLE", "DEFAULT_FRICTION", "FRICTION_CODES", "FRICTION_MODEL_TABLE", "LAW_CODES",
            "RIGID_CONTACT", "ContactLaw", "FrictionModel", "contact_law", "friction_model"]
 
 
@@ -165,6 +165,20 @@ RIGID_CONTACT = ("contact is rigid, so the slip/stick distinction of the complia
                  "not apply")
 _NONSMOOTH_COULOMB = "set-valued Coulomb friction"
 
+def _contact2d(lam_n: float, ds: float, ut: float, p: dict) -> float:
+    # from the virgin element (stick point 0): ds is the total tangential displacement s
+    trial = -p["kt"] * ds
+    lim = p["mu"] * lam_n
+    return trial if abs(trial) - lim <= 0.0 else math.copysign(lim, trial)
+
+
+_STICK_REFUSAL = ("OpenSees cannot express 'stick' (the project's return-mapping stick law: "
+                  "after sliding its stick spring keeps |λ_T| = μ λ_N and it is released when "
+                  "the corner opens); zeroLengthContact2D resets its stick point at every "
+                  "sliding commit and keeps it while the corner is open: use "
+                  "friction_mode = 'contact2d' (that element's algorithm, also in the "
+                  "compliance engine)")
+
 #: The friction models, in code order.
 FRICTION_MODEL_TABLE: tuple[FrictionModel, ...] = (
     FrictionModel("none", 0, (), "λ_T = 0", lambda lam_n, ds, ut, p: 0.0,
@@ -172,12 +186,23 @@ FRICTION_MODEL_TABLE: tuple[FrictionModel, ...] = (
     FrictionModel("slip", 1, ("contact.slip_velocity",), "λ_T = −μ λ_N tanh(U_T / v₀)", _slip,
                   opensees_refusal="OpenSees cannot express 'slip' (regularised friction without "
                   "sticking); zeroLengthContact2D always has a stick spring: use "
-                  "friction_mode = 'stick'", nonsmooth=_NONSMOOTH_COULOMB),
+                  "friction_mode = 'contact2d'", nonsmooth=_NONSMOOTH_COULOMB),
     FrictionModel("stick", 2, ("contact.tangential_stiffness",),
-                  "λ_T = λ_T,n − k_t Δs, returned to |λ_T| ≤ μ λ_N", _stick,
+                  "λ_T = λ_T,n − k_t Δs, returned to |λ_T| ≤ μ λ_N; λ_T = 0 when open", _stick,
+                  opensees_refusal=_STICK_REFUSAL, nonsmooth=_NONSMOOTH_COULOMB),
+    FrictionModel("contact2d", 3, ("contact.tangential_stiffness",),
+                  "OpenSees zeroLengthContact2D: λ_T = −k_t (s − s_p) if |k_t (s − s_p)| ≤ "
+                  "μ λ_N (stick) else μ λ_N sign(−(s − s_p)) (slide); s_p := s at a sliding "
+                  "commit, kept while open", _contact2d,
                   opensees="zeroLengthContact2D", opensees_laws=("linear",),
                   nonsmooth=_NONSMOOTH_COULOMB),
 )
+
+#: The friction model the package switches on when it turns friction on (paper job, friction,
+#: sticking and skew studies, stress grid, ``verify clone``): OpenSees's own element, so that
+#: every "with friction" comparison between the engines is the same algorithm in OpenSees and
+#: in the clone (the nonsmooth engine uses set-valued Coulomb friction for every model).
+DEFAULT_FRICTION = "contact2d"
 
 #: name → kernel code
 LAW_CODES = {law.name: law.code for law in CONTACT_LAW_TABLE}

@@ -400,9 +400,9 @@ def _springs(scene: Scene) -> tuple[Spring, ...]:
     for i, b in enumerate(scene.bents):
         xb = b.station - hl
         out.append(Spring(f"{b.name}_x", "bent", b.name, "x", "takeda", (DECK_X,), (1.0,),
-                          2 * i, 1.0, b.x.stiffness, 0.0, takeda_hysteretic_args(b.x)))
+                          2 * i, 1.0, b.x.stiffness, b.cx, takeda_hysteretic_args(b.x)))
         out.append(Spring(f"{b.name}_y", "bent", b.name, "y", "takeda", (DECK_Y, DECK_THETA),
-                          (1.0, xb), 2 * i + 1, 1.0, b.y.stiffness, 0.0,
+                          (1.0, xb), 2 * i + 1, 1.0, b.y.stiffness, b.cy,
                           takeda_hysteretic_args(b.y)))
     for j, s in enumerate(scene.seats):
         name = f"seat{j + 1}"

@@ -22,6 +22,9 @@ from .errors import SceneError
 
 CONTACT_LAWS = tuple(LAW_CODES)          # the rows of contact_laws_table, in code order
 FRICTION_MODES = tuple(FRICTION_CODES)
+DAMPING_MEMBERS = ("bents", "bents+seats", "none")
+DAMPING_STIFFNESS = ("initial", "committed", "current")
+DAMPING_MASS = ("absolute", "relative")
 GEOMETRIES = ("linear", "nonlinear")
 SUPPORTS_PER_BENT = ("x", "y")
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
@@ -103,6 +106,9 @@ class Bent:
     station: float = spec(unit="m", doc="distance from the deck's left end (x = -L/2)", ge=0.0)
     x: TakedaSpring = spec(doc="longitudinal spring")
     y: TakedaSpring = spec(doc="transverse spring")
+    cx: float = spec(0.0, unit="kN*s/m", doc="explicit dashpot deck-table in x (e.g. from a "
+                     "system identification; adds to any Rayleigh damping)", ge=0.0)
+    cy: float = spec(0.0, unit="kN*s/m", doc="explicit dashpot deck-table in y", ge=0.0)
 
     def __post_init__(self) -> None:
         validate(self)
@@ -147,7 +153,10 @@ class Contact:
     bilinear_yield: float = spec(0.001, unit="m", doc="yield deformation of the bilinear law",
                                  gt=0.0)
     friction: float = spec(0.0, unit="-", doc="Coulomb friction coefficient mu", ge=0.0)
-    friction_mode: str = spec("none", doc="none | slip (no sticking) | stick (stick spring)",
+    friction_mode: str = spec("none", doc="none | slip (no sticking) | stick (the project's "
+                              "return-mapping stick spring) | contact2d (OpenSees "
+                              "zeroLengthContact2D's algorithm; what OpenSees expresses and "
+                              "the package uses when it switches friction on)",
                               choices=FRICTION_MODES)
     tangential_stiffness: float = spec(1.0e6, unit="kN/m",
                                        doc="tangential stick spring per corner (stick mode)",
@@ -171,21 +180,39 @@ class Contact:
 
 @dataclass(frozen=True, kw_only=True)
 class Damping:
-    """Rayleigh damping C = a0·M + a1·K0 with the ratio matched at two frequencies.
+    """Damping of the plan model, every choice explicit (see :mod:`deckpound.models.damping`).
 
-    K0 is the initial stiffness of the bent and seat springs (contact excluded); the
-    mass-proportional part acts on absolute velocities and the stiffness-proportional part on
-    the springs' deformation rates (this is what OpenSees does under MultipleSupport; every
-    engine uses the same definition).
+    Rayleigh damping a0·M + a1·K with the ratio matched at two frequencies (``method`` modes or
+    frequencies; ``none``: no Rayleigh damping, the explicit dashpots still act). The
+    stiffness-proportional part acts on the deformation rates of the springs named by
+    ``members`` (never the gap elements) with the ``stiffness`` it names (OpenSees ``rayleigh
+    αM βK βKinit βKc``: current → βK, initial → βKinit, committed → βKc, element by element
+    with ``-doRayleigh``). The mass-proportional part acts on the ``mass`` velocities:
+    absolute (what OpenSees's global αM does under MultipleSupport) or relative to the
+    supports (deck x, y relative to the bent tables, seats x to their actuators; rotations
+    are absolute because no support rotates). Defaults: 8 % on the deck–bent system only, the
+    seats damped by their identified dashpots only (Rayleigh on the seat springs would make
+    them 1.55× / 2.35× critically damped), initial stiffness, absolute velocities.
     """
 
     ratio: float = spec(0.08, unit="-", doc="damping ratio at both frequencies", ge=0.0, lt=1.0)
     method: str = spec("modes", doc="modes: natural modes of the contact-free elastic model; "
-                       "frequencies: given values", choices=("modes", "frequencies"))
+                       "frequencies: given values; none: no Rayleigh damping (explicit dashpots "
+                       "still act)", choices=("modes", "frequencies", "none"))
     modes: tuple[int, ...] = spec((1, 3), doc="the two mode numbers (1-based, by frequency)",
                                   ge=1)
     frequencies: tuple[float, ...] = spec((2.0, 5.0), unit="Hz",
                                           doc="the two frequencies (method = frequencies)", gt=0.0)
+    members: str = spec("bents", doc="springs carrying the stiffness-proportional part: bents "
+                        "(the deck-bent system; the seats keep their identified dashpots "
+                        "only), bents+seats, none", choices=DAMPING_MEMBERS)
+    stiffness: str = spec("initial", doc="stiffness of the stiffness-proportional part: "
+                          "initial (OpenSees betaKinit), committed (betaKc: the tangent at the "
+                          "last commit), current (betaK: the trial tangent)",
+                          choices=DAMPING_STIFFNESS)
+    mass: str = spec("absolute", doc="velocities of the mass-proportional part: absolute "
+                     "(OpenSees alphaM under MultipleSupport) or relative to the supports",
+                     choices=DAMPING_MASS)
 
     def __post_init__(self) -> None:
         validate(self)

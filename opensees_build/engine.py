@@ -285,7 +285,7 @@ class OpenSeesEngine(Engine):
             read.add("contact.friction")
         if ct.friction > 0.0:
             read.add("contact.friction_mode")
-            if ct.friction_mode == "stick":
+            if ct.friction_mode == "contact2d":
                 read.add("contact.tangential_stiffness")
         if settings.mode == "stick":
             read.add("deck.stick_modulus")

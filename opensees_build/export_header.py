@@ -203,8 +203,12 @@ def damping_lines(p: ExportParts) -> list[str]:
                f"betaKinit (initial stiffness) = {bk0:.12g}, betaKcomm (last committed) = "
                f"{bkc:.12g}.")
     masses = [f"{c.args[0]} {p.name('node', c.args[0])}" for c in p.log if c.name == "mass"]
-    out.append(f"  alphaM*M acts on the nodes with mass ({', '.join(masses)}) and, under "
-               "MultipleSupport, on their ABSOLUTE velocities.")
+    if am != 0.0:
+        out.append(f"  alphaM*M acts on the nodes with mass ({', '.join(masses)}) and, under "
+                   "MultipleSupport, on their ABSOLUTE velocities.")
+    else:
+        out.append("  alphaM = 0: no mass-proportional Rayleigh term (a mass part on velocities "
+                   "relative to the supports, if any, is in the 'mass damper' Viscous elements).")
     with_r, without, beams = [], [], []
     for c in p.log:
         if c.name != "element":

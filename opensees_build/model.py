@@ -29,10 +29,13 @@ from its actuator, without Rayleigh damping; the seat has no y mass.
 
 Springs: bents — zeroLength table → deck bent node, Hysteretic (Takeda stand-in) in x and y;
 seats — zeroLength actuator → seat, Elastic k in x and θ, and a second zeroLength with
-Viscous(c, α = 1) dashpots (no Rayleigh on it: see the comment in :func:`build_model`). The
-bent and seat springs take the Rayleigh stiffness part on the initial stiffness (``rayleigh a0 0 a1 0`` + ``-doRayleigh 1``); the mass
-part acts on the absolute velocities of the deck and seat nodes. Gap elements and sticks take
-no Rayleigh damping.
+Viscous(c, α = 1) dashpots (no Rayleigh on it: see the comment in :func:`build_model`).
+Damping (:mod:`deckpound.models.damping`, the scene's ``[damping]``): ``rayleigh αM βK βKinit
+βKc`` (:func:`rayleigh_factors`: a1 on the stiffness the scene names), ``-doRayleigh 1`` on the
+members the scene names (:func:`rayleigh_members`: the bents by default, the seat springs too
+with ``bents+seats``); αM = a0 on the absolute velocities of the deck and seat nodes, or, with
+``mass = relative``, Viscous dashpots from support reference nodes (:func:`mass_dampers`). Gap
+elements, guides and sticks take no Rayleigh damping.
 
 Gaps: see :func:`gap_mapping` — the ONE place where the positive physical gap g₀ and the
 closing direction are mapped to OpenSees' node order, element orientation and negative
@@ -261,6 +264,8 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
     d = scene.deck
     plan = plan_of(scene)
     friction = gaps and scene.contact.has_friction
+    damping = damping_model(scene, plan)
+    ray_bents, ray_seats = rayleigh_members(scene)
     T = ops.tag
     ops.model("basic", "-ndm", 2, "-ndf", 3)
 
@@ -350,8 +355,19 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             ops.uniaxialMaterial("Hysteretic", m, *takeda_hysteretic_args(spring))
             mats.append(m)
         e = T("element", f"bent {b.name}")
-        ops.element("zeroLength", e, tn, dn, "-mat", *mats, "-dir", 1, 2, "-doRayleigh", 1)
+        ops.element("zeroLength", e, tn, dn, "-mat", *mats, "-dir", 1, 2,
+                    *(("-doRayleigh", 1) if ray_bents else ()))
         bent_eles.append(e)
+        # explicit bent dashpots (bents[i].cx, cy), in their own element like the seats'
+        dash = [(dirn, c) for dirn, c in ((1, b.cx), (2, b.cy)) if c > 0.0]
+        if dash:
+            dmats = []
+            for dirn, c in dash:
+                m = T("material", f"{b.name} c{'xy'[dirn - 1]}")
+                ops.uniaxialMaterial("Viscous", m, c, 1.0)
+                dmats.append(m)
+            ops.element("zeroLength", T("element", f"bent {b.name} dashpot"), tn, dn, "-mat",
+                        *dmats, "-dir", *(dirn for dirn, _ in dash))
     for j, seat in enumerate(scene.seats):
         mx = T("material", f"seat{j + 1} kx")
         ops.uniaxialMaterial("Elastic", mx, seat.kx)
@@ -359,7 +375,7 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         ops.uniaxialMaterial("Elastic", mt, seat.ktheta)
         e = T("element", f"seat{j + 1} spring")
         ops.element("zeroLength", e, acts[j], seats[j], "-mat", mx, mt, "-dir", 1, 3,
-                    "-doRayleigh", 1)
+                    *(("-doRayleigh", 1) if ray_seats else ()))
         # dashpots in their own element: with -doRayleigh 1 a zeroLength (3.7) drops its
         # materials' damping tangent from the damping matrix (Newton then converges linearly)
         cx = T("material", f"seat{j + 1} cx")
@@ -369,7 +385,11 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         e = T("element", f"seat{j + 1} dashpot")
         ops.element("zeroLength", e, acts[j], seats[j], "-mat", cx, ct, "-dir", 1, 3)
     mg = T("material", "seat guide")
-    ops.uniaxialMaterial("Elastic", mg, GUIDE_STIFFNESS if d.skew == 0.0 else SKEW_GUIDE_STIFFNESS)
+    # with friction the guide also carries the tangential force: 1e10 would add a series
+    # compliance 1/k_guide behind the 1e6 stick spring (a 1e-4 relative difference from the
+    # plan model, whose seats do not move in y); the skew guide makes it round-off
+    stiff_guide = d.skew != 0.0 or friction
+    ops.uniaxialMaterial("Elastic", mg, SKEW_GUIDE_STIFFNESS if stiff_guide else GUIDE_STIFFNESS)
     for j in range(2):
         e = T("element", f"seat{j + 1} guide")
         ops.element("zeroLength", e, acts[j], seats[j], "-mat", mg, "-dir", 2)
@@ -402,11 +422,17 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             gap_eles.append(e)
 
     # --- damping --------------------------------------------------------------------------
-    damping = damping_model(scene, plan)
-    a0, a1, (wi, wj) = damping.a0, damping.a1, damping.omega
-    ops.comment(f"Rayleigh: a0 M (absolute velocities) + a1 K0 (bent and seat springs); "
-                f"matched at {wi:.6g} and {wj:.6g} rad/s")
-    ops.rayleigh(a0, 0.0, a1, 0.0)
+    a1, (wi, wj) = damping.a1, damping.omega
+    dsc = scene.damping
+    members = {"bents": "bent springs", "bents+seats": "bent and seat springs",
+               "none": "no springs"}[dsc.members]
+    factors = rayleigh_factors(scene, damping)
+    ops.comment(f"Rayleigh: a0 M ({dsc.mass} velocities) + a1 K ({dsc.stiffness} stiffness of "
+                f"the {members}, -doRayleigh 1); "
+                + (f"matched at {wi:.6g} and {wj:.6g} rad/s" if dsc.method != "none"
+                   else "method none: no Rayleigh damping"))
+    ops.rayleigh(*factors)
+    ref_nodes = mass_dampers(ops, scene, damping, deck, seats, acts, supports)
     if sticks:
         ops.region(T("region", "sticks"), "-eleOnly", *sticks, "-rayleigh", 0.0, 0.0, 0.0, 0.0)
 
@@ -424,6 +450,11 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         for b, tn in zip(scene.bents, tables):
             where += [(tn, 1), (tn, 2)]
         where += [(acts[0], 1), (acts[1], 1)]
+        # reference nodes of the relative mass damping follow their table's motion
+        also: dict[int, list[tuple[int, int]]] = {}
+        for k, rn in enumerate(ref_nodes):
+            also.setdefault(2 * k, []).append((rn, 1))
+            also.setdefault(2 * k + 1, []).append((rn, 2))
         for k, (ch, (node, dof)) in enumerate(zip(channels, where)):
             ts_d = T("timeSeries", f"{ch} disp")
             ops.timeSeries("Path", ts_d, "-dt", dt, ArrayArg(f"{ch}_disp", padded(D[:, k])))
@@ -432,6 +463,8 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             gm = T("groundMotion", ch)
             ops.groundMotion(gm, "Plain", "-disp", ts_d, "-vel", ts_v)
             ops.imposedMotion(node, dof, gm)
+            for rn, rdof in also.get(k, ()):
+                ops.imposedMotion(rn, rdof, gm)
 
     return ModelInfo(mode=s.mode, deck=deck, seats=tuple(seats), deck_corners=tuple(dcorners),
                      seat_corners=tuple(scorners), gap_elements=tuple(gap_eles), g0=g0,
@@ -440,6 +473,66 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
                      normals=tuple(c.normal for c in plan.corners),
                      tangents=tuple(c.tangent for c in plan.corners),
                      stick_elements=tuple(sticks))
+
+
+def rayleigh_members(scene: Scene) -> tuple[bool, bool]:
+    """(bents, seat springs) take the stiffness-proportional part (``-doRayleigh 1``)."""
+    d = scene.damping
+    return d.members in ("bents", "bents+seats"), d.members == "bents+seats"
+
+
+def rayleigh_factors(scene: Scene, damping) -> tuple[float, float, float, float]:
+    """``rayleigh αM βK βKinit βKc``: αM = a0 on absolute velocities (0 when the mass part is
+    relative: dashpots then carry it, :func:`mass_dampers`), a1 on the tangent the scene names
+    (current → βK, initial → βKinit, committed → βKc)."""
+    a1 = damping.a1
+    st = scene.damping.stiffness
+    return (damping.a0_absolute, a1 if st == "current" else 0.0,
+            a1 if st == "initial" else 0.0, a1 if st == "committed" else 0.0)
+
+
+def mass_dampers(ops: OpsSession, scene: Scene, damping, deck: int, seats, acts,
+                 supports: str) -> list[int]:
+    """The mass-proportional part on relative velocities (``damping.mass = relative``): a
+    zeroLength with Viscous(a0 m / n, α = 1) materials in x, y, θ from a reference node per bent
+    table — at the deck centre, imposed x and y motion of that table, θ fixed — to the deck
+    centre, and one from each seat's actuator to the seat (x, θ); the same dashpots as
+    :func:`deckpound.models.damping.relative_mass_dampers`. No Rayleigh on them. Returns the
+    reference nodes (one per bent, in bent order; their motion is imposed with the tables')."""
+    if not damping.mass_dampers:
+        return []
+    T = ops.tag
+    plan_mass = plan_of(scene).mass
+    nb = len(scene.bents)
+    a0 = damping.a0
+    ops.comment("mass-proportional damping on relative velocities: Viscous dashpots to the "
+                "supports")
+    refs = []
+    for k, b in enumerate(scene.bents or [None]):
+        name = b.name if b is not None else "fixed"
+        rn = T("node", f"deck ref {name}")
+        ops.node(rn, 0.0, 0.0)
+        moving = b is not None and supports == "motion"
+        ops.fix(rn, 0 if moving else 1, 0 if moving else 1, 1)
+        if b is not None:
+            refs.append(rn)
+        n = max(nb, 1)
+        mats = []
+        for dirn, dof in (("x", 4), ("y", 5), ("theta", 6)):
+            m = T("material", f"deck mass damper {name} {dirn}")
+            ops.uniaxialMaterial("Viscous", m, a0 * plan_mass[dof] / n, 1.0)
+            mats.append(m)
+        e = T("element", f"deck mass damper {name}")
+        ops.element("zeroLength", e, rn, deck, "-mat", *mats, "-dir", 1, 2, 3)
+    for j in range(2):
+        mats = []
+        for dirn, dof in (("x", 2 * j), ("theta", 2 * j + 1)):
+            m = T("material", f"seat{j + 1} mass damper {dirn}")
+            ops.uniaxialMaterial("Viscous", m, a0 * plan_mass[dof], 1.0)
+            mats.append(m)
+        e = T("element", f"seat{j + 1} mass damper")
+        ops.element("zeroLength", e, acts[j], seats[j], "-mat", *mats, "-dir", 1, 3)
+    return refs
 
 
 def analysis_commands(scene: Scene) -> list[tuple]:

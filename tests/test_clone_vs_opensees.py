@@ -1,8 +1,8 @@
 """The compliance engine's Newmark clone against the OpenSees engine (rigid mode).
 
 Benchmark scene, frictionless linear gap (ElasticPPGap), both engines at dt = 5e-4 s with a
-NormDispIncr tolerance of 1e-12: every standard column agrees to round-off (≤ 1e-9 of its peak
-over the first 5 s; measured ~4e-10 over 5 s and ~1.5e-9 over the whole 20 s record, with
+NormDispIncr tolerance of 1e-12: every standard column agrees to round-off (≤ 1e-8 of its peak
+over the first 5 s; measured ~2e-9 over 5 s with the default damping of issue 12, with
 identical Newton iteration counts).
 """
 
@@ -33,7 +33,9 @@ def test_clone_agrees_with_opensees_first_5_s():
     print("largest deviation:", rep["worst"], "speed ratio:", rep["speed_ratio"],
           "iterations:", rep["iterations"])
     assert rep["status"] == {"opensees": "success", "compliance": "success"}
-    assert rep["worst"][1] <= 1e-9, rep["deviation"]
+    # 1e-8 since issue 12 (the default damping leaves the seats to their dashpots: ~2e-9
+    # of round-off in the contact forces, 4e-10 with Rayleigh on the seat springs)
+    assert rep["worst"][1] <= 1e-8, rep["deviation"]
     assert rep["worst_velocity"][1] <= 1e-8, rep["deviation"]   # 2/dt amplification, see verify
     assert rep["iterations"]["opensees"] == rep["iterations"]["compliance"]
 

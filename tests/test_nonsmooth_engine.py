@@ -173,9 +173,14 @@ def test_compliance_kelvin_voigt_approaches_nonsmooth_as_stiffness_grows():
         diffs.append({c: float(np.max(np.abs(r[c] - ns[c]))) for c in ("deck_x_abs", "seat1_x_abs",
                                                                         "seat2_x_abs")})
     print("max |compliance - nonsmooth| per k:", diffs)
-    for c in ("deck_x_abs", "seat1_x_abs", "seat2_x_abs"):
+    for c in ("deck_x_abs", "seat1_x_abs"):
         d = [x[c] for x in diffs]
         assert d[0] > d[1] > d[2], c
+    # issue 12: with the seats damped by their dashpots only (the new default), the light
+    # seat 2 approaches the nonsmooth answer tenfold from 1e6 to 1e7 kN/m and then levels off
+    # at ~2.5e-4 m (2.48e-4, 2.68e-4 at 1e7, 1e8): what is left is not the contact stiffness
+    d = [x["seat2_x_abs"] for x in diffs]
+    assert d[1] < 0.3 * d[0] and d[2] < 1.2 * d[1]
     d = [x["deck_x_abs"] for x in diffs]
     assert d[1] < 0.3 * d[0] and d[2] < 0.3 * d[1]
     assert d[2] < 1e-4 * np.max(np.abs(ns["deck_x_abs"]))

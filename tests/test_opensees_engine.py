@@ -87,13 +87,18 @@ def test_result_contract(bench):
 # -- contact-free linear response vs an independent ODE solution ----------------------------------
 
 def reference_response(scene, motion, t_out, a0=None, a1=None, relative_mass_damping=False):
-    """7-DOF absolute-coordinate ODE: M ü + a0 M u̇ + Bᵀ[(a1 k + c)(B u̇ − S v_g) + k (B u − S d_g)] = 0.
+    """7-DOF absolute-coordinate ODE: M ü + a0 M u̇ + Bᵀ[(a1 m k + c)(B u̇ − S v_g) + k (B u − S d_g)]
+    = 0, m = 1 on the springs of ``damping.members`` (issue 12: the bents only by default).
 
-    ``relative_mass_damping``: the (wrong) variant a0 M (u̇ − u̇_table), the deck DOFs measured
-    from the first bent table's velocity (for the discrimination check)."""
+    ``relative_mass_damping``: the variant a0 M (u̇ − u̇_support): the deck x, y measured from
+    the first bent table's velocity (all tables move alike here), the seats' x from their
+    actuators'."""
+    from deckpound.models.damping import damping_model
+
     M = mechanics.mass_matrix(scene)
     B, S = mechanics.spring_matrices(scene)
-    k = plan_of(scene).k0
+    k = plan_of(scene).k0 * (damping_model(scene, plan_of(scene)).beta > 0)
+    kk = plan_of(scene).k0
     c = plan_of(scene).dashpots
     ra0, ra1, _ = mechanics.rayleigh_coefficients(scene)
     a0 = ra0 if a0 is None else a0
@@ -109,13 +114,15 @@ def reference_response(scene, motion, t_out, a0=None, a1=None, relative_mass_dam
     nc = D.shape[1]
     Cm = a0 * M + B.T @ np.diag(a1 * k + c) @ B
     A = np.block([[np.zeros((7, 7)), np.eye(7)],
-                  [-Minv @ B.T @ np.diag(k) @ B, -Minv @ Cm]])
+                  [-Minv @ B.T @ np.diag(kk) @ B, -Minv @ Cm]])
     G = np.zeros((14, 2 * nc))
-    G[7:, :nc] = Minv @ B.T @ np.diag(k) @ S
+    G[7:, :nc] = Minv @ B.T @ np.diag(kk) @ S
     G[7:, nc:] = Minv @ B.T @ np.diag(a1 * k + c) @ S
-    if relative_mass_damping:   # a0 M (u̇ − v_table1) on the deck x and y
+    if relative_mass_damping:   # a0 M (u̇ − v_support) on the deck x, y and the seats' x
         G[7 + 4, nc + 0] += a0
         G[7 + 5, nc + 1] += a0
+        G[7 + 0, nc + nc - 2] += a0
+        G[7 + 2, nc + nc - 1] += a0
     n = 14 + 4 * nc
     Z = np.zeros((n, n))
     Z[:14, :14] = A
@@ -259,6 +266,25 @@ def test_damping_force_definition(bench):
     assert err(relative_mass_damping=True) > 20 * tol
 
 
+def test_relative_mass_damping_matches_the_reference(bench):
+    """Issue 12: ``damping.mass = relative`` (Viscous dashpots from support reference nodes)
+    is a0 M (u̇ − u̇_support) — the independent ODE's relative variant — and not the absolute
+    form."""
+    sc = elastic_scene(short(bench, 2.0))
+    sc = sc.replace(damping=dc.replace(sc.damping, mass="relative"))
+    motion = support_motion(sc)
+    r = engine.run_opensees(sc, motion)
+    got = np.column_stack([r["deck_x_abs"], r["deck_y_abs"], r["deck_theta"]])
+
+    def err(**kw):
+        ref = reference_response(sc, motion, r.t, **kw)[:, 4:]
+        return (np.abs(got - ref).max(axis=0) / np.abs(ref).max(axis=0)).max()
+
+    tol = 5e-5
+    assert err(relative_mass_damping=True) < tol
+    assert err() > 20 * tol
+
+
 # -- failures and the substep fallback -------------------------------------------------------------
 
 class FailAt:
@@ -349,7 +375,7 @@ def test_friction_opposes_sliding_and_respects_coulomb(bench):
     sc = short(bench, 0.03, dt=2e-5)
     sc = sc.replace(bents=tuple(dc.replace(b, x=tiny, y=tiny) for b in sc.bents),
                     damping=dc.replace(sc.damping, ratio=0.0),
-                    contact=dc.replace(sc.contact, friction=0.5, friction_mode="stick"))
+                    contact=dc.replace(sc.contact, friction=0.5, friction_mode="contact2d"))
     sc = sc.replace(run=RunSettings(duration=0.03, output_dt=2e-5))
     with OpsSession() as ops:
         info, plan = engine.build(ops, sc, zero_motion(sc, 0.03))

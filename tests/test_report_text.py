@@ -276,8 +276,13 @@ def test_sticking_sentence_pairs_stick_with_slip():
                                           (0.4, 3.004e-3, 3.045e-3))
             for m, th in (("slip", th_slip), ("stick", th_stick))]
     s = report_text.mode_pair_sentence(pd.DataFrame(rows))
-    assert s == ("Against sliding only, sticking raises the peak rotation at μ = 0.2 (×1.03) "
-                 "and changes it by less than 2 % at μ = 0.1 and 0.4.")
+    # issue 12: the sticking study now has two sticking models, named in the sentence
+    assert s == ("Against sliding only, the project's stick law raises the peak rotation at "
+                 "μ = 0.2 (×1.03) and changes it by less than 2 % at μ = 0.1 and 0.4.")
     check_clauses(claims(s), {0.1: 3.298 / 3.277, 0.2: 3.243 / 3.138, 0.4: 3.045 / 3.004},
                   mu_values)
     assert report_text.mode_pair_sentence(pd.DataFrame(rows[:1])) == ""
+    c2d = [dict(r, friction_mode="contact2d", peak_theta=r["peak_theta"] * 0.9)
+           for r in rows if r["friction_mode"] == "stick"]
+    s2 = report_text.mode_pair_sentence(pd.DataFrame(rows + c2d))
+    assert s2.startswith(s + " Against sliding only, OpenSees's zeroLengthContact2D algorithm")

@@ -102,7 +102,7 @@ def _impact(phi_deg, friction: bool):
     if friction:
         ov += [
             "contact.friction=0.3",
-            "contact.friction_mode=stick",
+            "contact.friction_mode=contact2d",
             "contact.tangential_stiffness=1e7",
         ]
     for i in range(3):
@@ -142,7 +142,7 @@ def test_closing_motion_gives_compression(phi_deg, friction):
 
 SKEW_VARIANTS = {
     "skew": ("deck.skew=30.0",),
-    "skew-friction": ("deck.skew=30.0", "contact.friction=0.2", "contact.friction_mode=stick"),
+    "skew-friction": ("deck.skew=30.0", "contact.friction=0.2", "contact.friction_mode=contact2d"),
 }
 
 
@@ -193,7 +193,7 @@ def test_skew_exports_match_the_in_process_run(variant, tmp_path):
 
 def test_straight_friction_command_log_keeps_its_seat_nodes():
     """φ = 0 with friction: seat nodes at ∓(L/2 + g₀), normals (∓1, 0) without −0.0."""
-    sc = load_scene("saiidi-4span", ["contact.friction=0.2", "contact.friction_mode=stick"])
+    sc = load_scene("saiidi-4span", ["contact.friction=0.2", "contact.friction_mode=contact2d"])
     log = engine.command_log(sc)
     nodes = {c.args[0]: c.args[1:] for c in log if c.name == "node"}
     contact = [c for c in log if c.name == "element" and c.args[0] == "zeroLengthContact2D"]

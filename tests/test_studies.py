@@ -148,3 +148,29 @@ def test_a_study_registered_the_old_way_runs_from_the_virgin_state():
     assert not s.carried and s.unit == ""
     assert {n for n, st in STUDIES.items() if st.carried} >= {"friction", "sticking",
                                                              "stiffness", "law"}
+
+
+def test_damping_study_cases_and_sentences(tiny):
+    """Issue 12: the damping study crosses members × stiffness × mass for every engine that
+    expresses the case (the nonsmooth engine refuses the committed and current tangents), and
+    its sentences are the table's numbers."""
+    from deckpound.compare.damping_study import damping_cases, damping_headlines
+
+    cases = damping_cases(tiny, quick=False)
+    labels = {c.params["damping"] for c in cases}
+    assert len(labels) == 3 * 3 * 2 - 4          # members none: the stiffness does nothing
+    by_engine = {e: {c.params["damping"] for c in cases if c.engine == e}
+                 for e in ("opensees", "compliance", "nonsmooth")}
+    assert by_engine["opensees"] == by_engine["compliance"] == labels
+    assert all("initial" in lab or lab.startswith("none") for lab in by_engine["nonsmooth"])
+    table = pd.DataFrame([
+        {"engine": "opensees", "damping": "bents·initial·absolute", "peak_theta": 2e-3,
+         "peak_fn": 1000.0, "gap_closures": 10, "status": "success"},
+        {"engine": "opensees", "damping": "bents+seats·initial·absolute", "peak_theta": 2.2e-3,
+         "peak_fn": 700.0, "gap_closures": 5, "status": "success"},
+    ])
+    (s,) = damping_headlines(table)
+    assert s == ("opensees, from bents·initial·absolute: peak rotation 2 mrad ×1 "
+                 "(bents·initial·absolute) to ×1.1 (bents+seats·initial·absolute); peak gap "
+                 "force 1000 kN ×0.7 (bents+seats·initial·absolute) to ×1 "
+                 "(bents·initial·absolute); gap closures 10 (5–10).")

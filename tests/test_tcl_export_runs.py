@@ -41,8 +41,11 @@ needs_tcl = pytest.mark.skipif(not HAS_TCL, reason="the Tcl OpenSees interpreter
 pytest.importorskip("openseespy.opensees")
 
 #: 2 s of the benchmark with Newton capped at 3 iterations: step 2105 (t = 1.0525 s) fails and
-#: is rescued by sub-steps; an output every 5 steps puts that step on an output row
-OVERRIDES = ("opensees.max_iterations=3", "run.output_dt=0.0025")
+#: is rescued by sub-steps; an output every 5 steps puts that step on an output row. The
+#: scenario was tuned with Rayleigh damping on the seat springs too, the default before issue 12
+#: (with the new default, four steps fail, none on an output row): kept, as this file tests the
+#: exports, not the damping
+OVERRIDES = ("opensees.max_iterations=3", "run.output_dt=0.0025", "damping.members=bents+seats")
 
 
 def run_tcl(script, **kw) -> subprocess.CompletedProcess:
@@ -143,7 +146,7 @@ def test_tcl_csv_block_reproduces_deckpound_csv(trip, tmp_path):
 
 VARIANTS = {
     # zeroLengthContact2D: gaps from the corner nodes, fn and ft from the element forces
-    "friction": ("contact.friction=0.2", "contact.friction_mode=stick"),
+    "friction": ("contact.friction=0.2", "contact.friction_mode=contact2d"),
     # step 148 fails without a fallback: both scripts stop there and exit 1, the recorders
     # hold exactly the rows deckpound stored up to the failure
     "failure": ("opensees.max_iterations=2", "opensees.fallback=none"),
@@ -175,4 +178,6 @@ def test_exports_of_variants_match_the_in_process_run(variant, tmp_path):
     assert cp.returncode == (0 if ref.ok else 1), (cp.stdout + cp.stderr)[-2000:]
     dev = deviation(recorded(tcl, folder / "v_results"), ref)
     print(f"{variant}: Tcl recorders vs in-process, worst {max(dev.values()):.2e}")
-    assert max(dev.values()) <= 1e-10
+    # two OpenSees builds: round-off. With friction (issue 12: seat guide 1e16 so the clone
+    # matches; seats damped by their dashpots only) the contact forces carry ~3e-10 of it
+    assert max(dev.values()) <= (1e-9 if variant == "friction" else 1e-10)

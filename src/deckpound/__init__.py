@@ -5,7 +5,7 @@ The front door for scripts and notebooks::
     import deckpound as dp
 
     scene = dp.load_scene("saiidi-4span", set={"contact.friction": 0.2,
-                                                "contact.friction_mode": "stick"})
+                                                "contact.friction_mode": "contact2d"})
     res = dp.run(scene, engine="compliance")          # a frozen, labelled Result
     many = dp.run_batch([scene, scene2], engine="compliance", workers=2)  # kernels loaded once
     res.to_frame()                                    # pandas, time as index, units in attrs

@@ -39,8 +39,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     q.add_argument("--states", type=int_in(1, 10_000_000), default=20000)
     q.add_argument("--seed", type=int_in(0, 2 ** 63 - 1), default=0)
     q.set_defaults(func=_verify_takeda)
-    q = vsub.add_parser("clone", help="compliance newmark vs OpenSees rigid on a scene")
+    q = vsub.add_parser("clone", help="compliance newmark vs OpenSees rigid: the matrix of "
+                        "contact laws x friction x skew x damping (one case with --set)")
     add_scene_args(q)
+    q.add_argument("--quick", action="store_true",
+                   help="a small subset of the matrix over the first 5 s")
+    q.add_argument("--write-readme", nargs="?", const="README.md", default=None, metavar="PATH",
+                   help="put the matrix table into the README (default ./README.md) in place "
+                   "of the previous one")
     q.set_defaults(func=_verify_clone)
 
 
@@ -134,11 +140,34 @@ def _verify_takeda(args) -> int:
 
 
 def _verify_clone(args) -> int:
-    from deckpound.analytic.verify import verify_clone
+    """One line per case (compare/verify_matrix.py); exit 1 when a case exceeds its tolerance.
+    With --set: one case, the scene as given, with its column-by-column deviations."""
+    from pathlib import Path
+
+    from deckpound.compare import verify_matrix
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene(args.scene, args.overrides)
+    pinned = bool(args.overrides)
+    target = None
+    if args.write_readme is not None:
+        target = Path(args.write_readme)
+        if pinned:
+            raise SceneError("--write-readme", "writes the whole matrix: not with --set")
+        if not target.is_file():
+            raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
+    if pinned:
+        return _verify_single(scene, verify_matrix)
+    return verify_matrix.main(scene, pinned=False, quick=args.quick, write_readme_to=target,
+                              log=lambda t: print(t, flush=True))
+
+
+def _verify_single(scene, verify_matrix) -> int:
+    from deckpound.analytic.verify import verify_clone
+
     report = verify_clone(scene)
+    for note in report["notes"]:
+        print(f"note: {note}")
     for col, dev in sorted(report["deviation"].items(), key=lambda kv: -kv[1]):
         print(f"{col:16s} {dev:.3e}")
     col, worst = report["worst"]
@@ -153,4 +182,9 @@ def _verify_clone(args) -> int:
           f"{report['speed_ratio']:.1f}")
     if any(s != "success" for s in report["status"].values()):
         raise EngineFailure(f"a run failed: {report['status']}")
+    tol = verify_matrix.TOLERANCE
+    if max(worst, vworst) > tol:
+        print(f"FAIL: deviation above {tol:g} of the column's peak")
+        return 1
+    print(f"PASS: every column within {tol:g} of its peak")
     return 0

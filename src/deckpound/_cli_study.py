@@ -68,7 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("study", help="a sensitivity study: table + figure")
     p.add_argument("name", metavar="NAME", help="stiffness, friction, sticking, law, geometry, "
-                   "opensees-mode, skew, sequence or variability")
+                   "opensees-mode, skew, damping, sequence or variability")
     add_scene_args(p)
     p.add_argument("-o", "--output", default=None, metavar="DIR",
                    help="output folder (default: study-NAME)")
