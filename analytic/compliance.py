@@ -251,7 +251,8 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
         failed_step=None if ok else failed_step, failed_time=None if ok else failed_step * dt,
         steps=st["steps"], newton_iterations=st["newton_iterations"],
         failed_steps=st["rescued_steps"] + (0 if ok else 1), rescued_steps=st["rescued_steps"],
-        compile_time=compile_time, loop_time=loop, extra=extra)
+        compile_time=compile_time, loop_time=loop,
+        max_penetration=st["max_penetration"], extra=extra)
 
 
 def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,

@@ -23,6 +23,8 @@ from .errors import SceneError
 CONTACT_LAWS = tuple(LAW_CODES)          # the rows of contact_laws_table, in code order
 FRICTION_MODES = tuple(FRICTION_CODES)
 GEOMETRIES = ("linear", "nonlinear")
+#: the nonsmooth engine's impact laws (:func:`deckpound.analytic.nonsmooth.separating_restitution`)
+IMPACT_LAWS = ("newton", "energy-safe")
 SUPPORTS_PER_BENT = ("x", "y")
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
 #: largest number of time steps one run may take (a 60 s record at 1e-5 s is 6e6)
@@ -392,6 +394,11 @@ class NonsmoothSettings:
     tolerance: float = spec(1.0e-10, unit="-", doc="complementarity tolerance", gt=0.0)
     max_iterations: int = spec(50, doc="Newton iterations per step for the Takeda springs", ge=1,
                                le=MAX_ITERATIONS)
+    impact_law: str = spec("newton", doc="newton: Newton's law 0 <= U_N+ + e U_N- at every "
+                           "active corner (Siconos' Moreau-Jean); energy-safe: restitution "
+                           "max(e, (1-theta)/theta) at active corners already separating "
+                           "(U_N- > 0), so no normal impulse does positive work",
+                           choices=IMPACT_LAWS)
 
     def __post_init__(self) -> None:
         validate(self)

@@ -42,6 +42,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     q = vsub.add_parser("clone", help="compliance newmark vs OpenSees rigid on a scene")
     add_scene_args(q)
     q.set_defaults(func=_verify_clone)
+    q = vsub.add_parser("impact-law", help="nonsmooth engine: Newton's impact law vs the "
+                        "energy-safe variant on a scene, without and with friction")
+    add_scene_args(q)
+    q.set_defaults(func=_verify_impact_law)
 
 
 def check_output_folder(path: str) -> Path:
@@ -153,4 +157,16 @@ def _verify_clone(args) -> int:
           f"{report['speed_ratio']:.1f}")
     if any(s != "success" for s in report["status"].values()):
         raise EngineFailure(f"a run failed: {report['status']}")
+    return 0
+
+
+def _verify_impact_law(args) -> int:
+    from deckpound.compare.impact_law import format_table, impact_law_table
+    from deckpound.models.scene_io import load_scene
+
+    rows = impact_law_table(load_scene(args.scene, args.overrides))
+    print(format_table(rows))
+    if any(r["status"] != "success" for r in rows):
+        raise EngineFailure("a run failed: " + ", ".join(
+            f"{r['friction']}/{r['impact_law']}: {r['status']}" for r in rows))
     return 0
