@@ -148,6 +148,10 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
 
     periods = natural_modes(scene).periods
     report.periods = tuple(float(T) for T in periods)
+    if not scene.bents:
+        # bents = []: the deck is free in plan, its three rigid-body modes (x, y, θ; the
+        # first three, ω = 0) have no period to resolve
+        periods = periods[3:]
     if not np.all(np.isfinite(periods)):
         add(Finding("error", "scene", "the masses and stiffnesses give non-finite natural "
                     f"periods ({', '.join(f'{T:g}' for T in periods)} s): a mechanism or "

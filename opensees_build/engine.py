@@ -277,10 +277,10 @@ class OpenSeesEngine(Engine):
     def reads(self, scene: Scene, settings) -> set[str]:
         ct = scene.contact
         read = {"contact.law", "contact.stiffness"}
-        if ct.law == "kelvin-voigt":
+        if ct.law in ("kelvin-voigt", "hertzdamp"):
             read.add("contact.restitution")
-        if ct.law == "bilinear":
-            read |= {"contact.bilinear_ratio", "contact.bilinear_yield"}
+        if ct.law in ("hertz", "hertzdamp"):
+            read.add("contact.exponent")
         if ct.friction_mode != "none":
             read.add("contact.friction")
         if ct.friction > 0.0:

@@ -11,7 +11,8 @@ Nodes (tags by name through :meth:`OpsSession.tag`):
   face's gap-opening normal; ∓(L/2 + g₀) for a straight deck) so that zeroLengthContact2D,
   whose gap includes the node coordinates, sees the clear gap g₀ along n;
 * ``seat1 c1``, ... — seat points facing the deck corners, at pivot + lever r = (y_c tan φ, y_c)
-  (the plan's ``Corner.lever``), rigidLinked (beam) to their seat node;
+  (the plan's ``Corner.lever``), rigidLinked (beam) to their seat node — or fixed, for a
+  ``seats[i].fixed`` rigid abutment (its actuator is then at rest);
 * ``actuator1``/``actuator2`` — at the seat nodes, imposed x motion, y and θ fixed;
 * ``table <bent>`` — at (x_b, 0), imposed x and y motion, θ fixed.
 
@@ -49,7 +50,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from deckpound.models.contact_params import kelvin_voigt_damping
+from deckpound.models.contact_params import hunt_crossley_factor, kelvin_voigt_damping
 from deckpound.models.damping import damping_model
 from deckpound.models.plan import plan_of, takeda_hysteretic_args
 from deckpound.models.errors import SceneError
@@ -184,6 +185,11 @@ def gap_mapping(scene: Scene, corner: int, deck_node: int, seat_node: int,
     if c.law == "kelvin-voigt":
         damp = float(kelvin_voigt_damping(scene)[corner])
         return GapSpec(i, j, "ViscoelasticGap", (mat_tag, c.stiffness, damp, -g0), orient)
+    if c.law in ("hertz", "hertzdamp"):
+        # Hertzdamp(Kh, ξ_n, gap, n): ξ_n = 0 is the undamped Hertz law k δ^n exactly; the
+        # clone's 'hertzdamp' law is this material's arithmetic (contact_laws.py)
+        xi_n = hunt_crossley_factor(c.restitution) if c.law == "hertzdamp" else 0.0
+        return GapSpec(i, j, "Hertzdamp", (mat_tag, c.stiffness, xi_n, -g0, c.exponent), orient)
     raise SceneError("contact.law", f"OpenSees cannot express the {c.law!r} law")
 
 
@@ -333,7 +339,13 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             sc = T("node", f"seat{j + 1} {CORNER_NAMES[c]}")
             rx, ry = plan.corners[c].lever
             ops.node(sc, xf + rx, yf + ry)
-            ops.rigidLink("beam", n, sc)
+            if seat.fixed:
+                # rigid abutment (actuator at rest, checked by the scene): the seat point is
+                # fixed, not linked to the seat node, so the contact force never reaches the
+                # seat — the plan model's zero seat columns of W_N, W_T, exactly
+                ops.fix(sc, 1, 1, 1)
+            else:
+                ops.rigidLink("beam", n, sc)
             scorners.append(sc)
 
     # --- materials and springs ----------------------------------------------------------------

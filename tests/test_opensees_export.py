@@ -293,10 +293,13 @@ def test_gap_mapping_signs(bench):
     assert spec.material == "ImpactMaterial" and spec.args[3] < 0 and spec.args[4] < 0
 
 
-@pytest.mark.parametrize("law", ["hertz", "hertz-damp"])
-def test_refuses_hertz(bench, law):
+@pytest.mark.parametrize("law,why", [("hertz-damp", "OpenSees cannot express the 'hertz-damp'"),
+                                     ("bilinear", "OpenSees cannot run the 'bilinear' law")])
+def test_refuses_hertz_damp_and_bilinear(bench, law, why):
+    """Issue 12: hertz-damp is not Hertzdamp's law (law = 'hertzdamp' is); ImpactMaterial
+    fails at the first impact, so bilinear is refused before any work, with the reason."""
     sc = bench.replace(contact=dc.replace(bench.contact, law=law))
-    with pytest.raises(SceneError, match="OpenSees cannot express"):
+    with pytest.raises(SceneError, match=why):
         engine.run_opensees(sc)
 
 
@@ -306,7 +309,7 @@ def test_refuses_slip_friction(bench):
         engine.run_opensees(sc)
 
 
-@pytest.mark.parametrize("law", ["bilinear", "kelvin-voigt"])
+@pytest.mark.parametrize("law", ["kelvin-voigt", "hertz", "hertzdamp"])
 def test_refuses_law_with_friction(bench, law):
     sc = bench.replace(contact=dc.replace(bench.contact, law=law, friction=0.2,
                                           friction_mode="stick"))
