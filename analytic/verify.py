@@ -38,7 +38,8 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
 
     The clone takes the OpenSees step, tolerance and iteration limit (``tolerance`` overrides
     both when given) and the OpenSees materials' contact tangents
-    (``compliance.contact_tangent = "opensees"``: the same Newton iterates). Returns ``{"deviation": {column: rel. dev.}, "worst": (column, dev),
+    (``compliance.contact_tangent = "opensees"``: the same Newton iterates). Returns
+    ``{"deviation": {column: rel. dev.}, "worst": (column, dev),
     "speed_ratio": OpenSees wall time / clone wall time (clone compiled beforehand),
     "us_per_step": {...}, "iterations": {...}, "status": {...}}``.
     """

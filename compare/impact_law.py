@@ -31,8 +31,6 @@ __all__ = ["FRICTION_CASE", "impact_law_table", "format_table"]
 
 #: The frictional case of the measurement: μ = 0.2 with sticking (the report's headline case).
 FRICTION_CASE = {"contact.friction": 0.2, "contact.friction_mode": "stick"}
-_COLUMNS = ("friction", "impact_law", "peak_theta", "peak_ratio", "nrmse_theta",
-            "max_penetration", "max_penetration_rows", "energy_closure", "impact_gain")
 
 
 def _with(scene, changes: dict):

@@ -5,9 +5,9 @@ Each support channel (``<bent>_x``, ``<bent>_y`` for every shake table, ``seat1_
 base; accelerations [m/s²] are derived. Engines resample onto their own step with
 :meth:`SupportMotion.resample` (linear interpolation, held constant after the record ends).
 
-Sources: the seeded synthetic record, the pulse and supports at rest (here), users' records (AT2, text, CSV:
-:mod:`deckpound.models.records` reads them, :mod:`deckpound.models.record_motion` turns them
-into motion). :func:`support_motion` dispatches, measures the applied PGA per direction,
+Sources: the seeded synthetic record, the pulse and supports at rest (here), users' records
+(AT2, text, CSV: :mod:`deckpound.models.records` reads them,
+:mod:`deckpound.models.record_motion` turns them into motion). :func:`support_motion` dispatches, measures the applied PGA per direction,
 refuses more than ``EXTREME_PGA`` unless forced, and states every tolerance as a warning.
 """
 

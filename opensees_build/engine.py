@@ -281,6 +281,8 @@ class OpenSeesEngine(Engine):
             read.add("contact.restitution")
         if ct.law in ("hertz", "hertzdamp"):
             read.add("contact.exponent")
+        if ct.law == "bilinear":
+            read |= {"contact.bilinear_ratio", "contact.bilinear_yield"}
         if ct.friction_mode != "none":
             read.add("contact.friction")
         if ct.friction > 0.0:

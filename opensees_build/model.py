@@ -127,12 +127,22 @@ def refuse_scene(scene: Scene) -> None:
     The "option does nothing" warnings are derived by the engine contract from
     :meth:`deckpound.opensees_build.engine.OpenSeesEngine.reads`.
     """
-    from deckpound.models.contact_laws_table import contact_law, friction_model
+    from deckpound.models.contact_laws_table import (
+        BILINEAR_MIN_SUBSTEPS,
+        BILINEAR_OPENSEES_REASON,
+        contact_law,
+        friction_model,
+    )
 
     c = scene.contact
     law = contact_law(c.law)
     if law.opensees is None:
         raise SceneError("contact.law", law.opensees_refusal)
+    o = scene.opensees
+    if c.law == "bilinear" and (o.substeps < BILINEAR_MIN_SUBSTEPS or o.fallback != "substep"):
+        raise SceneError("opensees.substeps", BILINEAR_OPENSEES_REASON.format(
+            min=BILINEAR_MIN_SUBSTEPS, got=o.substeps if o.fallback == "substep" else
+            f"{o.substeps} with fallback = {o.fallback!r}"))
     if c.has_friction:
         model = friction_model(c.friction_mode)
         if model.opensees is None:
