@@ -227,3 +227,28 @@ def test_velocity_columns_are_the_rates_of_the_displacements(engine):
             assert np.max(np.abs(fd)) < 1e-9
             continue
         assert np.max(np.abs(fd - v)) <= 2e-3 * scale, (engine, vel)
+
+
+def test_penetration_quality_warning():
+    """Issue 16: a run that penetrates beyond PENETRATION_WARN_FRACTION of the smallest gap
+    (per-step maximum) says so in meta['warnings'] and as a QualityWarning; the benchmark at
+    the engines' default settings does not."""
+    import warnings
+
+    from deckpound.engine_contract import PENETRATION_WARN_FRACTION, QualityWarning
+    from deckpound.models.scene_io import load_scene
+
+    quiet = [("nonsmooth", []), ("compliance", [])]
+    loud = [("nonsmooth", ["nonsmooth.h=0.05"]), ("compliance", ["contact.stiffness=1e4"])]
+    for (engine, ov), warn in [(c, False) for c in quiet] + [(c, True) for c in loud]:
+        sc = load_scene("saiidi-4span", ["run.duration=6.0", *ov])
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            r = run_engine(engine, sc)
+        q = [w for w in caught if issubclass(w.category, QualityWarning)]
+        limit = PENETRATION_WARN_FRACTION[engine != "nonsmooth"] * sc.seats[0].gap
+        print(engine, ov, r.meta["max_penetration"], limit)
+        assert (r.meta["max_penetration"] > limit) == warn
+        assert bool(q) == warn == bool(r.meta.get("quality_warnings"))
+        if warn:
+            assert r.meta["quality_warnings"][0] in r.meta["warnings"]

@@ -296,14 +296,14 @@ def _relative_columns(plan: Plan, motion, cols: dict[str, np.ndarray]) -> dict[s
 
 #: Quality warning thresholds (issue 16): a penetration larger than this fraction of the
 #: smallest initial clear gap is reported as a warning in the result metadata (and so in the
-#: report). Penalty (compliant) engines: 5 % — the penetration is the contact spring's
-#: deformation, and beyond 5 % of the gap the contact is too soft for the gap the scene
-#: resolves (benchmark, k = 1e6 kN/m: 0.32 mm = 2.5 % of 12.7 mm; 0.33 mm = 4.7 % of the 7.0 mm
-#: gap carried into run 7). Rigid contact (nonsmooth): 20 % — penetration is a discretisation
-#: artefact O(h·v) of the velocity-level scheme (benchmark at h = 1e-3 s: 0.50 mm = 3.9 %;
-#: 0.63 mm = 9 % with friction and the 7.0 mm gap), while the runs issue 16 found wrong
-#: (h = 0.05 s: 72 mm into a 12.7 mm gap) are far beyond it.
-PENETRATION_WARN_FRACTION = {True: 0.05, False: 0.20}
+#: report). Penalty (compliant) engines: 10 % — the penetration is the contact spring's
+#: deformation; beyond a tenth of the gap the contact is too soft for the gap the scene
+#: resolves. On the benchmark's 7-run sequence (k = 1e6 kN/m) the largest is 5.4 % (run 7:
+#: 0.38 mm of the carried 7.0 mm gap), so 5 % would flag the paper's own stiffness. Rigid
+#: contact (nonsmooth): 20 % — penetration is a discretisation artefact O(h·v) of the
+#: velocity-level scheme (sequence at h = 1e-3 s: at most 7.1 %), while the runs issue 16
+#: found wrong (h = 0.05 s: 72 mm into a 12.7 mm gap) are far beyond it.
+PENETRATION_WARN_FRACTION = {True: 0.10, False: 0.20}
 
 
 def _contact_quality(engine: Engine, scene: Scene, cols: dict, out: RunOutput) -> dict:
