@@ -236,6 +236,9 @@ def build(ops, scene: Scene, motion=None):
     ops.comment("analysis")
     for cmd in plan["analysis"]:
         ops.call(*cmd)
+    # part of the build (not of the run) so that the exported scripts start from the same
+    # initial velocity as the in-process run (issue 12: textbook scenes)
+    _set_initial_velocity(ops, scene)
     return info, plan
 
 
@@ -320,7 +323,6 @@ class OpenSeesEngine(Engine):
         with OpsSession() as ops:
             info, splan = build(ops, scene, motion)
             raw = ops.raw
-            _set_initial_velocity(ops, scene)
             if _before_run is not None:
                 _before_run(raw, info, splan)
             runner_ops = _ops_wrapper(raw) if _ops_wrapper is not None else raw
