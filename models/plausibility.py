@@ -107,7 +107,7 @@ def contact_duration(scene: Scene) -> float:
 
     ct = scene.contact
     k = ct.stiffness
-    if ct.law in ("hertz", "hertz-damp"):
+    if ct.law in ("hertz", "hertz-damp", "hertzdamp"):
         k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
     m = float(np.min(effective_masses(scene)))
     return float(math.pi * math.sqrt(m / k)) if k > 0 and m > 0 else math.nan
