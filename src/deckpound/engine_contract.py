@@ -30,6 +30,11 @@ A new engine is one module plus one registry entry. It must:
 7. Report compile time apart: time spent compiling or loading compiled kernels goes into
    ``RunOutput.compile_time`` (see :func:`deckpound.analytic._jit.ensure_compiled`), never into
    the run time.
+8. Optionally measure the largest penetration over **every** step (``RunOutput.
+   max_penetration``, and ``max_complementarity_residual`` for a complementarity problem);
+   without it the epilogue takes the penetration from the output rows and says so
+   (``meta["max_penetration_basis"]``). The epilogue turns a penetration beyond
+   :data:`PENETRATION_WARN_FRACTION` of the gap into a :class:`QualityWarning`.
 
 :meth:`Engine.run` (not overridden) does the rest the same way for every engine: validation,
 support motion, timing, and the epilogue :func:`finish`, which adds the columns computed from
