@@ -140,4 +140,4 @@ def run_adaptive(plan, scene, settings, motion, *, kv_clip: bool = False,
         columns=columns, status=status, message=message,
         failed_step=None if ok else st["failed_step"], failed_time=None if ok else st["time"],
         steps=st["steps"], failed_steps=0 if ok else 1, compile_time=compile_time,
-        loop_time=loop, extra=extra)
+        loop_time=loop, max_penetration=st["max_penetration"], extra=extra)

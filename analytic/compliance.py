@@ -208,6 +208,8 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
     dt = settings.dt
     duration = analysis_duration(scene, motion)
     ps, record, cp, cs, corners = pack_run(plan, scene, motion, kv_clip=kv_clip)
+    # Newton's contact tangent: the laws' derivatives, or what OpenSees's materials report
+    cp[:, cl.P_OTAN] = 1.0 if settings.contact_tangent == "opensees" else 0.0
     if not on["friction"]:
         # the slip law with μ = 0 wherever friction was switched off: same (zero) forces
         off = cp[:, cl.P_FMODE] == cl.FRICTION_NONE
@@ -258,6 +260,7 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
     extra = {
         "integrator": "newmark",
         "gamma": GAMMA, "beta": BETA, "kv_clip": kv_clip, "skips": on,
+        "contact_tangent": settings.contact_tangent,
         "max_step_iterations": st["max_step_iterations"],
         "elastic_factor_reuses": st["factor_reuses"],
         "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
@@ -276,7 +279,8 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
         failed_step=None if ok else failed_step, failed_time=None if ok else failed_step * dt,
         steps=st["steps"], newton_iterations=st["newton_iterations"],
         failed_steps=st["rescued_steps"] + (0 if ok else 1), rescued_steps=st["rescued_steps"],
-        compile_time=compile_time, loop_time=loop, extra=extra)
+        compile_time=compile_time, loop_time=loop,
+        max_penetration=st["max_penetration"], extra=extra)
 
 
 def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,

@@ -25,6 +25,17 @@ engine uses (strain ε = g − g₀, OpenSees gap = −g₀, so ε − gap = g):
 * ``hertz-damp`` — λ = k δ^n (1 + D δ̇ / v⁻), D = 3(1 − e²)/4 (Lankarani–Nikravesh), clipped at 0;
   v⁻ is the approach velocity δ̇ committed at the last open state before the impact (at the
   located closure event in the adaptive integrator), floored at ``V_IMPACT_MIN``.
+* ``hertzdamp`` — OpenSees ``Hertzdamp(k, ξ_n, −g₀, n)`` exactly (Muthukumar & DesRoches
+  2006; Ye et al. 2009): λ = (k + ξ δ̇) δ^n for g < 0 with ξ = ξ_n k / v_i, ξ_n = 3(1 − e²)/4,
+  v_i = δ̇ = −ġ of the first closed *trial* after an open committed state (recomputed at every
+  Newton iteration of that step, kept afterwards; not set when δ̇ ≤ 0 there); ξ is reset when a
+  trial opens after a closed commit, and is neither committed nor reverted (a material
+  member). No clipping: λ < 0 near separation. It differs from ``hertz-damp`` in v_i (the
+  trial rate of the first closed step, not the committed approach velocity), the clipping and
+  the floor of v_i. OpenSees reports the tangent −n(k + ξδ̇)δ^(n−1) of the stress with respect
+  to the strain, i.e. +n(k + ξδ̇)δ^(n−1) as ∂λ/∂g — the opposite sign of the force's
+  derivative — and no damping tangent (``opensees_tangent``); Newton still converges on this
+  model because the contact tangent is small against the mass term 4M/Δt².
 * ``bilinear`` — OpenSees ``ImpactMaterial(K1, K2, −δ_y, −g₀)`` (Muthukumar): loading with K1
   from the committed stress, capped by the line K1 δ_y + K2 (δ − δ_y); unloading with K1, floored
   by the line K2 δ; open (0) for g ≥ 0. On the first contact step the increment is measured from
@@ -77,6 +88,7 @@ LAW_HERTZ = LAW_CODES["hertz"]
 LAW_HERTZ_DAMP = LAW_CODES["hertz-damp"]
 LAW_BILINEAR = LAW_CODES["bilinear"]
 LAW_FLORES = LAW_CODES["flores"]
+LAW_HERTZDAMP = LAW_CODES["hertzdamp"]
 FRICTION_NONE = FRICTION_CODES["none"]
 FRICTION_SLIP = FRICTION_CODES["slip"]
 FRICTION_STICK = FRICTION_CODES["stick"]
@@ -92,25 +104,34 @@ def has_stick_spring(mode):
 
 # parameters per corner (cp[c, :]): law code, k, exponent n, Kelvin–Voigt c, Hunt–Crossley
 # factor, K2, δ_y, μ, friction code, k_t, v₀, clip flag, ImpactMaterial quirk flag,
-# restitution e, rate-event flag (the law's ContactLaw.rate_event)
+# restitution e, rate-event flag (the law's ContactLaw.rate_event), OpenSees-tangent flag
 (P_LAW, P_K, P_N, P_C, P_D, P_K2, P_DY, P_MU, P_FMODE, P_KT, P_V0, P_CLIP, P_IMPQ, P_E,
- P_EVENT) = range(15)
-N_CP = 15
-# state per corner (cs[c, :]); the last four are contact2d's: committed stick point s_p, trial
-# total tangential displacement s and the trial slide flag
+ P_EVENT, P_OTAN) = range(16)
+N_CP = 16
+# state per corner (cs[c, :]); S_CSTICK, S_TS, S_TSLIDE are contact2d's: committed stick point
+# s_p, trial total tangential displacement s and the trial slide flag; S_XI: the Hertzdamp
+# damping coefficient ξ, a material member that OpenSees neither commits nor reverts (set at
+# the first closed trial of an impact)
 (S_CG, S_CGD, S_CLAM, S_CFT, S_CCLOSED, S_CVIMP, S_TLAM, S_TTAN, S_TFT, S_TVIMP, S_TCLOSED,
- S_CSTICK, S_TS, S_TSLIDE) = range(14)
-N_CS = 14
+ S_CSTICK, S_TS, S_TSLIDE, S_XI) = range(15)
+N_CS = 15
 
 
 def pack_contact(scene: Scene, *, kv_clip: bool = False,
-                 impact_opensees: bool = False) -> np.ndarray:
+                 impact_opensees: bool = False, opensees_tangent: bool = False) -> np.ndarray:
     """Per-corner parameter array (4, N_CP) of the scene's contact law and friction.
 
     ``impact_opensees`` keeps ImpactMaterial's first-contact quirk in the bilinear law (the
     increment taken from the last open strain, so the force jumps at closure and Newton can
     fail exactly where OpenSees fails); the default measures the first increment from the
     closure point g = 0, the continuous Muthukumar law.
+
+    ``opensees_tangent`` (``compliance.contact_tangent = "opensees"``) gives Newton the
+    tangent the OpenSees materials report instead of the law's derivatives — the same forces,
+    so the converged answer differs only within the Newton tolerance, but the iterates are
+    OpenSees's (round-off agreement): ViscoelasticGap (kelvin-voigt) has no damping tangent
+    (∂λ/∂ġ = 0), Hertzdamp (hertz, hertzdamp) reports its stiffness with the opposite sign
+    (+n(k + ξ δ̇) δ^(n−1) as ∂λ/∂g) and no damping tangent.
     """
     ct = scene.contact
     cp = np.zeros((4, N_CP))
@@ -130,6 +151,7 @@ def pack_contact(scene: Scene, *, kv_clip: bool = False,
     cp[:, P_V0] = ct.slip_velocity
     cp[:, P_CLIP] = 1.0 if kv_clip else 0.0
     cp[:, P_IMPQ] = 1.0 if impact_opensees else 0.0
+    cp[:, P_OTAN] = 1.0 if opensees_tangent else 0.0
     return cp
 
 
@@ -161,7 +183,7 @@ def normal_law(cp, cs, g, gd):
             closed = True
             lam = cp[P_K] * (-g) + cp[P_C] * (-gd)
             dg = -cp[P_K]
-            dgd = -cp[P_C]
+            dgd = -cp[P_C] if cp[P_OTAN] == 0.0 else 0.0   # ViscoelasticGap: no damping tangent
             if cp[P_CLIP] != 0.0 and lam < 0.0:
                 lam = 0.0
                 dg = 0.0
@@ -173,6 +195,26 @@ def normal_law(cp, cs, g, gd):
             dlt = -g
             lam = cp[P_K] * dlt ** n
             dg = -n * cp[P_K] * dlt ** (n - 1.0)
+            if cp[P_OTAN] != 0.0:
+                dg = -dg                          # Hertzdamp's tangent sign (see hertzdamp)
+    elif law == LAW_HERTZDAMP:                    # OpenSees Hertzdamp, its arithmetic
+        n = cp[P_N]
+        if g >= 0.0:
+            if cs[S_CCLOSED] != 0.0:              # "commitTangent != 0": the impact is over
+                cs[S_XI] = 0.0
+        else:
+            closed = True
+            if cs[S_CCLOSED] == 0.0 and gd < 0.0:  # a new impact: ξ from this trial's rate
+                cs[S_XI] = cp[P_D] * cp[P_K] / (-gd)
+            xi = cs[S_XI]
+            dlt = -g
+            fac = cp[P_K] + xi * (-gd)
+            lam = fac * dlt ** n                  # no clipping: tension near separation
+            if cp[P_OTAN] != 0.0:
+                dg = n * fac * dlt ** (n - 1.0)   # Hertzdamp's reported tangent, sign as is
+            else:
+                dg = -n * fac * dlt ** (n - 1.0)
+                dgd = -xi * dlt ** n
     elif law == LAW_HERTZ_DAMP or law == LAW_FLORES:   # Hunt–Crossley type, factor cp[P_D]
         if g < 0.0:
             closed = True
@@ -351,7 +393,7 @@ def contact_stored_energy(cp, cs):
             k = cp[c, P_K]
             if law == LAW_LINEAR or law == LAW_KELVIN_VOIGT:
                 e += 0.5 * k * g * g
-            elif law == LAW_HERTZ or law == LAW_HERTZ_DAMP or law == LAW_FLORES:
+            elif law == LAW_HERTZ or law == LAW_HERTZ_DAMP or law == LAW_FLORES or law == LAW_HERTZDAMP:
                 n = cp[c, P_N]
                 e += k * (-g) ** (n + 1.0) / (n + 1.0)
             elif law == LAW_BILINEAR:

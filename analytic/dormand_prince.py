@@ -272,7 +272,8 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
 
     Fills ``output.table`` (rows at k·out_dt) and ``stats``: count = status (RUN_OK,
     RUN_STEP_UNDERFLOW, RUN_NONFINITE, RUN_STEP_BUDGET, RUN_INTERRUPTED), rows, steps
-    (accepted), rejected, events, rhs calls; value[VAL_TIME] = the time reached [s]; work.hist,
+    (accepted), rejected, events, rhs calls; value[VAL_TIME] = the time reached [s],
+    value[VAL_MAX_PEN] the largest penetration over the accepted steps [m]; work.hist,
     work.hstat: accepted step sizes. ``stats.halt[0]`` ≠ 0 stops the loop before the next step
     attempt (RUN_INTERRUPTED); so does ``opt.max_steps`` attempts (RUN_STEP_BUDGET).
     """
@@ -396,6 +397,9 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
         calls += 1
         spring_commit(sa, hstate)
         cl.contact_commit(cs, cw.g, cw.gd, cw.evaluated)
+        for c in range(4):                 # penetration at every accepted step
+            if -cw.g[c] > stats.value[bd.VAL_MAX_PEN]:
+                stats.value[bd.VAL_MAX_PEN] = -cw.g[c]
         if not yielded:
             yielded = _any_yielded(sa, hstate)
         for j in range(7):

@@ -36,9 +36,10 @@ __all__ = ["K_G0", "N_K", "contact_kinematics", "linear_gap", "pack_corners"]
 # DOF indices
 XD, YD, TD = DECK_X, DECK_Y, DECK_THETA
 #: columns of the packed corner table: position, gap, normal, tangent, lever arm, seat pivot
-#: at rest, and the DOF indices of the facing seat
-K_X, K_Y, K_G0, K_NX, K_NY, K_TX, K_TY, K_RX, K_RY, K_PX, K_PY, K_SX, K_ST = range(13)
-N_K = 13
+#: at rest, the DOF indices of the facing seat, and K_FREE = 0 for a fixed (rigid) seat, 1
+#: otherwise (the contact then puts no force on the seat: its W_N, W_T columns are zero)
+K_X, K_Y, K_G0, K_NX, K_NY, K_TX, K_TY, K_RX, K_RY, K_PX, K_PY, K_SX, K_ST, K_FREE = range(14)
+N_K = 14
 
 
 def pack_corners(plan: Plan) -> np.ndarray:
@@ -59,6 +60,7 @@ def pack_corners(plan: Plan) -> np.ndarray:
         row[K_PY] = 0.0 - c.gap * c.normal[1]
         sx, st = c.seat_dofs
         row[K_SX], row[K_ST] = sx, st
+        row[K_FREE] = 0.0 if c.seat_fixed else 1.0
     return out
 
 
@@ -110,6 +112,10 @@ def contact_kinematics(u, corners, nonlinear, gap, WN, WT):
             WT[c, YD] = ty
             WT[c, TD] = -tx * yc + ty * xc
             WT[c, sx] = -tx
+            if k[K_FREE] == 0.0:          # fixed seat: the contact does not load it
+                WN[c, sx] = 0.0
+                WN[c, st] = 0.0
+                WT[c, sx] = 0.0
         else:
             th, ths = u[TD], u[st]
             ct, sn = np.cos(th), np.sin(th)
@@ -134,6 +140,10 @@ def contact_kinematics(u, corners, nonlinear, gap, WN, WT):
             WT[c, YD] = ty
             WT[c, TD] = tx * dpx + ty * dpy
             WT[c, sx] = -tx
+            if k[K_FREE] == 0.0:
+                WN[c, sx] = 0.0
+                WN[c, st] = 0.0
+                WT[c, sx] = 0.0
 
 
 @kernel
@@ -168,3 +178,9 @@ def gap_hessian(u, corners, c, H):
     H[st, st] = -(nx * rx + ny * ry)           # ∂²n/∂θ_s² = −n
     for i in (XD, YD, TD, sx):
         H[st, i] = H[i, st]
+    if k[K_FREE] == 0.0:                       # fixed seat: no seat rows or columns
+        for i in range(7):
+            H[sx, i] = 0.0
+            H[i, sx] = 0.0
+            H[st, i] = 0.0
+            H[i, st] = 0.0

@@ -443,6 +443,10 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 if nonlinear and not anyev:
                     cl.gaps_and_rates(contact, u, v, cw)
                 cl.contact_commit(cs, g, gd, evaluated)
+                # penetration at every converged (sub)step, not only on output rows
+                for c in range(4):
+                    if -g[c] > stats.value[bd.VAL_MAX_PEN]:
+                        stats.value[bd.VAL_MAX_PEN] = -g[c]
                 # --- energy (trapezoidal work over the (sub)step)
                 if not want_energy:
                     continue

@@ -49,7 +49,8 @@ v_m = (1−θ)v_k + θv_{k+1}, note Δq = h v_m and v_mᵀMΔv = ΔT + (θ−½)
 problems solved, Newton re-solves included; ``newton_iterations``: Newton iterations of the
 Takeda springs) plus ``contact_steps``, ``max_complementarity`` and ``max_cone_residual``
 (largest verified residuals of :func:`~deckpound.analytic.frictional_contact.
-solve_contact_impulses_into`, m/s), ``max_penetration`` (on the output rows, m) and
+solve_contact_impulses_into`, m/s; also ``max_complementarity_residual``), ``max_penetration``
+(at every step, m, through the shared epilogue), ``impact_law`` and
 ``energy_error`` (largest |energy_error|, kJ), ``final_u``/``final_v`` (DOF displacements and
 velocities at the last accepted step, DOF order of :mod:`deckpound.models.mechanics`).
 """
@@ -85,9 +86,18 @@ def output_columns(scene: Scene) -> list[str]:
             + list(ENERGY_COLUMNS))
 
 
-def separating_restitution(e: float, theta: float) -> float:
-    """Restitution used at an active corner that is already separating (U_N⁻ > 0):
-    max(e, (1 − θ)/θ), which makes the normal impulse's work on v_m non-positive."""
+def separating_restitution(e: float, theta: float, impact_law: str = "energy-safe") -> float:
+    """Restitution used at an active corner that is already separating (U_N⁻ > 0).
+
+    ``impact_law = "newton"``: e, Newton's law at every active corner (Siconos'
+    MoreauJeanOSI with NewtonImpactNSL). ``"energy-safe"``: max(e, (1 − θ)/θ) (= 1 for θ = ½),
+    which makes the normal impulse's work on v_m = (1−θ)v_k + θv_{k+1} non-positive, so a
+    frictionless step never gains energy (:mod:`deckpound.analytic.moreau_jean`).
+    """
+    if impact_law == "newton":
+        return float(e)
+    if impact_law != "energy-safe":
+        raise ValueError(f"impact_law must be 'newton' or 'energy-safe', got {impact_law!r}")
     return max(float(e), (1.0 - theta) / theta)
 
 
@@ -194,7 +204,7 @@ class NonsmoothEngine(Engine):
         work = moreau_jean_workspace(u0, v0, ps.new_state(), ps.n_springs, len(ps.channels))
         opts = MoreauJeanOptions(
             nsteps=nsteps, h=float(h), theta=float(theta), ecoef=float(ct.restitution),
-            esep=separating_restitution(ct.restitution, theta), mu=mu,
+            esep=separating_restitution(ct.restitution, theta, ns_set.impact_law), mu=mu,
             mode=MODE_ENUM if ns_set.solver == "enumeration" else MODE_AUTO,
             rtol=float(ns_set.tolerance), ftol=_force_tolerance(ps, ns_set.tolerance),
             maxit=int(ns_set.max_iterations), stride=int(stride))
@@ -213,7 +223,6 @@ class NonsmoothEngine(Engine):
         ok = status == Status.SUCCESS
         rows = st["rows"]
         columns = {k: output.table[:rows, i].copy() for i, k in enumerate(cols)}
-        gaps = np.column_stack([columns[f"gap_c{c}"] for c in range(1, 5)])
         ein = float(np.max(np.abs(columns["energy_input"]))) if rows else 0.0
         eerr = float(np.max(np.abs(columns["energy_error"]))) if rows else 0.0
         extra = {
@@ -223,7 +232,7 @@ class NonsmoothEngine(Engine):
             "factorisations": st["factorisations"],
             "max_complementarity": st["max_complementarity"],
             "max_cone_residual": st["max_cone_residual"],
-            "max_penetration": float(max(0.0, -np.min(gaps))) if rows else 0.0,
+            "impact_law": ns_set.impact_law,
             "energy_error": eerr,
             "energy_closure": eerr / ein if ein > 0 else 0.0,
             "final_u": work.final[0].tolist(),
@@ -241,7 +250,9 @@ class NonsmoothEngine(Engine):
             failed_time=None if ok else st["failed_step"] * h,
             steps=st["steps"], newton_iterations=st["newton_iterations"],
             contact_solves=st["contact_solves"], failed_steps=0 if ok else 1,
-            compile_time=compile_time, loop_time=loop, extra=extra)
+            compile_time=compile_time, loop_time=loop,
+            max_penetration=st["max_penetration"],
+            max_complementarity_residual=st["max_complementarity"], extra=extra)
 
 
 def run_nonsmooth(scene: Scene, motion: SupportMotion | None = None, *,

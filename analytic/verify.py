@@ -53,9 +53,11 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
     """Run OpenSees (rigid) and the Newmark clone on ``scene``; report their agreement.
 
     The clone takes the OpenSees step, tolerance and iteration limit (``tolerance`` overrides
-    both when given). ``friction_mode = stick`` is verified as ``contact2d``
-    (:func:`opensees_friction`). Returns ``{"notes": [...], "peaks": {column: OpenSees peak},
-    "deviation": {column: rel. dev.}, "worst": (column, dev),
+    both when given) and the OpenSees materials' contact tangents
+    (``compliance.contact_tangent = "opensees"``: the same Newton iterates).
+    ``friction_mode = stick`` is verified as ``contact2d`` (:func:`opensees_friction`). Returns
+    ``{"notes": [...], "peaks": {column: OpenSees peak}, "deviation": {column: rel. dev.},
+    "worst": (column, dev),
     "speed_ratio": OpenSees wall time / clone wall time (clone compiled beforehand),
     "us_per_step": {...}, "iterations": {...}, "status": {...}}``.
     """
@@ -69,7 +71,8 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
     os_set = dataclasses.replace(os_set, mode="rigid")
     cp_set = dataclasses.replace(scene.compliance, integrator="newmark", dt=os_set.dt,
                                  tolerance=os_set.tolerance,
-                                 max_iterations=os_set.max_iterations)
+                                 max_iterations=os_set.max_iterations,
+                                 contact_tangent="opensees")
     sc = scene.replace(opensees=os_set, compliance=cp_set)
     if motion is None:
         from deckpound.models.excitation import support_motion

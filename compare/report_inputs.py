@@ -82,6 +82,9 @@ def excitation_sentences(scene: Scene, prov: dict) -> list[str]:
     elif kind == "pulse":
         out.append(f"One longitudinal displacement pulse of period {short(exc.pulse_period)} s, "
                    f"no transverse motion; {span}.")
+    elif kind == "none":
+        out.append(f"No excitation: every support at rest for {short(dur)} s (free motion "
+                   "from the scene's initial state).")
     else:
         files = files_table(prov)
         parts = [f"{r.direction}: {r.path} (SHA-256 {r.sha256}, {r.bytes} bytes, {r.npts} "

@@ -89,7 +89,23 @@ def what_was_run(d) -> list:
     items.append(Table(pd.DataFrame(cost), "Cost per engine. Run times exclude compilation "
                        "(numba kernels, OpenSees model build) and are as measured when each case "
                        "was computed (also for cache hits); compile time is shown apart."))
+    items.append(_quality_sentence(d))
     return items
+
+
+def _quality_sentence(d) -> str:
+    """The results' quality warnings (issue 16: penetration beyond a stated fraction of the
+    gap, measured at every step), or that there were none."""
+    from deckpound.engine_contract import PENETRATION_WARN_FRACTION
+
+    found = [f"{case} run {r.index}: {w}" for case, runs in d.sequences.items() for r in runs
+             for w in r.result.meta.get("quality_warnings", [])]
+    limits = (f"penetration beyond {PENETRATION_WARN_FRACTION[True]:.0%} (penalty engines) or "
+              f"{PENETRATION_WARN_FRACTION[False]:.0%} (nonsmooth) of the smallest initial gap, "
+              "measured at every step")
+    if not found:
+        return f"Quality warnings: none in the sequence runs ({limits})."
+    return f"Quality warnings ({limits}): " + "; ".join(found) + "."
 
 
 def excitation(d) -> list:

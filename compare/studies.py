@@ -56,7 +56,7 @@ def modified(scene: Scene, *overrides: str) -> Scene:
 def contact_step(scene: Scene, per_period: int = 20) -> float:
     """Compliance time step resolving the stiffest contact oscillation (linearised) [s]."""
     k = scene.contact.stiffness
-    if scene.contact.law in ("hertz", "hertz-damp"):
+    if scene.contact.law in ("hertz", "hertz-damp", "hertzdamp"):
         k = k * np.sqrt(0.01)  # secant stiffness at 10 mm penetration, an upper estimate
     period = 2.0 * np.pi * np.sqrt(float(np.min(effective_masses(scene))) / k)
     return float(min(scene.compliance.dt, period / per_period))

@@ -19,7 +19,12 @@ The matrix (:func:`matrix_cases`) is the product of
 * the geometry: straight deck and skew :data:`SKEW` degrees;
 * the damping choices OpenSees expresses (:data:`DAMPING_CASES`): the default (bents, initial
   stiffness, absolute velocities), Rayleigh on the seat springs too, no Rayleigh, committed and
-  current tangent, mass part on relative velocities.
+  current tangent, mass part on relative velocities — all with the linear law; the other laws
+  with the default damping (the damping algorithm does not depend on the law).
+
+The clone uses the OpenSees materials' contact tangents (``compliance.contact_tangent =
+"opensees"``), so Newton takes the same iterates (Kelvin–Voigt and Hertzdamp still differ in a
+few steps where a gap reopens: see the README's known limitations).
 
 ``--quick`` runs :data:`QUICK_CASES` over :data:`QUICK_DURATION` s. With ``--set`` the user pins
 the options: one case, the scene as given. ``friction_mode = stick`` (the project's own law,
@@ -51,11 +56,10 @@ SKEW = 30.0
 QUICK_DURATION = 5.0
 #: contact laws with an OpenSees material that the matrix leaves out, and why
 LAW_EXCLUSIONS = {
-    "kelvin-voigt": "OpenSees's ViscoelasticGap gives Newton no damping tangent, so at the "
-                    "1e-12 tolerance its Newton stalls and sub-steps where the clone converges "
-                    "(issue 12 item 3)",
-    "bilinear": "OpenSees's ImpactMaterial jumps at first contact and Newton fails at the "
-                "benchmark's first impact (issue 12 item 3)",
+    "bilinear": "OpenSees's ImpactMaterial measures the closing step's increment from the last "
+                "open strain: it runs only with >= 1000 sub-steps and its gap force then jumps "
+                "at closure (+34 % on the first impact), a documented difference from the "
+                "clone's continuous law, not round-off (README, known limitations)",
 }
 #: damping choices OpenSees expresses: label → overrides
 DAMPING_CASES = {
@@ -102,7 +106,9 @@ def verified_laws() -> list[str]:
 
 
 def matrix_cases() -> list[VerifyCase]:
-    """laws × friction (none, contact2d where OpenSees combines it) × skew × damping."""
+    """linear law: friction (none, contact2d) × skew × every damping choice; the other laws
+    OpenSees expresses: skew × the default damping (the damping algorithm does not depend on
+    the law, the contact tangent does)."""
     from deckpound.models.contact_laws_table import DEFAULT_FRICTION, friction_model
 
     cases = []
@@ -112,7 +118,7 @@ def matrix_cases() -> list[VerifyCase]:
             frictions.append(DEFAULT_FRICTION)
         for fr in frictions:
             for skew in (0.0, SKEW):
-                for damping in DAMPING_CASES:
+                for damping in (DAMPING_CASES if law == "linear" else list(DAMPING_CASES)[:1]):
                     cases.append(VerifyCase(law, fr, skew, damping))
     return cases
 

@@ -28,7 +28,8 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-__all__ = ["CONTACT_LAW_TABLE", "DEFAULT_FRICTION", "FRICTION_CODES", "FRICTION_MODEL_TABLE", "LAW_CODES",
+__all__ = ["BILINEAR_MIN_SUBSTEPS", "BILINEAR_OPENSEES_REASON", "CONTACT_LAW_TABLE",
+           "DEFAULT_FRICTION", "FRICTION_CODES", "FRICTION_MODEL_TABLE", "LAW_CODES",
            "RIGID_CONTACT", "ContactLaw", "FrictionModel", "contact_law", "friction_model"]
 
 
@@ -114,39 +115,78 @@ def _needs_positive_restitution(contact) -> tuple[str, str] | None:
     return None
 
 
+def _hertzdamp(d: float, r: float, p: dict) -> float:
+    # OpenSees Hertzdamp on a virgin corner: ξ = ξ_n k / δ̇ at the first closed trial when
+    # approaching (δ̇ > 0), so ξ δ̇ = ξ_n k there; ξ = 0 otherwise
+    return p["k"] * d ** p["n"] * (1.0 + p["hc"]) if r > 0.0 else p["k"] * d ** p["n"]
+
+
 def _bilinear(d: float, r: float, p: dict) -> float:
     # first loading from the closure point: K1 up to the yield line K1 δy + K2 (δ − δy)
     return min(p["k"] * d, p["k"] * p["dy"] + p["k2"] * (d - p["dy"]))
 
 
-_OPENSEES_LAWS = "use linear, bilinear or kelvin-voigt"
-_HERTZ_REFUSAL = ("OpenSees cannot express the {name!r} law of the scene (F = k δ^n (1 + "
-                  "3(1−e²)/4 δ̇/v⁻)): its Hertzdamp material has not been shown to be the same "
-                  "law; " + _OPENSEES_LAWS)
+_OPENSEES_LAWS = "use linear, kelvin-voigt, hertz, hertzdamp or bilinear"
+_HERTZ_DAMP_REFUSAL = (
+    "OpenSees cannot express the 'hertz-damp' law (λ = k δ^n (1 + 3(1−e²)/4 δ̇/v⁻), v⁻ the "
+    "committed approach velocity before the impact, floored at 1 mm/s, λ clipped at 0): its "
+    "Hertzdamp material takes v⁻ from the strain rate of the first closed Newton trial, does "
+    "not clip the tensile force near separation and has no floor (SRC/material/uniaxial/"
+    "Hertzdamp.cpp); law = 'hertzdamp' is that material exactly, in every engine; "
+    + _OPENSEES_LAWS)
+_FLORES_REFUSAL = (
+    "OpenSees has no material with the 'flores' law (λ = k δ^n (1 + 8(1−e)/(5e) δ̇/v⁻)): "
+    "Hertzdamp's damping is the Lankarani–Nikravesh form; " + _OPENSEES_LAWS)
+#: Fewest OpenSees sub-steps per failed step that run the 'bilinear' law (ImpactMaterial)
+BILINEAR_MIN_SUBSTEPS = 1000
+BILINEAR_OPENSEES_REASON = (
+    "OpenSees runs the 'bilinear' law (ImpactMaterial) only with opensees.substeps >= {min} "
+    "(and fallback = 'substep'): ImpactMaterial measures the strain increment of the step in "
+    "which the gap closes from the last committed (open) strain, not from the gap "
+    "(SRC/material/uniaxial/ImpactMaterial.cpp, setTrialStrain), so its force jumps by "
+    "K1·(committed strain − gap) at closure and Newton finds no equilibrium in most closing "
+    "steps; on the benchmark it fails at t = 0.84 s with 10 sub-steps and at 11.58 s with 100, "
+    "while with 1000 the 20 s record completes (116 closing steps rescued); its motion is then "
+    "the clone's continuous bilinear law's to ~1e-5 (peak rotation), but the jump of the "
+    "closing sub-step spikes the gap force (+34 % on the first impact); got "
+    "opensees.substeps = {got}")
 
 #: The normal contact laws, in code order.
 CONTACT_LAW_TABLE: tuple[ContactLaw, ...] = (
+    # ElasticPPGap(k, Fy → ∞, −g₀): the same force and tangent (clone ≡ OpenSees to
+    # round-off, `deckpound verify clone`)
     ContactLaw("linear", 0, ("contact.stiffness",), "λ = k δ for δ ≥ 0",
                lambda d, r, p: p["k"] * d, opensees="ElasticPPGap"),
+    # ViscoelasticGap(k, c, −g₀): the same force (tension allowed); its tangent is k only (no
+    # damping tangent), which compliance.contact_tangent = "opensees" reproduces
     ContactLaw("kelvin-voigt", 1, ("contact.stiffness", "contact.restitution"),
                "λ = k δ + c δ̇ for δ > 0, c = 2ζ(e)√(k m_eff) (tension allowed unless kv_clip)",
                lambda d, r, p: p["k"] * d + p["c"] * r, opensees="ViscoelasticGap"),
+    # Hertzdamp(k, 0, −g₀, n): with ξ_n = 0 its force is k δ^n exactly; its tangent has the
+    # opposite sign (contact_tangent = "opensees" reproduces it)
     ContactLaw("hertz", 2, ("contact.stiffness", "contact.exponent"), "λ = k δ^n for δ > 0",
-               lambda d, r, p: p["k"] * d ** p["n"],
-               opensees_refusal=_HERTZ_REFUSAL.format(name="hertz")),
+               lambda d, r, p: p["k"] * d ** p["n"], opensees="Hertzdamp"),
     ContactLaw("hertz-damp", 3, ("contact.stiffness", "contact.exponent", "contact.restitution"),
                "λ = k δ^n (1 + 3(1 − e²)/4 · δ̇/v⁻) ≥ 0, v⁻ the approach velocity",
-               _hertz_damp, opensees_refusal=_HERTZ_REFUSAL.format(name="hertz-damp"),
+               _hertz_damp, opensees_refusal=_HERTZ_DAMP_REFUSAL,
                hysteresis=_lankarani_nikravesh),
+    # ImpactMaterial: only with >= BILINEAR_MIN_SUBSTEPS sub-steps (see BILINEAR_OPENSEES_REASON);
+    # the clone keeps the continuous law (difference measured there)
     ContactLaw("bilinear", 4, ("contact.stiffness", "contact.bilinear_ratio",
                                "contact.bilinear_yield"),
                "Muthukumar: loading K1 capped by K1 δy + K2 (δ − δy), unloading K1 floored by K2 δ",
                _bilinear, opensees="ImpactMaterial", rate_event=True),
     ContactLaw("flores", 5, ("contact.stiffness", "contact.exponent", "contact.restitution"),
                "λ = k δ^n (1 + 8(1 − e)/(5e) · δ̇/v⁻) ≥ 0, v⁻ the approach velocity (Flores 2011)",
-               _hertz_damp, opensees_refusal=_HERTZ_REFUSAL.format(name="flores").replace(
-                   "3(1−e²)/4", "8(1−e)/(5e)"),
+               _hertz_damp, opensees_refusal=_FLORES_REFUSAL,
                hysteresis=_flores, refuse=_needs_positive_restitution),
+    # Hertzdamp(k, 3(1−e²)/4, −g₀, n): the material's arithmetic in every engine
+    # (deckpound.analytic.contact_laws, hertzdamp)
+    ContactLaw("hertzdamp", 6, ("contact.stiffness", "contact.exponent",
+                                "contact.restitution"),
+               "OpenSees Hertzdamp: λ = (k + ξ δ̇) δ^n, ξ = 3(1 − e²)/4 · k / v_i, v_i = δ̇ of the "
+               "first closed trial of an impact (no clipping)", _hertzdamp, opensees="Hertzdamp",
+               hysteresis=_lankarani_nikravesh),
 )
 
 

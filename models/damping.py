@@ -141,6 +141,10 @@ def rayleigh_coefficients(scene: Scene, plan: Plan | None = None
     else:
         wi, wj = (2.0 * np.pi * f for f in d.frequencies)
     z = d.ratio
+    if z == 0.0:
+        # no damping: a0 = a1 = 0 whatever the frequencies (also for a free deck, bents = [],
+        # whose rigid-body modes have ω = 0 and would give 0/0)
+        return 0.0, 0.0, (float(wi), float(wj))
     return 2.0 * z * wi * wj / (wi + wj), 2.0 * z / (wi + wj), (float(wi), float(wj))
 
 

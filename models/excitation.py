@@ -5,9 +5,9 @@ Each support channel (``<bent>_x``, ``<bent>_y`` for every shake table, ``seat1_
 base; accelerations [m/s²] are derived. Engines resample onto their own step with
 :meth:`SupportMotion.resample` (linear interpolation, held constant after the record ends).
 
-Sources: the seeded synthetic record and the pulse (here), users' records (AT2, text, CSV:
-:mod:`deckpound.models.records` reads them, :mod:`deckpound.models.record_motion` turns them
-into motion). :func:`support_motion` dispatches, measures the applied PGA per direction,
+Sources: the seeded synthetic record, the pulse and supports at rest (here), users' records
+(AT2, text, CSV: :mod:`deckpound.models.records` reads them,
+:mod:`deckpound.models.record_motion` turns them into motion). :func:`support_motion` dispatches, measures the applied PGA per direction,
 refuses more than ``EXTREME_PGA`` unless forced, and states every tolerance as a warning.
 """
 
@@ -350,6 +350,22 @@ def pulse_motion(scene: Scene) -> SupportMotion:
     return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc, provenance=prov)
 
 
+def rest_motion(scene: Scene) -> SupportMotion:
+    """Every support at rest (kind = none) over ``run.duration`` if given, else
+    ``excitation.duration``: two samples of zero displacement and velocity (the engines hold
+    the last sample, so the motion is exactly zero at every step)."""
+    exc = scene.excitation
+    duration = scene.run.duration if scene.run.duration is not None else exc.duration
+    t = np.array([0.0, float(duration)])
+    zero = np.zeros(2)
+    chans = support_channels(scene)
+    prov = make_provenance(
+        exc, files={}, header={}, npts={}, dt_record=None, dt=None, duration=float(duration),
+        targets={"x": 0.0, "y": 0.0}, factors={}, notes=[], processing="none (supports at rest)")
+    return SupportMotion(t=t, disp={c: zero for c in chans}, vel={c: zero for c in chans},
+                         acc_exact={c: zero for c in chans}, provenance=prov)
+
+
 def support_motion(scene: Scene) -> SupportMotion:
     """The scene's support motion, whatever its source, with its provenance.
 
@@ -366,6 +382,8 @@ def support_motion(scene: Scene) -> SupportMotion:
         motion, field_name = synthetic_motion(scene), "excitation"
     elif kind == "pulse":
         motion, field_name = pulse_motion(scene), "excitation"
+    elif kind == "none":
+        motion, field_name = rest_motion(scene), "excitation"
     else:
         with np.errstate(all="ignore"):  # an overflow is refused below, not warned about
             motion = acceleration_motion(scene)

@@ -44,7 +44,9 @@ class Modes:
 
     @property
     def periods(self) -> np.ndarray:
-        return 2.0 * np.pi / self.omega
+        """2π/ω [s]; inf for a rigid-body mode (ω = 0, e.g. a deck without bents)."""
+        with np.errstate(divide="ignore"):
+            return 2.0 * np.pi / self.omega
 
     @property
     def frequencies(self) -> np.ndarray:

@@ -88,6 +88,9 @@ class Corner:
     tangent : unit tangent of the seat face; the tangential force is reported along it.
     lever : facing seat point relative to the seat's pivot (contact-face mid-point) [m].
     gap : initial clear gap g₀ measured along the normal [m].
+    seat_fixed : the facing seat is a rigid abutment (``seats[i].fixed``): the contact force
+        does not act on it, so the seat columns of W_N and W_T are zero (the seat, whose
+        actuator is then at rest, stays at rest exactly).
     """
 
     name: str
@@ -99,6 +102,7 @@ class Corner:
     tangent: tuple[float, float]
     lever: tuple[float, float]
     gap: float
+    seat_fixed: bool = False
 
     @property
     def seat_dofs(self) -> tuple[int, int]:
@@ -118,8 +122,9 @@ class Corner:
         w = np.zeros(N_DOF)
         w[DECK_X], w[DECK_Y] = nx, ny
         w[DECK_THETA] = -nx * self.y + ny * self.x
-        w[sx] = -nx
-        w[st] = nx * ry - ny * rx
+        if not self.seat_fixed:
+            w[sx] = -nx
+            w[st] = nx * ry - ny * rx
         return w
 
     def tangent_row(self) -> np.ndarray:
@@ -129,7 +134,8 @@ class Corner:
         w = np.zeros(N_DOF)
         w[DECK_X], w[DECK_Y] = tx, ty
         w[DECK_THETA] = -tx * self.y + ty * self.x
-        w[sx] = -tx
+        if not self.seat_fixed:
+            w[sx] = -tx
         return w
 
 
@@ -389,7 +395,8 @@ def _corner_table(scene: Scene, gaps: tuple[float, float]) -> tuple[Corner, ...]
         # φ = 0 gives exactly n = (±1, 0), t = (0, 1), r = (0, y_c): the straight-deck formulae
         normal = (side * cs, -side * sn)
         out.append(Corner(name=CORNER_NAMES[k], index=k, seat=seat, x=xc, y=yc, normal=normal,
-                          tangent=(sn, cs), lever=(yc * tn, yc), gap=float(gaps[seat])))
+                          tangent=(sn, cs), lever=(yc * tn, yc), gap=float(gaps[seat]),
+                          seat_fixed=bool(scene.seats[seat].fixed)))
     return tuple(out)
 
 

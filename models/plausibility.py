@@ -107,7 +107,7 @@ def contact_duration(scene: Scene) -> float:
 
     ct = scene.contact
     k = ct.stiffness
-    if ct.law in ("hertz", "hertz-damp"):
+    if ct.law in ("hertz", "hertz-damp", "hertzdamp"):
         k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
     m = float(np.min(effective_masses(scene)))
     return float(math.pi * math.sqrt(m / k)) if k > 0 and m > 0 else math.nan
@@ -148,6 +148,10 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
 
     periods = natural_modes(scene).periods
     report.periods = tuple(float(T) for T in periods)
+    if not scene.bents:
+        # bents = []: the deck is free in plan, its three rigid-body modes (x, y, θ; the
+        # first three, ω = 0) have no period to resolve
+        periods = periods[3:]
     if not np.all(np.isfinite(periods)):
         add(Finding("error", "scene", "the masses and stiffnesses give non-finite natural "
                     f"periods ({', '.join(f'{T:g}' for T in periods)} s): a mechanism or "

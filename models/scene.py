@@ -26,6 +26,8 @@ DAMPING_MEMBERS = ("bents", "bents+seats", "none")
 DAMPING_STIFFNESS = ("initial", "committed", "current")
 DAMPING_MASS = ("absolute", "relative")
 GEOMETRIES = ("linear", "nonlinear")
+#: the nonsmooth engine's impact laws (:func:`deckpound.analytic.nonsmooth.separating_restitution`)
+IMPACT_LAWS = ("newton", "energy-safe")
 SUPPORTS_PER_BENT = ("x", "y")
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
 #: largest number of time steps one run may take (a 60 s record at 1e-5 s is 6e6)
@@ -120,6 +122,13 @@ class Seat:
 
     The seat moves in x and rotates about the mid-point of its contact face; its spring and
     dashpot act on the deformation between the seat and its actuator.
+
+    ``fixed = true`` makes it a rigid abutment: the contact forces do not act on the seat (the
+    seat columns of W_N, W_T are zero in the analytic engines; OpenSees fixes the seat's contact
+    points instead of linking them to the seat node), so the seat stays exactly where its
+    actuator holds it. This is exact only while the actuator is at rest — a seat following a
+    moving actuator rigidly would need its DOFs prescribed in every engine's step loop, which
+    they do not do — so the scene refuses a fixed seat under longitudinal support motion.
     """
 
     name: str = spec(doc="label")
@@ -131,6 +140,9 @@ class Seat:
     cx: float = spec(unit="kN*s/m", doc="translational dashpot", ge=0.0)
     ctheta: float = spec(unit="kN*m*s/rad", doc="rotational dashpot", ge=0.0)
     gap: float = spec(unit="m", doc="initial clear gap between deck end and seat face", ge=0.0)
+    fixed: bool = spec(False, doc="rigid abutment: the seat stays on its actuator and the "
+                       "contact forces do not move it (needs the actuators at rest: "
+                       "excitation.kind = 'none' or longitudinal_ratio = 0)")
 
     def __post_init__(self) -> None:
         validate(self)
@@ -246,7 +258,9 @@ class Excitation:
     seat2_x);
     kind = pulse: one longitudinal displacement pulse d = D(1 − cos 2πt/T)/2 for t ≤ T
     (``pulse_period`` T), max acceleration pga · longitudinal_ratio, no transverse motion —
-    the canonical single-impact input.
+    the canonical single-impact input;
+    kind = none: every support at rest for ``duration`` seconds (or ``run.duration``) — free
+    vibration from the ``[initial]`` state, the textbook impact problems.
 
     Records (at2, text, csv) are applied at every table (x and y), the actuators follow x;
     they are time-scaled by ``time_scale``, processed by ``processing`` (default none: real
@@ -257,7 +271,7 @@ class Excitation:
     """
 
     kind: str = spec("synthetic", doc="record source",
-                     choices=("synthetic", "csv", "at2", "text", "pulse"))
+                     choices=("synthetic", "csv", "at2", "text", "pulse", "none"))
     pga: float = spec(0.5, unit="g", doc="transverse peak ground acceleration (run label; "
                       "> 5 g needs allow_extreme)", gt=0.0, le=100.0)
     longitudinal_ratio: float = spec(1.2, unit="-", doc="longitudinal PGA / transverse PGA",
@@ -404,6 +418,12 @@ class ComplianceSettings:
     commit_step: float = spec(1.0e-4, unit="s",
                               doc="largest step (adaptive) once a Takeda spring has yielded: "
                               "the Hysteretic state depends on where it is committed", gt=0.0)
+    contact_tangent: str = spec("consistent", doc="Newton's contact tangent (newmark): "
+                                "consistent = the laws' derivatives; opensees = what the OpenSees "
+                                "materials report (ViscoelasticGap: no damping tangent; "
+                                "Hertzdamp: opposite sign, no damping tangent) — the same "
+                                "forces, OpenSees's Newton iterates (round-off agreement)",
+                                choices=("consistent", "opensees"))
     max_steps: int = spec(10_000_000, doc="step budget (adaptive): Runge-Kutta steps tried, "
                           "accepted or rejected, before the run stops with status step_budget; "
                           "about 50x the 0.2 million steps of the 20 s benchmark, 1-3 min of "
@@ -423,6 +443,11 @@ class NonsmoothSettings:
     tolerance: float = spec(1.0e-10, unit="-", doc="complementarity tolerance", gt=0.0)
     max_iterations: int = spec(50, doc="Newton iterations per step for the Takeda springs", ge=1,
                                le=MAX_ITERATIONS)
+    impact_law: str = spec("newton", doc="newton: Newton's law 0 <= U_N+ + e U_N- at every "
+                           "active corner (Siconos' Moreau-Jean); energy-safe: restitution "
+                           "max(e, (1-theta)/theta) at active corners already separating "
+                           "(U_N- > 0), so no normal impulse does positive work",
+                           choices=IMPACT_LAWS)
 
     def __post_init__(self) -> None:
         validate(self)
@@ -501,8 +526,6 @@ class Scene:
 
     def __post_init__(self) -> None:
         validate(self)
-        if not self.bents:
-            raise SceneError("bents", "must hold at least one bent")
         if len(self.seats) != 2:
             raise SceneError("seats", f"must hold exactly 2 seats (left, right), got {len(self.seats)}")
         names = [b.name for b in self.bents]
@@ -518,15 +541,43 @@ class Scene:
                 raise SceneError(f"bents[{i}].station",
                                  f"must lie on the deck, in [0, {self.deck.length}] m, "
                                  f"got {b.station}")
+        self._check_free_deck()
+        self._check_fixed_seats()
         for key in self.notes:
             _check_path(self, key)
         check_sequence_pgas(self)
         self._check_step_counts()
 
+    def _check_free_deck(self) -> None:
+        """``bents = []`` leaves the deck free in plan: the contact-free model then has three
+        rigid-body modes (deck x, y, θ at zero frequency), so Rayleigh damping matched at modes
+        1-3 is undefined (ω = 0); refuse it unless the ratio is 0."""
+        d = self.damping
+        if (not self.bents and d.method == "modes" and d.ratio > 0.0
+                and min(d.modes) <= 3):
+            raise SceneError("damping.method", "'modes' needs the natural frequencies of the "
+                             "contact-free model, but with bents = [] the deck is free in "
+                             "plan: modes 1-3 are its rigid-body modes at zero frequency; give "
+                             "damping.method = 'frequencies' (with damping.frequencies), modes "
+                             f"above 3, or damping.ratio = 0 (got modes {list(d.modes)})")
+
+    def _check_fixed_seats(self) -> None:
+        """A fixed seat is exact only with its actuator at rest (see :class:`Seat`)."""
+        exc = self.excitation
+        at_rest = exc.kind == "none" or (exc.kind in ("synthetic", "pulse")
+                                          and exc.longitudinal_ratio == 0.0)
+        for i, seat in enumerate(self.seats):
+            if seat.fixed and not at_rest:
+                raise SceneError(f"seats[{i}].fixed", "a fixed (rigid) seat needs its actuator "
+                                 "at rest: excitation.kind = 'none', or a synthetic/pulse "
+                                 "record with longitudinal_ratio = 0 (the engines cannot "
+                                 "prescribe a moving seat); use stiff seat springs instead, "
+                                 f"got excitation.kind = {exc.kind!r}")
+
     def _check_step_counts(self) -> None:
         """Refuse steps so small that a run could not fit in memory or time (MAX_STEPS)."""
         duration = self.run.duration
-        if duration is None and self.excitation.kind in ("synthetic", "pulse"):
+        if duration is None and self.excitation.kind in ("synthetic", "pulse", "none"):
             duration = self.excitation.duration
         if duration is None:
             return  # a loaded record: checked when it is resampled

@@ -11,7 +11,8 @@ Nodes (tags by name through :meth:`OpsSession.tag`):
   face's gap-opening normal; ∓(L/2 + g₀) for a straight deck) so that zeroLengthContact2D,
   whose gap includes the node coordinates, sees the clear gap g₀ along n;
 * ``seat1 c1``, ... — seat points facing the deck corners, at pivot + lever r = (y_c tan φ, y_c)
-  (the plan's ``Corner.lever``), rigidLinked (beam) to their seat node;
+  (the plan's ``Corner.lever``), rigidLinked (beam) to their seat node — or fixed, for a
+  ``seats[i].fixed`` rigid abutment (its actuator is then at rest);
 * ``actuator1``/``actuator2`` — at the seat nodes, imposed x motion, y and θ fixed;
 * ``table <bent>`` — at (x_b, 0), imposed x and y motion, θ fixed.
 
@@ -52,6 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from deckpound.models.contact_laws_table import contact_law
 from deckpound.models.contact_params import kelvin_voigt_damping
 from deckpound.models.damping import damping_model
 from deckpound.models.plan import plan_of, takeda_hysteretic_args
@@ -129,12 +131,22 @@ def refuse_scene(scene: Scene) -> None:
     The "option does nothing" warnings are derived by the engine contract from
     :meth:`deckpound.opensees_build.engine.OpenSeesEngine.reads`.
     """
-    from deckpound.models.contact_laws_table import contact_law, friction_model
+    from deckpound.models.contact_laws_table import (
+        BILINEAR_MIN_SUBSTEPS,
+        BILINEAR_OPENSEES_REASON,
+        contact_law,
+        friction_model,
+    )
 
     c = scene.contact
     law = contact_law(c.law)
     if law.opensees is None:
         raise SceneError("contact.law", law.opensees_refusal)
+    o = scene.opensees
+    if c.law == "bilinear" and (o.substeps < BILINEAR_MIN_SUBSTEPS or o.fallback != "substep"):
+        raise SceneError("opensees.substeps", BILINEAR_OPENSEES_REASON.format(
+            min=BILINEAR_MIN_SUBSTEPS, got=o.substeps if o.fallback == "substep" else
+            f"{o.substeps} with fallback = {o.fallback!r}"))
     if c.has_friction:
         model = friction_model(c.friction_mode)
         if model.opensees is None:
@@ -187,6 +199,12 @@ def gap_mapping(scene: Scene, corner: int, deck_node: int, seat_node: int,
     if c.law == "kelvin-voigt":
         damp = float(kelvin_voigt_damping(scene)[corner])
         return GapSpec(i, j, "ViscoelasticGap", (mat_tag, c.stiffness, damp, -g0), orient)
+    if c.law in ("hertz", "hertzdamp"):
+        # Hertzdamp(Kh, ξ_n, gap, n): ξ_n = 0 is the undamped Hertz law k δ^n exactly; the
+        # clone's 'hertzdamp' law is this material's arithmetic (contact_laws.py)
+        law = contact_law(c.law)
+        xi_n = law.hysteresis(c.restitution) if law.hysteresis is not None else 0.0
+        return GapSpec(i, j, "Hertzdamp", (mat_tag, c.stiffness, xi_n, -g0, c.exponent), orient)
     raise SceneError("contact.law", f"OpenSees cannot express the {c.law!r} law")
 
 
@@ -338,7 +356,13 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             sc = T("node", f"seat{j + 1} {CORNER_NAMES[c]}")
             rx, ry = plan.corners[c].lever
             ops.node(sc, xf + rx, yf + ry)
-            ops.rigidLink("beam", n, sc)
+            if seat.fixed:
+                # rigid abutment (actuator at rest, checked by the scene): the seat point is
+                # fixed, not linked to the seat node, so the contact force never reaches the
+                # seat — the plan model's zero seat columns of W_N, W_T, exactly
+                ops.fix(sc, 1, 1, 1)
+            else:
+                ops.rigidLink("beam", n, sc)
             scorners.append(sc)
 
     # --- materials and springs ----------------------------------------------------------------

@@ -187,7 +187,7 @@ BAD_SETS = [
     ("mass-huge", ["--set", "deck.mass=1e300"], "deck.mass", "1e+30"),
     ("mass-huge-int", ["--set", "deck.mass=1" + "0" * 400], "deck.mass", "too large"),
     ("unknown-law", ["--set", "contact.law=hertzz"], "contact.law", "'hertzz'",
-     "allowed: linear, kelvin-voigt, hertz, hertz-damp, bilinear"),
+     "allowed: linear, kelvin-voigt, hertz, hertz-damp, bilinear, hertzdamp"),
     ("misspelt-key-set", ["--set", "contact.stifness=2e6"], "contact.stifness",
      "did you mean 'stiffness'"),
     ("unknown-key-set", ["--set", "deck.colour=1"], "deck.colour", "unknown key",

@@ -197,3 +197,58 @@ def test_elastic_impact_gains_no_energy(engine):
     # step, an O(dt) error of either sign (3e-6 at dt = 1e-5 s here)
     assert ke1 <= ke0 * (1 + (1e-9 if engine == "nonsmooth" else 1e-5))
     assert ke1 >= ke0 * (1 - 1e-3)          # and an elastic impact keeps it
+
+
+@pytest.mark.parametrize("engine", BUILT_IN)
+def test_velocity_columns_are_the_rates_of_the_displacements(engine):
+    """Issue 12: every engine's result carries the deck and seat velocities (absolute), and
+    they are the time derivatives of its displacement columns: on the smooth contact-free
+    problem the central difference of the output displacements matches the velocity columns
+    to O(Δt_out²)."""
+    sc = with_seats(with_bents(base_scene(), elastic=True), gap=10.0)
+    sc = with_run(sc, duration=1.0, output_dt=2e-3)
+    t = np.linspace(0.0, 1.0, 2001)
+    w = 2 * np.pi * 1.5
+    a = 0.02 * (1 - np.cos(w * t))
+    plan = plan_of(sc)
+    motion = motion_from(sc, t, {ch: a for ch in plan.channels},
+                         {ch: 0.02 * w * np.sin(w * t) for ch in plan.channels})
+    r = run_engine(engine, sc, motion, settings=with_step(engine, sc, 2e-4))
+    assert r.ok
+    for disp, vel in (("deck_x_abs", "deck_vx_abs"), ("deck_y_abs", "deck_vy_abs"),
+                      ("deck_theta", "deck_omega"), ("seat1_x_abs", "seat1_vx_abs"),
+                      ("seat1_theta", "seat1_omega"), ("seat2_x_abs", "seat2_vx_abs"),
+                      ("seat2_theta", "seat2_omega")):
+        assert r.meta["units"][vel] == ("rad/s" if vel.endswith("omega") else "m/s")
+        fd = np.gradient(r[disp], r.t)[1:-1]
+        v = r[vel][1:-1]
+        scale = max(np.max(np.abs(v)), 1e-12)
+        if np.max(np.abs(v)) < 1e-12:      # e.g. no rotation under uniform x/y motion
+            assert np.max(np.abs(fd)) < 1e-9
+            continue
+        assert np.max(np.abs(fd - v)) <= 2e-3 * scale, (engine, vel)
+
+
+def test_penetration_quality_warning():
+    """Issue 16: a run that penetrates beyond PENETRATION_WARN_FRACTION of the smallest gap
+    (per-step maximum) says so in meta['warnings'] and as a QualityWarning; the benchmark at
+    the engines' default settings does not."""
+    import warnings
+
+    from deckpound.engine_contract import PENETRATION_WARN_FRACTION, QualityWarning
+    from deckpound.models.scene_io import load_scene
+
+    quiet = [("nonsmooth", []), ("compliance", [])]
+    loud = [("nonsmooth", ["nonsmooth.h=0.05"]), ("compliance", ["contact.stiffness=1e4"])]
+    for (engine, ov), warn in [(c, False) for c in quiet] + [(c, True) for c in loud]:
+        sc = load_scene("saiidi-4span", ["run.duration=6.0", *ov])
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            r = run_engine(engine, sc)
+        q = [w for w in caught if issubclass(w.category, QualityWarning)]
+        limit = PENETRATION_WARN_FRACTION[engine != "nonsmooth"] * sc.seats[0].gap
+        print(engine, ov, r.meta["max_penetration"], limit)
+        assert (r.meta["max_penetration"] > limit) == warn
+        assert bool(q) == warn == bool(r.meta.get("quality_warnings"))
+        if warn:
+            assert r.meta["quality_warnings"][0] in r.meta["warnings"]

@@ -3,6 +3,8 @@ engine, the benchmark, and the engine contract."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import warnings
 
 import numpy as np
@@ -68,6 +70,8 @@ def test_no_energy_gain_in_any_step(e, mu, theta, geometry, dashpots):
     """
     T = 3.0
     sc = free_scene(e, mu, theta, geometry, dashpots, T=T)
+    # the property of the energy-safe impact law (issue 12: the default is Newton's law)
+    sc = sc.replace(nonsmooth=dataclasses.replace(sc.nonsmooth, impact_law="energy-safe"))
     r = quiet(run_nonsmooth, sc, rest_motion(sc, T), initial_state=(np.zeros(7), V0))
     assert r.ok, r.meta["message"]
     assert r.meta["gap_closures"] >= 5
@@ -84,6 +88,51 @@ def test_no_energy_gain_in_any_step(e, mu, theta, geometry, dashpots):
     assert r.meta["energy_error"] <= 1e-11 * E0
     if e == 1.0 and mu == 0.0 and not dashpots:
         assert E[-1] == pytest.approx(E0, rel=1e-10)       # θ = ½, e = 1: conservative
+
+
+def test_impact_law_option_changes_only_separating_corners():
+    """Issue 12: ``nonsmooth.impact_law``. Newton's law (the default, Siconos' Moreau–Jean)
+    and the energy-safe variant differ only at active corners that already separate: on the
+    free deck of the energy test the energy-safe law never lets a step gain energy, Newton's
+    law may (by less than 1e-4 of the initial energy here) — and it penetrates less. Per-step
+    penetration is reported through the shared epilogue and is ≥ the output rows' value."""
+    T = 3.0
+    base = free_scene(0.6, 0.0, 0.5, "linear", False, T=T)
+    out = {}
+    for law in ("newton", "energy-safe"):
+        sc = base.replace(nonsmooth=dataclasses.replace(base.nonsmooth, impact_law=law))
+        r = quiet(run_nonsmooth, sc, rest_motion(sc, T), initial_state=(np.zeros(7), V0))
+        assert r.ok and r.meta["impact_law"] == law
+        E = r["energy_kinetic"] + r["energy_strain"]
+        out[law] = (np.max(np.diff(E)) / E[0], r.meta["max_penetration"])
+        assert r.meta["max_penetration_basis"] == "every step"
+        assert r.meta["max_penetration"] >= r.meta["max_penetration_rows"] > 0.0
+        assert r.meta["max_complementarity_residual"] == r.meta["max_complementarity"]
+    print("largest step gain / E0, max penetration:", out)
+    assert out["energy-safe"][0] <= 1e-12
+    assert 1e-12 < out["newton"][0] < 1e-4
+    assert out["newton"][1] < out["energy-safe"][1]
+    assert base.nonsmooth.impact_law == "newton"
+
+
+def test_penetration_is_measured_at_every_step():
+    """Output every 50 steps: the per-step maximum of the kernel is larger than the rows'."""
+    sc = base_scene("nonsmooth.h=1e-4", "damping.ratio=0.0")
+    sc = with_run(with_seats(with_bents(sc, kx=1e-9, ky=1e-9), mass=1e12, inertia=1e12,
+                             gap=0.01), duration=0.05, output_dt=5e-3)
+    sc = sc.replace(initial=dataclasses.replace(sc.initial, deck_velocity=(-0.5, 0.0, 0.0)))
+    for engine, dt in (("nonsmooth", 1e-4), ("compliance", 1e-5)):
+        settings = dataclasses.replace(getattr(sc, engine), **{
+            "h" if engine == "nonsmooth" else "dt": dt})
+        r = quiet(run_engine, engine, sc, rest_motion(sc, 0.05), settings=settings)
+        assert r.ok
+        print(engine, r.meta["max_penetration"], r.meta["max_penetration_rows"])
+        assert r.meta["max_penetration_basis"] == "every step"
+        assert r.meta["max_penetration"] > r.meta["max_penetration_rows"]
+        # the compliance engine's largest linear-spring force is k times it (to the step)
+        if engine == "compliance":
+            fmax = max(np.max(r[f"fn_c{c}"]) for c in (1, 2))
+            assert r.meta["max_penetration"] * sc.contact.stiffness >= fmax
 
 
 def test_energy_balance_closes_on_benchmark_with_takeda_and_friction():

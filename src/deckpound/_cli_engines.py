@@ -48,6 +48,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="put the matrix table into the README (default ./README.md) in place "
                    "of the previous one")
     q.set_defaults(func=_verify_clone)
+    q = vsub.add_parser("impact-law", help="nonsmooth engine: Newton's impact law vs the "
+                        "energy-safe variant on a scene, without and with friction")
+    add_scene_args(q)
+    q.set_defaults(func=_verify_impact_law)
 
 
 def check_output_folder(path: str) -> Path:
@@ -187,4 +191,16 @@ def _verify_single(scene, verify_matrix) -> int:
         print(f"FAIL: deviation above {tol:g} of the column's peak")
         return 1
     print(f"PASS: every column within {tol:g} of its peak")
+    return 0
+
+
+def _verify_impact_law(args) -> int:
+    from deckpound.compare.impact_law import format_table, impact_law_table
+    from deckpound.models.scene_io import load_scene
+
+    rows = impact_law_table(load_scene(args.scene, args.overrides))
+    print(format_table(rows))
+    if any(r["status"] != "success" for r in rows):
+        raise EngineFailure("a run failed: " + ", ".join(
+            f"{r['friction']}/{r['impact_law']}: {r['status']}" for r in rows))
     return 0
