@@ -14,7 +14,7 @@ from ._jit import use_source_keyed_cache
 
 use_source_keyed_cache()
 
-from .hysteretic import HystereticMaterial
+from .hysteretic import HystereticMaterial  # noqa: E402 (after the cache is keyed)
 
 __all__ = ["HystereticMaterial", "run_compliance", "run_nonsmooth"]
 

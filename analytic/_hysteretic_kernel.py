@@ -25,6 +25,8 @@ from __future__ import annotations
 import os
 
 import numpy as np
+from numba import njit
+
 from deckpound.analytic import _hysteretic_layout as _layout
 from deckpound.analytic._hysteretic_layout import (  # noqa: F401 (re-exported: data format)
     C_ENERGYD,
@@ -82,17 +84,23 @@ from deckpound.analytic._hysteretic_layout import (  # noqa: F401 (re-exported: 
     pack_hysteretic_params,
 )
 from deckpound.analytic._jit import compiled, kernel
-from numba import njit
 
-__all__ = [*_layout.__all__, "ELASTIC_SHORTCUT",  # noqa: PLE0604 (re-exported layout)
-           "hyst_init_state", "hyst_set_trial",
-           "hyst_commit", "hyst_revert", "hyst_revert_to_start"]
+__all__ = [
+    *_layout.__all__,
+    "ELASTIC_SHORTCUT",
+    "hyst_init_state",
+    "hyst_set_trial",
+    "hyst_commit",
+    "hyst_revert",
+    "hyst_revert_to_start",
+]
 
 #: The elastic short-circuit of :func:`_degradation` (``pow`` skipped while the ductility is
 #: ≤ 1; bit-identical results). ``DECKPOUND_TAKEDA_SHORTCUT=0`` in the environment turns it
 #: off, for measurement only (``compare/skips.py``). numba freezes the value at compile time;
 #: the package keys its kernel cache by it (:func:`deckpound.analytic._jit.use_source_keyed_cache`).
 ELASTIC_SHORTCUT = os.environ.get("DECKPOUND_TAKEDA_SHORTCUT", "1") != "0"
+
 
 # ------------------------------------------------------------ envelope helpers
 @njit(cache=True, inline="always")
@@ -197,7 +205,7 @@ def _degradation(ratio, beta):
     """
     if ELASTIC_SHORTCUT and ratio <= 1.0 and ratio >= 0.0:
         return 1.0
-    k = ratio ** beta
+    k = ratio**beta
     if k < 1.0:
         return 1.0
     return 1.0 / k
@@ -281,7 +289,7 @@ def _positive_increment(p, s, d_strain):
     kn = _cached_degradation(p, s, c_rot_min, rot1n, K_KN, K_KN_ROT)
     kp = _cached_degradation(p, s, c_rot_max, rot1p, K_KP, K_KP_ROT)
 
-    if s[T_LOADIND] == 2.0:  # noqa: SIM102 (OpenSees's branch structure, kept)
+    if s[T_LOADIND] == 2.0:
         if c_stress <= 0.0:
             s[T_ROTNU] = s[C_STRAIN] - c_stress / (e_un * kn)
             energy = s[C_ENERGYD] - 0.5 * c_stress / (e_un * kn) * c_stress
@@ -350,7 +358,7 @@ def _negative_increment(p, s, d_strain):
     kn = _cached_degradation(p, s, c_rot_min, rot1n, K_KN, K_KN_ROT)
     kp = _cached_degradation(p, s, c_rot_max, rot1p, K_KP, K_KP_ROT)
 
-    if s[T_LOADIND] == 1.0:  # noqa: SIM102 (OpenSees's branch structure, kept)
+    if s[T_LOADIND] == 1.0:
         if c_stress >= 0.0:
             s[T_ROTPU] = s[C_STRAIN] - c_stress / (e_up * kp)
             energy = s[C_ENERGYD] - 0.5 * c_stress / (e_up * kp) * c_stress

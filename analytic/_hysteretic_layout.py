@@ -133,7 +133,7 @@ __all__ = [
 POS_INF_STRAIN = 1.0e16
 NEG_INF_STRAIN = -1.0e16
 #: ``DBL_EPSILON``: trial-strain increments smaller than this are ignored.
-DBL_EPSILON = 2.0 ** -52  # 2.220446049250313e-16
+DBL_EPSILON = 2.0**-52  # 2.220446049250313e-16
 
 # ---------------------------------------------------------------- parameters
 P_S1P, P_E1P, P_S2P, P_E2P, P_S3P, P_E3P = 0, 1, 2, 3, 4, 5
@@ -149,14 +149,30 @@ C_ROTMAX, C_ROTMIN, C_ROTPU, C_ROTNU, C_ENERGYD, C_LOADIND = 0, 1, 2, 3, 4, 5
 C_STRESS, C_STRAIN = 6, 7
 T_ROTMAX, T_ROTMIN, T_ROTPU, T_ROTNU, T_ENERGYD, T_LOADIND = 8, 9, 10, 11, 12, 13
 T_STRESS, T_STRAIN, T_TANGENT = 14, 15, 16
-K_KN, K_KN_ROT, K_KP, K_KP_ROT = 17, 18, 19, 20   # degradation cache
+K_KN, K_KN_ROT, K_KP, K_KP_ROT = 17, 18, 19, 20  # degradation cache
 N_STATE = 21
 
 
-def pack_hysteretic_params(s1p, e1p, s2p, e2p, s3p, e3p,
-                           s1n, e1n, s2n, e2n, s3n, e3n,
-                           pinch_x, pinch_y, damage1, damage2, beta,
-                           energy_a):
+def pack_hysteretic_params(
+    s1p,
+    e1p,
+    s2p,
+    e2p,
+    s3p,
+    e3p,
+    s1n,
+    e1n,
+    s2n,
+    e2n,
+    s3n,
+    e3n,
+    pinch_x,
+    pinch_y,
+    damage1,
+    damage2,
+    beta,
+    energy_a,
+):
     """Assemble a params array from an (already validated) 3-point backbone.
 
     No validation happens here; use
@@ -169,10 +185,8 @@ def pack_hysteretic_params(s1p, e1p, s2p, e2p, s3p, e3p,
         float64 array of length :data:`N_PARAMS` (layout in module docstring).
     """
     p = np.empty(N_PARAMS, dtype=np.float64)
-    p[P_S1P], p[P_E1P], p[P_S2P], p[P_E2P], p[P_S3P], p[P_E3P] = (
-        s1p, e1p, s2p, e2p, s3p, e3p)
-    p[P_S1N], p[P_E1N], p[P_S2N], p[P_E2N], p[P_S3N], p[P_E3N] = (
-        s1n, e1n, s2n, e2n, s3n, e3n)
+    p[P_S1P], p[P_E1P], p[P_S2P], p[P_E2P], p[P_S3P], p[P_E3P] = (s1p, e1p, s2p, e2p, s3p, e3p)
+    p[P_S1N], p[P_E1N], p[P_S2N], p[P_E2N], p[P_S3N], p[P_E3N] = (s1n, e1n, s2n, e2n, s3n, e3n)
     p[P_PINCHX], p[P_PINCHY] = pinch_x, pinch_y
     p[P_DAMAGE1], p[P_DAMAGE2], p[P_BETA] = damage1, damage2, beta
     # Envelope slopes (OpenSees setEnvelope); Python float arithmetic is

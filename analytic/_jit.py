@@ -36,7 +36,13 @@ from pathlib import Path
 import numba
 from numba import njit, types
 
-__all__ = ["compiled", "ensure_compiled", "kernel", "plain_argument_types", "use_source_keyed_cache"]
+__all__ = [
+    "compiled",
+    "ensure_compiled",
+    "kernel",
+    "plain_argument_types",
+    "use_source_keyed_cache",
+]
 
 _HERE = Path(__file__).resolve().parent
 
@@ -74,8 +80,9 @@ def plain_argument_types(dispatcher):
     resolve = dispatcher.get_call_template
 
     def get_call_template(args, kws):
-        return resolve(tuple(types.unliteral(a) for a in args),
-                       {k: types.unliteral(v) for k, v in kws.items()})
+        return resolve(
+            tuple(types.unliteral(a) for a in args), {k: types.unliteral(v) for k, v in kws.items()}
+        )
 
     dispatcher.get_call_template = get_call_template
     return dispatcher

@@ -35,6 +35,7 @@ from __future__ import annotations
 import time as _time
 
 import numpy as np
+
 from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import ensure_compiled
 from deckpound.analytic.compliance import _STATUS_TEXT, ENERGY_COLUMNS, pack_run
@@ -46,9 +47,8 @@ from deckpound.analytic.dormand_prince import (
     adaptive_workspace,
 )
 from deckpound.analytic.system import initial_dofs
-from deckpound.models.excitation import analysis_duration
-
 from deckpound.engine_contract import RunOutput, Status, engine_columns
+from deckpound.models.excitation import analysis_duration
 
 __all__ = ["run_adaptive"]
 
@@ -68,16 +68,27 @@ def step_size_summary(hist: np.ndarray, hstat: np.ndarray) -> dict:
     out = {}
     for ic, name in ((0, "free"), (1, "contact")):
         n = int(hist[ic].sum())
-        out[name] = {"steps": n, "median": _hist_median(hist[ic]),
-                     "min": float(hstat[ic, 0]) if n else float("nan"),
-                     "max": float(hstat[ic, 1]) if n else float("nan"),
-                     "mean": float(hstat[ic, 2] / n) if n else float("nan"),
-                     "time": float(hstat[ic, 2])}
+        out[name] = {
+            "steps": n,
+            "median": _hist_median(hist[ic]),
+            "min": float(hstat[ic, 0]) if n else float("nan"),
+            "max": float(hstat[ic, 1]) if n else float("nan"),
+            "mean": float(hstat[ic, 2] / n) if n else float("nan"),
+            "time": float(hstat[ic, 2]),
+        }
     return out
 
 
-def run_adaptive(plan, scene, settings, motion, *, kv_clip: bool = False,
-                 initial_state=None, on_interrupt: str = "raise") -> RunOutput:
+def run_adaptive(
+    plan,
+    scene,
+    settings,
+    motion,
+    *,
+    kv_clip: bool = False,
+    initial_state=None,
+    on_interrupt: str = "raise",
+) -> RunOutput:
     """Adaptive compliance run (see the module docstring); called by the compliance engine
     (``on_interrupt``: see :meth:`deckpound.analytic.compliance.ComplianceEngine._run`)."""
     cset = settings
@@ -92,15 +103,22 @@ def run_adaptive(plan, scene, settings, motion, *, kv_clip: bool = False,
     nout = round(duration / out_dt) + 1
     cols = engine_columns(plan) + list(ENERGY_COLUMNS)
     bd.check_output_size(nout, len(cols))
-    output = bd.Output(np.zeros((nout, len(cols))), np.arange(len(cols), dtype=np.int64),
-                       np.zeros(len(cols)))
+    output = bd.Output(
+        np.zeros((nout, len(cols))), np.arange(len(cols), dtype=np.int64), np.zeros(len(cols))
+    )
     u0, v0 = initial_dofs(initial_state)
-    work = adaptive_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, UG.shape[1],
-                              ps.n_bent_springs)
-    opts = AdaptiveOptions(t_end=(nout - 1) * out_dt, out_dt=float(out_dt),
-                           rtol=float(cset.rtol), atol=float(cset.atol),
-                           max_step=float(cset.max_step), commit_step=float(cset.commit_step),
-                           max_steps=int(cset.max_steps))
+    work = adaptive_workspace(
+        u0, v0, ps.new_state(), cs, ps.n_springs, UG.shape[1], ps.n_bent_springs
+    )
+    opts = AdaptiveOptions(
+        t_end=(nout - 1) * out_dt,
+        out_dt=float(out_dt),
+        rtol=float(cset.rtol),
+        atol=float(cset.atol),
+        max_step=float(cset.max_step),
+        commit_step=float(cset.commit_step),
+        max_steps=int(cset.max_steps),
+    )
     contact = bd.Contact(corners, cp, scene.contact.geometry == "nonlinear")
     stats = bd.new_stats()
     args = (ps.arrays, contact, bd.Record(tb, UG, VG), opts, output, work, stats)
@@ -116,28 +134,41 @@ def run_adaptive(plan, scene, settings, motion, *, kv_clip: bool = False,
     ein = np.max(np.abs(columns["energy_input"])) if rows else 0.0
     code = st["status"]
     ok = code == bd.RUN_OK and rows == nout
-    status = Status.SUCCESS if ok else (bd.status_of(code) if code != bd.RUN_OK
-                                        else Status.NONFINITE)
+    status = (
+        Status.SUCCESS if ok else (bd.status_of(code) if code != bd.RUN_OK else Status.NONFINITE)
+    )
     extra = {
-        "integrator": "adaptive", "kv_clip": kv_clip,
+        "integrator": "adaptive",
+        "kv_clip": kv_clip,
         "scheme": "Dormand-Prince 5(4) with events",
-        "rejected_steps": st["rejected_steps"], "events": st["contact_events"],
+        "rejected_steps": st["rejected_steps"],
+        "events": st["contact_events"],
         "rhs_calls": st["rhs_calls"],
-        "energy_closure": float(np.max(np.abs(columns["energy_error"])) / ein) if ein > 0
-        else 0.0,
+        "energy_closure": float(np.max(np.abs(columns["energy_error"])) / ein) if ein > 0 else 0.0,
         "energy_columns": list(ENERGY_COLUMNS),
         "step_sizes": step_size_summary(work.hist, work.hstat),
     }
     if ok:
-        message = f"{st['steps']} steps ({st['rejected_steps']} rejected, " \
-                  f"{st['contact_events']} events)"
+        message = (
+            f"{st['steps']} steps ({st['rejected_steps']} rejected, {st['contact_events']} events)"
+        )
     elif code == bd.RUN_STEP_BUDGET:
-        message = (f"step budget exhausted: compliance.max_steps = {cset.max_steps} steps tried "
-                   f"reached t = {st['time']:.6g} s of {opts.t_end:g} s")
+        message = (
+            f"step budget exhausted: compliance.max_steps = {cset.max_steps} steps tried "
+            f"reached t = {st['time']:.6g} s of {opts.t_end:g} s"
+        )
     else:
         message = _STATUS_TEXT.get(code, "non-finite state")
     return RunOutput(
-        columns=columns, status=status, message=message,
-        failed_step=None if ok else st["failed_step"], failed_time=None if ok else st["time"],
-        steps=st["steps"], failed_steps=0 if ok else 1, compile_time=compile_time,
-        loop_time=loop, max_penetration=st["max_penetration"], extra=extra)
+        columns=columns,
+        status=status,
+        message=message,
+        failed_step=None if ok else st["failed_step"],
+        failed_time=None if ok else st["time"],
+        steps=st["steps"],
+        failed_steps=0 if ok else 1,
+        compile_time=compile_time,
+        loop_time=loop,
+        max_penetration=st["max_penetration"],
+        extra=extra,
+    )

@@ -41,15 +41,36 @@ import threading
 from collections import namedtuple
 
 import numpy as np
-from deckpound.models.errors import SceneError
 
 from deckpound.engine_contract import Status
+from deckpound.models.errors import SceneError
 
-__all__ = ["COUNT_NAMES", "MAX_OUTPUT_BYTES", "RUN_CONTACT_UNSOLVED", "RUN_INTERRUPTED",
-           "RUN_NONFINITE", "RUN_NOT_CONVERGED", "RUN_OK", "RUN_SINGULAR", "RUN_STEP_BUDGET",
-           "RUN_STEP_UNDERFLOW", "RUN_UNKNOWN_LAW", "VALUE_NAMES", "Contact", "ContactWork",
-           "Output", "Record", "Stats", "check_output_size", "new_contact_work", "new_stats",
-           "row_views", "run_loop", "stats_dict", "status_of"]
+__all__ = [
+    "COUNT_NAMES",
+    "MAX_OUTPUT_BYTES",
+    "RUN_CONTACT_UNSOLVED",
+    "RUN_INTERRUPTED",
+    "RUN_NONFINITE",
+    "RUN_NOT_CONVERGED",
+    "RUN_OK",
+    "RUN_SINGULAR",
+    "RUN_STEP_BUDGET",
+    "RUN_STEP_UNDERFLOW",
+    "RUN_UNKNOWN_LAW",
+    "VALUE_NAMES",
+    "Contact",
+    "ContactWork",
+    "Output",
+    "Record",
+    "Stats",
+    "check_output_size",
+    "new_contact_work",
+    "new_stats",
+    "row_views",
+    "run_loop",
+    "stats_dict",
+    "status_of",
+]
 
 # Each namedtuple class lives at module level under its own typename: a class made per call
 # would be a new numba type (a fresh compilation every run), and a typename differing from the
@@ -72,16 +93,43 @@ Stats = namedtuple("Stats", ["count", "value", "halt"])
 #: Per-corner contact arrays of the compliance loops (:mod:`.contact_laws`): gaps ``g`` [m],
 #: rates ``gd`` [m/s], rows ``WN``, ``WT`` (4, 7), generalised contact force ``fc`` (7,),
 #: forces ``lam``, ``lt`` (4,) [kN], law derivatives ``der`` (4, 7) and ``evaluated`` (4,) bool.
-ContactWork = namedtuple("ContactWork", ["g", "gd", "WN", "WT", "fc", "lam", "lt", "der",
-                                         "evaluated"])
+ContactWork = namedtuple(
+    "ContactWork", ["g", "gd", "WN", "WT", "fc", "lam", "lt", "der", "evaluated"]
+)
 
 #: Names of ``Stats.count`` entries, in index order.
-COUNT_NAMES = ("status", "rows", "failed_step", "steps", "newton_iterations", "contact_events",
-               "factor_reuses", "max_step_iterations", "rescued_steps", "contact_solves",
-               "contact_steps", "factorisations", "rejected_steps", "rhs_calls")
-(CNT_STATUS, CNT_ROWS, CNT_FAILED_STEP, CNT_STEPS, CNT_NEWTON, CNT_EVENTS, CNT_REUSED,
- CNT_MAX_IT, CNT_RESCUED, CNT_SOLVES, CNT_CONTACT_STEPS, CNT_FACTORISATIONS, CNT_REJECTED,
- CNT_RHS_CALLS) = range(len(COUNT_NAMES))
+COUNT_NAMES = (
+    "status",
+    "rows",
+    "failed_step",
+    "steps",
+    "newton_iterations",
+    "contact_events",
+    "factor_reuses",
+    "max_step_iterations",
+    "rescued_steps",
+    "contact_solves",
+    "contact_steps",
+    "factorisations",
+    "rejected_steps",
+    "rhs_calls",
+)
+(
+    CNT_STATUS,
+    CNT_ROWS,
+    CNT_FAILED_STEP,
+    CNT_STEPS,
+    CNT_NEWTON,
+    CNT_EVENTS,
+    CNT_REUSED,
+    CNT_MAX_IT,
+    CNT_RESCUED,
+    CNT_SOLVES,
+    CNT_CONTACT_STEPS,
+    CNT_FACTORISATIONS,
+    CNT_REJECTED,
+    CNT_RHS_CALLS,
+) = range(len(COUNT_NAMES))
 #: Names of ``Stats.value`` entries, in index order: largest verified complementarity and cone
 #: residuals of the contact solves [m/s], time reached [s], and the largest penetration
 #: max(0, −g) over the four corners at the end of **every accepted step** [m] (issue 12: the
@@ -92,19 +140,25 @@ VAL_MAX_COMP, VAL_MAX_CONE, VAL_TIME, VAL_MAX_PEN = range(len(VALUE_NAMES))
 
 # how a loop ended (Stats.count[CNT_STATUS])
 RUN_OK = 0
-RUN_NOT_CONVERGED = 1      # Newton did not converge
-RUN_SINGULAR = 2           # singular tangent / iteration matrix
-RUN_NONFINITE = 3          # non-finite state
-RUN_CONTACT_UNSOLVED = 4   # no verified solution of the contact problem
-RUN_STEP_BUDGET = 5        # step budget exhausted (adaptive)
-RUN_INTERRUPTED = 6        # Stats.halt set (Ctrl-C)
-RUN_STEP_UNDERFLOW = 7     # adaptive step size below 1e-14 s
-RUN_UNKNOWN_LAW = 8        # a contact law or friction code without a kernel branch
+RUN_NOT_CONVERGED = 1  # Newton did not converge
+RUN_SINGULAR = 2  # singular tangent / iteration matrix
+RUN_NONFINITE = 3  # non-finite state
+RUN_CONTACT_UNSOLVED = 4  # no verified solution of the contact problem
+RUN_STEP_BUDGET = 5  # step budget exhausted (adaptive)
+RUN_INTERRUPTED = 6  # Stats.halt set (Ctrl-C)
+RUN_STEP_UNDERFLOW = 7  # adaptive step size below 1e-14 s
+RUN_UNKNOWN_LAW = 8  # a contact law or friction code without a kernel branch
 
-_STATUS = {RUN_OK: Status.SUCCESS, RUN_NOT_CONVERGED: Status.NOT_CONVERGED,
-           RUN_SINGULAR: Status.SINGULAR, RUN_NONFINITE: Status.NONFINITE,
-           RUN_CONTACT_UNSOLVED: Status.CONTACT_UNSOLVED, RUN_STEP_BUDGET: Status.STEP_BUDGET,
-           RUN_INTERRUPTED: Status.INTERRUPTED, RUN_STEP_UNDERFLOW: Status.NOT_CONVERGED}
+_STATUS = {
+    RUN_OK: Status.SUCCESS,
+    RUN_NOT_CONVERGED: Status.NOT_CONVERGED,
+    RUN_SINGULAR: Status.SINGULAR,
+    RUN_NONFINITE: Status.NONFINITE,
+    RUN_CONTACT_UNSOLVED: Status.CONTACT_UNSOLVED,
+    RUN_STEP_BUDGET: Status.STEP_BUDGET,
+    RUN_INTERRUPTED: Status.INTERRUPTED,
+    RUN_STEP_UNDERFLOW: Status.NOT_CONVERGED,
+}
 
 #: Largest output table a run may allocate [bytes] (1 GiB; the engine's result copies it once
 #: more): a run storing every step of 10⁷ steps would need ~2.6 GiB and is refused up front.
@@ -113,8 +167,11 @@ MAX_OUTPUT_BYTES = 1 << 30
 
 def new_stats() -> Stats:
     """Zeroed statistics (halt flag down)."""
-    return Stats(np.zeros(len(COUNT_NAMES), dtype=np.int64), np.zeros(len(VALUE_NAMES)),
-                 np.zeros(1, dtype=np.int64))
+    return Stats(
+        np.zeros(len(COUNT_NAMES), dtype=np.int64),
+        np.zeros(len(VALUE_NAMES)),
+        np.zeros(1, dtype=np.int64),
+    )
 
 
 def stats_dict(stats: Stats) -> dict:
@@ -127,10 +184,12 @@ def stats_dict(stats: Stats) -> dict:
 def status_of(code: int) -> Status:
     """The engine-contract status of a loop's status code (unknown codes: NONFINITE)."""
     if code == RUN_UNKNOWN_LAW:
-        raise NotImplementedError("a contact law or friction model of the scene has no branch "
-                                  "in deckpound.analytic.contact_laws (normal_law / "
-                                  "friction_law): add it there (see "
-                                  "deckpound.models.contact_laws_table)")
+        raise NotImplementedError(
+            "a contact law or friction model of the scene has no branch "
+            "in deckpound.analytic.contact_laws (normal_law / "
+            "friction_law): add it there (see "
+            "deckpound.models.contact_laws_table)"
+        )
     return _STATUS.get(code, Status.NONFINITE)
 
 
@@ -151,10 +210,13 @@ def check_output_size(rows: int, columns: int, field: str = "run.output_dt") -> 
     """Refuse (SceneError naming ``field``) an output table above :data:`MAX_OUTPUT_BYTES`."""
     size = 8 * int(rows) * int(columns)
     if size > MAX_OUTPUT_BYTES:
-        raise SceneError(field, f"gives {rows} output rows x {columns} columns = "
-                         f"{size / 2**30:.2f} GiB of output; at most "
-                         f"{MAX_OUTPUT_BYTES / 2**30:g} GiB is allowed: store fewer rows "
-                         f"(a larger {field})")
+        raise SceneError(
+            field,
+            f"gives {rows} output rows x {columns} columns = "
+            f"{size / 2**30:.2f} GiB of output; at most "
+            f"{MAX_OUTPUT_BYTES / 2**30:g} GiB is allowed: store fewer rows "
+            f"(a larger {field})",
+        )
 
 
 def run_loop(loop, args, stats: Stats) -> bool:
@@ -173,7 +235,7 @@ def run_loop(loop, args, stats: Stats) -> bool:
     def target():
         try:
             loop(*args)
-        except BaseException as exc:  # noqa: BLE001 (re-raised in the caller's thread)
+        except BaseException as exc:
             failure.append(exc)
         finally:
             done.set()
@@ -189,7 +251,7 @@ def run_loop(loop, args, stats: Stats) -> bool:
     except KeyboardInterrupt:
         interrupted = True
         stats.halt[0] = 1
-        while not done.wait(0.05):     # the loop stops within one iteration
+        while not done.wait(0.05):  # the loop stops within one iteration
             pass
     if failure:
         raise failure[0]

@@ -38,19 +38,27 @@ import time as _time
 from typing import ClassVar
 
 import numpy as np
+
+from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import ComplianceSettings, Scene
 
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
-
 __all__ = ["ENERGY_COLUMNS", "SKIPS", "ComplianceEngine", "output_columns", "run_compliance"]
 
 #: Energy columns of the compliance result, in the order the kernels write them [kJ].
-ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
-                  "energy_hysteretic", "energy_contact_stored", "energy_contact_dissipated",
-                  "energy_friction", "energy_error")
-SUBSTEPS = 10   # sub-steps of the fallback for a failed step (OpenSees engine default)
+ENERGY_COLUMNS = (
+    "energy_input",
+    "energy_kinetic",
+    "energy_strain",
+    "energy_viscous",
+    "energy_hysteretic",
+    "energy_contact_stored",
+    "energy_contact_dissipated",
+    "energy_friction",
+    "energy_error",
+)
+SUBSTEPS = 10  # sub-steps of the fallback for a failed step (OpenSees engine default)
 #: The skips the engine can turn off for measurement (``_skips={name: False}``);
 #: results are identical with and without each (``compare/skips.py`` measures and checks):
 #:
@@ -71,9 +79,14 @@ SUBSTEPS = 10   # sub-steps of the fallback for a failed step (OpenSees engine d
 SKIPS = ("contact", "friction", "factor_reuse", "decimate")
 
 #: failure messages by loop status code (:mod:`deckpound.analytic.bundles` ``RUN_*``)
-_STATUS_TEXT = {1: "Newton did not converge (NormDispIncr)", 2: "singular tangent",
-                3: "non-finite state", 5: "step budget exhausted (compliance.max_steps)",
-                6: "interrupted", 7: "step size underflow"}
+_STATUS_TEXT = {
+    1: "Newton did not converge (NormDispIncr)",
+    2: "singular tangent",
+    3: "non-finite state",
+    5: "step budget exhausted (compliance.max_steps)",
+    6: "interrupted",
+    7: "step size underflow",
+}
 
 
 def output_columns(scene: Scene) -> list[str]:
@@ -112,8 +125,12 @@ class ComplianceEngine(Engine):
     Settings = ComplianceSettings
     settings_field = "compliance"
     step_field = "dt"
-    style: ClassVar[dict] = {"color": "#1f5fa8", "linestyle": "--", "linewidth": 1.2,
-                             "label": "compliance clone"}
+    style: ClassVar[dict] = {
+        "color": "#1f5fa8",
+        "linestyle": "--",
+        "linewidth": 1.2,
+        "label": "compliance clone",
+    }
 
     def fixed_step(self, settings) -> float | None:
         return settings.dt if settings.integrator == "newmark" else None
@@ -142,25 +159,46 @@ class ComplianceEngine(Engine):
         from deckpound.models.errors import SceneError
 
         if settings.integrator != "newmark":
-            refuse_tangent_damping(scene, "compliance engine's adaptive", "its explicit "
-                                   "Dormand–Prince stages and energy work use the constant "
-                                   "damping matrix")
+            refuse_tangent_damping(
+                scene,
+                "compliance engine's adaptive",
+                "its explicit "
+                "Dormand–Prince stages and energy work use the constant "
+                "damping matrix",
+            )
         ct = scene.contact
         if ct.has_friction and ct.friction_mode == "contact2d":
             if settings.integrator != "newmark":
-                raise SceneError("compliance.integrator", "friction_mode = 'contact2d' "
-                                 "(OpenSees zeroLengthContact2D's step-by-step algorithm) needs "
-                                 "integrator = 'newmark'; use friction_mode = 'stick' or "
-                                 "'slip' with the adaptive integrator")
+                raise SceneError(
+                    "compliance.integrator",
+                    "friction_mode = 'contact2d' "
+                    "(OpenSees zeroLengthContact2D's step-by-step algorithm) needs "
+                    "integrator = 'newmark'; use friction_mode = 'stick' or "
+                    "'slip' with the adaptive integrator",
+                )
             if ct.geometry != "linear":
-                raise SceneError("contact.geometry", "friction_mode = 'contact2d' "
-                                 "(zeroLengthContact2D: fixed normal and tangent) needs "
-                                 "geometry = 'linear'; use friction_mode = 'stick' or 'slip' "
-                                 "with the nonlinear geometry")
+                raise SceneError(
+                    "contact.geometry",
+                    "friction_mode = 'contact2d' "
+                    "(zeroLengthContact2D: fixed normal and tangent) needs "
+                    "geometry = 'linear'; use friction_mode = 'stick' or 'slip' "
+                    "with the nonlinear geometry",
+                )
 
-    def _run(self, plan: Plan, scene: Scene, settings, motion, *, kv_clip: bool = False,
-             initial_state=None, substeps: int = SUBSTEPS, channels=None,
-             on_interrupt: str = "raise", _skips: dict | None = None) -> RunOutput:
+    def _run(
+        self,
+        plan: Plan,
+        scene: Scene,
+        settings,
+        motion,
+        *,
+        kv_clip: bool = False,
+        initial_state=None,
+        substeps: int = SUBSTEPS,
+        channels=None,
+        on_interrupt: str = "raise",
+        _skips: dict | None = None,
+    ) -> RunOutput:
         """Extra keywords (not scene options): ``kv_clip`` clips the Kelvin–Voigt force at zero
         instead of the OpenSees ViscoelasticGap behaviour (tension allowed until the gap
         reopens); ``initial_state = (u0, v0)`` starts from the given DOF displacements and
@@ -179,15 +217,42 @@ class ComplianceEngine(Engine):
         if settings.integrator == "adaptive":
             from deckpound.analytic.adaptive import run_adaptive
 
-            return run_adaptive(plan, scene, settings, motion, kv_clip=kv_clip,
-                                initial_state=initial_state, on_interrupt=on_interrupt)
-        return _run_newmark(plan, scene, settings, motion, kv_clip=kv_clip,
-                            initial_state=initial_state, substeps=substeps, channels=channels,
-                            skips=_skips, on_interrupt=on_interrupt)
+            return run_adaptive(
+                plan,
+                scene,
+                settings,
+                motion,
+                kv_clip=kv_clip,
+                initial_state=initial_state,
+                on_interrupt=on_interrupt,
+            )
+        return _run_newmark(
+            plan,
+            scene,
+            settings,
+            motion,
+            kv_clip=kv_clip,
+            initial_state=initial_state,
+            substeps=substeps,
+            channels=channels,
+            skips=_skips,
+            on_interrupt=on_interrupt,
+        )
 
 
-def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, substeps, channels,
-                 skips, on_interrupt) -> RunOutput:
+def _run_newmark(
+    plan,
+    scene,
+    settings,
+    motion,
+    *,
+    kv_clip,
+    initial_state,
+    substeps,
+    channels,
+    skips,
+    on_interrupt,
+) -> RunOutput:
     from deckpound.analytic import bundles as bd
     from deckpound.analytic import contact_laws as cl
     from deckpound.analytic._jit import ensure_compiled
@@ -200,7 +265,7 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
     )
     from deckpound.analytic.system import initial_dofs
 
-    on = {k: True for k in SKIPS}
+    on = dict.fromkeys(SKIPS, True)
     for k, v in (skips or {}).items():
         if k not in on:
             raise ValueError(f"unknown skip {k!r}; valid: {', '.join(SKIPS)}")
@@ -232,11 +297,17 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
     colsel = np.array([full.index(c) for c in cols], dtype=np.int64)
     rows_max = nsteps // kstride + 1
     bd.check_output_size(rows_max, len(cols))
-    opts = NewmarkOptions(nsteps=nsteps, dt=float(dt), tol=float(settings.tolerance),
-                          maxit=int(settings.max_iterations), stride=int(kstride),
-                          substeps=int(substeps), skip_contact=on["contact"],
-                          reuse_factors=on["factor_reuse"],
-                          want_energy=any(c in ENERGY_COLUMNS for c in cols))
+    opts = NewmarkOptions(
+        nsteps=nsteps,
+        dt=float(dt),
+        tol=float(settings.tolerance),
+        maxit=int(settings.max_iterations),
+        stride=int(kstride),
+        substeps=int(substeps),
+        skip_contact=on["contact"],
+        reuse_factors=on["factor_reuse"],
+        want_energy=any(c in ENERGY_COLUMNS for c in cols),
+    )
     output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(len(full)))
     u0, v0 = initial_dofs(initial_state)
     work = newmark_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, len(ps.channels))
@@ -259,34 +330,50 @@ def _run_newmark(plan, scene, settings, motion, *, kv_clip, initial_state, subst
     ok = status == Status.SUCCESS
     extra = {
         "integrator": "newmark",
-        "gamma": GAMMA, "beta": BETA, "kv_clip": kv_clip, "skips": on,
+        "gamma": GAMMA,
+        "beta": BETA,
+        "kv_clip": kv_clip,
+        "skips": on,
         "contact_tangent": settings.contact_tangent,
         "max_step_iterations": st["max_step_iterations"],
         "elastic_factor_reuses": st["factor_reuses"],
         "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
         "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
-                       "contact_stored + contact_dissipated + friction) [kJ]",
+        "contact_stored + contact_dissipated + friction) [kJ]",
     }
     if "energy_input" in columns and "energy_error" in columns:
         ein = np.max(np.abs(columns["energy_input"])) if rows else 0.0
-        extra["energy_closure"] = float(np.max(np.abs(columns["energy_error"])) / ein) \
-            if ein > 0 else 0.0
+        extra["energy_closure"] = (
+            float(np.max(np.abs(columns["energy_error"])) / ein) if ein > 0 else 0.0
+        )
     failed_step = st["failed_step"]
     return RunOutput(
-        columns=columns, status=status,
-        message=(f"{nsteps} steps, {st['newton_iterations']} Newton iterations" if ok
-                 else _STATUS_TEXT.get(st["status"], status.text)),
-        failed_step=None if ok else failed_step, failed_time=None if ok else failed_step * dt,
-        steps=st["steps"], newton_iterations=st["newton_iterations"],
-        failed_steps=st["rescued_steps"] + (0 if ok else 1), rescued_steps=st["rescued_steps"],
-        compile_time=compile_time, loop_time=loop,
-        max_penetration=st["max_penetration"], extra=extra)
+        columns=columns,
+        status=status,
+        message=(
+            f"{nsteps} steps, {st['newton_iterations']} Newton iterations"
+            if ok
+            else _STATUS_TEXT.get(st["status"], status.text)
+        ),
+        failed_step=None if ok else failed_step,
+        failed_time=None if ok else failed_step * dt,
+        steps=st["steps"],
+        newton_iterations=st["newton_iterations"],
+        failed_steps=st["rescued_steps"] + (0 if ok else 1),
+        rescued_steps=st["rescued_steps"],
+        compile_time=compile_time,
+        loop_time=loop,
+        max_penetration=st["max_penetration"],
+        extra=extra,
+    )
 
 
-def run_compliance(scene: Scene, motion: SupportMotion | None = None, *,
-                   raise_on_failure: bool = False, **options):
+def run_compliance(
+    scene: Scene, motion: SupportMotion | None = None, *, raise_on_failure: bool = False, **options
+):
     """Run the compliance engine on ``scene`` (keywords of :meth:`ComplianceEngine._run`)."""
     from deckpound.engines import get_engine
 
-    return get_engine("compliance").run(scene, None, motion, raise_on_failure=raise_on_failure,
-                                        **options)
+    return get_engine("compliance").run(
+        scene, None, motion, raise_on_failure=raise_on_failure, **options
+    )

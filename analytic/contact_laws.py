@@ -71,15 +71,35 @@ Friction (``scene.contact.friction_mode``):
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
+
 from deckpound.analytic._jit import kernel
+from deckpound.analytic.kinematics import (
+    contact_kinematics,
+    gap_hessian,
+    linear_gap,
+    linear_gap_rate,
+)
 from deckpound.models import contact_params
 from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_CODES, LAW_CODES
 from deckpound.models.scene import Scene
-from numba import njit
 
-__all__ = ["FRICTION_CODES", "LAW_CODES", "N_CP", "N_CS", "V_IMPACT_MIN", "check_kernel_branches",
-           "contact_commit", "contact_revert", "contact_stored_energy", "friction_law",
-           "law_parameters", "new_contact_state", "normal_law", "pack_contact"]
+__all__ = [
+    "FRICTION_CODES",
+    "LAW_CODES",
+    "N_CP",
+    "N_CS",
+    "V_IMPACT_MIN",
+    "check_kernel_branches",
+    "contact_commit",
+    "contact_revert",
+    "contact_stored_energy",
+    "friction_law",
+    "law_parameters",
+    "new_contact_state",
+    "normal_law",
+    "pack_contact",
+]
 
 # the kernel codes, by name (numba freezes them into the compiled branches)
 LAW_LINEAR = LAW_CODES["linear"]
@@ -93,32 +113,68 @@ FRICTION_NONE = FRICTION_CODES["none"]
 FRICTION_SLIP = FRICTION_CODES["slip"]
 FRICTION_STICK = FRICTION_CODES["stick"]
 FRICTION_CONTACT2D = FRICTION_CODES["contact2d"]
-V_IMPACT_MIN = 1.0e-3   # m/s, floor of the Hunt–Crossley approach velocity
+V_IMPACT_MIN = 1.0e-3  # m/s, floor of the Hunt–Crossley approach velocity
 
 
 @njit(cache=True, inline="always")
 def has_stick_spring(mode):
     """True for the friction codes with an elastic stick spring k_t (stick, contact2d)."""
-    return mode == FRICTION_STICK or mode == FRICTION_CONTACT2D
+    return mode in (FRICTION_STICK, FRICTION_CONTACT2D)
 
 
 # parameters per corner (cp[c, :]): law code, k, exponent n, Kelvin–Voigt c, Hunt–Crossley
 # factor, K2, δ_y, μ, friction code, k_t, v₀, clip flag, ImpactMaterial quirk flag,
 # restitution e, rate-event flag (the law's ContactLaw.rate_event), OpenSees-tangent flag
-(P_LAW, P_K, P_N, P_C, P_D, P_K2, P_DY, P_MU, P_FMODE, P_KT, P_V0, P_CLIP, P_IMPQ, P_E,
- P_EVENT, P_OTAN) = range(16)
+(
+    P_LAW,
+    P_K,
+    P_N,
+    P_C,
+    P_D,
+    P_K2,
+    P_DY,
+    P_MU,
+    P_FMODE,
+    P_KT,
+    P_V0,
+    P_CLIP,
+    P_IMPQ,
+    P_E,
+    P_EVENT,
+    P_OTAN,
+) = range(16)
 N_CP = 16
 # state per corner (cs[c, :]); S_CSTICK, S_TS, S_TSLIDE are contact2d's: committed stick point
 # s_p, trial total tangential displacement s and the trial slide flag; S_XI: the Hertzdamp
 # damping coefficient ξ, a material member that OpenSees neither commits nor reverts (set at
 # the first closed trial of an impact)
-(S_CG, S_CGD, S_CLAM, S_CFT, S_CCLOSED, S_CVIMP, S_TLAM, S_TTAN, S_TFT, S_TVIMP, S_TCLOSED,
- S_CSTICK, S_TS, S_TSLIDE, S_XI) = range(15)
+(
+    S_CG,
+    S_CGD,
+    S_CLAM,
+    S_CFT,
+    S_CCLOSED,
+    S_CVIMP,
+    S_TLAM,
+    S_TTAN,
+    S_TFT,
+    S_TVIMP,
+    S_TCLOSED,
+    S_CSTICK,
+    S_TS,
+    S_TSLIDE,
+    S_XI,
+) = range(15)
 N_CS = 15
 
 
-def pack_contact(scene: Scene, *, kv_clip: bool = False,
-                 impact_opensees: bool = False, opensees_tangent: bool = False) -> np.ndarray:
+def pack_contact(
+    scene: Scene,
+    *,
+    kv_clip: bool = False,
+    impact_opensees: bool = False,
+    opensees_tangent: bool = False,
+) -> np.ndarray:
     """Per-corner parameter array (4, N_CP) of the scene's contact law and friction.
 
     ``impact_opensees`` keeps ImpactMaterial's first-contact quirk in the bilinear law (the
@@ -173,17 +229,17 @@ def normal_law(cp, cs, g, gd):
     dg = 0.0
     dgd = 0.0
     closed = False
-    if law == LAW_LINEAR:                         # ElasticPPGap, Fy -> inf
+    if law == LAW_LINEAR:  # ElasticPPGap, Fy -> inf
         if g <= 0.0:
             closed = True
             lam = -cp[P_K] * g
             dg = -cp[P_K]
-    elif law == LAW_KELVIN_VOIGT:                 # ViscoelasticGap
+    elif law == LAW_KELVIN_VOIGT:  # ViscoelasticGap
         if g < 0.0:
             closed = True
             lam = cp[P_K] * (-g) + cp[P_C] * (-gd)
             dg = -cp[P_K]
-            dgd = -cp[P_C] if cp[P_OTAN] == 0.0 else 0.0   # ViscoelasticGap: no damping tangent
+            dgd = -cp[P_C] if cp[P_OTAN] == 0.0 else 0.0  # ViscoelasticGap: no damping tangent
             if cp[P_CLIP] != 0.0 and lam < 0.0:
                 lam = 0.0
                 dg = 0.0
@@ -193,14 +249,14 @@ def normal_law(cp, cs, g, gd):
             closed = True
             n = cp[P_N]
             dlt = -g
-            lam = cp[P_K] * dlt ** n
+            lam = cp[P_K] * dlt**n
             dg = -n * cp[P_K] * dlt ** (n - 1.0)
             if cp[P_OTAN] != 0.0:
-                dg = -dg                          # Hertzdamp's tangent sign (see hertzdamp)
-    elif law == LAW_HERTZDAMP:                    # OpenSees Hertzdamp, its arithmetic
+                dg = -dg  # Hertzdamp's tangent sign (see hertzdamp)
+    elif law == LAW_HERTZDAMP:  # OpenSees Hertzdamp, its arithmetic
         n = cp[P_N]
         if g >= 0.0:
-            if cs[S_CCLOSED] != 0.0:              # "commitTangent != 0": the impact is over
+            if cs[S_CCLOSED] != 0.0:  # "commitTangent != 0": the impact is over
                 cs[S_XI] = 0.0
         else:
             closed = True
@@ -209,13 +265,13 @@ def normal_law(cp, cs, g, gd):
             xi = cs[S_XI]
             dlt = -g
             fac = cp[P_K] + xi * (-gd)
-            lam = fac * dlt ** n                  # no clipping: tension near separation
+            lam = fac * dlt**n  # no clipping: tension near separation
             if cp[P_OTAN] != 0.0:
-                dg = n * fac * dlt ** (n - 1.0)   # Hertzdamp's reported tangent, sign as is
+                dg = n * fac * dlt ** (n - 1.0)  # Hertzdamp's reported tangent, sign as is
             else:
                 dg = -n * fac * dlt ** (n - 1.0)
-                dgd = -xi * dlt ** n
-    elif law == LAW_HERTZ_DAMP or law == LAW_FLORES:   # Hunt–Crossley type, factor cp[P_D]
+                dgd = -xi * dlt**n
+    elif law in (LAW_HERTZ_DAMP, LAW_FLORES):  # Hunt–Crossley type, factor cp[P_D]
         if g < 0.0:
             closed = True
             if cs[S_CCLOSED] == 0.0:
@@ -226,7 +282,7 @@ def normal_law(cp, cs, g, gd):
             cs[S_TVIMP] = vimp
             n = cp[P_N]
             dlt = -g
-            dn = dlt ** n
+            dn = dlt**n
             fac = 1.0 + cp[P_D] * (-gd) / vimp
             lam = cp[P_K] * dn * fac
             if lam > 0.0:
@@ -234,13 +290,13 @@ def normal_law(cp, cs, g, gd):
                 dgd = -cp[P_K] * dn * cp[P_D] / vimp
             else:
                 lam = 0.0
-    elif law == LAW_BILINEAR:                     # ImpactMaterial (stress = -lambda)
+    elif law == LAW_BILINEAR:  # ImpactMaterial (stress = -lambda)
         k1 = cp[P_K]
         k2 = cp[P_K2]
         dy = -cp[P_DY]
         g_committed = cs[S_CG]
         if cp[P_IMPQ] == 0.0 and g_committed > 0.0:
-            g_committed = 0.0      # first contact: load from the closure point (continuous law)
+            g_committed = 0.0  # first contact: load from the closure point (continuous law)
         dstrain = g - g_committed
         cstress = -cs[S_CLAM]
         if g >= 0.0:
@@ -262,13 +318,13 @@ def normal_law(cp, cs, g, gd):
                 if cstress + k1 * dstrain > lim:
                     stress = lim
                     tan = k2
-            else:                                  # OpenSees: trial values unchanged
+            else:  # OpenSees: trial values unchanged
                 stress = -cs[S_TLAM]
                 tan = cs[S_TTAN]
         lam = -stress
         dg = -tan
         cs[S_TTAN] = tan
-    else:                                         # no branch for this code: fail, loudly
+    else:  # no branch for this code: fail, loudly
         closed = True
         lam = np.nan
         dg = np.nan
@@ -317,23 +373,23 @@ def friction_law(cp, cs, lam_n, ds, ut):
                 lt = sg * lim
                 d_lam = sg * mu
                 state = 2
-    elif mode == FRICTION_CONTACT2D:              # zeroLengthContact2D::formResidAndTangent
+    elif mode == FRICTION_CONTACT2D:  # zeroLengthContact2D::formResidAndTangent
         cs[S_TS] = ds
         cs[S_TSLIDE] = 0.0
-        if lam_n > 0.0 or cs[S_TCLOSED] != 0.0:   # contactDetect: gap ≥ 0 (g ≤ 0)
+        if lam_n > 0.0 or cs[S_TCLOSED] != 0.0:  # contactDetect: gap ≥ 0 (g ≤ 0)
             trial = -cp[P_KT] * (ds - cs[S_CSTICK])
             lim = mu * lam_n
-            if abs(trial) - lim <= 0.0:           # Φ ≤ 0: stick
+            if abs(trial) - lim <= 0.0:  # Φ ≤ 0: stick
                 lt = trial
                 d_ds = -cp[P_KT]
                 state = 1
-            else:                                 # slide (ContactFlag = 2)
+            else:  # slide (ContactFlag = 2)
                 sg = 1.0 if trial > 0.0 else -1.0
                 lt = sg * lim
                 d_lam = sg * mu
                 state = 2
                 cs[S_TSLIDE] = 1.0
-    else:                                         # no branch for this code: fail, loudly
+    else:  # no branch for this code: fail, loudly
         lt = np.nan
         d_ds = np.nan
         d_ut = np.nan
@@ -391,9 +447,9 @@ def contact_stored_energy(cp, cs):
         lam = cs[c, S_CLAM]
         if lam > 0.0 and g < 0.0:
             k = cp[c, P_K]
-            if law == LAW_LINEAR or law == LAW_KELVIN_VOIGT:
+            if law in (LAW_LINEAR, LAW_KELVIN_VOIGT):
                 e += 0.5 * k * g * g
-            elif law == LAW_HERTZ or law == LAW_HERTZ_DAMP or law == LAW_FLORES or law == LAW_HERTZDAMP:
+            elif law in (LAW_HERTZ, LAW_HERTZ_DAMP, LAW_FLORES, LAW_HERTZDAMP):
                 n = cp[c, P_N]
                 e += k * (-g) ** (n + 1.0) / (n + 1.0)
             elif law == LAW_BILINEAR:
@@ -406,22 +462,31 @@ def contact_stored_energy(cp, cs):
                     gs = g
                 lam_s = -k2 * gs
                 e += 0.5 * (lam + lam_s) * (gs - g) + 0.5 * k2 * gs * gs
-            else:                                 # no branch for this code
+            else:  # no branch for this code
                 e = np.nan
         if has_stick_spring(cp[c, P_FMODE]) and cs[c, S_CFT] != 0.0:
             e += 0.5 * cs[c, S_CFT] ** 2 / cp[c, P_KT]
     return e
 
 
-
 def law_parameters(cp_row, cs_row) -> dict:
     """The packed parameters of one corner by the names the table's ``force`` functions use
     (:mod:`deckpound.models.contact_laws_table`); ``v_impact``: the committed approach
     velocity −ġ."""
-    return {"k": cp_row[P_K], "n": cp_row[P_N], "c": cp_row[P_C], "hc": cp_row[P_D],
-            "k2": cp_row[P_K2], "dy": cp_row[P_DY], "e": cp_row[P_E], "mu": cp_row[P_MU],
-            "kt": cp_row[P_KT], "v0": cp_row[P_V0], "v_min": V_IMPACT_MIN,
-            "v_impact": -cs_row[S_CGD]}
+    return {
+        "k": cp_row[P_K],
+        "n": cp_row[P_N],
+        "c": cp_row[P_C],
+        "hc": cp_row[P_D],
+        "k2": cp_row[P_K2],
+        "dy": cp_row[P_DY],
+        "e": cp_row[P_E],
+        "mu": cp_row[P_MU],
+        "kt": cp_row[P_KT],
+        "v0": cp_row[P_V0],
+        "v_min": V_IMPACT_MIN,
+        "v_impact": -cs_row[S_CGD],
+    }
 
 
 def check_kernel_branches(cp) -> None:
@@ -437,24 +502,18 @@ def check_kernel_branches(cp) -> None:
             raise NotImplementedError(
                 f"contact law code {int(row[P_LAW])} has no branch in "
                 "deckpound.analytic.contact_laws.normal_law (table: "
-                "deckpound.models.contact_laws_table)")
+                "deckpound.models.contact_laws_table)"
+            )
         _, lt, *_ = friction_law(row, cs, 1.0, 0.0, 0.0)
         if not np.isfinite(lt):
             raise NotImplementedError(
                 f"friction code {int(row[P_FMODE])} has no branch in "
                 "deckpound.analytic.contact_laws.friction_law (table: "
-                "deckpound.models.contact_laws_table)")
+                "deckpound.models.contact_laws_table)"
+            )
 
 
 # --------------------------------------------------------------------------- assembly helpers
-from deckpound.analytic.kinematics import (
-    contact_kinematics,
-    gap_hessian,
-    linear_gap,
-    linear_gap_rate,
-)
-
-
 @njit(cache=True, inline="always")
 def _linear_gaps(u, v, corners, g, gd):
     """Gaps and gap rates of the small-rotation kinematics (kinematics.contact_kinematics)."""
@@ -486,8 +545,17 @@ def eval_closed(contact, cs, cw, u, v, un):
     number of closed corners."""
     cp = contact.params
     geom = contact.corners
-    g, gd, WN, WT, fc, lam, lt, der, evaluated = (cw.g, cw.gd, cw.WN, cw.WT, cw.fc, cw.lam,
-                                                  cw.lt, cw.der, cw.evaluated)
+    g, gd, WN, WT, fc, lam, lt, der, evaluated = (
+        cw.g,
+        cw.gd,
+        cw.WN,
+        cw.WT,
+        cw.fc,
+        cw.lam,
+        cw.lt,
+        cw.der,
+        cw.evaluated,
+    )
     if contact.nonlinear:
         gaps_and_rates(contact, u, v, cw)
         for j in range(7):
@@ -519,8 +587,7 @@ def eval_closed(contact, cs, cw, u, v, un):
                 arg = 0.0
                 for j in range(7):
                     arg += WT[c, j] * u[j]
-            _, lt[c], der[c, 2], der[c, 3], der[c, 4] = friction_law(cp[c], cs[c], lam[c], arg,
-                                                                      ut)
+            _, lt[c], der[c, 2], der[c, 3], der[c, 4] = friction_law(cp[c], cs[c], lam[c], arg, ut)
             der[c, 5] = ds
             der[c, 6] = ut
         else:

@@ -46,6 +46,7 @@ whose matrix is copositive for symmetric PSD G (Anitescu & Potra 1997).
 from __future__ import annotations
 
 import numpy as np
+
 from deckpound.analytic._jit import compiled, kernel
 
 __all__ = ["build_lcp3", "build_lcp_st", "extract3", "extract_st"]

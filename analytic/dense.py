@@ -7,6 +7,7 @@ without allocation, so the compiled step loops never call into LAPACK's Python l
 from __future__ import annotations
 
 import numpy as np
+
 from deckpound.analytic._jit import kernel
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
+
 from deckpound.analytic import bundles as bd
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._hysteretic_kernel import C_ROTMAX, C_ROTMIN, T_STRESS
@@ -35,8 +36,16 @@ from deckpound.analytic.system import (
     store_standard,
 )
 
-__all__ = ["H_BINS_PER_DECADE", "H_LOG_MIN", "H_NBINS", "TABLEAU", "AdaptiveOptions",
-           "AdaptiveWork", "adaptive_run", "adaptive_workspace"]
+__all__ = [
+    "H_BINS_PER_DECADE",
+    "H_LOG_MIN",
+    "H_NBINS",
+    "TABLEAU",
+    "AdaptiveOptions",
+    "AdaptiveWork",
+    "adaptive_run",
+    "adaptive_workspace",
+]
 
 # Dormand–Prince 5(4) tableau
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
@@ -48,10 +57,11 @@ _A[4, :4] = [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729]
 _A[5, :5] = [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656]
 _A[6, :6] = [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]
 _B5 = _A[6].copy()
-_E = _B5 - np.array([5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100,
-                     1 / 40])
-NY = 14          # u, v
-NE = 5           # energy integrals: input, springs, viscous, contact, friction
+_E = _B5 - np.array(
+    [5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40]
+)
+NY = 14  # u, v
+NE = 5  # energy integrals: input, springs, viscous, contact, friction
 NT = NY + NE
 # accepted-step-size statistics: log10(h) histogram, H_BINS_PER_DECADE bins per decade from
 # 10**H_LOG_MIN to 1 s, row 0 = out of contact, row 1 = in contact (a gap ≤ 0 at either end)
@@ -64,8 +74,9 @@ H_NBINS = int(-H_LOG_MIN) * H_BINS_PER_DECADE
 #: error tolerances ``rtol`` [-] and ``atol`` [m, m/s]; largest step ``max_step`` and, once a
 #: Takeda spring has yielded, ``commit_step`` [s]; step budget ``max_steps`` (Runge–Kutta steps
 #: tried, accepted or rejected: each costs the same work).
-AdaptiveOptions = namedtuple("AdaptiveOptions", ["t_end", "out_dt", "rtol", "atol", "max_step",
-                                                 "commit_step", "max_steps"])
+AdaptiveOptions = namedtuple(
+    "AdaptiveOptions", ["t_end", "out_dt", "rtol", "atol", "max_step", "commit_step", "max_steps"]
+)
 _NS = ("d", "dd", "fs", "kt")
 _NT = ("y", "k1", "ytmp", "ynew", "yev")
 #: The workspace of :func:`adaptive_run` (:func:`adaptive_workspace`): u0, v0 initial state;
@@ -75,20 +86,37 @@ _NT = ("y", "k1", "ytmp", "ynew", "yev")
 #: integrals], its rate, stage / new / interpolated states; K (7, NT) stage rates; ev0, ev1 event
 #: values at the step's ends; hist (2, H_NBINS) int64 and hstat (2, 3) accepted-step-size
 #: statistics (row 0 out of contact, row 1 in contact; hstat = [min, max, sum]).
-AdaptiveWork = namedtuple("AdaptiveWork", ("u0", "v0", "hstate", "cstate", "cw", "uc", "ug",
-                                           "vg", "f") + _NS + _NT + ("K", "ev0", "ev1", "hist",
-                                                                     "hstat"))
+AdaptiveWork = namedtuple(
+    "AdaptiveWork",
+    ("u0", "v0", "hstate", "cstate", "cw", "uc", "ug", "vg", "f")
+    + _NS
+    + _NT
+    + ("K", "ev0", "ev1", "hist", "hstat"),
+)
 
 
 def adaptive_workspace(u0, v0, hstate, cstate, ns: int, nch: int, nbs: int) -> AdaptiveWork:
     """The workspace of :func:`adaptive_run` (zeroed) around the initial state u0, v0 (7,) and
     the virgin material and corner states; ns springs, nch channels, nbs bent springs."""
     nev = 4 + nbs + 8
-    return AdaptiveWork(u0=u0, v0=v0, hstate=hstate, cstate=cstate, cw=bd.new_contact_work(),
-                        uc=np.zeros(7), ug=np.zeros(nch), vg=np.zeros(nch), f=np.zeros(7),
-                        **bd.row_views(_NS, ns), **bd.row_views(_NT, NT), K=np.zeros((7, NT)),
-                        ev0=np.zeros(nev), ev1=np.zeros(nev),
-                        hist=np.zeros((2, H_NBINS), dtype=np.int64), hstat=np.zeros((2, 3)))
+    return AdaptiveWork(
+        u0=u0,
+        v0=v0,
+        hstate=hstate,
+        cstate=cstate,
+        cw=bd.new_contact_work(),
+        uc=np.zeros(7),
+        ug=np.zeros(nch),
+        vg=np.zeros(nch),
+        f=np.zeros(7),
+        **bd.row_views(_NS, ns),
+        **bd.row_views(_NT, NT),
+        K=np.zeros((7, NT)),
+        ev0=np.zeros(nev),
+        ev1=np.zeros(nev),
+        hist=np.zeros((2, H_NBINS), dtype=np.int64),
+        hstat=np.zeros((2, 3)),
+    )
 
 
 @kernel
@@ -192,10 +220,10 @@ def _events(y, sa, contact, ws, ev):
 
 @kernel
 def _hermite(y0, f0, y1, f1, h, th):
-    h00 = 2 * th ** 3 - 3 * th ** 2 + 1
-    h10 = th ** 3 - 2 * th ** 2 + th
-    h01 = -2 * th ** 3 + 3 * th ** 2
-    h11 = th ** 3 - th ** 2
+    h00 = 2 * th**3 - 3 * th**2 + 1
+    h10 = th**3 - 2 * th**2 + th
+    h01 = -2 * th**3 + 3 * th**2
+    h11 = th**3 - th**2
     return h00 * y0 + h10 * h * f0 + h01 * y1 + h11 * h * f1
 
 
@@ -259,8 +287,9 @@ def _any_yielded(sa, hstate):
     paths (OpenSees Hysteretic arithmetic), so the loop caps its steps at ``commit_step``.
     """
     for i in range(hstate.shape[0]):
-        if sa.kind[i] == 1 and (hstate[i, C_ROTMAX] > sa.hparams[i, 1]
-                                or hstate[i, C_ROTMIN] < sa.hparams[i, 7]):
+        if sa.kind[i] == 1 and (
+            hstate[i, C_ROTMAX] > sa.hparams[i, 1] or hstate[i, C_ROTMIN] < sa.hparams[i, 7]
+        ):
             return True
     return False
 
@@ -348,7 +377,7 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
             err = 1e10
         if err > 1.0:
             rejected += 1
-            h *= max(0.2, 0.9 * err ** -0.2)
+            h *= max(0.2, 0.9 * err**-0.2)
             continue
         # events inside (t, t+h]
         _rhs(t + h, ynew, sa, contact, record, ws, ytmp)
@@ -358,7 +387,7 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
         for q in range(nev):
             a_, b_ = ev0[q], ev1[q]
             if (a_ == 0.0 or (a_ < 0.0) == (b_ < 0.0)) and not (b_ == 0.0 and a_ != 0.0):
-                continue   # no sign change in (t, t+h] (a zero at t+h counts)
+                continue  # no sign change in (t, t+h] (a zero at t+h counts)
             # bisection on the Hermite interpolant
             lo = 0.0
             hi = 1.0
@@ -397,7 +426,7 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
         calls += 1
         spring_commit(sa, hstate)
         cl.contact_commit(cs, cw.g, cw.gd, cw.evaluated)
-        for c in range(4):                 # penetration at every accepted step
+        for c in range(4):  # penetration at every accepted step
             if -cw.g[c] > stats.value[bd.VAL_MAX_PEN]:
                 stats.value[bd.VAL_MAX_PEN] = -cw.g[c]
         if not yielded:
@@ -433,7 +462,7 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
             _adaptive_store(sa, contact, ws, output, row, row * out_dt)
             row += 1
         if err > 0.0:
-            fac = 0.9 * err ** -0.2
+            fac = 0.9 * err**-0.2
             fac = min(fac, 5.0)
             fac = max(fac, 0.2)
             hn = h * fac

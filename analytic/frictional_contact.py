@@ -94,6 +94,7 @@ C. Glocker, "Concepts for modeling impacts without friction", Acta Mech.
 from __future__ import annotations
 
 import numpy as np
+
 from deckpound.analytic._jit import compiled, kernel
 
 from .coulomb_lcp import build_lcp3, build_lcp_st, extract3, extract_st
@@ -122,17 +123,17 @@ CONTACT_OPEN = 0
 CONTACT_STICK = 1
 CONTACT_SLIP = 2
 
-STATUS_LEMKE = 0      # verified, Lemke on the 3-unknown LCP
-STATUS_LEMKE_ST = 1   # verified, Lemke on the Stewart-Trinkle LCP
-STATUS_ENUM = 2       # verified, enumeration
-STATUS_FAILED = 3     # nothing verified; best candidate returned
+STATUS_LEMKE = 0  # verified, Lemke on the 3-unknown LCP
+STATUS_LEMKE_ST = 1  # verified, Lemke on the Stewart-Trinkle LCP
+STATUS_ENUM = 2  # verified, enumeration
+STATUS_FAILED = 3  # nothing verified; best candidate returned
 
 MODE_AUTO = 0
 MODE_LEMKE3 = 1
 MODE_LEMKE_ST = 2
 MODE_ENUM = 3
 
-_VTOL = 1e-9   # default relative acceptance tolerance (velocity units)
+_VTOL = 1e-9  # default relative acceptance tolerance (velocity units)
 
 
 @compiled
@@ -208,17 +209,16 @@ def _impulse_scale(G, nc):
 
 
 @kernel
-def _evaluate(G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus,
-              uT_plus):
+def _evaluate(G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus):
     _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus)
-    comp, cone = contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus,
-                                   uT_plus)
+    comp, cone = contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus)
     return comp, cone
 
 
 @kernel
-def _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best,
-                    verified_status, tolv):
+def _keep_if_better(
+    G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, verified_status, tolv
+):
     """Check the candidate impulses (cN, cT) against the contact laws; keep them in (bN, bT)
     when their residual max(comp, cone) beats ``best[0]``, with best = [residual, comp, cone,
     status]: ``verified_status`` if the residual is ≤ tolv, else STATUS_FAILED. Returns True
@@ -280,9 +280,9 @@ def _split_shared_tangents(G, mu, P_N, P_T):
 
 
 @compiled
-def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
-                                P_N, P_T, uN_plus, uT_plus, state,
-                                mode=0, rtol=1e-9):
+def solve_contact_impulses_into(
+    G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus, state, mode=0, rtol=1e-9
+):
     """Frictional impact impulses for nc active contacts, written into the
     output arrays.
 
@@ -312,8 +312,7 @@ def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
         return STATUS_LEMKE, 0.0, 0.0
     vscale = 0.0
     for i in range(nc):
-        vscale = max(vscale, abs(uN_free[i]), abs(uT_free[i]),
-                     abs(e[i] * uN_minus[i]))
+        vscale = max(vscale, abs(uN_free[i]), abs(uT_free[i]), abs(e[i] * uN_minus[i]))
     tolv = rtol * vscale
     if vscale == 0.0:
         tolv = 1e-300
@@ -334,36 +333,67 @@ def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
     cT = np.empty(nc)
     vN = np.empty(nc)
     vT = np.empty(nc)
-    best = np.array([np.inf, np.inf, np.inf, STATUS_FAILED])   # residual, comp, cone, status
+    best = np.array([np.inf, np.inf, np.inf, STATUS_FAILED])  # residual, comp, cone, status
     done = False
 
     # 1. Lemke, 3-unknown formulation
     A3, q3 = build_lcp3(G, qN, uT_free, mu, fidx, nf, s)
-    if mode == MODE_AUTO or mode == MODE_LEMKE3:
+    if mode in (MODE_AUTO, MODE_LEMKE3):
         z, _w, _st, _npiv = lcp_lemke(A3, q3)
         extract3(z, mu, fidx, nf, s, cN, cT)
-        done = _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT,
-                               best, STATUS_LEMKE, tolv)
+        done = _keep_if_better(
+            G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, STATUS_LEMKE, tolv
+        )
     # 2. Lemke, Stewart-Trinkle formulation (copositive)
-    if (not done) and nf > 0 and (mode == MODE_AUTO or mode == MODE_LEMKE_ST):
+    if (not done) and nf > 0 and (mode in (MODE_AUTO, MODE_LEMKE_ST)):
         Ast, qst = build_lcp_st(G, qN, uT_free, mu, fidx, nf, s)
         z, _w, _st, _npiv = lcp_lemke(Ast, qst)
         extract_st(z, fidx, nf, s, cN, cT)
-        done = _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT,
-                               best, STATUS_LEMKE_ST, tolv)
+        done = _keep_if_better(
+            G,
+            uN_free,
+            uT_free,
+            uN_minus,
+            e,
+            mu,
+            cN,
+            cT,
+            vN,
+            vT,
+            bN,
+            bT,
+            best,
+            STATUS_LEMKE_ST,
+            tolv,
+        )
     elif mode == MODE_LEMKE_ST and nf == 0:
         # frictionless: the ST form is the normal LCP
         z, _w, _st, _npiv = lcp_lemke(A3, q3)
         extract3(z, mu, fidx, nf, s, cN, cT)
-        done = _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT,
-                               best, STATUS_LEMKE_ST, tolv)
+        done = _keep_if_better(
+            G,
+            uN_free,
+            uT_free,
+            uN_minus,
+            e,
+            mu,
+            cN,
+            cT,
+            vN,
+            vT,
+            bN,
+            bT,
+            best,
+            STATUS_LEMKE_ST,
+            tolv,
+        )
     # 3. enumeration of the 3-unknown LCP
-    if (not done) and (mode == MODE_AUTO or mode == MODE_ENUM) and \
-            nc + 2 * nf <= ENUM_MAX_N:
+    if (not done) and (mode in (MODE_AUTO, MODE_ENUM)) and nc + 2 * nf <= ENUM_MAX_N:
         z, _w, _st, _res = lcp_enumerate(A3, q3)
         extract3(z, mu, fidx, nf, s, cN, cT)
-        _keep_if_better(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best,
-                        STATUS_ENUM, tolv)
+        _keep_if_better(
+            G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, STATUS_ENUM, tolv
+        )
     best_comp = best[1]
     best_cone = best[2]
     best_status = int(best[3])
@@ -374,8 +404,7 @@ def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
         cN[:] = bN
         cT[:] = bT
         if _split_shared_tangents(G, mu, cN, cT):
-            comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN,
-                                   cT, vN, vT)
+            comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT)
             if max(comp, cone) <= max(best[0], tolv):
                 bT[:] = cT
                 best_comp = comp
@@ -398,8 +427,7 @@ def solve_contact_impulses_into(G, uN_free, uT_free, uN_minus, e, mu,
 
 
 @compiled
-def solve_contact_impulses(G, uN_free, uT_free, uN_minus, e, mu, mode=0,
-                           rtol=1e-9):
+def solve_contact_impulses(G, uN_free, uT_free, uN_minus, e, mu, mode=0, rtol=1e-9):
     """Allocating wrapper of :func:`solve_contact_impulses_into`.
 
     Returns ``(P_N, P_T, uN_plus, uT_plus, state, status, comp_res,
@@ -412,6 +440,6 @@ def solve_contact_impulses(G, uN_free, uT_free, uN_minus, e, mu, mode=0,
     uT_plus = np.zeros(nc)
     state = np.zeros(nc, dtype=np.int64)
     status, comp, cone = solve_contact_impulses_into(
-        G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus,
-        state, mode, rtol)
+        G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus, state, mode, rtol
+    )
     return P_N, P_T, uN_plus, uT_plus, state, status, comp, cone

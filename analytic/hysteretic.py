@@ -56,6 +56,7 @@ import math
 from numbers import Real
 
 import numpy as np
+
 from deckpound.analytic._hysteretic_kernel import (
     N_PARAMS,
     N_STATE,
@@ -73,12 +74,40 @@ from deckpound.analytic._hysteretic_kernel import (
 
 __all__ = ["N_PARAMS", "N_STATE", "HystereticMaterial", "pack_hysteretic"]
 
-_NAMES_3PT = ("s1p", "e1p", "s2p", "e2p", "s3p", "e3p",
-              "s1n", "e1n", "s2n", "e2n", "s3n", "e3n",
-              "pinchX", "pinchY", "damage1", "damage2", "beta")
-_NAMES_2PT = ("s1p", "e1p", "s2p", "e2p",
-              "s1n", "e1n", "s2n", "e2n",
-              "pinchX", "pinchY", "damage1", "damage2", "beta")
+_NAMES_3PT = (
+    "s1p",
+    "e1p",
+    "s2p",
+    "e2p",
+    "s3p",
+    "e3p",
+    "s1n",
+    "e1n",
+    "s2n",
+    "e2n",
+    "s3n",
+    "e3n",
+    "pinchX",
+    "pinchY",
+    "damage1",
+    "damage2",
+    "beta",
+)
+_NAMES_2PT = (
+    "s1p",
+    "e1p",
+    "s2p",
+    "e2p",
+    "s1n",
+    "e1n",
+    "s2n",
+    "e2n",
+    "pinchX",
+    "pinchY",
+    "damage1",
+    "damage2",
+    "beta",
+)
 
 
 def _parse(args, beta, element_copy):
@@ -88,25 +117,24 @@ def _parse(args, beta, element_copy):
         raise ValueError(
             f"Hysteretic expects 12 or 13 numbers (2-point backbone) or 16 or "
             f"17 numbers (3-point backbone) after the tag, got {n} positional "
-            f"arguments")
+            f"arguments"
+        )
     names = _NAMES_2PT if n in (12, 13) else _NAMES_3PT
     vals = list(args)
     if n in (13, 17):
         if beta is not None:
             raise ValueError(
-                f"beta was given both positionally ({args[-1]!r}) and as a "
-                f"keyword ({beta!r})")
+                f"beta was given both positionally ({args[-1]!r}) and as a keyword ({beta!r})"
+            )
     else:
         vals.append(0.0 if beta is None else beta)
     out = {}
     for name, v in zip(names, vals):
         if isinstance(v, bool) or not isinstance(v, (Real, np.floating, np.integer)):
-            raise ValueError(  # noqa: TRY004 (ValueError is the documented refusal)
-                f"Hysteretic argument {name} must be a real number, got {v!r}")
+            raise ValueError(f"Hysteretic argument {name} must be a real number, got {v!r}")
         fv = float(v)
         if not math.isfinite(fv):
-            raise ValueError(f"Hysteretic argument {name} must be finite, "
-                             f"got {fv!r}")
+            raise ValueError(f"Hysteretic argument {name} must be finite, got {fv!r}")
         out[name] = fv
 
     two_point = n in (12, 13)
@@ -122,67 +150,91 @@ def _parse(args, beta, element_copy):
 
     # --- backbone checks (OpenSees: "input backbone is not unique") -------
     if not e1p > 0.0:
-        raise ValueError(f"Hysteretic argument e1p must be > 0 (first positive "
-                         f"backbone deformation), got {e1p!r}")
+        raise ValueError(
+            f"Hysteretic argument e1p must be > 0 (first positive "
+            f"backbone deformation), got {e1p!r}"
+        )
     if not out["s1p"] > 0.0:
-        raise ValueError(f"Hysteretic argument s1p must be > 0 (positive "
-                         f"initial stiffness s1p/e1p), got {out['s1p']!r}")
+        raise ValueError(
+            f"Hysteretic argument s1p must be > 0 (positive "
+            f"initial stiffness s1p/e1p), got {out['s1p']!r}"
+        )
     if not e1n < 0.0:
-        raise ValueError(f"Hysteretic argument e1n must be < 0 (first negative "
-                         f"backbone deformation), got {e1n!r}")
+        raise ValueError(
+            f"Hysteretic argument e1n must be < 0 (first negative "
+            f"backbone deformation), got {e1n!r}"
+        )
     if not out["s1n"] < 0.0:
-        raise ValueError(f"Hysteretic argument s1n must be < 0 (positive "
-                         f"initial stiffness s1n/e1n), got {out['s1n']!r}")
+        raise ValueError(
+            f"Hysteretic argument s1n must be < 0 (positive "
+            f"initial stiffness s1n/e1n), got {out['s1n']!r}"
+        )
     if not two_point:
         if not out["e2p"] > e1p:
-            raise ValueError(f"Hysteretic argument e2p must be > e1p = {e1p!r}, "
-                             f"got {out['e2p']!r}")
+            raise ValueError(f"Hysteretic argument e2p must be > e1p = {e1p!r}, got {out['e2p']!r}")
         if not e3p > out["e2p"]:
-            raise ValueError(f"Hysteretic argument e3p must be > e2p = "
-                             f"{out['e2p']!r}, got {e3p!r}")
+            raise ValueError(f"Hysteretic argument e3p must be > e2p = {out['e2p']!r}, got {e3p!r}")
         if not out["e2n"] < e1n:
-            raise ValueError(f"Hysteretic argument e2n must be < e1n = {e1n!r}, "
-                             f"got {out['e2n']!r}")
+            raise ValueError(f"Hysteretic argument e2n must be < e1n = {e1n!r}, got {out['e2n']!r}")
         if not e3n < out["e2n"]:
-            raise ValueError(f"Hysteretic argument e3n must be < e2n = "
-                             f"{out['e2n']!r}, got {e3n!r}")
+            raise ValueError(f"Hysteretic argument e3n must be < e2n = {out['e2n']!r}, got {e3n!r}")
     else:
         if not e3p > e1p:
-            raise ValueError(f"Hysteretic argument {n3p} must be > e1p = "
-                             f"{e1p!r}, got {e3p!r}")
+            raise ValueError(f"Hysteretic argument {n3p} must be > e1p = {e1p!r}, got {e3p!r}")
         if not e3n < e1n:
-            raise ValueError(f"Hysteretic argument {n3n} must be < e1n = "
-                             f"{e1n!r}, got {e3n!r}")
+            raise ValueError(f"Hysteretic argument {n3n} must be < e1n = {e1n!r}, got {e3n!r}")
     for name in ("pinchX", "pinchY"):
         if not 0.0 <= out[name] <= 1.0:
-            raise ValueError(f"Hysteretic argument {name} must lie in [0, 1], "
-                             f"got {out[name]!r}")
+            raise ValueError(f"Hysteretic argument {name} must lie in [0, 1], got {out[name]!r}")
     for name in ("damage1", "damage2", "beta"):
         if out[name] < 0.0:
-            raise ValueError(f"Hysteretic argument {name} must be >= 0, got "
-                             f"{out[name]!r}")
+            raise ValueError(f"Hysteretic argument {name} must be >= 0, got {out[name]!r}")
 
     if two_point:
         # Same expression order as the OpenSees 2-point constructor.
-        energy_2pt = 0.5 * (e1p * s1p + (e3p - e1p) * (s3p + s1p)
-                            + e1n * s1n + (e3n - e1n) * (s3n + s1n))
+        energy_2pt = 0.5 * (
+            e1p * s1p + (e3p - e1p) * (s3p + s1p) + e1n * s1n + (e3n - e1n) * (s3n + s1n)
+        )
         s2p = 0.5 * (s1p + s3p)
         s2n = 0.5 * (s1n + s3n)
         e2p = 0.5 * (e1p + e3p)
         e2n = 0.5 * (e1n + e3n)
     else:
         s2p, e2p, s2n, e2n = out["s2p"], out["e2p"], out["s2n"], out["e2n"]
-    energy_3pt = 0.5 * (e1p * s1p + (e2p - e1p) * (s2p + s1p)
-                        + (e3p - e2p) * (s3p + s2p)
-                        + e1n * s1n + (e2n - e1n) * (s2n + s1n)
-                        + (e3n - e2n) * (s3n + s2n))
+    energy_3pt = 0.5 * (
+        e1p * s1p
+        + (e2p - e1p) * (s2p + s1p)
+        + (e3p - e2p) * (s3p + s2p)
+        + e1n * s1n
+        + (e2n - e1n) * (s2n + s1n)
+        + (e3n - e2n) * (s3n + s2n)
+    )
     energy_a = energy_3pt if (element_copy or not two_point) else energy_2pt
     if not energy_a != 0.0:
-        raise ValueError("Hysteretic backbone encloses zero energy (energyA = "
-                         "0); damage2 normalisation would divide by zero")
-    return (s1p, e1p, s2p, e2p, s3p, e3p, s1n, e1n, s2n, e2n, s3n, e3n,
-            out["pinchX"], out["pinchY"], out["damage1"], out["damage2"],
-            out["beta"], energy_a)
+        raise ValueError(
+            "Hysteretic backbone encloses zero energy (energyA = "
+            "0); damage2 normalisation would divide by zero"
+        )
+    return (
+        s1p,
+        e1p,
+        s2p,
+        e2p,
+        s3p,
+        e3p,
+        s1n,
+        e1n,
+        s2n,
+        e2n,
+        s3n,
+        e3n,
+        out["pinchX"],
+        out["pinchY"],
+        out["damage1"],
+        out["damage2"],
+        out["beta"],
+        energy_a,
+    )
 
 
 def pack_hysteretic(*args, beta=None, element_copy=True):
@@ -311,8 +363,10 @@ class HystereticMaterial:
 
     def __repr__(self):
         p = self.params
-        return (f"HystereticMaterial(s1p={p[0]!r}, e1p={p[1]!r}, s2p={p[2]!r}, "
-                f"e2p={p[3]!r}, s3p={p[4]!r}, e3p={p[5]!r}, s1n={p[6]!r}, "
-                f"e1n={p[7]!r}, s2n={p[8]!r}, e2n={p[9]!r}, s3n={p[10]!r}, "
-                f"e3n={p[11]!r}, pinchX={p[12]!r}, pinchY={p[13]!r}, "
-                f"damage1={p[14]!r}, damage2={p[15]!r}, beta={p[16]!r})")
+        return (
+            f"HystereticMaterial(s1p={p[0]!r}, e1p={p[1]!r}, s2p={p[2]!r}, "
+            f"e2p={p[3]!r}, s3p={p[4]!r}, e3p={p[5]!r}, s1n={p[6]!r}, "
+            f"e1n={p[7]!r}, s2n={p[8]!r}, e2n={p[9]!r}, s3n={p[10]!r}, "
+            f"e3n={p[11]!r}, pinchX={p[12]!r}, pinchY={p[13]!r}, "
+            f"damage1={p[14]!r}, damage2={p[15]!r}, beta={p[16]!r})"
+        )

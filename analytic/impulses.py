@@ -14,6 +14,7 @@ kernel compiled without it (:mod:`deckpound.analytic._jit`).
 from __future__ import annotations
 
 import numpy as np
+
 from deckpound.analytic._jit import compiled
 from deckpound.analytic.dense import lu_solve
 from deckpound.analytic.frictional_contact import solve_contact_impulses_into
@@ -21,9 +22,10 @@ from deckpound.analytic.frictional_contact import solve_contact_impulses_into
 __all__ = ["solve_active_impulses"]
 
 
-@compiled(_nrt=True)   # allocates: keeps numba's runtime when called from a kernel
-def solve_active_impulses(LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu, mode, rtol,
-                          P_N, P_T, state, vnew):
+@compiled(_nrt=True)  # allocates: keeps numba's runtime when called from a kernel
+def solve_active_impulses(
+    LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu, mode, rtol, P_N, P_T, state, vnew
+):
     """Solve the frictional impact problem of the active corners act[:nact].
 
     G = W Ŵ⁻¹ Wᵀ, u_free = W v_free, U_N⁻ = W_N v0; vnew = v_free + Ŵ⁻¹ Wᵀ P. Restitution
@@ -32,7 +34,7 @@ def solve_active_impulses(LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu
     Returns (status, comp_res, cone_res).
     """
     nc = nact
-    X = np.empty((2 * nc, 7))       # rows: Ŵ⁻¹ w for each column w of W
+    X = np.empty((2 * nc, 7))  # rows: Ŵ⁻¹ w for each column w of W
     Wr = np.empty((2 * nc, 7))
     col = np.empty(7)
     for a in range(nc):
@@ -77,8 +79,9 @@ def solve_active_impulses(LU, piv, WN, WT, act, nact, v0, vfree, ecoef, esep, mu
     uNp = np.zeros(nc)
     uTp = np.zeros(nc)
     st = np.zeros(nc, dtype=np.int64)
-    status, comp, cone = solve_contact_impulses_into(G, uNf, uTf, uNm, ea, ma, pN, pT, uNp,
-                                                     uTp, st, mode, rtol)
+    status, comp, cone = solve_contact_impulses_into(
+        G, uNf, uTf, uNm, ea, ma, pN, pT, uNp, uTp, st, mode, rtol
+    )
     for c in range(4):
         P_N[c] = 0.0
         P_T[c] = 0.0

@@ -28,6 +28,7 @@ arrays, usable inside the engines' step loops and from Python alike.
 from __future__ import annotations
 
 import numpy as np
+
 from deckpound.analytic._jit import kernel
 from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, N_CORNERS, Plan
 
@@ -69,8 +70,11 @@ def linear_gap(k, u):
     """Gap of one corner (row k of the corner table) for displacement u, linear kinematics."""
     sx = int(k[K_SX])
     st = int(k[K_ST])
-    return (k[K_G0] + k[K_NX] * ((u[XD] - k[K_Y] * u[TD]) - (u[sx] - k[K_RY] * u[st]))
-            + k[K_NY] * ((u[YD] + k[K_X] * u[TD]) - k[K_RX] * u[st]))
+    return (
+        k[K_G0]
+        + k[K_NX] * ((u[XD] - k[K_Y] * u[TD]) - (u[sx] - k[K_RY] * u[st]))
+        + k[K_NY] * ((u[YD] + k[K_X] * u[TD]) - k[K_RX] * u[st])
+    )
 
 
 @kernel(inline="always")
@@ -78,8 +82,9 @@ def linear_gap_rate(k, v):
     """ġ_N = W_N u̇ of one corner, linear kinematics (the gap formula without g₀)."""
     sx = int(k[K_SX])
     st = int(k[K_ST])
-    return (k[K_NX] * ((v[XD] - k[K_Y] * v[TD]) - (v[sx] - k[K_RY] * v[st]))
-            + k[K_NY] * ((v[YD] + k[K_X] * v[TD]) - k[K_RX] * v[st]))
+    return k[K_NX] * ((v[XD] - k[K_Y] * v[TD]) - (v[sx] - k[K_RY] * v[st])) + k[K_NY] * (
+        (v[YD] + k[K_X] * v[TD]) - k[K_RX] * v[st]
+    )
 
 
 @kernel
@@ -112,7 +117,7 @@ def contact_kinematics(u, corners, nonlinear, gap, WN, WT):
             WT[c, YD] = ty
             WT[c, TD] = -tx * yc + ty * xc
             WT[c, sx] = -tx
-            if k[K_FREE] == 0.0:          # fixed seat: the contact does not load it
+            if k[K_FREE] == 0.0:  # fixed seat: the contact does not load it
                 WN[c, sx] = 0.0
                 WN[c, st] = 0.0
                 WT[c, sx] = 0.0
@@ -121,8 +126,8 @@ def contact_kinematics(u, corners, nonlinear, gap, WN, WT):
             ct, sn = np.cos(th), np.sin(th)
             px = u[XD] + xc * ct - yc * sn
             py = u[YD] + xc * sn + yc * ct
-            dpx = -xc * sn - yc * ct          # ∂P_x/∂θ_d
-            dpy = xc * ct - yc * sn           # ∂P_y/∂θ_d
+            dpx = -xc * sn - yc * ct  # ∂P_x/∂θ_d
+            dpy = xc * ct - yc * sn  # ∂P_y/∂θ_d
             cs, ss = np.cos(ths), np.sin(ths)
             nx = k[K_NX] * cs - k[K_NY] * ss  # n = R(θ_s) n₀
             ny = k[K_NX] * ss + k[K_NY] * cs
@@ -135,7 +140,7 @@ def contact_kinematics(u, corners, nonlinear, gap, WN, WT):
             WN[c, YD] = ny
             WN[c, TD] = nx * dpx + ny * dpy
             WN[c, sx] = -nx
-            WN[c, st] = -ny * rx + nx * ry    # (∂n/∂θ_s)·(P − F), ∂n/∂θ_s = (−n_y, n_x)
+            WN[c, st] = -ny * rx + nx * ry  # (∂n/∂θ_s)·(P − F), ∂n/∂θ_s = (−n_y, n_x)
             WT[c, XD] = tx
             WT[c, YD] = ty
             WT[c, TD] = tx * dpx + ty * dpy
@@ -169,16 +174,16 @@ def gap_hessian(u, corners, c, H):
     ny = k[K_NX] * ss + k[K_NY] * cs_
     rx = px - (k[K_PX] + u[sx])
     ry = py - k[K_PY]
-    dnx, dny = -ny, nx                         # ∂n/∂θ_s
+    dnx, dny = -ny, nx  # ∂n/∂θ_s
     H[TD, TD] = nx * d2px + ny * d2py
     H[XD, st] = dnx
     H[YD, st] = dny
     H[TD, st] = dnx * dpx + dny * dpy
     H[sx, st] = -dnx
-    H[st, st] = -(nx * rx + ny * ry)           # ∂²n/∂θ_s² = −n
+    H[st, st] = -(nx * rx + ny * ry)  # ∂²n/∂θ_s² = −n
     for i in (XD, YD, TD, sx):
         H[st, i] = H[i, st]
-    if k[K_FREE] == 0.0:                       # fixed seat: no seat rows or columns
+    if k[K_FREE] == 0.0:  # fixed seat: no seat rows or columns
         for i in range(7):
             H[sx, i] = 0.0
             H[i, sx] = 0.0

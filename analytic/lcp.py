@@ -47,6 +47,7 @@ K. G. Murty, "Linear Complementarity, Linear and Nonlinear Programming",
 from __future__ import annotations
 
 import numpy as np
+
 from deckpound.analytic._jit import compiled, kernel
 
 __all__ = [

@@ -72,6 +72,7 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
+
 from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.bundles import (
@@ -99,8 +100,14 @@ from deckpound.analytic.system import (
     store_standard,
 )
 
-__all__ = ["ENERGY_COLUMNS", "N_ENERGY", "MoreauJeanOptions", "MoreauJeanWork", "moreau_jean_run",
-           "moreau_jean_workspace"]
+__all__ = [
+    "ENERGY_COLUMNS",
+    "N_ENERGY",
+    "MoreauJeanOptions",
+    "MoreauJeanWork",
+    "moreau_jean_run",
+    "moreau_jean_workspace",
+]
 
 N_ENERGY = len(ENERGY_COLUMNS)
 
@@ -110,12 +117,27 @@ N_ENERGY = len(ENERGY_COLUMNS)
 #: contact solver ``mode`` (:mod:`deckpound.analytic.frictional_contact` ``MODE_*``); ``rtol``
 #: relative acceptance of the contact solution; ``ftol`` [kN] Newton acceptance of the spring
 #: forces and ``maxit`` Newton iterations; output every ``stride`` steps.
-MoreauJeanOptions = namedtuple("MoreauJeanOptions", ["nsteps", "h", "theta", "ecoef", "esep",
-                                                     "mu", "mode", "rtol", "ftol", "maxit",
-                                                     "stride"])
+MoreauJeanOptions = namedtuple(
+    "MoreauJeanOptions",
+    ["nsteps", "h", "theta", "ecoef", "esep", "mu", "mode", "rtol", "ftol", "maxit", "stride"],
+)
 _V7 = ("q", "v", "qk", "vk", "qM", "vfree", "vnew", "R", "dv", "Fk", "f")
-_NS = ("kt_fact", "d_k", "dd_k", "fs_k", "kt_k", "d_lin", "fs_lin", "kt_lin", "d", "dd", "fs",
-       "kt", "sdu", "sdv")
+_NS = (
+    "kt_fact",
+    "d_k",
+    "dd_k",
+    "fs_k",
+    "kt_k",
+    "d_lin",
+    "fs_lin",
+    "kt_lin",
+    "d",
+    "dd",
+    "fs",
+    "kt",
+    "sdu",
+    "sdv",
+)
 _V4 = ("gap", "gapo", "P_N", "P_T", "pn_acc", "pt_acc", "fn_out", "ft_out")
 _CH = ("ug", "vg", "ugo", "vgo")
 _CORNER = _V4 + ("WN", "WT", "WNo", "WTo", "act", "state", "was_active")
@@ -137,8 +159,10 @@ MoreauJeanCorners = namedtuple("MoreauJeanCorners", _CORNER)
 #: displacement and velocity at the last accepted step; dof, spring, corner the groups above;
 #: ug, vg, ugo, vgo supports now and at the last step; W (6,) running work totals [kJ];
 #: energy (N_ENERGY,).
-MoreauJeanWork = namedtuple("MoreauJeanWork", ("u0", "v0", "hstate", "final", "dof", "spring",
-                                               "corner") + _CH + ("W", "energy"))
+MoreauJeanWork = namedtuple(
+    "MoreauJeanWork",
+    ("u0", "v0", "hstate", "final", "dof", "spring", "corner") + _CH + ("W", "energy"),
+)
 
 
 @kernel
@@ -198,16 +222,28 @@ def moreau_jean_workspace(u0, v0, hstate, ns: int, nch: int) -> MoreauJeanWork:
     initial state u0, v0 (7,) and the virgin Takeda states. Allocated here because the kernel
     runs without numba's runtime."""
     wns = bd.row_views(_NS, ns)
-    wns["kt_fact"][:] = np.nan         # no factorisation held yet
-    dof = MoreauJeanDofs(**bd.row_views(_V7, 7), **bd.row_views(("K", "LU"), 7, 7),
-                         piv=np.zeros(7, dtype=np.int64))
-    corner = MoreauJeanCorners(**bd.row_views(_V4, 4),
-                               **bd.row_views(("WN", "WT", "WNo", "WTo"), 4, 7),
-                               **bd.row_views(("act", "state"), 4, dtype=np.int64),
-                               was_active=np.zeros(4, dtype=np.bool_))
-    return MoreauJeanWork(u0=u0, v0=v0, hstate=hstate, final=np.zeros((2, 7)), dof=dof,
-                          spring=MoreauJeanSprings(**wns), corner=corner,
-                          **bd.row_views(_CH, nch), W=np.zeros(6), energy=np.zeros(N_ENERGY))
+    wns["kt_fact"][:] = np.nan  # no factorisation held yet
+    dof = MoreauJeanDofs(
+        **bd.row_views(_V7, 7), **bd.row_views(("K", "LU"), 7, 7), piv=np.zeros(7, dtype=np.int64)
+    )
+    corner = MoreauJeanCorners(
+        **bd.row_views(_V4, 4),
+        **bd.row_views(("WN", "WT", "WNo", "WTo"), 4, 7),
+        **bd.row_views(("act", "state"), 4, dtype=np.int64),
+        was_active=np.zeros(4, dtype=np.bool_),
+    )
+    return MoreauJeanWork(
+        u0=u0,
+        v0=v0,
+        hstate=hstate,
+        final=np.zeros((2, 7)),
+        dof=dof,
+        spring=MoreauJeanSprings(**wns),
+        corner=corner,
+        **bd.row_views(_CH, nch),
+        W=np.zeros(6),
+        energy=np.zeros(N_ENERGY),
+    )
 
 
 @kernel(nogil=True)
@@ -248,18 +284,48 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     wk = work
     hstate, uv_end, u0, v0 = wk.hstate, wk.final, wk.u0, wk.v0
     dof, spr, cor = wk.dof, wk.spring, wk.corner
-    q, v, qk, vk, qM, vfree, vnew, R, dv, Fk, f = (dof.q, dof.v, dof.qk, dof.vk, dof.qM,
-                                                  dof.vfree, dof.vnew, dof.R, dof.dv, dof.Fk,
-                                                  dof.f)
+    q, v, qk, vk, qM, vfree, vnew, R, dv, Fk, f = (
+        dof.q,
+        dof.v,
+        dof.qk,
+        dof.vk,
+        dof.qM,
+        dof.vfree,
+        dof.vnew,
+        dof.R,
+        dof.dv,
+        dof.Fk,
+        dof.f,
+    )
     K, LU, piv = dof.K, dof.LU, dof.piv
     # spring quantities: committed start of step (k), linearisation point (lin), new iterate;
     # kt_fact: tangents of the factors held in LU (NaN: none); sdu, sdv: S Δu_g, S Δu̇_g
-    (kt_fact, d_k, dd_k, fs_k, kt_k, d_lin, fs_lin, kt_lin, d, dd, fs, kt, sdu,
-     sdv) = (spr.kt_fact, spr.d_k, spr.dd_k, spr.fs_k, spr.kt_k, spr.d_lin, spr.fs_lin,
-             spr.kt_lin, spr.d, spr.dd, spr.fs, spr.kt, spr.sdu, spr.sdv)
-    gap, gapo, P_N, P_T, pn_acc, pt_acc, fn_out, ft_out = (cor.gap, cor.gapo, cor.P_N, cor.P_T,
-                                                          cor.pn_acc, cor.pt_acc, cor.fn_out,
-                                                          cor.ft_out)
+    (kt_fact, d_k, dd_k, fs_k, kt_k, d_lin, fs_lin, kt_lin, d, dd, fs, kt, sdu, sdv) = (
+        spr.kt_fact,
+        spr.d_k,
+        spr.dd_k,
+        spr.fs_k,
+        spr.kt_k,
+        spr.d_lin,
+        spr.fs_lin,
+        spr.kt_lin,
+        spr.d,
+        spr.dd,
+        spr.fs,
+        spr.kt,
+        spr.sdu,
+        spr.sdv,
+    )
+    gap, gapo, P_N, P_T, pn_acc, pt_acc, fn_out, ft_out = (
+        cor.gap,
+        cor.gapo,
+        cor.P_N,
+        cor.P_T,
+        cor.pn_acc,
+        cor.pt_acc,
+        cor.fn_out,
+        cor.ft_out,
+    )
     WN, WT, WNo, WTo = cor.WN, cor.WT, cor.WNo, cor.WTo
     act, state, was_active = cor.act, cor.state, cor.was_active
     ug, vg, ugo, vgo = wk.ug, wk.vg, wk.ugo, wk.vgo
@@ -283,8 +349,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     W[1] = es0
     contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
     _energies(sa, hstate, q, v, ug, W, energy)
-    _store(output, 0, 0.0, q, v, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state,
-           energy)
+    _store(output, 0, 0.0, q, v, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state, energy)
     row = 1
     solves = 0
     events = 0
@@ -375,9 +440,25 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
                 vfree[j] = v[j] - dv[j]
             # ---- contact
             if nact > 0:
-                cst, comp, cone = solve_active_impulses(LU, piv, WN, WT, act, nact, vk, vfree,
-                                                        ecoef, esep, mu, mode, rtol, P_N, P_T,
-                                                        state, vnew)
+                cst, comp, cone = solve_active_impulses(
+                    LU,
+                    piv,
+                    WN,
+                    WT,
+                    act,
+                    nact,
+                    vk,
+                    vfree,
+                    ecoef,
+                    esep,
+                    mu,
+                    mode,
+                    rtol,
+                    P_N,
+                    P_T,
+                    state,
+                    vnew,
+                )
                 solves += 1
                 if cst == STATUS_FAILED:
                     status = RUN_CONTACT_UNSOLVED
@@ -484,8 +565,22 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
                 fn_out[c] = pn_acc[c] * inv_out
                 ft_out[c] = pt_acc[c] * inv_out
             _energies(sa, hstate, q, v, ug, W, energy)
-            _store(output, row, (n + 1) * h, q, v, gapo, fn_out, ft_out, fs, nbs, pn_acc,
-                   pt_acc, state, energy)
+            _store(
+                output,
+                row,
+                (n + 1) * h,
+                q,
+                v,
+                gapo,
+                fn_out,
+                ft_out,
+                fs,
+                nbs,
+                pn_acc,
+                pt_acc,
+                state,
+                energy,
+            )
             row += 1
             for c in range(4):
                 pn_acc[c] = 0.0

@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
+
 from deckpound.analytic import bundles as bd
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._jit import kernel
@@ -59,8 +60,16 @@ from deckpound.analytic.system import (
     store_standard,
 )
 
-__all__ = ["BETA", "ENERGY_COLUMNS", "GAMMA", "N_ENERGY", "NewmarkOptions", "NewmarkWork",
-           "newmark_run", "newmark_workspace"]
+__all__ = [
+    "BETA",
+    "ENERGY_COLUMNS",
+    "GAMMA",
+    "N_ENERGY",
+    "NewmarkOptions",
+    "NewmarkWork",
+    "newmark_run",
+    "newmark_workspace",
+]
 
 N_ENERGY = len(ENERGY_COLUMNS)
 GAMMA, BETA = 0.5, 0.25
@@ -72,9 +81,20 @@ GAMMA, BETA = 0.5, 0.25
 #: contact tangent skipped while every gap is open), ``reuse_factors`` (the tangent
 #: factorisation reused while the matrix is bitwise the last one); ``want_energy`` (energy work
 #: terms accumulated; False when no energy column is requested).
-NewmarkOptions = namedtuple("NewmarkOptions", ["nsteps", "dt", "tol", "maxit", "stride",
-                                               "substeps", "skip_contact", "reuse_factors",
-                                               "want_energy"])
+NewmarkOptions = namedtuple(
+    "NewmarkOptions",
+    [
+        "nsteps",
+        "dt",
+        "tol",
+        "maxit",
+        "stride",
+        "substeps",
+        "skip_contact",
+        "reuse_factors",
+        "want_energy",
+    ],
+)
 # workspace rows by shape: (7,) DOF vectors, (7, 7) matrices, (7,) pivots, (ns,) per spring,
 # (4,) per corner, (n_channels,) supports
 _V7 = ("u", "v", "a", "un", "vn", "an", "us", "vs", "as_", "du", "R", "f")
@@ -102,21 +122,32 @@ NewmarkSupports = namedtuple("NewmarkSupports", _CH)
 #: corner states; cw the ContactWork; dof, mat, spring, support the groups above;
 #: lam/lt/g_prev last committed contact forces and gaps (4,); W (5,) running work [input,
 #: springs, viscous, contact, friction] [kJ]; energy (N_ENERGY,) the output energies.
-NewmarkWork = namedtuple("NewmarkWork", ("u0", "v0", "hstate", "cstate", "cw", "dof", "mat",
-                                         "spring", "support") + _V4 + ("W", "energy"))
+NewmarkWork = namedtuple(
+    "NewmarkWork",
+    ("u0", "v0", "hstate", "cstate", "cw", "dof", "mat", "spring", "support")
+    + _V4
+    + ("W", "energy"),
+)
 
 
 def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
     """The workspace of :func:`newmark_run` (zeroed; ns springs, nch support channels) around
     the initial state u0, v0 (7,) and the virgin material and corner states. Allocated here
     because the kernel runs without numba's runtime."""
-    return NewmarkWork(u0=u0, v0=v0, hstate=hstate, cstate=cstate, cw=bd.new_contact_work(),
-                       dof=NewmarkDofs(**bd.row_views(_V7, 7)),
-                       mat=NewmarkMatrices(**bd.row_views(_M77, 7, 7),
-                                           **bd.row_views(_PIV, 7, dtype=np.int64)),
-                       spring=NewmarkSprings(**bd.row_views(_NS, ns)),
-                       support=NewmarkSupports(**bd.row_views(_CH, nch)),
-                       **bd.row_views(_V4, 4), W=np.zeros(5), energy=np.zeros(N_ENERGY))
+    return NewmarkWork(
+        u0=u0,
+        v0=v0,
+        hstate=hstate,
+        cstate=cstate,
+        cw=bd.new_contact_work(),
+        dof=NewmarkDofs(**bd.row_views(_V7, 7)),
+        mat=NewmarkMatrices(**bd.row_views(_M77, 7, 7), **bd.row_views(_PIV, 7, dtype=np.int64)),
+        spring=NewmarkSprings(**bd.row_views(_NS, ns)),
+        support=NewmarkSupports(**bd.row_views(_CH, nch)),
+        **bd.row_views(_V4, 4),
+        W=np.zeros(5),
+        energy=np.zeros(N_ENERGY),
+    )
 
 
 @kernel
@@ -147,7 +178,7 @@ def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
         ke += 0.5 * sa.mass[j] * v[j] * v[j]
     es = spring_stored_energy(sa, hstate, u, ug)
     ec = cl.contact_stored_energy(cp, cs)
-    efs = 0.0                                        # stick-spring part of ec
+    efs = 0.0  # stick-spring part of ec
     for c in range(4):
         if cl.has_stick_spring(cp[c, cl.P_FMODE]) and cs[c, cl.S_CFT] != 0.0:
             efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
@@ -193,8 +224,9 @@ def _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact):
 
 
 @kernel
-def _set_stats(stats, status, rows, failed, steps, total_it, events, reused, maxit_seen,
-               rescued, dt):
+def _set_stats(
+    stats, status, rows, failed, steps, total_it, events, reused, maxit_seen, rescued, dt
+):
     """Write the loop's statistics (time reached = steps · dt [s])."""
     stats.value[bd.VAL_TIME] = steps * dt
     cnt = stats.count
@@ -251,24 +283,42 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     hstate, cs, cw = wk.hstate, wk.cstate, wk.cw
     dof, mat, spr, sup = wk.dof, wk.mat, wk.spring, wk.support
     mass = sa.mass
-    u, v, a, un, vn, an, us, vs, as_, du, R, f = (dof.u, dof.v, dof.a, dof.un, dof.vn, dof.an,
-                                                   dof.us, dof.vs, dof.as_, dof.du, dof.R, dof.f)
+    u, v, a, un, vn, an, us, vs, as_, du, R, f = (
+        dof.u,
+        dof.v,
+        dof.a,
+        dof.un,
+        dof.vn,
+        dof.an,
+        dof.us,
+        dof.vs,
+        dof.as_,
+        dof.du,
+        dof.R,
+        dof.f,
+    )
     K, Keff, LU, H, Kel, LUel = mat.K, mat.Keff, mat.LU, mat.H, mat.Kel, mat.LUel
     piv, pivel = mat.piv, mat.pivel
     fs, kt, kt_fact, d_prev, dd_prev, fs_prev, d_new, dd_new = (
-        spr.fs, spr.kt, spr.kt_fact, spr.d_prev, spr.dd_prev, spr.fs_prev, spr.d_new,
-        spr.dd_new)
+        spr.fs,
+        spr.kt,
+        spr.kt_fact,
+        spr.d_prev,
+        spr.dd_prev,
+        spr.fs_prev,
+        spr.d_new,
+        spr.dd_new,
+    )
     g, gd, lam, lt, evaluated = cw.g, cw.gd, cw.lam, cw.lt, cw.evaluated
     lam_prev, lt_prev, g_prev = wk.lam_prev, wk.lt_prev, wk.g_prev
     WT = cw.WT
     # supports: at the trial, at the last (sub)step, at t_n and t_{n+1} (start and end of step)
-    ug, vg, ugo, ug0, vg0, ug1, vg1 = (sup.ug, sup.vg, sup.ugo, sup.ug0, sup.vg0, sup.ug1,
-                                       sup.vg1)
+    ug, vg, ugo, ug0, vg0, ug1, vg1 = (sup.ug, sup.vg, sup.ugo, sup.ug0, sup.vg0, sup.ug1, sup.vg1)
     W, energy = wk.W, wk.energy
     # kt_fact: spring tangents of the factors held in LU; Kel, LUel, pivel: the elastic
     # effective tangent of the main step and its factors
-    lu_springs_only = False         # LU holds a factorisation without contact terms
-    lu_h = 0.0                      # step of the factors held in LU
+    lu_springs_only = False  # LU holds a factorisation without contact terms
+    lu_h = 0.0  # step of the factors held in LU
     c2 = GAMMA / (BETA * dt)
     c3 = 1.0 / (BETA * dt * dt)
     spring_tangent(sa, sa.k0, K)
@@ -325,8 +375,19 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     status = RUN_OK
     for n in range(nsteps):
         if halt[0] != 0:
-            _set_stats(stats, RUN_INTERRUPTED, row, n + 1, n, total_it, events, reused,
-                       maxit_seen, rescued, dt)
+            _set_stats(
+                stats,
+                RUN_INTERRUPTED,
+                row,
+                n + 1,
+                n,
+                total_it,
+                events,
+                reused,
+                maxit_seen,
+                rescued,
+                dt,
+            )
             return
         for j in range(7):
             us[j] = u[j]
@@ -364,8 +425,9 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 for j in range(7):
                     v[j] = a1p * vn[j] + a2p * an[j]
                     a[j] = a4p * an[j] + a3p * vn[j]
-                nonel, anyev = _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup,
-                                               skip_contact)
+                nonel, anyev = _form_unbalance(
+                    sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact
+                )
                 it = 0
                 converged = False
                 while True:
@@ -414,8 +476,9 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                         a[j] += c3 * du[j]
                         nrm += du[j] * du[j]
                     nrm = np.sqrt(nrm)
-                    nonel, anyev = _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup,
-                                               skip_contact)
+                    nonel, anyev = _form_unbalance(
+                        sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact
+                    )
                     it += 1
                     if not np.isfinite(nrm):
                         status = RUN_NONFINITE
@@ -488,8 +551,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 if nsub > 1:
                     rescued += 1
                 break
-            if (nsub > 1 or substeps <= 1 or status == RUN_NONFINITE
-                    or status == RUN_INTERRUPTED):
+            if nsub > 1 or substeps <= 1 or status in (RUN_NONFINITE, RUN_INTERRUPTED):
                 break
             # --- revert to the start of the step and sub-step it
             spring_revert(sa, hstate)
@@ -503,8 +565,9 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 vg[k] = vg0[k]
             nsub = substeps
         if status != RUN_OK:
-            _set_stats(stats, status, row, n + 1, n, total_it, events, reused, maxit_seen,
-                       rescued, dt)
+            _set_stats(
+                stats, status, row, n + 1, n, total_it, events, reused, maxit_seen, rescued, dt
+            )
             return
         # --- output
         if (n + 1) % stride == 0:
@@ -512,5 +575,4 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
             _store(output, row, (n + 1) * dt, u, v, cw, cs, fs, nbs, energy)
             row += 1
-    _set_stats(stats, RUN_OK, row, 0, nsteps, total_it, events, reused, maxit_seen, rescued,
-               dt)
+    _set_stats(stats, RUN_OK, row, 0, nsteps, total_it, events, reused, maxit_seen, rescued, dt)

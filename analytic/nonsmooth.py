@@ -61,29 +61,43 @@ import time as _time
 from typing import ClassVar
 
 import numpy as np
+
+from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import NonsmoothSettings, Scene
 
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
-
 __all__ = ["ENERGY_COLUMNS", "NonsmoothEngine", "output_columns", "run_nonsmooth"]
 
 #: Energy columns of the nonsmooth result, in the order the kernel writes them [kJ].
-ENERGY_COLUMNS = ("energy_input", "energy_kinetic", "energy_strain", "energy_viscous",
-                  "energy_hysteretic", "energy_impact", "energy_friction", "energy_numerical",
-                  "energy_error")
+ENERGY_COLUMNS = (
+    "energy_input",
+    "energy_kinetic",
+    "energy_strain",
+    "energy_viscous",
+    "energy_hysteretic",
+    "energy_impact",
+    "energy_friction",
+    "energy_numerical",
+    "energy_error",
+)
 #: Per-corner extras of the nonsmooth result, in kernel order.
-IMPULSE_COLUMNS = tuple(f"pn_c{c}" for c in range(1, 5)) + tuple(f"pt_c{c}" for c in range(1, 5)) \
+IMPULSE_COLUMNS = (
+    tuple(f"pn_c{c}" for c in range(1, 5))
+    + tuple(f"pt_c{c}" for c in range(1, 5))
     + tuple(f"state_c{c}" for c in range(1, 5))
+)
 
 
 def output_columns(scene: Scene) -> list[str]:
     """Column names of the nonsmooth result (standard, impulses, contact states, energies)."""
     from deckpound.models.plan import standard_columns
 
-    return (standard_columns([b.name for b in scene.bents]) + list(IMPULSE_COLUMNS)
-            + list(ENERGY_COLUMNS))
+    return (
+        standard_columns([b.name for b in scene.bents])
+        + list(IMPULSE_COLUMNS)
+        + list(ENERGY_COLUMNS)
+    )
 
 
 def separating_restitution(e: float, theta: float, impact_law: str = "energy-safe") -> float:
@@ -119,16 +133,23 @@ class NonsmoothEngine(Engine):
     settings_field = "nonsmooth"
     step_field = "h"
     compliant_contact = False
-    style: ClassVar[dict] = {"color": "#c0392b", "linestyle": ":", "linewidth": 1.6,
-                             "label": "nonsmooth"}
+    style: ClassVar[dict] = {
+        "color": "#c0392b",
+        "linestyle": ":",
+        "linewidth": 1.6,
+        "label": "nonsmooth",
+    }
 
     def refuse(self, scene: Scene, settings) -> None:
         """Damping on the committed or current tangent is not implemented in the Moreau–Jean
         smooth-force step (its θ-linearisation uses the constant damping matrix)."""
         from deckpound.models.damping import refuse_tangent_damping
 
-        refuse_tangent_damping(scene, "nonsmooth", "its θ-method step linearises the smooth "
-                               "forces with the constant damping matrix")
+        refuse_tangent_damping(
+            scene,
+            "nonsmooth",
+            "its θ-method step linearises the smooth forces with the constant damping matrix",
+        )
 
     def reads(self, scene: Scene, settings) -> set[str]:
         """Restitution, geometry and the friction coefficient; the contact law and its
@@ -154,12 +175,24 @@ class NonsmoothEngine(Engine):
         ct = scene.contact
         how = friction_model(ct.friction_mode).nonsmooth
         if ct.has_friction and how:
-            return [(f"contact.friction_mode = {ct.friction_mode!r} means {how} "
-                     f"(mu = {ct.friction:g}): {RIGID_CONTACT}")]
+            return [
+                (
+                    f"contact.friction_mode = {ct.friction_mode!r} means {how} "
+                    f"(mu = {ct.friction:g}): {RIGID_CONTACT}"
+                )
+            ]
         return []
 
-    def _run(self, plan: Plan, scene: Scene, settings, motion, *,
-             initial_state=None, on_interrupt: str = "raise") -> RunOutput:
+    def _run(
+        self,
+        plan: Plan,
+        scene: Scene,
+        settings,
+        motion,
+        *,
+        initial_state=None,
+        on_interrupt: str = "raise",
+    ) -> RunOutput:
         """Extra keywords (not scene options): ``initial_state = (u0, v0)`` starts from the
         given DOF displacements and velocities (default: the scene's ``initial`` table);
         ``on_interrupt``: Ctrl-C during the step loop stops it within one Newton iteration
@@ -179,10 +212,13 @@ class NonsmoothEngine(Engine):
         from deckpound.analytic.system import initial_dofs, pack_system
         from deckpound.models.damping import damping_model
 
-        text_of = {bd.RUN_NOT_CONVERGED: "Newton iteration of the Takeda springs did not converge",
-                   bd.RUN_CONTACT_UNSOLVED: "contact problem not solved (no verified solution)",
-                   bd.RUN_NONFINITE: "non-finite state", bd.RUN_SINGULAR: "singular iteration matrix",
-                   bd.RUN_INTERRUPTED: "interrupted"}
+        text_of = {
+            bd.RUN_NOT_CONVERGED: "Newton iteration of the Takeda springs did not converge",
+            bd.RUN_CONTACT_UNSOLVED: "contact problem not solved (no verified solution)",
+            bd.RUN_NONFINITE: "non-finite state",
+            bd.RUN_SINGULAR: "singular iteration matrix",
+            bd.RUN_INTERRUPTED: "interrupted",
+        }
         if on_interrupt not in ("raise", "return"):
             raise ValueError(f"on_interrupt must be 'raise' or 'return', got {on_interrupt!r}")
         if initial_state is None:
@@ -198,18 +234,27 @@ class NonsmoothEngine(Engine):
         nsteps = round(duration / h)
         cols = engine_columns(plan) + list(IMPULSE_COLUMNS) + list(ENERGY_COLUMNS)
         bd.check_output_size(nsteps // stride + 1, len(cols))
-        output = bd.Output(np.zeros((nsteps // stride + 1, len(cols))),
-                           np.arange(len(cols), dtype=np.int64), np.zeros(len(cols)))
+        output = bd.Output(
+            np.zeros((nsteps // stride + 1, len(cols))),
+            np.arange(len(cols), dtype=np.int64),
+            np.zeros(len(cols)),
+        )
         u0, v0 = initial_dofs(initial_state)
         work = moreau_jean_workspace(u0, v0, ps.new_state(), ps.n_springs, len(ps.channels))
         opts = MoreauJeanOptions(
-            nsteps=nsteps, h=float(h), theta=float(theta), ecoef=float(ct.restitution),
-            esep=separating_restitution(ct.restitution, theta, ns_set.impact_law), mu=mu,
+            nsteps=nsteps,
+            h=float(h),
+            theta=float(theta),
+            ecoef=float(ct.restitution),
+            esep=separating_restitution(ct.restitution, theta, ns_set.impact_law),
+            mu=mu,
             mode=MODE_ENUM if ns_set.solver == "enumeration" else MODE_AUTO,
-            rtol=float(ns_set.tolerance), ftol=_force_tolerance(ps, ns_set.tolerance),
-            maxit=int(ns_set.max_iterations), stride=int(stride))
-        contact = bd.Contact(pack_corners(plan), pack_contact(scene),
-                             ct.geometry == "nonlinear")
+            rtol=float(ns_set.tolerance),
+            ftol=_force_tolerance(ps, ns_set.tolerance),
+            maxit=int(ns_set.max_iterations),
+            stride=int(stride),
+        )
+        contact = bd.Contact(pack_corners(plan), pack_contact(scene), ct.geometry == "nonlinear")
         stats = bd.new_stats()
         args = (ps.arrays, contact, record, opts, output, work, stats)
         compile_time = ensure_compiled(moreau_jean_run, *args)
@@ -226,7 +271,8 @@ class NonsmoothEngine(Engine):
         ein = float(np.max(np.abs(columns["energy_input"]))) if rows else 0.0
         eerr = float(np.max(np.abs(columns["energy_error"]))) if rows else 0.0
         extra = {
-            "restitution": float(ct.restitution), "friction": mu,
+            "restitution": float(ct.restitution),
+            "friction": mu,
             "contact_steps": st["contact_steps"],
             "max_step_iterations": st["max_step_iterations"],
             "factorisations": st["factorisations"],
@@ -239,26 +285,37 @@ class NonsmoothEngine(Engine):
             "final_v": work.final[1].tolist(),
             "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
             "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
-                           "impact + friction + numerical) [kJ]",
+            "impact + friction + numerical) [kJ]",
         }
         return RunOutput(
-            columns=columns, status=status,
-            message=(f"{nsteps} steps, {st['contact_steps']} with contact, "
-                     f"{st['contact_solves']} contact solves") if ok
+            columns=columns,
+            status=status,
+            message=(
+                f"{nsteps} steps, {st['contact_steps']} with contact, "
+                f"{st['contact_solves']} contact solves"
+            )
+            if ok
             else text_of.get(st["status"], status.text),
             failed_step=None if ok else st["failed_step"],
             failed_time=None if ok else st["failed_step"] * h,
-            steps=st["steps"], newton_iterations=st["newton_iterations"],
-            contact_solves=st["contact_solves"], failed_steps=0 if ok else 1,
-            compile_time=compile_time, loop_time=loop,
+            steps=st["steps"],
+            newton_iterations=st["newton_iterations"],
+            contact_solves=st["contact_solves"],
+            failed_steps=0 if ok else 1,
+            compile_time=compile_time,
+            loop_time=loop,
             max_penetration=st["max_penetration"],
-            max_complementarity_residual=st["max_complementarity"], extra=extra)
+            max_complementarity_residual=st["max_complementarity"],
+            extra=extra,
+        )
 
 
-def run_nonsmooth(scene: Scene, motion: SupportMotion | None = None, *,
-                  raise_on_failure: bool = False, **options):
+def run_nonsmooth(
+    scene: Scene, motion: SupportMotion | None = None, *, raise_on_failure: bool = False, **options
+):
     """Run the nonsmooth engine on ``scene`` (keywords of :meth:`NonsmoothEngine._run`)."""
     from deckpound.engines import get_engine
 
-    return get_engine("nonsmooth").run(scene, None, motion, raise_on_failure=raise_on_failure,
-                                       **options)
+    return get_engine("nonsmooth").run(
+        scene, None, motion, raise_on_failure=raise_on_failure, **options
+    )

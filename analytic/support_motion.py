@@ -21,6 +21,7 @@ O(1); any hint is valid (the search moves both ways).
 from __future__ import annotations
 
 import numpy as np
+
 from deckpound.analytic._jit import kernel
 
 __all__ = ["record_at", "record_at_times", "support_record"]
@@ -42,12 +43,12 @@ def record_at(tb, D, V, t, j, ug, vg):
     """
     n = tb.shape[0]
     nch = D.shape[1]
-    if t >= tb[n - 1]:                       # at or after the last sample: last value held
+    if t >= tb[n - 1]:  # at or after the last sample: last value held
         for k in range(nch):
             ug[k] = D[n - 1, k]
             vg[k] = V[n - 1, k]
         return n - 1
-    if t < tb[0]:                            # before the record: first value held
+    if t < tb[0]:  # before the record: first value held
         for k in range(nch):
             ug[k] = D[0, k]
             vg[k] = V[0, k]

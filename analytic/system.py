@@ -49,6 +49,7 @@ from collections import namedtuple
 from dataclasses import dataclass
 
 import numpy as np
+
 from deckpound.analytic._hysteretic_kernel import (
     C_ROTMAX,
     C_ROTMIN,
@@ -73,10 +74,22 @@ from deckpound.analytic.hysteretic import pack_hysteretic
 from deckpound.models.damping import DampingModel
 from deckpound.models.plan import DOF_COLUMNS, N_CORNERS, VELOCITY_COLUMNS, Plan
 
-__all__ = ["KIND_HYSTERETIC", "KIND_LINEAR", "N_DOF", "PackedSystem", "SystemArrays", "pack_system",
-           "spring_assemble", "spring_commit", "spring_damping_tangent", "spring_deformations",
-           "spring_revert",
-           "spring_stored_energy", "spring_tangent", "spring_update_materials"]
+__all__ = [
+    "KIND_HYSTERETIC",
+    "KIND_LINEAR",
+    "N_DOF",
+    "PackedSystem",
+    "SystemArrays",
+    "pack_system",
+    "spring_assemble",
+    "spring_commit",
+    "spring_damping_tangent",
+    "spring_deformations",
+    "spring_revert",
+    "spring_stored_energy",
+    "spring_tangent",
+    "spring_update_materials",
+]
 
 N_DOF = 7
 KIND_LINEAR = 0
@@ -97,8 +110,28 @@ KIND_HYSTERETIC = 1
 #: ``system`` bundle of the step loops (:mod:`deckpound.analytic.bundles`).
 SystemArrays = namedtuple(
     "SystemArrays",
-    ["mass", "B", "S", "bidx", "bval", "bnnz", "schan", "sval", "k0", "cdash", "crate", "kind",
-     "hparams", "scal", "C", "nbs", "bk", "bkc", "kc", "cvar"],
+    [
+        "mass",
+        "B",
+        "S",
+        "bidx",
+        "bval",
+        "bnnz",
+        "schan",
+        "sval",
+        "k0",
+        "cdash",
+        "crate",
+        "kind",
+        "hparams",
+        "scal",
+        "C",
+        "nbs",
+        "bk",
+        "bkc",
+        "kc",
+        "cvar",
+    ],
 )
 
 
@@ -161,8 +194,8 @@ def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
         if len(spring.dofs) > 2:
             raise ValueError(f"spring {spring.name}: more than 2 DOFs in its deformation")
         bnnz[i] = len(spring.dofs)
-        bidx[i, :len(spring.dofs)] = spring.dofs
-        bval[i, :len(spring.dofs)] = spring.coefs
+        bidx[i, : len(spring.dofs)] = spring.dofs
+        bval[i, : len(spring.dofs)] = spring.coefs
         if spring.channel >= 0:
             schan[i] = spring.channel
             sval[i] = spring.channel_coef
@@ -189,18 +222,41 @@ def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
     a0, a1 = damping.a0_absolute, damping.a1
     var = 1.0 if damping.tangent_dependent else 0.0
     C = np.diag(a0 * mass) + B.T @ (crate[:, None] * B)
-    arrays = SystemArrays(mass=mass, B=np.ascontiguousarray(B), S=np.ascontiguousarray(S),
-                          bidx=bidx, bval=bval, bnnz=bnnz, schan=schan, sval=sval,
-                          k0=k0.astype(float), cdash=cdash, crate=crate,
-                          kind=kind, hparams=hparams, scal=np.array([a0, a1, var]),
-                          C=np.ascontiguousarray(C), nbs=int(plan.n_bent_springs),
-                          bk=bk, bkc=bkc, kc=k0.astype(float).copy(), cvar=np.zeros(ns))
+    arrays = SystemArrays(
+        mass=mass,
+        B=np.ascontiguousarray(B),
+        S=np.ascontiguousarray(S),
+        bidx=bidx,
+        bval=bval,
+        bnnz=bnnz,
+        schan=schan,
+        sval=sval,
+        k0=k0.astype(float),
+        cdash=cdash,
+        crate=crate,
+        kind=kind,
+        hparams=hparams,
+        scal=np.array([a0, a1, var]),
+        C=np.ascontiguousarray(C),
+        nbs=int(plan.n_bent_springs),
+        bk=bk,
+        bkc=bkc,
+        kc=k0.astype(float).copy(),
+        cvar=np.zeros(ns),
+    )
     K0 = B.T @ (k0[:, None] * B)
-    return PackedSystem(arrays=arrays, C=C, K0=K0, a0=float(a0), a1=float(a1),
-                        omega=(float(damping.omega[0]), float(damping.omega[1])),
-                        spring_names=tuple(sp.name for sp in plan.springs)
-                        + tuple(f"mass damper {k + 1}" for k in range(nd)),
-                        channels=plan.channels, n_bent_springs=plan.n_bent_springs)
+    return PackedSystem(
+        arrays=arrays,
+        C=C,
+        K0=K0,
+        a0=float(a0),
+        a1=float(a1),
+        omega=(float(damping.omega[0]), float(damping.omega[1])),
+        spring_names=tuple(sp.name for sp in plan.springs)
+        + tuple(f"mass damper {k + 1}" for k in range(nd)),
+        channels=plan.channels,
+        n_bent_springs=plan.n_bent_springs,
+    )
 
 
 def _or_zero(beta, plan: Plan) -> np.ndarray:
@@ -379,8 +435,10 @@ def initial_dofs(initial_state) -> tuple[np.ndarray, np.ndarray]:
         for name, dst, src in (("u0", u0, initial_state[0]), ("v0", v0, initial_state[1])):
             arr = np.asarray(src, dtype=float)
             if arr.shape != (7,) or not np.all(np.isfinite(arr)):
-                raise ValueError(f"initial_state {name} must be 7 finite numbers (DOF order "
-                                 f"x1, th1, x2, th2, x_d, y_d, th_d); got {arr.tolist()!r}")
+                raise ValueError(
+                    f"initial_state {name} must be 7 finite numbers (DOF order "
+                    f"x1, th1, x2, th2, x_d, y_d, th_d); got {arr.tolist()!r}"
+                )
             dst[:] = arr
     return u0, v0
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+
 from deckpound.models.plan import column_unit, standard_columns
 from deckpound.models.scene import Scene
 
@@ -43,9 +44,11 @@ def opensees_friction(scene: Scene) -> tuple[Scene, list[str]]:
     ct = scene.contact
     if ct.has_friction and ct.friction_mode == "stick":
         sc = scene.replace(contact=dataclasses.replace(ct, friction_mode="contact2d"))
-        return sc, ["friction_mode = 'stick' (the project's stick law) has no OpenSees "
-                    "counterpart; verifying friction_mode = 'contact2d' (OpenSees's "
-                    "zeroLengthContact2D algorithm, in both engines) instead"]
+        return sc, [
+            "friction_mode = 'stick' (the project's stick law) has no OpenSees "
+            "counterpart; verifying friction_mode = 'contact2d' (OpenSees's "
+            "zeroLengthContact2D algorithm, in both engines) instead"
+        ]
     return scene, []
 
 
@@ -69,13 +72,18 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
     if tolerance is not None:
         os_set = dataclasses.replace(os_set, tolerance=tolerance)
     os_set = dataclasses.replace(os_set, mode="rigid")
-    cp_set = dataclasses.replace(scene.compliance, integrator="newmark", dt=os_set.dt,
-                                 tolerance=os_set.tolerance,
-                                 max_iterations=os_set.max_iterations,
-                                 contact_tangent="opensees")
+    cp_set = dataclasses.replace(
+        scene.compliance,
+        integrator="newmark",
+        dt=os_set.dt,
+        tolerance=os_set.tolerance,
+        max_iterations=os_set.max_iterations,
+        contact_tangent="opensees",
+    )
     sc = scene.replace(opensees=os_set, compliance=cp_set)
     if motion is None:
         from deckpound.models.excitation import support_motion
+
         motion = support_motion(sc)
     # numba compiles (or loads) the clone's kernels on first use: a short run first keeps that
     # one-off cost out of the timed comparison
@@ -86,8 +94,7 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
     dev = column_deviations(ro.columns, rc.columns, cols)
     velocity = {c for c in cols if column_unit(c) in ("m/s", "rad/s")}
     worst = max(((c, d) for c, d in dev.items() if c not in velocity), key=lambda kv: kv[1])
-    worst_velocity = max(((c, d) for c, d in dev.items() if c in velocity),
-                         key=lambda kv: kv[1])
+    worst_velocity = max(((c, d) for c, d in dev.items() if c in velocity), key=lambda kv: kv[1])
     steps = max(int(ro.meta.get("steps", 1)), 1)
     return {
         "notes": notes,
@@ -96,9 +103,13 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
         "worst": worst,
         "worst_velocity": worst_velocity,
         "speed_ratio": ro.meta["wall_time"] / rc.meta["wall_time"],
-        "us_per_step": {"opensees": 1e6 * ro.meta["wall_time"] / steps,
-                        "compliance": rc.meta["us_per_step"]},
-        "iterations": {"opensees": ro.meta.get("newton_iterations"),
-                       "compliance": rc.meta.get("newton_iterations")},
+        "us_per_step": {
+            "opensees": 1e6 * ro.meta["wall_time"] / steps,
+            "compliance": rc.meta["us_per_step"],
+        },
+        "iterations": {
+            "opensees": ro.meta.get("newton_iterations"),
+            "compliance": rc.meta.get("newton_iterations"),
+        },
         "status": {"opensees": ro.meta["status"], "compliance": rc.meta["status"]},
     }

@@ -53,5 +53,6 @@ def die_with_parent(parent_pid: int) -> None:
     _set_pdeathsig()
     if os.getppid() != parent_pid:  # the parent died before the request took effect
         os._exit(1)
-    threading.Thread(target=_watch, args=(parent_pid,), name="deckpound-parent-watch",
-                     daemon=True).start()
+    threading.Thread(
+        target=_watch, args=(parent_pid,), name="deckpound-parent-watch", daemon=True
+    ).start()

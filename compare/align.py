@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
 from deckpound.models.result import Result
 
 FORCE_PREFIXES = ("fn_", "ft_")
@@ -87,8 +88,9 @@ def align_column(name: str, t_src: np.ndarray, x: np.ndarray, t: np.ndarray) -> 
     return peak_preserving(t_src, x, t)
 
 
-def align(results: dict[str, Result], dt: float | None = None,
-          columns: list[str] | None = None) -> dict[str, pd.DataFrame]:
+def align(
+    results: dict[str, Result], dt: float | None = None, columns: list[str] | None = None
+) -> dict[str, pd.DataFrame]:
     """Wide frames (one per engine/label) on the common time base."""
     t = common_time_base(results, dt)
     if columns is None:
@@ -114,8 +116,12 @@ def long_table(aligned: dict[str, pd.DataFrame]) -> pd.DataFrame:
     return pd.concat(parts, ignore_index=True)
 
 
-def write_tables(aligned: dict[str, pd.DataFrame], folder: str | Path,
-                 formats: tuple[str, ...] = ("parquet", "csv"), long: bool = True) -> list[Path]:
+def write_tables(
+    aligned: dict[str, pd.DataFrame],
+    folder: str | Path,
+    formats: tuple[str, ...] = ("parquet", "csv"),
+    long: bool = True,
+) -> list[Path]:
     """``aligned_<engine>`` (wide) and, with ``long``, ``aligned_long`` tables in ``folder``,
     in each of ``formats`` (``parquet``: units in the schema metadata; ``csv``: units in the
     header, ``deck_theta [rad]``; the long table's ``value`` column has the unit of its row's
@@ -136,8 +142,11 @@ def write_tables(aligned: dict[str, pd.DataFrame], folder: str | Path,
         frames = {"aligned_long": table, **frames}
     written = []
     for name, frame in frames.items():
-        units = {c: column_unit(c) for c in frame.columns
-                 if c not in ("engine", "quantity", "unit", "value")}
+        units = {
+            c: column_unit(c)
+            for c in frame.columns
+            if c not in ("engine", "quantity", "unit", "value")
+        }
         for fmt in formats:
             p = out / f"{name}.{fmt}"
             if fmt == "parquet":
@@ -146,4 +155,3 @@ def write_tables(aligned: dict[str, pd.DataFrame], folder: str | Path,
                 write_csv(frame, p, units)
             written.append(p)
     return written
-

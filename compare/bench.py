@@ -40,18 +40,27 @@ class Config:
     label: str
     engine: str
     overrides: tuple[str, ...]
-    family: str          # "compliance" (reference: adaptive) or "nonsmooth"
+    family: str  # "compliance" (reference: adaptive) or "nonsmooth"
 
 
 def scenes(base: Scene, quick: bool) -> dict[str, Scene]:
     """The canonical scenes (shortened in quick mode)."""
     d = 5.0 if quick else None
     out = {
-        "benchmark": modified(base, *( [f"excitation.duration={d!r}"] if d else [])),
-        "single-impact": modified(base, "excitation.kind=pulse", "excitation.pga=0.4",
-                                  "excitation.duration=2.0", "excitation.pulse_period=0.5"),
-        "sticking": modified(base, "contact.friction=0.4", "contact.friction_mode=stick",
-                             f"excitation.duration={3.0 if quick else 10.0!r}"),
+        "benchmark": modified(base, *([f"excitation.duration={d!r}"] if d else [])),
+        "single-impact": modified(
+            base,
+            "excitation.kind=pulse",
+            "excitation.pga=0.4",
+            "excitation.duration=2.0",
+            "excitation.pulse_period=0.5",
+        ),
+        "sticking": modified(
+            base,
+            "contact.friction=0.4",
+            "contact.friction_mode=stick",
+            f"excitation.duration={3.0 if quick else 10.0!r}",
+        ),
     }
     if not quick:
         out["long"] = modified(base, "excitation.duration=60.0")
@@ -60,17 +69,36 @@ def scenes(base: Scene, quick: bool) -> dict[str, Scene]:
 
 def configs(quick: bool) -> list[Config]:
     steps = [1e-3, 2.5e-4] if quick else [2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4]
-    out = [Config(f"opensees dt={h:g}", "opensees", (f"opensees.dt={h!r}",), "compliance")
-           for h in steps]
-    out += [Config(f"compliance newmark dt={h:g}", "compliance",
-                   ("compliance.integrator=newmark", f"compliance.dt={h!r}"), "compliance")
-            for h in steps + ([] if quick else [5e-5])]
-    out += [Config(f"compliance adaptive rtol={r:g}", "compliance",
-                   ("compliance.integrator=adaptive", f"compliance.rtol={r!r}",
-                    f"compliance.atol={r * 1e-3!r}"), "compliance")
-            for r in ([1e-4] if quick else [1e-3, 1e-4, 1e-5])]
-    out += [Config(f"nonsmooth h={h:g}", "nonsmooth", (f"nonsmooth.h={h!r}",), "nonsmooth")
-            for h in ([2e-3, 5e-4] if quick else [4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4])]
+    out = [
+        Config(f"opensees dt={h:g}", "opensees", (f"opensees.dt={h!r}",), "compliance")
+        for h in steps
+    ]
+    out += [
+        Config(
+            f"compliance newmark dt={h:g}",
+            "compliance",
+            ("compliance.integrator=newmark", f"compliance.dt={h!r}"),
+            "compliance",
+        )
+        for h in steps + ([] if quick else [5e-5])
+    ]
+    out += [
+        Config(
+            f"compliance adaptive rtol={r:g}",
+            "compliance",
+            (
+                "compliance.integrator=adaptive",
+                f"compliance.rtol={r!r}",
+                f"compliance.atol={r * 1e-3!r}",
+            ),
+            "compliance",
+        )
+        for r in ([1e-4] if quick else [1e-3, 1e-4, 1e-5])
+    ]
+    out += [
+        Config(f"nonsmooth h={h:g}", "nonsmooth", (f"nonsmooth.h={h!r}",), "nonsmooth")
+        for h in ([2e-3, 5e-4] if quick else [4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4])
+    ]
     return out
 
 
@@ -80,8 +108,12 @@ def configs(quick: bool) -> list[Config]:
 #: converged answer is the dense-commit limit); on the benchmark it agrees with Newmark at
 #: dt = 2e-5 to 1.5e-7 of the peak rotation.
 REFERENCES = {
-    "compliance": ("compliance.integrator=adaptive", "compliance.rtol=1e-08",
-                   "compliance.atol=1e-11", "compliance.commit_step=1e-05"),
+    "compliance": (
+        "compliance.integrator=adaptive",
+        "compliance.rtol=1e-08",
+        "compliance.atol=1e-11",
+        "compliance.commit_step=1e-05",
+    ),
     "nonsmooth": ("nonsmooth.h=2e-05",),
 }
 
@@ -136,18 +168,25 @@ def speed_ratio_at_equal_error(table: pd.DataFrame) -> tuple[pd.Series, pd.Serie
     kinds = pd.Series("", index=table.index, dtype=object)
     if "err_primary" not in table:
         return ratios, kinds
-    for scene_name, g in table.groupby("scene"):
+    for _scene_name, g in table.groupby("scene"):
         os_ = g[(g["engine"] == "opensees") & (g["family"] == "compliance")]
-        os_ = os_[np.isfinite(os_["err_primary"].astype(float)) & (os_["err_primary"] > 0)
-                  & np.isfinite(os_["wall"].astype(float))]
+        os_ = os_[
+            np.isfinite(os_["err_primary"].astype(float))
+            & (os_["err_primary"] > 0)
+            & np.isfinite(os_["wall"].astype(float))
+        ]
         if len(os_) < 1:
             continue
         os_ = os_.sort_values("err_primary")
         le, lt = np.log(os_["err_primary"].to_numpy(float)), np.log(os_["wall"].to_numpy(float))
         for i, row in g.iterrows():
             e = row["err_primary"]
-            if row["family"] != "compliance" or not np.isfinite(e) or e <= 0 \
-                    or not np.isfinite(row["wall"]):
+            if (
+                row["family"] != "compliance"
+                or not np.isfinite(e)
+                or e <= 0
+                or not np.isfinite(row["wall"])
+            ):
                 continue
             x = np.log(e)
             if len(le) >= 2 and le[0] <= x <= le[-1]:
@@ -165,8 +204,15 @@ def speed_ratio_at_equal_error(table: pd.DataFrame) -> tuple[pd.Series, pd.Serie
     return ratios, kinds
 
 
-def run_bench(base: Scene, out: str | Path, *, quick: bool = False, repeats: int | None = None,
-              timeout: float = 900.0, progress: bool = True) -> pd.DataFrame:
+def run_bench(
+    base: Scene,
+    out: str | Path,
+    *,
+    quick: bool = False,
+    repeats: int | None = None,
+    timeout: float = 900.0,
+    progress: bool = True,
+) -> pd.DataFrame:
     """Run the work–precision benchmark; write bench.csv and figures into ``out``."""
     from deckpound.warmup import ITEMS, warm
 
@@ -185,27 +231,40 @@ def run_bench(base: Scene, out: str | Path, *, quick: bool = False, repeats: int
     for name, scene in sc.items():
         refs = {}
         for fam, ov in REFERENCES.items():
-            outcome = run_guarded("compliance" if fam == "compliance" else "nonsmooth",
-                                  modified(scene, *ov), timeout)
+            outcome = run_guarded(
+                "compliance" if fam == "compliance" else "nonsmooth", modified(scene, *ov), timeout
+            )
             refs[fam] = outcome.result if outcome.result is not None and outcome.result.ok else None
             bar.advance()
         for cfg in cfgs:
             ov = cfg.overrides
-            if cfg.engine == "opensees" and scene.contact.has_friction \
-                    and scene.contact.friction_mode == "stick":
+            if (
+                cfg.engine == "opensees"
+                and scene.contact.has_friction
+                and scene.contact.friction_mode == "stick"
+            ):
                 # OpenSees has no element with the project's stick law (issue 12): its
                 # sticking friction is zeroLengthContact2D, as it always was in this table, so
                 # its "error" against the stick-law reference is a model difference
                 ov = ov + ("contact.friction_mode=contact2d",)
             outcome, wall = timed(cfg.engine, modified(scene, *ov), repeats, timeout)
-            row = dict(scene=name, config=cfg.label, engine=cfg.engine, family=cfg.family,
-                       status=outcome.status, wall=wall)
+            row = dict(
+                scene=name,
+                config=cfg.label,
+                engine=cfg.engine,
+                family=cfg.family,
+                status=outcome.status,
+                wall=wall,
+            )
             r = outcome.result
             if r is not None:
                 steps = r.meta.get("steps", np.nan)
-                row.update(steps=steps, us_per_step=1e6 * wall / steps if steps else np.nan,
-                           iterations=r.meta.get("iterations", np.nan),
-                           compile_time=r.meta.get("compile_time", np.nan))
+                row.update(
+                    steps=steps,
+                    us_per_step=1e6 * wall / steps if steps else np.nan,
+                    iterations=r.meta.get("iterations", np.nan),
+                    compile_time=r.meta.get("compile_time", np.nan),
+                )
                 ref = refs.get(cfg.family)
                 if ref is not None and r.ok:
                     row.update(errors(r, ref, PRIMARY.get(name, "deck_theta")))
@@ -236,13 +295,16 @@ def figures(table: pd.DataFrame, scene: Scene, out: Path) -> list[Path]:
         for k, (label, sub) in enumerate(groups):
             if "err_primary" not in sub:
                 continue
-            sub = sub[np.isfinite(sub["err_primary"].astype(float))
-                      & np.isfinite(sub["wall"].astype(float))]
+            sub = sub[
+                np.isfinite(sub["err_primary"].astype(float))
+                & np.isfinite(sub["wall"].astype(float))
+            ]
             if not len(sub):
                 continue
             st = dict(CYCLE[k % len(CYCLE)])
-            ax.loglog(np.maximum(sub["err_primary"].astype(float), 1e-16), sub["wall"],
-                      label=label, **st)
+            ax.loglog(
+                np.maximum(sub["err_primary"].astype(float), 1e-16), sub["wall"], label=label, **st
+            )
         ax.axvline(0.01, color="#999999", linestyle=":", linewidth=0.8)
         primary = PRIMARY.get(name, "deck_theta").replace("deck_", "deck ")
         ax.set_xlabel(f"relative error of peak {primary} [-]")

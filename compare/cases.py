@@ -27,17 +27,23 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from deckpound import __version__
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result, physics_hash, settings_hash
 from deckpound.models.scene import Scene
 
-from deckpound import __version__
-
 from .pool import Interrupted, map_local
 from .result_cache import ResultCache
 
-__all__ = ["Case", "Progress", "ResultCache", "case_key", "check_scheduler_address",
-           "run_case", "run_cases"]
+__all__ = [
+    "Case",
+    "Progress",
+    "ResultCache",
+    "case_key",
+    "check_scheduler_address",
+    "run_case",
+    "run_cases",
+]
 
 #: seconds to wait for a Dask scheduler before giving up (exit status 3 on the CLI)
 CONNECT_TIMEOUT = 20.0
@@ -70,7 +76,7 @@ def record_digests(scene: Scene) -> dict[str, str]:
                     for chunk in iter(lambda: fh.read(1 << 20), b""):
                         h.update(chunk)
             except OSError:
-                continue   # the run refuses the scene with its own message
+                continue  # the run refuses the scene with its own message
             out[name] = h.hexdigest()
     return out
 
@@ -81,10 +87,17 @@ def case_key(engine: str, scene: Scene) -> str:
     from deckpound.engines import get_engine
 
     settings = get_engine(engine).settings_of(scene)
-    text = json.dumps({"engine": engine, "physics": physics_hash(scene),
-                       "records": record_digests(scene),
-                       "settings": settings_hash(settings), "version": __version__},
-                      sort_keys=True, separators=(",", ":"))
+    text = json.dumps(
+        {
+            "engine": engine,
+            "physics": physics_hash(scene),
+            "records": record_digests(scene),
+            "settings": settings_hash(settings),
+            "version": __version__,
+        },
+        sort_keys=True,
+        separators=(",", ":"),
+    )
     return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -118,14 +131,23 @@ def surface_warnings(results: Iterable[Result], where: str = "") -> None:
                 warnings.warn(f"{where}{msg}" if where else msg, stacklevel=2)
 
 
-def interrupted(err: KeyboardInterrupt, title: str, done: int, total: int, folder,
-                what: str = "cases", item: str = "case") -> KeyboardInterrupt:
+def interrupted(
+    err: KeyboardInterrupt,
+    title: str,
+    done: int,
+    total: int,
+    folder,
+    what: str = "cases",
+    item: str = "case",
+) -> KeyboardInterrupt:
     """The interrupt to raise after a sweep was stopped: an :class:`Interrupted` saying what is
     cached and how to resume (an inner sweep's message is kept as it is)."""
     if isinstance(err, Interrupted) or folder is None:
         return err
-    return Interrupted(f"{title}: {done} of {total} {what} finished; every finished {item} is "
-                       f"cached in {folder}: run the same command again to resume")
+    return Interrupted(
+        f"{title}: {done} of {total} {what} finished; every finished {item} is "
+        f"cached in {folder}: run the same command again to resume"
+    )
 
 
 class Progress:
@@ -150,8 +172,10 @@ class Progress:
         width = 30
         fill = int(width * self.done / max(self.total, 1))
         elapsed = time.perf_counter() - self.t0
-        sys.stderr.write(f"\r{self.title} [{'#' * fill}{'.' * (width - fill)}] "
-                         f"{self.done}/{self.total} {elapsed:6.1f} s")
+        sys.stderr.write(
+            f"\r{self.title} [{'#' * fill}{'.' * (width - fill)}] "
+            f"{self.done}/{self.total} {elapsed:6.1f} s"
+        )
         if self.done >= self.total:
             sys.stderr.write("\n")
         sys.stderr.flush()
@@ -163,9 +187,15 @@ class Progress:
             sys.stderr.flush()
 
 
-def run_cases(cases: Iterable[Case], *, cache: ResultCache | None = None,
-              workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, title: str = "cases") -> dict[str, Result]:
+def run_cases(
+    cases: Iterable[Case],
+    *,
+    cache: ResultCache | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    title: str = "cases",
+) -> dict[str, Result]:
     """Run cases (cached ones are loaded), in parallel; results keyed by case label."""
     cases = list(cases)
     results: dict[str, Result] = {}
@@ -189,14 +219,21 @@ def run_cases(cases: Iterable[Case], *, cache: ResultCache | None = None,
         _map_parallel(todo, lambda c: (c.engine, c.scene), run_case, finish, workers, scheduler)
     except KeyboardInterrupt as err:
         bar.close()
-        raise interrupted(err, title, len(results), len(cases),
-                          cache.folder if cache is not None else None) from None
+        raise interrupted(
+            err, title, len(results), len(cases), cache.folder if cache is not None else None
+        ) from None
     surface_warnings(results.values())
     return {c.label: results[c.label] for c in cases}
 
 
-def _map_parallel(items: list, args_of: Callable, func: Callable, on_done: Callable,
-                  workers: int | None, scheduler: str | None) -> None:
+def _map_parallel(
+    items: list,
+    args_of: Callable,
+    func: Callable,
+    on_done: Callable,
+    workers: int | None,
+    scheduler: str | None,
+) -> None:
     """Apply func(*args_of(item)) to items on Dask, a process pool, or in this process."""
     if not items:
         return
@@ -211,8 +248,10 @@ def _map_parallel(items: list, args_of: Callable, func: Callable, on_done: Calla
     map_local(items, args_of, func, on_done, n)
 
 
-_ADDRESS = re.compile(r"^(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.\-]+)"
-                      r"(?::(\d{1,5}))?/?$")
+_ADDRESS = re.compile(
+    r"^(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.\-]+)"
+    r"(?::(\d{1,5}))?/?$"
+)
 
 
 def check_scheduler_address(address: str) -> str:
@@ -221,23 +260,28 @@ def check_scheduler_address(address: str) -> str:
         return address  # in-process schedulers (tests) have their own address form
     m = _ADDRESS.match(address.strip()) if isinstance(address, str) else None
     if m is None or m.group(3) is None:
-        raise SceneError("--scheduler", f"must be a Dask scheduler address such as "
-                         f"tcp://127.0.0.1:8786 (scheme://host:port), got {address!r}")
+        raise SceneError(
+            "--scheduler",
+            f"must be a Dask scheduler address such as "
+            f"tcp://127.0.0.1:8786 (scheme://host:port), got {address!r}",
+        )
     if m.group(3) is not None and not 0 < int(m.group(3)) < 65536:
         raise SceneError("--scheduler", f"port must be in [1, 65535], got {m.group(3)}")
     return address.strip()
 
 
-def _map_dask(items: list, args_of: Callable, func: Callable, on_done: Callable,
-              scheduler: str) -> None:
+def _map_dask(
+    items: list, args_of: Callable, func: Callable, on_done: Callable, scheduler: str
+) -> None:
     from dask.distributed import Client
     from dask.distributed import as_completed as dask_completed
 
     try:
         client = Client(scheduler, timeout=CONNECT_TIMEOUT)
     except (OSError, TimeoutError) as err:
-        raise ConnectionError(f"cannot reach the Dask scheduler at {scheduler} within "
-                              f"{CONNECT_TIMEOUT:g} s ({err})") from None
+        raise ConnectionError(
+            f"cannot reach the Dask scheduler at {scheduler} within {CONNECT_TIMEOUT:g} s ({err})"
+        ) from None
     with client:
         # every worker loads cached kernels the fast way; a worker keeps them for its lifetime
         client.run(_dask_worker_setup)

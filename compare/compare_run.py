@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from deckpound.engines import DEFAULT_REFERENCE
 from deckpound._io import write_csv
+from deckpound.engines import DEFAULT_REFERENCE
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
@@ -16,13 +16,29 @@ from .align import align, write_tables
 from .cases import Case, ResultCache, run_cases
 from .metrics import metrics_against, summary
 
-QUANTITIES = ["deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel", "gap_c1", "gap_c3"]
+QUANTITIES = [
+    "deck_theta",
+    "deck_y_rel",
+    "deck_x_rel",
+    "seat1_x_rel",
+    "seat2_x_rel",
+    "gap_c1",
+    "gap_c3",
+]
 
 
-def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
-                measured: Result | None = None, workers: int | None = None,
-                scheduler: str | None = None, cache_dir: str | Path | None = None,
-                progress: bool = True, reference: str | None = None) -> str:
+def run_compare(
+    scene: Scene,
+    engines: list[str],
+    out: str | Path,
+    *,
+    measured: Result | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    cache_dir: str | Path | None = None,
+    progress: bool = True,
+    reference: str | None = None,
+) -> str:
     """Run, write results, aligned tables, metrics (vs ``reference`` — default the registry's
     reference engine if it runs, else the first — and vs measured data) and figures into
     ``out``; returns a printable summary."""
@@ -32,21 +48,27 @@ def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
     if ref not in engines:
         engines = [ref] + list(engines)
     cases = [Case(e, e, scene) for e in engines]
-    results = run_cases(cases, cache=cache, workers=workers, scheduler=scheduler,
-                        progress=progress, title="engines")
+    results = run_cases(
+        cases, cache=cache, workers=workers, scheduler=scheduler, progress=progress, title="engines"
+    )
     for r in results.values():
         r.write(out)
     everything = dict(results)
     if measured is not None:
         everything["measured"] = measured
-    aligned = align(everything, columns=[q for q in QUANTITIES
-                                         if all(q in r.columns for r in everything.values())])
+    aligned = align(
+        everything,
+        columns=[q for q in QUANTITIES if all(q in r.columns for r in everything.values())],
+    )
     write_tables(aligned, out)
     parts = [metrics_against(everything, aligned, ref)]
     if measured is not None:
         parts.append(metrics_against(everything, aligned, "measured"))
-    metrics = pd.concat([p for p in parts if len(p)], ignore_index=True) \
-        if any(len(p) for p in parts) else pd.DataFrame()
+    metrics = (
+        pd.concat([p for p in parts if len(p)], ignore_index=True)
+        if any(len(p) for p in parts)
+        else pd.DataFrame()
+    )
     write_csv(metrics, out / "metrics.csv")
     figs = out / "figures"
     figures.histories(everything, scene, figs / "histories.png")
@@ -55,10 +77,12 @@ def run_compare(scene: Scene, engines: list[str], out: str | Path, *,
     lines = []
     for label, r in results.items():
         s = summary(r, ["deck_theta", "deck_y_rel"])
-        lines.append(f"{label:11s} {r.meta.get('status')}: peak θ "
-                     f"{1e3 * s['peak_deck_theta']:.3f} mrad, peak y rel. tables "
-                     f"{1e3 * s['peak_deck_y_rel']:.2f} mm, {s['gap_closures']} gap closures, "
-                     f"run {r.meta.get('wall_time', float('nan')):.2f} s (+ compile "
-                     f"{r.meta.get('compile_time', 0.0):.2f} s)")
+        lines.append(
+            f"{label:11s} {r.meta.get('status')}: peak θ "
+            f"{1e3 * s['peak_deck_theta']:.3f} mrad, peak y rel. tables "
+            f"{1e3 * s['peak_deck_y_rel']:.2f} mm, {s['gap_closures']} gap closures, "
+            f"run {r.meta.get('wall_time', float('nan')):.2f} s (+ compile "
+            f"{r.meta.get('compile_time', 0.0):.2f} s)"
+        )
     lines.append(f"metrics against {ref}; wrote {out}")
     return "\n".join(lines)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 from deckpound.models.scene import DAMPING_MASS, DAMPING_MEMBERS, DAMPING_STIFFNESS, Scene
@@ -28,17 +29,27 @@ __all__ = ["damping_cases", "damping_figure", "damping_headlines", "damping_row"
 
 log = logging.getLogger(__name__)
 
-QUICK = (("bents", "initial", "absolute"), ("bents+seats", "initial", "absolute"),
-         ("none", "initial", "absolute"), ("bents", "committed", "absolute"),
-         ("bents", "current", "absolute"), ("bents", "initial", "relative"))
+QUICK = (
+    ("bents", "initial", "absolute"),
+    ("bents+seats", "initial", "absolute"),
+    ("none", "initial", "absolute"),
+    ("bents", "committed", "absolute"),
+    ("bents", "current", "absolute"),
+    ("bents", "initial", "relative"),
+)
 
 
 def _choices(quick: bool) -> list[tuple[str, str, str]]:
     if quick:
         return list(QUICK)
-    return [(m, s, a) for m in DAMPING_MEMBERS for s in DAMPING_STIFFNESS for a in DAMPING_MASS
-            # the stiffness choice does nothing without stiffness-proportional members
-            if not (m == "none" and s != "initial")]
+    return [
+        (m, s, a)
+        for m in DAMPING_MEMBERS
+        for s in DAMPING_STIFFNESS
+        for a in DAMPING_MASS
+        # the stiffness choice does nothing without stiffness-proportional members
+        if not (m == "none" and s != "initial")
+    ]
 
 
 def _expresses(engine: str, scene: Scene) -> bool:
@@ -62,14 +73,28 @@ def damping_cases(scene: Scene, quick: bool = False) -> list[Case]:
 
     cases = []
     for members, stiffness, mass in _choices(quick):
-        sc = modified(scene, f"damping.members={members}", f"damping.stiffness={stiffness}",
-                      f"damping.mass={mass}")
+        sc = modified(
+            scene,
+            f"damping.members={members}",
+            f"damping.stiffness={stiffness}",
+            f"damping.mass={mass}",
+        )
         label = f"{members}·{stiffness}·{mass}"
         for engine in engine_names():
             if _expresses(engine, sc):
-                cases.append(Case(f"{engine} {label}", engine, sc,
-                                  {"damping": label, "members": members,
-                                   "stiffness": stiffness, "mass": mass}))
+                cases.append(
+                    Case(
+                        f"{engine} {label}",
+                        engine,
+                        sc,
+                        {
+                            "damping": label,
+                            "members": members,
+                            "stiffness": stiffness,
+                            "mass": mass,
+                        },
+                    )
+                )
     return cases
 
 
@@ -80,8 +105,16 @@ def damping_row(case: Case, result: Result) -> dict:
     return case_row(case, result)
 
 
-def damping_figure(study, scene: Scene, cases, results, table: pd.DataFrame, path: str | Path,
-                   formats: tuple[str, ...] = (), subtitle: str = "") -> list[Path]:
+def damping_figure(
+    study,
+    scene: Scene,
+    cases,
+    results,
+    table: pd.DataFrame,
+    path: str | Path,
+    formats: tuple[str, ...] = (),
+    subtitle: str = "",
+) -> list[Path]:
     """Peak deck rotation (top) and peak normal gap force (bottom) per damping case, one
     marker series per engine."""
     from .style import CYCLE, engine_style, new_figure, save
@@ -92,16 +125,24 @@ def damping_figure(study, scene: Scene, cases, results, table: pd.DataFrame, pat
         st = engine_style(engine)
         x = [labels.index(lab) + 0.12 * (k - 1) for lab in g["damping"]]
         for ax, q, scale in ((axes[0, 0], "peak_theta", 1e3), (axes[1, 0], "peak_fn", 1e-3)):
-            ax.plot(x, scale * g[q], linestyle="none", marker=CYCLE[k % len(CYCLE)]["marker"],
-                    color=st.get("color"), label=st.get("label", engine))
+            ax.plot(
+                x,
+                scale * g[q],
+                linestyle="none",
+                marker=CYCLE[k % len(CYCLE)]["marker"],
+                color=st.get("color"),
+                label=st.get("label", engine),
+            )
     axes[0, 0].set_ylabel("peak θ_d [mrad]")
     axes[1, 0].set_ylabel("peak gap force [MN]")
     axes[1, 0].set_xticks(range(len(labels)))
     axes[1, 0].set_xticklabels(labels, rotation=35, ha="right", fontsize=6)
     axes[0, 0].set_xticks(range(len(labels)))
     axes[0, 0].set_xticklabels([])
-    axes[0, 0].set_title((study.title if study is not None else "damping")
-                         + (f" — {subtitle}" if subtitle else ""), fontsize=8)
+    axes[0, 0].set_title(
+        (study.title if study is not None else "damping") + (f" — {subtitle}" if subtitle else ""),
+        fontsize=8,
+    )
     axes[0, 0].legend(fontsize=7)
     return save(fig, path, scene.name, formats)
 
@@ -115,14 +156,20 @@ def damping_headlines(table: pd.DataFrame) -> list[str]:
     for engine, g in ok.groupby("engine", sort=False):
         ref = g.iloc[0]
         parts = []
-        for q, name, unit, scale in (("peak_theta", "peak rotation", "mrad", 1e3),
-                                     ("peak_fn", "peak gap force", "kN", 1.0)):
+        for q, name, unit, scale in (
+            ("peak_theta", "peak rotation", "mrad", 1e3),
+            ("peak_fn", "peak gap force", "kN", 1.0),
+        ):
             ratio = g[q] / ref[q] if ref[q] > 0 else pd.Series(np.nan, index=g.index)
             lo, hi = ratio.idxmin(), ratio.idxmax()
-            parts.append(f"{name} {scale * ref[q]:.4g} {unit} ×{ratio[lo]:.3g} "
-                         f"({g.loc[lo, 'damping']}) to ×{ratio[hi]:.3g} "
-                         f"({g.loc[hi, 'damping']})")
-        parts.append(f"gap closures {int(ref['gap_closures'])} "
-                     f"({int(g['gap_closures'].min())}–{int(g['gap_closures'].max())})")
+            parts.append(
+                f"{name} {scale * ref[q]:.4g} {unit} ×{ratio[lo]:.3g} "
+                f"({g.loc[lo, 'damping']}) to ×{ratio[hi]:.3g} "
+                f"({g.loc[hi, 'damping']})"
+            )
+        parts.append(
+            f"gap closures {int(ref['gap_closures'])} "
+            f"({int(g['gap_closures'].min())}–{int(g['gap_closures'].max())})"
+        )
         out.append(f"{engine}, from {ref['damping']}: " + "; ".join(parts) + ".")
     return out

@@ -12,11 +12,11 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from deckpound.engines import engine_names
 from deckpound.models.plan import plan_of
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
-
-from deckpound.engines import engine_names
 
 from .style import CYCLE, engine_style, new_figure, save
 
@@ -42,9 +42,14 @@ def _style_for(label: str, k: int) -> dict:
     return st
 
 
-def histories(results: dict[str, Result], scene: Scene, path: str | Path,
-              quantities: tuple[str, ...] = ("deck_theta", "deck_y_rel"), title: str = "",
-              formats: tuple[str, ...] = ()) -> list[Path]:
+def histories(
+    results: dict[str, Result],
+    scene: Scene,
+    path: str | Path,
+    quantities: tuple[str, ...] = ("deck_theta", "deck_y_rel"),
+    title: str = "",
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
     """Time histories of quantities overlaid per engine/case (paper Figs. 4–6 style)."""
     fig, axes = new_figure(len(quantities), 1, width=7.5, height=2.2, sharex=True)
     for i, q in enumerate(quantities):
@@ -61,8 +66,13 @@ def histories(results: dict[str, Result], scene: Scene, path: str | Path,
     return save(fig, path, scene.name, formats)
 
 
-def contact_forces(results: dict[str, Result], scene: Scene, path: str | Path,
-                   title: str = "", formats: tuple[str, ...] = ()) -> list[Path]:
+def contact_forces(
+    results: dict[str, Result],
+    scene: Scene,
+    path: str | Path,
+    title: str = "",
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
     """Normal contact force per corner (c1, c2 at seat 1; c3, c4 at seat 2)."""
     fig, axes = new_figure(2, 2, width=8.0, height=2.0, sharex=True)
     for c in range(4):
@@ -79,8 +89,13 @@ def contact_forces(results: dict[str, Result], scene: Scene, path: str | Path,
     return save(fig, path, scene.name, formats)
 
 
-def peak_vs_pga(table: pd.DataFrame, scene: Scene, path: str | Path,
-                quantity: str = "peak_theta", formats: tuple[str, ...] = ()) -> list[Path]:
+def peak_vs_pga(
+    table: pd.DataFrame,
+    scene: Scene,
+    path: str | Path,
+    quantity: str = "peak_theta",
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
     """Peak deck rotation vs run PGA over the sequence, one line per engine and friction
     assumption (``case`` column: engine name, then a variant tag; paper Fig. 7)."""
     fig, axes = new_figure(1, 1, width=5.5, height=3.2)
@@ -91,8 +106,7 @@ def peak_vs_pga(table: pd.DataFrame, scene: Scene, path: str | Path,
         base, _, variant = case.partition(" ")
         st = engine_style(base)
         if variant:  # the same engine under another assumption: hollow markers, thinner line
-            st.update(label=f"{st['label']}, {variant}", markerfacecolor="white",
-                      linewidth=0.9)
+            st.update(label=f"{st['label']}, {variant}", markerfacecolor="white", linewidth=0.9)
         ax.plot(g["run"], 1e3 * g[quantity], marker=markers.get(base, "x"), **st)
     runs = table.drop_duplicates("run")
     ax.set_xticks(runs["run"])
@@ -103,8 +117,13 @@ def peak_vs_pga(table: pd.DataFrame, scene: Scene, path: str | Path,
     return save(fig, path, scene.name, formats)
 
 
-def friction_ratio(effect: pd.DataFrame, scene: Scene, path: str | Path, tol: float | None = None,
-                   formats: tuple[str, ...] = ()) -> list[Path]:
+def friction_ratio(
+    effect: pd.DataFrame,
+    scene: Scene,
+    path: str | Path,
+    tol: float | None = None,
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
     """Peak rotation with friction / without, per run and engine (1 = no effect; the band is
     the ±tol within which the report calls the change negligible)."""
     from .report_text import TOL
@@ -127,8 +146,9 @@ def friction_ratio(effect: pd.DataFrame, scene: Scene, path: str | Path, tol: fl
     return save(fig, path, scene.name, formats)
 
 
-def friction_mechanism(pairs: dict, path: str | Path, title: str = "",
-                       formats: tuple[str, ...] = ()) -> list[Path]:
+def friction_mechanism(
+    pairs: dict, path: str | Path, title: str = "", formats: tuple[str, ...] = ()
+) -> list[Path]:
     """Per engine, a sequence run without and with friction (``pairs``: engine →
     (SequenceRun μ = 0, SequenceRun μ > 0), either order): deck rotation of both (top) and
     the moment of the tangential contact forces about the deck centre with friction
@@ -137,14 +157,18 @@ def friction_mechanism(pairs: dict, path: str | Path, title: str = "",
 
     fig, axes = new_figure(2, 1, width=7.5, height=2.3, sharex=True)
     shaded = False
-    for k, (engine, runs) in enumerate(pairs.items()):
+    for _k, (engine, runs) in enumerate(pairs.items()):
         plain, rough = sorted(runs, key=lambda r: r.scene.contact.friction)
         st = engine_style(engine)
         label = st.pop("label", engine)
         for run, dash in ((plain, ":"), (rough, "-")):
             r = run.result
-            axes[0, 0].plot(r.t, 1e3 * r["deck_theta"], **{**st, "linestyle": dash},
-                            label=f"{label}, μ = {run.scene.contact.friction:g}")
+            axes[0, 0].plot(
+                r.t,
+                1e3 * r["deck_theta"],
+                **{**st, "linestyle": dash},
+                label=f"{label}, μ = {run.scene.contact.friction:g}",
+            )
         row = mechanism_row(rough.result, rough.scene)
         if np.isfinite(row["friction_impulse"]):
             mt, _ = contact_moments(rough.result, rough.scene)
@@ -160,15 +184,23 @@ def friction_mechanism(pairs: dict, path: str | Path, title: str = "",
     if axes[1, 0].get_legend_handles_labels()[0]:
         axes[1, 0].legend(fontsize=6)
     if title:
-        axes[0, 0].set_title(f"{title}: shaded, the excursion that reaches the frictional peak",
-                             fontsize=8)
+        axes[0, 0].set_title(
+            f"{title}: shaded, the excursion that reaches the frictional peak", fontsize=8
+        )
     scene = next(iter(pairs.values()))[0].scene
     return save(fig, path, scene.name, formats)
 
 
-def study_figure(study, scene: Scene, cases, results: dict[str, Result], table: pd.DataFrame,
-                 path: str | Path, formats: tuple[str, ...] = (), subtitle: str = ""
-                 ) -> list[Path]:
+def study_figure(
+    study,
+    scene: Scene,
+    cases,
+    results: dict[str, Result],
+    table: pd.DataFrame,
+    path: str | Path,
+    formats: tuple[str, ...] = (),
+    subtitle: str = "",
+) -> list[Path]:
     """Left: the study's headline (peak rotation vs parameter); right: rotation histories."""
     fig, axes = new_figure(1, 2, width=9.0, height=3.2)
     ax = axes[0, 0]
@@ -182,8 +214,12 @@ def study_figure(study, scene: Scene, cases, results: dict[str, Result], table: 
             st = engine_style(eng)
             st["label"] = label
             if len(finite):
-                ax.plot(finite[x].astype(float), 1e3 * finite["peak_theta"],
-                        marker=CYCLE[k % len(CYCLE)]["marker"], **st)
+                ax.plot(
+                    finite[x].astype(float),
+                    1e3 * finite["peak_theta"],
+                    marker=CYCLE[k % len(CYCLE)]["marker"],
+                    **st,
+                )
             inf = g[~np.isfinite(g[x].astype(float))]
             for _, row in inf.iterrows():
                 ax.axhline(1e3 * row["peak_theta"], **{**st, "label": f"{row['label']}"})
@@ -194,8 +230,13 @@ def study_figure(study, scene: Scene, cases, results: dict[str, Result], table: 
             ax.set_xlabel("friction coefficient μ [-]")
     else:
         labels = table["label"].tolist()
-        ax.bar(range(len(labels)), 1e3 * table["peak_theta"], color="#888888", edgecolor="k",
-               hatch="//")
+        ax.bar(
+            range(len(labels)),
+            1e3 * table["peak_theta"],
+            color="#888888",
+            edgecolor="k",
+            hatch="//",
+        )
         ax.set_xticks(range(len(labels)))
         ax.set_xticklabels(labels, rotation=30, ha="right", fontsize=7)
     ax.set_ylabel("peak deck rotation [mrad]")
@@ -215,16 +256,21 @@ def study_figure(study, scene: Scene, cases, results: dict[str, Result], table: 
     return save(fig, path, scene.name, formats)
 
 
-def hysteresis(result: Result, scene: Scene, path: str | Path, title: str = "",
-               formats: tuple[str, ...] = ()) -> list[Path]:
+def hysteresis(
+    result: Result, scene: Scene, path: str | Path, title: str = "", formats: tuple[str, ...] = ()
+) -> list[Path]:
     """Bent force–deformation loops (Takeda springs), x and y, one panel per bent (the result's
     ``<bent>_fx``/``<bent>_dx`` columns: nothing is recomputed from the excitation)."""
     fig, axes = new_figure(2, len(scene.bents), width=3.0 * len(scene.bents), height=2.4)
     for i, b in enumerate(scene.bents):
         for j, axis in enumerate(("x", "y")):
             ax = axes[j, i]
-            ax.plot(1e3 * result[f"{b.name}_d{axis}"], result[f"{b.name}_f{axis}"], color="k",
-                    linewidth=0.7)
+            ax.plot(
+                1e3 * result[f"{b.name}_d{axis}"],
+                result[f"{b.name}_f{axis}"],
+                color="k",
+                linewidth=0.7,
+            )
             ax.set_title(f"{b.name} {axis}")
             ax.set_xlabel("deformation [mm]")
             ax.set_ylabel("force [kN]")
@@ -235,8 +281,15 @@ def hysteresis(result: Result, scene: Scene, path: str | Path, title: str = "",
 
 #: the state columns a plan-view outline reads: displacements relative to the supports, so the
 #: picture shows the gaps and the rotation rather than the ground's translation
-OUTLINE_COLUMNS = ("deck_x_rel", "deck_y_rel", "deck_theta", "seat1_x_rel", "seat1_theta",
-                   "seat2_x_rel", "seat2_theta")
+OUTLINE_COLUMNS = (
+    "deck_x_rel",
+    "deck_y_rel",
+    "deck_theta",
+    "seat1_x_rel",
+    "seat1_theta",
+    "seat2_x_rel",
+    "seat2_theta",
+)
 
 
 def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.ndarray]:
@@ -252,8 +305,12 @@ def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.
     c, s = np.cos(th), np.sin(th)
     k = {cn.name: cn for cn in plan.corners}
     box = np.array([[k[n].x, k[n].y] for n in ("c1", "c3", "c4", "c2", "c1")])
-    deck = np.column_stack([scale * row["deck_x_rel"] + c * box[:, 0] - s * box[:, 1],
-                            scale * row["deck_y_rel"] + s * box[:, 0] + c * box[:, 1]])
+    deck = np.column_stack(
+        [
+            scale * row["deck_x_rel"] + c * box[:, 0] - s * box[:, 1],
+            scale * row["deck_y_rel"] + s * box[:, 0] + c * box[:, 1],
+        ]
+    )
     out = {"deck": deck}
     depth, overhang = 0.6, 0.3
     for j in (1, 2):
@@ -266,9 +323,12 @@ def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.
         ts = scale * row[f"seat{j}_theta"]
         cs, ss = np.cos(ts), np.sin(ts)
         rel = seat - pivot
-        out[f"seat{j}"] = np.column_stack([
-            pivot[0] + scale * row[f"seat{j}_x_rel"] + cs * rel[:, 0] - ss * rel[:, 1],
-            pivot[1] + ss * rel[:, 0] + cs * rel[:, 1]])
+        out[f"seat{j}"] = np.column_stack(
+            [
+                pivot[0] + scale * row[f"seat{j}_x_rel"] + cs * rel[:, 0] - ss * rel[:, 1],
+                pivot[1] + ss * rel[:, 0] + cs * rel[:, 1],
+            ]
+        )
     return out
 
 
@@ -276,23 +336,36 @@ def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.
 PLAN_SCALE = 100.0
 
 
-def plan_snapshot(results: dict[str, Result], scene: Scene, path: str | Path,
-                  scale: float = PLAN_SCALE, formats: tuple[str, ...] = ()) -> list[Path]:
+def plan_snapshot(
+    results: dict[str, Result],
+    scene: Scene,
+    path: str | Path,
+    scale: float = PLAN_SCALE,
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
     """Plan view of deck and seats at each engine's peak rotation (displacements × scale)."""
     fig, axes = new_figure(len(results), 1, width=8.0, height=2.0)
     for i, (label, r) in enumerate(results.items()):
         k = int(np.argmax(np.abs(r["deck_theta"])))
         row = {q: r[q][k] for q in OUTLINE_COLUMNS}
         ax = axes[i, 0]
-        rest = outlines(scene, {q: 0.0 for q in row}, 1.0)
-        for name, poly in rest.items():
+        rest = outlines(scene, dict.fromkeys(row, 0.0), 1.0)
+        for poly in rest.values():
             ax.plot(poly[:, 0], poly[:, 1], color="#bbbbbb", linewidth=0.8, linestyle="--")
         for name, poly in outlines(scene, row, scale).items():
-            ax.fill(poly[:, 0], poly[:, 1], facecolor="#dddddd" if name == "deck" else "#888888",
-                    edgecolor="k", linewidth=1.0, alpha=0.8)
+            ax.fill(
+                poly[:, 0],
+                poly[:, 1],
+                facecolor="#dddddd" if name == "deck" else "#888888",
+                edgecolor="k",
+                linewidth=1.0,
+                alpha=0.8,
+            )
         ax.set_aspect("equal")
-        ax.set_title(f"{label}: t = {r.t[k]:.2f} s, θ_d = {1e3 * row['deck_theta']:.2f} mrad "
-                     f"(displacements relative to the supports × {scale:g})")
+        ax.set_title(
+            f"{label}: t = {r.t[k]:.2f} s, θ_d = {1e3 * row['deck_theta']:.2f} mrad "
+            f"(displacements relative to the supports × {scale:g})"
+        )
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
     return save(fig, path, scene.name, formats)

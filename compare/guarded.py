@@ -20,7 +20,7 @@ from deckpound.models.scene import Scene
 class GuardedOutcome:
     """What happened to one guarded run."""
 
-    status: str                 # "success", "failed" (engine status), "timeout", "crashed"
+    status: str  # "success", "failed" (engine status), "timeout", "crashed"
     result: Result | None
     message: str
     wall: float

@@ -27,7 +27,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["FRICTION_CASE", "impact_law_table", "format_table"]
+__all__ = ["FRICTION_CASE", "format_table", "impact_law_table"]
 
 #: The frictional case of the measurement: μ = 0.2 with sticking (the report's headline case).
 FRICTION_CASE = {"contact.friction": 0.2, "contact.friction_mode": "stick"}
@@ -35,8 +35,9 @@ FRICTION_CASE = {"contact.friction": 0.2, "contact.friction_mode": "stick"}
 
 def _with(scene, changes: dict):
     """``scene`` with ``contact.<name>`` fields replaced (validated again)."""
-    contact = dataclasses.replace(scene.contact, **{k.split(".", 1)[1]: v
-                                                    for k, v in changes.items()})
+    contact = dataclasses.replace(
+        scene.contact, **{k.split(".", 1)[1]: v for k, v in changes.items()}
+    )
     return scene.replace(contact=contact)
 
 
@@ -54,9 +55,10 @@ def impact_law_table(scene) -> list[dict]:
     from deckpound.engines import run_engine
 
     rows = []
-    for label, changes in (("none", {"contact.friction": 0.0,
-                                      "contact.friction_mode": "none"}),
-                           ("mu=0.2 stick", FRICTION_CASE)):
+    for label, changes in (
+        ("none", {"contact.friction": 0.0, "contact.friction_mode": "none"}),
+        ("mu=0.2 stick", FRICTION_CASE),
+    ):
         sc = _with(scene, changes)
         ref = run_engine("compliance", sc)
         th_ref = np.asarray(ref["deck_theta"])
@@ -67,17 +69,22 @@ def impact_law_table(scene) -> list[dict]:
             th = np.asarray(r["deck_theta"])
             n = min(len(th), len(th_ref))
             peak = float(np.max(np.abs(th)))
-            rows.append({
-                "friction": label, "impact_law": law, "peak_theta": peak,
-                "peak_ratio": peak / peak_ref if peak_ref > 0 else float("nan"),
-                "nrmse_theta": float(np.sqrt(np.mean((th[:n] - th_ref[:n]) ** 2)) / peak_ref)
-                if peak_ref > 0 else float("nan"),
-                "max_penetration": float(r.meta["max_penetration"]),
-                "max_penetration_rows": float(r.meta["max_penetration_rows"]),
-                "energy_closure": float(r.meta["energy_closure"]),
-                "impact_gain": _impact_gain(np.asarray(r["energy_impact"])),
-                "status": r.meta["status"],
-            })
+            rows.append(
+                {
+                    "friction": label,
+                    "impact_law": law,
+                    "peak_theta": peak,
+                    "peak_ratio": peak / peak_ref if peak_ref > 0 else float("nan"),
+                    "nrmse_theta": float(np.sqrt(np.mean((th[:n] - th_ref[:n]) ** 2)) / peak_ref)
+                    if peak_ref > 0
+                    else float("nan"),
+                    "max_penetration": float(r.meta["max_penetration"]),
+                    "max_penetration_rows": float(r.meta["max_penetration_rows"]),
+                    "energy_closure": float(r.meta["energy_closure"]),
+                    "impact_gain": _impact_gain(np.asarray(r["energy_impact"])),
+                    "status": r.meta["status"],
+                }
+            )
     return rows
 
 
@@ -88,14 +95,17 @@ def _tiny(x: float, floor: float) -> str:
 
 def format_table(rows: list[dict]) -> str:
     """The rows as the Markdown table the README quotes (3 significant digits)."""
-    head = ("| friction | impact law | peak θ [mrad] | ÷ clone peak | NRMSE θ vs clone "
-            "| max penetration, every step [mm] | on output rows [mm] | energy closure "
-            "| impulse energy gain ÷ dissipation |")
+    head = (
+        "| friction | impact law | peak θ [mrad] | ÷ clone peak | NRMSE θ vs clone "
+        "| max penetration, every step [mm] | on output rows [mm] | energy closure "
+        "| impulse energy gain ÷ dissipation |"
+    )
     lines = [head, "|" + "---|" * 9]
     for r in rows:
         lines.append(
             f"| {r['friction']} | {r['impact_law']} | {1e3 * r['peak_theta']:.3g} | "
             f"{r['peak_ratio']:.3g} | {r['nrmse_theta']:.3g} | "
             f"{1e3 * r['max_penetration']:.3g} | {1e3 * r['max_penetration_rows']:.3g} | "
-            f"{_tiny(r['energy_closure'], 1e-13)} | {_tiny(r['impact_gain'], 1e-12)} |")
+            f"{_tiny(r['energy_closure'], 1e-13)} | {_tiny(r['impact_gain'], 1e-12)} |"
+        )
     return "\n".join(lines)

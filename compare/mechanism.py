@@ -31,6 +31,7 @@ Otherwise they are NaN and ``stick_source`` / ``ft_source`` say ``n/a``.
 from __future__ import annotations
 
 import numpy as np
+
 from deckpound.models.plan import plan_of
 from deckpound.models.result import Result, closure_times, in_contact
 from deckpound.models.scene import Scene
@@ -39,12 +40,22 @@ CONE_TOL = 1e-3
 ZERO_FT_SHARE = 0.1
 
 #: units of the columns of :func:`mechanism_row`
-MECHANISM_UNITS = {"peak_theta": "rad", "t_peak": "s", "t_start": "s", "friction_impulse":
-                   "kN*m*s", "normal_impulse": "kN*m*s", "t_start_ref": "s", "t_peak_ref": "s",
-                   "friction_impulse_ref": "kN*m*s", "contact_seat1": "s",
-                   "contact_seat2": "s", "mu": "-", "ft_zero_share": "-",
-                   **{f"first_closure_c{c}": "s" for c in range(1, 5)},
-                   **{f"stick_share_c{c}": "-" for c in range(1, 5)}}
+MECHANISM_UNITS = {
+    "peak_theta": "rad",
+    "t_peak": "s",
+    "t_start": "s",
+    "friction_impulse": "kN*m*s",
+    "normal_impulse": "kN*m*s",
+    "t_start_ref": "s",
+    "t_peak_ref": "s",
+    "friction_impulse_ref": "kN*m*s",
+    "contact_seat1": "s",
+    "contact_seat2": "s",
+    "mu": "-",
+    "ft_zero_share": "-",
+    **{f"first_closure_c{c}": "s" for c in range(1, 5)},
+    **{f"stick_share_c{c}": "-" for c in range(1, 5)},
+}
 
 
 def _face(corners: list) -> str:
@@ -116,8 +127,9 @@ def _window(t: np.ndarray, x: np.ndarray, t0: float, t1: float) -> float:
     return _integral(t[keep], x[keep])
 
 
-def mechanism_row(result: Result, scene: Scene, mu: float | None = None,
-                  reference: Result | None = None) -> dict:
+def mechanism_row(
+    result: Result, scene: Scene, mu: float | None = None, reference: Result | None = None
+) -> dict:
     """The numbers of the module docstring for one result (``mu`` defaults to the scene's;
     ``reference``: the frictionless result of the same case)."""
     mu = scene.contact.friction if mu is None else mu
@@ -128,16 +140,26 @@ def mechanism_row(result: Result, scene: Scene, mu: float | None = None,
     mt, mn = contact_moments(result, scene)
     usable, zero = tangential_output(result, mu)
     nan = float("nan")
-    row.update(peak_theta=abs(float(th[i])), t_peak=float(t[i]), t_start=float(t[i0]),
-               friction_impulse=sign * _integral(t[i0:i + 1], mt[i0:i + 1]) if usable else nan,
-               normal_impulse=sign * _integral(t[i0:i + 1], mn[i0:i + 1]),
-               ft_source="reported" if usable else "n/a", ft_zero_share=zero,
-               t_start_ref=nan, t_peak_ref=nan, friction_impulse_ref=nan)
+    row.update(
+        peak_theta=abs(float(th[i])),
+        t_peak=float(t[i]),
+        t_start=float(t[i0]),
+        friction_impulse=sign * _integral(t[i0 : i + 1], mt[i0 : i + 1]) if usable else nan,
+        normal_impulse=sign * _integral(t[i0 : i + 1], mn[i0 : i + 1]),
+        ft_source="reported" if usable else "n/a",
+        ft_zero_share=zero,
+        t_start_ref=nan,
+        t_peak_ref=nan,
+        friction_impulse_ref=nan,
+    )
     if reference is not None and len(reference.t):
         j0, j, sign0 = peak_excursion(reference.t, reference["deck_theta"])
         t0, t1 = float(reference.t[j0]), float(reference.t[j])
-        row.update(t_start_ref=t0, t_peak_ref=t1,
-                   friction_impulse_ref=sign0 * _window(t, mt, t0, t1) if usable else nan)
+        row.update(
+            t_start_ref=t0,
+            t_peak_ref=t1,
+            friction_impulse_ref=sign0 * _window(t, mt, t0, t1) if usable else nan,
+        )
     closed = {c.name: in_contact(result.columns, c.name) for c in corners}
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
     for seat in (0, 1):

@@ -39,12 +39,19 @@ print(json.dumps({"baseline_mb": base / 1024, "peak_mb": peak / 1024,
 """
 
 
-def peak_rss(engine: str, overrides: list[str] | tuple[str, ...] = (),
-             scene: str = "saiidi-4span", *, warm: bool = True, timeout: float = 3600.0) -> dict:
+def peak_rss(
+    engine: str,
+    overrides: list[str] | tuple[str, ...] = (),
+    scene: str = "saiidi-4span",
+    *,
+    warm: bool = True,
+    timeout: float = 3600.0,
+) -> dict:
     """Peak RSS [MB] of one run in a fresh process (see the module docstring)."""
     arg = json.dumps([engine, scene, list(overrides), warm])
-    proc = subprocess.run([sys.executable, "-c", _CHILD, arg], capture_output=True, text=True,
-                          timeout=timeout)
+    proc = subprocess.run(
+        [sys.executable, "-c", _CHILD, arg], capture_output=True, text=True, timeout=timeout
+    )
     if proc.returncode != 0:
         raise RuntimeError(f"memory child failed ({proc.returncode}): {proc.stderr[-2000:]}")
     return json.loads(proc.stdout.strip().splitlines()[-1])

@@ -47,9 +47,13 @@ def residual(x: np.ndarray, frac: float = 0.02) -> float:
 
 def closure_times_per_corner(result: Result) -> dict[str, list[float]]:
     """Gap closure times per corner (their counts are ``result.meta["gap_closures_per_corner"]``)."""
-    return {f"c{c}": closure_times(result.t, result[f"gap_c{c}"],
-                                   result.columns.get(f"fn_c{c}")).tolist()
-            for c in range(1, 5) if f"gap_c{c}" in result.columns}
+    return {
+        f"c{c}": closure_times(
+            result.t, result[f"gap_c{c}"], result.columns.get(f"fn_c{c}")
+        ).tolist()
+        for c in range(1, 5)
+        if f"gap_c{c}" in result.columns
+    }
 
 
 def summary(result: Result, quantities: list[str]) -> dict[str, float]:
@@ -63,35 +67,55 @@ def summary(result: Result, quantities: list[str]) -> dict[str, float]:
     return out
 
 
-def compare_pair(test: Result, ref: Result, aligned_test: pd.DataFrame,
-                 aligned_ref: pd.DataFrame, quantities: list[str]) -> pd.DataFrame:
+def compare_pair(
+    test: Result,
+    ref: Result,
+    aligned_test: pd.DataFrame,
+    aligned_ref: pd.DataFrame,
+    quantities: list[str],
+) -> pd.DataFrame:
     """One row per quantity: peaks, peak ratio, peak times, NRMSE, correlation, residuals."""
     rows = []
     for q in quantities:
         x, r = aligned_test[q].to_numpy(), aligned_ref[q].to_numpy()
         px, pr = peak(test[q]), peak(ref[q])
-        rows.append({
-            "quantity": q, "peak": px, "peak_ref": pr,
-            "peak_ratio": px / pr if pr > 0 else float("nan"),
-            "t_peak": time_of_peak(test.t, test[q]), "t_peak_ref": time_of_peak(ref.t, ref[q]),
-            "nrmse": nrmse(x, r), "correlation": correlation(x, r),
-            "residual": residual(test[q]), "residual_ref": residual(ref[q]),
-        })
+        rows.append(
+            {
+                "quantity": q,
+                "peak": px,
+                "peak_ref": pr,
+                "peak_ratio": px / pr if pr > 0 else float("nan"),
+                "t_peak": time_of_peak(test.t, test[q]),
+                "t_peak_ref": time_of_peak(ref.t, ref[q]),
+                "nrmse": nrmse(x, r),
+                "correlation": correlation(x, r),
+                "residual": residual(test[q]),
+                "residual_ref": residual(ref[q]),
+            }
+        )
     return pd.DataFrame(rows)
 
 
-def metrics_against(results: dict[str, Result], aligned: dict[str, pd.DataFrame],
-                    reference: str, quantities: list[str] | None = None) -> pd.DataFrame:
+def metrics_against(
+    results: dict[str, Result],
+    aligned: dict[str, pd.DataFrame],
+    reference: str,
+    quantities: list[str] | None = None,
+) -> pd.DataFrame:
     """:func:`compare_pair` of every result against ``reference``, one frame (columns engine,
     reference, quantity, ...); quantities default to the aligned columns."""
     rows = []
     for label in results:
         if label == reference:
             continue
-        qs = quantities if quantities is not None else [
-            q for q in aligned[label].columns if q != "t"]
-        m = compare_pair(results[label], results[reference], aligned[label], aligned[reference],
-                         list(qs))
+        qs = (
+            quantities
+            if quantities is not None
+            else [q for q in aligned[label].columns if q != "t"]
+        )
+        m = compare_pair(
+            results[label], results[reference], aligned[label], aligned[reference], list(qs)
+        )
         m.insert(0, "reference", reference)
         m.insert(0, "engine", label)
         rows.append(m)
@@ -106,7 +130,9 @@ def measured_result(path, t_column: str = "t") -> Result:
     try:
         frame = pd.read_csv(path)
     except Exception as err:
-        raise SceneError("--measured", f"cannot read CSV {str(path)!r}: {str(err).splitlines()[0]}") from None
+        raise SceneError(
+            "--measured", f"cannot read CSV {str(path)!r}: {str(err).splitlines()[0]}"
+        ) from None
     if t_column not in frame:
         raise SceneError("--measured", f"{str(path)!r} has no {t_column!r} column")
     try:
@@ -115,7 +141,9 @@ def measured_result(path, t_column: str = "t") -> Result:
         raise SceneError("--measured", f"{str(path)!r}: non-numeric value ({err})") from None
     for c, v in cols.items():
         if not np.all(np.isfinite(v)):
-            raise SceneError("--measured", f"{str(path)!r}: column {c!r} has missing or non-finite values")
+            raise SceneError(
+                "--measured", f"{str(path)!r}: column {c!r} has missing or non-finite values"
+            )
     check_time_base(cols[t_column], "--measured")
     cols["t"] = cols.pop(t_column)
     return Result(engine="measured", columns=cols, meta={"source": str(path)})

@@ -49,8 +49,9 @@ def write_text(path: str | Path, text: str) -> Path:
 
 def unit_header(frame: pd.DataFrame, units: dict[str, str]) -> pd.DataFrame:
     """The frame with ``name [unit]`` headers for the columns that have a unit."""
-    return frame.rename(columns={c: f"{c} [{units[c]}]" for c in frame.columns
-                                 if units.get(c) not in (None, "")})
+    return frame.rename(
+        columns={c: f"{c} [{units[c]}]" for c in frame.columns if units.get(c) not in (None, "")}
+    )
 
 
 def write_csv(frame: pd.DataFrame, path: str | Path, units: dict[str, str]) -> Path:
@@ -60,8 +61,12 @@ def write_csv(frame: pd.DataFrame, path: str | Path, units: dict[str, str]) -> P
     return Path(path)
 
 
-def write_parquet(frame: pd.DataFrame, path: str | Path, units: dict[str, str],
-                  descriptions: dict[str, str] | None = None) -> Path:
+def write_parquet(
+    frame: pd.DataFrame,
+    path: str | Path,
+    units: dict[str, str],
+    descriptions: dict[str, str] | None = None,
+) -> Path:
     """A Parquet table with plain column names and the units in the schema metadata."""
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -77,8 +82,9 @@ def write_parquet(frame: pd.DataFrame, path: str | Path, units: dict[str, str],
             meta[b"description"] = descriptions[f.name].encode()
         fields.append(f.with_metadata(meta) if meta else f)
     schema_meta = dict(table.schema.metadata or {})
-    schema_meta[b"units"] = json.dumps({c: units[c] for c in frame.columns if units.get(c)}
-                                       ).encode()
+    schema_meta[b"units"] = json.dumps(
+        {c: units[c] for c in frame.columns if units.get(c)}
+    ).encode()
     table = table.cast(pa.schema(fields, metadata=schema_meta))
     with target(path) as p:
         pq.write_table(table, p)

@@ -26,10 +26,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from deckpound.models.scene import Scene
-from deckpound.models.scene_io import scene_to_toml
 
 from deckpound.engines import DEFAULT_REFERENCE, engine_names
+from deckpound.models.scene import Scene
+from deckpound.models.scene_io import scene_to_toml
 
 from . import figures
 from .align import align, write_tables
@@ -50,10 +50,14 @@ from .studies import (
 )
 
 QUANTITIES = ["deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel"]
-EFFECT_UNITS = {"pga": "g", "mu": "-", "peak_theta_0": "rad", "peak_theta_mu": "rad",
-                "ratio": "-"}
-METRIC_UNITS = {"t_peak": "s", "t_peak_ref": "s", "nrmse": "-", "correlation": "-",
-                "peak_ratio": "-"}
+EFFECT_UNITS = {"pga": "g", "mu": "-", "peak_theta_0": "rad", "peak_theta_mu": "rad", "ratio": "-"}
+METRIC_UNITS = {
+    "t_peak": "s",
+    "t_peak_ref": "s",
+    "nrmse": "-",
+    "correlation": "-",
+    "peak_ratio": "-",
+}
 
 
 class CountingCache(ResultCache):
@@ -80,8 +84,10 @@ def friction_variant(scene: Scene) -> tuple[Scene, str]:
         return modified(scene, "contact.friction=0.0", "contact.friction_mode=none"), "μ=0"
     from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 
-    return (modified(scene, "contact.friction=0.2", f"contact.friction_mode={DEFAULT_FRICTION}"),
-            "μ=0.2")
+    return (
+        modified(scene, "contact.friction=0.2", f"contact.friction_mode={DEFAULT_FRICTION}"),
+        "μ=0.2",
+    )
 
 
 def sequence_table(sequences: dict[str, list[SequenceRun]]) -> pd.DataFrame:
@@ -95,30 +101,49 @@ def sequence_table(sequences: dict[str, list[SequenceRun]]) -> pd.DataFrame:
             r = run.result
             applied = (r.meta.get("record") or {}).get("applied_pga") or {}
             contact = run.scene.contact
-            row = {"run": run.index, "pga": run.pga, "case": case, "engine": r.engine,
-                   "mu": contact.friction, "friction_mode": contact.friction_mode,
-                   "status": r.meta.get("status"), "applied_pga_x": applied.get("x", np.nan),
-                   "applied_pga_y": applied.get("y", np.nan), "gap1_start": run.state.gaps[0],
-                   "gap2_start": run.state.gaps[1]}
+            row = {
+                "run": run.index,
+                "pga": run.pga,
+                "case": case,
+                "engine": r.engine,
+                "mu": contact.friction,
+                "friction_mode": contact.friction_mode,
+                "status": r.meta.get("status"),
+                "applied_pga_x": applied.get("x", np.nan),
+                "applied_pga_y": applied.get("y", np.nan),
+                "gap1_start": run.state.gaps[0],
+                "gap2_start": run.state.gaps[1],
+            }
             for b, (kx, ky) in zip(run.scene.bents, run.state.stiffness):
                 row[f"{b.name}_kx"], row[f"{b.name}_ky"] = kx, ky
             firsts = [t[0] for t in closure_times_per_corner(r).values() if t]
-            row.update(peak_theta=peak(r["deck_theta"]), peak_y_rel=peak(r["deck_y_rel"]),
-                       peak_x_rel=peak(r["deck_x_rel"]), peak_y_abs=peak(r["deck_y_abs"]),
-                       peak_x_abs=peak(r["deck_x_abs"]),
-                       peak_fn=max(peak(r[f"fn_c{c}"]) for c in range(1, 5)),
-                       gap_closures=r.gap_closures,
-                       first_closure=min(firsts) if firsts else np.nan,
-                       wall_time=r.meta.get("wall_time", np.nan),
-                       compile_time=r.meta.get("compile_time", np.nan),
-                       steps=r.meta.get("steps", 0), cached=run.cached)
+            row.update(
+                peak_theta=peak(r["deck_theta"]),
+                peak_y_rel=peak(r["deck_y_rel"]),
+                peak_x_rel=peak(r["deck_x_rel"]),
+                peak_y_abs=peak(r["deck_y_abs"]),
+                peak_x_abs=peak(r["deck_x_abs"]),
+                peak_fn=max(peak(r[f"fn_c{c}"]) for c in range(1, 5)),
+                gap_closures=r.gap_closures,
+                first_closure=min(firsts) if firsts else np.nan,
+                wall_time=r.meta.get("wall_time", np.nan),
+                compile_time=r.meta.get("compile_time", np.nan),
+                steps=r.meta.get("steps", 0),
+                cached=run.cached,
+            )
             rows.append(row)
     return pd.DataFrame(rows)
 
 
 def sequence_units(seq: pd.DataFrame) -> dict[str, str]:
-    units = {**ROW_UNITS, "pga": "g", "applied_pga_x": "g", "applied_pga_y": "g",
-             "first_closure": "s", "steps": "-"}
+    units = {
+        **ROW_UNITS,
+        "pga": "g",
+        "applied_pga_x": "g",
+        "applied_pga_y": "g",
+        "first_closure": "s",
+        "steps": "-",
+    }
     units.update({c: "kN/m" for c in seq.columns if c.endswith(("_kx", "_ky"))})
     return {k: v for k, v in units.items() if k in seq}
 
@@ -160,22 +185,43 @@ class PaperData:
 def _mech_rows(source: str, state: str, run: int | None, results, scenes) -> list[dict]:
     """Mechanism rows of finished results; a frictional one is read against the frictionless
     result of the same engine among ``results``."""
-    plain = {r.engine: r for label, r in results.items()
-             if r.ok and not scenes[label].contact.friction > 0}
+    plain = {
+        r.engine: r
+        for label, r in results.items()
+        if r.ok and not scenes[label].contact.friction > 0
+    }
     rows = []
     for label, r in results.items():
         if r.ok:
             ref = plain.get(r.engine) if scenes[label].contact.friction > 0 else None
-            rows.append(dict(source=source, state=state, run=run, case=label, engine=r.engine,
-                             **mechanism_row(r, scenes[label], reference=ref)))
+            rows.append(
+                dict(
+                    source=source,
+                    state=state,
+                    run=run,
+                    case=label,
+                    engine=r.engine,
+                    **mechanism_row(r, scenes[label], reference=ref),
+                )
+            )
     return rows
 
 
-def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: int | None = None,
-              scheduler: str | None = None, cache_dir: str | Path | None = None,
-              studies: tuple[str, ...] | None = None, progress: bool = True,
-              engines: tuple[str, ...] | None = None, reference: str = DEFAULT_REFERENCE,
-              full_histories: bool = False, formats: tuple[str, ...] = ()) -> Path:
+def run_paper(
+    scene: Scene,
+    out: str | Path,
+    *,
+    quick: bool = False,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    cache_dir: str | Path | None = None,
+    studies: tuple[str, ...] | None = None,
+    progress: bool = True,
+    engines: tuple[str, ...] | None = None,
+    reference: str = DEFAULT_REFERENCE,
+    full_histories: bool = False,
+    formats: tuple[str, ...] = (),
+) -> Path:
     """Run the whole comparison and write the report folder; returns the report.md path.
 
     ``engines`` (default: every registered engine) run the sequence; the others are compared
@@ -204,8 +250,7 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
     effect = friction_effect(seq)
     write_csv(effect, tables / "friction_effect_sequence.csv", EFFECT_UNITS)
     if len(effect):
-        figures.friction_ratio(effect, scene, figs / "friction_ratio_vs_run.png",
-                               formats=formats)
+        figures.friction_ratio(effect, scene, figs / "friction_ratio_vs_run.png", formats=formats)
 
     # 2. per run: metrics against the reference, histories, mechanism
     metric_rows, mech_rows = [], []
@@ -213,22 +258,32 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
     for i in range(n_runs):
         results = {e: base[e][i].result for e in names}
         run = base[reference][i]
-        figures.histories(results, run.scene, figs / f"run{run.index}_histories.png",
-                          title=f"run {run.index}: {run.pga:g} g transverse", formats=formats)
+        figures.histories(
+            results,
+            run.scene,
+            figs / f"run{run.index}_histories.png",
+            title=f"run {run.index}: {run.pga:g} g transverse",
+            formats=formats,
+        )
         aligned = align(results)
         if full_histories:
             write_tables(aligned, tables / f"run{run.index}", formats=("parquet",), long=True)
             write_tables(aligned, tables / f"run{run.index}", formats=("csv",), long=False)
         for e in (e for e in names if e != reference):
-            m = compare_pair(results[e], results[reference], aligned[e], aligned[reference],
-                             QUANTITIES)
+            m = compare_pair(
+                results[e], results[reference], aligned[e], aligned[reference], QUANTITIES
+            )
             m.insert(0, "engine", e)
             m.insert(0, "run", run.index)
             metric_rows.append(m)
         both = {c: runs[i] for c, runs in sequences.items()}
-        mech_rows += _mech_rows("sequence", f"run{run.index}", run.index,
-                                {c: r.result for c, r in both.items()},
-                                {c: r.scene for c, r in both.items()})
+        mech_rows += _mech_rows(
+            "sequence",
+            f"run{run.index}",
+            run.index,
+            {c: r.result for c, r in both.items()},
+            {c: r.scene for c, r in both.items()},
+        )
     metrics = pd.concat(metric_rows, ignore_index=True) if metric_rows else pd.DataFrame()
     write_csv(metrics, tables / f"metrics_vs_{reference}.csv", METRIC_UNITS)
 
@@ -236,39 +291,66 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
     if n_runs >= k:
         strong = {e: base[e][k - 1].result for e in names}
         s_scene = base[reference][k - 1].scene
-        figures.contact_forces(strong, s_scene, figs / "contact_forces_strongest.png",
-                               title=f"run {k}: normal contact force per corner", formats=formats)
-        figures.hysteresis(strong[reference], s_scene, figs / "bent_hysteresis_strongest.png",
-                           title=f"run {k}: bent hysteresis ({reference} engine)", formats=formats)
-        figures.plan_snapshot(strong, s_scene, figs / "plan_at_peak_rotation.png",
-                              formats=formats)
+        figures.contact_forces(
+            strong,
+            s_scene,
+            figs / "contact_forces_strongest.png",
+            title=f"run {k}: normal contact force per corner",
+            formats=formats,
+        )
+        figures.hysteresis(
+            strong[reference],
+            s_scene,
+            figs / "bent_hysteresis_strongest.png",
+            title=f"run {k}: bent hysteresis ({reference} engine)",
+            formats=formats,
+        )
+        figures.plan_snapshot(strong, s_scene, figs / "plan_at_peak_rotation.png", formats=formats)
         pairs = {e: (base[e][k - 1], other[e][k - 1]) for e in names}
-        figures.friction_mechanism(pairs, figs / "friction_mechanism_strongest.png",
-                                   title=f"run {k}", formats=formats)
+        figures.friction_mechanism(
+            pairs, figs / "friction_mechanism_strongest.png", title=f"run {k}", formats=formats
+        )
 
     # 3. studies, from the stated start states
     states = [start_state(scene, "virgin")]
     carried_note = ""
     ref_runs = base[reference]
-    if len(ref_runs) >= k and all(r.result.ok for r in ref_runs[:k - 1]):
+    if len(ref_runs) >= k and all(r.result.ok for r in ref_runs[: k - 1]):
         states.insert(0, start_state(scene, f"run{k}", sequence=ref_runs))
     else:
-        carried_note = (f"The {reference} sequence did not reach run {k}, so no study starts "
-                        "from its carried state.")
+        carried_note = (
+            f"The {reference} sequence did not reach run {k}, so no study starts "
+            "from its carried state."
+        )
     study_runs = []
-    for name in (studies if studies is not None else tuple(STUDIES)):
-        for st in (states if STUDIES[name].carried else states[-1:]):
-            cases, results, table = study_results(name, st, quick=quick, cache=cache,
-                                                  workers=workers, scheduler=scheduler,
-                                                  progress=progress)
+    for name in studies if studies is not None else tuple(STUDIES):
+        for st in states if STUDIES[name].carried else states[-1:]:
+            cases, results, table = study_results(
+                name,
+                st,
+                quick=quick,
+                cache=cache,
+                workers=workers,
+                scheduler=scheduler,
+                progress=progress,
+            )
             write_csv(table, tables / f"study_{name}_{st.label}.csv", study_units(name, table))
             fig = f"study_{name}_{st.label}.png"
-            figures.study_figure(STUDIES[name], st.scene, cases, results, table, figs / fig,
-                                 formats=formats, subtitle=state_caption(st))
+            figures.study_figure(
+                STUDIES[name],
+                st.scene,
+                cases,
+                results,
+                table,
+                figs / fig,
+                formats=formats,
+                subtitle=state_caption(st),
+            )
             study_runs.append(StudyRun(name, st, table, fig))
             if name == "friction":
-                mech_rows += _mech_rows("friction study", st.label, st.run, results,
-                                        {c.label: c.scene for c in cases})
+                mech_rows += _mech_rows(
+                    "friction study", st.label, st.run, results, {c.label: c.scene for c in cases}
+                )
     mech = pd.DataFrame(mech_rows)
     write_csv(mech, tables / "friction_mechanism.csv", MECHANISM_UNITS)
 
@@ -280,15 +362,32 @@ def run_paper(scene: Scene, out: str | Path, *, quick: bool = False, workers: in
         counts.setdefault(e, [0, 0])
         counts[e][0] += h
         counts[e][1] += m
-    cache_counts = pd.DataFrame([{"engine": e, "hits": h, "misses": m}
-                                 for e, (h, m) in counts.items()])
+    cache_counts = pd.DataFrame(
+        [{"engine": e, "hits": h, "misses": m} for e, (h, m) in counts.items()]
+    )
     write_csv(cache_counts, tables / "cache_counts.csv", {})
 
-    data = PaperData(scene=scene, out=out, engines=names, reference=reference, variant_tag=tag,
-                     sequences=sequences, seq=seq, effect=effect, metrics=metrics, mech=mech,
-                     strongest=k, studies=study_runs, carried_note=carried_note,
-                     cache_counts=cache_counts, formats=formats, full_histories=full_histories)
-    data.sizes = {"report": folder_size(out, exclude=("cache",)),
-                  "cache": folder_size(cache_dir) if cache_dir.is_dir() else 0}
+    data = PaperData(
+        scene=scene,
+        out=out,
+        engines=names,
+        reference=reference,
+        variant_tag=tag,
+        sequences=sequences,
+        seq=seq,
+        effect=effect,
+        metrics=metrics,
+        mech=mech,
+        strongest=k,
+        studies=study_runs,
+        carried_note=carried_note,
+        cache_counts=cache_counts,
+        formats=formats,
+        full_histories=full_histories,
+    )
+    data.sizes = {
+        "report": folder_size(out, exclude=("cache",)),
+        "cache": folder_size(cache_dir) if cache_dir.is_dir() else 0,
+    }
     data.wall = time.perf_counter() - t0
     return write_report(data)

@@ -25,8 +25,9 @@ def plot_excitation(scene: Scene, motion: SupportMotion, path: str | Path) -> li
             axes[1, col].plot(motion.t, motion.vel[ch], **st)
             axes[2, col].plot(motion.t, motion.acc(ch) / G, **st)
         pga = max(np.max(np.abs(motion.acc(c))) for c in channels) / G
-        axes[0, col].set_title(f"{'longitudinal x' if axis == 'x' else 'transverse y'} "
-                               f"(PGA {pga:.3g} g)")
+        axes[0, col].set_title(
+            f"{'longitudinal x' if axis == 'x' else 'transverse y'} (PGA {pga:.3g} g)"
+        )
         axes[0, col].legend(loc="upper right", ncol=2)
         axes[0, col].set_ylabel("displacement [mm]")
         axes[1, col].set_ylabel("velocity [m/s]")

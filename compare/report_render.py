@@ -26,7 +26,7 @@ class Table:
 
 @dataclass(frozen=True)
 class Figure:
-    src: str       # relative to the report folder
+    src: str  # relative to the report folder
     caption: str
 
 
@@ -42,8 +42,9 @@ def view(frame: pd.DataFrame, columns: list[tuple[str, str, float]]) -> pd.DataF
     for name, header, factor in columns:
         if name in frame:
             col = frame[name]
-            out[header] = col * factor if factor != 1 and pd.api.types.is_numeric_dtype(col) \
-                else col
+            out[header] = (
+                col * factor if factor != 1 and pd.api.types.is_numeric_dtype(col) else col
+            )
     return pd.DataFrame(out)
 
 
@@ -65,8 +66,10 @@ def md_table(frame: pd.DataFrame) -> str:
 
 def html_table(frame: pd.DataFrame) -> str:
     head = "".join(f"<th>{html.escape(str(c))}</th>" for c in frame.columns)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(_cell(v))}</td>" for v in row) + "</tr>"
-                   for row in frame.itertuples(index=False))
+    body = "".join(
+        "<tr>" + "".join(f"<td>{html.escape(_cell(v))}</td>" for v in row) + "</tr>"
+        for row in frame.itertuples(index=False)
+    )
     return f'<table class="t"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
 
 
@@ -75,10 +78,12 @@ def _html_text(text: str) -> str:
     return "".join(f"<b>{p}</b>" if k % 2 else p for k, p in enumerate(parts))
 
 
-STYLE = ("body{font-family:sans-serif;max-width:1050px;margin:2em auto;color:#111;"
-         "line-height:1.4}table.t{border-collapse:collapse;font-size:12px;margin:.3em 0}"
-         "table.t td,table.t th{border:1px solid #999;padding:2px 6px}"
-         "p.cap{font-size:12px;color:#333;margin-top:.1em}")
+STYLE = (
+    "body{font-family:sans-serif;max-width:1050px;margin:2em auto;color:#111;"
+    "line-height:1.4}table.t{border-collapse:collapse;font-size:12px;margin:.3em 0}"
+    "table.t td,table.t th{border:1px solid #999;padding:2px 6px}"
+    "p.cap{font-size:12px;color:#333;margin-top:.1em}"
+)
 
 
 def render(title: str, sections: list[tuple[str, list]], out: Path) -> Path:
@@ -97,19 +102,25 @@ def render(title: str, sections: list[tuple[str, list]], out: Path) -> Path:
                 body.append(html_table(item.frame))
             elif isinstance(item, Figure):
                 md += [f"![{item.caption}]({item.src})", "", f"*{item.caption}*", ""]
-                body.append(f'<p><img src="{html.escape(item.src)}" alt="'
-                            f'{html.escape(item.caption)}" style="max-width:100%"></p>'
-                            f'<p class="cap">{_html_text(item.caption)}</p>')
+                body.append(
+                    f'<p><img src="{html.escape(item.src)}" alt="'
+                    f'{html.escape(item.caption)}" style="max-width:100%"></p>'
+                    f'<p class="cap">{_html_text(item.caption)}</p>'
+                )
             elif isinstance(item, Bullets):
                 md += [f"- {b}" for b in item.items] + [""]
-                body.append("<ul>" + "".join(f"<li>{_html_text(b)}</li>" for b in item.items)
-                            + "</ul>")
+                body.append(
+                    "<ul>" + "".join(f"<li>{_html_text(b)}</li>" for b in item.items) + "</ul>"
+                )
             else:
                 md += [item, ""]
                 body.append(f"<p>{_html_text(item)}</p>")
     write_text(out / "report.md", "\n".join(md))
-    write_text(out / "report.html",
-               "<!doctype html><html><head><meta charset='utf-8'>"
-               f"<title>{html.escape(title)}</title><style>{STYLE}</style></head><body>"
-               + "".join(body) + "</body></html>")
+    write_text(
+        out / "report.html",
+        "<!doctype html><html><head><meta charset='utf-8'>"
+        f"<title>{html.escape(title)}</title><style>{STYLE}</style></head><body>"
+        + "".join(body)
+        + "</body></html>",
+    )
     return out / "report.md"

@@ -11,11 +11,11 @@ import platform
 
 import numpy as np
 import pandas as pd
-from deckpound.models._fields import to_mapping
-from deckpound.models.result import scene_hash
 
 from deckpound import __version__
 from deckpound.engines import get_engine
+from deckpound.models._fields import to_mapping
+from deckpound.models.result import scene_hash
 
 from . import figures
 from . import report_inputs as inputs
@@ -24,27 +24,41 @@ from .report_render import Bullets, Figure, Table, render, view
 from .studies import STUDIES
 
 MM, MRAD = 1e3, 1e3
-STUDY_COLUMNS = [("label", "case", 1), ("engine", "engine", 1), ("state", "start state", 1),
-                 ("gap1_start", "gap 1 at start [mm]", MM),
-                 ("gap2_start", "gap 2 at start [mm]", MM),
-                 ("peak_theta", "peak θ_d [mrad]", MRAD),
-                 ("peak_x_rel", "peak x_d rel. tables [mm]", MM),
-                 ("peak_y_rel", "peak y_d rel. tables [mm]", MM),
-                 ("peak_fn", "peak fn [kN]", 1), ("gap_closures", "gap closures", 1),
-                 ("wall_time", "run time [s]", 1), ("status", "status", 1)]
+STUDY_COLUMNS = [
+    ("label", "case", 1),
+    ("engine", "engine", 1),
+    ("state", "start state", 1),
+    ("gap1_start", "gap 1 at start [mm]", MM),
+    ("gap2_start", "gap 2 at start [mm]", MM),
+    ("peak_theta", "peak θ_d [mrad]", MRAD),
+    ("peak_x_rel", "peak x_d rel. tables [mm]", MM),
+    ("peak_y_rel", "peak y_d rel. tables [mm]", MM),
+    ("peak_fn", "peak fn [kN]", 1),
+    ("gap_closures", "gap closures", 1),
+    ("wall_time", "run time [s]", 1),
+    ("status", "status", 1),
+]
 
 
 MECHANISM_COLUMNS = (
-    [("source", "source", 1), ("state", "state", 1), ("engine", "engine", 1), ("mu", "μ [-]", 1),
-     ("peak_theta", "peak θ_d [mrad]", MRAD), ("t_start", "excursion from [s]", 1),
-     ("t_peak", "peak at [s]", 1), ("friction_impulse", "J_T [kN·m·s]", 1),
-     ("normal_impulse", "J_N [kN·m·s]", 1),
-     ("friction_impulse_ref", "J_T over the μ = 0 peak excursion [kN·m·s]", 1),
-     ("corners_at_peak", "in contact at peak", 1),
-     ("face_at_peak", "face", 1)]
+    [
+        ("source", "source", 1),
+        ("state", "state", 1),
+        ("engine", "engine", 1),
+        ("mu", "μ [-]", 1),
+        ("peak_theta", "peak θ_d [mrad]", MRAD),
+        ("t_start", "excursion from [s]", 1),
+        ("t_peak", "peak at [s]", 1),
+        ("friction_impulse", "J_T [kN·m·s]", 1),
+        ("normal_impulse", "J_N [kN·m·s]", 1),
+        ("friction_impulse_ref", "J_T over the μ = 0 peak excursion [kN·m·s]", 1),
+        ("corners_at_peak", "in contact at peak", 1),
+        ("face_at_peak", "face", 1),
+    ]
     + [(f"stick_share_c{c}", f"stick c{c} [%]", 100) for c in range(1, 5)]
     + [(f"first_closure_c{c}", f"first closure c{c} [s]", 1) for c in range(1, 5)]
-    + [("contact_seat1", "contact seat 1 [s]", 1), ("contact_seat2", "contact seat 2 [s]", 1)])
+    + [("contact_seat1", "contact seat 1 [s]", 1), ("contact_seat2", "contact seat 2 [s]", 1)]
+)
 
 
 def _settings_text(engine: str, scene) -> str:
@@ -57,38 +71,61 @@ def what_was_run(d) -> list:
     s = d.scene
     c = s.contact
     items = [
-        (f"Scene **{s.name}** (hash `{scene_hash(s)[:16]}`), deckpound {__version__}, on "
-        f"{platform.machine()} / Python {platform.python_version()}; the whole job took "
-        f"{d.wall:.1f} s of wall time."),
+        (
+            f"Scene **{s.name}** (hash `{scene_hash(s)[:16]}`), deckpound {__version__}, on "
+            f"{platform.machine()} / Python {platform.python_version()}; the whole job took "
+            f"{d.wall:.1f} s of wall time."
+        ),
         f"Engines (reference: {text.engine_label(d.reference)}):",
-        Bullets(tuple(f"{text.engine_label(e)} (`{e}`): {_settings_text(e, s)}"
-                      for e in d.engines)),
-        (f"Contact: {c.law} law, k = {c.stiffness:g} kN/m, e = {c.restitution:g}, μ = "
-        f"{c.friction:g} (friction mode {c.friction_mode}), {c.geometry} geometry. Damping: "
-        f"Rayleigh {100 * s.damping.ratio:g} % ({s.damping.method} {list(s.damping.modes)})."),
-        (f"Sequence: PGA labels {', '.join(f'{p:g}' for p in s.sequence.pgas)} g transverse "
-        f"(longitudinal × {s.excitation.longitudinal_ratio:g}); gap carried from run to run: "
-        f"{s.sequence.carry_gap}; bent stiffness carried: {s.sequence.carry_stiffness}. Every "
-        f"run is computed with the scene's contact and again with the other friction assumption "
-        f"({d.variant_tag})."),
+        Bullets(
+            tuple(f"{text.engine_label(e)} (`{e}`): {_settings_text(e, s)}" for e in d.engines)
+        ),
+        (
+            f"Contact: {c.law} law, k = {c.stiffness:g} kN/m, e = {c.restitution:g}, μ = "
+            f"{c.friction:g} (friction mode {c.friction_mode}), {c.geometry} geometry. Damping: "
+            f"Rayleigh {100 * s.damping.ratio:g} % ({s.damping.method} {list(s.damping.modes)})."
+        ),
+        (
+            f"Sequence: PGA labels {', '.join(f'{p:g}' for p in s.sequence.pgas)} g transverse "
+            f"(longitudinal × {s.excitation.longitudinal_ratio:g}); gap carried from run to run: "
+            f"{s.sequence.carry_gap}; bent stiffness carried: {s.sequence.carry_stiffness}. Every "
+            f"run is computed with the scene's contact and again with the other friction assumption "
+            f"({d.variant_tag})."
+        ),
     ]
     cost = []
     runs = d.seq.groupby("engine", sort=False)[["wall_time", "compile_time"]].sum()
     for e in d.cache_counts["engine"]:
         row = d.cache_counts[d.cache_counts["engine"] == e].iloc[0]
-        study_wall = sum(float(r.table.loc[r.table["engine"] == e, "wall_time"].sum())
-                         for r in d.studies)
-        cost.append({"engine": e, "cache hits": int(row["hits"]),
-                     "cache misses (computed now)": int(row["misses"]),
-                     "sequence run time [s]": runs["wall_time"].get(e, np.nan),
-                     "study run time [s]": study_wall,
-                     "sequence compile time [s]": runs["compile_time"].get(e, np.nan)})
-    items.append("Result cache, per engine: " + "; ".join(
-        f"{text.engine_label(r['engine'])} {int(r['hits'])} hits, {int(r['misses'])} misses"
-        for _, r in d.cache_counts.iterrows()) + ". A miss is a case computed by this job.")
-    items.append(Table(pd.DataFrame(cost), "Cost per engine. Run times exclude compilation "
-                       "(numba kernels, OpenSees model build) and are as measured when each case "
-                       "was computed (also for cache hits); compile time is shown apart."))
+        study_wall = sum(
+            float(r.table.loc[r.table["engine"] == e, "wall_time"].sum()) for r in d.studies
+        )
+        cost.append(
+            {
+                "engine": e,
+                "cache hits": int(row["hits"]),
+                "cache misses (computed now)": int(row["misses"]),
+                "sequence run time [s]": runs["wall_time"].get(e, np.nan),
+                "study run time [s]": study_wall,
+                "sequence compile time [s]": runs["compile_time"].get(e, np.nan),
+            }
+        )
+    items.append(
+        "Result cache, per engine: "
+        + "; ".join(
+            f"{text.engine_label(r['engine'])} {int(r['hits'])} hits, {int(r['misses'])} misses"
+            for _, r in d.cache_counts.iterrows()
+        )
+        + ". A miss is a case computed by this job."
+    )
+    items.append(
+        Table(
+            pd.DataFrame(cost),
+            "Cost per engine. Run times exclude compilation "
+            "(numba kernels, OpenSees model build) and are as measured when each case "
+            "was computed (also for cache hits); compile time is shown apart.",
+        )
+    )
     items.append(_quality_sentence(d))
     return items
 
@@ -98,11 +135,17 @@ def _quality_sentence(d) -> str:
     gap, measured at every step), or that there were none."""
     from deckpound.engine_contract import PENETRATION_WARN_FRACTION
 
-    found = [f"{case} run {r.index}: {w}" for case, runs in d.sequences.items() for r in runs
-             for w in r.result.meta.get("quality_warnings", [])]
-    limits = (f"penetration beyond {PENETRATION_WARN_FRACTION[True]:.0%} (penalty engines) or "
-              f"{PENETRATION_WARN_FRACTION[False]:.0%} (nonsmooth) of the smallest initial gap, "
-              "measured at every step")
+    found = [
+        f"{case} run {r.index}: {w}"
+        for case, runs in d.sequences.items()
+        for r in runs
+        for w in r.result.meta.get("quality_warnings", [])
+    ]
+    limits = (
+        f"penetration beyond {PENETRATION_WARN_FRACTION[True]:.0%} (penalty engines) or "
+        f"{PENETRATION_WARN_FRACTION[False]:.0%} (nonsmooth) of the smallest initial gap, "
+        "measured at every step"
+    )
     if not found:
         return f"Quality warnings: none in the sequence runs ({limits})."
     return f"Quality warnings ({limits}): " + "; ".join(found) + "."
@@ -114,38 +157,64 @@ def excitation(d) -> list:
     table = inputs.record_table([(r.index, r.pga, r.result.meta.get("record")) for r in ref_runs])
     items = inputs.excitation_sentences(d.scene, prov)
     items.append(inputs.scaling_sentence(table, d.scene.excitation.longitudinal_ratio))
-    cols = [("run", "run", 1), ("pga", "label [g]", 1), ("target_pga_y", "target y [g]", 1),
-            ("applied_pga_y", "applied y [g]", 1), ("target_pga_x", "target x [g]", 1),
-            ("applied_pga_x", "applied x [g]", 1), ("scale_factor_y", "scale factor y [-]", 1),
-            ("scale_factor_x", "scale factor x [-]", 1), ("duration", "duration [s]", 1)]
-    items.append(inputs.same_motion_sentence(
-        {c: [r.result.meta.get("record") for r in runs] for c, runs in d.sequences.items()}))
-    items.append(Table(view(table, cols), f"Excitation of each run of the {d.reference} "
-                       "sequence, from the record provenance of its result; applied = max |a| "
-                       "over the direction's supports, measured on the motion."))
+    cols = [
+        ("run", "run", 1),
+        ("pga", "label [g]", 1),
+        ("target_pga_y", "target y [g]", 1),
+        ("applied_pga_y", "applied y [g]", 1),
+        ("target_pga_x", "target x [g]", 1),
+        ("applied_pga_x", "applied x [g]", 1),
+        ("scale_factor_y", "scale factor y [-]", 1),
+        ("scale_factor_x", "scale factor x [-]", 1),
+        ("duration", "duration [s]", 1),
+    ]
+    items.append(
+        inputs.same_motion_sentence(
+            {c: [r.result.meta.get("record") for r in runs] for c, runs in d.sequences.items()}
+        )
+    )
+    items.append(
+        Table(
+            view(table, cols),
+            f"Excitation of each run of the {d.reference} "
+            "sequence, from the record provenance of its result; applied = max |a| "
+            "over the direction's supports, measured on the motion.",
+        )
+    )
     files = inputs.files_table(prov)
     if len(files):
         items.append(Table(files, "Record files (resolved paths) and their SHA-256."))
     if any(r.state.label == "virgin" for r in d.studies):
-        items.append(f"Studies from the virgin state run the scene as given: transverse PGA "
-                     f"label {d.scene.excitation.pga:g} g.")
+        items.append(
+            f"Studies from the virgin state run the scene as given: transverse PGA "
+            f"label {d.scene.excitation.pga:g} g."
+        )
     return items
 
 
 def headline(d) -> list:
     virgin = _study_effect(d, "virgin")
-    items = text.headline_sentences(d.seq, d.effect, d.strongest, d.reference, d.metrics,
-                                    virgin)
-    items.append(Figure("figures/peak_rotation_vs_pga.png",
-                        "Peak deck rotation |θ_d| [mrad] in each run of the sequence, per engine; "
-                        f"hollow markers: {d.variant_tag}."))
-    pivot = d.seq.pivot_table(index=["run", "pga"], columns="case", values="peak_theta",
-                              sort=False).reset_index()
+    items = text.headline_sentences(d.seq, d.effect, d.strongest, d.reference, d.metrics, virgin)
+    items.append(
+        Figure(
+            "figures/peak_rotation_vs_pga.png",
+            "Peak deck rotation |θ_d| [mrad] in each run of the sequence, per engine; "
+            f"hollow markers: {d.variant_tag}.",
+        )
+    )
+    pivot = d.seq.pivot_table(
+        index=["run", "pga"], columns="case", values="peak_theta", sort=False
+    ).reset_index()
     pivot.columns = ["run", "PGA label [g]"] + [f"{c} peak θ_d [mrad]" for c in pivot.columns[2:]]
     pivot.iloc[:, 2:] = MRAD * pivot.iloc[:, 2:]
-    items.append(Table(pivot, "Peak deck rotation per run and case [mrad] (tables/sequence.csv "
-                       "has gaps, bent stiffness, relative and absolute peaks, applied PGA, "
-                       "run and compile times)."))
+    items.append(
+        Table(
+            pivot,
+            "Peak deck rotation per run and case [mrad] (tables/sequence.csv "
+            "has gaps, bent stiffness, relative and absolute peaks, applied PGA, "
+            "run and compile times).",
+        )
+    )
     return items
 
 
@@ -158,33 +227,58 @@ def _study_effect(d, state: str) -> pd.DataFrame | None:
 
 def friction(d) -> list:
     eff = d.effect
-    items = [(f"Each run of the sequence is computed with and without friction; the ratio of the "
-             f"two peak rotations says where friction raises (> {1 + text.TOL:g}) and where it "
-             f"lowers (< {1 - text.TOL:g}) the rotation. Each case carries its own state from "
-             "its own previous runs.")]
+    items = [
+        (
+            f"Each run of the sequence is computed with and without friction; the ratio of the "
+            f"two peak rotations says where friction raises (> {1 + text.TOL:g}) and where it "
+            f"lowers (< {1 - text.TOL:g}) the rotation. Each case carries its own state from "
+            "its own previous runs."
+        )
+    ]
     items.append(Bullets(tuple(text.sequence_friction_sentences(eff))))
     if len(eff):
-        items.append(Figure("figures/friction_ratio_vs_run.png", "Peak |θ_d| with friction / "
-                            f"without, per run and engine [-]; grey band: ±{100 * text.TOL:g} %."))
-        items.append(Table(view(eff, [("engine", "engine", 1), ("run", "run", 1),
-                                      ("pga", "PGA label [g]", 1), ("mu", "μ [-]", 1),
-                                      ("peak_theta_0", "peak θ_d, μ = 0 [mrad]", MRAD),
-                                      ("peak_theta_mu", "peak θ_d, with μ [mrad]", MRAD),
-                                      ("ratio", "ratio [-]", 1),
-                                      ("direction", "friction", 1)]),
-                           "Friction's effect on the peak rotation along the sequence "
-                           "(tables/friction_effect_sequence.csv)."))
+        items.append(
+            Figure(
+                "figures/friction_ratio_vs_run.png",
+                "Peak |θ_d| with friction / "
+                f"without, per run and engine [-]; grey band: ±{100 * text.TOL:g} %.",
+            )
+        )
+        items.append(
+            Table(
+                view(
+                    eff,
+                    [
+                        ("engine", "engine", 1),
+                        ("run", "run", 1),
+                        ("pga", "PGA label [g]", 1),
+                        ("mu", "μ [-]", 1),
+                        ("peak_theta_0", "peak θ_d, μ = 0 [mrad]", MRAD),
+                        ("peak_theta_mu", "peak θ_d, with μ [mrad]", MRAD),
+                        ("ratio", "ratio [-]", 1),
+                        ("direction", "friction", 1),
+                    ],
+                ),
+                "Friction's effect on the peak rotation along the sequence "
+                "(tables/friction_effect_sequence.csv).",
+            )
+        )
     for r in d.studies:
         if r.name == "friction":
-            items.append(f"**Friction study from {text.state_name(r.state.label)}.** "
-                         + text.state_sentence(r.state))
-            items.append(Bullets(tuple(text.study_friction_sentences(
-                text.study_friction_effect(r.table)))))
-    items.append("**Mechanism.** The numbers below come from tables/friction_mechanism.csv: the "
-                 "excursion of θ_d that reaches the peak (from its last change of sign), the "
-                 "angular impulse about the deck centre of the friction forces and of the normal "
-                 "forces over it (positive: towards the peak rotation), the corners in contact "
-                 "at the peak, stick shares and first closures.")
+            items.append(
+                f"**Friction study from {text.state_name(r.state.label)}.** "
+                + text.state_sentence(r.state)
+            )
+            items.append(
+                Bullets(tuple(text.study_friction_sentences(text.study_friction_effect(r.table))))
+            )
+    items.append(
+        "**Mechanism.** The numbers below come from tables/friction_mechanism.csv: the "
+        "excursion of θ_d that reaches the peak (from its last change of sign), the "
+        "angular impulse about the deck centre of the friction forces and of the normal "
+        "forces over it (positive: towards the peak rotation), the corners in contact "
+        "at the peak, stick shares and first closures."
+    )
     items.append(Bullets(tuple(_mechanism_sentences(d))))
     contrast = _state_contrasts(d)
     if contrast:
@@ -193,18 +287,28 @@ def friction(d) -> list:
     seq_mech = d.mech[d.mech["source"] == "sequence"] if len(d.mech) else d.mech
     if len(seq_mech):
         items.append(Bullets(tuple(text.impulse_agreement_sentences(eff, seq_mech))))
-        shown = d.mech[(d.mech["mu"] > 0) & ((d.mech["source"] != "sequence")
-                                             | (d.mech["run"] == d.strongest))]
-        items.append(Table(view(shown, MECHANISM_COLUMNS), "Friction mechanism of the frictional "
-                           f"cases of run {d.strongest} and of the friction studies "
-                           "(every run and case: tables/friction_mechanism.csv). J_T, J_N: angular "
-                           "impulse of the friction / normal contact forces about the deck centre "
-                           "over the peak excursion, positive towards the peak rotation."))
-        items.append(Figure("figures/friction_mechanism_strongest.png",
-                            f"Run {d.strongest}: deck rotation θ_d [mrad] without (dotted) and "
-                            "with "
-                            "friction (solid), and the moment of the tangential contact forces "
-                            "about the deck centre [MN·m]."))
+        shown = d.mech[
+            (d.mech["mu"] > 0) & ((d.mech["source"] != "sequence") | (d.mech["run"] == d.strongest))
+        ]
+        items.append(
+            Table(
+                view(shown, MECHANISM_COLUMNS),
+                "Friction mechanism of the frictional "
+                f"cases of run {d.strongest} and of the friction studies "
+                "(every run and case: tables/friction_mechanism.csv). J_T, J_N: angular "
+                "impulse of the friction / normal contact forces about the deck centre "
+                "over the peak excursion, positive towards the peak rotation.",
+            )
+        )
+        items.append(
+            Figure(
+                "figures/friction_mechanism_strongest.png",
+                f"Run {d.strongest}: deck rotation θ_d [mrad] without (dotted) and "
+                "with "
+                "friction (solid), and the moment of the tangential contact forces "
+                "about the deck centre [MN·m].",
+            )
+        )
     return items
 
 
@@ -224,8 +328,11 @@ def _mechanism_sentences(d) -> list[str]:
         if mu is not None:
             rows = rows[np.isclose(rows["mu"], mu)]
         for _, row in rows.iterrows():
-            out.append(text.mechanism_sentence(
-                row, f"friction study from {text.state_name(r.state.label)}"))
+            out.append(
+                text.mechanism_sentence(
+                    row, f"friction study from {text.state_name(r.state.label)}"
+                )
+            )
     return out
 
 
@@ -242,8 +349,12 @@ def _state_contrasts(d) -> list[str]:
         for r in runs:
             eff = text.study_friction_effect(r.table)
             e = eff[(eff["engine"] == engine) & np.isclose(eff["mu"], mu)]
-            m = d.mech[(d.mech["source"] == "friction study") & (d.mech["state"] == r.state.label)
-                       & (d.mech["engine"] == engine) & np.isclose(d.mech["mu"], mu)]
+            m = d.mech[
+                (d.mech["source"] == "friction study")
+                & (d.mech["state"] == r.state.label)
+                & (d.mech["engine"] == engine)
+                & np.isclose(d.mech["mu"], mu)
+            ]
             if len(e) and len(m):
                 parts.append((r.state, m.iloc[0], float(e["ratio"].iloc[0])))
         if len(parts) == len(runs):
@@ -260,28 +371,50 @@ def engines_vs_reference(d) -> list:
         m["unit"] = m["quantity"].map(lambda q: "mrad" if q.endswith("theta") else "mm")
         m["peak"] *= scale
         m["peak_ref"] *= scale
-        items.append(Table(view(m, [("engine", "engine", 1), ("quantity", "quantity", 1),
-                                    ("unit", "unit", 1), ("peak", "peak", 1),
-                                    ("peak_ref", f"peak {ref}", 1),
-                                    ("peak_ratio", "peak ratio [-]", 1), ("nrmse", "NRMSE [-]", 1),
-                                    ("correlation", "correlation [-]", 1)]),
-                           f"Run {d.strongest}, no friction: peak ratio = engine peak / {ref} "
-                           f"peak; NRMSE normalised by the {ref} peak. Displacements (_rel) are "
-                           "relative to the supports: the deck to the shake tables, a seat to "
-                           "its actuator."))
-    items += [Figure(f"figures/run{d.strongest}_histories.png",
-                     f"Run {d.strongest}: deck rotation θ_d [mrad] and transverse displacement "
-                     "y_d relative to the shake tables [mm], per engine."),
-              Figure("figures/contact_forces_strongest.png",
-                     f"Run {d.strongest}: normal contact force fn per corner [MN]."),
-              Figure("figures/bent_hysteresis_strongest.png",
-                     f"Run {d.strongest}: bent force [kN] against bent deformation (deck point "
-                     f"above the bent relative to its table) [mm], {ref} engine."),
-              Figure("figures/plan_at_peak_rotation.png",
-                     f"Run {d.strongest}: plan view at each engine's peak rotation; deck and seat "
-                     "displacements relative to their supports (tables, actuators) × "
-                     f"{figures.PLAN_SCALE:g}, so "
-                     "the gaps and the rotation are visible; dashed: at rest.")]
+        items.append(
+            Table(
+                view(
+                    m,
+                    [
+                        ("engine", "engine", 1),
+                        ("quantity", "quantity", 1),
+                        ("unit", "unit", 1),
+                        ("peak", "peak", 1),
+                        ("peak_ref", f"peak {ref}", 1),
+                        ("peak_ratio", "peak ratio [-]", 1),
+                        ("nrmse", "NRMSE [-]", 1),
+                        ("correlation", "correlation [-]", 1),
+                    ],
+                ),
+                f"Run {d.strongest}, no friction: peak ratio = engine peak / {ref} "
+                f"peak; NRMSE normalised by the {ref} peak. Displacements (_rel) are "
+                "relative to the supports: the deck to the shake tables, a seat to "
+                "its actuator.",
+            )
+        )
+    items += [
+        Figure(
+            f"figures/run{d.strongest}_histories.png",
+            f"Run {d.strongest}: deck rotation θ_d [mrad] and transverse displacement "
+            "y_d relative to the shake tables [mm], per engine.",
+        ),
+        Figure(
+            "figures/contact_forces_strongest.png",
+            f"Run {d.strongest}: normal contact force fn per corner [MN].",
+        ),
+        Figure(
+            "figures/bent_hysteresis_strongest.png",
+            f"Run {d.strongest}: bent force [kN] against bent deformation (deck point "
+            f"above the bent relative to its table) [mm], {ref} engine.",
+        ),
+        Figure(
+            "figures/plan_at_peak_rotation.png",
+            f"Run {d.strongest}: plan view at each engine's peak rotation; deck and seat "
+            "displacements relative to their supports (tables, actuators) × "
+            f"{figures.PLAN_SCALE:g}, so "
+            "the gaps and the rotation are visible; dashed: at rest.",
+        ),
+    ]
     return items
 
 
@@ -290,7 +423,7 @@ def study_sections(d) -> list[tuple[str, list]]:
     for r in d.studies:
         st = r.state
         items = [text.state_sentence(st), text.study_spread_sentence(r.table)]
-        if STUDIES[r.name].summary is not None:   # the study's own sentences from its table
+        if STUDIES[r.name].summary is not None:  # the study's own sentences from its table
             items += STUDIES[r.name].summary(r.table)
         pair = text.mode_pair_sentence(r.table)
         if pair:
@@ -298,16 +431,26 @@ def study_sections(d) -> list[tuple[str, list]]:
         if not st.carried:
             carried = [c for c in d.studies if c.name == r.name and c.state.carried]
             if carried:
-                items.append(text.state_comparison_sentence(carried[0].table, r.table,
-                                                            carried[0].state.run))
-        items.append(Figure(f"figures/{r.figure}", f"{STUDIES[r.name].title}, from "
-                            f"{text.state_name(st.label)}: peak "
-                            "deck rotation |θ_d| [mrad] per case (left) and θ_d histories "
-                            "[mrad] (right)."))
-        items.append(Table(view(r.table, STUDY_COLUMNS[:2] + _param_columns(r) + STUDY_COLUMNS[2:]),
-                           f"tables/study_{r.name}_{st.label}.csv; displacements relative to "
-                           "the shake tables (absolute peaks in the CSV); run time without "
-                           "compilation."))
+                items.append(
+                    text.state_comparison_sentence(carried[0].table, r.table, carried[0].state.run)
+                )
+        items.append(
+            Figure(
+                f"figures/{r.figure}",
+                f"{STUDIES[r.name].title}, from "
+                f"{text.state_name(st.label)}: peak "
+                "deck rotation |θ_d| [mrad] per case (left) and θ_d histories "
+                "[mrad] (right).",
+            )
+        )
+        items.append(
+            Table(
+                view(r.table, STUDY_COLUMNS[:2] + _param_columns(r) + STUDY_COLUMNS[2:]),
+                f"tables/study_{r.name}_{st.label}.csv; displacements relative to "
+                "the shake tables (absolute peaks in the CSV); run time without "
+                "compilation.",
+            )
+        )
         out.append((f"Study: {STUDIES[r.name].title}, from {text.state_name(st.label)}", items))
     if d.carried_note:
         out.append(("Studies from a carried state", [d.carried_note]))
@@ -327,49 +470,83 @@ def _param_columns(r) -> list[tuple[str, str, float]]:
 
 def outputs(d) -> list:
     mb = 1e-6
-    return [(f"This folder holds {d.sizes['report'] * mb:.2f} MB of figures, tables and scene "
+    return [
+        (
+            f"This folder holds {d.sizes['report'] * mb:.2f} MB of figures, tables and scene "
             f"before the report text; the result cache (cache/ unless --cache names another "
-            f"folder) holds {d.sizes['cache'] * mb:.1f} MB and is not part of the report."),
-            Bullets((
-                ("tables/*.csv: units in the column headers (SI: m, rad, kN, s, g); peaks of "
-                "displacements relative to the supports (_rel) and absolute (_abs)."),
-                "figures/*.png" + (f" (also {', '.join(d.formats)})" if d.formats else
-                                   " (PDF with --pdf)") + ".",
-                ("tables/runK/aligned_*.parquet|csv: full aligned histories (units in the "
-                 "Parquet schema metadata and the CSV headers)." if d.full_histories else
-                 "Full aligned histories per run: deckpound paper --full-histories."),
-                ("ParaView: deckpound export-vtk on a folder written by deckpound run or "
-                "compare (one XDMF time series per engine)."),
-            ))]
+            f"folder) holds {d.sizes['cache'] * mb:.1f} MB and is not part of the report."
+        ),
+        Bullets(
+            (
+                (
+                    "tables/*.csv: units in the column headers (SI: m, rad, kN, s, g); peaks of "
+                    "displacements relative to the supports (_rel) and absolute (_abs)."
+                ),
+                "figures/*.png"
+                + (f" (also {', '.join(d.formats)})" if d.formats else " (PDF with --pdf)")
+                + ".",
+                (
+                    "tables/runK/aligned_*.parquet|csv: full aligned histories (units in the "
+                    "Parquet schema metadata and the CSV headers)."
+                    if d.full_histories
+                    else "Full aligned histories per run: deckpound paper --full-histories."
+                ),
+                (
+                    "ParaView: deckpound export-vtk on a folder written by deckpound run or "
+                    "compare (one XDMF time series per engine)."
+                ),
+            )
+        ),
+    ]
 
 
 def notes(d) -> list:
     table = inputs.notes_table(d.scene, inputs.builtin_twin(d.scene))
-    items = [("These are the scene author's own notes on its values (sources and assumptions), "
-             "shown as written next to the value each field was run with. deckpound does not "
-             "check them; a note on a value that differs from the built-in scene of the same "
-             "name says what it was written for.")]
+    items = [
+        (
+            "These are the scene author's own notes on its values (sources and assumptions), "
+            "shown as written next to the value each field was run with. deckpound does not "
+            "check them; a note on a value that differs from the built-in scene of the same "
+            "name says what it was written for."
+        )
+    ]
     stale = table[table["written_for"] != ""]
     if len(stale):
-        items.append(f"{len(stale)} note(s) were written for another value: "
-                     + ", ".join(stale["field"]) + ".")
+        items.append(
+            f"{len(stale)} note(s) were written for another value: "
+            + ", ".join(stale["field"])
+            + "."
+        )
     items.append(Table(table))
     return items
 
 
 def write_report(d):
     """Build every section and write report.md and report.html."""
-    sections = [("What was run", what_was_run(d)), ("Excitation", excitation(d)),
-                ("Headline: the sequence", headline(d)),
-                ("Friction: where it raises and where it lowers the rotation", friction(d)),
-                (f"Engines against {text.engine_label(d.reference)} (strongest run)",
-                 engines_vs_reference(d))]
+    sections = [
+        ("What was run", what_was_run(d)),
+        ("Excitation", excitation(d)),
+        ("Headline: the sequence", headline(d)),
+        ("Friction: where it raises and where it lowers the rotation", friction(d)),
+        (
+            f"Engines against {text.engine_label(d.reference)} (strongest run)",
+            engines_vs_reference(d),
+        ),
+    ]
     sections += study_sections(d)
-    sections.append(("Every run of the sequence", [
-        Figure(f"figures/run{r.index}_histories.png",
-               f"Run {r.index} ({r.pga:g} g): deck rotation θ_d [mrad] and transverse "
-               "displacement y_d relative to the shake tables [mm], per engine, no friction.")
-        for r in d.sequences[d.reference]
-        if (d.out / "figures" / f"run{r.index}_histories.png").is_file()]))
+    sections.append(
+        (
+            "Every run of the sequence",
+            [
+                Figure(
+                    f"figures/run{r.index}_histories.png",
+                    f"Run {r.index} ({r.pga:g} g): deck rotation θ_d [mrad] and transverse "
+                    "displacement y_d relative to the shake tables [mm], per engine, no friction.",
+                )
+                for r in d.sequences[d.reference]
+                if (d.out / "figures" / f"run{r.index}_histories.png").is_file()
+            ],
+        )
+    )
     sections += [("Outputs", outputs(d)), ("The scene's notes", notes(d))]
     return render(f"deckpound report: {d.scene.name}", sections, d.out)

@@ -89,8 +89,12 @@ def effect_clauses(items: list[tuple[object, float]], keys_text, tol: float = TO
     """Clauses "raises the peak rotation in <keys> (×…), lowers it in <keys> (×…) and changes
     it by less than 2 % in <keys>" for (key, ratio) pairs; ``keys_text`` renders a list of keys
     with its preposition (:func:`in_runs`, :func:`at_mu`)."""
-    by: dict[str, list[tuple[object, float]]] = {"raises": [], "lowers": [], "unchanged": [],
-                                                 "undetermined": []}
+    by: dict[str, list[tuple[object, float]]] = {
+        "raises": [],
+        "lowers": [],
+        "unchanged": [],
+        "undetermined": [],
+    }
     for key, ratio in items:
         by[direction(ratio, tol)].append((key, ratio))
     clauses = []
@@ -98,19 +102,25 @@ def effect_clauses(items: list[tuple[object, float]], keys_text, tol: float = TO
         if by[word]:
             ratios = [r for _, r in by[word]]
             obj = "the peak rotation" if not clauses else "it"
-            clauses.append(f"{word} {obj} {keys_text([k for k, _ in by[word]])} "
-                           f"({ratio_text(min(ratios), max(ratios))})")
+            clauses.append(
+                f"{word} {obj} {keys_text([k for k, _ in by[word]])} "
+                f"({ratio_text(min(ratios), max(ratios))})"
+            )
     if by["unchanged"]:
         obj = "the peak rotation" if not clauses else "it"
-        clauses.append(f"changes {obj} by less than {short(100 * tol)} % "
-                       f"{keys_text([k for k, _ in by['unchanged']])}")
+        clauses.append(
+            f"changes {obj} by less than {short(100 * tol)} % "
+            f"{keys_text([k for k, _ in by['unchanged']])}"
+        )
     if by["undetermined"]:
-        clauses.append(f"cannot be judged {keys_text([k for k, _ in by['undetermined']])} "
-                       "(a case failed)")
+        clauses.append(
+            f"cannot be judged {keys_text([k for k, _ in by['undetermined']])} (a case failed)"
+        )
     return join(clauses)
 
 
 # -- friction along the sequence -----------------------------------------------------------
+
 
 def friction_effect(seq: pd.DataFrame) -> pd.DataFrame:
     """Per engine and run: peak rotation without (μ = 0) and with friction, their ratio and the
@@ -123,17 +133,28 @@ def friction_effect(seq: pd.DataFrame) -> pd.DataFrame:
             t0 = float(base["peak_theta"].iloc[0]) if len(base) else float("nan")
             ok = (r["status"] == "success") and len(base) and base["status"].iloc[0] == "success"
             ratio = r["peak_theta"] / t0 if ok and t0 > 0 else float("nan")
-            rows.append({"engine": engine, "run": int(run), "pga": r["pga"], "mu": r["mu"],
-                             "friction_mode": r["friction_mode"], "peak_theta_0": t0,
-                             "peak_theta_mu": r["peak_theta"], "ratio": ratio,
-                             "direction": direction(ratio)})
+            rows.append(
+                {
+                    "engine": engine,
+                    "run": int(run),
+                    "pga": r["pga"],
+                    "mu": r["mu"],
+                    "friction_mode": r["friction_mode"],
+                    "peak_theta_0": t0,
+                    "peak_theta_mu": r["peak_theta"],
+                    "ratio": ratio,
+                    "direction": direction(ratio),
+                }
+            )
     return pd.DataFrame(rows)
 
 
 def friction_model_text(mu: float, mode: str) -> str:
-    how = {"stick": "with sticking",
-           "contact2d": "with sticking, OpenSees's zeroLengthContact2D algorithm",
-           "slip": "sliding only, no sticking"}.get(mode, mode)
+    how = {
+        "stick": "with sticking",
+        "contact2d": "with sticking, OpenSees's zeroLengthContact2D algorithm",
+        "slip": "sliding only, no sticking",
+    }.get(mode, mode)
     return f"μ = {short(mu)}, {how}"
 
 
@@ -144,12 +165,15 @@ def sequence_friction_sentences(effect: pd.DataFrame) -> list[str]:
     for engine, g in effect.groupby("engine", sort=False):
         for (mu, mode), h in g.groupby(["mu", "friction_mode"], sort=False):
             items = list(zip(h["run"], h["ratio"]))
-            out.append(f"{engine_label(engine)}: friction ({friction_model_text(mu, mode)}) "
-                       f"{effect_clauses(items, in_runs)}.")
+            out.append(
+                f"{engine_label(engine)}: friction ({friction_model_text(mu, mode)}) "
+                f"{effect_clauses(items, in_runs)}."
+            )
     return out
 
 
 # -- friction in a study (one start state) ----------------------------------------------------
+
 
 def study_friction_effect(table: pd.DataFrame) -> pd.DataFrame:
     """Per engine and μ > 0 of a friction-study table: ratio to the same engine's μ = 0 case."""
@@ -160,9 +184,17 @@ def study_friction_effect(table: pd.DataFrame) -> pd.DataFrame:
         for _, r in g[g["mu"] > 0].iterrows():
             ok = r["status"] == "success" and len(base) and base["status"].iloc[0] == "success"
             ratio = r["peak_theta"] / t0 if ok and t0 > 0 else float("nan")
-            rows.append({"engine": engine, "mu": r["mu"], "state": r.get("state", ""),
-                             "peak_theta_0": t0, "peak_theta_mu": r["peak_theta"], "ratio": ratio,
-                             "direction": direction(ratio)})
+            rows.append(
+                {
+                    "engine": engine,
+                    "mu": r["mu"],
+                    "state": r.get("state", ""),
+                    "peak_theta_0": t0,
+                    "peak_theta_mu": r["peak_theta"],
+                    "ratio": ratio,
+                    "direction": direction(ratio),
+                }
+            )
     return pd.DataFrame(rows)
 
 
@@ -173,12 +205,15 @@ def study_friction_sentences(effect: pd.DataFrame) -> list[str]:
         g = g.sort_values("mu")
         items = list(zip(g["mu"], g["ratio"]))
         base = g["peak_theta_0"].iloc[0]
-        out.append(f"{engine_label(engine)} (μ = 0: {num(1e3 * base)} mrad): friction "
-                   f"{effect_clauses(items, at_mu)}.")
+        out.append(
+            f"{engine_label(engine)} (μ = 0: {num(1e3 * base)} mrad): friction "
+            f"{effect_clauses(items, at_mu)}."
+        )
     return out
 
 
 # -- the mechanism ------------------------------------------------------------------------------
+
 
 def _corner_face(corner: str) -> str:
     return "seat 1" if corner in ("c1", "c2") else "seat 2"
@@ -188,22 +223,30 @@ def mechanism_sentence(row: pd.Series, where: str) -> str:
     """What one frictional result shows: the peak excursion, the friction and normal angular
     impulses over it, the corners in contact at the peak, stick shares and first closures."""
     label = engine_label(row["engine"])
-    s = (f"{label}, {where} (μ = {short(row['mu'])}): the peak rotation "
-         f"{num(1e3 * row['peak_theta'])} mrad at t = {row['t_peak']:.2f} s ends an excursion "
-         f"that began at t = {row['t_start']:.2f} s")
+    s = (
+        f"{label}, {where} (μ = {short(row['mu'])}): the peak rotation "
+        f"{num(1e3 * row['peak_theta'])} mrad at t = {row['t_peak']:.2f} s ends an excursion "
+        f"that began at t = {row['t_start']:.2f} s"
+    )
     jt, jn = row["friction_impulse"], row["normal_impulse"]
     if np.isfinite(jt):
-        s += (f"; over it the friction forces' angular impulse about the deck centre is "
-              f"{jt:+.3g} kN·m·s ({'towards' if jt > 0 else 'against'} the peak rotation), "
-              f"the normal forces' {jn:+.3g} kN·m·s")
+        s += (
+            f"; over it the friction forces' angular impulse about the deck centre is "
+            f"{jt:+.3g} kN·m·s ({'towards' if jt > 0 else 'against'} the peak rotation), "
+            f"the normal forces' {jn:+.3g} kN·m·s"
+        )
         jr = row.get("friction_impulse_ref", float("nan"))
         if np.isfinite(jr):
-            s += (f"; over the excursion that is the peak without friction (t = "
-                  f"{row['t_start_ref']:.2f}–{row['t_peak_ref']:.2f} s) the friction impulse is "
-                  f"{jr:+.3g} kN·m·s ({'with' if jr > 0 else 'against'} that rotation)")
+            s += (
+                f"; over the excursion that is the peak without friction (t = "
+                f"{row['t_start_ref']:.2f}–{row['t_peak_ref']:.2f} s) the friction impulse is "
+                f"{jr:+.3g} kN·m·s ({'with' if jr > 0 else 'against'} that rotation)"
+            )
     else:
-        s += (f"; its reported tangential forces are zero in {100 * row['ft_zero_share']:.0f} % "
-              "of the rows with a normal force, so no friction impulse is read from them")
+        s += (
+            f"; its reported tangential forces are zero in {100 * row['ft_zero_share']:.0f} % "
+            "of the rows with a normal force, so no friction impulse is read from them"
+        )
     corners = row["corners_at_peak"]
     if corners == "none":
         s += ". No corner is in contact at the peak"
@@ -213,19 +256,25 @@ def mechanism_sentence(row: pd.Series, where: str) -> str:
     known = {c: v for c, v in shares.items() if np.isfinite(v)}
     if known:
         src = "state_c*" if row["stick_source"] == "state" else "|ft| against μ·fn"
-        s += ("; share of contact time sticking (" + src + "): "
-              + ", ".join(f"{c} {100 * v:.0f} %" for c, v in known.items()))
+        s += (
+            "; share of contact time sticking ("
+            + src
+            + "): "
+            + ", ".join(f"{c} {100 * v:.0f} %" for c, v in known.items())
+        )
     firsts = {c: row[f"first_closure_{c}"] for c in ("c1", "c2", "c3", "c4")}
     closed = {c: t for c, t in firsts.items() if np.isfinite(t)}
     if closed:
         t1 = min(closed.values())
         first = [c for c, t in closed.items() if t <= t1 + 1e-9]
         faces = join(sorted({_corner_face(c) for c in first}))
-        s += (f"; the gaps close first at {join(first)} ({faces}) at t = {t1:.2f} s")
+        s += f"; the gaps close first at {join(first)} ({faces}) at t = {t1:.2f} s"
     c1, c2 = row["contact_seat1"], row["contact_seat2"]
     if c1 + c2 > 0:
-        s += (f"; {100 * c1 / (c1 + c2):.0f} % of the face contact time is at seat 1 "
-              f"({c1:.2f} s against {c2:.2f} s at seat 2)")
+        s += (
+            f"; {100 * c1 / (c1 + c2):.0f} % of the face contact time is at seat 1 "
+            f"({c1:.2f} s against {c2:.2f} s at seat 2)"
+        )
     return s + "."
 
 
@@ -257,18 +306,21 @@ def impulse_agreement_sentences(effect: pd.DataFrame, mech: pd.DataFrame) -> lis
             out.append(f"{label}: the friction impulse cannot be read from its output.")
             continue
         n = len(agree) + len(disagree)
-        s = (f"{label}: of the {n} run(s) where friction changes the peak rotation by more than "
-             f"{short(100 * TOL)} %, the friction impulse explains the change in {len(agree)}: "
-             "it drives the new peak where friction raises it and resists the frictionless "
-             "peak's excursion where friction lowers it")
+        s = (
+            f"{label}: of the {n} run(s) where friction changes the peak rotation by more than "
+            f"{short(100 * TOL)} %, the friction impulse explains the change in {len(agree)}: "
+            "it drives the new peak where friction raises it and resists the frictionless "
+            "peak's excursion where friction lowers it"
+        )
         s += f" ({runs_text(agree)})" if agree else ""
         s += f"; it does not {in_runs(disagree)}" if disagree else ""
-        s += (f"; {runs_text(unknown)} cannot be read" if unknown else "")
+        s += f"; {runs_text(unknown)} cannot be read" if unknown else ""
         out.append(s + ".")
     return out
 
 
 # -- start states, studies -------------------------------------------------------------------
+
 
 def state_name(label: str) -> str:
     """``the virgin state`` or ``the state carried into run 7``."""
@@ -280,17 +332,23 @@ def state_name(label: str) -> str:
 def state_sentence(state) -> str:
     """The start state of a study in words (a :class:`~.studies.StartState`)."""
     sc = state.scene
-    gaps = (f"gaps {1e3 * sc.seats[0].gap:.2f} mm at seat 1 and {1e3 * sc.seats[1].gap:.2f} mm "
-            "at seat 2")
+    gaps = (
+        f"gaps {1e3 * sc.seats[0].gap:.2f} mm at seat 1 and {1e3 * sc.seats[1].gap:.2f} mm "
+        "at seat 2"
+    )
     pga = f"excitation at {short(sc.excitation.pga)} g transverse"
     if not state.carried:
-        return f"Starts from the virgin state: the scene as given ({gaps}, bent stiffness as " \
-               f"given, {pga})."
+        return (
+            f"Starts from the virgin state: the scene as given ({gaps}, bent stiffness as "
+            f"given, {pga})."
+        )
     ratios = state.stiffness_ratios()
     prior = "no earlier run" if state.run == 1 else runs_text(list(range(1, state.run)))
-    return (f"Starts from the state carried into run {state.run} by the {state.engine} "
-            f"sequence (after {prior}): {gaps}, bent stiffness {100 * min(ratios):.0f}–"
-            f"{100 * max(ratios):.0f} % of the scene's, {pga}.")
+    return (
+        f"Starts from the state carried into run {state.run} by the {state.engine} "
+        f"sequence (after {prior}): {gaps}, bent stiffness {100 * min(ratios):.0f}–"
+        f"{100 * max(ratios):.0f} % of the scene's, {pga}."
+    )
 
 
 def study_spread_sentence(table: pd.DataFrame) -> str:
@@ -300,9 +358,11 @@ def study_spread_sentence(table: pd.DataFrame) -> str:
         return "No case of this study finished."
     lo, hi = ok.loc[ok["peak_theta"].idxmin()], ok.loc[ok["peak_theta"].idxmax()]
     spread = (hi["peak_theta"] / lo["peak_theta"] - 1.0) if lo["peak_theta"] > 0 else np.nan
-    s = (f"Peak rotation from {num(1e3 * lo['peak_theta'])} mrad ({lo['label']}) to "
-         f"{num(1e3 * hi['peak_theta'])} mrad ({hi['label']}), a spread of "
-         f"{num(100 * spread, 2)} % of the lowest")
+    s = (
+        f"Peak rotation from {num(1e3 * lo['peak_theta'])} mrad ({lo['label']}) to "
+        f"{num(1e3 * hi['peak_theta'])} mrad ({hi['label']}), a spread of "
+        f"{num(100 * spread, 2)} % of the lowest"
+    )
     failed = len(table) - len(ok)
     return s + (f"; {failed} case(s) failed." if failed else ".")
 
@@ -314,19 +374,27 @@ def state_comparison_sentence(carried: pd.DataFrame, virgin: pd.DataFrame, run: 
     if not len(both):
         return ""
     r = both["peak_theta_c"] / both["peak_theta_v"]
-    return (f"From the state carried into run {run}, the peak rotations are "
-            f"{ratio_text(r.min(), r.max())} of the virgin state's for the same cases.")
+    return (
+        f"From the state carried into run {run}, the peak rotations are "
+        f"{ratio_text(r.min(), r.max())} of the virgin state's for the same cases."
+    )
 
 
 # -- headline ----------------------------------------------------------------------------------
+
 
 def _by_engine_clauses(items: list[tuple[str, float]]) -> str:
     return effect_clauses(items, lambda ks: "in " + join([engine_label(k) for k in ks]))
 
 
-def headline_sentences(seq: pd.DataFrame, effect: pd.DataFrame, strongest: int,
-                       reference: str, metrics: pd.DataFrame | None = None,
-                       virgin: pd.DataFrame | None = None) -> list[str]:
+def headline_sentences(
+    seq: pd.DataFrame,
+    effect: pd.DataFrame,
+    strongest: int,
+    reference: str,
+    metrics: pd.DataFrame | None = None,
+    virgin: pd.DataFrame | None = None,
+) -> list[str]:
     """The paper's comparison in words: the strongest run's peak rotations per engine with and
     without friction, the direction of friction's effect there and (``virgin``: the friction
     study's effect table from the virgin state) from the scene as given, the engines' agreement
@@ -347,10 +415,19 @@ def headline_sentences(seq: pd.DataFrame, effect: pd.DataFrame, strongest: int,
             if not with_friction and r["engine"] != reference and np.isfinite(ref_theta):
                 p += f" ({ratio_text(r['peak_theta'] / ref_theta)} of {engine_label(reference)})"
             parts.append(p)
-        what = ("without friction" if not with_friction else "with friction ("
-                + friction_model_text(rows["mu"].iloc[0], rows["friction_mode"].iloc[0]) + ")")
-        lead = (f"Strongest run (run {strongest}, {short(rows['pga'].iloc[0])} g transverse "
-                "label): peak deck rotation " if not out else "With ")
+        what = (
+            "without friction"
+            if not with_friction
+            else "with friction ("
+            + friction_model_text(rows["mu"].iloc[0], rows["friction_mode"].iloc[0])
+            + ")"
+        )
+        lead = (
+            f"Strongest run (run {strongest}, {short(rows['pga'].iloc[0])} g transverse "
+            "label): peak deck rotation "
+            if not out
+            else "With "
+        )
         if with_friction and out:
             what = what.replace("with friction", "friction", 1)
         out.append(lead + f"{what}: " + "; ".join(parts) + ".")
@@ -362,28 +439,43 @@ def headline_sentences(seq: pd.DataFrame, effect: pd.DataFrame, strongest: int,
         mu = strong["mu"].iloc[0] if len(strong) else virgin["mu"].min()
         v = virgin[np.isclose(virgin["mu"], mu)]
         if len(v):
-            s = (f"From the virgin state (the scene as given, friction study at μ = {short(mu)}) "
-                 f"friction {_by_engine_clauses(list(zip(v['engine'], v['ratio'])))}")
-            if len(strong) and set(v["direction"]) & {"raises", "lowers"} and \
-                    not set(v["direction"]) & set(strong["direction"]):
+            s = (
+                f"From the virgin state (the scene as given, friction study at μ = {short(mu)}) "
+                f"friction {_by_engine_clauses(list(zip(v['engine'], v['ratio'])))}"
+            )
+            if (
+                len(strong)
+                and set(v["direction"]) & {"raises", "lowers"}
+                and not set(v["direction"]) & set(strong["direction"])
+            ):
                 s += ": the opposite of the carried state"
             out.append(s + ".")
     if metrics is not None and len(metrics):
         m = metrics[(metrics["run"] == strongest) & (metrics["quantity"] == "deck_theta")]
         if len(m):
-            out.append(f"Against {engine_label(reference)} in run {strongest} (no friction): "
-                       + "; ".join(f"{engine_label(r['engine'])} peak θ "
-                                   f"{ratio_text(r['peak_ratio'])}, NRMSE {r['nrmse']:.2g}"
-                                   for _, r in m.iterrows()) + ".")
+            out.append(
+                f"Against {engine_label(reference)} in run {strongest} (no friction): "
+                + "; ".join(
+                    f"{engine_label(r['engine'])} peak θ "
+                    f"{ratio_text(r['peak_ratio'])}, NRMSE {r['nrmse']:.2g}"
+                    for _, r in m.iterrows()
+                )
+                + "."
+            )
     closes = seq[seq["gap_closures"] > 0].groupby("case", sort=False)["run"].min()
     never = sorted(set(seq["case"]) - set(closes.index))
     if len(closes):
         if closes.nunique() == 1 and not never:
-            out.append(f"The gaps first close in run {int(closes.iloc[0])} for every engine and "
-                       "friction assumption.")
+            out.append(
+                f"The gaps first close in run {int(closes.iloc[0])} for every engine and "
+                "friction assumption."
+            )
         else:
-            out.append("First run in which a gap closes: " + ", ".join(
-                f"{c} run {int(r)}" for c, r in closes.items()) + ".")
+            out.append(
+                "First run in which a gap closes: "
+                + ", ".join(f"{c} run {int(r)}" for c, r in closes.items())
+                + "."
+            )
     if never:
         out.append(f"No gap closes in any run for: {', '.join(never)}.")
     return out
@@ -396,19 +488,30 @@ def state_contrast_sentence(engine: str, mu: float, parts: list[tuple]) -> str:
     for state, row, ratio in parts:
         sc = state.scene
         word = direction(ratio)
-        effect = (f"changes the peak rotation by less than {short(100 * TOL)} %"
-                  if word == "unchanged" else f"{word} the peak rotation {ratio_text(ratio)}")
-        if word == "lowers":   # what friction does to the rotation that was the peak without it
+        effect = (
+            f"changes the peak rotation by less than {short(100 * TOL)} %"
+            if word == "unchanged"
+            else f"{word} the peak rotation {ratio_text(ratio)}"
+        )
+        if word == "lowers":  # what friction does to the rotation that was the peak without it
             jt, what = row["friction_impulse_ref"], "the frictionless peak's excursion"
         else:
             jt, what = row["friction_impulse"], "the peak excursion"
-        drive = (f", its impulse {'driving' if jt > 0 else 'resisting'} {what} "
-                 f"({jt:+.3g} kN·m·s)" if np.isfinite(jt) else "")
+        drive = (
+            f", its impulse {'driving' if jt > 0 else 'resisting'} {what} ({jt:+.3g} kN·m·s)"
+            if np.isfinite(jt)
+            else ""
+        )
         c1, c2 = row["contact_seat1"], row["contact_seat2"]
-        share = f", seat 1 taking {100 * c1 / (c1 + c2):.0f} % of the face contact time" \
-            if c1 + c2 > 0 else ""
-        clauses.append(f"from {state_name(state.label)} (gaps {1e3 * sc.seats[0].gap:.2f} and "
-                       f"{1e3 * sc.seats[1].gap:.2f} mm) friction {effect}{drive}{share}")
+        share = (
+            f", seat 1 taking {100 * c1 / (c1 + c2):.0f} % of the face contact time"
+            if c1 + c2 > 0
+            else ""
+        )
+        clauses.append(
+            f"from {state_name(state.label)} (gaps {1e3 * sc.seats[0].gap:.2f} and "
+            f"{1e3 * sc.seats[1].gap:.2f} mm) friction {effect}{drive}{share}"
+        )
     return f"{engine_label(engine)} at μ = {short(mu)}: " + "; ".join(clauses) + "."
 
 
@@ -420,8 +523,10 @@ def mode_pair_sentence(table: pd.DataFrame) -> str:
     ok = table[table["status"] == "success"]
     slip = ok[ok["friction_mode"] == "slip"].set_index("mu")["peak_theta"]
     out = []
-    for mode, what in (("stick", "the project's stick law"),
-                       ("contact2d", "OpenSees's zeroLengthContact2D algorithm")):
+    for mode, what in (
+        ("stick", "the project's stick law"),
+        ("contact2d", "OpenSees's zeroLengthContact2D algorithm"),
+    ):
         stick = ok[ok["friction_mode"] == mode].set_index("mu")["peak_theta"]
         items = [(mu, stick[mu] / slip[mu]) for mu in stick.index if mu in slip.index]
         if items:

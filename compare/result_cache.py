@@ -27,10 +27,9 @@ import shutil
 import warnings
 from pathlib import Path
 
+from deckpound._io import ensure_folder, is_temporary
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
-
-from deckpound._io import ensure_folder, is_temporary
 
 MANIFEST = "manifest.json"
 FORMAT = 1
@@ -73,8 +72,11 @@ class ResultCache:
             result = self._load(self.path(key), engine)
         except CorruptEntry as err:
             self.corrupt += 1
-            warnings.warn(f"result cache entry {key[:16]} in {str(self.folder)!r} is damaged "
-                          f"({err}); recomputing it", stacklevel=2)
+            warnings.warn(
+                f"result cache entry {key[:16]} in {str(self.folder)!r} is damaged "
+                f"({err}); recomputing it",
+                stacklevel=2,
+            )
             result = None
         counts = self.by_engine.setdefault(engine, [0, 0])
         if result is None:
@@ -110,8 +112,9 @@ class ResultCache:
             os.close(dfd)
         _verify(files, engine)
         try:
-            return Result.from_bytes(engine, files[f"{engine}.csv"], files[f"{engine}.json"],
-                                     source=str(entry))
+            return Result.from_bytes(
+                engine, files[f"{engine}.csv"], files[f"{engine}.json"], source=str(entry)
+            )
         except (SceneError, ValueError) as err:
             raise CorruptEntry(str(err)) from None
 
@@ -125,9 +128,11 @@ class ResultCache:
             _write_entry(tmp, result)
             self._install(tmp, final, result.engine)
         except OSError as err:
-            warnings.warn(f"could not store a result in the cache {str(self.folder)!r} "
-                          f"({err.strerror or err}); it will be recomputed next time",
-                          stacklevel=2)
+            warnings.warn(
+                f"could not store a result in the cache {str(self.folder)!r} "
+                f"({err.strerror or err}); it will be recomputed next time",
+                stacklevel=2,
+            )
         finally:
             if tmp.exists():
                 shutil.rmtree(tmp, ignore_errors=True)
@@ -183,8 +188,9 @@ def _verify(files: dict[str, bytes], engine: str) -> None:
             raise CorruptEntry(f"{MANIFEST} does not list {name}")
         data = files[name]
         if want.get("size") != len(data):
-            raise CorruptEntry(f"{name} holds {len(data)} bytes, the manifest says "
-                               f"{want.get('size')}")
+            raise CorruptEntry(
+                f"{name} holds {len(data)} bytes, the manifest says {want.get('size')}"
+            )
         if want.get("sha256") != _sha256(data):
             raise CorruptEntry(f"{name} does not match its SHA-256 checksum")
 
@@ -194,10 +200,15 @@ def _write_entry(folder: Path, result: Result) -> None:
     from deckpound._io import atomic_write_bytes
 
     os.mkdir(folder)
-    data = {f"{result.engine}.csv": result.csv_bytes(),
-            f"{result.engine}.json": result.json_bytes()}
+    data = {
+        f"{result.engine}.csv": result.csv_bytes(),
+        f"{result.engine}.json": result.json_bytes(),
+    }
     for name, content in data.items():
         atomic_write_bytes(folder / name, content, field="cache")
-    manifest = {"format": FORMAT, "engine": result.engine,
-                "files": {n: {"sha256": _sha256(c), "size": len(c)} for n, c in data.items()}}
+    manifest = {
+        "format": FORMAT,
+        "engine": result.engine,
+        "files": {n: {"sha256": _sha256(c), "size": len(c)} for n, c in data.items()},
+    }
     atomic_write_bytes(folder / MANIFEST, json.dumps(manifest, indent=1).encode(), field="cache")

@@ -15,8 +15,15 @@ from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 from deckpound.models.sequence import SpecimenState, initial_state, next_state, scene_for_run
 
-from .cases import (Progress, ResultCache, _map_parallel, case_key, interrupted, run_case,
-                    surface_warnings)
+from .cases import (
+    Progress,
+    ResultCache,
+    _map_parallel,
+    case_key,
+    interrupted,
+    run_case,
+    surface_warnings,
+)
 
 
 @dataclass
@@ -28,12 +35,16 @@ class SequenceRun:
     state: SpecimenState
     scene: Scene
     result: Result
-    cached: bool = False     # the result came from the result cache (not computed now)
+    cached: bool = False  # the result came from the result cache (not computed now)
 
 
-def run_sequence(scene: Scene, engine: str, cache_folder: str | Path | None = None,
-                 start: SpecimenState | None = None, runs: int | None = None
-                 ) -> list[SequenceRun]:
+def run_sequence(
+    scene: Scene,
+    engine: str,
+    cache_folder: str | Path | None = None,
+    start: SpecimenState | None = None,
+    runs: int | None = None,
+) -> list[SequenceRun]:
     """The runs of ``scene.sequence`` with one engine (the first ``runs`` of them, default
     all); stops after a failed run."""
     cache = ResultCache(cache_folder) if cache_folder is not None else None
@@ -63,8 +74,9 @@ def strongest_run(scene: Scene) -> int:
     return max(range(len(pgas)), key=lambda i: (pgas[i], i)) + 1
 
 
-def state_before(scene: Scene, run: int, engine: str, cache_folder: str | Path | None = None
-                 ) -> tuple[SpecimenState, Scene]:
+def state_before(
+    scene: Scene, run: int, engine: str, cache_folder: str | Path | None = None
+) -> tuple[SpecimenState, Scene]:
     """The state the specimen carries into run ``run`` (1-based) of the sequence driven by
     ``engine`` (runs 1 … run − 1 are run or read from the cache), and that run's scene."""
     n = len(scene.sequence.pgas)
@@ -75,16 +87,24 @@ def state_before(scene: Scene, run: int, engine: str, cache_folder: str | Path |
         runs = run_sequence(scene, engine, cache_folder, runs=run - 1)
         last = runs[-1]
         if len(runs) < run - 1 or not last.result.ok:
-            raise SceneError("--state", f"run {last.index} of the {engine} sequence failed "
-                             f"({last.result.meta.get('message', '')}), so no state reaches "
-                             f"run {run}")
+            raise SceneError(
+                "--state",
+                f"run {last.index} of the {engine} sequence failed "
+                f"({last.result.meta.get('message', '')}), so no state reaches "
+                f"run {run}",
+            )
         state = next_state(scene, last.state, last.scene, last.result, None)
     return state, scene_for_run(scene, scene.sequence.pgas[run - 1], state)
 
 
-def run_sequences(scene: Scene, engines: list[str], cache_folder: str | Path | None = None,
-                  workers: int | None = None, scheduler: str | None = None,
-                  progress: bool = True) -> dict[str, list[SequenceRun]]:
+def run_sequences(
+    scene: Scene,
+    engines: list[str],
+    cache_folder: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+) -> dict[str, list[SequenceRun]]:
     """The sequence for several engines, one engine per worker."""
     out: dict[str, list[SequenceRun]] = {}
     bar = Progress(len(engines), "sequence", progress)
@@ -94,11 +114,13 @@ def run_sequences(scene: Scene, engines: list[str], cache_folder: str | Path | N
         bar.advance()
 
     try:
-        _map_parallel(engines, lambda e: (scene, e, cache_folder), run_sequence, done, workers,
-                      scheduler)
-    except KeyboardInterrupt as err:   # each finished run is cached: say so (issue 14)
+        _map_parallel(
+            engines, lambda e: (scene, e, cache_folder), run_sequence, done, workers, scheduler
+        )
+    except KeyboardInterrupt as err:  # each finished run is cached: say so (issue 14)
         bar.close()
-        raise interrupted(err, "sequence", len(out), len(engines), cache_folder,
-                          "engines' sequences", "run") from None
+        raise interrupted(
+            err, "sequence", len(out), len(engines), cache_folder, "engines' sequences", "run"
+        ) from None
     surface_warnings(r.result for runs in out.values() for r in runs)
     return {e: out[e] for e in engines}

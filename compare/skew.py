@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
 from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import CORNER_NAMES
@@ -117,8 +118,9 @@ def skew_cases(scene: Scene, quick: bool = False) -> list[Case]:
                 sc = base if engine == "nonsmooth" else penalty
                 if not _can_run(engine, sc):
                     continue
-                friction = ("none" if mu == 0 else
-                            "Coulomb" if engine == "nonsmooth" else DEFAULT_FRICTION)
+                friction = (
+                    "none" if mu == 0 else "Coulomb" if engine == "nonsmooth" else DEFAULT_FRICTION
+                )
                 cases.append(
                     Case(
                         f"{engine} skew={phi:g} mu={mu:g}",
@@ -220,8 +222,14 @@ Y_PEAK = "peak_y_rel"
 
 
 def skew_figure(
-    study, scene: Scene, cases, results, table: pd.DataFrame, path: str | Path,
-    formats: tuple[str, ...] = (), subtitle: str = ""
+    study,
+    scene: Scene,
+    cases,
+    results,
+    table: pd.DataFrame,
+    path: str | Path,
+    formats: tuple[str, ...] = (),
+    subtitle: str = "",
 ) -> list[Path]:
     """Peak deck rotation (left) and peak transverse deck displacement relative to the tables
     (right) against the skew angle; one line per engine × friction (friction: open markers,

@@ -127,13 +127,24 @@ def _takeda_off(scenes: dict[str, Scene], repeats: int, timeout: float) -> dict:
     from deckpound.models._fields import to_mapping
 
     with tempfile.TemporaryDirectory(prefix="deckpound-skips-") as tmp:
-        spec = {"scenes": {k: to_mapping(s) for k, s in scenes.items()}, "repeats": repeats,
-                "folder": tmp}
+        spec = {
+            "scenes": {k: to_mapping(s) for k, s in scenes.items()},
+            "repeats": repeats,
+            "folder": tmp,
+        }
         (Path(tmp) / "spec.json").write_text(json.dumps(spec))
-        env = dict(os.environ, DECKPOUND_TAKEDA_SHORTCUT="0",
-                   NUMBA_CACHE_DIR=str(Path(tmp) / "numba-cache"))
-        proc = subprocess.run([sys.executable, "-c", _TAKEDA_CHILD, str(Path(tmp) / "spec.json")],
-                              capture_output=True, text=True, env=env, timeout=timeout)
+        env = dict(
+            os.environ,
+            DECKPOUND_TAKEDA_SHORTCUT="0",
+            NUMBA_CACHE_DIR=str(Path(tmp) / "numba-cache"),
+        )
+        proc = subprocess.run(
+            [sys.executable, "-c", _TAKEDA_CHILD, str(Path(tmp) / "spec.json")],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=timeout,
+        )
         if proc.returncode != 0:
             raise RuntimeError(proc.stderr[-1500:])
         walls = json.loads(proc.stdout.strip().splitlines()[-1])
@@ -141,8 +152,15 @@ def _takeda_off(scenes: dict[str, Scene], repeats: int, timeout: float) -> dict:
     return {k: (walls[k], cols[k]) for k in scenes}
 
 
-def run_skips(base: Scene, out: str | Path, *, quick: bool = False, repeats: int | None = None,
-              takeda: bool = True, timeout: float = 1800.0) -> tuple[pd.DataFrame, pd.DataFrame]:
+def run_skips(
+    base: Scene,
+    out: str | Path,
+    *,
+    quick: bool = False,
+    repeats: int | None = None,
+    takeda: bool = True,
+    timeout: float = 1800.0,
+) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Measure every skip (see the module docstring); write skips.csv, adaptive_steps.csv."""
     from deckpound.analytic.compliance import SKIPS, run_compliance
     from deckpound.models.excitation import support_motion
@@ -157,49 +175,85 @@ def run_skips(base: Scene, out: str | Path, *, quick: bool = False, repeats: int
         warnings.simplefilter("ignore")
         for name, sc in scenes.items():
             sc = modified(sc, "compliance.integrator=newmark")
-            m = support_motion(sc)                    # built once: the record is not timed
-            run_compliance(sc, m)                                     # compile / warm
+            m = support_motion(sc)  # built once: the record is not timed
+            run_compliance(sc, m)  # compile / warm
             ref, t_on = _timed(lambda: run_compliance(sc, m), repeats)
             n = max(int(ref.meta["steps"]), 1)
 
             def add(skip, t_with, t_without, diff, note=""):
-                rows.append(dict(scene=name, skip=skip, time_with=t_with,
-                                 time_without=t_without, saving=1.0 - t_with / t_without,
-                                 speedup=t_without / t_with, us_per_step_with=1e6 * t_with / n,
-                                 us_per_step_without=1e6 * t_without / n, max_abs_diff=diff,
-                                 identical=diff == 0.0, gap_closures=ref.gap_closures,
-                                 note=note))
+                rows.append(
+                    dict(
+                        scene=name,
+                        skip=skip,
+                        time_with=t_with,
+                        time_without=t_without,
+                        saving=1.0 - t_with / t_without,
+                        speedup=t_without / t_with,
+                        us_per_step_with=1e6 * t_with / n,
+                        us_per_step_without=1e6 * t_without / n,
+                        max_abs_diff=diff,
+                        identical=diff == 0.0,
+                        gap_closures=ref.gap_closures,
+                        note=note,
+                    )
+                )
 
             for skip in SKIPS:
-                a, t_a, r, t_off = _paired(lambda: run_compliance(sc, m),
-                                           lambda: run_compliance(sc, m, _skips={skip: False}),
-                                           repeats)
+                _a, t_a, r, t_off = _paired(
+                    lambda: run_compliance(sc, m),
+                    lambda: run_compliance(sc, m, _skips={skip: False}),
+                    repeats,
+                )
                 add(skip, t_a, t_off, max_diff(ref, r))
-            r, t_ch, a, t_a = _paired(lambda: run_compliance(sc, m, channels=["deck_theta"]),
-                                      lambda: run_compliance(sc, m), repeats)
-            add("channels", t_ch, t_a, max_diff(ref, r, ["t", "deck_theta"]),
-                "deck_theta only vs every column")
+            r, t_ch, _a, t_a = _paired(
+                lambda: run_compliance(sc, m, channels=["deck_theta"]),
+                lambda: run_compliance(sc, m),
+                repeats,
+            )
+            add(
+                "channels",
+                t_ch,
+                t_a,
+                max_diff(ref, r, ["t", "deck_theta"]),
+                "deck_theta only vs every column",
+            )
             nl = modified(sc, "contact.geometry=nonlinear")
             run_compliance(nl, m)
-            a, t_a, r, t_nl = _paired(lambda: run_compliance(sc, m),
-                                      lambda: run_compliance(nl, m), repeats)
-            add("geometry", t_a, t_nl, max_diff(ref, r, ["deck_theta"]),
+            _a, t_a, r, t_nl = _paired(
+                lambda: run_compliance(sc, m), lambda: run_compliance(nl, m), repeats
+            )
+            add(
+                "geometry",
+                t_a,
+                t_nl,
+                max_diff(ref, r, ["deck_theta"]),
                 "linear vs nonlinear kinematics: a different model; max_abs_diff is that of "
-                "deck_theta [rad], for information")
+                "deck_theta [rad], for information",
+            )
             ad = modified(sc, "compliance.integrator=adaptive")
             lifted = modified(ad, f"compliance.commit_step={ad.compliance.max_step!r}")
             for cap, scn in (("default", ad), ("lifted", lifted)):
                 ra = run_compliance(scn, m)
                 for where, st in ra.meta["step_sizes"].items():
-                    steps_rows.append(dict(scene=name, commit_cap=cap,
-                                           commit_step=scn.compliance.commit_step, where=where,
-                                           **st, wall=ra.meta["wall_time"],
-                                           rtol=scn.compliance.rtol))
+                    steps_rows.append(
+                        dict(
+                            scene=name,
+                            commit_cap=cap,
+                            commit_step=scn.compliance.commit_step,
+                            where=where,
+                            **st,
+                            wall=ra.meta["wall_time"],
+                            rtol=scn.compliance.rtol,
+                        )
+                    )
             if takeda:
                 rows.append(dict(scene=name, skip="takeda_pow", time_with=t_on, _ref=ref))
     if takeda:
-        off = _takeda_off({k: modified(s, "compliance.integrator=newmark")
-                           for k, s in scenes.items()}, repeats, timeout)
+        off = _takeda_off(
+            {k: modified(s, "compliance.integrator=newmark") for k, s in scenes.items()},
+            repeats,
+            timeout,
+        )
         for row in rows:
             if row.get("skip") == "takeda_pow":
                 ref = row.pop("_ref")
@@ -208,12 +262,17 @@ def run_skips(base: Scene, out: str | Path, *, quick: bool = False, repeats: int
                 for c, v in cols.items():
                     diff = max(diff, float(np.max(np.abs(v - ref.columns[c]))))
                 n = max(int(ref.meta["steps"]), 1)
-                row.update(time_without=t_off, saving=1.0 - row["time_with"] / t_off,
-                           speedup=t_off / row["time_with"],
-                           us_per_step_with=1e6 * row["time_with"] / n,
-                           us_per_step_without=1e6 * t_off / n, max_abs_diff=diff,
-                           identical=diff == 0.0, gap_closures=ref.gap_closures,
-                           note="Hysteretic kernel pow short-circuit (child process)")
+                row.update(
+                    time_without=t_off,
+                    saving=1.0 - row["time_with"] / t_off,
+                    speedup=t_off / row["time_with"],
+                    us_per_step_with=1e6 * row["time_with"] / n,
+                    us_per_step_without=1e6 * t_off / n,
+                    max_abs_diff=diff,
+                    identical=diff == 0.0,
+                    gap_closures=ref.gap_closures,
+                    note="Hysteretic kernel pow short-circuit (child process)",
+                )
     table = pd.DataFrame(rows)
     steps = pd.DataFrame(steps_rows)
     table.to_csv(out / "skips.csv", index=False)

@@ -95,10 +95,9 @@ def measure(
     """Measure every engine (see the module docstring); returns (rows, context)."""
     import json
 
+    from deckpound.engines import engine_names, run_engine
     from deckpound.models.excitation import support_motion
     from deckpound.models.scene_io import load_scene
-
-    from deckpound.engines import engine_names, run_engine
 
     overrides = list(overrides or [])
     engines = list(engines or engine_names())

@@ -26,16 +26,24 @@ from deckpound.models.scene import Scene
 from .guarded import run_guarded
 from .studies import modified
 
+
 def step_field(engine: str) -> str:
     """Dotted scene path of an engine's time step (declared by the engine)."""
     e = get_engine(engine)
     return f"{e.settings_field}.{e.step_field}"
 
-FULL = dict(stiffness=[1e4, 1e6, 1e8, 1e10], dt=[1e-5, 1e-4, 1e-3, 1e-2],
-            pga=[0.05, 0.5, 1.0, 2.0], gap=[0.0, 0.0127, 0.1], friction=[0.0, 0.2, 0.8],
-            restitution=[0.0, 0.6, 1.0])
-QUICK = dict(stiffness=[1e4, 1e10], dt=[1e-4, 1e-2], pga=[2.0], gap=[0.0], friction=[0.8],
-             restitution=[0.0])
+
+FULL = dict(
+    stiffness=[1e4, 1e6, 1e8, 1e10],
+    dt=[1e-5, 1e-4, 1e-3, 1e-2],
+    pga=[0.05, 0.5, 1.0, 2.0],
+    gap=[0.0, 0.0127, 0.1],
+    friction=[0.0, 0.2, 0.8],
+    restitution=[0.0, 0.6, 1.0],
+)
+QUICK = dict(
+    stiffness=[1e4, 1e10], dt=[1e-4, 1e-2], pga=[2.0], gap=[0.0], friction=[0.8], restitution=[0.0]
+)
 
 
 def grid(quick: bool = False) -> list[dict]:
@@ -75,10 +83,17 @@ def _row(engine: str, cell: dict, outcome) -> dict:
     row.update(status=outcome.status, wall=outcome.wall, message=outcome.message[:200])
     r = outcome.result
     if r is None:
-        row.update(finite=False, max_penetration=np.nan, energy_error=np.nan,
-                   complementarity=np.nan, failed_time=np.nan, failed_step=np.nan, t_end=np.nan)
+        row.update(
+            finite=False,
+            max_penetration=np.nan,
+            energy_error=np.nan,
+            complementarity=np.nan,
+            failed_time=np.nan,
+            failed_step=np.nan,
+            t_end=np.nan,
+        )
         return row
-    data = np.column_stack([v for v in r.columns.values()])
+    data = np.column_stack(list(r.columns.values()))
     gaps = np.column_stack([r[f"gap_c{c}"] for c in range(1, 5)])
     row.update(
         finite=bool(np.all(np.isfinite(data))),
@@ -113,10 +128,17 @@ def _energy_error(r) -> float:
     return np.nan
 
 
-def run_stress(base: Scene, out: str | Path, *, quick: bool = False,
-               engines: tuple[str, ...] | None = None, duration: float | None = None,
-               timeout: float = 300.0, progress: bool = True,
-               cells: list[dict] | None = None) -> pd.DataFrame:
+def run_stress(
+    base: Scene,
+    out: str | Path,
+    *,
+    quick: bool = False,
+    engines: tuple[str, ...] | None = None,
+    duration: float | None = None,
+    timeout: float = 300.0,
+    progress: bool = True,
+    cells: list[dict] | None = None,
+) -> pd.DataFrame:
     """Run the grid (or the given ``cells``), write stress.csv and heat maps into ``out``;
     return the table.
 
@@ -160,7 +182,7 @@ def heat_maps(table: pd.DataFrame, scene: Scene, out: Path) -> list[Path]:
 
     from .style import new_figure, save
 
-    status_cmap = ListedColormap(["#f4a6a6", "#a8dba8"])     # 0 FAIL (red), 1 ok (green)
+    status_cmap = ListedColormap(["#f4a6a6", "#a8dba8"])  # 0 FAIL (red), 1 ok (green)
     written = []
     two_way = table.dropna(subset=["stiffness", "dt"])
     engines = list(dict.fromkeys(table["engine"]))
@@ -176,26 +198,48 @@ def heat_maps(table: pd.DataFrame, scene: Scene, out: Path) -> list[Path]:
                 i, k = dts.index(r["dt"]), ks.index(r["stiffness"])
                 ok[i, k] = 1.0 if (r["status"] == "success" and r["finite"]) else 0.0
                 pen[i, k] = 1e3 * r["max_penetration"]
-            for row, (data, title) in enumerate(((ok, "finished with finite output"),
-                                                 (pen, "max penetration [mm]"))):
+            for row, (data, title) in enumerate(
+                ((ok, "finished with finite output"), (pen, "max penetration [mm]"))
+            ):
                 ax = axes[row, j]
                 ax.grid(False)
                 norm = None
                 if row == 0:
-                    im = ax.imshow(data, cmap=status_cmap, origin="lower", aspect="auto",
-                                   vmin=0, vmax=1)
+                    im = ax.imshow(
+                        data, cmap=status_cmap, origin="lower", aspect="auto", vmin=0, vmax=1
+                    )
                 else:
                     pos = data[np.isfinite(data) & (data > 0)]
-                    norm = LogNorm(vmin=pos.min(), vmax=max(pos.max(), pos.min() * 10)) \
-                        if len(pos) else None
-                    im = ax.imshow(np.where(data > 0, data, np.nan), cmap="Blues",
-                                   origin="lower", aspect="auto", norm=norm)
+                    norm = (
+                        LogNorm(vmin=pos.min(), vmax=max(pos.max(), pos.min() * 10))
+                        if len(pos)
+                        else None
+                    )
+                    im = ax.imshow(
+                        np.where(data > 0, data, np.nan),
+                        cmap="Blues",
+                        origin="lower",
+                        aspect="auto",
+                        norm=norm,
+                    )
                 for (i, k), v in np.ndenumerate(data):
-                    label = "—" if not np.isfinite(v) else (("ok" if v else "FAIL") if row == 0 else f"{v:.3g}")
-                    dark = row == 1 and norm is not None and np.isfinite(v) and v > 0 \
-                        and norm(v) > 0.6
-                    ax.text(k, i, label, ha="center", va="center", fontsize=6,
-                            color="white" if dark else "black")
+                    label = (
+                        "—"
+                        if not np.isfinite(v)
+                        else (("ok" if v else "FAIL") if row == 0 else f"{v:.3g}")
+                    )
+                    dark = (
+                        row == 1 and norm is not None and np.isfinite(v) and v > 0 and norm(v) > 0.6
+                    )
+                    ax.text(
+                        k,
+                        i,
+                        label,
+                        ha="center",
+                        va="center",
+                        fontsize=6,
+                        color="white" if dark else "black",
+                    )
                 ax.set_xticks(range(len(ks)))
                 ax.set_xticklabels([f"{k:.0e}" for k in ks], fontsize=6)
                 ax.set_yticks(range(len(dts)))
@@ -214,8 +258,9 @@ def heat_maps(table: pd.DataFrame, scene: Scene, out: Path) -> list[Path]:
             vals = sorted(sub[c].unique())
             data = np.full((len(engines), len(vals)), np.nan)
             for _, r in sub.iterrows():
-                data[engines.index(r["engine"]), vals.index(r[c])] = \
+                data[engines.index(r["engine"]), vals.index(r[c])] = (
                     1.0 if (r["status"] == "success" and r["finite"]) else 0.0
+                )
             ax = axes[0, j]
             ax.grid(False)
             ax.imshow(data, cmap=status_cmap, vmin=0, vmax=1, aspect="auto")

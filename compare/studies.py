@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
 from deckpound.models._fields import to_mapping
 from deckpound.models.contact_params import effective_masses
 from deckpound.models.errors import SceneError
@@ -41,8 +42,8 @@ from deckpound.models.scene import Scene
 from deckpound.models.scene_io import apply_overrides, scene_from_mapping
 
 from .cases import Case, ResultCache, run_cases
-from .metrics import peak
 from .damping_study import damping_cases, damping_figure, damping_headlines, damping_row
+from .metrics import peak
 from .skew import skew_cases, skew_figure, skew_headlines, skew_row
 
 ENGINES_ALL = ("opensees", "compliance", "nonsmooth")
@@ -68,10 +69,21 @@ def _compliance(scene: Scene, *overrides: str) -> Scene:
 
 
 #: units of the columns of :func:`case_row` (and of the sequence table, which adds its own)
-ROW_UNITS = {"peak_theta": "rad", "peak_x_rel": "m", "peak_y_rel": "m", "peak_x_abs": "m",
-             "peak_y_abs": "m", "peak_fn": "kN", "gap1_start": "m", "gap2_start": "m",
-             "wall_time": "s", "compile_time": "s", "gap_closures": "-", "stiffness": "kN/m",
-             "mu": "-"}
+ROW_UNITS = {
+    "peak_theta": "rad",
+    "peak_x_rel": "m",
+    "peak_y_rel": "m",
+    "peak_x_abs": "m",
+    "peak_y_abs": "m",
+    "peak_fn": "kN",
+    "gap1_start": "m",
+    "gap2_start": "m",
+    "wall_time": "s",
+    "compile_time": "s",
+    "gap_closures": "-",
+    "stiffness": "kN/m",
+    "mu": "-",
+}
 
 
 def case_row(case: Case, result: Result, state: str = "virgin") -> dict:
@@ -80,9 +92,13 @@ def case_row(case: Case, result: Result, state: str = "virgin") -> dict:
     compilation (``wall_time``) and the compilation time apart."""
     row = dict(label=case.label, engine=case.engine, **case.params)
     row.update(
-        state=state, gap1_start=case.scene.seats[0].gap, gap2_start=case.scene.seats[1].gap,
-        peak_theta=peak(result["deck_theta"]), peak_x_rel=peak(result["deck_x_rel"]),
-        peak_y_rel=peak(result["deck_y_rel"]), peak_x_abs=peak(result["deck_x_abs"]),
+        state=state,
+        gap1_start=case.scene.seats[0].gap,
+        gap2_start=case.scene.seats[1].gap,
+        peak_theta=peak(result["deck_theta"]),
+        peak_x_rel=peak(result["deck_x_rel"]),
+        peak_y_rel=peak(result["deck_y_rel"]),
+        peak_x_abs=peak(result["deck_x_abs"]),
         peak_y_abs=peak(result["deck_y_abs"]),
         peak_fn=max(peak(result[f"fn_c{c}"]) for c in range(1, 5)),
         gap_closures=result.gap_closures,
@@ -94,6 +110,7 @@ def case_row(case: Case, result: Result, state: str = "virgin") -> dict:
 
 
 # -- the state a study starts from -------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class StartState:
@@ -118,16 +135,24 @@ class StartState:
 
     def stiffness_ratios(self) -> list[float]:
         """Carried / original bent stiffness, every bent and direction [-]."""
-        return [getattr(b, a).stiffness / getattr(b0, a).stiffness
-                for b, b0 in zip(self.scene.bents, self.base.bents) for a in ("x", "y")]
+        return [
+            getattr(b, a).stiffness / getattr(b0, a).stiffness
+            for b, b0 in zip(self.scene.bents, self.base.bents)
+            for a in ("x", "y")
+        ]
 
 
 _RUN = re.compile(r"run(\d+)")
 
 
-def start_state(scene: Scene, spec: str = "virgin", *, engine: str | None = None,
-                cache_folder: str | Path | None = None, sequence: list | None = None
-                ) -> StartState:
+def start_state(
+    scene: Scene,
+    spec: str = "virgin",
+    *,
+    engine: str | None = None,
+    cache_folder: str | Path | None = None,
+    sequence: list | None = None,
+) -> StartState:
     """Resolve ``virgin``, ``strongest`` or ``run<k>`` into a :class:`StartState`.
 
     A carried state comes from ``sequence`` (the :class:`~.sequence_run.SequenceRun` list of
@@ -146,8 +171,9 @@ def start_state(scene: Scene, spec: str = "virgin", *, engine: str | None = None
     else:
         m = _RUN.fullmatch(spec)
         if m is None:
-            raise SceneError("--state", f"must be 'virgin', 'strongest' or 'run<k>' (e.g. run7), "
-                             f"got {spec!r}")
+            raise SceneError(
+                "--state", f"must be 'virgin', 'strongest' or 'run<k>' (e.g. run7), got {spec!r}"
+            )
         k = int(m.group(1))
     if sequence is not None and len(sequence) >= k:
         run = sequence[k - 1]
@@ -159,11 +185,18 @@ def start_state(scene: Scene, spec: str = "virgin", *, engine: str | None = None
 
 # -- case builders -----------------------------------------------------------------------
 
+
 def stiffness_cases(scene: Scene, quick: bool = False) -> list[Case]:
     ks = [1e4, 1e6, 1e8] if quick else [1e4, 1e5, 1e6, 1e7, 1e8]
-    cases = [Case(f"compliance k={k:.0e}", "compliance",
-                  _compliance(scene, f"contact.stiffness={k!r}", "contact.law=linear"),
-                  {"stiffness": k}) for k in ks]
+    cases = [
+        Case(
+            f"compliance k={k:.0e}",
+            "compliance",
+            _compliance(scene, f"contact.stiffness={k!r}", "contact.law=linear"),
+            {"stiffness": k},
+        )
+        for k in ks
+    ]
     cases.append(Case("nonsmooth (rigid limit)", "nonsmooth", scene, {"stiffness": np.inf}))
     return cases
 
@@ -178,8 +211,14 @@ def friction_cases(scene: Scene, quick: bool = False) -> list[Case]:
         ov = (f"contact.friction={mu!r}", f"contact.friction_mode={mode}")
         # newmark: the contact2d algorithm is OpenSees's fixed-step one (the engine refuses it
         # with the adaptive integrator)
-        cases.append(Case(f"compliance mu={mu}", "compliance",
-                          _compliance(scene, *ov, "compliance.integrator=newmark"), {"mu": mu}))
+        cases.append(
+            Case(
+                f"compliance mu={mu}",
+                "compliance",
+                _compliance(scene, *ov, "compliance.integrator=newmark"),
+                {"mu": mu},
+            )
+        )
         cases.append(Case(f"nonsmooth mu={mu}", "nonsmooth", modified(scene, *ov), {"mu": mu}))
     return cases
 
@@ -188,11 +227,21 @@ def sticking_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """Sliding only (slip), the project's stick law and OpenSees's zeroLengthContact2D
     algorithm (contact2d) at equal μ, compliance engine (newmark: contact2d needs it)."""
     mus = [0.2] if quick else [0.1, 0.2, 0.4]
-    return [Case(f"compliance {mode} mu={mu}", "compliance",
-                 _compliance(scene, f"contact.friction={mu!r}", f"contact.friction_mode={mode}",
-                             "compliance.integrator=newmark"),
-                 {"mu": mu, "friction_mode": mode})
-            for mu in mus for mode in ("slip", "stick", "contact2d")]
+    return [
+        Case(
+            f"compliance {mode} mu={mu}",
+            "compliance",
+            _compliance(
+                scene,
+                f"contact.friction={mu!r}",
+                f"contact.friction_mode={mode}",
+                "compliance.integrator=newmark",
+            ),
+            {"mu": mu, "friction_mode": mode},
+        )
+        for mu in mus
+        for mode in ("slip", "stick", "contact2d")
+    ]
 
 
 def law_cases(scene: Scene, quick: bool = False) -> list[Case]:
@@ -201,10 +250,16 @@ def law_cases(scene: Scene, quick: bool = False) -> list[Case]:
     discretisation's — and Newton on the bilinear law's kinks can stall at a fixed step."""
     from deckpound.models.contact_laws_table import LAW_CODES
 
-    laws = tuple(LAW_CODES)       # every row of the contact-law table
-    return [Case(f"compliance {law}", "compliance",
-                 _compliance(scene, f"contact.law={law}", "compliance.integrator=adaptive"),
-                 {"law": law}) for law in laws]
+    laws = tuple(LAW_CODES)  # every row of the contact-law table
+    return [
+        Case(
+            f"compliance {law}",
+            "compliance",
+            _compliance(scene, f"contact.law={law}", "compliance.integrator=adaptive"),
+            {"law": law},
+        )
+        for law in laws
+    ]
 
 
 def geometry_cases(scene: Scene, quick: bool = False) -> list[Case]:
@@ -214,16 +269,30 @@ def geometry_cases(scene: Scene, quick: bool = False) -> list[Case]:
     ov = (f"contact.friction={mu!r}", "contact.friction_mode=stick")
     cases = []
     for geo in ("linear", "nonlinear"):
-        cases.append(Case(f"compliance {geo}", "compliance",
-                          _compliance(scene, *ov, f"contact.geometry={geo}"), {"geometry": geo}))
-        cases.append(Case(f"nonsmooth {geo}", "nonsmooth",
-                          modified(scene, *ov, f"contact.geometry={geo}"), {"geometry": geo}))
+        cases.append(
+            Case(
+                f"compliance {geo}",
+                "compliance",
+                _compliance(scene, *ov, f"contact.geometry={geo}"),
+                {"geometry": geo},
+            )
+        )
+        cases.append(
+            Case(
+                f"nonsmooth {geo}",
+                "nonsmooth",
+                modified(scene, *ov, f"contact.geometry={geo}"),
+                {"geometry": geo},
+            )
+        )
     return cases
 
 
 def opensees_mode_cases(scene: Scene, quick: bool = False) -> list[Case]:
-    return [Case(f"opensees {m}", "opensees", modified(scene, f"opensees.mode={m}"), {"mode": m})
-            for m in ("rigid", "stick")]
+    return [
+        Case(f"opensees {m}", "opensees", modified(scene, f"opensees.mode={m}"), {"mode": m})
+        for m in ("rigid", "stick")
+    ]
 
 
 @dataclass(frozen=True)
@@ -246,38 +315,74 @@ class Study:
     summary: Callable[[pd.DataFrame], list[str]] | None = None
 
 
-STUDIES: dict[str, Study] = {s.name: s for s in (
-    Study("stiffness", "Contact stiffness", stiffness_cases, "stiffness", "kN/m", True),
-    Study("friction", "Friction on/off", friction_cases, "mu", "-", True),
-    Study("sticking", "Coulomb friction with and without sticking", sticking_cases, "mu", "-",
-          True),
-    Study("law", "Contact law", law_cases, "law", "", True),
-    Study("geometry", "Geometrically linear vs nonlinear contact", geometry_cases, "geometry"),
-    Study("opensees-mode", "OpenSees stick vs rigid deck", opensees_mode_cases, "mode"),
-    Study("skew", "Skewed deck: skew angle, with and without friction", skew_cases, "skew",
-          row=skew_row, figure=skew_figure, summary=skew_headlines),
-    Study("damping", "Damping choices: members × stiffness × mass velocities", damping_cases,
-          "damping", row=damping_row, figure=damping_figure, summary=damping_headlines),
-)}
+STUDIES: dict[str, Study] = {
+    s.name: s
+    for s in (
+        Study("stiffness", "Contact stiffness", stiffness_cases, "stiffness", "kN/m", True),
+        Study("friction", "Friction on/off", friction_cases, "mu", "-", True),
+        Study(
+            "sticking",
+            "Coulomb friction with and without sticking",
+            sticking_cases,
+            "mu",
+            "-",
+            True,
+        ),
+        Study("law", "Contact law", law_cases, "law", "", True),
+        Study("geometry", "Geometrically linear vs nonlinear contact", geometry_cases, "geometry"),
+        Study("opensees-mode", "OpenSees stick vs rigid deck", opensees_mode_cases, "mode"),
+        Study(
+            "skew",
+            "Skewed deck: skew angle, with and without friction",
+            skew_cases,
+            "skew",
+            row=skew_row,
+            figure=skew_figure,
+            summary=skew_headlines,
+        ),
+        Study(
+            "damping",
+            "Damping choices: members × stiffness × mass velocities",
+            damping_cases,
+            "damping",
+            row=damping_row,
+            figure=damping_figure,
+            summary=damping_headlines,
+        ),
+    )
+}
 STUDY_NAMES = tuple(STUDIES) + ("sequence",)
 
 
 def get_study(name: str) -> Study:
     if name not in STUDIES:
-        raise SceneError("study", f"unknown study {name!r}; valid studies: "
-                         f"{', '.join(STUDY_NAMES)}")
+        raise SceneError(
+            "study", f"unknown study {name!r}; valid studies: {', '.join(STUDY_NAMES)}"
+        )
     return STUDIES[name]
 
 
-def study_results(name: str, start: StartState, *, quick: bool = False,
-                  cache: ResultCache | None = None, workers: int | None = None,
-                  scheduler: str | None = None, progress: bool = True
-                  ) -> tuple[list[Case], dict[str, Result], pd.DataFrame]:
+def study_results(
+    name: str,
+    start: StartState,
+    *,
+    quick: bool = False,
+    cache: ResultCache | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+) -> tuple[list[Case], dict[str, Result], pd.DataFrame]:
     """Run a study from a start state: its cases, their results and its table."""
     study = get_study(name)
     cases = study.cases(start.scene, quick)
-    results = run_cases(cases, cache=cache, workers=workers, scheduler=scheduler,
-                        progress=progress, title=f"study {name} ({start.label})")
+    results = run_cases(
+        cases,
+        cache=cache,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        title=f"study {name} ({start.label})",
+    )
     if study.row is not None:
         rows = [{**study.row(c, results[c.label]), "state": start.label} for c in cases]
     else:
@@ -294,11 +399,20 @@ def study_units(name: str, table: pd.DataFrame) -> dict[str, str]:
     return units
 
 
-def run_study(name: str, scene: Scene, out: str | Path, *, quick: bool = False,
-              cache: ResultCache | None = None, workers: int | None = None,
-              scheduler: str | None = None, progress: bool = True,
-              state: str | StartState = "virgin", state_engine: str | None = None,
-              formats: tuple[str, ...] = ()) -> tuple[pd.DataFrame, dict]:
+def run_study(
+    name: str,
+    scene: Scene,
+    out: str | Path,
+    *,
+    quick: bool = False,
+    cache: ResultCache | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    state: str | StartState = "virgin",
+    state_engine: str | None = None,
+    formats: tuple[str, ...] = (),
+) -> tuple[pd.DataFrame, dict]:
     """Run a study from ``state`` (default: the scene as given) and write ``<name>.csv`` and
     ``<name>.png`` (``<name>_<state>.*`` for a carried state; ``formats`` adds e.g. PDF) in
     ``out``; return the table and the results."""
@@ -308,16 +422,29 @@ def run_study(name: str, scene: Scene, out: str | Path, *, quick: bool = False,
     if not isinstance(state, StartState):
         cache_folder = cache.folder if cache is not None else None
         state = start_state(scene, state, engine=state_engine, cache_folder=cache_folder)
-    cases, results, table = study_results(name, state, quick=quick, cache=cache,
-                                          workers=workers, scheduler=scheduler,
-                                          progress=progress)
+    cases, results, table = study_results(
+        name,
+        state,
+        quick=quick,
+        cache=cache,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+    )
     out = folder(out)
     stem = name if not state.carried else f"{name}_{state.label}"
     write_csv(table, out / f"{stem}.csv", study_units(name, table))
     study = get_study(name)
-    (study.figure or study_figure)(study, state.scene, cases, results, table,
-                                   out / f"{stem}.png", formats=formats,
-                                   subtitle=state_caption(state))
+    (study.figure or study_figure)(
+        study,
+        state.scene,
+        cases,
+        results,
+        table,
+        out / f"{stem}.png",
+        formats=formats,
+        subtitle=state_caption(state),
+    )
     return table, results
 
 

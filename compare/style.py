@@ -17,15 +17,30 @@ import matplotlib.pyplot as plt
 
 from deckpound._io import atomic_path
 
-CYCLE = [{"color": c, "linestyle": s, "marker": m, "markersize": 4}
-         for c, s, m in (("#000000", "-", "o"), ("#1f5fa8", "--", "s"), ("#c0392b", ":", "^"),
-                         ("#27ae60", "-.", "D"), ("#7f7f7f", (0, (5, 1)), "v"),
-                         ("#8e44ad", (0, (3, 1, 1, 1)), "x"))]
+CYCLE = [
+    {"color": c, "linestyle": s, "marker": m, "markersize": 4}
+    for c, s, m in (
+        ("#000000", "-", "o"),
+        ("#1f5fa8", "--", "s"),
+        ("#c0392b", ":", "^"),
+        ("#27ae60", "-.", "D"),
+        ("#7f7f7f", (0, (5, 1)), "v"),
+        ("#8e44ad", (0, (3, 1, 1, 1)), "x"),
+    )
+]
 
 RC = {
-    "figure.dpi": 110, "savefig.dpi": 150, "font.size": 9, "axes.titlesize": 9,
-    "axes.labelsize": 9, "legend.fontsize": 8, "axes.grid": True, "grid.alpha": 0.3,
-    "axes.spines.top": False, "axes.spines.right": False, "lines.linewidth": 1.2,
+    "figure.dpi": 110,
+    "savefig.dpi": 150,
+    "font.size": 9,
+    "axes.titlesize": 9,
+    "axes.labelsize": 9,
+    "legend.fontsize": 8,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "lines.linewidth": 1.2,
 }
 
 
@@ -37,12 +52,14 @@ def engine_style(engine: str) -> dict:
     return _registry_style(engine)
 
 
-def new_figure(nrows: int = 1, ncols: int = 1, *, width: float = 7.0, height: float = 2.2,
-               **kwargs):
+def new_figure(
+    nrows: int = 1, ncols: int = 1, *, width: float = 7.0, height: float = 2.2, **kwargs
+):
     """A figure in the deckpound style (height per row in inches)."""
     with plt.rc_context(RC):
-        fig, axes = plt.subplots(nrows, ncols, figsize=(width, height * nrows), squeeze=False,
-                                 **kwargs)
+        fig, axes = plt.subplots(
+            nrows, ncols, figsize=(width, height * nrows), squeeze=False, **kwargs
+        )
     for ax in axes.flat:
         ax.grid(True, alpha=0.3)
     return fig, axes
@@ -52,7 +69,7 @@ def stamp_text(name: str, limit: int = 80) -> str:
     """A scene name as one printable line for a figure: control characters shown as ``?``,
     cut to ``limit`` characters (a longer stamp would not fit the figure)."""
     text = "".join(c if c.isprintable() else "?" for c in str(name))
-    return text if len(text) <= limit else text[:limit - 1] + "…"
+    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 def literal_text(fig) -> None:
@@ -77,8 +94,16 @@ def save(fig, path: str | Path, scene_name: str, formats: tuple[str, ...] = ()) 
     figure (also when saving fails)."""
     path = Path(path)
     try:
-        fig.text(0.995, 0.005, f"scene: {stamp_text(scene_name)}", ha="right", va="bottom",
-                 fontsize=7, color="#555555", parse_math=False)
+        fig.text(
+            0.995,
+            0.005,
+            f"scene: {stamp_text(scene_name)}",
+            ha="right",
+            va="bottom",
+            fontsize=7,
+            color="#555555",
+            parse_math=False,
+        )
         literal_text(fig)
         fig.tight_layout(rect=(0, 0.02, 1, 1))
         written = []

@@ -28,6 +28,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+
 from deckpound.models.errors import SceneError
 from deckpound.models.scene import Scene
 

@@ -57,9 +57,9 @@ QUICK_DURATION = 5.0
 #: contact laws with an OpenSees material that the matrix leaves out, and why
 LAW_EXCLUSIONS = {
     "bilinear": "OpenSees's ImpactMaterial measures the closing step's increment from the last "
-                "open strain: it runs only with >= 1000 sub-steps and its gap force then jumps "
-                "at closure (+34 % on the first impact), a documented difference from the "
-                "clone's continuous law, not round-off (README, known limitations)",
+    "open strain: it runs only with >= 1000 sub-steps and its gap force then jumps "
+    "at closure (+34 % on the first impact), a documented difference from the "
+    "clone's continuous law, not round-off (README, known limitations)",
 }
 #: damping choices OpenSees expresses: label → overrides
 DAMPING_CASES = {
@@ -70,8 +70,19 @@ DAMPING_CASES = {
     "bents·current·absolute": ("damping.stiffness=current",),
     "bents·initial·relative": ("damping.mass=relative",),
 }
-COLUMNS = ("law", "friction", "skew [°]", "damping", "largest deviation / peak", "in column",
-           "velocities", "in column", "Newton its", "clone × OpenSees", "pass")
+COLUMNS = (
+    "law",
+    "friction",
+    "skew [°]",
+    "damping",
+    "largest deviation / peak",
+    "in column",
+    "velocities",
+    "in column",
+    "Newton its",
+    "clone × OpenSees",
+    "pass",
+)
 
 
 @dataclass(frozen=True)
@@ -101,8 +112,11 @@ def verified_laws() -> list[str]:
     """The contact laws in the matrix: an OpenSees material and not in LAW_EXCLUSIONS."""
     from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE
 
-    return [law.name for law in CONTACT_LAW_TABLE
-            if law.opensees is not None and law.name not in LAW_EXCLUSIONS]
+    return [
+        law.name
+        for law in CONTACT_LAW_TABLE
+        if law.opensees is not None and law.name not in LAW_EXCLUSIONS
+    ]
 
 
 def matrix_cases() -> list[VerifyCase]:
@@ -118,7 +132,7 @@ def matrix_cases() -> list[VerifyCase]:
             frictions.append(DEFAULT_FRICTION)
         for fr in frictions:
             for skew in (0.0, SKEW):
-                for damping in (DAMPING_CASES if law == "linear" else list(DAMPING_CASES)[:1]):
+                for damping in DAMPING_CASES if law == "linear" else list(DAMPING_CASES)[:1]:
                     cases.append(VerifyCase(law, fr, skew, damping))
     return cases
 
@@ -151,13 +165,16 @@ class CaseResult:
         """The one-line summary of the case."""
         (c, d), (cv, dv) = self.worst, self.worst_velocity
         its = "identical" if self.same_iterations else "differ"
-        return (f"{'PASS' if self.ok else 'FAIL'}  {self.label}: {d:.2e} ({c}), velocities "
-                f"{dv:.2e} ({cv}); Newton iterations {its}; clone {self.speed_ratio:.0f}× "
-                "OpenSees")
+        return (
+            f"{'PASS' if self.ok else 'FAIL'}  {self.label}: {d:.2e} ({c}), velocities "
+            f"{dv:.2e} ({cv}); Newton iterations {its}; clone {self.speed_ratio:.0f}× "
+            "OpenSees"
+        )
 
 
-def run_case(scene: Scene, case: VerifyCase | None = None, *,
-             duration: float | None = None) -> CaseResult:
+def run_case(
+    scene: Scene, case: VerifyCase | None = None, *, duration: float | None = None
+) -> CaseResult:
     """Verify one case (``case`` None: the scene as given)."""
     import dataclasses
 
@@ -171,12 +188,16 @@ def run_case(scene: Scene, case: VerifyCase | None = None, *,
     ok_status = all(s == "success" for s in rep["status"].values())
     worst, wv = rep["worst"], rep["worst_velocity"]
     return CaseResult(
-        case=case, label=case.label if case is not None else "the scene as given",
-        worst=worst, worst_velocity=wv,
+        case=case,
+        label=case.label if case is not None else "the scene as given",
+        worst=worst,
+        worst_velocity=wv,
         same_iterations=rep["iterations"]["opensees"] == rep["iterations"]["compliance"],
         speed_ratio=float(rep["speed_ratio"]),
         ok=ok_status and worst[1] <= TOLERANCE and wv[1] <= TOLERANCE,
-        status=rep["status"], notes=rep["notes"])
+        status=rep["status"],
+        notes=rep["notes"],
+    )
 
 
 def run_matrix(scene: Scene, *, quick: bool = False, log=print) -> list[CaseResult]:
@@ -192,25 +213,39 @@ def run_matrix(scene: Scene, *, quick: bool = False, log=print) -> list[CaseResu
     return out
 
 
-def readme_block(results: list[CaseResult], scene: Scene, *, quick: bool,
-                 ctx: dict | None = None) -> str:
+def readme_block(
+    results: list[CaseResult], scene: Scene, *, quick: bool, ctx: dict | None = None
+) -> str:
     """The Markdown table of a matrix run between BEGIN and END."""
-    ctx = ctx or {"date": datetime.date.today().isoformat(), "python": platform.python_version(),
-                  "machine": platform.machine()}
+    ctx = ctx or {
+        "date": datetime.date.today().isoformat(),
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+    }
     lines = [BEGIN, "", "| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
     for r in results:
         c = r.case
         (col, dev), (vcol, vdev) = r.worst, r.worst_velocity
-        lines.append(f"| {c.law} | {c.friction} | {c.skew:g} | {c.damping} | {dev:.1e} | {col} | "
-                     f"{vdev:.1e} | {vcol} | {'identical' if r.same_iterations else 'differ'} | "
-                     f"{r.speed_ratio:.0f} | {'yes' if r.ok else 'NO'} |")
-    span = (f"first {QUICK_DURATION:g} s (--quick)" if quick
-            else f"whole record ({scene.excitation.duration:g} s)")
+        lines.append(
+            f"| {c.law} | {c.friction} | {c.skew:g} | {c.damping} | {dev:.1e} | {col} | "
+            f"{vdev:.1e} | {vcol} | {'identical' if r.same_iterations else 'differ'} | "
+            f"{r.speed_ratio:.0f} | {'yes' if r.ok else 'NO'} |"
+        )
+    span = (
+        f"first {QUICK_DURATION:g} s (--quick)"
+        if quick
+        else f"whole record ({scene.excitation.duration:g} s)"
+    )
     worst = max(max(r.worst[1], r.worst_velocity[1]) for r in results)
-    lines += ["", f"Scene `{scene.name}`, {span}, dt = {scene.opensees.dt:g} s, Newton "
-              f"tolerance 1e-12; {len(results)} cases, tolerance {TOLERANCE:g} of each column's "
-              f"peak, largest deviation {worst:.1e}; μ = {FRICTION:g} with friction; "
-              f"{ctx['machine']}, Python {ctx['python']}, {ctx['date']}.", "", END]
+    lines += [
+        "",
+        f"Scene `{scene.name}`, {span}, dt = {scene.opensees.dt:g} s, Newton "
+        f"tolerance 1e-12; {len(results)} cases, tolerance {TOLERANCE:g} of each column's "
+        f"peak, largest deviation {worst:.1e}; μ = {FRICTION:g} with friction; "
+        f"{ctx['machine']}, Python {ctx['python']}, {ctx['date']}.",
+        "",
+        END,
+    ]
     return "\n".join(lines)
 
 
@@ -232,8 +267,9 @@ def write_readme(path: str | Path, block: str) -> Path:
     return atomic_write_text(path, replace_block(path.read_text(), block), field="--write-readme")
 
 
-def main(scene: Scene, *, pinned: bool, quick: bool, write_readme_to: Path | None,
-         log=print) -> int:
+def main(
+    scene: Scene, *, pinned: bool, quick: bool, write_readme_to: Path | None, log=print
+) -> int:
     """The command: a single case when the user pinned options, else the matrix. Returns the
     exit status (0 when every case passes, 1 otherwise)."""
     t0 = time.perf_counter()
@@ -249,6 +285,8 @@ def main(scene: Scene, *, pinned: bool, quick: bool, write_readme_to: Path | Non
             write_readme(write_readme_to, readme_block(results, scene, quick=quick))
             log(f"wrote the verification table into {write_readme_to}")
     bad = [r for r in results if not r.ok]
-    log(f"{len(results) - len(bad)} of {len(results)} cases within {TOLERANCE:g} of each "
-        f"column's peak ({time.perf_counter() - t0:.0f} s)")
+    log(
+        f"{len(results) - len(bad)} of {len(results)} cases within {TOLERANCE:g} of each "
+        f"column's peak ({time.perf_counter() - t0:.0f} s)"
+    )
     return 1 if bad else 0

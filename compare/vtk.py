@@ -27,6 +27,7 @@ from xml.sax.saxutils import quoteattr
 
 import meshio
 import numpy as np
+
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 from deckpound.models.scene_io import scene_from_mapping
@@ -38,8 +39,12 @@ from .outputs import target, write_text
 BODIES = ("deck", "seat1", "seat2")
 FORMATS = ("xdmf", "pvd")
 #: the absolute counterpart of each outline column (θ is the same: the supports do not rotate)
-ABSOLUTE = {"deck_x_rel": "deck_x_abs", "deck_y_rel": "deck_y_abs", "seat1_x_rel": "seat1_x_abs",
-            "seat2_x_rel": "seat2_x_abs"}
+ABSOLUTE = {
+    "deck_x_rel": "deck_x_abs",
+    "deck_y_rel": "deck_y_abs",
+    "seat1_x_rel": "seat1_x_abs",
+    "seat2_x_rel": "seat2_x_abs",
+}
 STATE = OUTLINE_COLUMNS
 #: most frames one ``pvd`` export may write per result (each frame is one file)
 MAX_FRAMES = 100_000
@@ -62,11 +67,15 @@ def _cells() -> np.ndarray:
 def frame_mesh(scene, row: dict[str, float]) -> meshio.Mesh:
     """One frame: each body's outline as a polygon (true-scale displacements)."""
     p = _points(scene, row)
-    rest = _points(scene, {k: 0.0 for k in row})
+    rest = _points(scene, dict.fromkeys(row, 0.0))
     pts = np.column_stack([p, np.zeros(len(p))])
     d = np.column_stack([p - rest, np.zeros(len(p))])
-    return meshio.Mesh(pts, [("polygon", _cells())], point_data={"displacement": d},
-                       cell_data={"body": [np.arange(len(BODIES), dtype=float)]})
+    return meshio.Mesh(
+        pts,
+        [("polygon", _cells())],
+        point_data={"displacement": d},
+        cell_data={"body": [np.arange(len(BODIES), dtype=float)]},
+    )
 
 
 def _rows(r: Result, k: int) -> tuple[dict[str, float], dict[str, float]]:
@@ -77,7 +86,7 @@ def _rows(r: Result, k: int) -> tuple[dict[str, float], dict[str, float]]:
 
 def write_xdmf(scene, r: Result, path: Path, every: int = 1) -> Path:
     """The XDMF time series of one result (see the module docstring)."""
-    rest = _points(scene, {q: 0.0 for q in OUTLINE_COLUMNS})
+    rest = _points(scene, dict.fromkeys(OUTLINE_COLUMNS, 0.0))
     z = np.zeros((len(rest), 1))
     body = np.arange(len(BODIES), dtype=np.float32)
     with target(path) as p, meshio.xdmf.TimeSeriesWriter(p, data_format="XML") as writer:
@@ -86,9 +95,11 @@ def write_xdmf(scene, r: Result, path: Path, every: int = 1) -> Path:
             rel, absolute = _rows(r, k)
             d_rel = np.hstack([_points(scene, rel) - rest, z]).astype(np.float32)
             d_abs = np.hstack([_points(scene, absolute) - rest, z]).astype(np.float32)
-            writer.write_data(float(r.t[k]),
-                              point_data={"displacement": d_rel, "displacement_abs": d_abs},
-                              cell_data={"body": [body]})
+            writer.write_data(
+                float(r.t[k]),
+                point_data={"displacement": d_rel, "displacement_abs": d_abs},
+                cell_data={"body": [body]},
+            )
     return path
 
 
@@ -101,15 +112,20 @@ def write_pvd(scene, r: Result, out: Path, engine: str, every: int = 1) -> Path:
         name = f"frame_{k:06d}.vtu"
         with target(frames / name) as p:
             meshio.write(p, frame_mesh(scene, rel))
-        entries.append(f'    <DataSet timestep={quoteattr(repr(float(r.t[k])))} '
-                       f'part="0" file={quoteattr(f"{engine}/{name}")}/>')
-    return write_text(out / f"{engine}.pvd",
-                      '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-                      "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
+        entries.append(
+            f"    <DataSet timestep={quoteattr(repr(float(r.t[k])))} "
+            f'part="0" file={quoteattr(f"{engine}/{name}")}/>'
+        )
+    return write_text(
+        out / f"{engine}.pvd",
+        '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+        "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n",
+    )
 
 
-def check_result_folder(result_dir: str | Path, every: int = 1,
-                        fmt: str = "xdmf") -> dict[str, tuple]:
+def check_result_folder(
+    result_dir: str | Path, every: int = 1, fmt: str = "xdmf"
+) -> dict[str, tuple]:
     """Load and check every result in ``result_dir``: ``{engine: (Result, Scene)}``.
 
     Refuses (SceneError, field ``RESULT_DIR`` or ``--every``) a folder without results,
@@ -119,7 +135,7 @@ def check_result_folder(result_dir: str | Path, every: int = 1,
     result_dir = Path(result_dir)
     if not result_dir.is_dir():
         raise SceneError("RESULT_DIR", f"{str(result_dir)!r} is not a folder")
-    if not 1 <= every <= 10 ** 9:
+    if not 1 <= every <= 10**9:
         raise SceneError("--every", f"must be in [1, 1e9], got {every}")
     engines = result_engines(result_dir)
     if not engines:
@@ -133,8 +149,11 @@ def check_result_folder(result_dir: str | Path, every: int = 1,
         except ValueError as err:  # columns of unequal length and the like
             raise SceneError("RESULT_DIR", f"{engine}: {err}") from None
         if not isinstance(r.meta.get("scene"), dict):
-            raise SceneError("RESULT_DIR", f"{engine}.json carries no scene (write results with "
-                             "'deckpound run' or 'deckpound compare')")
+            raise SceneError(
+                "RESULT_DIR",
+                f"{engine}.json carries no scene (write results with "
+                "'deckpound run' or 'deckpound compare')",
+            )
         try:
             scene = scene_from_mapping(r.meta["scene"])
         except SceneError as err:
@@ -147,20 +166,31 @@ def check_result_folder(result_dir: str | Path, every: int = 1,
         for q in ("t",) + STATE:
             bad = np.flatnonzero(~np.isfinite(r[q]))
             if len(bad):
-                raise SceneError("RESULT_DIR", f"{engine}.csv: column {q!r} is not finite in "
-                                 f"row {int(bad[0]) + 2} ({r[q][bad[0]]})")
+                raise SceneError(
+                    "RESULT_DIR",
+                    f"{engine}.csv: column {q!r} is not finite in "
+                    f"row {int(bad[0]) + 2} ({r[q][bad[0]]})",
+                )
         if len(r.t) > 1 and not np.all(np.diff(r.t) > 0):
             raise SceneError("RESULT_DIR", f"{engine}.csv: the time column 't' does not increase")
         frames = (len(r.t) + every - 1) // every
         if fmt == "pvd" and frames > MAX_FRAMES:
-            raise SceneError("--every", f"gives {frames} frames for {engine} (one file each; at "
-                             f"most {MAX_FRAMES}); use --every >= {len(r.t) // MAX_FRAMES + 1}")
+            raise SceneError(
+                "--every",
+                f"gives {frames} frames for {engine} (one file each; at "
+                f"most {MAX_FRAMES}); use --every >= {len(r.t) // MAX_FRAMES + 1}",
+            )
         out[engine] = (r, scene)
     return out
 
 
-def export_vtk(result_dir: str | Path, out: str | Path, every: int = 1, fmt: str = "xdmf",
-               results: dict[str, tuple] | None = None) -> list[Path]:
+def export_vtk(
+    result_dir: str | Path,
+    out: str | Path,
+    every: int = 1,
+    fmt: str = "xdmf",
+    results: dict[str, tuple] | None = None,
+) -> list[Path]:
     """Write the time series of every result in ``result_dir``; returns the files ParaView
     opens (``<engine>.xdmf``, or ``<engine>.pvd`` with ``fmt = "pvd"``).
 

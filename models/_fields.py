@@ -23,7 +23,6 @@ from typing import Any
 
 from .errors import SceneError
 
-
 # Floats beyond these magnitudes are no physical value in SI units with tonnes, and they
 # overflow or underflow (to inf, NaN or subnormals) in the engines' arithmetic.
 MIN_MAGNITUDE = 1e-30
@@ -31,7 +30,7 @@ MAX_MAGNITUDE = 1e30
 # Integers beyond this magnitude (2**53) lose exactness as floats and overflow the int64 loop
 # counters of the compiled engines; no count, seed or index of a scene comes near it. Fields
 # with a physical limit declare a tighter ``le`` (e.g. Newton iterations).
-MAX_INT = 2 ** 53
+MAX_INT = 2**53
 
 
 def spec(
@@ -82,10 +81,16 @@ def _check_number(name: str, value: float, meta: typing.Mapping[str, Any]) -> No
         raise SceneError(name, f"must be < {meta['lt']}{u}, got {_fmt(value)}")
     if meta.get("le") is not None and not value <= meta["le"]:
         raise SceneError(name, f"must be <= {meta['le']}{u}, got {_fmt(value)}")
-    if (isinstance(value, float) and value != 0.0
-            and not MIN_MAGNITUDE <= abs(value) <= MAX_MAGNITUDE):
-        raise SceneError(name, f"is beyond any physical value: magnitudes from {MIN_MAGNITUDE:g} "
-                         f"to {MAX_MAGNITUDE:g}{u} are allowed, got {_fmt(value)}")
+    if (
+        isinstance(value, float)
+        and value != 0.0
+        and not MIN_MAGNITUDE <= abs(value) <= MAX_MAGNITUDE
+    ):
+        raise SceneError(
+            name,
+            f"is beyond any physical value: magnitudes from {MIN_MAGNITUDE:g} "
+            f"to {MAX_MAGNITUDE:g}{u} are allowed, got {_fmt(value)}",
+        )
 
 
 def _coerce(name: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> Any:
@@ -106,8 +111,10 @@ def _coerce(name: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> A
         try:
             value = float(value)
         except OverflowError:
-            raise SceneError(name, f"must be a finite number{_in_unit(meta)}, got an integer "
-                             "too large for a float") from None
+            raise SceneError(
+                name,
+                f"must be a finite number{_in_unit(meta)}, got an integer too large for a float",
+            ) from None
         _check_number(name, value, meta)
         return value
     if tp is int:
@@ -116,11 +123,21 @@ def _coerce(name: str, tp: Any, value: Any, meta: typing.Mapping[str, Any]) -> A
                 raise SceneError(name, f"must be an integer{_in_unit(meta)}, got {_fmt(value)}")
         if abs(value) > MAX_INT:
             hi = meta["le"] if meta.get("le") is not None else MAX_INT
-            got = f"{value:g}" if isinstance(value, float) else (
-                f"{value}" if len(str(value)) <= 30 else f"an integer of {len(str(value))} digits")
-            raise SceneError(name, f"must be an integer <= {hi}{_unit(meta)}, got {got}"
-                             if value > 0 else f"must be an integer >= {-MAX_INT}"
-                             f"{_unit(meta)}, got {got}")
+            got = (
+                f"{value:g}"
+                if isinstance(value, float)
+                else (
+                    f"{value}"
+                    if len(str(value)) <= 30
+                    else f"an integer of {len(str(value))} digits"
+                )
+            )
+            raise SceneError(
+                name,
+                f"must be an integer <= {hi}{_unit(meta)}, got {got}"
+                if value > 0
+                else f"must be an integer >= {-MAX_INT}{_unit(meta)}, got {got}",
+            )
         value = int(value)
         _check_number(name, value, meta)
         return value
@@ -192,9 +209,13 @@ def from_mapping(cls: type, data: Any, path: str = "") -> Any:
     except SceneError as err:
         raise err.prefixed(path) from None
     except TypeError as err:  # missing required field
-        missing = [f.name for f in dataclasses.fields(cls)
-                   if f.default is dataclasses.MISSING
-                   and f.default_factory is dataclasses.MISSING and f.name not in kwargs]
+        missing = [
+            f.name
+            for f in dataclasses.fields(cls)
+            if f.default is dataclasses.MISSING
+            and f.default_factory is dataclasses.MISSING
+            and f.name not in kwargs
+        ]
         if missing:
             where = f"{path}.{missing[0]}" if path else missing[0]
             raise SceneError(where, "is required but missing") from None
@@ -230,8 +251,12 @@ def json_schema(cls: type) -> dict[str, Any]:
         elif f.default is not dataclasses.MISSING and not dataclasses.is_dataclass(f.default):
             if f.default is not None:
                 props[f.name]["default"] = to_mapping(f.default)
-    schema = {"type": "object", "title": cls.__name__, "properties": props,
-              "additionalProperties": False}
+    schema = {
+        "type": "object",
+        "title": cls.__name__,
+        "properties": props,
+        "additionalProperties": False,
+    }
     doc = (cls.__doc__ or "").strip().splitlines()
     if doc:
         schema["description"] = doc[0]
@@ -254,8 +279,12 @@ def _type_schema(tp: Any, meta: typing.Mapping[str, Any]) -> dict[str, Any]:
         return json_schema(tp)
     if tp is float or tp is int:
         out = {"type": "number" if tp is float else "integer"}
-        for key, js in (("gt", "exclusiveMinimum"), ("ge", "minimum"),
-                        ("lt", "exclusiveMaximum"), ("le", "maximum")):
+        for key, js in (
+            ("gt", "exclusiveMinimum"),
+            ("ge", "minimum"),
+            ("lt", "exclusiveMaximum"),
+            ("le", "maximum"),
+        ):
             if meta.get(key) is not None:
                 out[js] = meta[key]
     elif tp is bool:

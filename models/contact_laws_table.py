@@ -28,9 +28,20 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-__all__ = ["BILINEAR_MIN_SUBSTEPS", "BILINEAR_OPENSEES_REASON", "CONTACT_LAW_TABLE",
-           "DEFAULT_FRICTION", "FRICTION_CODES", "FRICTION_MODEL_TABLE", "LAW_CODES",
-           "RIGID_CONTACT", "ContactLaw", "FrictionModel", "contact_law", "friction_model"]
+__all__ = [
+    "BILINEAR_MIN_SUBSTEPS",
+    "BILINEAR_OPENSEES_REASON",
+    "CONTACT_LAW_TABLE",
+    "DEFAULT_FRICTION",
+    "FRICTION_CODES",
+    "FRICTION_MODEL_TABLE",
+    "LAW_CODES",
+    "RIGID_CONTACT",
+    "ContactLaw",
+    "FrictionModel",
+    "contact_law",
+    "friction_model",
+]
 
 
 @dataclass(frozen=True)
@@ -110,8 +121,11 @@ def _flores(e: float) -> float:
 
 def _needs_positive_restitution(contact) -> tuple[str, str] | None:
     if contact.restitution <= 0.0:
-        return ("contact.restitution", "the flores law needs e > 0 (its damping factor "
-                "8(1 − e)/(5e) is infinite at e = 0); use hertz-damp for a fully plastic impact")
+        return (
+            "contact.restitution",
+            "the flores law needs e > 0 (its damping factor "
+            "8(1 − e)/(5e) is infinite at e = 0); use hertz-damp for a fully plastic impact",
+        )
     return None
 
 
@@ -132,11 +146,12 @@ _HERTZ_DAMP_REFUSAL = (
     "committed approach velocity before the impact, floored at 1 mm/s, λ clipped at 0): its "
     "Hertzdamp material takes v⁻ from the strain rate of the first closed Newton trial, does "
     "not clip the tensile force near separation and has no floor (SRC/material/uniaxial/"
-    "Hertzdamp.cpp); law = 'hertzdamp' is that material exactly, in every engine; "
-    + _OPENSEES_LAWS)
+    "Hertzdamp.cpp); law = 'hertzdamp' is that material exactly, in every engine; " + _OPENSEES_LAWS
+)
 _FLORES_REFUSAL = (
     "OpenSees has no material with the 'flores' law (λ = k δ^n (1 + 8(1−e)/(5e) δ̇/v⁻)): "
-    "Hertzdamp's damping is the Lankarani–Nikravesh form; " + _OPENSEES_LAWS)
+    "Hertzdamp's damping is the Lankarani–Nikravesh form; " + _OPENSEES_LAWS
+)
 #: Fewest OpenSees sub-steps per failed step that run the 'bilinear' law (ImpactMaterial)
 BILINEAR_MIN_SUBSTEPS = 1000
 BILINEAR_OPENSEES_REASON = (
@@ -149,44 +164,83 @@ BILINEAR_OPENSEES_REASON = (
     "while with 1000 the 20 s record completes (116 closing steps rescued); its motion is then "
     "the clone's continuous bilinear law's to ~1e-5 (peak rotation), but the jump of the "
     "closing sub-step spikes the gap force (+34 % on the first impact); got "
-    "opensees.substeps = {got}")
+    "opensees.substeps = {got}"
+)
 
 #: The normal contact laws, in code order.
 CONTACT_LAW_TABLE: tuple[ContactLaw, ...] = (
     # ElasticPPGap(k, Fy → ∞, −g₀): the same force and tangent (clone ≡ OpenSees to
     # round-off, `deckpound verify clone`)
-    ContactLaw("linear", 0, ("contact.stiffness",), "λ = k δ for δ ≥ 0",
-               lambda d, r, p: p["k"] * d, opensees="ElasticPPGap"),
+    ContactLaw(
+        "linear",
+        0,
+        ("contact.stiffness",),
+        "λ = k δ for δ ≥ 0",
+        lambda d, r, p: p["k"] * d,
+        opensees="ElasticPPGap",
+    ),
     # ViscoelasticGap(k, c, −g₀): the same force (tension allowed); its tangent is k only (no
     # damping tangent), which compliance.contact_tangent = "opensees" reproduces
-    ContactLaw("kelvin-voigt", 1, ("contact.stiffness", "contact.restitution"),
-               "λ = k δ + c δ̇ for δ > 0, c = 2ζ(e)√(k m_eff) (tension allowed unless kv_clip)",
-               lambda d, r, p: p["k"] * d + p["c"] * r, opensees="ViscoelasticGap"),
+    ContactLaw(
+        "kelvin-voigt",
+        1,
+        ("contact.stiffness", "contact.restitution"),
+        "λ = k δ + c δ̇ for δ > 0, c = 2ζ(e)√(k m_eff) (tension allowed unless kv_clip)",
+        lambda d, r, p: p["k"] * d + p["c"] * r,
+        opensees="ViscoelasticGap",
+    ),
     # Hertzdamp(k, 0, −g₀, n): with ξ_n = 0 its force is k δ^n exactly; its tangent has the
     # opposite sign (contact_tangent = "opensees" reproduces it)
-    ContactLaw("hertz", 2, ("contact.stiffness", "contact.exponent"), "λ = k δ^n for δ > 0",
-               lambda d, r, p: p["k"] * d ** p["n"], opensees="Hertzdamp"),
-    ContactLaw("hertz-damp", 3, ("contact.stiffness", "contact.exponent", "contact.restitution"),
-               "λ = k δ^n (1 + 3(1 − e²)/4 · δ̇/v⁻) ≥ 0, v⁻ the approach velocity",
-               _hertz_damp, opensees_refusal=_HERTZ_DAMP_REFUSAL,
-               hysteresis=_lankarani_nikravesh),
+    ContactLaw(
+        "hertz",
+        2,
+        ("contact.stiffness", "contact.exponent"),
+        "λ = k δ^n for δ > 0",
+        lambda d, r, p: p["k"] * d ** p["n"],
+        opensees="Hertzdamp",
+    ),
+    ContactLaw(
+        "hertz-damp",
+        3,
+        ("contact.stiffness", "contact.exponent", "contact.restitution"),
+        "λ = k δ^n (1 + 3(1 − e²)/4 · δ̇/v⁻) ≥ 0, v⁻ the approach velocity",
+        _hertz_damp,
+        opensees_refusal=_HERTZ_DAMP_REFUSAL,
+        hysteresis=_lankarani_nikravesh,
+    ),
     # ImpactMaterial: only with >= BILINEAR_MIN_SUBSTEPS sub-steps (see BILINEAR_OPENSEES_REASON);
     # the clone keeps the continuous law (difference measured there)
-    ContactLaw("bilinear", 4, ("contact.stiffness", "contact.bilinear_ratio",
-                               "contact.bilinear_yield"),
-               "Muthukumar: loading K1 capped by K1 δy + K2 (δ − δy), unloading K1 floored by K2 δ",
-               _bilinear, opensees="ImpactMaterial", rate_event=True),
-    ContactLaw("flores", 5, ("contact.stiffness", "contact.exponent", "contact.restitution"),
-               "λ = k δ^n (1 + 8(1 − e)/(5e) · δ̇/v⁻) ≥ 0, v⁻ the approach velocity (Flores 2011)",
-               _hertz_damp, opensees_refusal=_FLORES_REFUSAL,
-               hysteresis=_flores, refuse=_needs_positive_restitution),
+    ContactLaw(
+        "bilinear",
+        4,
+        ("contact.stiffness", "contact.bilinear_ratio", "contact.bilinear_yield"),
+        "Muthukumar: loading K1 capped by K1 δy + K2 (δ − δy), unloading K1 floored by K2 δ",
+        _bilinear,
+        opensees="ImpactMaterial",
+        rate_event=True,
+    ),
+    ContactLaw(
+        "flores",
+        5,
+        ("contact.stiffness", "contact.exponent", "contact.restitution"),
+        "λ = k δ^n (1 + 8(1 − e)/(5e) · δ̇/v⁻) ≥ 0, v⁻ the approach velocity (Flores 2011)",
+        _hertz_damp,
+        opensees_refusal=_FLORES_REFUSAL,
+        hysteresis=_flores,
+        refuse=_needs_positive_restitution,
+    ),
     # Hertzdamp(k, 3(1−e²)/4, −g₀, n): the material's arithmetic in every engine
     # (deckpound.analytic.contact_laws, hertzdamp)
-    ContactLaw("hertzdamp", 6, ("contact.stiffness", "contact.exponent",
-                                "contact.restitution"),
-               "OpenSees Hertzdamp: λ = (k + ξ δ̇) δ^n, ξ = 3(1 − e²)/4 · k / v_i, v_i = δ̇ of the "
-               "first closed trial of an impact (no clipping)", _hertzdamp, opensees="Hertzdamp",
-               hysteresis=_lankarani_nikravesh),
+    ContactLaw(
+        "hertzdamp",
+        6,
+        ("contact.stiffness", "contact.exponent", "contact.restitution"),
+        "OpenSees Hertzdamp: λ = (k + ξ δ̇) δ^n, ξ = 3(1 − e²)/4 · k / v_i, v_i = δ̇ of the "
+        "first closed trial of an impact (no clipping)",
+        _hertzdamp,
+        opensees="Hertzdamp",
+        hysteresis=_lankarani_nikravesh,
+    ),
 )
 
 
@@ -201,9 +255,11 @@ def _stick(lam_n: float, ds: float, ut: float, p: dict) -> float:
 
 
 #: Why the nonsmooth engine reads no compliant law nor the slip/stick distinction.
-RIGID_CONTACT = ("contact is rigid, so the slip/stick distinction of the compliance laws does "
-                 "not apply")
+RIGID_CONTACT = (
+    "contact is rigid, so the slip/stick distinction of the compliance laws does not apply"
+)
 _NONSMOOTH_COULOMB = "set-valued Coulomb friction"
+
 
 def _contact2d(lam_n: float, ds: float, ut: float, p: dict) -> float:
     # from the virgin element (stick point 0): ds is the total tangential displacement s
@@ -212,30 +268,52 @@ def _contact2d(lam_n: float, ds: float, ut: float, p: dict) -> float:
     return trial if abs(trial) - lim <= 0.0 else math.copysign(lim, trial)
 
 
-_STICK_REFUSAL = ("OpenSees cannot express 'stick' (the project's return-mapping stick law: "
-                  "after sliding its stick spring keeps |λ_T| = μ λ_N and it is released when "
-                  "the corner opens); zeroLengthContact2D resets its stick point at every "
-                  "sliding commit and keeps it while the corner is open: use "
-                  "friction_mode = 'contact2d' (that element's algorithm, also in the "
-                  "compliance engine)")
+_STICK_REFUSAL = (
+    "OpenSees cannot express 'stick' (the project's return-mapping stick law: "
+    "after sliding its stick spring keeps |λ_T| = μ λ_N and it is released when "
+    "the corner opens); zeroLengthContact2D resets its stick point at every "
+    "sliding commit and keeps it while the corner is open: use "
+    "friction_mode = 'contact2d' (that element's algorithm, also in the "
+    "compliance engine)"
+)
 
 #: The friction models, in code order.
 FRICTION_MODEL_TABLE: tuple[FrictionModel, ...] = (
-    FrictionModel("none", 0, (), "λ_T = 0", lambda lam_n, ds, ut, p: 0.0,
-                  opensees="(no tangential element)"),
-    FrictionModel("slip", 1, ("contact.slip_velocity",), "λ_T = −μ λ_N tanh(U_T / v₀)", _slip,
-                  opensees_refusal="OpenSees cannot express 'slip' (regularised friction without "
-                  "sticking); zeroLengthContact2D always has a stick spring: use "
-                  "friction_mode = 'contact2d'", nonsmooth=_NONSMOOTH_COULOMB),
-    FrictionModel("stick", 2, ("contact.tangential_stiffness",),
-                  "λ_T = λ_T,n − k_t Δs, returned to |λ_T| ≤ μ λ_N; λ_T = 0 when open", _stick,
-                  opensees_refusal=_STICK_REFUSAL, nonsmooth=_NONSMOOTH_COULOMB),
-    FrictionModel("contact2d", 3, ("contact.tangential_stiffness",),
-                  "OpenSees zeroLengthContact2D: λ_T = −k_t (s − s_p) if |k_t (s − s_p)| ≤ "
-                  "μ λ_N (stick) else μ λ_N sign(−(s − s_p)) (slide); s_p := s at a sliding "
-                  "commit, kept while open", _contact2d,
-                  opensees="zeroLengthContact2D", opensees_laws=("linear",),
-                  nonsmooth=_NONSMOOTH_COULOMB),
+    FrictionModel(
+        "none", 0, (), "λ_T = 0", lambda lam_n, ds, ut, p: 0.0, opensees="(no tangential element)"
+    ),
+    FrictionModel(
+        "slip",
+        1,
+        ("contact.slip_velocity",),
+        "λ_T = −μ λ_N tanh(U_T / v₀)",
+        _slip,
+        opensees_refusal="OpenSees cannot express 'slip' (regularised friction without "
+        "sticking); zeroLengthContact2D always has a stick spring: use "
+        "friction_mode = 'contact2d'",
+        nonsmooth=_NONSMOOTH_COULOMB,
+    ),
+    FrictionModel(
+        "stick",
+        2,
+        ("contact.tangential_stiffness",),
+        "λ_T = λ_T,n − k_t Δs, returned to |λ_T| ≤ μ λ_N; λ_T = 0 when open",
+        _stick,
+        opensees_refusal=_STICK_REFUSAL,
+        nonsmooth=_NONSMOOTH_COULOMB,
+    ),
+    FrictionModel(
+        "contact2d",
+        3,
+        ("contact.tangential_stiffness",),
+        "OpenSees zeroLengthContact2D: λ_T = −k_t (s − s_p) if |k_t (s − s_p)| ≤ "
+        "μ λ_N (stick) else μ λ_N sign(−(s − s_p)) (slide); s_p := s at a sliding "
+        "commit, kept while open",
+        _contact2d,
+        opensees="zeroLengthContact2D",
+        opensees_laws=("linear",),
+        nonsmooth=_NONSMOOTH_COULOMB,
+    ),
 )
 
 #: The friction model the package switches on when it turns friction on (paper job, friction,

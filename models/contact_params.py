@@ -29,7 +29,7 @@ def kelvin_voigt_ratio(e: float) -> float:
     if e <= 0.0:
         return 1.0
     le = np.log(e)
-    return float(-le / np.sqrt(np.pi ** 2 + le ** 2))
+    return float(-le / np.sqrt(np.pi**2 + le**2))
 
 
 def kelvin_voigt_damping(scene: Scene) -> np.ndarray:

@@ -47,8 +47,14 @@ from .errors import SceneError
 from .plan import DECK_THETA, DECK_X, DECK_Y, SEAT_THETA, SEAT_X, Plan
 from .scene import Scene
 
-__all__ = ["DampingModel", "MassDamper", "damping_model", "rayleigh_coefficients",
-           "refuse_tangent_damping", "tangent_dependent"]
+__all__ = [
+    "DampingModel",
+    "MassDamper",
+    "damping_model",
+    "rayleigh_coefficients",
+    "refuse_tangent_damping",
+    "tangent_dependent",
+]
 
 
 @dataclass(frozen=True)
@@ -100,8 +106,9 @@ class DampingModel:
     @property
     def tangent_dependent(self) -> bool:
         """True when some spring is damped on its current or committed tangent."""
-        return any(b is not None and np.any(b != 0.0)
-                   for b in (self.beta_current, self.beta_committed))
+        return any(
+            b is not None and np.any(b != 0.0) for b in (self.beta_current, self.beta_committed)
+        )
 
     def rate_coefficients(self, plan: Plan) -> np.ndarray:
         """β0_i·k0_i + c_i of every spring: its constant deformation-rate coefficient [kN·s/m]."""
@@ -121,8 +128,9 @@ class DampingModel:
         return C
 
 
-def rayleigh_coefficients(scene: Scene, plan: Plan | None = None
-                          ) -> tuple[float, float, tuple[float, float]]:
+def rayleigh_coefficients(
+    scene: Scene, plan: Plan | None = None
+) -> tuple[float, float, tuple[float, float]]:
     """Rayleigh a0 [1/s] and a1 [s] giving ratio ζ at ω_i and ω_j; returns (a0, a1, (ω_i, ω_j)).
 
     ``method = none``: (0, 0, (nan, nan))."""
@@ -135,8 +143,9 @@ def rayleigh_coefficients(scene: Scene, plan: Plan | None = None
         omega = natural_modes(scene, plan).omega
         i, j = d.modes
         if max(i, j) > len(omega):
-            raise SceneError("damping.modes",
-                             f"mode numbers must be <= {len(omega)}, got {list(d.modes)}")
+            raise SceneError(
+                "damping.modes", f"mode numbers must be <= {len(omega)}, got {list(d.modes)}"
+            )
         wi, wj = omega[i - 1], omega[j - 1]
     else:
         wi, wj = (2.0 * np.pi * f for f in d.frequencies)
@@ -154,9 +163,9 @@ def _members_mask(scene: Scene, plan: Plan) -> np.ndarray:
     members = scene.damping.members
     on = np.zeros(plan.n_springs, dtype=bool)
     if members in ("bents", "bents+seats"):
-        on[:plan.n_bent_springs] = True
+        on[: plan.n_bent_springs] = True
     if members == "bents+seats":
-        on[plan.n_bent_springs:] = True
+        on[plan.n_bent_springs :] = True
     return on
 
 
@@ -185,17 +194,19 @@ def tangent_dependent(scene: Scene) -> bool:
     """True when the scene's stiffness-proportional damping uses a tangent that changes during
     the run (``stiffness`` committed or current on some members with a non-zero ratio)."""
     d = scene.damping
-    return (d.stiffness != "initial" and d.members != "none" and d.method != "none"
-            and d.ratio > 0.0)
+    return d.stiffness != "initial" and d.members != "none" and d.method != "none" and d.ratio > 0.0
 
 
 def refuse_tangent_damping(scene: Scene, engine: str, why: str) -> None:
     """SceneError for an engine that implements only initial-stiffness damping."""
     if tangent_dependent(scene):
-        raise SceneError("damping.stiffness", f"the {engine} engine cannot damp on the "
-                         f"{scene.damping.stiffness} tangent ({why}); use stiffness = "
-                         "'initial', or the compliance engine's newmark integrator or the "
-                         "OpenSees engine")
+        raise SceneError(
+            "damping.stiffness",
+            f"the {engine} engine cannot damp on the "
+            f"{scene.damping.stiffness} tangent ({why}); use stiffness = "
+            "'initial', or the compliance engine's newmark integrator or the "
+            "OpenSees engine",
+        )
 
 
 def damping_model(scene: Scene, plan: Plan) -> DampingModel:
@@ -209,7 +220,16 @@ def damping_model(scene: Scene, plan: Plan) -> DampingModel:
     beta_current = coef if d.stiffness == "current" else zero.copy()
     beta_committed = coef if d.stiffness == "committed" else zero.copy()
     dampers = relative_mass_dampers(plan, a0) if d.mass == "relative" and a0 != 0.0 else ()
-    return DampingModel(a0=float(a0), a1=float(a1), omega=omega, beta=beta,
-                        dashpots=plan.dashpots, beta_current=beta_current,
-                        beta_committed=beta_committed, mass=d.mass, mass_dampers=dampers,
-                        members=d.members, stiffness=d.stiffness)
+    return DampingModel(
+        a0=float(a0),
+        a1=float(a1),
+        omega=omega,
+        beta=beta,
+        dashpots=plan.dashpots,
+        beta_current=beta_current,
+        beta_committed=beta_committed,
+        mass=d.mass,
+        mass_dampers=dampers,
+        members=d.members,
+        stiffness=d.stiffness,
+    )

@@ -24,12 +24,16 @@ class SceneError(ValueError):
         self.reason = message
         super().__init__(f"{field}: {message}" if field else message)
 
-    def prefixed(self, prefix: str) -> "SceneError":
+    def prefixed(self, prefix: str) -> SceneError:
         """The same error with ``prefix`` prepended to its field path."""
         if not prefix:
             return self
-        joined = prefix if not self.field else (
-            f"{prefix}{self.field}" if self.field.startswith("[") else f"{prefix}.{self.field}"
+        joined = (
+            prefix
+            if not self.field
+            else (
+                f"{prefix}{self.field}" if self.field.startswith("[") else f"{prefix}.{self.field}"
+            )
         )
         return SceneError(joined, self.reason)
 

@@ -87,8 +87,11 @@ class SupportMotion:
         from .scene import MAX_STEPS
 
         if total / dt > MAX_STEPS:
-            raise SceneError("dt", f"gives {total / dt:.3g} steps over {total:g} s; at most "
-                             f"{MAX_STEPS:.0e} are allowed")
+            raise SceneError(
+                "dt",
+                f"gives {total / dt:.3g} steps over {total:g} s; at most "
+                f"{MAX_STEPS:.0e} are allowed",
+            )
         n = round(total / dt)
         t = np.arange(n + 1) * dt
         disp = {k: np.interp(t, self.t, v) for k, v in self.disp.items()}
@@ -108,31 +111,61 @@ class SupportMotion:
         """Peak |acceleration| per direction over its supports [g] (x: tables and seats)."""
         out = {}
         for axis in ("x", "y"):
-            peaks = [float(np.max(np.abs(self.acc(c)))) for c in self.disp if c.endswith(f"_{axis}")]
+            peaks = [
+                float(np.max(np.abs(self.acc(c)))) for c in self.disp if c.endswith(f"_{axis}")
+            ]
             out[axis] = max(peaks, default=0.0) / G
         return out
 
 
-def make_provenance(exc: Excitation, *, files: dict, header: dict, npts: dict,
-                    dt_record: float | None, dt: float | None, duration: float,
-                    processing: str, targets: dict, factors: dict, notes: list[str],
-                    seed: int | None = None) -> dict:
+def make_provenance(
+    exc: Excitation,
+    *,
+    files: dict,
+    header: dict,
+    npts: dict,
+    dt_record: float | None,
+    dt: float | None,
+    duration: float,
+    processing: str,
+    targets: dict,
+    factors: dict,
+    notes: list[str],
+    seed: int | None = None,
+) -> dict:
     """The provenance dict (keys in :class:`SupportMotion`); ``applied_pga`` is filled by
     :func:`support_motion` from the finished motion."""
     both = ("x", "y")
     return {
-        "kind": exc.kind, "files": files, "header": header, "npts": npts,
-        "dt_record": dt_record, "time_scale": exc.time_scale, "dt": dt, "duration": duration,
-        "processing": processing, "scaling": exc.scaling,
+        "kind": exc.kind,
+        "files": files,
+        "header": header,
+        "npts": npts,
+        "dt_record": dt_record,
+        "time_scale": exc.time_scale,
+        "dt": dt,
+        "duration": duration,
+        "processing": processing,
+        "scaling": exc.scaling,
         "target_pga": {a: targets.get(a) for a in both},
         "scale_factor": {a: factors.get(a) for a in both},
-        "applied_pga": None, "seed": seed, "warnings": list(notes),
-        "units": {"dt_record": "s", "dt": "s", "duration": "s", "target_pga": "g",
-                  "applied_pga": "g", "time_scale": "-", "scale_factor": "-"},
+        "applied_pga": None,
+        "seed": seed,
+        "warnings": list(notes),
+        "units": {
+            "dt_record": "s",
+            "dt": "s",
+            "duration": "s",
+            "target_pga": "g",
+            "applied_pga": "g",
+            "time_scale": "-",
+            "scale_factor": "-",
+        },
     }
 
 
 # -- signal processing ---------------------------------------------------------------------
+
 
 def _spectral_derivative(x: np.ndarray, dt: float) -> np.ndarray:
     """d/dt of a signal that starts and ends at rest, by FFT on a zero-padded copy."""
@@ -166,15 +199,17 @@ def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.
     """
     nyq = 0.5 / dt
     if not 1e-6 * nyq <= highpass < nyq:  # below 1e-6·nyq the filter design is singular
-        raise SceneError("excitation.highpass",
-                         f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
-                         f"of the record, got {highpass}")
+        raise SceneError(
+            "excitation.highpass",
+            f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
+            f"of the record, got {highpass}",
+        )
     sos = butter_highpass_sos(4, highpass / nyq)
     pad = len(acc)
     a = sosfiltfilt(sos, np.concatenate([np.zeros(pad), acc, np.zeros(pad)]))
     v = np.concatenate([[0.0], np.cumsum(0.5 * (a[1:] + a[:-1]) * dt)])
     d = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)])
-    d = d[pad:2 * pad]
+    d = d[pad : 2 * pad]
     d = (d - np.linspace(d[0], d[-1], len(d))) * _taper(len(d))
     v = _spectral_derivative(d, dt)
     a = _spectral_derivative(v, dt)
@@ -194,12 +229,13 @@ def _kanai_tajimi(noise: np.ndarray, dt: float, fg: float, zg: float) -> np.ndar
     nfft = 1 << int(np.ceil(np.log2(2 * n)))
     w = 2.0 * np.pi * np.fft.rfftfreq(nfft, dt)
     wg = 2.0 * np.pi * fg
-    H = (wg ** 2 + 2j * zg * wg * w) / (wg ** 2 - w ** 2 + 2j * zg * wg * w)
+    H = (wg**2 + 2j * zg * wg * w) / (wg**2 - w**2 + 2j * zg * wg * w)
     return np.fft.irfft(H * np.fft.rfft(noise, nfft), nfft)[:n]
 
 
-def synthetic_component(exc: Excitation, pga: float, rng: np.random.Generator,
-                        common: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
+def synthetic_component(
+    exc: Excitation, pga: float, rng: np.random.Generator, common: np.ndarray | None = None
+) -> tuple[np.ndarray, ...]:
     """One earthquake-like component scaled so that max|a| = pga [g] exactly.
 
     Returns (t, d, v, a) in s, m, m/s, m/s². ``common`` (a white-noise sample) is mixed in
@@ -216,9 +252,11 @@ def synthetic_component(exc: Excitation, pga: float, rng: np.random.Generator,
     d, v, a = baseline_corrected(raw, exc.dt, exc.highpass)
     peak = np.max(np.abs(a))
     if not (np.isfinite(peak) and peak > 0.0):
-        raise SceneError("excitation.dominant_frequency",
-                         f"gives no usable record with highpass = {exc.highpass} Hz and dt = "
-                         f"{exc.dt} s (peak acceleration {peak}), got {exc.dominant_frequency} Hz")
+        raise SceneError(
+            "excitation.dominant_frequency",
+            f"gives no usable record with highpass = {exc.highpass} Hz and dt = "
+            f"{exc.dt} s (peak acceleration {peak}), got {exc.dominant_frequency} Hz",
+        )
     s = pga * G / peak
     return t, d * s, v * s, a * s
 
@@ -228,17 +266,19 @@ def _shift(x: np.ndarray, steps: int) -> np.ndarray:
     if steps <= 0:
         return x
     steps = min(steps, len(x))
-    return np.concatenate([np.zeros(steps), x[:len(x) - steps]])
+    return np.concatenate([np.zeros(steps), x[: len(x) - steps]])
 
 
 def _check_samples(n: float, short_field: str, long_field: str, what: str) -> None:
     """Refuse records too short for the baseline correction or too long to hold."""
     if n < MIN_SAMPLES:
-        raise SceneError(short_field,
-                         f"{what} gives {n:g} samples; at least {MIN_SAMPLES} are needed")
+        raise SceneError(
+            short_field, f"{what} gives {n:g} samples; at least {MIN_SAMPLES} are needed"
+        )
     if n > MAX_SAMPLES:
-        raise SceneError(long_field,
-                         f"{what} gives {n:.3g} samples; at most {MAX_SAMPLES:g} are allowed")
+        raise SceneError(
+            long_field, f"{what} gives {n:.3g} samples; at most {MAX_SAMPLES:g} are allowed"
+        )
 
 
 def _check_lag(scene: Scene, dt: float, n: int) -> int:
@@ -248,16 +288,22 @@ def _check_lag(scene: Scene, dt: float, n: int) -> int:
     last = (len(scene.bents) - 1) * steps
     if last >= n:
         limit = (n - 1) * dt / max(1, len(scene.bents) - 1)
-        raise SceneError("excitation.lag",
-                         f"delays the last table by {last * dt:g} s, beyond the record length "
-                         f"{(n - 1) * dt:g} s; must be < {limit:g} s, got {exc.lag}")
+        raise SceneError(
+            "excitation.lag",
+            f"delays the last table by {last * dt:g} s, beyond the record length "
+            f"{(n - 1) * dt:g} s; must be < {limit:g} s, got {exc.lag}",
+        )
     return steps
 
 
 def _synthetic_samples(exc: Excitation) -> int:
     """Sample count of a generated record (synthetic, pulse), refused when absurd."""
-    _check_samples(round(exc.duration / exc.dt) + 1.0, "excitation.duration", "excitation.dt",
-                   f"duration {exc.duration} s at dt = {exc.dt} s")
+    _check_samples(
+        round(exc.duration / exc.dt) + 1.0,
+        "excitation.duration",
+        "excitation.dt",
+        f"duration {exc.duration} s at dt = {exc.dt} s",
+    )
     return round(exc.duration / exc.dt) + 1
 
 
@@ -280,8 +326,11 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     base: dict[str, tuple] = {}
     for axis in ("x", "y"):
         sub = np.random.default_rng([exc.seed, ord(axis)])
-        base[axis] = synthetic_component(exc, pgas[axis], sub, common[axis]) if pgas[axis] > 0 \
+        base[axis] = (
+            synthetic_component(exc, pgas[axis], sub, common[axis])
+            if pgas[axis] > 0
             else (t, np.zeros(n), np.zeros(n), np.zeros(n))
+        )
     lag_steps = _check_lag(scene, exc.dt, n)
     for k, bent in enumerate(scene.bents):
         for axis in ("x", "y"):
@@ -298,14 +347,25 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     disp["seat2_x"], vel["seat2_x"] = disp[f"{last}_x"].copy(), vel[f"{last}_x"].copy()
     acc["seat1_x"], acc["seat2_x"] = acc[f"{first}_x"].copy(), acc[f"{last}_x"].copy()
     prov = make_provenance(
-        exc, files={}, header={}, npts={"x": n, "y": n}, dt_record=exc.dt, dt=exc.dt,
-        duration=float(t[-1]), targets=pgas, factors={}, notes=[], seed=exc.seed,
+        exc,
+        files={},
+        header={},
+        npts={"x": n, "y": n},
+        dt_record=exc.dt,
+        dt=exc.dt,
+        duration=float(t[-1]),
+        targets=pgas,
+        factors={},
+        notes=[],
+        seed=exc.seed,
         processing=f"generator (Kanai-Tajimi {exc.dominant_frequency:g} Hz, envelope; built-in "
-        f"baseline correction: highpass {exc.highpass:g} Hz, taper)")
+        f"baseline correction: highpass {exc.highpass:g} Hz, taper)",
+    )
     return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc, provenance=prov)
 
 
 # -- loaders -------------------------------------------------------------------------------
+
 
 def check_time_base(t: np.ndarray, field: str) -> None:
     """Refuse non-finite, duplicate or decreasing time stamps."""
@@ -318,7 +378,9 @@ def check_time_base(t: np.ndarray, field: str) -> None:
     if np.any(dt <= 0):
         i = int(np.argmax(dt <= 0)) + 1
         kind = "duplicate" if dt[i - 1] == 0 else "decreasing"
-        raise SceneError(field, f"time stamps must increase strictly; stamp {i} ({t[i]} s) is {kind}")
+        raise SceneError(
+            field, f"time stamps must increase strictly; stamp {i} ({t[i]} s) is {kind}"
+        )
 
 
 def pulse_motion(scene: Scene) -> SupportMotion:
@@ -332,7 +394,7 @@ def pulse_motion(scene: Scene) -> SupportMotion:
     n = _synthetic_samples(exc)
     t = np.arange(n) * exc.dt
     w = 2.0 * np.pi / exc.pulse_period
-    D = 2.0 * exc.pga * exc.longitudinal_ratio * G / w ** 2
+    D = 2.0 * exc.pga * exc.longitudinal_ratio * G / w**2
     on = t <= exc.pulse_period
     d = np.where(on, 0.5 * D * (1.0 - np.cos(w * t)), 0.0)
     v = np.where(on, 0.5 * D * w * np.sin(w * t), 0.0)
@@ -343,10 +405,18 @@ def pulse_motion(scene: Scene) -> SupportMotion:
         x = ch.endswith("_x")
         disp[ch], vel[ch], acc[ch] = (d, v, a) if x else (zero, zero, zero)
     prov = make_provenance(
-        exc, files={}, header={}, npts={"x": n}, dt_record=exc.dt, dt=exc.dt,
-        duration=float(t[-1]), targets={"x": exc.pga * exc.longitudinal_ratio, "y": 0.0},
-        factors={}, notes=[], processing=f"generator (1 - cos pulse, period "
-        f"{exc.pulse_period:g} s)")
+        exc,
+        files={},
+        header={},
+        npts={"x": n},
+        dt_record=exc.dt,
+        dt=exc.dt,
+        duration=float(t[-1]),
+        targets={"x": exc.pga * exc.longitudinal_ratio, "y": 0.0},
+        factors={},
+        notes=[],
+        processing=f"generator (1 - cos pulse, period {exc.pulse_period:g} s)",
+    )
     return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc, provenance=prov)
 
 
@@ -360,10 +430,25 @@ def rest_motion(scene: Scene) -> SupportMotion:
     zero = np.zeros(2)
     chans = support_channels(scene)
     prov = make_provenance(
-        exc, files={}, header={}, npts={}, dt_record=None, dt=None, duration=float(duration),
-        targets={"x": 0.0, "y": 0.0}, factors={}, notes=[], processing="none (supports at rest)")
-    return SupportMotion(t=t, disp={c: zero for c in chans}, vel={c: zero for c in chans},
-                         acc_exact={c: zero for c in chans}, provenance=prov)
+        exc,
+        files={},
+        header={},
+        npts={},
+        dt_record=None,
+        dt=None,
+        duration=float(duration),
+        targets={"x": 0.0, "y": 0.0},
+        factors={},
+        notes=[],
+        processing="none (supports at rest)",
+    )
+    return SupportMotion(
+        t=t,
+        disp=dict.fromkeys(chans, zero),
+        vel=dict.fromkeys(chans, zero),
+        acc_exact=dict.fromkeys(chans, zero),
+        provenance=prov,
+    )
 
 
 def support_motion(scene: Scene) -> SupportMotion:
@@ -393,18 +478,27 @@ def support_motion(scene: Scene) -> SupportMotion:
     for name, arrays in (("displacement", motion.disp), ("velocity", motion.vel)):
         for ch, x in arrays.items():
             if not np.all(np.isfinite(x)):
-                raise SceneError(field_name, f"the {name} of support {ch!r} overflows to a "
-                                 f"non-finite value (scaling = {exc.scaling!r}; check the "
-                                 "record's magnitude and units)")
+                raise SceneError(
+                    field_name,
+                    f"the {name} of support {ch!r} overflows to a "
+                    f"non-finite value (scaling = {exc.scaling!r}; check the "
+                    "record's magnitude and units)",
+                )
     applied = motion.applied_pga()
     for axis, pga in applied.items():
         if pga > ABSURD_PGA or (pga > EXTREME_PGA and not exc.allow_extreme):
             where = field_name if kind not in ("at2", "text") else f"excitation.file_{axis}"
             name = "longitudinal (x)" if axis == "x" else "transverse (y)"
-            limit = (f"more than {EXTREME_PGA:g} g is refused unless excitation.allow_extreme = "
-                     "true" if pga <= ABSURD_PGA else f"more than {ABSURD_PGA:g} g is refused")
-            raise SceneError(where, f"gives a {name} PGA of {pga:.4g} g after scaling (scaling = "
-                             f"{exc.scaling!r}, scale = {exc.scale:g}); {limit}")
+            limit = (
+                f"more than {EXTREME_PGA:g} g is refused unless excitation.allow_extreme = true"
+                if pga <= ABSURD_PGA
+                else f"more than {ABSURD_PGA:g} g is refused"
+            )
+            raise SceneError(
+                where,
+                f"gives a {name} PGA of {pga:.4g} g after scaling (scaling = "
+                f"{exc.scaling!r}, scale = {exc.scale:g}); {limit}",
+            )
     motion.provenance["applied_pga"] = applied
     for text in motion.provenance.get("warnings", []):
         # one location for every call: a sequence or several engines print a sentence once

@@ -11,13 +11,36 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .plan import (DECK_THETA, DECK_X, DECK_Y, DOF_NAMES, N_DOF, SEAT_THETA, SEAT_X, Plan,
-                   plan_of, support_channels)
+from .plan import (
+    DECK_THETA,
+    DECK_X,
+    DECK_Y,
+    DOF_NAMES,
+    N_DOF,
+    SEAT_THETA,
+    SEAT_X,
+    Plan,
+    plan_of,
+    support_channels,
+)
 from .scene import Scene
 
-__all__ = ["DOF_NAMES", "N_DOF", "SEAT_X", "SEAT_THETA", "DECK_X", "DECK_Y", "DECK_THETA",
-           "support_channels", "mass_matrix", "spring_matrices", "initial_stiffness", "Modes",
-           "natural_modes", "rayleigh_coefficients"]
+__all__ = [
+    "DECK_THETA",
+    "DECK_X",
+    "DECK_Y",
+    "DOF_NAMES",
+    "N_DOF",
+    "SEAT_THETA",
+    "SEAT_X",
+    "Modes",
+    "initial_stiffness",
+    "mass_matrix",
+    "natural_modes",
+    "rayleigh_coefficients",
+    "spring_matrices",
+    "support_channels",
+]
 
 
 def mass_matrix(scene: Scene) -> np.ndarray:
@@ -39,8 +62,8 @@ def initial_stiffness(scene: Scene) -> np.ndarray:
 class Modes:
     """Natural modes of the contact-free elastic model (ascending frequency)."""
 
-    omega: np.ndarray      # rad/s
-    shapes: np.ndarray     # (7, 7), columns mass-normalised
+    omega: np.ndarray  # rad/s
+    shapes: np.ndarray  # (7, 7), columns mass-normalised
 
     @property
     def periods(self) -> np.ndarray:

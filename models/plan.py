@@ -46,13 +46,27 @@ import numpy as np
 from .scene import Scene, TakedaSpring
 
 __all__ = [
-    "DOF_NAMES", "N_DOF", "SEAT_X", "SEAT_THETA", "DECK_X", "DECK_Y", "DECK_THETA",
-    "N_CORNERS", "CORNER_NAMES", "Corner", "Spring", "Column", "Plan", "plan_of",
-    "support_channels", "takeda_hysteretic_args", "standard_columns", "column_unit",
+    "CORNER_NAMES",
+    "DECK_THETA",
+    "DECK_X",
+    "DECK_Y",
+    "DOF_NAMES",
+    "N_CORNERS",
+    "N_DOF",
+    "SEAT_THETA",
+    "SEAT_X",
+    "Column",
+    "Corner",
+    "Plan",
+    "Spring",
+    "column_unit",
+    "plan_of",
+    "standard_columns",
+    "support_channels",
+    "takeda_hysteretic_args",
 ]
 
-DOF_NAMES = ("seat1_x", "seat1_theta", "seat2_x", "seat2_theta", "deck_x", "deck_y",
-             "deck_theta")
+DOF_NAMES = ("seat1_x", "seat1_theta", "seat2_x", "seat2_theta", "deck_x", "deck_y", "deck_theta")
 N_DOF = 7
 SEAT_X = (0, 2)
 SEAT_THETA = (1, 3)
@@ -62,12 +76,25 @@ CORNER_NAMES = ("c1", "c2", "c3", "c4")
 
 #: Absolute displacement / rotation columns in output order, with the DOF each one reads.
 #: θ has no ``_abs`` suffix: the supports do not rotate, so absolute and relative rotation agree.
-DOF_COLUMNS = (("deck_x_abs", DECK_X), ("deck_y_abs", DECK_Y), ("deck_theta", DECK_THETA),
-               ("seat1_x_abs", 0), ("seat1_theta", 1), ("seat2_x_abs", 2), ("seat2_theta", 3))
+DOF_COLUMNS = (
+    ("deck_x_abs", DECK_X),
+    ("deck_y_abs", DECK_Y),
+    ("deck_theta", DECK_THETA),
+    ("seat1_x_abs", 0),
+    ("seat1_theta", 1),
+    ("seat2_x_abs", 2),
+    ("seat2_theta", 3),
+)
 #: Absolute velocity columns, in the same order as :data:`DOF_COLUMNS`.
-VELOCITY_COLUMNS = (("deck_vx_abs", DECK_X), ("deck_vy_abs", DECK_Y), ("deck_omega", DECK_THETA),
-                    ("seat1_vx_abs", 0), ("seat1_omega", 1), ("seat2_vx_abs", 2),
-                    ("seat2_omega", 3))
+VELOCITY_COLUMNS = (
+    ("deck_vx_abs", DECK_X),
+    ("deck_vy_abs", DECK_Y),
+    ("deck_omega", DECK_THETA),
+    ("seat1_vx_abs", 0),
+    ("seat1_omega", 1),
+    ("seat2_vx_abs", 2),
+    ("seat2_omega", 3),
+)
 #: Displacements relative to the supports: the deck centre relative to the mean motion of the
 #: shake tables (the table motion itself for coherent input), each seat relative to its actuator.
 RELATIVE_COLUMNS = ("deck_x_rel", "deck_y_rel", "seat1_x_rel", "seat2_x_rel")
@@ -187,8 +214,12 @@ def takeda_hysteretic_args(spring: TakedaSpring) -> tuple[float, ...]:
     2-point symmetric backbone (F_y, F_y/k0), (F_y + r k0 (d_u − d_y), d_u); pinchX = pinchY = 1,
     damage1 = damage2 = 0, beta (Takeda unloading exponent). Every engine builds this material.
     """
-    k0, fy, r, du = (spring.stiffness, spring.yield_force, spring.post_yield_ratio,
-                     spring.ultimate_displacement)
+    k0, fy, r, du = (
+        spring.stiffness,
+        spring.yield_force,
+        spring.post_yield_ratio,
+        spring.ultimate_displacement,
+    )
     dy = fy / k0
     fu = fy + r * k0 * (du - dy)
     return (fy, dy, fu, du, -fy, -dy, -fu, -du, 1.0, 1.0, 0.0, 0.0, spring.beta)
@@ -238,35 +269,78 @@ def _columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
     cols = [Column("t", "s", "time", "time")]
     for name, _ in DOF_COLUMNS:
         part = name.split("_")[0]
-        cols.append(Column(name, _unit_of(name), f"{part} displacement, absolute", "absolute",
-                           (("body", part),)))
+        cols.append(
+            Column(
+                name,
+                _unit_of(name),
+                f"{part} displacement, absolute",
+                "absolute",
+                (("body", part),),
+            )
+        )
     for name in RELATIVE_COLUMNS:
         part = name.split("_")[0]
         what = "the mean shake-table motion" if part == "deck" else "its actuator"
-        cols.append(Column(name, "m", f"{part} displacement relative to {what}", "relative",
-                           (("body", part),)))
+        cols.append(
+            Column(
+                name, "m", f"{part} displacement relative to {what}", "relative", (("body", part),)
+            )
+        )
     for name, _ in VELOCITY_COLUMNS:
         part = name.split("_")[0]
-        cols.append(Column(name, _unit_of(name), f"{part} velocity, absolute", "velocity",
-                           (("body", part),)))
+        cols.append(
+            Column(
+                name, _unit_of(name), f"{part} velocity, absolute", "velocity", (("body", part),)
+            )
+        )
     for c in CORNER_NAMES:
-        cols.append(Column(f"gap_{c}", "m", f"gap at corner {c} (< 0: penetration)", "gap",
-                           (("corner", c),)))
+        cols.append(
+            Column(
+                f"gap_{c}", "m", f"gap at corner {c} (< 0: penetration)", "gap", (("corner", c),)
+            )
+        )
     for c in CORNER_NAMES:
-        cols.append(Column(f"fn_{c}", "kN", f"normal contact force at {c} (compression > 0)",
-                           "normal_force", (("corner", c),)))
+        cols.append(
+            Column(
+                f"fn_{c}",
+                "kN",
+                f"normal contact force at {c} (compression > 0)",
+                "normal_force",
+                (("corner", c),),
+            )
+        )
     for c in CORNER_NAMES:
-        cols.append(Column(f"ft_{c}", "kN", f"tangential contact force on the deck at {c} "
-                           "along the face tangent", "tangential_force", (("corner", c),)))
+        cols.append(
+            Column(
+                f"ft_{c}",
+                "kN",
+                f"tangential contact force on the deck at {c} along the face tangent",
+                "tangential_force",
+                (("corner", c),),
+            )
+        )
     for b in bent_names:
         for d in ("x", "y"):
-            cols.append(Column(f"{b}_f{d}", "kN", f"bent {b} spring force in {d}", "bent_force",
-                               (("bent", b), ("direction", d))))
+            cols.append(
+                Column(
+                    f"{b}_f{d}",
+                    "kN",
+                    f"bent {b} spring force in {d}",
+                    "bent_force",
+                    (("bent", b), ("direction", d)),
+                )
+            )
     for b in bent_names:
         for d in ("x", "y"):
-            cols.append(Column(f"{b}_d{d}", "m", f"bent {b} spring deformation in {d} "
-                               "(deck point above the bent − table)", "bent_deformation",
-                               (("bent", b), ("direction", d))))
+            cols.append(
+                Column(
+                    f"{b}_d{d}",
+                    "m",
+                    f"bent {b} spring deformation in {d} (deck point above the bent − table)",
+                    "bent_deformation",
+                    (("bent", b), ("direction", d)),
+                )
+            )
     return tuple(cols)
 
 
@@ -394,9 +468,20 @@ def _corner_table(scene: Scene, gaps: tuple[float, float]) -> tuple[Corner, ...]
         side = 1.0 if seat == 0 else -1.0
         # φ = 0 gives exactly n = (±1, 0), t = (0, 1), r = (0, y_c): the straight-deck formulae
         normal = (side * cs, -side * sn)
-        out.append(Corner(name=CORNER_NAMES[k], index=k, seat=seat, x=xc, y=yc, normal=normal,
-                          tangent=(sn, cs), lever=(yc * tn, yc), gap=float(gaps[seat]),
-                          seat_fixed=bool(scene.seats[seat].fixed)))
+        out.append(
+            Corner(
+                name=CORNER_NAMES[k],
+                index=k,
+                seat=seat,
+                x=xc,
+                y=yc,
+                normal=normal,
+                tangent=(sn, cs),
+                lever=(yc * tn, yc),
+                gap=float(gaps[seat]),
+                seat_fixed=bool(scene.seats[seat].fixed),
+            )
+        )
     return tuple(out)
 
 
@@ -406,17 +491,70 @@ def _springs(scene: Scene) -> tuple[Spring, ...]:
     nb = len(scene.bents)
     for i, b in enumerate(scene.bents):
         xb = b.station - hl
-        out.append(Spring(f"{b.name}_x", "bent", b.name, "x", "takeda", (DECK_X,), (1.0,),
-                          2 * i, 1.0, b.x.stiffness, b.cx, takeda_hysteretic_args(b.x)))
-        out.append(Spring(f"{b.name}_y", "bent", b.name, "y", "takeda", (DECK_Y, DECK_THETA),
-                          (1.0, xb), 2 * i + 1, 1.0, b.y.stiffness, b.cy,
-                          takeda_hysteretic_args(b.y)))
+        out.append(
+            Spring(
+                f"{b.name}_x",
+                "bent",
+                b.name,
+                "x",
+                "takeda",
+                (DECK_X,),
+                (1.0,),
+                2 * i,
+                1.0,
+                b.x.stiffness,
+                b.cx,
+                takeda_hysteretic_args(b.x),
+            )
+        )
+        out.append(
+            Spring(
+                f"{b.name}_y",
+                "bent",
+                b.name,
+                "y",
+                "takeda",
+                (DECK_Y, DECK_THETA),
+                (1.0, xb),
+                2 * i + 1,
+                1.0,
+                b.y.stiffness,
+                b.cy,
+                takeda_hysteretic_args(b.y),
+            )
+        )
     for j, s in enumerate(scene.seats):
         name = f"seat{j + 1}"
-        out.append(Spring(f"{name}_x", "seat", s.name, "x", "linear", (SEAT_X[j],), (1.0,),
-                          2 * nb + j, 1.0, s.kx, s.cx))
-        out.append(Spring(f"{name}_theta", "seat", s.name, "theta", "linear", (SEAT_THETA[j],),
-                          (1.0,), -1, 0.0, s.ktheta, s.ctheta))
+        out.append(
+            Spring(
+                f"{name}_x",
+                "seat",
+                s.name,
+                "x",
+                "linear",
+                (SEAT_X[j],),
+                (1.0,),
+                2 * nb + j,
+                1.0,
+                s.kx,
+                s.cx,
+            )
+        )
+        out.append(
+            Spring(
+                f"{name}_theta",
+                "seat",
+                s.name,
+                "theta",
+                "linear",
+                (SEAT_THETA[j],),
+                (1.0,),
+                -1,
+                0.0,
+                s.ktheta,
+                s.ctheta,
+            )
+        )
     return tuple(out)
 
 
@@ -426,8 +564,9 @@ def plan_of(scene: Scene, gaps: tuple[float, float] | None = None) -> Plan:
     s1, s2, d = scene.seats[0], scene.seats[1], scene.deck
     hl = 0.5 * d.length
     return Plan(
-        mass=np.array([s1.mass, s1.inertia, s2.mass, s2.inertia, d.mass, d.mass, d.inertia],
-                      dtype=float),
+        mass=np.array(
+            [s1.mass, s1.inertia, s2.mass, s2.inertia, d.mass, d.mass, d.inertia], dtype=float
+        ),
         corners=_corner_table(scene, (float(g[0]), float(g[1]))),
         springs=_springs(scene),
         channels=support_channels(scene),

@@ -139,10 +139,16 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
     for _, name, h, _ in steps:
         if h * MIN_STEPS > D:
             where = "run.duration" if scene.run.duration is not None else name
-            add(Finding("error", where, f"the analysis ({src}) holds only {D / h:.3g} steps of "
-                        f"{name} = {h:g} s (at least {MIN_STEPS} are needed to resolve a "
-                        f"history); give a step <= {D / MIN_STEPS:.3g} s or a longer "
-                        "analysis"))
+            add(
+                Finding(
+                    "error",
+                    where,
+                    f"the analysis ({src}) holds only {D / h:.3g} steps of "
+                    f"{name} = {h:g} s (at least {MIN_STEPS} are needed to resolve a "
+                    f"history); give a step <= {D / MIN_STEPS:.3g} s or a longer "
+                    "analysis",
+                )
+            )
     if any(f.level == "error" for f in report.findings):
         return report  # the other checks assume at least one step
 
@@ -153,56 +159,104 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
         # first three, ω = 0) have no period to resolve
         periods = periods[3:]
     if not np.all(np.isfinite(periods)):
-        add(Finding("error", "scene", "the masses and stiffnesses give non-finite natural "
-                    f"periods ({', '.join(f'{T:g}' for T in periods)} s): a mechanism or "
-                    "extreme values; check them"))
+        add(
+            Finding(
+                "error",
+                "scene",
+                "the masses and stiffnesses give non-finite natural "
+                f"periods ({', '.join(f'{T:g}' for T in periods)} s): a mechanism or "
+                "extreme values; check them",
+            )
+        )
         return report
     t1, tmin = float(np.max(periods)), float(np.min(periods))
     for _, name, h, _ in steps:
         if h > t1 / 2:
-            add(Finding("error", name, f"{name} = {h:g} s cannot represent even the "
-                        f"fundamental period T1 = {t1:.4g} s of the contact-free model "
-                        f"(at least 2 steps per period); it must be <= {t1 / 2:.4g} s"))
+            add(
+                Finding(
+                    "error",
+                    name,
+                    f"{name} = {h:g} s cannot represent even the "
+                    f"fundamental period T1 = {t1:.4g} s of the contact-free model "
+                    f"(at least 2 steps per period); it must be <= {t1 / 2:.4g} s",
+                )
+            )
         elif h > tmin / STEPS_PER_PERIOD:
-            add(Finding("warning", name, f"{name} = {h:g} s resolves the shortest natural "
-                        f"period T = {tmin:.4g} s with only {tmin / h:.3g} steps (>= "
-                        f"{STEPS_PER_PERIOD} recommended, i.e. <= "
-                        f"{tmin / STEPS_PER_PERIOD:.3g} s): the highest modes are distorted"))
+            add(
+                Finding(
+                    "warning",
+                    name,
+                    f"{name} = {h:g} s resolves the shortest natural "
+                    f"period T = {tmin:.4g} s with only {tmin / h:.3g} steps (>= "
+                    f"{STEPS_PER_PERIOD} recommended, i.e. <= "
+                    f"{tmin / STEPS_PER_PERIOD:.3g} s): the highest modes are distorted",
+                )
+            )
 
     tc = contact_duration(scene)
     report.contact_duration = tc
     if math.isfinite(tc):
         for _, name, h, compliant in steps:
             if compliant and h > tc:
-                add(Finding("warning", name, f"contacts last about {tc:.3g} s "
-                            f"(contact.stiffness = {scene.contact.stiffness:g}, the lightest "
-                            f"corner's effective mass), shorter than {name} = {h:g} s: impacts "
-                            f"are not resolved and their forces depend on the step; use a step "
-                            f"<= {tc / 10:.3g} s, compliance.integrator = 'adaptive', or the "
-                            "nonsmooth engine (rigid limit)"))
+                add(
+                    Finding(
+                        "warning",
+                        name,
+                        f"contacts last about {tc:.3g} s "
+                        f"(contact.stiffness = {scene.contact.stiffness:g}, the lightest "
+                        f"corner's effective mass), shorter than {name} = {h:g} s: impacts "
+                        f"are not resolved and their forces depend on the step; use a step "
+                        f"<= {tc / 10:.3g} s, compliance.integrator = 'adaptive', or the "
+                        "nonsmooth engine (rigid limit)",
+                    )
+                )
 
     out_dt = scene.run.output_dt
     if out_dt > D:
-        add(Finding("error", "run.output_dt", f"run.output_dt = {out_dt:g} s is longer than the "
-                    f"analysis ({src}): the result would hold the single row t = 0; it must be "
-                    f"<= {D / MIN_OUTPUT_ROWS:.3g} s for {MIN_OUTPUT_ROWS} rows"))
+        add(
+            Finding(
+                "error",
+                "run.output_dt",
+                f"run.output_dt = {out_dt:g} s is longer than the "
+                f"analysis ({src}): the result would hold the single row t = 0; it must be "
+                f"<= {D / MIN_OUTPUT_ROWS:.3g} s for {MIN_OUTPUT_ROWS} rows",
+            )
+        )
     else:
         # each engine stores every round(output_dt / h)-th step (engines.output_stride)
         stored = [max(1, round(out_dt / h)) * h for _, _, h, _ in steps] or [out_dt]
         most, fewest = int(D / min(stored)) + 1, int(D / max(stored)) + 1
         if most > MAX_OUTPUT_ROWS:
-            add(Finding("error", "run.output_dt", f"run.output_dt = {out_dt:g} s over {D:g} s "
-                        f"stores {most:.3g} rows per run (at most {MAX_OUTPUT_ROWS:.0e}); it "
-                        f"must be >= {D / MAX_OUTPUT_ROWS:.3g} s"))
+            add(
+                Finding(
+                    "error",
+                    "run.output_dt",
+                    f"run.output_dt = {out_dt:g} s over {D:g} s "
+                    f"stores {most:.3g} rows per run (at most {MAX_OUTPUT_ROWS:.0e}); it "
+                    f"must be >= {D / MAX_OUTPUT_ROWS:.3g} s",
+                )
+            )
         elif fewest < MIN_OUTPUT_ROWS:
-            add(Finding("warning", "run.output_dt", f"run.output_dt = {out_dt:g} s over "
-                        f"{D:g} s stores only {fewest} rows (peaks between them are missed); "
-                        f"use <= {D / MIN_OUTPUT_ROWS:.3g} s"))
+            add(
+                Finding(
+                    "warning",
+                    "run.output_dt",
+                    f"run.output_dt = {out_dt:g} s over "
+                    f"{D:g} s stores only {fewest} rows (peaks between them are missed); "
+                    f"use <= {D / MIN_OUTPUT_ROWS:.3g} s",
+                )
+            )
         for _, name, h, _ in steps:
             if out_dt < 0.5 * h:
-                add(Finding("warning", "run.output_dt", f"run.output_dt = {out_dt:g} s is "
-                            f"shorter than {name} = {h:g} s: output is stored every step "
-                            f"({h:g} s) instead"))
+                add(
+                    Finding(
+                        "warning",
+                        "run.output_dt",
+                        f"run.output_dt = {out_dt:g} s is "
+                        f"shorter than {name} = {h:g} s: output is stored every step "
+                        f"({h:g} s) instead",
+                    )
+                )
     return report
 
 

@@ -75,7 +75,7 @@ def remove_baseline(a: np.ndarray, dt: float, degree: int = BASELINE_DEGREE) -> 
     record's displacement best (least squares); the integration is linear, so the corrected
     record's displacement is d − Σ c_k D[t^k] with D the trapezoidal double integral."""
     t = np.arange(len(a)) * dt / (len(a) * dt)  # normalised time: a well-conditioned basis
-    basis = np.column_stack([t ** k for k in range(degree + 1)])
+    basis = np.column_stack([t**k for k in range(degree + 1)])
     drift = np.column_stack([integrate(basis[:, k], dt)[1] for k in range(degree + 1)])
     coef, *_ = np.linalg.lstsq(drift, integrate(a, dt)[1], rcond=None)
     return a - basis @ coef
@@ -89,13 +89,15 @@ def highpass_filtered(a: np.ndarray, dt: float, corner: float) -> np.ndarray:
     """
     nyq = 0.5 / dt
     if not 1e-6 * nyq <= corner < nyq:  # below 1e-6·nyq the filter design is singular
-        raise SceneError("excitation.highpass",
-                         f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
-                         f"of the record (after time scaling), got {corner}")
+        raise SceneError(
+            "excitation.highpass",
+            f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
+            f"of the record (after time scaling), got {corner}",
+        )
     sos = butter_highpass_sos(4, corner / nyq)
     n = len(a)
     padded = np.concatenate([np.zeros(n), a, np.zeros(n)])
-    return sosfiltfilt(sos, padded)[n:2 * n]
+    return sosfiltfilt(sos, padded)[n : 2 * n]
 
 
 def processing_label(exc: Excitation) -> str:
@@ -107,8 +109,9 @@ def processing_label(exc: Excitation) -> str:
     return "none (trapezoidal integration of the acceleration as given)"
 
 
-def _components(scene: Scene) -> tuple[dict[str, np.ndarray], dict[str, RecordFile], float,
-                                       list[str]]:
+def _components(
+    scene: Scene,
+) -> tuple[dict[str, np.ndarray], dict[str, RecordFile], float, list[str]]:
     """Accelerations [m/s²] per direction present, their files, the step [s], global notes."""
     exc = scene.excitation
     notes: list[str] = []
@@ -121,41 +124,56 @@ def _components(scene: Scene) -> tuple[dict[str, np.ndarray], dict[str, RecordFi
             files[axis] = reader(path, f"excitation.file_{axis}")
             with np.errstate(over="ignore"):  # an overflow is refused by _check_raw_pga
                 acc[axis] = files[axis].values * unit
-    dt = _common_step({a: f.dt for a, f in files.items()},
-                      {a: f"excitation.file_{a}" for a in files})
+    dt = _common_step(
+        {a: f.dt for a, f in files.items()}, {a: f"excitation.file_{a}" for a in files}
+    )
     return acc, files, dt, notes
 
 
 def _common_step(steps: dict[str, float], fields: dict[str, str]) -> float:
     """The components' sampling step; refuses different ones."""
     if len(steps) == 2 and abs(steps["x"] - steps["y"]) > 1e-6 * steps["x"]:
-        raise SceneError(fields["y"], f"the record's step DT = {steps['y']:g} s differs from the "
-                         f"x record's {steps['x']:g} s; both directions must share their "
-                         "sampling step (components of one station do)")
+        raise SceneError(
+            fields["y"],
+            f"the record's step DT = {steps['y']:g} s differs from the "
+            f"x record's {steps['x']:g} s; both directions must share their "
+            "sampling step (components of one station do)",
+        )
     return next(iter(steps.values()))
 
 
-def _check_raw_pga(exc: Excitation, peaks: dict[str, float], fields: dict[str, str],
-                   how: str) -> None:
+def _check_raw_pga(
+    exc: Excitation, peaks: dict[str, float], fields: dict[str, str], how: str
+) -> None:
     """Refuse a record whose PGA as read [g] exceeds EXTREME_PGA (a wrong unit, or noise), or
     ABSURD_PGA even when forced (beyond any physical value; it would overflow downstream)."""
     for axis, peak in peaks.items():
         if not np.isfinite(peak):
-            raise SceneError(fields[axis], f"the {AXIS_NAME[axis]} acceleration overflows to a "
-                             f"non-finite value ({how}); check the record's magnitude and unit")
+            raise SceneError(
+                fields[axis],
+                f"the {AXIS_NAME[axis]} acceleration overflows to a "
+                f"non-finite value ({how}); check the record's magnitude and unit",
+            )
         if peak > ABSURD_PGA:
-            raise SceneError(fields[axis], f"the {AXIS_NAME[axis]} record reads as a PGA of "
-                             f"{peak:.4g} g ({how}): beyond any physical value (at most "
-                             f"{ABSURD_PGA:g} g even with allow_extreme); check the record's unit")
+            raise SceneError(
+                fields[axis],
+                f"the {AXIS_NAME[axis]} record reads as a PGA of "
+                f"{peak:.4g} g ({how}): beyond any physical value (at most "
+                f"{ABSURD_PGA:g} g even with allow_extreme); check the record's unit",
+            )
         if peak > EXTREME_PGA and not exc.allow_extreme:
-            raise SceneError(fields[axis], f"the {AXIS_NAME[axis]} record reads as a PGA of "
-                             f"{peak:.4g} g ({how}); more than {EXTREME_PGA:g} g is refused: "
-                             "check the record's unit, or set excitation.allow_extreme = true "
-                             "to force it")
+            raise SceneError(
+                fields[axis],
+                f"the {AXIS_NAME[axis]} record reads as a PGA of "
+                f"{peak:.4g} g ({how}); more than {EXTREME_PGA:g} g is refused: "
+                "check the record's unit, or set excitation.allow_extreme = true "
+                "to force it",
+            )
 
 
-def _equal_lengths(acc: dict[str, np.ndarray], files: dict[str, RecordFile], dt: float,
-                   label) -> int:
+def _equal_lengths(
+    acc: dict[str, np.ndarray], files: dict[str, RecordFile], dt: float, label
+) -> int:
     """Pad the shorter component with zeros at the end; returns the common length."""
     n = max(len(a) for a in acc.values())
     for axis, a in acc.items():
@@ -164,7 +182,8 @@ def _equal_lengths(acc: dict[str, np.ndarray], files: dict[str, RecordFile], dt:
             files[axis].notes.append(
                 f"{label(axis)}: the {AXIS_NAME[axis]} component has {len(a)} samples, "
                 f"{n - len(a)} fewer than the {AXIS_NAME[other]} one ({n}): padded with zeros "
-                f"at the end ({(n - len(a)) * dt:g} s at rest)")
+                f"at the end ({(n - len(a)) * dt:g} s at rest)"
+            )
             acc[axis] = np.concatenate([a, np.zeros(n - len(a))])
     return n
 
@@ -174,11 +193,14 @@ def _drift_note(d: np.ndarray, exc: Excitation, where: str) -> str | None:
     fraction only, which scaling does not change, so a sequence repeats one sentence."""
     peak = float(np.max(np.abs(d)))
     if peak > 0.0 and abs(d[-1]) > DRIFT_FRACTION * peak:
-        hint = ("; consider processing = 'baseline' or 'highpass'"
-                if exc.processing == "none" else "")
-        return (f"{where}: with processing = {exc.processing!r} the displacement ends at "
-                f"{100 * abs(d[-1]) / peak:.0f} % of its peak (more than "
-                f"{100 * DRIFT_FRACTION:g} %): the record drifts{hint}")
+        hint = (
+            "; consider processing = 'baseline' or 'highpass'" if exc.processing == "none" else ""
+        )
+        return (
+            f"{where}: with processing = {exc.processing!r} the displacement ends at "
+            f"{100 * abs(d[-1]) / peak:.0f} % of its peak (more than "
+            f"{100 * DRIFT_FRACTION:g} %): the record drifts{hint}"
+        )
     return None
 
 
@@ -189,8 +211,11 @@ def _factors(exc: Excitation, peaks: dict[str, float], fields: dict[str, str]) -
     for axis, peak in peaks.items():
         if exc.scaling == "pga":
             if peak == 0.0 and targets[axis] > 0.0:
-                raise SceneError(fields[axis], f"the {AXIS_NAME[axis]} record is zero after "
-                                 f"processing; it cannot be scaled to {targets[axis]:g} g")
+                raise SceneError(
+                    fields[axis],
+                    f"the {AXIS_NAME[axis]} record is zero after "
+                    f"processing; it cannot be scaled to {targets[axis]:g} g",
+                )
             factors[axis] = targets[axis] / peak if peak > 0.0 else 0.0
             wanted[axis] = targets[axis]
         else:
@@ -217,13 +242,19 @@ def acceleration_motion(scene: Scene) -> SupportMotion:
     for axis in ("x", "y"):
         if axis not in acc:
             src = "file_x" if axis == "x" else "file_y"
-            what = f"excitation.{src} is not given" if exc.kind != "csv" else \
-                f"the CSV has no acc_{axis} column"
-            notes.append(f"{what}: the {AXIS_NAME[axis]} direction is at rest"
-                         + (" (its PGA target is not applied)" if exc.scaling == "pga" else ""))
+            what = (
+                f"excitation.{src} is not given"
+                if exc.kind != "csv"
+                else f"the CSV has no acc_{axis} column"
+            )
+            notes.append(
+                f"{what}: the {AXIS_NAME[axis]} direction is at rest"
+                + (" (its PGA target is not applied)" if exc.scaling == "pga" else "")
+            )
     unit = "g" if exc.kind == "at2" else exc.acc_unit
-    _check_raw_pga(exc, {a: float(np.max(np.abs(x))) / G for a, x in acc.items()}, fields,
-                   f"values in {unit}")
+    _check_raw_pga(
+        exc, {a: float(np.max(np.abs(x))) / G for a, x in acc.items()}, fields, f"values in {unit}"
+    )
     n = _equal_lengths(acc, files, dt, label)
     dt_model = dt * exc.time_scale
     base: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
@@ -251,11 +282,18 @@ def acceleration_motion(scene: Scene) -> SupportMotion:
     unique = {f.path: f for f in files.values()}
     all_notes = [w for f in unique.values() for w in f.notes] + notes
     prov = make_provenance(
-        exc, files={a: f.info() for a, f in files.items()},
+        exc,
+        files={a: f.info() for a, f in files.items()},
         header={a: f.header for a, f in files.items()},
-        npts={a: f.npts for a, f in files.items()}, dt_record=dt, dt=dt_model,
-        duration=float(t[-1]), processing=processing_label(exc), targets=targets,
-        factors=factors, notes=all_notes)
+        npts={a: f.npts for a, f in files.items()},
+        dt_record=dt,
+        dt=dt_model,
+        duration=float(t[-1]),
+        processing=processing_label(exc),
+        targets=targets,
+        factors=factors,
+        notes=all_notes,
+    )
     return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc_out, provenance=prov)
 
 
@@ -280,8 +318,11 @@ def _csv_components(exc: Excitation, csv: CsvRecord):
     rec, t = csv.file, csv.t
     unknown = [c for c in csv.columns if c not in ("acc_x", "acc_y")]
     if unknown:
-        raise SceneError("excitation.file", f"{rec.path!r}: unknown column {unknown[0][:24]!r}; "
-                         f"an acceleration CSV holds {exc.time_column!r}, acc_x and acc_y")
+        raise SceneError(
+            "excitation.file",
+            f"{rec.path!r}: unknown column {unknown[0][:24]!r}; "
+            f"an acceleration CSV holds {exc.time_column!r}, acc_x and acc_y",
+        )
     if not np.all(np.isfinite(t)):
         i = int(np.argmin(np.isfinite(t)))
         raise SceneError("excitation.file", f"{rec.path!r}: row {i + 2} has no time stamp")
@@ -292,11 +333,17 @@ def _csv_components(exc: Excitation, csv: CsvRecord):
         n = int(np.flatnonzero(ok)[-1]) + 1 if ok.any() else 0
         if not ok[:n].all():
             i = int(np.argmin(ok[:n]))
-            raise SceneError("excitation.file", f"{rec.path!r}: row {i + 2}, column {name!r} is "
-                             "empty inside the record (only a shorter component may end early)")
+            raise SceneError(
+                "excitation.file",
+                f"{rec.path!r}: row {i + 2}, column {name!r} is "
+                "empty inside the record (only a shorter component may end early)",
+            )
         if n < MIN_SAMPLES:
-            raise SceneError("excitation.file", f"{rec.path!r}: column {name!r} holds {n} values; "
-                             f"at least {MIN_SAMPLES} are needed")
+            raise SceneError(
+                "excitation.file",
+                f"{rec.path!r}: column {name!r} holds {n} values; "
+                f"at least {MIN_SAMPLES} are needed",
+            )
         with np.errstate(over="ignore"):  # an overflow is refused by _check_raw_pga
             acc[axis] = col[:n] * ACC_UNITS[exc.acc_unit]
         files[axis] = rec
@@ -317,15 +364,21 @@ def displacement_motion(scene: Scene, csv: CsvRecord) -> SupportMotion:
 
     exc, rec, field = scene.excitation, csv.file, "excitation.file"
     if exc.processing != "none":
-        raise SceneError("excitation.processing", f"{rec.path!r} holds displacements, used as "
-                         f"given; processing must be 'none', got {exc.processing!r}")
+        raise SceneError(
+            "excitation.processing",
+            f"{rec.path!r} holds displacements, used as "
+            f"given; processing must be 'none', got {exc.processing!r}",
+        )
     channels = support_channels(scene)
     allowed = {f"{c}_disp" for c in channels} | {f"{c}_vel" for c in channels}
     for col in csv.columns:
         if col not in allowed:
-            raise SceneError(field, f"unknown column {col[:24]!r}; expected {exc.time_column!r} "
-                             "and acc_x / acc_y, or <support>_disp / <support>_vel for supports "
-                             f"{', '.join(channels)}")
+            raise SceneError(
+                field,
+                f"unknown column {col[:24]!r}; expected {exc.time_column!r} "
+                "and acc_x / acc_y, or <support>_disp / <support>_vel for supports "
+                f"{', '.join(channels)}",
+            )
     for c in channels:
         if f"{c}_disp" not in csv.columns:
             raise SceneError(field, f"support {c!r} has no record (column '{c}_disp' missing)")
@@ -333,8 +386,11 @@ def displacement_motion(scene: Scene, csv: CsvRecord) -> SupportMotion:
     for name, col in {exc.time_column: csv.t, **csv.columns}.items():
         if not np.all(np.isfinite(col)):
             row = int(np.argmin(np.isfinite(col)))
-            raise SceneError(field, f"value in row {row + 2}, column {name[:24]!r} is missing or "
-                             "not finite (records of mismatched length?)")
+            raise SceneError(
+                field,
+                f"value in row {row + 2}, column {name[:24]!r} is missing or "
+                "not finite (records of mismatched length?)",
+            )
     if csv.t[0] != 0.0:
         rec.note(f"time starts at {csv.t[0]:g} s; the record is shifted to start at 0 s")
     s = exc.time_scale
@@ -344,13 +400,27 @@ def displacement_motion(scene: Scene, csv: CsvRecord) -> SupportMotion:
         if not np.all(np.isfinite(t)):
             raise SceneError(field, "the time stamps overflow to a non-finite value")
         disp = {c: csv.columns[f"{c}_disp"] * f * s * s for c in channels}
-        vel = {c: (csv.columns[f"{c}_vel"] * f * s if f"{c}_vel" in csv.columns
-                   else np.gradient(disp[c], t)) for c in channels}
-        peaks = {axis: max(float(np.max(np.abs(np.gradient(vel[c], t)))) for c in channels
-                           if c.endswith(f"_{axis}")) / G for axis in ("x", "y")}
+        vel = {
+            c: (
+                csv.columns[f"{c}_vel"] * f * s
+                if f"{c}_vel" in csv.columns
+                else np.gradient(disp[c], t)
+            )
+            for c in channels
+        }
+        peaks = {
+            axis: max(
+                float(np.max(np.abs(np.gradient(vel[c], t))))
+                for c in channels
+                if c.endswith(f"_{axis}")
+            )
+            / G
+            for axis in ("x", "y")
+        }
     fields = {"x": field, "y": field}
-    _check_raw_pga(exc, peaks, fields, f"derived from displacements in {exc.disp_unit}, "
-                   f"time scale {s:g}")
+    _check_raw_pga(
+        exc, peaks, fields, f"derived from displacements in {exc.disp_unit}, time scale {s:g}"
+    )
     factors, targets = _factors(exc, peaks, fields)
     for c in channels:
         k = factors[c[-1]]
@@ -358,9 +428,16 @@ def displacement_motion(scene: Scene, csv: CsvRecord) -> SupportMotion:
     steps = np.diff(t)
     uniform = bool(np.all(np.abs(steps - steps.mean()) <= 0.01 * steps.mean()))
     prov = make_provenance(
-        exc, files={"csv": rec.info()}, header={}, npts={"csv": rec.npts},
+        exc,
+        files={"csv": rec.info()},
+        header={},
+        npts={"csv": rec.npts},
         dt_record=float(steps.mean() / s) if uniform else None,
-        dt=float(steps.mean()) if uniform else None, duration=float(t[-1]),
-        processing="none (displacements used as given)", targets=targets, factors=factors,
-        notes=list(rec.notes))
+        dt=float(steps.mean()) if uniform else None,
+        duration=float(t[-1]),
+        processing="none (displacements used as given)",
+        targets=targets,
+        factors=factors,
+        notes=list(rec.notes),
+    )
     return SupportMotion(t=t, disp=disp, vel=vel, provenance=prov)

@@ -33,10 +33,10 @@ from .errors import SceneError
 
 MIN_SAMPLES = 16  # shortest record the processing (zero-phase filter, taper) can handle
 MAX_SAMPLES = 2_000_000  # longest record held in memory (600 s at 0.3 ms)
-MAX_RECORD_BYTES = 256 * 2 ** 20  # 2e6 rows of a 23-column CSV hold about 250 MB
+MAX_RECORD_BYTES = 256 * 2**20  # 2e6 rows of a 23-column CSV hold about 250 MB
 MAX_CSV_CELLS = 24_000_000  # rows x columns of a CSV record (190 MB as float64)
 EXCERPT = 24  # longest excerpt of a record quoted in a message [characters]
-_CHUNK = 2 ** 20
+_CHUNK = 2**20
 
 # a number ends where no digit, point, exponent or sign follows ("1.2.3", "1e" are no numbers)
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][-+]?\d+)?(?![\d.EeDd+-])"
@@ -120,8 +120,9 @@ def resolve_path(path: str | Path, field_name: str, base: Path | None = None) ->
         raise SceneError(field_name, f"is not a usable file path ({reason})") from None
 
 
-def read_capped(path: str | Path | None, field_name: str, what: str,
-                max_lines: int) -> tuple[bytes, RecordFile]:
+def read_capped(
+    path: str | Path | None, field_name: str, what: str, max_lines: int
+) -> tuple[bytes, RecordFile]:
     """The bytes of a record file with its SHA-256, refused when too big before it is all read.
 
     Reads in 1 MiB chunks and stops as soon as the file exceeds ``MAX_RECORD_BYTES`` or holds
@@ -139,21 +140,30 @@ def read_capped(path: str | Path | None, field_name: str, what: str,
                 size += len(chunk)
                 lines += chunk.count(b"\n")
                 if size > MAX_RECORD_BYTES:
-                    raise SceneError(field_name, f"{what} {str(resolved)!r} is larger than "
-                                     f"{MAX_RECORD_BYTES // 2 ** 20} MiB, the largest record read")
+                    raise SceneError(
+                        field_name,
+                        f"{what} {str(resolved)!r} is larger than "
+                        f"{MAX_RECORD_BYTES // 2**20} MiB, the largest record read",
+                    )
                 if lines > max_lines:
-                    raise SceneError(field_name, f"{what} {str(resolved)!r} holds more than "
-                                     f"{max_lines:,} lines; records of at most {MAX_SAMPLES:,} "
-                                     "samples are read")
+                    raise SceneError(
+                        field_name,
+                        f"{what} {str(resolved)!r} holds more than "
+                        f"{max_lines:,} lines; records of at most {MAX_SAMPLES:,} "
+                        "samples are read",
+                    )
                 digest.update(chunk)
                 chunks.append(chunk)
     except OSError as err:
-        raise SceneError(field_name, f"cannot read {str(resolved)!r}: "
-                         f"{err.strerror or type(err).__name__}") from None
+        raise SceneError(
+            field_name, f"cannot read {str(resolved)!r}: {err.strerror or type(err).__name__}"
+        ) from None
     raw = b"".join(chunks)
     if b"\x00" in raw[:65536]:
-        raise SceneError(field_name, f"{str(resolved)!r} is not a text file (it holds NUL bytes); "
-                         f"a {what} is text")
+        raise SceneError(
+            field_name,
+            f"{str(resolved)!r} is not a text file (it holds NUL bytes); a {what} is text",
+        )
     return raw, RecordFile(field_name, str(resolved), digest.hexdigest(), size)
 
 
@@ -170,28 +180,34 @@ def _to_floats(tokens: list[str], rec: RecordFile, where) -> np.ndarray:
             except ValueError:
                 ok = False
             if not ok:
-                raise SceneError(rec.field, f"{rec.path!r}: {where(i)} holds {excerpt(tok)}: "
-                                 "not finite or not a number") from None
+                raise SceneError(
+                    rec.field,
+                    f"{rec.path!r}: {where(i)} holds {excerpt(tok)}: not finite or not a number",
+                ) from None
     return values
 
 
 def check_count(n: int, rec: RecordFile, what: str) -> None:
     """Refuse a sample count the processing cannot handle or memory cannot hold."""
     if n < MIN_SAMPLES:
-        raise SceneError(rec.field, f"{rec.path!r}: {what} {n} samples; at least {MIN_SAMPLES} "
-                         "are needed")
+        raise SceneError(
+            rec.field, f"{rec.path!r}: {what} {n} samples; at least {MIN_SAMPLES} are needed"
+        )
     if n > MAX_SAMPLES:
-        raise SceneError(rec.field, f"{rec.path!r}: {what} {n:,} samples; at most "
-                         f"{MAX_SAMPLES:,} are read")
+        raise SceneError(
+            rec.field, f"{rec.path!r}: {what} {n:,} samples; at most {MAX_SAMPLES:,} are read"
+        )
 
 
 def _check_dt(dt: float, rec: RecordFile, what: str) -> None:
     if not (np.isfinite(dt) and 1e-5 <= dt <= 0.5):
-        raise SceneError(rec.field, f"{rec.path!r}: {what} must be between 1e-05 s and 0.5 s, "
-                         f"got {dt:g} s")
+        raise SceneError(
+            rec.field, f"{rec.path!r}: {what} must be between 1e-05 s and 0.5 s, got {dt:g} s"
+        )
 
 
 # -- PEER AT2 ------------------------------------------------------------------------------
+
 
 def _at2_header(lines: list[str]) -> tuple[int, int, float] | None:
     """(line index, NPTS, DT) of the first header line (of the first 6) giving both."""
@@ -231,44 +247,65 @@ def read_at2(path: str | Path | None, field_name: str = "excitation.file_x") -> 
     head = _at2_header(lines)
     named = [i for i, line in enumerate(lines[:6]) if _NAMES.search(line)]
     if head is None and named:
-        raise SceneError(field_name, f"{rec.path!r}: header line {named[0] + 1} must give NPTS "
-                         "and DT as numbers (as 'NPTS= 7999, DT= .0050 SEC' or "
-                         "'7999 .0050 NPTS, DT')")
+        raise SceneError(
+            field_name,
+            f"{rec.path!r}: header line {named[0] + 1} must give NPTS "
+            "and DT as numbers (as 'NPTS= 7999, DT= .0050 SEC' or "
+            "'7999 .0050 NPTS, DT')",
+        )
     if head is None:  # not recognised as a record: quote nothing of it
-        raise SceneError(field_name, f"{rec.path!r} is not a PEER AT2 file: none of its first 6 "
-                         "lines gives NPTS and DT (as 'NPTS= 7999, DT= .0050 SEC' or "
-                         "'7999 .0050 NPTS, DT')")
+        raise SceneError(
+            field_name,
+            f"{rec.path!r} is not a PEER AT2 file: none of its first 6 "
+            "lines gives NPTS and DT (as 'NPTS= 7999, DT= .0050 SEC' or "
+            "'7999 .0050 NPTS, DT')",
+        )
     k, npts, dt = head
     for line in lines[:k]:
         kind, unit = _KIND.search(line), _UNIT.search(line)
         if kind:
-            raise SceneError(field_name, f"{rec.path!r} is a {kind.group(1).lower()} time series "
-                             "(header line), not an acceleration record")
+            raise SceneError(
+                field_name,
+                f"{rec.path!r} is a {kind.group(1).lower()} time series "
+                "(header line), not an acceleration record",
+            )
         if unit and not unit.group(1).upper().startswith("G"):
-            raise SceneError(field_name, f"{rec.path!r}: the header gives the unit "
-                             f"{excerpt(unit.group(1))}; AT2 records are read in g")
+            raise SceneError(
+                field_name,
+                f"{rec.path!r}: the header gives the unit "
+                f"{excerpt(unit.group(1))}; AT2 records are read in g",
+            )
     rec.header = one_line(lines[1]) if k >= 2 else None
     if npts < 0:
-        raise SceneError(field_name, f"{rec.path!r}: NPTS in header line {k + 1} must be a whole "
-                         "number")
+        raise SceneError(
+            field_name, f"{rec.path!r}: NPTS in header line {k + 1} must be a whole number"
+        )
     check_count(npts, rec, "NPTS gives")
     _check_dt(dt, rec, f"DT in header line {k + 1}")
     rec.npts, rec.dt = npts, dt
-    body = lines[k + 1:]
+    body = lines[k + 1 :]
     counts = np.cumsum([0] + [len(line.split()) for line in body])
     tokens = " ".join(body).split()
     if len(tokens) < npts:
-        raise SceneError(field_name, f"{rec.path!r}: header says NPTS={npts} but the file holds "
-                         f"{len(tokens)} values (a cut download?); if the file is complete, "
-                         f"correct NPTS in header line {k + 1}")
+        raise SceneError(
+            field_name,
+            f"{rec.path!r}: header says NPTS={npts} but the file holds "
+            f"{len(tokens)} values (a cut download?); if the file is complete, "
+            f"correct NPTS in header line {k + 1}",
+        )
     if len(tokens) > npts:
         extra = len(tokens) - npts
         if extra > max(10, npts // 100):  # more than a stray value: not the record described
-            raise SceneError(field_name, f"{rec.path!r}: header says NPTS={npts} but the file "
-                             f"holds {len(tokens)} values ({extra} more); at most "
-                             f"{max(10, npts // 100)} extra values are tolerated")
-        rec.note(f"holds {len(tokens)} values but NPTS = {npts}: the first {npts} are used, the "
-                 f"last {extra} ignored")
+            raise SceneError(
+                field_name,
+                f"{rec.path!r}: header says NPTS={npts} but the file "
+                f"holds {len(tokens)} values ({extra} more); at most "
+                f"{max(10, npts // 100)} extra values are tolerated",
+            )
+        rec.note(
+            f"holds {len(tokens)} values but NPTS = {npts}: the first {npts} are used, the "
+            f"last {extra} ignored"
+        )
         tokens = tokens[:npts]
 
     def where(i: int) -> str:
@@ -279,6 +316,7 @@ def read_at2(path: str | Path | None, field_name: str = "excitation.file_x") -> 
 
 
 # -- two-column text -----------------------------------------------------------------------
+
 
 def read_text(path: str | Path | None, field_name: str = "excitation.file_x") -> RecordFile:
     """Read a plain two-column record: time [s], acceleration [``acc_unit``], one pair a line.
@@ -306,8 +344,11 @@ def read_text(path: str | Path | None, field_name: str = "excitation.file_x") ->
             first = s.split()
             break
     if not isinstance(first, list) or len(first) != 2 or not all(map(_is_number, first)):
-        raise SceneError(field_name, f"{rec.path!r} is not a two-column record: its first data "
-                         "line does not hold two numbers (time [s], acceleration)")
+        raise SceneError(
+            field_name,
+            f"{rec.path!r} is not a two-column record: its first data "
+            "line does not hold two numbers (time [s], acceleration)",
+        )
     try:
         data = np.loadtxt(io.StringIO(text), comments=_COMMENT, skiprows=skip, ndmin=2)
     except ValueError:
@@ -317,9 +358,15 @@ def read_text(path: str | Path | None, field_name: str = "excitation.file_x") ->
     check_count(len(data), rec, "the file holds")
     t, a = data[:, 0], data[:, 1]
     rec.npts, rec.t0, rec.values = len(a), float(t[0]), np.ascontiguousarray(a)
-    rows = [no for no, line in enumerate(lines, start=1)
-            if no > skip and line.strip() and line.strip()[0] not in _COMMENT] \
-        if not _uniform(t) else []
+    rows = (
+        [
+            no
+            for no, line in enumerate(lines, start=1)
+            if no > skip and line.strip() and line.strip()[0] not in _COMMENT
+        ]
+        if not _uniform(t)
+        else []
+    )
     rec.dt = uniform_step(t, rec, lambda i: f"line {rows[i]}" if rows else f"sample {i + 1}")
     return rec
 
@@ -330,8 +377,11 @@ _COMMENT = ("#", "%", "!")
 
 def _uniform(t: np.ndarray) -> bool:
     dt = (t[-1] - t[0]) / (len(t) - 1)
-    return bool(dt > 0 and np.all(np.diff(t) > 0)
-                and np.max(np.abs(t - t[0] - dt * np.arange(len(t)))) <= 0.01 * dt)
+    return bool(
+        dt > 0
+        and np.all(np.diff(t) > 0)
+        and np.max(np.abs(t - t[0] - dt * np.arange(len(t)))) <= 0.01 * dt
+    )
 
 
 def _text_error(lines: list[str], offset: int, rec: RecordFile) -> None:
@@ -341,12 +391,17 @@ def _text_error(lines: list[str], offset: int, rec: RecordFile) -> None:
         if not toks or toks[0][0] in _COMMENT:
             continue
         if len(toks) != 2:
-            raise SceneError(rec.field, f"{rec.path!r}: line {no} holds {len(toks)} values; "
-                             "two are expected (time, acceleration)")
+            raise SceneError(
+                rec.field,
+                f"{rec.path!r}: line {no} holds {len(toks)} values; "
+                "two are expected (time, acceleration)",
+            )
         for tok in toks:
             if not (_is_number(tok) and np.isfinite(float(tok))):
-                raise SceneError(rec.field, f"{rec.path!r}: line {no} holds {excerpt(tok)}: not "
-                                 "finite or not a number")
+                raise SceneError(
+                    rec.field,
+                    f"{rec.path!r}: line {no} holds {excerpt(tok)}: not finite or not a number",
+                )
     raise SceneError(rec.field, f"{rec.path!r}: the values cannot be read as two columns")
 
 
@@ -365,14 +420,20 @@ def uniform_step(t: np.ndarray, rec: RecordFile, where) -> float:
     steps = np.diff(t)
     bad = np.flatnonzero(steps <= 0)
     if bad.size:
-        raise SceneError(rec.field, f"{rec.path!r}: time stamps must increase; {where(bad[0] + 1)} "
-                         f"is at {t[bad[0] + 1]:g} s after {t[bad[0]]:g} s")
+        raise SceneError(
+            rec.field,
+            f"{rec.path!r}: time stamps must increase; {where(bad[0] + 1)} "
+            f"is at {t[bad[0] + 1]:g} s after {t[bad[0]]:g} s",
+        )
     off = np.abs(t - t[0] - dt * np.arange(len(t)))
     if off.max() > 0.01 * dt:
         i = int(np.argmax(off))
-        raise SceneError(rec.field, f"{rec.path!r}: time stamps must be evenly spaced (step "
-                         f"{dt:g} s); {where(i)} is {off[i]:.3g} s off the grid: resample the "
-                         "record or print its times with more digits")
+        raise SceneError(
+            rec.field,
+            f"{rec.path!r}: time stamps must be evenly spaced (step "
+            f"{dt:g} s); {where(i)} is {off[i]:.3g} s off the grid: resample the "
+            "record or print its times with more digits",
+        )
     if t[0] != 0.0:
         rec.note(f"time starts at {t[0]:g} s; the record is shifted to start at 0 s")
     return dt
@@ -383,8 +444,9 @@ def uniform_step(t: np.ndarray, rec: RecordFile, where) -> float:
 ACC_COLUMNS = ("acc_x", "acc_y")
 
 
-def read_csv_record(path: str | Path | None, time_column: str,
-                    field_name: str = "excitation.file") -> CsvRecord:
+def read_csv_record(
+    path: str | Path | None, time_column: str, field_name: str = "excitation.file"
+) -> CsvRecord:
     """Read a CSV record: a header line, then one row per time stamp.
 
     Columns: ``time_column`` [s] and either ground accelerations ``acc_x``, ``acc_y``
@@ -398,24 +460,34 @@ def read_csv_record(path: str | Path | None, time_column: str,
     first = text.split("\n", 1)[0]
     names = [c.strip() for c in first.split(",")]
     if time_column not in names:  # not recognised as a record: quote nothing of it
-        raise SceneError("excitation.time_column", f"{rec.path!r}: no column of the header (first "
-                         f"line) is named {time_column!r}; a CSV record starts with a header "
-                         "naming the time column and the record columns")
+        raise SceneError(
+            "excitation.time_column",
+            f"{rec.path!r}: no column of the header (first "
+            f"line) is named {time_column!r}; a CSV record starts with a header "
+            "naming the time column and the record columns",
+        )
     rows = text.count("\n") + (0 if text.endswith("\n") else 1) - 1
     if rows * len(names) > MAX_CSV_CELLS:
-        raise SceneError(field_name, f"{rec.path!r} holds {rows:,} rows of {len(names)} columns; "
-                         f"at most {MAX_CSV_CELLS:,} values are read")
+        raise SceneError(
+            field_name,
+            f"{rec.path!r} holds {rows:,} rows of {len(names)} columns; "
+            f"at most {MAX_CSV_CELLS:,} values are read",
+        )
     import pandas as pd  # only CSV records need it (0.3-0.6 s to import)
 
     try:
-        frame = pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False,
-                            skipinitialspace=True)
-    except Exception as err:  # noqa: BLE001 - pandas raises many types for malformed text
+        frame = pd.read_csv(
+            io.StringIO(text), dtype=str, keep_default_na=False, skipinitialspace=True
+        )
+    except Exception as err:
         first_line = (str(err).strip().splitlines() or [type(err).__name__])[0]
         raise SceneError(field_name, f"cannot read CSV {rec.path!r}: {first_line[:80]}") from None
     if not isinstance(frame.index, pd.RangeIndex):  # data rows longer than the header
-        raise SceneError(field_name, f"{rec.path!r}: the data rows hold more values than the "
-                         f"header has columns ({len(frame.columns)})")
+        raise SceneError(
+            field_name,
+            f"{rec.path!r}: the data rows hold more values than the "
+            f"header has columns ({len(frame.columns)})",
+        )
     frame.columns = [str(c).strip() for c in frame.columns]
     if len(set(frame.columns)) != len(frame.columns):
         raise SceneError(field_name, f"{rec.path!r}: the header names a column twice")
@@ -431,10 +503,15 @@ def read_csv_record(path: str | Path | None, time_column: str,
         if bad.size:
             i = int(bad[0])
             cell = cells.iloc[i]
-            what = ("a true/false value, numbers expected" if cell.lower() in ("true", "false")
-                    else "not finite or not a number")
-            raise SceneError(field_name, f"{rec.path!r}: row {i + 2}, column {excerpt(name)} holds "
-                             f"{excerpt(cell)}: {what}")
+            what = (
+                "a true/false value, numbers expected"
+                if cell.lower() in ("true", "false")
+                else "not finite or not a number"
+            )
+            raise SceneError(
+                field_name,
+                f"{rec.path!r}: row {i + 2}, column {excerpt(name)} holds {excerpt(cell)}: {what}",
+            )
         columns[name] = values
     t = columns.pop(time_column)
     return CsvRecord(rec, t, columns, mode)

@@ -35,9 +35,20 @@ from ._fields import to_mapping
 from .errors import SceneError
 from .plan import CORNER_NAMES, column_unit, standard_columns
 
-__all__ = ["Result", "column_unit", "standard_columns", "scene_hash", "physics_hash",
-           "physics_mapping", "settings_hash", "gap_closures", "closure_times",
-           "STATUS_SUCCESS", "STATUS_FAILED", "N_CORNERS"]
+__all__ = [
+    "N_CORNERS",
+    "STATUS_FAILED",
+    "STATUS_SUCCESS",
+    "Result",
+    "closure_times",
+    "column_unit",
+    "gap_closures",
+    "physics_hash",
+    "physics_mapping",
+    "scene_hash",
+    "settings_hash",
+    "standard_columns",
+]
 
 N_CORNERS = 4
 STATUS_SUCCESS = "success"
@@ -171,7 +182,7 @@ class Result:
         """Total gap closures on the output rows (see :func:`gap_closures`)."""
         return int(self.meta.get("gap_closures", 0))
 
-    def with_meta(self, **changes: Any) -> "Result":
+    def with_meta(self, **changes: Any) -> Result:
         """A copy with metadata entries added or replaced."""
         return Result(engine=self.engine, columns=self.columns, meta={**self.meta, **changes})
 
@@ -179,10 +190,14 @@ class Result:
         """pandas DataFrame with time [s] as the index; ``attrs`` holds units, engine, status."""
         import pandas as pd
 
-        frame = pd.DataFrame({k: v for k, v in self.columns.items() if k != "t"},
-                             index=pd.Index(self.t, name="t"))
-        frame.attrs = {"units": self.units, "engine": self.engine,
-                       "status": self.meta.get("status")}
+        frame = pd.DataFrame(
+            {k: v for k, v in self.columns.items() if k != "t"}, index=pd.Index(self.t, name="t")
+        )
+        frame.attrs = {
+            "units": self.units,
+            "engine": self.engine,
+            "status": self.meta.get("status"),
+        }
         return frame
 
     def to_xarray(self):
@@ -199,34 +214,46 @@ class Result:
         units = self.meta["units"]
         data_vars: dict[str, Any] = {}
         used: set[str] = {"t"}
-        prefixes = sorted({k.rsplit("_c", 1)[0] for k in self.columns
-                           if k.rsplit("_c", 1)[-1] in ("1", "2", "3", "4") and "_c" in k})
+        prefixes = sorted(
+            {
+                k.rsplit("_c", 1)[0]
+                for k in self.columns
+                if k.rsplit("_c", 1)[-1] in ("1", "2", "3", "4") and "_c" in k
+            }
+        )
         for p in prefixes:
             names = [f"{p}_{c}" for c in CORNER_NAMES]
             if all(n in self.columns for n in names):
-                data_vars[p] = (("time", "corner"), np.column_stack([self[n] for n in names]),
-                                {"units": units[names[0]]})
+                data_vars[p] = (
+                    ("time", "corner"),
+                    np.column_stack([self[n] for n in names]),
+                    {"units": units[names[0]]},
+                )
                 used.update(names)
         bents = [b for b in self.meta.get("bent_names", []) if f"{b}_fx" in self.columns]
         for kind, stem in (("f", "bent_force"), ("d", "bent_deformation")):
             names = [[f"{b}_{kind}x", f"{b}_{kind}y"] for b in bents]
             if bents and all(n in self.columns for pair in names for n in pair):
-                arr = np.stack([np.column_stack([self[n] for n in pair]) for pair in names],
-                               axis=1)
-                data_vars[stem] = (("time", "bent", "direction"), arr,
-                                   {"units": units[names[0][0]]})
+                arr = np.stack([np.column_stack([self[n] for n in pair]) for pair in names], axis=1)
+                data_vars[stem] = (
+                    ("time", "bent", "direction"),
+                    arr,
+                    {"units": units[names[0][0]]},
+                )
                 used.update(n for pair in names for n in pair)
         for k, v in self.columns.items():
             if k not in used:
                 data_vars[k] = (("time",), v, {"units": units[k]})
-        coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}),
-                                  "corner": list(CORNER_NAMES)}
+        coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}), "corner": list(CORNER_NAMES)}
         if bents:
             coords["bent"] = bents
             coords["direction"] = ["x", "y"]
         ds = xr.Dataset(data_vars, coords=coords)
-        ds.attrs = {"engine": self.engine, "status": str(self.meta.get("status")),
-                    "message": str(self.meta.get("message", ""))}
+        ds.attrs = {
+            "engine": self.engine,
+            "status": str(self.meta.get("status")),
+            "message": str(self.meta.get("message", "")),
+        }
         return ds
 
     # -- files -----------------------------------------------------------------------
@@ -237,8 +264,10 @@ class Result:
 
         folder = ensure_folder(folder, "result folder")
         csv_path, json_path = folder / f"{self.engine}.csv", folder / f"{self.engine}.json"
-        atomic_write_files({csv_path: self.csv_bytes(parallel=parallel),
-                            json_path: self.json_bytes()}, field="result folder")
+        atomic_write_files(
+            {csv_path: self.csv_bytes(parallel=parallel), json_path: self.json_bytes()},
+            field="result folder",
+        )
         return csv_path, json_path
 
     def csv_bytes(self, *, parallel: bool = False) -> bytes:
@@ -269,31 +298,43 @@ class Result:
         try:
             csv_data, json_data = csv_path.read_bytes(), json_path.read_bytes()
         except OSError as err:
-            raise SceneError("result", f"cannot read {str(folder)!r}: {err.strerror or err}") \
-                from None
+            raise SceneError(
+                "result", f"cannot read {str(folder)!r}: {err.strerror or err}"
+            ) from None
         return cls.from_bytes(engine, csv_data, json_data, source=str(folder))
 
     @classmethod
-    def from_bytes(cls, engine: str, csv_data: bytes, json_data: bytes,
-                   source: str = "result") -> Result:
+    def from_bytes(
+        cls, engine: str, csv_data: bytes, json_data: bytes, source: str = "result"
+    ) -> Result:
         """A result from the contents of its two files; SceneError names what is damaged."""
         import pandas as pd
 
         try:
             meta = json.loads(json_data.decode("utf-8"))
         except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as err:
-            raise SceneError("result", f"{source}: {engine}.json is not valid JSON "
-                             f"({str(err)[:120]})") from None
+            raise SceneError(
+                "result", f"{source}: {engine}.json is not valid JSON ({str(err)[:120]})"
+            ) from None
         if not isinstance(meta, dict):
-            raise SceneError("result", f"{source}: {engine}.json must hold an object, got "
-                             f"{type(meta).__name__}")
+            raise SceneError(
+                "result", f"{source}: {engine}.json must hold an object, got {type(meta).__name__}"
+            )
         try:
             frame = pd.read_csv(io.BytesIO(csv_data), comment="#")
             cols = {str(k): frame[k].to_numpy(dtype=float) for k in frame.columns}
-        except (ValueError, TypeError, pd.errors.ParserError, pd.errors.EmptyDataError,
-                UnicodeDecodeError) as err:
-            raise SceneError("result", f"{source}: {engine}.csv is not a table of numbers "
-                             f"({str(err).splitlines()[0][:120] if str(err) else err!r})") from None
+        except (
+            ValueError,
+            TypeError,
+            pd.errors.ParserError,
+            pd.errors.EmptyDataError,
+            UnicodeDecodeError,
+        ) as err:
+            raise SceneError(
+                "result",
+                f"{source}: {engine}.csv is not a table of numbers "
+                f"({str(err).splitlines()[0][:120] if str(err) else err!r})",
+            ) from None
         if "t" not in cols:
             raise SceneError("result", f"{source}: {engine}.csv has no time column 't'")
         return cls(engine=engine, columns=cols, meta=meta)
@@ -312,8 +353,6 @@ def _jsonable(obj: Any) -> Any:
         return _jsonable(obj.tolist())
     if isinstance(obj, float) and not np.isfinite(obj):
         return str(obj)
-    if hasattr(obj, "value") and hasattr(obj, "name") and isinstance(getattr(obj, "value"), str):
-        return obj.value   # enum members
+    if hasattr(obj, "value") and hasattr(obj, "name") and isinstance(obj.value, str):
+        return obj.value  # enum members
     return obj
-
-

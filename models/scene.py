@@ -12,15 +12,14 @@ the engines that run it (the engine settings are plain data read by the engines)
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
-
 import re
+from dataclasses import dataclass
 
 from ._fields import spec, validate
 from .contact_laws_table import FRICTION_CODES, LAW_CODES, contact_law
 from .errors import SceneError
 
-CONTACT_LAWS = tuple(LAW_CODES)          # the rows of contact_laws_table, in code order
+CONTACT_LAWS = tuple(LAW_CODES)  # the rows of contact_laws_table, in code order
 FRICTION_MODES = tuple(FRICTION_CODES)
 DAMPING_MEMBERS = ("bents", "bents+seats", "none")
 DAMPING_STIFFNESS = ("initial", "committed", "current")
@@ -59,12 +58,21 @@ class Deck:
     width: float = spec(unit="m", doc="deck width along y", gt=0.0)
     mass: float = spec(unit="t", doc="deck mass M_d", gt=0.0)
     inertia: float = spec(unit="t*m^2", doc="deck polar mass moment of inertia I_d", gt=0.0)
-    stick_modulus: float = spec(3.0e9, unit="kN/m^2",
-                                doc="Young's modulus of the stiff stick elements (OpenSees stick mode)",
-                                gt=0.0)
-    skew: float = spec(0.0, unit="deg", doc="skew angle φ of the end faces from the transverse "
-                       "axis (degrees; 0 = straight deck); the gap is measured along the face "
-                       "normal", ge=0.0, lt=MAX_SKEW)
+    stick_modulus: float = spec(
+        3.0e9,
+        unit="kN/m^2",
+        doc="Young's modulus of the stiff stick elements (OpenSees stick mode)",
+        gt=0.0,
+    )
+    skew: float = spec(
+        0.0,
+        unit="deg",
+        doc="skew angle φ of the end faces from the transverse "
+        "axis (degrees; 0 = straight deck); the gap is measured along the face "
+        "normal",
+        ge=0.0,
+        lt=MAX_SKEW,
+    )
 
     def __post_init__(self) -> None:
         validate(self)
@@ -81,18 +89,22 @@ class TakedaSpring:
 
     stiffness: float = spec(unit="kN/m", doc="initial (post-crack) stiffness k0", gt=0.0)
     yield_force: float = spec(unit="kN", doc="yield force F_y", gt=0.0)
-    post_yield_ratio: float = spec(0.05, unit="-", doc="post-yield to initial stiffness ratio",
-                                   ge=0.0, lt=1.0)
+    post_yield_ratio: float = spec(
+        0.05, unit="-", doc="post-yield to initial stiffness ratio", ge=0.0, lt=1.0
+    )
     beta: float = spec(0.5, unit="-", doc="Takeda unloading-stiffness exponent", ge=0.0, le=2.0)
-    ultimate_displacement: float = spec(0.3, unit="m",
-                                        doc="deformation of the second backbone point", gt=0.0)
+    ultimate_displacement: float = spec(
+        0.3, unit="m", doc="deformation of the second backbone point", gt=0.0
+    )
 
     def __post_init__(self) -> None:
         validate(self)
         if self.ultimate_displacement <= self.yield_displacement:
-            raise SceneError("ultimate_displacement",
-                             f"must exceed the yield displacement {self.yield_displacement:.6g} m, "
-                             f"got {self.ultimate_displacement}")
+            raise SceneError(
+                "ultimate_displacement",
+                f"must exceed the yield displacement {self.yield_displacement:.6g} m, "
+                f"got {self.ultimate_displacement}",
+            )
 
     @property
     def yield_displacement(self) -> float:
@@ -108,8 +120,13 @@ class Bent:
     station: float = spec(unit="m", doc="distance from the deck's left end (x = -L/2)", ge=0.0)
     x: TakedaSpring = spec(doc="longitudinal spring")
     y: TakedaSpring = spec(doc="transverse spring")
-    cx: float = spec(0.0, unit="kN*s/m", doc="explicit dashpot deck-table in x (e.g. from a "
-                     "system identification; adds to any Rayleigh damping)", ge=0.0)
+    cx: float = spec(
+        0.0,
+        unit="kN*s/m",
+        doc="explicit dashpot deck-table in x (e.g. from a "
+        "system identification; adds to any Rayleigh damping)",
+        ge=0.0,
+    )
     cy: float = spec(0.0, unit="kN*s/m", doc="explicit dashpot deck-table in y", ge=0.0)
 
     def __post_init__(self) -> None:
@@ -133,16 +150,20 @@ class Seat:
 
     name: str = spec(doc="label")
     mass: float = spec(unit="t", doc="seat mass", gt=0.0)
-    inertia: float = spec(unit="t*m^2", doc="seat polar inertia about the contact-face mid-point",
-                          gt=0.0)
+    inertia: float = spec(
+        unit="t*m^2", doc="seat polar inertia about the contact-face mid-point", gt=0.0
+    )
     kx: float = spec(unit="kN/m", doc="translational spring to the actuator", gt=0.0)
     ktheta: float = spec(unit="kN*m/rad", doc="rotational spring", gt=0.0)
     cx: float = spec(unit="kN*s/m", doc="translational dashpot", ge=0.0)
     ctheta: float = spec(unit="kN*m*s/rad", doc="rotational dashpot", ge=0.0)
     gap: float = spec(unit="m", doc="initial clear gap between deck end and seat face", ge=0.0)
-    fixed: bool = spec(False, doc="rigid abutment: the seat stays on its actuator and the "
-                       "contact forces do not move it (needs the actuators at rest: "
-                       "excitation.kind = 'none' or longitudinal_ratio = 0)")
+    fixed: bool = spec(
+        False,
+        doc="rigid abutment: the seat stays on its actuator and the "
+        "contact forces do not move it (needs the actuators at rest: "
+        "excitation.kind = 'none' or longitudinal_ratio = 0)",
+    )
 
     def __post_init__(self) -> None:
         validate(self)
@@ -152,29 +173,40 @@ class Seat:
 class Contact:
     """Deck-seat contact at the four deck corners (compliance laws; nonsmooth uses e and mu)."""
 
-    law: str = spec("linear", doc="normal contact law of the compliance engines",
-                    choices=CONTACT_LAWS)
-    stiffness: float = spec(1.0e6, unit="kN/m (hertz: kN/m^exponent)",
-                            doc="normal contact stiffness per corner (K1 for bilinear)", gt=0.0)
+    law: str = spec(
+        "linear", doc="normal contact law of the compliance engines", choices=CONTACT_LAWS
+    )
+    stiffness: float = spec(
+        1.0e6,
+        unit="kN/m (hertz: kN/m^exponent)",
+        doc="normal contact stiffness per corner (K1 for bilinear)",
+        gt=0.0,
+    )
     exponent: float = spec(1.5, unit="-", doc="Hertz exponent", gt=0.0)
-    restitution: float = spec(0.6, unit="-",
-                              doc="coefficient of restitution e (damped laws, nonsmooth)",
-                              ge=0.0, le=1.0)
-    bilinear_ratio: float = spec(0.35, unit="-", doc="K2/K1 of the Muthukumar bilinear law",
-                                 gt=0.0, le=1.0)
-    bilinear_yield: float = spec(0.001, unit="m", doc="yield deformation of the bilinear law",
-                                 gt=0.0)
+    restitution: float = spec(
+        0.6, unit="-", doc="coefficient of restitution e (damped laws, nonsmooth)", ge=0.0, le=1.0
+    )
+    bilinear_ratio: float = spec(
+        0.35, unit="-", doc="K2/K1 of the Muthukumar bilinear law", gt=0.0, le=1.0
+    )
+    bilinear_yield: float = spec(
+        0.001, unit="m", doc="yield deformation of the bilinear law", gt=0.0
+    )
     friction: float = spec(0.0, unit="-", doc="Coulomb friction coefficient mu", ge=0.0)
-    friction_mode: str = spec("none", doc="none | slip (no sticking) | stick (the project's "
-                              "return-mapping stick spring) | contact2d (OpenSees "
-                              "zeroLengthContact2D's algorithm; what OpenSees expresses and "
-                              "the package uses when it switches friction on)",
-                              choices=FRICTION_MODES)
-    tangential_stiffness: float = spec(1.0e6, unit="kN/m",
-                                       doc="tangential stick spring per corner (stick mode)",
-                                       gt=0.0)
-    slip_velocity: float = spec(1.0e-3, unit="m/s",
-                                doc="regularisation velocity of the slip mode (tanh(v/v0))", gt=0.0)
+    friction_mode: str = spec(
+        "none",
+        doc="none | slip (no sticking) | stick (the project's "
+        "return-mapping stick spring) | contact2d (OpenSees "
+        "zeroLengthContact2D's algorithm; what OpenSees expresses and "
+        "the package uses when it switches friction on)",
+        choices=FRICTION_MODES,
+    )
+    tangential_stiffness: float = spec(
+        1.0e6, unit="kN/m", doc="tangential stick spring per corner (stick mode)", gt=0.0
+    )
+    slip_velocity: float = spec(
+        1.0e-3, unit="m/s", doc="regularisation velocity of the slip mode (tanh(v/v0))", gt=0.0
+    )
     geometry: str = spec("linear", doc="contact kinematics", choices=GEOMETRIES)
 
     def __post_init__(self) -> None:
@@ -208,23 +240,37 @@ class Damping:
     """
 
     ratio: float = spec(0.08, unit="-", doc="damping ratio at both frequencies", ge=0.0, lt=1.0)
-    method: str = spec("modes", doc="modes: natural modes of the contact-free elastic model; "
-                       "frequencies: given values; none: no Rayleigh damping (explicit dashpots "
-                       "still act)", choices=("modes", "frequencies", "none"))
-    modes: tuple[int, ...] = spec((1, 3), doc="the two mode numbers (1-based, by frequency)",
-                                  ge=1)
-    frequencies: tuple[float, ...] = spec((2.0, 5.0), unit="Hz",
-                                          doc="the two frequencies (method = frequencies)", gt=0.0)
-    members: str = spec("bents", doc="springs carrying the stiffness-proportional part: bents "
-                        "(the deck-bent system; the seats keep their identified dashpots "
-                        "only), bents+seats, none", choices=DAMPING_MEMBERS)
-    stiffness: str = spec("initial", doc="stiffness of the stiffness-proportional part: "
-                          "initial (OpenSees betaKinit), committed (betaKc: the tangent at the "
-                          "last commit), current (betaK: the trial tangent)",
-                          choices=DAMPING_STIFFNESS)
-    mass: str = spec("absolute", doc="velocities of the mass-proportional part: absolute "
-                     "(OpenSees alphaM under MultipleSupport) or relative to the supports",
-                     choices=DAMPING_MASS)
+    method: str = spec(
+        "modes",
+        doc="modes: natural modes of the contact-free elastic model; "
+        "frequencies: given values; none: no Rayleigh damping (explicit dashpots "
+        "still act)",
+        choices=("modes", "frequencies", "none"),
+    )
+    modes: tuple[int, ...] = spec((1, 3), doc="the two mode numbers (1-based, by frequency)", ge=1)
+    frequencies: tuple[float, ...] = spec(
+        (2.0, 5.0), unit="Hz", doc="the two frequencies (method = frequencies)", gt=0.0
+    )
+    members: str = spec(
+        "bents",
+        doc="springs carrying the stiffness-proportional part: bents "
+        "(the deck-bent system; the seats keep their identified dashpots "
+        "only), bents+seats, none",
+        choices=DAMPING_MEMBERS,
+    )
+    stiffness: str = spec(
+        "initial",
+        doc="stiffness of the stiffness-proportional part: "
+        "initial (OpenSees betaKinit), committed (betaKc: the tangent at the "
+        "last commit), current (betaK: the trial tangent)",
+        choices=DAMPING_STIFFNESS,
+    )
+    mass: str = spec(
+        "absolute",
+        doc="velocities of the mass-proportional part: absolute "
+        "(OpenSees alphaM under MultipleSupport) or relative to the supports",
+        choices=DAMPING_MASS,
+    )
 
     def __post_init__(self) -> None:
         validate(self)
@@ -270,46 +316,83 @@ class Excitation:
     direction above ``EXTREME_PGA`` g is refused unless ``allow_extreme``.
     """
 
-    kind: str = spec("synthetic", doc="record source",
-                     choices=("synthetic", "csv", "at2", "text", "pulse", "none"))
-    pga: float = spec(0.5, unit="g", doc="transverse peak ground acceleration (run label; "
-                      "> 5 g needs allow_extreme)", gt=0.0, le=100.0)
-    longitudinal_ratio: float = spec(1.2, unit="-", doc="longitudinal PGA / transverse PGA",
-                                     ge=0.0, le=10.0)
+    kind: str = spec(
+        "synthetic",
+        doc="record source",
+        choices=("synthetic", "csv", "at2", "text", "pulse", "none"),
+    )
+    pga: float = spec(
+        0.5,
+        unit="g",
+        doc="transverse peak ground acceleration (run label; > 5 g needs allow_extreme)",
+        gt=0.0,
+        le=100.0,
+    )
+    longitudinal_ratio: float = spec(
+        1.2, unit="-", doc="longitudinal PGA / transverse PGA", ge=0.0, le=10.0
+    )
     seed: int = spec(1994, doc="random seed of the synthetic record", ge=0)
     duration: float = spec(20.0, unit="s", doc="synthetic record length", gt=0.0, le=600.0)
     dt: float = spec(0.005, unit="s", doc="synthetic record sampling step", gt=0.0, le=0.1)
-    dominant_frequency: float = spec(3.5, unit="Hz",
-                                     doc="Kanai-Tajimi ground frequency of the synthetic record",
-                                     gt=0.0)
-    ground_damping: float = spec(0.6, unit="-", doc="Kanai-Tajimi ground damping ratio",
-                                 gt=0.0, lt=5.0)
-    highpass: float = spec(0.5, unit="Hz", doc="high-pass corner: the synthetic generator's "
-                           "baseline correction, and records with processing = highpass "
-                           "(model time)", gt=0.0)
+    dominant_frequency: float = spec(
+        3.5, unit="Hz", doc="Kanai-Tajimi ground frequency of the synthetic record", gt=0.0
+    )
+    ground_damping: float = spec(
+        0.6, unit="-", doc="Kanai-Tajimi ground damping ratio", gt=0.0, lt=5.0
+    )
+    highpass: float = spec(
+        0.5,
+        unit="Hz",
+        doc="high-pass corner: the synthetic generator's "
+        "baseline correction, and records with processing = highpass "
+        "(model time)",
+        gt=0.0,
+    )
     lag: float = spec(0.0, unit="s", doc="time lag between successive bent tables", ge=0.0)
-    incoherence: float = spec(0.0, unit="-",
-                              doc="fraction of independent noise at each table (0 = coherent)",
-                              ge=0.0, le=1.0)
+    incoherence: float = spec(
+        0.0,
+        unit="-",
+        doc="fraction of independent noise at each table (0 = coherent)",
+        ge=0.0,
+        le=1.0,
+    )
     file: str | None = spec(None, doc="CSV file (kind = csv), relative to the scene file")
     time_column: str = spec("t", doc="CSV time column")
     disp_unit: str = spec("m", doc="CSV displacement unit", choices=("m", "cm", "mm", "in"))
-    acc_unit: str = spec("g", doc="acceleration unit of text and CSV records (AT2: always g)",
-                         choices=("g", "m/s^2", "cm/s^2"))
-    file_x: str | None = spec(None, doc="x (longitudinal) record (kind = at2 or text), "
-                              "relative to the scene file")
-    file_y: str | None = spec(None, doc="y (transverse) record (kind = at2 or text), "
-                              "relative to the scene file")
-    scaling: str = spec("pga", doc="records: pga = to pga (y) and longitudinal_ratio*pga (x); "
-                        "factor = times scale; none = as read", choices=("pga", "factor", "none"))
-    scale: float = spec(1.0, unit="-", doc="factor applied to records (scaling = factor)",
-                        gt=0.0)
-    time_scale: float = spec(1.0, unit="-", doc="similitude time scale of records: t_model = "
-                             "time_scale*t (accelerations kept: v x time_scale, "
-                             "d x time_scale^2)", gt=0.0, le=10.0)
-    processing: str = spec("none", doc="records: none = integrate as given; baseline = remove "
-                           "a fitted polynomial baseline; highpass = zero-phase Butterworth at "
-                           "highpass Hz", choices=("none", "baseline", "highpass"))
+    acc_unit: str = spec(
+        "g",
+        doc="acceleration unit of text and CSV records (AT2: always g)",
+        choices=("g", "m/s^2", "cm/s^2"),
+    )
+    file_x: str | None = spec(
+        None, doc="x (longitudinal) record (kind = at2 or text), relative to the scene file"
+    )
+    file_y: str | None = spec(
+        None, doc="y (transverse) record (kind = at2 or text), relative to the scene file"
+    )
+    scaling: str = spec(
+        "pga",
+        doc="records: pga = to pga (y) and longitudinal_ratio*pga (x); "
+        "factor = times scale; none = as read",
+        choices=("pga", "factor", "none"),
+    )
+    scale: float = spec(1.0, unit="-", doc="factor applied to records (scaling = factor)", gt=0.0)
+    time_scale: float = spec(
+        1.0,
+        unit="-",
+        doc="similitude time scale of records: t_model = "
+        "time_scale*t (accelerations kept: v x time_scale, "
+        "d x time_scale^2)",
+        gt=0.0,
+        le=10.0,
+    )
+    processing: str = spec(
+        "none",
+        doc="records: none = integrate as given; baseline = remove "
+        "a fitted polynomial baseline; highpass = zero-phase Butterworth at "
+        "highpass Hz",
+        choices=("none", "baseline", "highpass"),
+    )
     allow_extreme: bool = spec(False, doc="accept a PGA above 5 g in any direction")
     pulse_period: float = spec(0.5, unit="s", doc="period of the pulse (kind = pulse)", gt=0.0)
 
@@ -318,27 +401,46 @@ class Excitation:
         if self.kind == "csv" and not self.file:
             raise SceneError("file", "is required when kind = 'csv'")
         if self.kind in ("at2", "text") and not (self.file_x or self.file_y):
-            raise SceneError("file_x", f"or file_y is required when kind = {self.kind!r} (one "
-                             "record per direction; a direction without one is at rest)")
+            raise SceneError(
+                "file_x",
+                f"or file_y is required when kind = {self.kind!r} (one "
+                "record per direction; a direction without one is at rest)",
+            )
         record = self.kind in RECORD_KINDS
         for name, value, default, why in (
-                ("scaling", self.scaling, "pga", "generated records are made at pga"),
-                ("time_scale", self.time_scale, 1.0, "generated records are made at model time"),
-                ("processing", self.processing, "none",
-                 "the synthetic generator has its own baseline correction (highpass)")):
+            ("scaling", self.scaling, "pga", "generated records are made at pga"),
+            ("time_scale", self.time_scale, 1.0, "generated records are made at model time"),
+            (
+                "processing",
+                self.processing,
+                "none",
+                "the synthetic generator has its own baseline correction (highpass)",
+            ),
+        ):
             if not record and value != default:
-                raise SceneError(name, f"applies to records (kind = csv, at2, text), not to kind "
-                                 f"= {self.kind!r} ({why}); must be {default!r}, got {value!r}")
+                raise SceneError(
+                    name,
+                    f"applies to records (kind = csv, at2, text), not to kind "
+                    f"= {self.kind!r} ({why}); must be {default!r}, got {value!r}",
+                )
         if record and self.incoherence > 0.0:
-            raise SceneError("incoherence", f"applies to the synthetic record only (a record is "
-                             f"applied at every table, delayed by lag); must be 0.0 for kind = "
-                             f"{self.kind!r}, got {self.incoherence}")
+            raise SceneError(
+                "incoherence",
+                f"applies to the synthetic record only (a record is "
+                f"applied at every table, delayed by lag); must be 0.0 for kind = "
+                f"{self.kind!r}, got {self.incoherence}",
+            )
         if self.scale != 1.0 and self.scaling != "factor":
-            raise SceneError("scale", f"is used only with scaling = 'factor' (scaling is "
-                             f"{self.scaling!r}); must be 1.0, got {self.scale}")
+            raise SceneError(
+                "scale",
+                f"is used only with scaling = 'factor' (scaling is "
+                f"{self.scaling!r}); must be 1.0, got {self.scale}",
+            )
         if self.kind == "at2" and self.acc_unit != "g":
-            raise SceneError("acc_unit", f"must be 'g' for AT2 records (the format's unit), got "
-                             f"{self.acc_unit!r}")
+            raise SceneError(
+                "acc_unit",
+                f"must be 'g' for AT2 records (the format's unit), got {self.acc_unit!r}",
+            )
         self.check_pga(self.pga, "pga")
 
     def check_pga(self, pga: float, field: str) -> None:
@@ -348,11 +450,17 @@ class Excitation:
             return
         for what, value in (("transverse", pga), ("longitudinal", pga * self.longitudinal_ratio)):
             if value > EXTREME_PGA:
-                extra = "" if what == "transverse" else \
-                    f" = {pga:g} g x longitudinal_ratio {self.longitudinal_ratio:g}"
-                raise SceneError(field, f"gives a {what} PGA of {value:g} g{extra}; at most "
-                                 f"{EXTREME_PGA:g} g is allowed unless excitation.allow_extreme = "
-                                 f"true, got {pga}")
+                extra = (
+                    ""
+                    if what == "transverse"
+                    else f" = {pga:g} g x longitudinal_ratio {self.longitudinal_ratio:g}"
+                )
+                raise SceneError(
+                    field,
+                    f"gives a {what} PGA of {value:g} g{extra}; at most "
+                    f"{EXTREME_PGA:g} g is allowed unless excitation.allow_extreme = "
+                    f"true, got {pga}",
+                )
 
 
 def check_sequence_pgas(scene: Scene) -> None:
@@ -366,8 +474,9 @@ def check_sequence_pgas(scene: Scene) -> None:
 class RunSettings:
     """What every engine shares: how long to run and how often to store output."""
 
-    duration: float | None = spec(None, unit="s",
-                                  doc="analysis length (default: the record length)", gt=0.0)
+    duration: float | None = spec(
+        None, unit="s", doc="analysis length (default: the record length)", gt=0.0
+    )
     output_dt: float = spec(0.005, unit="s", doc="output step of the stored result", gt=0.0)
 
     def __post_init__(self) -> None:
@@ -378,22 +487,36 @@ class RunSettings:
 class OpenSeesSettings:
     """Settings of the OpenSees engine (plain data; the scene does not import OpenSees)."""
 
-    mode: str = spec("rigid", doc="rigid: 7-DOF rigid bodies via constraints; stick: stiff "
-                     "elastic sticks (paper)", choices=("rigid", "stick"))
+    mode: str = spec(
+        "rigid",
+        doc="rigid: 7-DOF rigid bodies via constraints; stick: stiff elastic sticks (paper)",
+        choices=("rigid", "stick"),
+    )
     dt: float = spec(5.0e-4, unit="s", doc="analysis time step", gt=0.0)
     gamma: float = spec(0.5, unit="-", doc="Newmark gamma", gt=0.0, le=1.0)
     beta: float = spec(0.25, unit="-", doc="Newmark beta", gt=0.0, le=0.5)
-    algorithm: str = spec("Newton", doc="solution algorithm",
-                          choices=("Newton", "ModifiedNewton", "KrylovNewton", "NewtonLineSearch"))
-    test: str = spec("NormDispIncr", doc="convergence test",
-                     choices=("NormDispIncr", "EnergyIncr", "NormUnbalance"))
+    algorithm: str = spec(
+        "Newton",
+        doc="solution algorithm",
+        choices=("Newton", "ModifiedNewton", "KrylovNewton", "NewtonLineSearch"),
+    )
+    test: str = spec(
+        "NormDispIncr",
+        doc="convergence test",
+        choices=("NormDispIncr", "EnergyIncr", "NormUnbalance"),
+    )
     tolerance: float = spec(1.0e-10, unit="m", doc="convergence tolerance", gt=0.0)
-    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1,
-                               le=MAX_ITERATIONS)
-    system: str = spec("BandGeneral", doc="linear system",
-                       choices=("BandGeneral", "UmfPack", "FullGeneral", "SparseGeneral"))
-    fallback: str = spec("substep", doc="on a failed step: none, or rebuild the analysis and "
-                         "sub-step", choices=("none", "substep"))
+    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1, le=MAX_ITERATIONS)
+    system: str = spec(
+        "BandGeneral",
+        doc="linear system",
+        choices=("BandGeneral", "UmfPack", "FullGeneral", "SparseGeneral"),
+    )
+    fallback: str = spec(
+        "substep",
+        doc="on a failed step: none, or rebuild the analysis and sub-step",
+        choices=("none", "substep"),
+    )
     substeps: int = spec(10, doc="sub-steps per step in the fallback", ge=2, le=1000)
     stick_elements: int = spec(4, doc="elements per deck half in stick mode", ge=1, le=100)
 
@@ -405,29 +528,43 @@ class OpenSeesSettings:
 class ComplianceSettings:
     """Settings of the pure-Python compliance engine."""
 
-    integrator: str = spec("newmark", doc="newmark: fixed-step Newmark-Newton (OpenSees clone); "
-                           "adaptive: error-controlled with event location",
-                           choices=("newmark", "adaptive"))
+    integrator: str = spec(
+        "newmark",
+        doc="newmark: fixed-step Newmark-Newton (OpenSees clone); "
+        "adaptive: error-controlled with event location",
+        choices=("newmark", "adaptive"),
+    )
     dt: float = spec(5.0e-4, unit="s", doc="time step (newmark)", gt=0.0)
     tolerance: float = spec(1.0e-10, unit="m", doc="Newton NormDispIncr tolerance", gt=0.0)
-    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1,
-                               le=MAX_ITERATIONS)
+    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1, le=MAX_ITERATIONS)
     rtol: float = spec(1.0e-6, unit="-", doc="relative tolerance (adaptive)", gt=0.0)
     atol: float = spec(1.0e-9, unit="m", doc="absolute tolerance (adaptive)", gt=0.0)
     max_step: float = spec(0.01, unit="s", doc="largest step (adaptive)", gt=0.0)
-    commit_step: float = spec(1.0e-4, unit="s",
-                              doc="largest step (adaptive) once a Takeda spring has yielded: "
-                              "the Hysteretic state depends on where it is committed", gt=0.0)
-    contact_tangent: str = spec("consistent", doc="Newton's contact tangent (newmark): "
-                                "consistent = the laws' derivatives; opensees = what the OpenSees "
-                                "materials report (ViscoelasticGap: no damping tangent; "
-                                "Hertzdamp: opposite sign, no damping tangent) — the same "
-                                "forces, OpenSees's Newton iterates (round-off agreement)",
-                                choices=("consistent", "opensees"))
-    max_steps: int = spec(10_000_000, doc="step budget (adaptive): Runge-Kutta steps tried, "
-                          "accepted or rejected, before the run stops with status step_budget; "
-                          "about 50x the 0.2 million steps of the 20 s benchmark, 1-3 min of "
-                          "loop at 6-20 us per step", ge=1, le=10**12)
+    commit_step: float = spec(
+        1.0e-4,
+        unit="s",
+        doc="largest step (adaptive) once a Takeda spring has yielded: "
+        "the Hysteretic state depends on where it is committed",
+        gt=0.0,
+    )
+    contact_tangent: str = spec(
+        "consistent",
+        doc="Newton's contact tangent (newmark): "
+        "consistent = the laws' derivatives; opensees = what the OpenSees "
+        "materials report (ViscoelasticGap: no damping tangent; "
+        "Hertzdamp: opposite sign, no damping tangent) — the same "
+        "forces, OpenSees's Newton iterates (round-off agreement)",
+        choices=("consistent", "opensees"),
+    )
+    max_steps: int = spec(
+        10_000_000,
+        doc="step budget (adaptive): Runge-Kutta steps tried, "
+        "accepted or rejected, before the run stops with status step_budget; "
+        "about 50x the 0.2 million steps of the 20 s benchmark, 1-3 min of "
+        "loop at 6-20 us per step",
+        ge=1,
+        le=10**12,
+    )
 
     def __post_init__(self) -> None:
         validate(self)
@@ -441,13 +578,17 @@ class NonsmoothSettings:
     theta: float = spec(0.5, unit="-", doc="theta of the Moreau-Jean scheme", ge=0.5, le=1.0)
     solver: str = spec("lemke", doc="contact problem solver", choices=("lemke", "enumeration"))
     tolerance: float = spec(1.0e-10, unit="-", doc="complementarity tolerance", gt=0.0)
-    max_iterations: int = spec(50, doc="Newton iterations per step for the Takeda springs", ge=1,
-                               le=MAX_ITERATIONS)
-    impact_law: str = spec("newton", doc="newton: Newton's law 0 <= U_N+ + e U_N- at every "
-                           "active corner (Siconos' Moreau-Jean); energy-safe: restitution "
-                           "max(e, (1-theta)/theta) at active corners already separating "
-                           "(U_N- > 0), so no normal impulse does positive work",
-                           choices=IMPACT_LAWS)
+    max_iterations: int = spec(
+        50, doc="Newton iterations per step for the Takeda springs", ge=1, le=MAX_ITERATIONS
+    )
+    impact_law: str = spec(
+        "newton",
+        doc="newton: Newton's law 0 <= U_N+ + e U_N- at every "
+        "active corner (Siconos' Moreau-Jean); energy-safe: restitution "
+        "max(e, (1-theta)/theta) at active corners already separating "
+        "(U_N- > 0), so no normal impulse does positive work",
+        choices=IMPACT_LAWS,
+    )
 
     def __post_init__(self) -> None:
         validate(self)
@@ -463,8 +604,12 @@ class Sequence:
     of the previous run (the Takeda unloading stiffness at that peak), per bent and direction.
     """
 
-    pgas: tuple[float, ...] = spec((0.075, 0.15, 0.25, 0.5, 0.75, 1.0, 1.0), unit="g",
-                                   doc="transverse PGA label of each run", gt=0.0)
+    pgas: tuple[float, ...] = spec(
+        (0.075, 0.15, 0.25, 0.5, 0.75, 1.0, 1.0),
+        unit="g",
+        doc="transverse PGA label of each run",
+        gt=0.0,
+    )
     carry_gap: bool = spec(True, doc="start each run from the previous run's residual gap")
     carry_stiffness: bool = spec(True, doc="degrade bent stiffness by the previous peak")
 
@@ -484,10 +629,12 @@ class Initial:
     such as a deck striking an abutment at a corner.
     """
 
-    deck: tuple[float, ...] = spec((0.0, 0.0, 0.0), unit="m, m, rad",
-                                   doc="initial deck displacement [x, y, theta]")
-    deck_velocity: tuple[float, ...] = spec((0.0, 0.0, 0.0), unit="m/s, m/s, rad/s",
-                                            doc="initial deck velocity [v_x, v_y, omega]")
+    deck: tuple[float, ...] = spec(
+        (0.0, 0.0, 0.0), unit="m, m, rad", doc="initial deck displacement [x, y, theta]"
+    )
+    deck_velocity: tuple[float, ...] = spec(
+        (0.0, 0.0, 0.0), unit="m/s, m/s, rad/s", doc="initial deck velocity [v_x, v_y, omega]"
+    )
 
     def __post_init__(self) -> None:
         validate(self)
@@ -516,31 +663,38 @@ class Scene:
     run: RunSettings = spec(default_factory=RunSettings, doc="shared run settings")
     initial: Initial = spec(default_factory=Initial, doc="initial state of the deck")
     opensees: OpenSeesSettings = spec(default_factory=OpenSeesSettings, doc="OpenSees engine")
-    compliance: ComplianceSettings = spec(default_factory=ComplianceSettings,
-                                          doc="compliance engine")
-    nonsmooth: NonsmoothSettings = spec(default_factory=NonsmoothSettings,
-                                        doc="nonsmooth engine")
+    compliance: ComplianceSettings = spec(
+        default_factory=ComplianceSettings, doc="compliance engine"
+    )
+    nonsmooth: NonsmoothSettings = spec(default_factory=NonsmoothSettings, doc="nonsmooth engine")
     sequence: Sequence = spec(default_factory=Sequence, doc="test sequence")
-    notes: dict[str, str] = spec(default_factory=dict,
-                                 doc="source or assumption of each value, keyed by dotted path")
+    notes: dict[str, str] = spec(
+        default_factory=dict, doc="source or assumption of each value, keyed by dotted path"
+    )
 
     def __post_init__(self) -> None:
         validate(self)
         if len(self.seats) != 2:
-            raise SceneError("seats", f"must hold exactly 2 seats (left, right), got {len(self.seats)}")
+            raise SceneError(
+                "seats", f"must hold exactly 2 seats (left, right), got {len(self.seats)}"
+            )
         names = [b.name for b in self.bents]
         if len(set(names)) != len(names):
             raise SceneError("bents", f"names must be unique, got {names}")
         for i, name in enumerate(names):
             # bent names become result columns and support channels (<name>_fx, <name>_x)
             if not _NAME.match(name) or name in ("seat1", "seat2", "deck"):
-                raise SceneError(f"bents[{i}].name", "must be a word of letters, digits and _ "
-                                 f"(not 'seat1', 'seat2' or 'deck'), got {name!r}")
+                raise SceneError(
+                    f"bents[{i}].name",
+                    "must be a word of letters, digits and _ "
+                    f"(not 'seat1', 'seat2' or 'deck'), got {name!r}",
+                )
         for i, b in enumerate(self.bents):
             if not 0.0 <= b.station <= self.deck.length:
-                raise SceneError(f"bents[{i}].station",
-                                 f"must lie on the deck, in [0, {self.deck.length}] m, "
-                                 f"got {b.station}")
+                raise SceneError(
+                    f"bents[{i}].station",
+                    f"must lie on the deck, in [0, {self.deck.length}] m, got {b.station}",
+                )
         self._check_free_deck()
         self._check_fixed_seats()
         for key in self.notes:
@@ -553,26 +707,32 @@ class Scene:
         rigid-body modes (deck x, y, θ at zero frequency), so Rayleigh damping matched at modes
         1-3 is undefined (ω = 0); refuse it unless the ratio is 0."""
         d = self.damping
-        if (not self.bents and d.method == "modes" and d.ratio > 0.0
-                and min(d.modes) <= 3):
-            raise SceneError("damping.method", "'modes' needs the natural frequencies of the "
-                             "contact-free model, but with bents = [] the deck is free in "
-                             "plan: modes 1-3 are its rigid-body modes at zero frequency; give "
-                             "damping.method = 'frequencies' (with damping.frequencies), modes "
-                             f"above 3, or damping.ratio = 0 (got modes {list(d.modes)})")
+        if not self.bents and d.method == "modes" and d.ratio > 0.0 and min(d.modes) <= 3:
+            raise SceneError(
+                "damping.method",
+                "'modes' needs the natural frequencies of the "
+                "contact-free model, but with bents = [] the deck is free in "
+                "plan: modes 1-3 are its rigid-body modes at zero frequency; give "
+                "damping.method = 'frequencies' (with damping.frequencies), modes "
+                f"above 3, or damping.ratio = 0 (got modes {list(d.modes)})",
+            )
 
     def _check_fixed_seats(self) -> None:
         """A fixed seat is exact only with its actuator at rest (see :class:`Seat`)."""
         exc = self.excitation
-        at_rest = exc.kind == "none" or (exc.kind in ("synthetic", "pulse")
-                                          and exc.longitudinal_ratio == 0.0)
+        at_rest = exc.kind == "none" or (
+            exc.kind in ("synthetic", "pulse") and exc.longitudinal_ratio == 0.0
+        )
         for i, seat in enumerate(self.seats):
             if seat.fixed and not at_rest:
-                raise SceneError(f"seats[{i}].fixed", "a fixed (rigid) seat needs its actuator "
-                                 "at rest: excitation.kind = 'none', or a synthetic/pulse "
-                                 "record with longitudinal_ratio = 0 (the engines cannot "
-                                 "prescribe a moving seat); use stiff seat springs instead, "
-                                 f"got excitation.kind = {exc.kind!r}")
+                raise SceneError(
+                    f"seats[{i}].fixed",
+                    "a fixed (rigid) seat needs its actuator "
+                    "at rest: excitation.kind = 'none', or a synthetic/pulse "
+                    "record with longitudinal_ratio = 0 (the engines cannot "
+                    "prescribe a moving seat); use stiff seat springs instead, "
+                    f"got excitation.kind = {exc.kind!r}",
+                )
 
     def _check_step_counts(self) -> None:
         """Refuse steps so small that a run could not fit in memory or time (MAX_STEPS)."""
@@ -581,12 +741,19 @@ class Scene:
             duration = self.excitation.duration
         if duration is None:
             return  # a loaded record: checked when it is resampled
-        for field, step in (("run.output_dt", self.run.output_dt), ("opensees.dt", self.opensees.dt),
-                            ("compliance.dt", self.compliance.dt), ("nonsmooth.h", self.nonsmooth.h)):
+        for field, step in (
+            ("run.output_dt", self.run.output_dt),
+            ("opensees.dt", self.opensees.dt),
+            ("compliance.dt", self.compliance.dt),
+            ("nonsmooth.h", self.nonsmooth.h),
+        ):
             if duration / step > MAX_STEPS:
-                raise SceneError(field, f"gives {duration / step:.3g} steps over {duration:g} s; at "
-                                 f"most {MAX_STEPS:.0e} are allowed, so it must be >= "
-                                 f"{duration / MAX_STEPS:.3g} s, got {step}")
+                raise SceneError(
+                    field,
+                    f"gives {duration / step:.3g} steps over {duration:g} s; at "
+                    f"most {MAX_STEPS:.0e} are allowed, so it must be >= "
+                    f"{duration / MAX_STEPS:.3g} s, got {step}",
+                )
 
     # -- derived geometry (the plan model is the one definition) ------------------------
     @property
@@ -603,7 +770,7 @@ class Scene:
 
         return tuple((c.x, c.y) for c in plan_of(self).corners)
 
-    def replace(self, **changes) -> "Scene":
+    def replace(self, **changes) -> Scene:
         """A copy with top-level fields replaced (validated again)."""
         return dataclasses.replace(self, **changes)
 
@@ -613,7 +780,9 @@ def _check_path(scene: Scene, key: str) -> None:
     obj = scene
     for part in key.replace("]", "").split("."):
         name, _, index = part.partition("[")
-        if not dataclasses.is_dataclass(obj) or name not in {f.name for f in dataclasses.fields(obj)}:
+        if not dataclasses.is_dataclass(obj) or name not in {
+            f.name for f in dataclasses.fields(obj)
+        }:
             raise SceneError(f"notes.{key}", "names no field of the scene")
         obj = getattr(obj, name)
         if index:

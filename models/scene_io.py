@@ -8,8 +8,9 @@ import json
 import re
 import tomllib
 import warnings
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 import tomli_w
 
@@ -60,8 +61,9 @@ def _nesting(value: Any, limit: int) -> int:
             deepest = max(deepest, depth + 1)
             if deepest > limit:
                 return deepest
-            stack.extend((v, depth + 1) for v in (node.values() if isinstance(node, dict)
-                                                   else node))
+            stack.extend(
+                (v, depth + 1) for v in (node.values() if isinstance(node, dict) else node)
+            )
     return deepest
 
 
@@ -77,9 +79,12 @@ def _check_dotted_depth(text: str, source: str) -> None:
         else:
             continue
         if key.count(".") >= MAX_NESTING:
-            raise SceneError(source, f"line {number}: a key or table header nested "
-                             f"{key.count('.') + 1} levels deep; at most {MAX_NESTING} levels "
-                             "are allowed")
+            raise SceneError(
+                source,
+                f"line {number}: a key or table header nested "
+                f"{key.count('.') + 1} levels deep; at most {MAX_NESTING} levels "
+                "are allowed",
+            )
 
 
 def parse_toml(text: str, source: str = "scene") -> dict[str, Any]:
@@ -90,8 +95,10 @@ def parse_toml(text: str, source: str = "scene") -> dict[str, Any]:
     except tomllib.TOMLDecodeError as err:
         raise SceneError(source, f"is not valid TOML: {err}") from None
     except RecursionError:
-        raise SceneError(source, f"nests arrays or tables too deeply to parse; at most "
-                         f"{MAX_NESTING} levels are allowed") from None
+        raise SceneError(
+            source,
+            f"nests arrays or tables too deeply to parse; at most {MAX_NESTING} levels are allowed",
+        ) from None
     if _nesting(data, MAX_NESTING) > MAX_NESTING:
         raise SceneError(source, f"nests arrays or tables more than {MAX_NESTING} levels deep")
     return data
@@ -106,9 +113,12 @@ def load_scene_data(ref: str | Path) -> tuple[dict[str, Any], Path | None]:
         try:
             size = path.stat().st_size
             if size > MAX_SCENE_BYTES:
-                raise SceneError("scene", f"file {str(path)!r} holds {size} bytes; a scene file "
-                                 f"may hold at most {MAX_SCENE_BYTES} (records go in their own "
-                                 "files)")
+                raise SceneError(
+                    "scene",
+                    f"file {str(path)!r} holds {size} bytes; a scene file "
+                    f"may hold at most {MAX_SCENE_BYTES} (records go in their own "
+                    "files)",
+                )
             text = path.read_text()
         except (OSError, UnicodeDecodeError) as err:
             raise SceneError("scene", f"cannot read {str(path)!r}: {err}") from None
@@ -138,8 +148,10 @@ def resolve_record_paths(data: dict[str, Any], folder: Path) -> list[str]:
             continue  # absolute: read as given (resolved when read)
         exc[key] = str(resolved)
         if not resolved.is_relative_to(folder.resolve()):
-            notices.append(f"excitation.{key}: the relative path {given!r} reaches outside the "
-                           f"scene's folder {str(folder)!r}; it is read from {str(resolved)!r}")
+            notices.append(
+                f"excitation.{key}: the relative path {given!r} reaches outside the "
+                f"scene's folder {str(folder)!r}; it is read from {str(resolved)!r}"
+            )
     return notices
 
 
@@ -193,11 +205,14 @@ def _parse_value(text: str) -> Any:
     except tomllib.TOMLDecodeError:
         return text
     except RecursionError:
-        raise SceneError("--set", f"value nests arrays or tables too deeply; at most "
-                         f"{MAX_NESTING} levels are allowed") from None
+        raise SceneError(
+            "--set",
+            f"value nests arrays or tables too deeply; at most {MAX_NESTING} levels are allowed",
+        ) from None
     if _nesting(value, MAX_NESTING) > MAX_NESTING:
-        raise SceneError("--set", f"value nests arrays or tables more than {MAX_NESTING} levels "
-                         "deep")
+        raise SceneError(
+            "--set", f"value nests arrays or tables more than {MAX_NESTING} levels deep"
+        )
     return value
 
 

@@ -30,7 +30,7 @@ class SpecimenState:
     """What the specimen carries into a run: seat gaps [m] and bent stiffness [kN/m]."""
 
     gaps: tuple[float, float]
-    stiffness: tuple[tuple[float, float], ...]   # per bent: (k_x, k_y)
+    stiffness: tuple[tuple[float, float], ...]  # per bent: (k_x, k_y)
     peak_deformation: tuple[tuple[float, float], ...]  # largest |d| so far, per bent (x, y) [m]
 
 
@@ -53,9 +53,12 @@ def check_runs(scene: Scene) -> None:
     """
     exc = scene.excitation
     if exc.kind in RECORD_KINDS and exc.scaling != "pga":
-        raise SceneError("excitation.scaling", f"is {exc.scaling!r}, but a sequence scales the "
-                         "record to each run's PGA (sequence.pgas); set scaling = 'pga' (or run "
-                         "single runs with this scaling)")
+        raise SceneError(
+            "excitation.scaling",
+            f"is {exc.scaling!r}, but a sequence scales the "
+            "record to each run's PGA (sequence.pgas); set scaling = 'pga' (or run "
+            "single runs with this scaling)",
+        )
     check_sequence_pgas(scene)
 
 
@@ -72,22 +75,26 @@ def scene_for_run(scene: Scene, pga: float, state: SpecimenState) -> Scene:
         for axis, k in zip(("x", "y"), ks):
             spring = getattr(b, axis)
             if spring.yield_force / k >= spring.ultimate_displacement:
-                raise SceneError(f"bents[{i}].{axis}.ultimate_displacement",
-                                 f"is {spring.ultimate_displacement:g} m, but the stiffness "
-                                 f"carried into the {pga:g} g run, {k:.6g} kN/m, puts the yield "
-                                 f"displacement at {spring.yield_force / k:.6g} m beyond it; "
-                                 "raise it or set sequence.carry_stiffness = false")
+                raise SceneError(
+                    f"bents[{i}].{axis}.ultimate_displacement",
+                    f"is {spring.ultimate_displacement:g} m, but the stiffness "
+                    f"carried into the {pga:g} g run, {k:.6g} kN/m, puts the yield "
+                    f"displacement at {spring.yield_force / k:.6g} m beyond it; "
+                    "raise it or set sequence.carry_stiffness = false",
+                )
     bents = tuple(
-        dataclasses.replace(b, x=dataclasses.replace(b.x, stiffness=kx),
-                            y=dataclasses.replace(b.y, stiffness=ky))
+        dataclasses.replace(
+            b, x=dataclasses.replace(b.x, stiffness=kx), y=dataclasses.replace(b.y, stiffness=ky)
+        )
         for b, (kx, ky) in zip(scene.bents, state.stiffness)
     )
     exc = dataclasses.replace(scene.excitation, pga=pga)
     return scene.replace(seats=seats, bents=bents, excitation=exc)
 
 
-def bent_deformations(scene: Scene, result: Result, motion: SupportMotion | None = None
-                      ) -> np.ndarray:
+def bent_deformations(
+    scene: Scene, result: Result, motion: SupportMotion | None = None
+) -> np.ndarray:
     """Bent spring deformations (deck point − table) at the result's times, shape
     (n, n_bents, 2): the result's ``<bent>_dx``/``<bent>_dy`` columns (every engine writes them
     from the plan model; ``motion`` is not needed and kept for old callers)."""
@@ -98,8 +105,9 @@ def bent_deformations(scene: Scene, result: Result, motion: SupportMotion | None
     return out
 
 
-def next_state(original: Scene, state: SpecimenState, run_scene: Scene, result: Result,
-               motion: SupportMotion) -> SpecimenState:
+def next_state(
+    original: Scene, state: SpecimenState, run_scene: Scene, result: Result, motion: SupportMotion
+) -> SpecimenState:
     """Apply the carry rule after one run (see the module docstring)."""
     seq = original.sequence
     gaps = state.gaps
@@ -109,8 +117,9 @@ def next_state(original: Scene, state: SpecimenState, run_scene: Scene, result: 
         g2 = float(np.mean(0.5 * (result["gap_c3"][-tail:] + result["gap_c4"][-tail:])))
         gaps = (max(0.0, g1), max(0.0, g2))
     peaks_now = np.max(np.abs(bent_deformations(run_scene, result, motion)), axis=0)
-    peaks = tuple((max(p[0], q[0]), max(p[1], q[1]))
-                  for p, q in zip(state.peak_deformation, peaks_now))
+    peaks = tuple(
+        (max(p[0], q[0]), max(p[1], q[1])) for p, q in zip(state.peak_deformation, peaks_now)
+    )
     stiffness = state.stiffness
     if seq.carry_stiffness:
         new = []

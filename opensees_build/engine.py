@@ -30,11 +30,11 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from typing import ClassVar
 
 import numpy as np
 
-from deckpound.engine_contract import (Engine, RunOutput, Status, engine_columns,
-                                       output_stride)
+from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.excitation import analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import OpenSeesSettings, Scene
@@ -45,6 +45,7 @@ ENGINE = "opensees"
 # ------------------------------------------------------------------------------------------
 # Runtime functions: self-contained (math only), copied into the exported Python script.
 # ------------------------------------------------------------------------------------------
+
 
 def define_analysis(ops, plan):
     """(Re)define the analysis objects from plan['analysis'] (list of command tuples)."""
@@ -76,7 +77,7 @@ def contact_forces(ops, plan):
             fn.append(0.0)
             ft.append(0.0)
         elif plan["friction"]:
-            f = ops.eleResponse(e, "force")   # resisting forces [Fx_i, Fy_i, M_i, Fx_j, Fy_j, M_j]
+            f = ops.eleResponse(e, "force")  # resisting forces [Fx_i, Fy_i, M_i, Fx_j, Fy_j, M_j]
             # the force ON the deck (node j) is minus its resisting force; compression pushes
             # the deck along the gap-opening normal n (+x at seat 1, -x at seat 2 when straight)
             nx, ny = plan["normals"][c]
@@ -97,8 +98,23 @@ def sample_row(ops, plan, t):
     vk = ops.nodeVel(plan["deck"])
     v1 = ops.nodeVel(plan["seats"][0])
     v2 = ops.nodeVel(plan["seats"][1])
-    row = [t, dk[0], dk[1], dk[2], s1[0], s1[2], s2[0], s2[2],
-           vk[0], vk[1], vk[2], v1[0], v1[2], v2[0], v2[2]]
+    row = [
+        t,
+        dk[0],
+        dk[1],
+        dk[2],
+        s1[0],
+        s1[2],
+        s2[0],
+        s2[2],
+        vk[0],
+        vk[1],
+        vk[2],
+        v1[0],
+        v1[2],
+        v2[0],
+        v2[2],
+    ]
     row += corner_gaps(ops, plan)
     fn, ft = contact_forces(ops, plan)
     row += fn + ft
@@ -124,8 +140,17 @@ def run_steps(ops, plan, log=None):
     stride = plan["stride"]
     rows = [sample_row(ops, plan, 0.0)]
     closed = [g < 0.0 for g in corner_gaps(ops, plan)] if plan["gap_elements"] else []
-    stats = {"steps": 0, "iterations": 0, "failures": 0, "rescued": 0, "contact_events": 0,
-             "status": "success", "message": "", "failed_time": None, "failed_step": None}
+    stats = {
+        "steps": 0,
+        "iterations": 0,
+        "failures": 0,
+        "rescued": 0,
+        "contact_events": 0,
+        "status": "success",
+        "message": "",
+        "failed_time": None,
+        "failed_step": None,
+    }
     for n in range(1, n_steps + 1):
         ok = ops.analyze(1, dt)
         if ok == 0:
@@ -138,7 +163,7 @@ def run_steps(ops, plan, log=None):
                 ops.wipeAnalysis()
                 define_analysis(ops, plan)
                 h = dt / plan["substeps"]
-                for k in range(plan["substeps"]):
+                for _k in range(plan["substeps"]):
                     ok = ops.analyze(1, h)
                     if ok != 0:
                         break
@@ -155,11 +180,16 @@ def run_steps(ops, plan, log=None):
             stats["status"] = "failed"
             stats["failed_step"] = n
             stats["failed_time"] = n * dt
-            stats["message"] = (f"step {n} (t = {n * dt:.6g} s) did not converge"
-                                + (f" even with {plan['substeps']} sub-steps"
-                                   if plan["fallback"] == "substep" else "")
-                                if ok != -100 else f"non-finite state at step {n} "
-                                f"(t = {n * dt:.6g} s)")
+            stats["message"] = (
+                f"step {n} (t = {n * dt:.6g} s) did not converge"
+                + (
+                    f" even with {plan['substeps']} sub-steps"
+                    if plan["fallback"] == "substep"
+                    else ""
+                )
+                if ok != -100
+                else f"non-finite state at step {n} (t = {n * dt:.6g} s)"
+            )
             break
         stats["steps"] = n
         if plan["gap_elements"]:
@@ -184,6 +214,7 @@ def run_steps(ops, plan, log=None):
 # ------------------------------------------------------------------------------------------
 # In-process driver
 # ------------------------------------------------------------------------------------------
+
 
 def make_plan(scene: Scene, info, duration: float) -> dict:
     """Tags and constants of the step loop (JSON-able: also written into exported scripts)."""
@@ -295,8 +326,10 @@ def _set_initial_acceleration(ops, scene: Scene, motion) -> None:
     if not (ax or ay or al):
         return
     raw = ops.raw
-    ops.comment(f"initial deck acceleration {ax!r} m/s2, {ay!r} m/s2, {al!r} rad/s2 "
-                "(equilibrium of the initial state)")
+    ops.comment(
+        f"initial deck acceleration {ax!r} m/s2, {ay!r} m/s2, {al!r} rad/s2 "
+        "(equilibrium of the initial state)"
+    )
     for name, tag in ops.tags("node").items():
         if name == "deck" or name.startswith("deck "):
             x, y = raw.nodeCoord(tag)
@@ -330,22 +363,31 @@ def _refuse_initial_displacement(scene: Scene, settings) -> None:
 
     where = f"the OpenSees engine starts the deck displaced (got {list(scene.initial.deck)}) "
     if settings.mode != "rigid":
-        raise SceneError("initial.deck", where + "in rigid mode only (opensees.mode = "
-                         "'rigid'): in stick mode the sticks would start deformed; use "
-                         "rigid mode, the compliance or the nonsmooth engine")
+        raise SceneError(
+            "initial.deck",
+            where + "in rigid mode only (opensees.mode = "
+            "'rigid'): in stick mode the sticks would start deformed; use "
+            "rigid mode, the compliance or the nonsmooth engine",
+        )
     plan = plan_of(scene)
     u0, _ = plan.initial_state(scene.initial)
     gaps = plan.linear_gaps(u0)[0]
     if np.any(gaps <= 0.0):
-        raise SceneError("initial.deck", where + "only with every gap open at the start; it "
-                         f"closes gap(s) {[c.name for c, g in zip(plan.corners, gaps) if g <= 0]}")
+        raise SceneError(
+            "initial.deck",
+            where + "only with every gap open at the start; it "
+            f"closes gap(s) {[c.name for c, g in zip(plan.corners, gaps) if g <= 0]}",
+        )
     B, _ = plan.spring_matrices
     d0 = B @ u0
     for s, d in zip(plan.springs, d0):
         if s.kind == "takeda" and abs(d) >= s.takeda[1]:
-            raise SceneError("initial.deck", where + f"only with the bents elastic at the "
-                             f"start; spring {s.name} starts at {d:.4g} m, beyond its yield "
-                             f"displacement {s.takeda[1]:.4g} m")
+            raise SceneError(
+                "initial.deck",
+                where + f"only with the bents elastic at the "
+                f"start; spring {s.name} starts at {d:.4g} m, beyond its yield "
+                f"displacement {s.takeda[1]:.4g} m",
+            )
 
 
 class OpenSeesEngine(Engine):
@@ -356,7 +398,7 @@ class OpenSeesEngine(Engine):
     Settings = OpenSeesSettings
     settings_field = "opensees"
     step_field = "dt"
-    style = dict(color="#000000", linestyle="-", linewidth=1.4, label="OpenSees")
+    style: ClassVar[dict] = dict(color="#000000", linestyle="-", linewidth=1.4, label="OpenSees")
 
     def reads(self, scene: Scene, settings) -> set[str]:
         ct = scene.contact
@@ -378,7 +420,6 @@ class OpenSeesEngine(Engine):
         return read
 
     def refuse(self, scene: Scene, settings) -> None:
-        from deckpound.models.errors import SceneError
 
         from .model import refuse_scene
 
@@ -386,8 +427,9 @@ class OpenSeesEngine(Engine):
         if any(scene.initial.deck):
             _refuse_initial_displacement(scene, settings)
 
-    def _run(self, plan: Plan, scene: Scene, settings, motion, *, _before_run=None,
-             _ops_wrapper=None) -> RunOutput:
+    def _run(
+        self, plan: Plan, scene: Scene, settings, motion, *, _before_run=None, _ops_wrapper=None
+    ) -> RunOutput:
         """``_before_run(ops_raw, info, plan)`` and ``_ops_wrapper(ops_raw) -> ops`` are test
         hooks (set initial velocities; inject a failing step)."""
         from .ops import OpsSession, openseespy_version
@@ -412,27 +454,49 @@ class OpenSeesEngine(Engine):
         ok = st["status"] == "success"
         nonfinite = "non-finite" in st["message"]
         if st["failures"]:
-            warnings.warn(f"OpenSees: {st['failures']} failed step(s), {st['rescued']} rescued "
-                          "by sub-stepping", stacklevel=4)
-        reason = "non-finite state" if nonfinite else (
-            "Newton did not converge" + (f" even with {settings.substeps} sub-steps"
-                                         if settings.fallback == "substep" else ""))
+            warnings.warn(
+                f"OpenSees: {st['failures']} failed step(s), {st['rescued']} rescued "
+                "by sub-stepping",
+                stacklevel=4,
+            )
+        reason = (
+            "non-finite state"
+            if nonfinite
+            else (
+                "Newton did not converge"
+                + (
+                    f" even with {settings.substeps} sub-steps"
+                    if settings.fallback == "substep"
+                    else ""
+                )
+            )
+        )
         return RunOutput(
             columns=columns,
-            status=Status.SUCCESS if ok else (Status.NONFINITE if nonfinite
-                                              else Status.NOT_CONVERGED),
+            status=Status.SUCCESS
+            if ok
+            else (Status.NONFINITE if nonfinite else Status.NOT_CONVERGED),
             message="" if ok else reason,
-            failed_step=st["failed_step"], failed_time=st["failed_time"],
-            steps=st["steps"], newton_iterations=st["iterations"],
-            failed_steps=st["failures"], rescued_steps=st["rescued"],
+            failed_step=st["failed_step"],
+            failed_time=st["failed_time"],
+            steps=st["steps"],
+            newton_iterations=st["iterations"],
+            failed_steps=st["failures"],
+            rescued_steps=st["rescued"],
             loop_time=loop,
-            extra={"openseespy": openseespy_version(), "dt": splan["dt"],
-                   "build_time": t1 - t0, "step_log": messages[:100]})
+            extra={
+                "openseespy": openseespy_version(),
+                "dt": splan["dt"],
+                "build_time": t1 - t0,
+                "step_log": messages[:100],
+            },
+        )
 
 
 def run_opensees(scene: Scene, motion=None, *, raise_on_failure: bool = False, **options):
     """Run the scene in OpenSees (keywords of :meth:`OpenSeesEngine._run`)."""
     from deckpound.engines import get_engine
 
-    return get_engine("opensees").run(scene, None, motion, raise_on_failure=raise_on_failure,
-                                      **options)
+    return get_engine("opensees").run(
+        scene, None, motion, raise_on_failure=raise_on_failure, **options
+    )

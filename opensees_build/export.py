@@ -24,10 +24,9 @@ import hashlib
 import json
 from pathlib import Path
 
+from deckpound import __version__
 from deckpound.models.errors import SceneError
 from deckpound.models.result import scene_hash
-
-from deckpound import __version__
 
 from . import engine
 from .export_header import UNITS, ExportParts
@@ -61,6 +60,7 @@ def golden_text(scene, motion=None) -> str:
 def regen_golden(name: str = GOLDEN_SCENE) -> Path:
     """Rewrite the golden command log of built-in scene ``name``."""
     from deckpound.models.scene_io import load_scene
+
     path = golden_path(name)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(golden_text(load_scene(name)))
@@ -68,6 +68,7 @@ def regen_golden(name: str = GOLDEN_SCENE) -> Path:
 
 
 # -- the parts of an export ------------------------------------------------------------------
+
 
 def _records(log: list[Command], tags: dict, file_of: dict[str, str]) -> list[dict]:
     """One manifest entry per support record, from the timeSeries / groundMotion /
@@ -90,11 +91,22 @@ def _records(log: list[Command], tags: dict, file_of: dict[str, str]) -> list[di
         for ts, quantity, unit in ((ts_d, "displacement", "m"), (ts_v, "velocity", "m/s")):
             arr, dt = series[ts]
             text = arr.file_text()
-            out.append({"file": file_of[arr.name], "channel": gm_names.get(gm, str(gm)),
-                        "quantity": quantity, "unit": unit, "time_series": ts,
-                        "ground_motion": gm, "node": node, "node_name": node_names.get(node, "?"),
-                        "dof": dof, "dt": dt, "count": len(arr.values),
-                        "sha256": hashlib.sha256(text.encode()).hexdigest()})
+            out.append(
+                {
+                    "file": file_of[arr.name],
+                    "channel": gm_names.get(gm, str(gm)),
+                    "quantity": quantity,
+                    "unit": unit,
+                    "time_series": ts,
+                    "ground_motion": gm,
+                    "node": node,
+                    "node_name": node_names.get(node, "?"),
+                    "dof": dof,
+                    "dt": dt,
+                    "count": len(arr.values),
+                    "sha256": hashlib.sha256(text.encode()).hexdigest(),
+                }
+            )
     return out
 
 
@@ -112,10 +124,22 @@ def export_parts(scene, fmt: str, stem: str, motion=None) -> tuple[ExportParts, 
         raise AssertionError("two support records map to one file name")
     files = {file_of[a.name]: a.file_text() for a in arrays}
     recs, maps = standard_recorders(plan, [b.name for b in scene.bents])
-    parts = ExportParts(scene=scene, fmt=fmt, stem=stem, log=log, tags=tags, plan=plan,
-                        records=_records(log, tags, file_of), file_of=file_of, recorders=recs,
-                        maps=maps, rec_dt=recorder_step(plan), scene_hash=scene_hash(scene),
-                        data_dir=f"{stem}_data", out_dir=f"{stem}_results")
+    parts = ExportParts(
+        scene=scene,
+        fmt=fmt,
+        stem=stem,
+        log=log,
+        tags=tags,
+        plan=plan,
+        records=_records(log, tags, file_of),
+        file_of=file_of,
+        recorders=recs,
+        maps=maps,
+        rec_dt=recorder_step(plan),
+        scene_hash=scene_hash(scene),
+        data_dir=f"{stem}_data",
+        out_dir=f"{stem}_results",
+    )
     files["manifest.json"] = json.dumps(manifest(parts), indent=2, ensure_ascii=True) + "\n"
     return parts, files
 
@@ -126,11 +150,22 @@ def manifest(p: ExportParts) -> dict:
         "format": MANIFEST_FORMAT,
         "generator": f"deckpound {__version__}",
         "scene": {"name": p.scene.name, "sha256": p.scene_hash},
-        "units": {"force": "kN", "length": "m", "mass": "t", "time": "s", "angle": "rad",
-                  "text": UNITS},
+        "units": {
+            "force": "kN",
+            "length": "m",
+            "mass": "t",
+            "time": "s",
+            "angle": "rad",
+            "text": UNITS,
+        },
         "records": p.records,
-        "recorders": {"dT": p.rec_dt, "precision": PRECISION, "dt": p.plan["dt"],
-                      "stride": p.plan["stride"], **manifest_entries(p.recorders, p.maps)},
+        "recorders": {
+            "dT": p.rec_dt,
+            "precision": PRECISION,
+            "dt": p.plan["dt"],
+            "stride": p.plan["stride"],
+            **manifest_entries(p.recorders, p.maps),
+        },
     }
 
 
@@ -142,6 +177,7 @@ def script_text(scene, fmt: str, stem: str, motion=None) -> tuple[str, dict[str,
 
 # -- writing -------------------------------------------------------------------------------
 
+
 def _check_output(path: Path, fmt: str) -> None:
     if path.is_dir():
         raise SceneError("--output", f"{str(path)!r} is a folder; give a file name")
@@ -149,12 +185,18 @@ def _check_output(path: Path, fmt: str) -> None:
         try:
             tcl_word(str(path.resolve()))
         except ValueError as err:
-            raise SceneError("--output", f"{str(path)!r} cannot be used by a Tcl script: {err}; "
-                             "choose a path without such characters") from None
+            raise SceneError(
+                "--output",
+                f"{str(path)!r} cannot be used by a Tcl script: {err}; "
+                "choose a path without such characters",
+            ) from None
     data = path.parent / f"{path.stem}_data"
     if data.is_symlink() or (data.exists() and not data.is_dir()):
-        raise SceneError("--output", f"{str(data)!r} (the data folder of {path.name!r}) exists "
-                         "and is not a plain folder; remove it or choose another name")
+        raise SceneError(
+            "--output",
+            f"{str(data)!r} (the data folder of {path.name!r}) exists "
+            "and is not a plain folder; remove it or choose another name",
+        )
 
 
 def export_script(scene, fmt: str, path, motion=None) -> Path:
@@ -175,7 +217,7 @@ def export_script(scene, fmt: str, path, motion=None) -> Path:
         if made and data.is_dir() and not any(data.iterdir()):
             data.rmdir()
         raise
-    for old in data.iterdir():     # data files of an earlier export that this one has not
+    for old in data.iterdir():  # data files of an earlier export that this one has not
         if old.is_file() and old.name not in files:
             old.unlink()
     return path
@@ -183,9 +225,11 @@ def export_script(scene, fmt: str, path, motion=None) -> Path:
 
 # -- README snippet ----------------------------------------------------------------------------
 
+
 def readme_snippet() -> str:
     """The README block: the first lines of the benchmark's Tcl export."""
     from deckpound.models.scene_io import load_scene
+
     text, _ = script_text(load_scene(GOLDEN_SCENE), "tcl", GOLDEN_SCENE)
     head = "\n".join(text.splitlines()[:README_LINES])
     return f"{README_BEGIN}\n```tcl\n{head}\n...\n```\n{README_END}"
@@ -196,7 +240,7 @@ def readme_block(text: str) -> str | None:
     if README_BEGIN not in text or README_END not in text:
         return None
     start = text.index(README_BEGIN)
-    return text[start:text.index(README_END, start) + len(README_END)]
+    return text[start : text.index(README_END, start) + len(README_END)]
 
 
 def regen_readme(path: Path = README) -> Path:
@@ -209,11 +253,15 @@ def regen_readme(path: Path = README) -> Path:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m deckpound.opensees_build.export",
-                                description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(
+        prog="python -m deckpound.opensees_build.export", description=__doc__.splitlines()[0]
+    )
     p.add_argument("--regen-golden", action="store_true", help="rewrite the golden command log")
-    p.add_argument("--regen-readme", action="store_true",
-                   help="rewrite the exported-script snippet in README.md")
+    p.add_argument(
+        "--regen-readme",
+        action="store_true",
+        help="rewrite the exported-script snippet in README.md",
+    )
     p.add_argument("--scene", default=GOLDEN_SCENE, help="built-in scene name or TOML file")
     p.add_argument("--format", choices=("tcl", "py"), default="py")
     p.add_argument("--out", help="script path to write")
@@ -227,6 +275,7 @@ def main(argv=None) -> int:
     if not a.out:
         p.error("--out is required unless --regen-golden / --regen-readme")
     from deckpound.models.scene_io import load_scene
+
     print(export_script(load_scene(a.scene), a.format, a.out))
     return 0
 

@@ -21,38 +21,50 @@ from .ops import ArrayArg, Command
 from .quoting import wrap_comment
 from .recorders import PRECISION, ColumnMap, Recorder
 
-UNITS = ("Units: force kN, length m, mass t (tonne), time s, angle rad (1 kN = 1 t*m/s^2); "
-         "stiffness kN/m or kN*m/rad, damping kN*s/m or kN*m*s/rad, stress of a zeroLength "
-         "material = force [kN].")
-AXES = ("Axes: x longitudinal (bridge axis), y transverse, theta rotation about the vertical, "
-        "counter-clockwise positive; model basic -ndm 2 -ndf 3: dof 1 = x, 2 = y, 3 = theta.")
+UNITS = (
+    "Units: force kN, length m, mass t (tonne), time s, angle rad (1 kN = 1 t*m/s^2); "
+    "stiffness kN/m or kN*m/rad, damping kN*s/m or kN*m*s/rad, stress of a zeroLength "
+    "material = force [kN]."
+)
+AXES = (
+    "Axes: x longitudinal (bridge axis), y transverse, theta rotation about the vertical, "
+    "counter-clockwise positive; model basic -ndm 2 -ndf 3: dof 1 = x, 2 = y, 3 = theta."
+)
 
 #: width of the header lines (before the comment sign and escapes)
 WIDTH = 96
 #: (regular expression on a registry name, meaning) per kind; {0}, {1} are the groups
 _MEANING = {
-    "node": [(r"deck", "deck centre: all the deck mass and polar inertia"),
-             (r"deck (c\d)", "deck corner {0}"),
-             (r"deck (\w+)", "deck point above bent {0}"),
-             (r"stick (\d+)", "node of the deck stick axis"),
-             (r"seat(\d)", "seat {0}: contact-face mid-point, seat mass and inertia"),
-             (r"seat(\d) (c\d)", "seat {0} point facing deck corner {1} (rigidLink to the seat)"),
-             (r"actuator(\d)", "actuator {0}: imposed x motion; y and theta fixed"),
-             (r"table (\w+)", "shake table of bent {0}: imposed x and y motion; theta fixed")],
-    "element": [(r"bent (\w+)", "bent {0} springs, table -> deck point (x, y)"),
-                (r"seat(\d) spring", "seat {0} springs kx, ktheta, actuator -> seat"),
-                (r"seat(\d) dashpot", "seat {0} dashpots cx, ctheta, actuator -> seat"),
-                (r"seat(\d) guide", "seat {0} y guide (stiff spring, the seat has no y mass)"),
-                (r"gap (c\d)", "contact (gap) element of corner {0}"),
-                (r"stick (c\d)", "transverse deck stick to corner {0}"),
-                (r"stick (\d+)", "deck stick along the axis")],
-    "material": [(r"(\w+) ([xy])", "bent {0}, {1}: Hysteretic (Takeda stand-in)"),
-                 (r"seat(\d) (kx|ktheta)", "seat {0} spring {1}"),
-                 (r"seat(\d) (cx|ctheta)", "seat {0} dashpot {1}"),
-                 (r"seat guide", "seat y guide spring"),
-                 (r"gap (c\d)", "gap law of corner {0}")],
-    "timeSeries": [(r"(\w+) disp", "displacement of support channel {0} [m]"),
-                   (r"(\w+) vel", "velocity of support channel {0} [m/s]")],
+    "node": [
+        (r"deck", "deck centre: all the deck mass and polar inertia"),
+        (r"deck (c\d)", "deck corner {0}"),
+        (r"deck (\w+)", "deck point above bent {0}"),
+        (r"stick (\d+)", "node of the deck stick axis"),
+        (r"seat(\d)", "seat {0}: contact-face mid-point, seat mass and inertia"),
+        (r"seat(\d) (c\d)", "seat {0} point facing deck corner {1} (rigidLink to the seat)"),
+        (r"actuator(\d)", "actuator {0}: imposed x motion; y and theta fixed"),
+        (r"table (\w+)", "shake table of bent {0}: imposed x and y motion; theta fixed"),
+    ],
+    "element": [
+        (r"bent (\w+)", "bent {0} springs, table -> deck point (x, y)"),
+        (r"seat(\d) spring", "seat {0} springs kx, ktheta, actuator -> seat"),
+        (r"seat(\d) dashpot", "seat {0} dashpots cx, ctheta, actuator -> seat"),
+        (r"seat(\d) guide", "seat {0} y guide (stiff spring, the seat has no y mass)"),
+        (r"gap (c\d)", "contact (gap) element of corner {0}"),
+        (r"stick (c\d)", "transverse deck stick to corner {0}"),
+        (r"stick (\d+)", "deck stick along the axis"),
+    ],
+    "material": [
+        (r"(\w+) ([xy])", "bent {0}, {1}: Hysteretic (Takeda stand-in)"),
+        (r"seat(\d) (kx|ktheta)", "seat {0} spring {1}"),
+        (r"seat(\d) (cx|ctheta)", "seat {0} dashpot {1}"),
+        (r"seat guide", "seat y guide spring"),
+        (r"gap (c\d)", "gap law of corner {0}"),
+    ],
+    "timeSeries": [
+        (r"(\w+) disp", "displacement of support channel {0} [m]"),
+        (r"(\w+) vel", "velocity of support channel {0} [m/s]"),
+    ],
     "groundMotion": [(r"(\w+)", "support channel {0} (-disp and -vel series)")],
     "pattern": [(r"supports", "MultipleSupport pattern of all imposed motions")],
     "transf": [(r"deck", "Linear transformation of the deck sticks")],
@@ -114,8 +126,16 @@ def _first(log: list[Command], name: str, pos: int | None = None, value=None) ->
 def tag_legend(p: ExportParts) -> list[str]:
     """One line per tag of every kind, with the facts the log gives about it."""
     out = ["Tags (from deckpound's tag registry; name: meaning):"]
-    for kind in ("node", "element", "material", "transf", "region", "timeSeries", "groundMotion",
-                 "pattern"):
+    for kind in (
+        "node",
+        "element",
+        "material",
+        "transf",
+        "region",
+        "timeSeries",
+        "groundMotion",
+        "pattern",
+    ):
         for name, tag in sorted(p.tags.get(kind, {}).items(), key=lambda kv: kv[1]):
             fact = ""
             if kind == "node":
@@ -126,8 +146,9 @@ def tag_legend(p: ExportParts) -> list[str]:
             elif kind == "element":
                 c = _first(p.log, "element", 1, tag)
                 if c:
-                    fact = (f" [{c.args[0]} {p.name('node', c.args[2])} -> "
-                            f"{p.name('node', c.args[3])}]")
+                    fact = (
+                        f" [{c.args[0]} {p.name('node', c.args[2])} -> {p.name('node', c.args[3])}]"
+                    )
             elif kind == "material":
                 c = _first(p.log, "uniaxialMaterial", 1, tag)
                 fact = f" [{c.args[0]}]" if c else ""
@@ -139,20 +160,32 @@ def sign_lines(p: ExportParts) -> list[str]:
     """Gap and bent sign conventions, per corner from the element and material commands."""
     normals = p.plan.get("normals") or [[s, 0.0] for s in p.plan["sides"]]
     skewed = any(n[1] != 0.0 for n in normals)
-    out = ["Sign conventions (gap g, contact force fn, as deckpound reports them):",
-           "  side = +1 for corners c1, c2 (seat 1, left), -1 for c3, c4 (seat 2, right);"]
+    out = [
+        "Sign conventions (gap g, contact force fn, as deckpound reports them):",
+        "  side = +1 for corners c1, c2 (seat 1, left), -1 for c3, c4 (seat 2, right);",
+    ]
     if skewed:
-        out += [("  skewed deck: n = gap-opening normal of each corner's end face (c1, c2: "
-                 f"{_fmt(normals[0][0])}, {_fmt(normals[0][1])}; c3, c4: {_fmt(normals[2][0])}, "
-                 f"{_fmt(normals[2][1])}), t = face tangent {_fmt(p.plan['tangents'][0][0])}, "
-                 f"{_fmt(p.plan['tangents'][0][1])};"),
-                ("  physical gap g = g0 + n.(u_deck corner - u_seat point): open > 0, "
-                 "penetration < 0 (g0 measured along n);"),
-                "  fn >= 0 is compression; ft is the tangential force ON the deck corner along t."]
+        out += [
+            (
+                "  skewed deck: n = gap-opening normal of each corner's end face (c1, c2: "
+                f"{_fmt(normals[0][0])}, {_fmt(normals[0][1])}; c3, c4: {_fmt(normals[2][0])}, "
+                f"{_fmt(normals[2][1])}), t = face tangent {_fmt(p.plan['tangents'][0][0])}, "
+                f"{_fmt(p.plan['tangents'][0][1])};"
+            ),
+            (
+                "  physical gap g = g0 + n.(u_deck corner - u_seat point): open > 0, "
+                "penetration < 0 (g0 measured along n);"
+            ),
+            "  fn >= 0 is compression; ft is the tangential force ON the deck corner along t.",
+        ]
     else:
-        out += ["  physical gap g = g0 + side*(u_deck,x - u_seat,x): open > 0, penetration < 0;",
-                ("  fn >= 0 is compression; ft is the tangential (y) force ON the deck corner, "
-                 "+ = +y.")]
+        out += [
+            "  physical gap g = g0 + side*(u_deck,x - u_seat,x): open > 0, penetration < 0;",
+            (
+                "  fn >= 0 is compression; ft is the tangential (y) force ON the deck corner, "
+                "+ = +y."
+            ),
+        ]
     friction = p.plan["friction"]
     for c, e in enumerate(p.plan["gap_elements"]):
         cmd = _first(p.log, "element", 1, e)
@@ -162,33 +195,43 @@ def sign_lines(p: ExportParts) -> list[str]:
             k = cmd.args.index("-normal")
             nx, ny = cmd.args[k + 1], cmd.args[k + 2]
             if skewed:
-                out.append(f"  c{c + 1}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
-                           f"({_fmt(nx)}, {_fmt(ny)}) = -n, from the deck to the seat; g0 = "
-                           f"{g0!r} m (the nodes sit g0 apart along n); fn = -n.(Fx_j, Fy_j), "
-                           "ft = -t.(Fx_j, Fy_j)")
+                out.append(
+                    f"  c{c + 1}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
+                    f"({_fmt(nx)}, {_fmt(ny)}) = -n, from the deck to the seat; g0 = "
+                    f"{g0!r} m (the nodes sit g0 apart along n); fn = -n.(Fx_j, Fy_j), "
+                    "ft = -t.(Fx_j, Fy_j)"
+                )
             else:
-                out.append(f"  c{c + 1}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
-                           f"({_fmt(nx)}, 0) from the deck to the seat; g0 = {g0!r} m (the nodes "
-                           f"sit g0 apart); fn = -side*Fx_j = {_fmt(-side)}*Fx_j, ft = -Fy_j")
+                out.append(
+                    f"  c{c + 1}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
+                    f"({_fmt(nx)}, 0) from the deck to the seat; g0 = {g0!r} m (the nodes "
+                    f"sit g0 apart); fn = -side*Fx_j = {_fmt(-side)}*Fx_j, ft = -Fy_j"
+                )
         else:
             mat = _first(p.log, "uniaxialMaterial", 1, cmd.args[5])
             args = " ".join(_fmt(a) for a in mat.args[2:])
             if "-orient" in cmd.args:
                 k = cmd.args.index("-orient")
-                along = (f"along its local x axis a = ({_fmt(cmd.args[k + 1])}, "
-                         f"{_fmt(cmd.args[k + 2])}) (-orient)")
+                along = (
+                    f"along its local x axis a = ({_fmt(cmd.args[k + 1])}, "
+                    f"{_fmt(cmd.args[k + 2])}) (-orient)"
+                )
                 strain = f"a.(u_j - u_i) = {'+' if side > 0 else '-'}a.(u_deck - u_seat)"
             else:
                 along = "along x"
                 strain = f"u_j - u_i = {'+' if side > 0 else '-'}(u_deck - u_seat)"
-            out.append(f"  c{c + 1}: zeroLength {e} {along}, i = {i}, j = {j}: deformation "
-                       f"e = {strain} = g - g0, "
-                       f"closing negative; material {mat.args[1]} {mat.args[0]} {args} (negative "
-                       f"gap and yield: compression only); g = {g0!r} + e, fn = -stress")
+            out.append(
+                f"  c{c + 1}: zeroLength {e} {along}, i = {i}, j = {j}: deformation "
+                f"e = {strain} = g - g0, "
+                f"closing negative; material {mat.args[1]} {mat.args[0]} {args} (negative "
+                f"gap and yield: compression only); g = {g0!r} + e, fn = -stress"
+            )
     if not p.plan["gap_elements"]:
         out.append("  this model has no gap elements (contact-free)")
-    out.append("  bents: zeroLength i = table, j = deck point; deformation u_deck - u_table; "
-               "Hysteretic stress > 0 when the deck is displaced +x (+y) from its table")
+    out.append(
+        "  bents: zeroLength i = table, j = deck point; deformation u_deck - u_table; "
+        "Hysteretic stress > 0 when the deck is displaced +x (+y) from its table"
+    )
     return out
 
 
@@ -199,16 +242,22 @@ def damping_lines(p: ExportParts) -> list[str]:
     if ray is None:
         return ["Damping: no rayleigh command (only the element dashpots)."]
     am, bk, bk0, bkc = (float(a) for a in ray.args)
-    out.append(f"Damping: rayleigh alphaM = {am:.12g}, betaK (current tangent) = {bk:.12g}, "
-               f"betaKinit (initial stiffness) = {bk0:.12g}, betaKcomm (last committed) = "
-               f"{bkc:.12g}.")
+    out.append(
+        f"Damping: rayleigh alphaM = {am:.12g}, betaK (current tangent) = {bk:.12g}, "
+        f"betaKinit (initial stiffness) = {bk0:.12g}, betaKcomm (last committed) = "
+        f"{bkc:.12g}."
+    )
     masses = [f"{c.args[0]} {p.name('node', c.args[0])}" for c in p.log if c.name == "mass"]
     if am != 0.0:
-        out.append(f"  alphaM*M acts on the nodes with mass ({', '.join(masses)}) and, under "
-                   "MultipleSupport, on their ABSOLUTE velocities.")
+        out.append(
+            f"  alphaM*M acts on the nodes with mass ({', '.join(masses)}) and, under "
+            "MultipleSupport, on their ABSOLUTE velocities."
+        )
     else:
-        out.append("  alphaM = 0: no mass-proportional Rayleigh term (a mass part on velocities "
-                   "relative to the supports, if any, is in the 'mass damper' Viscous elements).")
+        out.append(
+            "  alphaM = 0: no mass-proportional Rayleigh term (a mass part on velocities "
+            "relative to the supports, if any, is in the 'mass damper' Viscous elements)."
+        )
     with_r, without, beams = [], [], []
     for c in p.log:
         if c.name != "element":
@@ -221,75 +270,106 @@ def damping_lines(p: ExportParts) -> list[str]:
             without.append(label)
         else:
             beams.append(label)
-    out.append("  stiffness part on the elements with -doRayleigh 1: " + (", ".join(with_r) or
-                                                                          "none"))
-    out.append("  no Rayleigh (zeroLength without -doRayleigh, zeroLengthContact2D): "
-               + (", ".join(without) or "none"))
+    out.append(
+        "  stiffness part on the elements with -doRayleigh 1: " + (", ".join(with_r) or "none")
+    )
+    out.append(
+        "  no Rayleigh (zeroLength without -doRayleigh, zeroLengthContact2D): "
+        + (", ".join(without) or "none")
+    )
     excluded = set()
     for c in p.log:
         if c.name == "region":
             a = list(c.args)
-            eles = a[a.index("-eleOnly") + 1:a.index("-rayleigh")] if "-eleOnly" in a else []
-            fac = " ".join(_fmt(x) for x in a[a.index("-rayleigh") + 1:]) if "-rayleigh" in a else ""
+            eles = a[a.index("-eleOnly") + 1 : a.index("-rayleigh")] if "-eleOnly" in a else []
+            fac = (
+                " ".join(_fmt(x) for x in a[a.index("-rayleigh") + 1 :]) if "-rayleigh" in a else ""
+            )
             excluded |= {int(x) for x in eles}
-            out.append(f"  region {a[0]} '{p.name('region', a[0])}': elements {len(eles)} "
-                       f"({_fmt(eles[0]) if eles else ''}..{_fmt(eles[-1]) if eles else ''}), "
-                       f"rayleigh {fac}")
+            out.append(
+                f"  region {a[0]} '{p.name('region', a[0])}': elements {len(eles)} "
+                f"({_fmt(eles[0]) if eles else ''}..{_fmt(eles[-1]) if eles else ''}), "
+                f"rayleigh {fac}"
+            )
     rest = [b for b in beams if int(b.split()[0]) not in excluded]
     if beams:
-        out.append("  beam elements take the global factors unless in a region: "
-                   + (", ".join(rest) or "none (all in regions)"))
+        out.append(
+            "  beam elements take the global factors unless in a region: "
+            + (", ".join(rest) or "none (all in regions)")
+        )
     return out
 
 
 def analysis_lines(p: ExportParts) -> list[str]:
     pl = p.plan
     cmds = "; ".join(" ".join(_fmt(a) for a in c) for c in pl["analysis"])
-    out = [f"Analysis: {cmds}.",
-           (f"  dt = {pl['dt']!r} s, {pl['n_steps']} steps of analyze 1 $dt "
+    out = [
+        f"Analysis: {cmds}.",
+        (
+            f"  dt = {pl['dt']!r} s, {pl['n_steps']} steps of analyze 1 $dt "
             f"({pl['n_steps'] * pl['dt']:.6g} s); deckpound stores a row at t = 0 and every "
-            f"{pl['stride']} steps ({pl['stride'] * pl['dt']:.6g} s)."),
-           ("  Every analyze return code is checked. On a failed step OpenSees has reverted to "
-            "the last commit; the step loop below counts it as a failure and")]
+            f"{pl['stride']} steps ({pl['stride'] * pl['dt']:.6g} s)."
+        ),
+        (
+            "  Every analyze return code is checked. On a failed step OpenSees has reverted to "
+            "the last commit; the step loop below counts it as a failure and"
+        ),
+    ]
     if pl["fallback"] == "substep":
-        out.append(f"  (fallback 'substep') rebuilds the analysis (wipeAnalysis + the commands "
-                   "above: the Transformation handler keeps a stale increment on constrained "
-                   f"nodes otherwise), retries with {pl['substeps']} sub-steps of "
-                   f"dt/{pl['substeps']}, each checked, and rebuilds the analysis again; a step "
-                   "that still fails stops the run with status 'failed'.")
+        out.append(
+            f"  (fallback 'substep') rebuilds the analysis (wipeAnalysis + the commands "
+            "above: the Transformation handler keeps a stale increment on constrained "
+            f"nodes otherwise), retries with {pl['substeps']} sub-steps of "
+            f"dt/{pl['substeps']}, each checked, and rebuilds the analysis again; a step "
+            "that still fails stops the run with status 'failed'."
+        )
     else:
         out.append("  (fallback 'none') stops the run with status 'failed'.")
     return out
 
 
 def record_lines(p: ExportParts) -> list[str]:
-    out = [("Support motion: MultipleSupport, each channel imposes displacement AND velocity "
+    out = [
+        (
+            "Support motion: MultipleSupport, each channel imposes displacement AND velocity "
             "(groundMotion Plain -disp -vel) read by timeSeries Path -dt -filePath from "
             f"'{p.data_dir}/' (one value a line, 17 digits; manifest.json there lists node, dof, "
             "dt, units, count, sha256). Path series interpolate linearly and return 0 after "
-            "their last value, so every record ends with its last value repeated.")]
+            "their last value, so every record ends with its last value repeated."
+        )
+    ]
     for r in p.records:
         if r["quantity"] != "displacement":
             continue
-        vel = next((v for v in p.records if v["channel"] == r["channel"]
-                    and v["quantity"] == "velocity"), None)
-        out.append(f"  {r['channel']}: node {r['node']} ({r['node_name']}) dof {r['dof']}; "
-                   f"disp {r['file']} [m], vel {vel['file'] if vel else '-'} [m/s]; "
-                   f"dt {r['dt']!r} s, {r['count']} values")
+        vel = next(
+            (v for v in p.records if v["channel"] == r["channel"] and v["quantity"] == "velocity"),
+            None,
+        )
+        out.append(
+            f"  {r['channel']}: node {r['node']} ({r['node_name']}) dof {r['dof']}; "
+            f"disp {r['file']} [m], vel {vel['file'] if vel else '-'} [m/s]; "
+            f"dt {r['dt']!r} s, {r['count']} values"
+        )
     return out
 
 
 def recorder_lines(p: ExportParts) -> list[str]:
-    out = [(f"Recorders: files in the output folder (default '{p.out_dir}/'), each line 'time "
+    out = [
+        (
+            f"Recorders: files in the output folder (default '{p.out_dir}/'), each line 'time "
             f"value...' at {PRECISION} significant digits; written at t = 0 (record) and at "
             f"every output step: -dT = (stride - m)*dt = {p.rec_dt!r} s with m = half a "
             "sub-step, so the sub-steps of the fallback never add rows. deckpound's columns "
-            "follow from them as (file[k] = column k of the file, 0 = time):")]
+            "follow from them as (file[k] = column k of the file, 0 = time):"
+        )
+    ]
     out += [f"  {m.formula()}" for m in p.maps]
     vel = [r.file for r in p.recorders if r.file.endswith("_vel.out")]
     out.append(f"  also: {', '.join(vel)} (absolute velocities [m/s, rad/s])")
-    out.append("  deckpound.opensees_build.recorders.read_columns(folder, "
-               "manifest['recorders']['columns']) applies these maps.")
+    out.append(
+        "  deckpound.opensees_build.recorders.read_columns(folder, "
+        "manifest['recorders']['columns']) applies these maps."
+    )
     return out
 
 
@@ -298,17 +378,26 @@ def header_lines(p: ExportParts) -> list[str]:
     sc = p.scene
     lang = "Tcl" if p.fmt == "tcl" else "OpenSeesPy"
     friction = f", friction {sc.contact.friction_mode}" if p.plan["friction"] else ""
-    out = [f"deckpound {__version__} export ({lang}) of scene '{sc.name}'",
-           f"scene sha256: {p.scene_hash}",
-           (f"model: {sc.opensees.mode} deck, {len(sc.bents)} bents, contact law "
-            f"{sc.contact.law}{friction}; dt {sc.opensees.dt!r} s; {p.plan['n_steps']} steps"),
-           UNITS, AXES]
+    out = [
+        f"deckpound {__version__} export ({lang}) of scene '{sc.name}'",
+        f"scene sha256: {p.scene_hash}",
+        (
+            f"model: {sc.opensees.mode} deck, {len(sc.bents)} bents, contact law "
+            f"{sc.contact.law}{friction}; dt {sc.opensees.dt!r} s; {p.plan['n_steps']} steps"
+        ),
+        UNITS,
+        AXES,
+    ]
     if p.fmt == "tcl":
-        out.append(f"Run: OpenSees {p.stem}.tcl  (set outDir, writeCsv before 'source' to "
-                   "override the output folder / also write deckpound's CSV)")
+        out.append(
+            f"Run: OpenSees {p.stem}.tcl  (set outDir, writeCsv before 'source' to "
+            "override the output folder / also write deckpound's CSV)"
+        )
     else:
-        out.append(f"Run: python {p.stem}.py [--out DIR] [--csv]  (--csv also writes "
-                   "deckpound's CSV, opensees.csv)")
+        out.append(
+            f"Run: python {p.stem}.py [--out DIR] [--csv]  (--csv also writes "
+            "deckpound's CSV, opensees.csv)"
+        )
     if sc.description:
         out += ["Description:"] + [f"  {x}" for x in wrap_comment(sc.description)]
     out += [""] + sign_lines(p) + [""] + damping_lines(p) + [""] + analysis_lines(p)
@@ -328,7 +417,7 @@ def _wrap(line: str, width: int = WIDTH) -> list[str]:
     if len(line) <= width:
         return [line]
     body = line.lstrip(" ")
-    lead = line[:len(line) - len(body)]
+    lead = line[: len(line) - len(body)]
     words = body.split(" ")
     out, cur = [], lead + words[0]
     for w in words[1:]:

@@ -25,8 +25,13 @@ from .quoting import comment_text, py_str
 from .recorders import PRECISION, render_recorders
 
 #: the engine's runtime functions, copied into the script (the same code steps both runs)
-RUNTIME = (engine.define_analysis, engine.corner_gaps, engine.contact_forces, engine.sample_row,
-           engine.run_steps)
+RUNTIME = (
+    engine.define_analysis,
+    engine.corner_gaps,
+    engine.contact_forces,
+    engine.sample_row,
+    engine.run_steps,
+)
 
 
 def py_literal(v, indent: int = 0) -> str:

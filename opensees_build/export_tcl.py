@@ -30,8 +30,10 @@ def _tcl_list(values) -> str:
 
 
 def _analysis_body(plan: dict) -> str:
-    return "\n    ".join(" ".join(tcl_word(a) if isinstance(a, str) else _num(a) for a in c)
-                         for c in plan["analysis"])
+    return "\n    ".join(
+        " ".join(tcl_word(a) if isinstance(a, str) else _num(a) for a in c)
+        for c in plan["analysis"]
+    )
 
 
 def tcl_script(p: ExportParts) -> str:
@@ -43,7 +45,7 @@ def tcl_script(p: ExportParts) -> str:
     gap_eles = plan["gap_elements"] or [0, 0, 0, 0]
     margin = "0.5 / $nSub" if plan["fallback"] == "substep" else "0.5"
     columns = " ".join(tcl_word(c) for c in plan["columns"])
-    return f'''{head}
+    return f"""{head}
 
 set here [file dirname [file normalize [info script]]]
 set dataDir [file join $here {tcl_word(p.data_dir)}]
@@ -179,4 +181,4 @@ if {{$writeCsv}} {{ close $fh }}
 wipe
 puts "$status, failures: $failures, rescued by sub-steps: $rescued"
 if {{$status != "success"}} {{ exit 1 }}
-'''
+"""

@@ -56,8 +56,8 @@ import numpy as np
 from deckpound.models.contact_laws_table import contact_law
 from deckpound.models.contact_params import kelvin_voigt_damping
 from deckpound.models.damping import damping_model
-from deckpound.models.plan import plan_of, takeda_hysteretic_args
 from deckpound.models.errors import SceneError
+from deckpound.models.plan import plan_of, takeda_hysteretic_args
 from deckpound.models.scene import Scene
 
 from .ops import ArrayArg, OpsSession
@@ -125,6 +125,7 @@ class GapSpec:
 
 # -- checks -------------------------------------------------------------------------------
 
+
 def refuse_scene(scene: Scene) -> None:
     """Refuse (SceneError) what the OpenSees model cannot express, naming the alternatives.
 
@@ -144,20 +145,30 @@ def refuse_scene(scene: Scene) -> None:
         raise SceneError("contact.law", law.opensees_refusal)
     o = scene.opensees
     if c.law == "bilinear" and (o.substeps < BILINEAR_MIN_SUBSTEPS or o.fallback != "substep"):
-        raise SceneError("opensees.substeps", BILINEAR_OPENSEES_REASON.format(
-            min=BILINEAR_MIN_SUBSTEPS, got=o.substeps if o.fallback == "substep" else
-            f"{o.substeps} with fallback = {o.fallback!r}"))
+        raise SceneError(
+            "opensees.substeps",
+            BILINEAR_OPENSEES_REASON.format(
+                min=BILINEAR_MIN_SUBSTEPS,
+                got=o.substeps
+                if o.fallback == "substep"
+                else f"{o.substeps} with fallback = {o.fallback!r}",
+            ),
+        )
     if c.has_friction:
         model = friction_model(c.friction_mode)
         if model.opensees is None:
             raise SceneError("contact.friction_mode", model.opensees_refusal)
         if c.law not in model.opensees_laws:
-            raise SceneError("contact.law", f"OpenSees cannot combine the {c.law!r} law with "
-                             "friction: zeroLengthContact2D is a linear penalty contact; use "
-                             "law = 'linear' with friction")
+            raise SceneError(
+                "contact.law",
+                f"OpenSees cannot combine the {c.law!r} law with "
+                "friction: zeroLengthContact2D is a linear penalty contact; use "
+                "law = 'linear' with friction",
+            )
 
 
 # -- the one sign-convention function -------------------------------------------------------
+
 
 def gap_orientation(scene: Scene) -> tuple[float, ...] | None:
     """zeroLength ``-orient`` of the gap elements: local x = a = (cos φ, −sin φ), the right end
@@ -171,8 +182,7 @@ def gap_orientation(scene: Scene) -> tuple[float, ...] | None:
     return (cs, -sn, 0.0, sn, cs, 0.0)
 
 
-def gap_mapping(scene: Scene, corner: int, deck_node: int, seat_node: int,
-                mat_tag: int) -> GapSpec:
+def gap_mapping(scene: Scene, corner: int, deck_node: int, seat_node: int, mat_tag: int) -> GapSpec:
     """Node order, orientation and OpenSees material of corner ``corner`` (0..3).
 
     Physical gap (positive when open), measured along the corner's gap-opening normal n of the
@@ -193,9 +203,13 @@ def gap_mapping(scene: Scene, corner: int, deck_node: int, seat_node: int,
     if c.law == "linear":
         return GapSpec(i, j, "ElasticPPGap", (mat_tag, c.stiffness, -HUGE_FORCE, -g0), orient)
     if c.law == "bilinear":
-        return GapSpec(i, j, "ImpactMaterial",
-                       (mat_tag, c.stiffness, c.bilinear_ratio * c.stiffness, -c.bilinear_yield,
-                        -g0), orient)
+        return GapSpec(
+            i,
+            j,
+            "ImpactMaterial",
+            (mat_tag, c.stiffness, c.bilinear_ratio * c.stiffness, -c.bilinear_yield, -g0),
+            orient,
+        )
     if c.law == "kelvin-voigt":
         damp = float(kelvin_voigt_damping(scene)[corner])
         return GapSpec(i, j, "ViscoelasticGap", (mat_tag, c.stiffness, damp, -g0), orient)
@@ -219,10 +233,11 @@ def contact_normal(corner) -> tuple[float, float]:
 
 # -- geometry helpers ---------------------------------------------------------------------
 
+
 def stick_section(scene: Scene) -> tuple[float, float]:
     """(A [m²], I [m⁴]) of the deck sticks: a section W wide and W/8 deep, bending in plan."""
     w = scene.deck.width
-    return w * w / 8.0, w ** 4 / 96.0
+    return w * w / 8.0, w**4 / 96.0
 
 
 def stick_stations(scene: Scene) -> list[float]:
@@ -265,8 +280,10 @@ def padded(values: np.ndarray) -> np.ndarray:
 
 # -- the model ----------------------------------------------------------------------------
 
-def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True,
-                supports: str = "motion") -> ModelInfo:
+
+def build_model(
+    ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True, supports: str = "motion"
+) -> ModelInfo:
     """Define nodes, masses, constraints, materials, elements, damping and (optionally) the
     multiple-support excitation.
 
@@ -313,7 +330,9 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             ops.rigidLink("beam", deck, n)
     else:
         area, inertia = stick_section(scene)
-        ops.comment(f"stick deck: E = {d.stick_modulus:g} kN/m2, A = W^2/8, I = W^4/96 (near-rigid)")
+        ops.comment(
+            f"stick deck: E = {d.stick_modulus:g} kN/m2, A = W^2/8, I = W^4/96 (near-rigid)"
+        )
         transf = T("transf", "deck")
         ops.geomTransf("Linear", transf)
         xs = stick_stations(scene)
@@ -327,8 +346,9 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             axis.append(n)
         for k in range(len(axis) - 1):
             e = T("element", f"stick {k}")
-            ops.element("elasticBeamColumn", e, axis[k], axis[k + 1], area, d.stick_modulus,
-                        inertia, transf)
+            ops.element(
+                "elasticBeamColumn", e, axis[k], axis[k + 1], area, d.stick_modulus, inertia, transf
+            )
             sticks.append(e)
         for c, n in enumerate(dcorners):
             end = axis[0] if c < 2 else axis[-1]
@@ -379,8 +399,18 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             ops.uniaxialMaterial("Hysteretic", m, *takeda_hysteretic_args(spring))
             mats.append(m)
         e = T("element", f"bent {b.name}")
-        ops.element("zeroLength", e, tn, dn, "-mat", *mats, "-dir", 1, 2,
-                    *(("-doRayleigh", 1) if ray_bents else ()))
+        ops.element(
+            "zeroLength",
+            e,
+            tn,
+            dn,
+            "-mat",
+            *mats,
+            "-dir",
+            1,
+            2,
+            *(("-doRayleigh", 1) if ray_bents else ()),
+        )
         bent_eles.append(e)
         # explicit bent dashpots (bents[i].cx, cy), in their own element like the seats'
         dash = [(dirn, c) for dirn, c in ((1, b.cx), (2, b.cy)) if c > 0.0]
@@ -390,16 +420,35 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
                 m = T("material", f"{b.name} c{'xy'[dirn - 1]}")
                 ops.uniaxialMaterial("Viscous", m, c, 1.0)
                 dmats.append(m)
-            ops.element("zeroLength", T("element", f"bent {b.name} dashpot"), tn, dn, "-mat",
-                        *dmats, "-dir", *(dirn for dirn, _ in dash))
+            ops.element(
+                "zeroLength",
+                T("element", f"bent {b.name} dashpot"),
+                tn,
+                dn,
+                "-mat",
+                *dmats,
+                "-dir",
+                *(dirn for dirn, _ in dash),
+            )
     for j, seat in enumerate(scene.seats):
         mx = T("material", f"seat{j + 1} kx")
         ops.uniaxialMaterial("Elastic", mx, seat.kx)
         mt = T("material", f"seat{j + 1} ktheta")
         ops.uniaxialMaterial("Elastic", mt, seat.ktheta)
         e = T("element", f"seat{j + 1} spring")
-        ops.element("zeroLength", e, acts[j], seats[j], "-mat", mx, mt, "-dir", 1, 3,
-                    *(("-doRayleigh", 1) if ray_seats else ()))
+        ops.element(
+            "zeroLength",
+            e,
+            acts[j],
+            seats[j],
+            "-mat",
+            mx,
+            mt,
+            "-dir",
+            1,
+            3,
+            *(("-doRayleigh", 1) if ray_seats else ()),
+        )
         # dashpots in their own element: with -doRayleigh 1 a zeroLength (3.7) drops its
         # materials' damping tangent from the damping matrix (Newton then converges linearly)
         cx = T("material", f"seat{j + 1} cx")
@@ -422,8 +471,10 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
     gap_eles = []
     g0 = tuple(scene.seats[0].gap if c < 2 else scene.seats[1].gap for c in range(4))
     if gaps:
-        ops.comment(f"contact at the corners: law {scene.contact.law}"
-                    + (", zeroLengthContact2D with friction" if friction else ""))
+        ops.comment(
+            f"contact at the corners: law {scene.contact.law}"
+            + (", zeroLengthContact2D with friction" if friction else "")
+        )
         for c in range(4):
             e = T("element", f"gap {CORNER_NAMES[c]}")
             if friction:
@@ -434,27 +485,55 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
                 # geometric one).
                 nx, ny = contact_normal(plan.corners[c])
                 ct = scene.contact
-                ops.element("zeroLengthContact2D", e, scorners[c], dcorners[c], ct.stiffness,
-                            ct.tangential_stiffness, ct.friction, "-normal", nx, ny)
+                ops.element(
+                    "zeroLengthContact2D",
+                    e,
+                    scorners[c],
+                    dcorners[c],
+                    ct.stiffness,
+                    ct.tangential_stiffness,
+                    ct.friction,
+                    "-normal",
+                    nx,
+                    ny,
+                )
             else:
-                spec = gap_mapping(scene, c, dcorners[c], scorners[c],
-                                   T("material", f"gap {CORNER_NAMES[c]}"))
+                spec = gap_mapping(
+                    scene, c, dcorners[c], scorners[c], T("material", f"gap {CORNER_NAMES[c]}")
+                )
                 ops.uniaxialMaterial(spec.material, *spec.args)
                 orient = ("-orient", *spec.orient) if spec.orient is not None else ()
-                ops.element("zeroLength", e, spec.i_node, spec.j_node, "-mat", spec.args[0],
-                            "-dir", 1, *orient)
+                ops.element(
+                    "zeroLength",
+                    e,
+                    spec.i_node,
+                    spec.j_node,
+                    "-mat",
+                    spec.args[0],
+                    "-dir",
+                    1,
+                    *orient,
+                )
             gap_eles.append(e)
 
     # --- damping --------------------------------------------------------------------------
-    a1, (wi, wj) = damping.a1, damping.omega
+    _a1, (wi, wj) = damping.a1, damping.omega
     dsc = scene.damping
-    members = {"bents": "bent springs", "bents+seats": "bent and seat springs",
-               "none": "no springs"}[dsc.members]
+    members = {
+        "bents": "bent springs",
+        "bents+seats": "bent and seat springs",
+        "none": "no springs",
+    }[dsc.members]
     factors = rayleigh_factors(scene, damping)
-    ops.comment(f"Rayleigh: a0 M ({dsc.mass} velocities) + a1 K ({dsc.stiffness} stiffness of "
-                f"the {members}, -doRayleigh 1); "
-                + (f"matched at {wi:.6g} and {wj:.6g} rad/s" if dsc.method != "none"
-                   else "method none: no Rayleigh damping"))
+    ops.comment(
+        f"Rayleigh: a0 M ({dsc.mass} velocities) + a1 K ({dsc.stiffness} stiffness of "
+        f"the {members}, -doRayleigh 1); "
+        + (
+            f"matched at {wi:.6g} and {wj:.6g} rad/s"
+            if dsc.method != "none"
+            else "method none: no Rayleigh damping"
+        )
+    )
     ops.rayleigh(*factors)
     ref_nodes = mass_dampers(ops, scene, damping, deck, seats, acts, supports)
     if sticks:
@@ -471,7 +550,7 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
         channels = plan.channels
         D, V = motion.matrices(channels)
         where = []
-        for b, tn in zip(scene.bents, tables):
+        for tn in tables:
             where += [(tn, 1), (tn, 2)]
         where += [(acts[0], 1), (acts[1], 1)]
         # reference nodes of the relative mass damping follow their table's motion
@@ -490,13 +569,22 @@ def build_model(ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True
             for rn, rdof in also.get(k, ()):
                 ops.imposedMotion(rn, rdof, gm)
 
-    return ModelInfo(mode=s.mode, deck=deck, seats=tuple(seats), deck_corners=tuple(dcorners),
-                     seat_corners=tuple(scorners), gap_elements=tuple(gap_eles), g0=g0,
-                     sides=SIDES, bent_names=tuple(b.name for b in scene.bents),
-                     bent_elements=tuple(bent_eles), friction=friction,
-                     normals=tuple(c.normal for c in plan.corners),
-                     tangents=tuple(c.tangent for c in plan.corners),
-                     stick_elements=tuple(sticks))
+    return ModelInfo(
+        mode=s.mode,
+        deck=deck,
+        seats=tuple(seats),
+        deck_corners=tuple(dcorners),
+        seat_corners=tuple(scorners),
+        gap_elements=tuple(gap_eles),
+        g0=g0,
+        sides=SIDES,
+        bent_names=tuple(b.name for b in scene.bents),
+        bent_elements=tuple(bent_eles),
+        friction=friction,
+        normals=tuple(c.normal for c in plan.corners),
+        tangents=tuple(c.tangent for c in plan.corners),
+        stick_elements=tuple(sticks),
+    )
 
 
 def rayleigh_members(scene: Scene) -> tuple[bool, bool]:
@@ -511,12 +599,17 @@ def rayleigh_factors(scene: Scene, damping) -> tuple[float, float, float, float]
     (current → βK, initial → βKinit, committed → βKc)."""
     a1 = damping.a1
     st = scene.damping.stiffness
-    return (damping.a0_absolute, a1 if st == "current" else 0.0,
-            a1 if st == "initial" else 0.0, a1 if st == "committed" else 0.0)
+    return (
+        damping.a0_absolute,
+        a1 if st == "current" else 0.0,
+        a1 if st == "initial" else 0.0,
+        a1 if st == "committed" else 0.0,
+    )
 
 
-def mass_dampers(ops: OpsSession, scene: Scene, damping, deck: int, seats, acts,
-                 supports: str) -> list[int]:
+def mass_dampers(
+    ops: OpsSession, scene: Scene, damping, deck: int, seats, acts, supports: str
+) -> list[int]:
     """The mass-proportional part on relative velocities (``damping.mass = relative``): a
     zeroLength with Viscous(a0 m / n, α = 1) materials in x, y, θ from a reference node per bent
     table — at the deck centre, imposed x and y motion of that table, θ fixed — to the deck
@@ -529,10 +622,11 @@ def mass_dampers(ops: OpsSession, scene: Scene, damping, deck: int, seats, acts,
     plan_mass = plan_of(scene).mass
     nb = len(scene.bents)
     a0 = damping.a0
-    ops.comment("mass-proportional damping on relative velocities: Viscous dashpots to the "
-                "supports")
+    ops.comment(
+        "mass-proportional damping on relative velocities: Viscous dashpots to the supports"
+    )
     refs = []
-    for k, b in enumerate(scene.bents or [None]):
+    for _k, b in enumerate(scene.bents or [None]):
         name = b.name if b is not None else "fixed"
         rn = T("node", f"deck ref {name}")
         ops.node(rn, 0.0, 0.0)

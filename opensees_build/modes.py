@@ -45,14 +45,30 @@ def opensees_modes(scene: Scene, n: int = N_DOF) -> OpenSeesModes:
         info = build_model(ops, scene, None, gaps=False, supports="fixed")
         raw = ops.raw
         lam = np.array(raw.eigen("-fullGenLapack", N_DOF), dtype=float)[:n]
-        where = [(info.seats[0], 1), (info.seats[0], 3), (info.seats[1], 1), (info.seats[1], 3),
-                 (info.deck, 1), (info.deck, 2), (info.deck, 3)]
-        phi = np.array([[raw.nodeEigenvector(node, m + 1, dof) for m in range(n)]
-                        for node, dof in where])
+        where = [
+            (info.seats[0], 1),
+            (info.seats[0], 3),
+            (info.seats[1], 1),
+            (info.seats[1], 3),
+            (info.deck, 1),
+            (info.deck, 2),
+            (info.deck, 3),
+        ]
+        phi = np.array(
+            [[raw.nodeEigenvector(node, m + 1, dof) for m in range(n)] for node, dof in where]
+        )
         raw.wipeAnalysis()
-    masses = np.array([scene.seats[0].mass, scene.seats[0].inertia, scene.seats[1].mass,
-                       scene.seats[1].inertia, scene.deck.mass, scene.deck.mass,
-                       scene.deck.inertia])
+    masses = np.array(
+        [
+            scene.seats[0].mass,
+            scene.seats[0].inertia,
+            scene.seats[1].mass,
+            scene.seats[1].inertia,
+            scene.deck.mass,
+            scene.deck.mass,
+            scene.deck.inertia,
+        ]
+    )
     norm = np.sqrt(np.einsum("im,i,im->m", phi, masses, phi))
     phi = phi / norm
     sign = np.sign(phi[np.abs(phi).argmax(axis=0), np.arange(n)])

@@ -35,16 +35,34 @@ from .quoting import comment_text, py_str, tcl_word
 __all__ = ["ArrayArg", "Command", "OpsSession", "openseespy_version", "render_value"]
 
 #: commands executed but never logged: state queries, stepping and analysis bookkeeping
-QUERIES = frozenset({
-    "analyze", "nodeDisp", "nodeVel", "nodeAccel", "eleResponse", "testIter", "testNorm",
-    "getTime", "nodeEigenvector", "nodeReaction", "reactions", "getNodeTags", "getEleTags",
-    "revertToLastCommit", "printModel", "setNodeDisp", "version", "nodeCoord",
-})
+QUERIES = frozenset(
+    {
+        "analyze",
+        "nodeDisp",
+        "nodeVel",
+        "nodeAccel",
+        "eleResponse",
+        "testIter",
+        "testNorm",
+        "getTime",
+        "nodeEigenvector",
+        "nodeReaction",
+        "reactions",
+        "getNodeTags",
+        "getEleTags",
+        "revertToLastCommit",
+        "printModel",
+        "setNodeDisp",
+        "version",
+        "nodeCoord",
+    }
+)
 
 
 def openseespy_version() -> str:
     try:
         from importlib.metadata import version
+
         return version("openseespy")
     except Exception:  # pragma: no cover - metadata missing
         return "unknown"
@@ -118,7 +136,7 @@ class OpsSession:
         self._open = False
 
     # -- context ------------------------------------------------------------------------
-    def __enter__(self) -> "OpsSession":
+    def __enter__(self) -> OpsSession:
         if OpsSession._active:
             raise RuntimeError("an OpsSession is already open (openseespy has one global domain)")
         OpsSession._active = True
@@ -195,8 +213,14 @@ class OpsSession:
         return render_commands(self.log, style, **kw)
 
 
-def render_command(cmd: Command, style: str, *, golden: bool = False,
-                   file_of: dict[str, str] | None = None, module: str = "ops") -> str:
+def render_command(
+    cmd: Command,
+    style: str,
+    *,
+    golden: bool = False,
+    file_of: dict[str, str] | None = None,
+    module: str = "ops",
+) -> str:
     """One command as a line of ``style``: ``log`` (Tcl-like, arrays abbreviated), ``tcl`` or
     ``py`` (arrays read with ``-filePath`` from files named by ``file_of[name]`` in the script's
     data folder: ``$dataDir`` in Tcl, ``_data(name)`` in Python — the scripts define both).
@@ -221,8 +245,18 @@ def render_command(cmd: Command, style: str, *, golden: bool = False,
     return " ".join([cmd.name] + parts)
 
 
-def render_commands(log: list[Command], style: str = "log", *, golden: bool = False,
-                    file_of: dict[str, str] | None = None, module: str = "ops") -> str:
+def render_commands(
+    log: list[Command],
+    style: str = "log",
+    *,
+    golden: bool = False,
+    file_of: dict[str, str] | None = None,
+    module: str = "ops",
+) -> str:
     """The whole log, one command a line."""
-    return "\n".join(render_command(c, style, golden=golden, file_of=file_of, module=module)
-                     for c in log) + "\n"
+    return (
+        "\n".join(
+            render_command(c, style, golden=golden, file_of=file_of, module=module) for c in log
+        )
+        + "\n"
+    )

@@ -28,8 +28,16 @@ __all__ = ["comment_text", "py_str", "safe_file_name", "tcl_word", "wrap_comment
 
 _BARE = re.compile(r"[A-Za-z0-9_.+\-]+")
 _FILE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*")
-_TCL_ESC = {"\\": "\\\\", '"': '\\"', "$": "\\$", "[": "\\[", "]": "\\]", "\n": "\\n",
-            "\t": "\\t", "\r": "\\r"}
+_TCL_ESC = {
+    "\\": "\\\\",
+    '"': '\\"',
+    "$": "\\$",
+    "[": "\\[",
+    "]": "\\]",
+    "\n": "\\n",
+    "\t": "\\t",
+    "\r": "\\r",
+}
 
 
 def _uescape(ch: str) -> str:
@@ -49,8 +57,10 @@ def tcl_word(s: str) -> str:
         elif " " <= ch <= "~":
             out.append(ch)
         elif ord(ch) > 0xFFFF:
-            raise ValueError(f"Tcl 8.6 cannot represent the character {ch!r} (U+{ord(ch):X}, "
-                             "outside the Basic Multilingual Plane)")
+            raise ValueError(
+                f"Tcl 8.6 cannot represent the character {ch!r} (U+{ord(ch):X}, "
+                "outside the Basic Multilingual Plane)"
+            )
         else:
             out.append(_uescape(ch))
     return '"' + "".join(out) + '"'

@@ -104,7 +104,11 @@ class ColumnMap:
         if self.offset == 0.0:
             rhs = lin
         else:
-            rhs = f"{self.offset!r} - {lin[1:]}" if lin.startswith("-") else f"{self.offset!r} + {lin}"
+            rhs = (
+                f"{self.offset!r} - {lin[1:]}"
+                if lin.startswith("-")
+                else f"{self.offset!r} + {lin}"
+            )
         if self.a2 is not None:
             two = self._term(self.file, self.a2, self.b2, self.scale2)
             rhs += f" - {two[1:]}" if two.startswith("-") else f" + {two}"
@@ -128,11 +132,14 @@ def recorder_step(plan: dict) -> float:
     fallback, 1/2 without (see the module docstring)."""
     margin = 0.5 / plan["substeps"] if plan["fallback"] == "substep" else 0.5
     if OPENSEES_DT_RTOL * plan["stride"] > 0.1 * margin:
-        raise SceneError("run.output_dt", f"an output every {plan['stride']} steps with "
-                         f"{plan['substeps']} sub-steps cannot be separated by OpenSees "
-                         "recorders (-dT tolerance 1e-5 of the output step exceeds a tenth of "
-                         "half a sub-step); lower run.output_dt or opensees.substeps so that "
-                         f"stride x substeps <= {int(0.05 / OPENSEES_DT_RTOL)}")
+        raise SceneError(
+            "run.output_dt",
+            f"an output every {plan['stride']} steps with "
+            f"{plan['substeps']} sub-steps cannot be separated by OpenSees "
+            "recorders (-dT tolerance 1e-5 of the output step exceeds a tenth of "
+            "half a sub-step); lower run.output_dt or opensees.substeps so that "
+            f"stride x substeps <= {int(0.05 / OPENSEES_DT_RTOL)}",
+        )
     return (plan["stride"] - margin) * plan["dt"]
 
 
@@ -143,11 +150,29 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
     maps: list[ColumnMap] = []
 
     def node(col: str, vcol: str, tag: int, dof: int, what: str, unit: str) -> None:
-        recs.append(Recorder(f"{col}.out", "Node", (tag,), ("disp",), (col,),
-                             f"{what}, absolute displacement [{unit}]", dofs=(dof,)))
+        recs.append(
+            Recorder(
+                f"{col}.out",
+                "Node",
+                (tag,),
+                ("disp",),
+                (col,),
+                f"{what}, absolute displacement [{unit}]",
+                dofs=(dof,),
+            )
+        )
         maps.append(ColumnMap(col, f"{col}.out"))
-        recs.append(Recorder(f"{vcol}.out", "Node", (tag,), ("vel",), (vcol,),
-                             f"{what}, absolute velocity [{unit}/s]", dofs=(dof,)))
+        recs.append(
+            Recorder(
+                f"{vcol}.out",
+                "Node",
+                (tag,),
+                ("vel",),
+                (vcol,),
+                f"{what}, absolute velocity [{unit}/s]",
+                dofs=(dof,),
+            )
+        )
         maps.append(ColumnMap(vcol, f"{vcol}.out"))
 
     # the plan model's column names, in DOF order: deck x, y, θ, then seat x, θ per seat
@@ -157,7 +182,7 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
         unit = "rad" if dof == 3 else "m"
         node(col, vcol, plan["deck"], dof, f"deck centre node {plan['deck']} dof {dof}", unit)
     for j, seat in enumerate(plan["seats"], start=1):
-        for dof, (col, vcol) in zip((1, 3), names[1 + 2 * j:3 + 2 * j]):
+        for dof, (col, vcol) in zip((1, 3), names[1 + 2 * j : 3 + 2 * j]):
             unit = "rad" if dof == 3 else "m"
             node(col, vcol, seat, dof, f"seat {j} node {seat} dof {dof}", unit)
 
@@ -166,8 +191,11 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
         k = c + 1
         side, g0 = plan["sides"][c], plan["g0"][c]
         if not gaps:
-            maps += [ColumnMap(f"gap_c{k}", None, offset=g0), ColumnMap(f"fn_c{k}", None),
-                     ColumnMap(f"ft_c{k}", None)]
+            maps += [
+                ColumnMap(f"gap_c{k}", None, offset=g0),
+                ColumnMap(f"fn_c{k}", None),
+                ColumnMap(f"ft_c{k}", None),
+            ]
             continue
         e = gaps[c]
         dn, sn = plan["deck_corners"][c], plan["seat_corners"][c]
@@ -176,51 +204,104 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
             # skewed deck, any element: the gap is the engine's own projection of the node
             # displacements on n (the zeroLength's deformation a.(u_j - u_i) is the same gap
             # but in other arithmetic: its last bits would differ from the engine's column)
-            recs.append(Recorder(f"gap_c{k}.out", "Node", (dn, sn), ("disp",),
-                                 ("ux_deck corner", "uy_deck corner", "ux_seat point",
-                                  "uy_seat point"),
-                                 f"x and y displacements of deck corner node {dn} and seat "
-                                 f"point node {sn} [m]", dofs=(1, 2)))
-            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=3, offset=g0,
-                                  scale=nx, a2=2, b2=4, scale2=ny))
-        elif plan["friction"]:   # straight deck: x displacements only, n = (side, 0)
-            recs.append(Recorder(f"gap_c{k}.out", "Node", (dn, sn), ("disp",),
-                                 ("u_deck corner", "u_seat corner"),
-                                 f"x displacement of deck corner node {dn} and seat corner "
-                                 f"node {sn} [m]", dofs=(1,)))
-            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0,
-                                  scale=side))
+            recs.append(
+                Recorder(
+                    f"gap_c{k}.out",
+                    "Node",
+                    (dn, sn),
+                    ("disp",),
+                    ("ux_deck corner", "uy_deck corner", "ux_seat point", "uy_seat point"),
+                    f"x and y displacements of deck corner node {dn} and seat point node {sn} [m]",
+                    dofs=(1, 2),
+                )
+            )
+            maps.append(
+                ColumnMap(
+                    f"gap_c{k}",
+                    f"gap_c{k}.out",
+                    a=1,
+                    b=3,
+                    offset=g0,
+                    scale=nx,
+                    a2=2,
+                    b2=4,
+                    scale2=ny,
+                )
+            )
+        elif plan["friction"]:  # straight deck: x displacements only, n = (side, 0)
+            recs.append(
+                Recorder(
+                    f"gap_c{k}.out",
+                    "Node",
+                    (dn, sn),
+                    ("disp",),
+                    ("u_deck corner", "u_seat corner"),
+                    f"x displacement of deck corner node {dn} and seat corner node {sn} [m]",
+                    dofs=(1,),
+                )
+            )
+            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0, scale=side))
         else:
-            recs.append(Recorder(f"gap_c{k}.out", "Element", (e,), ("deformation",),
-                                 ("deformation",), f"deformation u_j - u_i of gap element {e} "
-                                 "[m]"))
+            recs.append(
+                Recorder(
+                    f"gap_c{k}.out",
+                    "Element",
+                    (e,),
+                    ("deformation",),
+                    ("deformation",),
+                    f"deformation u_j - u_i of gap element {e} [m]",
+                )
+            )
             maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", offset=g0))
         if plan["friction"]:
             # fn = -n.(Fx_j, Fy_j), ft = -t.(Fx_j, Fy_j) (j = deck corner); straight: -side*Fx_j,
             # -Fy_j
-            terms = (((f"fn_c{k}", 4, -side, None, 0.0), (f"ft_c{k}", 5, -1.0, None, 0.0))
-                     if ny == 0.0 else
-                     ((f"fn_c{k}", 4, -nx, 5, -ny), (f"ft_c{k}", 4, -tx, 5, -ty)))
+            terms = (
+                ((f"fn_c{k}", 4, -side, None, 0.0), (f"ft_c{k}", 5, -1.0, None, 0.0))
+                if ny == 0.0
+                else ((f"fn_c{k}", 4, -nx, 5, -ny), (f"ft_c{k}", 4, -tx, 5, -ty))
+            )
             for col, a, scale, a2, scale2 in terms:
-                recs.append(Recorder(f"{col}.out", "Element", (e,), ("force",),
-                                     ("Fx_i", "Fy_i", "M_i", "Fx_j", "Fy_j", "M_j"),
-                                     f"resisting forces of contact element {e} (i = seat, "
-                                     "j = deck corner) [kN, kN*m]"))
-                maps.append(ColumnMap(col, f"{col}.out", a=a, scale=scale, a2=a2,
-                                      scale2=scale2))
+                recs.append(
+                    Recorder(
+                        f"{col}.out",
+                        "Element",
+                        (e,),
+                        ("force",),
+                        ("Fx_i", "Fy_i", "M_i", "Fx_j", "Fy_j", "M_j"),
+                        f"resisting forces of contact element {e} (i = seat, "
+                        "j = deck corner) [kN, kN*m]",
+                    )
+                )
+                maps.append(ColumnMap(col, f"{col}.out", a=a, scale=scale, a2=a2, scale2=scale2))
         else:
-            recs.append(Recorder(f"fn_c{k}.out", "Element", (e,), ("basicForce",),
-                                 ("stress",), f"material stress of gap element {e}, <= 0 in "
-                                 "compression [kN]"))
+            recs.append(
+                Recorder(
+                    f"fn_c{k}.out",
+                    "Element",
+                    (e,),
+                    ("basicForce",),
+                    ("stress",),
+                    f"material stress of gap element {e}, <= 0 in compression [kN]",
+                )
+            )
             maps.append(ColumnMap(f"fn_c{k}", f"fn_c{k}.out", scale=-1.0))
             maps.append(ColumnMap(f"ft_c{k}", None))
 
     for name, e in zip(bent_names, plan["bent_elements"]):
         for mat, d in ((1, "x"), (2, "y")):
             col = f"{name}_f{d}"
-            recs.append(Recorder(f"{col}.out", "Element", (e,), ("material", mat, "stress"),
-                                 ("stress",), f"bent {name} element {e}, Hysteretic stress in "
-                                 f"{d} (deck - table deformation) [kN]"))
+            recs.append(
+                Recorder(
+                    f"{col}.out",
+                    "Element",
+                    (e,),
+                    ("material", mat, "stress"),
+                    ("stress",),
+                    f"bent {name} element {e}, Hysteretic stress in "
+                    f"{d} (deck - table deformation) [kN]",
+                )
+            )
             maps.append(ColumnMap(col, f"{col}.out"))
     for r in recs:
         if safe_file_name(r.file) != r.file:  # bent names are validated words; keep it so
@@ -241,27 +322,37 @@ def render_recorders(recs: list[Recorder], lang: str) -> list[str]:
         lines.append(f"# {comment_text(f'{r.file}: {r.meaning}', lang)}")
         if lang == "tcl":
             rest = " ".join(tcl_word(a) if isinstance(a, str) else str(a) for a in r.args())
-            lines.append(f"recorder {r.kind} -file [file join $outDir {tcl_word(r.file)}] -time "
-                         f"-precision {PRECISION} -dT $recDT {rest}")
+            lines.append(
+                f"recorder {r.kind} -file [file join $outDir {tcl_word(r.file)}] -time "
+                f"-precision {PRECISION} -dT $recDT {rest}"
+            )
         else:
             rest = ", ".join(py_str(a) if isinstance(a, str) else str(a) for a in r.args())
-            lines.append(f"ops.recorder({py_str(r.kind)}, '-file', _out(out_dir, {py_str(r.file)}), "
-                         f"*opts, {rest})")
+            lines.append(
+                f"ops.recorder({py_str(r.kind)}, '-file', _out(out_dir, {py_str(r.file)}), "
+                f"*opts, {rest})"
+            )
     return lines
 
 
 def manifest_entries(recs: list[Recorder], maps: list[ColumnMap]) -> dict:
     """JSON-able description of the recorder files and the column maps."""
-    return {"files": [{**asdict(r), "columns": ["time", *r.columns]} for r in recs],
-            "columns": [{**asdict(m), "formula": m.formula()} for m in maps]}
+    return {
+        "files": [{**asdict(r), "columns": ["time", *r.columns]} for r in recs],
+        "columns": [{**asdict(m), "formula": m.formula()} for m in maps],
+    }
 
 
 def read_columns(folder: str | Path, maps: list[ColumnMap] | list[dict]) -> dict[str, np.ndarray]:
     """deckpound's result columns from the recorder files in ``folder`` (maps as objects or
     as the dicts of a manifest)."""
     folder = Path(folder)
-    maps = [m if isinstance(m, ColumnMap) else
-            ColumnMap(**{k: v for k, v in m.items() if k != "formula"}) for m in maps]
+    maps = [
+        m
+        if isinstance(m, ColumnMap)
+        else ColumnMap(**{k: v for k, v in m.items() if k != "formula"})
+        for m in maps
+    ]
     tables = {m.file: np.loadtxt(folder / m.file, ndmin=2) for m in maps if m.file}
     n_rows = {len(t) for t in tables.values()}
     if len(n_rows) != 1:

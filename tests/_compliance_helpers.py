@@ -22,8 +22,9 @@ def motion_from(scene, t, disp: dict, vel: dict) -> SupportMotion:
     """Motion with the given channel histories (missing channels at rest)."""
     z = np.zeros_like(t)
     chans = mechanics.support_channels(scene)
-    return SupportMotion(t=t, disp={c: disp.get(c, z) for c in chans},
-                         vel={c: vel.get(c, z) for c in chans})
+    return SupportMotion(
+        t=t, disp={c: disp.get(c, z) for c in chans}, vel={c: vel.get(c, z) for c in chans}
+    )
 
 
 def rest_motion(scene, duration: float) -> SupportMotion:

@@ -10,6 +10,7 @@ it as over the built-in engines.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -37,10 +38,12 @@ class LinearNewmarkEngine(Engine):
     Settings = LinearNewmarkSettings
     settings_field = None
     step_field = "dt"
-    style = dict(color="#27ae60", linestyle="-.", linewidth=1.0, label="linear Newmark")
+    style: ClassVar[dict] = dict(
+        color="#27ae60", linestyle="-.", linewidth=1.0, label="linear Newmark"
+    )
 
     def reads(self, scene, settings) -> set[str]:
-        return set()          # no contact: every contact option is reported as ignored
+        return set()  # no contact: every contact option is reported as ignored
 
     def _run(self, plan, scene, settings, motion) -> RunOutput:
         dt = settings.dt
@@ -63,21 +66,25 @@ class LinearNewmarkEngine(Engine):
         v = np.zeros(7)
         p, ug = load(0.0)
         a = np.linalg.solve(M, p - C @ v - K @ u)
-        Keff = K + 2.0 / dt * C + 4.0 / dt ** 2 * M
+        Keff = K + 2.0 / dt * C + 4.0 / dt**2 * M
         cols = engine_columns(plan)
         rows = [self._row(plan, 0.0, u, v, ug, B, S, k0)]
         for step in range(1, n + 1):
             p, ug = load(step * dt)
-            rhs = p + M @ (4.0 / dt ** 2 * u + 4.0 / dt * v + a) + C @ (2.0 / dt * u + v)
+            rhs = p + M @ (4.0 / dt**2 * u + 4.0 / dt * v + a) + C @ (2.0 / dt * u + v)
             un = np.linalg.solve(Keff, rhs)
             vn = 2.0 / dt * (un - u) - v
-            a = 4.0 / dt ** 2 * (un - u) - 4.0 / dt * v - a
+            a = 4.0 / dt**2 * (un - u) - 4.0 / dt * v - a
             u, v = un, vn
             if step % stride == 0:
                 rows.append(self._row(plan, step * dt, u, v, ug, B, S, k0))
         arr = np.array(rows)
-        return RunOutput(columns={c: arr[:, i] for i, c in enumerate(cols)},
-                         status=Status.SUCCESS, message=f"{n} steps", steps=n)
+        return RunOutput(
+            columns={c: arr[:, i] for i, c in enumerate(cols)},
+            status=Status.SUCCESS,
+            message=f"{n} steps",
+            steps=n,
+        )
 
     @staticmethod
     def _row(plan, t, u, v, ug, B, S, k0):
@@ -86,5 +93,5 @@ class LinearNewmarkEngine(Engine):
         row = [t] + [u[d] for _, d in DOF_COLUMNS] + [v[d] for _, d in VELOCITY_COLUMNS]
         row += list(plan.linear_gaps(u)[0]) + [0.0] * 8
         fs = k0 * (B @ u - S @ ug)
-        row += list(fs[:plan.n_bent_springs])
+        row += list(fs[: plan.n_bent_springs])
         return row

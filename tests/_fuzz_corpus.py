@@ -35,6 +35,7 @@ import tomllib
 from dataclasses import dataclass, field
 
 import tomli_w
+
 from deckpound.models._fields import to_mapping
 from deckpound.models.scene_io import load_scene, scene_to_toml
 
@@ -53,12 +54,12 @@ class Case:
     files: tuple[tuple[str, bytes], ...] = ()
     dirs: tuple[str, ...] = ()
     links: tuple[tuple[str, str], ...] = ()
-    setup: tuple[str, ...] = ()        # named steps: "result" copies a tiny run into {tmp}/res
-    fault: str = ""                    # see tests._fuzz_outputs.FAULTS
-    target: str = ""                   # output path checked for partial output
-    target_kind: str = ""              # "dir" | "file"
-    nonsense: bool = False             # exit status 0 would be silent nonsense
-    expect: tuple[int, ...] = ()       # allowed exit statuses (empty: any clean one)
+    setup: tuple[str, ...] = ()  # named steps: "result" copies a tiny run into {tmp}/res
+    fault: str = ""  # see tests._fuzz_outputs.FAULTS
+    target: str = ""  # output path checked for partial output
+    target_kind: str = ""  # "dir" | "file"
+    nonsense: bool = False  # exit status 0 would be silent nonsense
+    expect: tuple[int, ...] = ()  # allowed exit statuses (empty: any clean one)
     weight: int = field(default=1, compare=False)  # rough cost, for the quick subset
 
 
@@ -78,11 +79,26 @@ LEAVES = [(p, v) for p, v in _leaves(BENCH) if not p.startswith("notes")]
 BENCH_TOML = scene_to_toml(load_scene("saiidi-4span", ["excitation.duration=0.3"]))
 
 # (TOML text, kind): kind "nonfinite" and "type:<t>" make success nonsense for numeric leaves
-VALUES = [("nan", "nonfinite"), ("inf", "nonfinite"), ("-inf", "nonfinite"), ("-1", "number"),
-          ("0", "number"), ("-0.0", "number"), ("1e308", "huge"), ("1e-320", "tiny"),
-          ("9223372036854775808", "number"), ("1" + "0" * 400, "huge"), ("3.5", "number"),
-          ("1e30", "number"), ('"x"', "str"), ("true", "bool"), ("[]", "list"),
-          ("[[1, 2]]", "list"), ("{a = 1}", "table"), ('"$\\\\frac{$"', "str")]
+VALUES = [
+    ("nan", "nonfinite"),
+    ("inf", "nonfinite"),
+    ("-inf", "nonfinite"),
+    ("-1", "number"),
+    ("0", "number"),
+    ("-0.0", "number"),
+    ("1e308", "huge"),
+    ("1e-320", "tiny"),
+    ("9223372036854775808", "number"),
+    ("1" + "0" * 400, "huge"),
+    ("3.5", "number"),
+    ("1e30", "number"),
+    ('"x"', "str"),
+    ("true", "bool"),
+    ("[]", "list"),
+    ("[[1, 2]]", "list"),
+    ("{a = 1}", "table"),
+    ('"$\\\\frac{$"', "str"),
+]
 
 
 def _type_of(value) -> str:
@@ -100,19 +116,31 @@ def _set_family() -> list[Case]:
     for path, value in LEAVES:
         leaf = _type_of(value)
         for text, kind in VALUES:
-            nonsense = leaf == "number" and kind in ("nonfinite", "huge", "str", "bool", "list",
-                                                    "table")
+            nonsense = leaf == "number" and kind in (
+                "nonfinite",
+                "huge",
+                "str",
+                "bool",
+                "list",
+                "table",
+            )
             nonsense |= leaf in ("str", "bool") and kind not in (leaf,)
             nonsense &= not (leaf == "str" and kind == "str")
-            cases.append(Case(f"set:{path}={text[:24]}", "set",
-                              ("scene", "validate", "saiidi-4span", *SHORT, "--set",
-                               f"{path}={text}"), nonsense=nonsense, expect=(0, 2)))
+            cases.append(
+                Case(
+                    f"set:{path}={text[:24]}",
+                    "set",
+                    ("scene", "validate", "saiidi-4span", *SHORT, "--set", f"{path}={text}"),
+                    nonsense=nonsense,
+                    expect=(0, 2),
+                )
+            )
     return cases
 
 
 def _nested(kind: str, depth: int) -> str:
     if kind == "array":
-        return "name = \"x\"\nv = " + "[" * depth + "1" + "]" * depth + "\n"
+        return 'name = "x"\nv = ' + "[" * depth + "1" + "]" * depth + "\n"
     if kind == "inline":
         return "v = " + "{a = " * depth + "1" + "}" * depth + "\n"
     if kind == "header":
@@ -122,18 +150,28 @@ def _nested(kind: str, depth: int) -> str:
 
 def _file_case(cid: str, text: str | bytes, nonsense: bool = False) -> Case:
     data = text.encode("utf-8", "surrogateescape") if isinstance(text, str) else text
-    return Case(cid, "file", ("scene", "validate", "{tmp}/scene.toml"),
-                files=(("scene.toml", data),), nonsense=nonsense, expect=(0, 2))
+    return Case(
+        cid,
+        "file",
+        ("scene", "validate", "{tmp}/scene.toml"),
+        files=(("scene.toml", data),),
+        nonsense=nonsense,
+        expect=(0, 2),
+    )
 
 
 def _file_family() -> list[Case]:
     cases = []
     for kind in ("array", "inline", "header", "dotted"):
         for depth in (8, 31, 33, 64, 500, 5000, 100_000):
-            cases.append(_file_case(f"file:nest-{kind}-{depth}", BENCH_TOML + _nested(kind, depth),
-                                    nonsense=True))
-            cases.append(_file_case(f"file:nest-only-{kind}-{depth}", _nested(kind, depth),
-                                    nonsense=True))
+            cases.append(
+                _file_case(
+                    f"file:nest-{kind}-{depth}", BENCH_TOML + _nested(kind, depth), nonsense=True
+                )
+            )
+            cases.append(
+                _file_case(f"file:nest-only-{kind}-{depth}", _nested(kind, depth), nonsense=True)
+            )
     headers = [ln for ln in BENCH_TOML.splitlines() if ln.startswith("[")]
     for h in sorted(set(headers)):
         for key in ("colour", "Mass", '"mass "', '"x-y"', "ünïcode", "0"):
@@ -144,8 +182,13 @@ def _file_family() -> list[Case]:
             data = dict(BENCH)
             data[top] = value
             same_type = type(value) is type(BENCH[top])
-            cases.append(_file_case(f"file:swap-{top}-{value!r}"[:80], tomli_w.dumps(data),
-                                    nonsense=not same_type and top != "notes"))
+            cases.append(
+                _file_case(
+                    f"file:swap-{top}-{value!r}"[:80],
+                    tomli_w.dumps(data),
+                    nonsense=not same_type and top != "notes",
+                )
+            )
         data = dict(BENCH)
         del data[top]
         cases.append(_file_case(f"file:drop-{top}", tomli_w.dumps(data)))
@@ -164,14 +207,21 @@ def _file_family() -> list[Case]:
         cases.append(_file_case(f"file:truncate-{cut}", raw[:cut]))
         junk = bytes((i * 37 + j * 11) % 256 for j in range(1 + i % 7))
         cases.append(_file_case(f"file:junk-{i}", raw[:cut] + junk + raw[cut:]))
-    for cid, data in (("empty", b""), ("spaces", b"   \n\t\n"), ("bom", b"\xef\xbb\xbf" + raw),
-                      ("crlf", raw.replace(b"\n", b"\r\n")), ("utf16", BENCH_TOML.encode("utf-16")),
-                      ("latin1", BENCH_TOML.replace("bridge", "brücke").encode("latin-1")),
-                      ("nul", raw.replace(b"\n", b"\x00\n", 3)),
-                      ("long-description", BENCH_TOML.replace(
-                          'description = "', 'description = "' + "x" * 2_000_000, 1).encode()),
-                      ("dup-table", raw + b"\n[deck]\nlength = 1.0\n"),
-                      ("dup-key", raw.replace(b"mass = 140.5", b"mass = 140.5\nmass = 1.0"))):
+    for cid, data in (
+        ("empty", b""),
+        ("spaces", b"   \n\t\n"),
+        ("bom", b"\xef\xbb\xbf" + raw),
+        ("crlf", raw.replace(b"\n", b"\r\n")),
+        ("utf16", BENCH_TOML.encode("utf-16")),
+        ("latin1", BENCH_TOML.replace("bridge", "brücke").encode("latin-1")),
+        ("nul", raw.replace(b"\n", b"\x00\n", 3)),
+        (
+            "long-description",
+            BENCH_TOML.replace('description = "', 'description = "' + "x" * 2_000_000, 1).encode(),
+        ),
+        ("dup-table", raw + b"\n[deck]\nlength = 1.0\n"),
+        ("dup-key", raw.replace(b"mass = 140.5", b"mass = 140.5\nmass = 1.0")),
+    ):
         cases.append(_file_case(f"file:{cid}", data))
     for n in (0, 1, 2, 40):
         data = dict(BENCH)
@@ -183,14 +233,48 @@ def _file_family() -> list[Case]:
     return cases
 
 
-BAD_PATHS = ["", ".", "..", "a..b", "[0]", "bents[x].station", "bents[-1].station", "bents[0][0]",
-             "deck[0]", "seats[99999999999999999999].gap", "notes", "notes.deck.mass", "notes.x",
-             "bents", "seats", "deck", "0deck", "déck.mass", "deck .mass", " deck.mass",
-             "deck.mass.x", "deck.mass[0]", "excitation.file", "name", "a" * 1000,
-             "bents[0].x.stiffness.y", "sequence.pgas[0]", "sequence.pgas[10]",
-             "damping.modes[1]", "damping.modes[9]", "run", "run.duration.x", "opensees.mode",
-             "contact.law", "bents[3].name", "bents[0].name", "seats[2].gap", "excitation.kind",
-             "excitation.file_x", "notes.deck"]
+BAD_PATHS = [
+    "",
+    ".",
+    "..",
+    "a..b",
+    "[0]",
+    "bents[x].station",
+    "bents[-1].station",
+    "bents[0][0]",
+    "deck[0]",
+    "seats[99999999999999999999].gap",
+    "notes",
+    "notes.deck.mass",
+    "notes.x",
+    "bents",
+    "seats",
+    "deck",
+    "0deck",
+    "déck.mass",
+    "deck .mass",
+    " deck.mass",
+    "deck.mass.x",
+    "deck.mass[0]",
+    "excitation.file",
+    "name",
+    "a" * 1000,
+    "bents[0].x.stiffness.y",
+    "sequence.pgas[0]",
+    "sequence.pgas[10]",
+    "damping.modes[1]",
+    "damping.modes[9]",
+    "run",
+    "run.duration.x",
+    "opensees.mode",
+    "contact.law",
+    "bents[3].name",
+    "bents[0].name",
+    "seats[2].gap",
+    "excitation.kind",
+    "excitation.file_x",
+    "notes.deck",
+]
 BAD_OVERRIDE_VALUES = ["1", "nan", "[" * 50 + "]" * 50, "", '"unterminated', "csv", "{}"]
 
 
@@ -198,148 +282,353 @@ def _override_family() -> list[Case]:
     cases = []
     for path in BAD_PATHS:
         for value in BAD_OVERRIDE_VALUES:
-            cases.append(Case(f"override:{path[:30]}={value[:12]}", "override",
-                              ("scene", "validate", "saiidi-4span", *SHORT, "--set",
-                               f"{path}={value}"), expect=(0, 2)))
-        cases.append(Case(f"override:{path[:30]}-no-equals", "override",
-                          ("scene", "validate", "saiidi-4span", *SHORT, "--set", path),
-                          expect=(2,)))
+            cases.append(
+                Case(
+                    f"override:{path[:30]}={value[:12]}",
+                    "override",
+                    ("scene", "validate", "saiidi-4span", *SHORT, "--set", f"{path}={value}"),
+                    expect=(0, 2),
+                )
+            )
+        cases.append(
+            Case(
+                f"override:{path[:30]}-no-equals",
+                "override",
+                ("scene", "validate", "saiidi-4span", *SHORT, "--set", path),
+                expect=(2,),
+            )
+        )
     return cases
 
 
 def _engine_family() -> list[Case]:
     cases = []
-    failing = ("opensees.tolerance=1e-30", "opensees.max_iterations=1", "opensees.fallback=none",
-               "compliance.tolerance=1e-30", "compliance.max_iterations=1",
-               "nonsmooth.tolerance=1e-30", "nonsmooth.max_iterations=1", "excitation.pga=2",
-               "seats[0].gap=0")
+    failing = (
+        "opensees.tolerance=1e-30",
+        "opensees.max_iterations=1",
+        "opensees.fallback=none",
+        "compliance.tolerance=1e-30",
+        "compliance.max_iterations=1",
+        "nonsmooth.tolerance=1e-30",
+        "nonsmooth.max_iterations=1",
+        "excitation.pga=2",
+        "seats[0].gap=0",
+    )
     sets = tuple(a for f in failing for a in ("--set", f))
     for engine in ENGINE_NAMES:  # the engine cannot converge: exit 1, the failed run written
         for substeps in ("2", "10"):
-            cases.append(Case(f"engine:fails:{engine}:{substeps}", "engine",
-                              ("run", "saiidi-4span", *SHORT, *sets, "--set",
-                               f"opensees.substeps={substeps}", "--engine", engine, "-o", OUT),
-                              target=OUT, target_kind="dir", expect=(1,)))
+            cases.append(
+                Case(
+                    f"engine:fails:{engine}:{substeps}",
+                    "engine",
+                    (
+                        "run",
+                        "saiidi-4span",
+                        *SHORT,
+                        *sets,
+                        "--set",
+                        f"opensees.substeps={substeps}",
+                        "--engine",
+                        engine,
+                        "-o",
+                        OUT,
+                    ),
+                    target=OUT,
+                    target_kind="dir",
+                    expect=(1,),
+                )
+            )
     # (setting, kind): "field" is refused by field validation whatever the engine, "plaus" by
     # the plausibility checks of the engines that use it, "ok" runs
-    grid = [("opensees.dt=30", "plaus"), ("opensees.dt=0.3", "plaus"),
-            ("opensees.dt=0.31", "plaus"), ("opensees.dt=0.2", "plaus"),
-            ("nonsmooth.h=30", "plaus"), ("nonsmooth.h=0.5", "plaus"),
-            ("compliance.dt=30", "plaus"), ("compliance.dt=0.29", "plaus"),
-            ("run.duration=1e-4", "plaus"), ("run.duration=0.0005", "plaus"),
-            ("run.output_dt=1e25", "plaus"), ("run.output_dt=100", "plaus"),
-            ("run.output_dt=0.31", "plaus"), ("excitation.duration=0.0004", "field"),
-            ("opensees.max_iterations=9223372036854775808", "field"),
-            ("opensees.max_iterations=1e308", "field"),
-            ("compliance.max_iterations=1e308", "field"),
-            ("nonsmooth.max_iterations=18446744073709551616", "field"),
-            ("opensees.substeps=1e9", "field"),
-            ("damping.modes=[1, 9223372036854775807]", "field"),
-            ("run.output_dt=0.001", "ok"), ("run.duration=0.2", "ok"),
-            ("contact.stiffness=1e14", "ok"), ("opensees.dt=0.01", "ok")]
+    grid = [
+        ("opensees.dt=30", "plaus"),
+        ("opensees.dt=0.3", "plaus"),
+        ("opensees.dt=0.31", "plaus"),
+        ("opensees.dt=0.2", "plaus"),
+        ("nonsmooth.h=30", "plaus"),
+        ("nonsmooth.h=0.5", "plaus"),
+        ("compliance.dt=30", "plaus"),
+        ("compliance.dt=0.29", "plaus"),
+        ("run.duration=1e-4", "plaus"),
+        ("run.duration=0.0005", "plaus"),
+        ("run.output_dt=1e25", "plaus"),
+        ("run.output_dt=100", "plaus"),
+        ("run.output_dt=0.31", "plaus"),
+        ("excitation.duration=0.0004", "field"),
+        ("opensees.max_iterations=9223372036854775808", "field"),
+        ("opensees.max_iterations=1e308", "field"),
+        ("compliance.max_iterations=1e308", "field"),
+        ("nonsmooth.max_iterations=18446744073709551616", "field"),
+        ("opensees.substeps=1e9", "field"),
+        ("damping.modes=[1, 9223372036854775807]", "field"),
+        ("run.output_dt=0.001", "ok"),
+        ("run.duration=0.2", "ok"),
+        ("contact.stiffness=1e14", "ok"),
+        ("opensees.dt=0.01", "ok"),
+    ]
     for engine in ("opensees", "compliance", "nonsmooth"):
         for setting, kind in grid:
             for cmd in ("validate", "run"):
-                argv = (("scene", "validate", "saiidi-4span", *SHORT, "--set", setting)
-                        if cmd == "validate" else
-                        ("run", "saiidi-4span", *SHORT, "--set", setting, "--engine", engine,
-                         "-o", OUT))
+                argv = (
+                    ("scene", "validate", "saiidi-4span", *SHORT, "--set", setting)
+                    if cmd == "validate"
+                    else (
+                        "run",
+                        "saiidi-4span",
+                        *SHORT,
+                        "--set",
+                        setting,
+                        "--engine",
+                        engine,
+                        "-o",
+                        OUT,
+                    )
+                )
                 if cmd == "validate" and engine != "opensees":
                     continue
                 owner = setting.split(".")[0]
                 # a run checks its own engine's settings (and the shared ones) only
-                bad = kind == "field" or (kind == "plaus" and (
-                    cmd == "validate" or owner not in ENGINE_NAMES or owner == engine))
-                cases.append(Case(f"engine:{cmd}:{engine}:{setting}", "engine", argv,
-                                  target=OUT if cmd == "run" else "", target_kind="dir"
-                                  if cmd == "run" else "", nonsense=bad,
-                                  expect=(2,) if bad else (0, 1)))
+                bad = kind == "field" or (
+                    kind == "plaus"
+                    and (cmd == "validate" or owner not in ENGINE_NAMES or owner == engine)
+                )
+                cases.append(
+                    Case(
+                        f"engine:{cmd}:{engine}:{setting}",
+                        "engine",
+                        argv,
+                        target=OUT if cmd == "run" else "",
+                        target_kind="dir" if cmd == "run" else "",
+                        nonsense=bad,
+                        expect=(2,) if bad else (0, 1),
+                    )
+                )
     return cases
 
 
 def _vtk_family() -> list[Case]:
-    damaged = [("json-truncated", "opensees.json", b'{"engine": "opensees", "sce'),
-               ("json-empty", "opensees.json", b""), ("json-list", "opensees.json", b"[1, 2]"),
-               ("json-nested", "opensees.json", b"[" * 100_000 + b"]" * 100_000),
-               ("json-binary", "opensees.json", bytes(range(256))),
-               ("json-no-scene", "opensees.json", b'{"engine": "opensees"}'),
-               ("json-bad-scene", "opensees.json", b'{"scene": {"deck": 1}}'),
-               ("json-scene-nan", "opensees.json", b'{"scene": NaN}'),
-               ("csv-empty", "opensees.csv", b""), ("csv-header-only", "opensees.csv", b"t,deck_x\n"),
-               ("csv-binary", "opensees.csv", bytes(range(256)) * 4),
-               ("csv-nan", "opensees.csv", None), ("csv-text", "opensees.csv", b"t,deck_x\na,b\n"),
-               ("csv-ragged", "opensees.csv", b"t,deck_x\n0,1,2,3\n0.1\n"),
-               ("csv-decreasing", "opensees.csv", None), ("csv-missing-col", "opensees.csv", None)]
+    damaged = [
+        ("json-truncated", "opensees.json", b'{"engine": "opensees", "sce'),
+        ("json-empty", "opensees.json", b""),
+        ("json-list", "opensees.json", b"[1, 2]"),
+        ("json-nested", "opensees.json", b"[" * 100_000 + b"]" * 100_000),
+        ("json-binary", "opensees.json", bytes(range(256))),
+        ("json-no-scene", "opensees.json", b'{"engine": "opensees"}'),
+        ("json-bad-scene", "opensees.json", b'{"scene": {"deck": 1}}'),
+        ("json-scene-nan", "opensees.json", b'{"scene": NaN}'),
+        ("csv-empty", "opensees.csv", b""),
+        ("csv-header-only", "opensees.csv", b"t,deck_x\n"),
+        ("csv-binary", "opensees.csv", bytes(range(256)) * 4),
+        ("csv-nan", "opensees.csv", None),
+        ("csv-text", "opensees.csv", b"t,deck_x\na,b\n"),
+        ("csv-ragged", "opensees.csv", b"t,deck_x\n0,1,2,3\n0.1\n"),
+        ("csv-decreasing", "opensees.csv", None),
+        ("csv-missing-col", "opensees.csv", None),
+    ]
     cases = []
     for cid, name, data in damaged:
         for every in ("1", "7"):
             files = () if data is None else ((f"res/{name}", data),)
-            cases.append(Case(f"vtk:{cid}:every{every}", "vtk",
-                              ("export-vtk", "{tmp}/res", "--every", every, "-o", OUT),
-                              setup=("result", f"damage:{cid}") if data is None else ("result",),
-                              files=files, target=OUT, target_kind="dir", nonsense=True,
-                              expect=(2,), weight=2))
+            cases.append(
+                Case(
+                    f"vtk:{cid}:every{every}",
+                    "vtk",
+                    ("export-vtk", "{tmp}/res", "--every", every, "-o", OUT),
+                    setup=("result", f"damage:{cid}") if data is None else ("result",),
+                    files=files,
+                    target=OUT,
+                    target_kind="dir",
+                    nonsense=True,
+                    expect=(2,),
+                    weight=2,
+                )
+            )
     for every in ("0", "-3", "1000000000000", "x"):
-        cases.append(Case(f"vtk:every={every}", "vtk",
-                          ("export-vtk", "{tmp}/res", "--every", every, "-o", OUT),
-                          setup=("result",), target=OUT, target_kind="dir", expect=(0, 2)))
-    cases.append(Case("vtk:not-a-folder", "vtk", ("export-vtk", "{tmp}/nothing", "-o", OUT),
-                      target=OUT, target_kind="dir", expect=(2,)))
+        cases.append(
+            Case(
+                f"vtk:every={every}",
+                "vtk",
+                ("export-vtk", "{tmp}/res", "--every", every, "-o", OUT),
+                setup=("result",),
+                target=OUT,
+                target_kind="dir",
+                expect=(0, 2),
+            )
+        )
+    cases.append(
+        Case(
+            "vtk:not-a-folder",
+            "vtk",
+            ("export-vtk", "{tmp}/nothing", "-o", OUT),
+            target=OUT,
+            target_kind="dir",
+            expect=(2,),
+        )
+    )
     return cases
 
 
-NAMES = ["$\\\\frac{$", "$", "$$", "$x^$", "\\\\$", "$\\\\undefined{x}$", "a\\nb", "\\u0000",
-         "nul\\u0000in", "\\u001b[31mred", "😀 émoji", "\\u202eRTL", "x" * 3000, "%s %d {0}",
-         "<b>&amp;</b>", "_^{}", "\\\\", "'; exec rm -rf /", "\\t\\r"]
+NAMES = [
+    "$\\\\frac{$",
+    "$",
+    "$$",
+    "$x^$",
+    "\\\\$",
+    "$\\\\undefined{x}$",
+    "a\\nb",
+    "\\u0000",
+    "nul\\u0000in",
+    "\\u001b[31mred",
+    "😀 émoji",
+    "\\u202eRTL",
+    "x" * 3000,
+    "%s %d {0}",
+    "<b>&amp;</b>",
+    "_^{}",
+    "\\\\",
+    "'; exec rm -rf /",
+    "\\t\\r",
+]
 
 
 def _name_family() -> list[Case]:
     cases = []
     for i, name in enumerate(NAMES):
-        cases.append(Case(f"name:{i}:plot", "name",
-                          ("excitation", "plot", "saiidi-4span", *SHORT, "--set",
-                           f'name="{name}"', "-o", "{tmp}/out/exc.png"),
-                          target="{tmp}/out/exc.png", target_kind="file", expect=(0,), weight=8))
-        cases.append(Case(f"name:{i}:validate", "name",
-                          ("scene", "validate", "saiidi-4span", *SHORT, "--set", f'name="{name}"'),
-                          expect=(0, 2)))
+        cases.append(
+            Case(
+                f"name:{i}:plot",
+                "name",
+                (
+                    "excitation",
+                    "plot",
+                    "saiidi-4span",
+                    *SHORT,
+                    "--set",
+                    f'name="{name}"',
+                    "-o",
+                    "{tmp}/out/exc.png",
+                ),
+                target="{tmp}/out/exc.png",
+                target_kind="file",
+                expect=(0,),
+                weight=8,
+            )
+        )
+        cases.append(
+            Case(
+                f"name:{i}:validate",
+                "name",
+                ("scene", "validate", "saiidi-4span", *SHORT, "--set", f'name="{name}"'),
+                expect=(0, 2),
+            )
+        )
     for i in (0, 1, 7, 12):  # every figure of compare, with the worst names
-        cases.append(Case(f"name:{i}:compare", "name",
-                          ("compare", "saiidi-4span", *SHORT, "--set", f'name="{NAMES[i]}"',
-                           "--engines", "compliance,nonsmooth", "--workers", "1",
-                           "--no-progress", "-o", OUT),
-                          target=OUT, target_kind="dir", expect=(0,), weight=25))
+        cases.append(
+            Case(
+                f"name:{i}:compare",
+                "name",
+                (
+                    "compare",
+                    "saiidi-4span",
+                    *SHORT,
+                    "--set",
+                    f'name="{NAMES[i]}"',
+                    "--engines",
+                    "compliance,nonsmooth",
+                    "--workers",
+                    "1",
+                    "--no-progress",
+                    "-o",
+                    OUT,
+                ),
+                target=OUT,
+                target_kind="dir",
+                expect=(0,),
+                weight=25,
+            )
+        )
     return cases
 
 
 def _option_family() -> list[Case]:
     cases = []
-    base = ("compare", "saiidi-4span", *SHORT, "--engines", "nonsmooth", "--no-progress",
-            "-o", OUT)
-    for opt, values in (("--workers", ["0", "-1", "abc", "1e9", "99999", "2.5", ""]),
-                        ("--scheduler", ["foo", "tcp://", "tcp://host", "tcp://h:0",
-                                         "tcp://h:99999", "http://x:1", "tcp://a b:1", "",
-                                         "tcp://127.0.0.1:1"]),
-                        ("--engines", ["", ",,", "x", "opensees,,x", "OpenSees"])):
+    base = ("compare", "saiidi-4span", *SHORT, "--engines", "nonsmooth", "--no-progress", "-o", OUT)
+    for opt, values in (
+        ("--workers", ["0", "-1", "abc", "1e9", "99999", "2.5", ""]),
+        (
+            "--scheduler",
+            [
+                "foo",
+                "tcp://",
+                "tcp://host",
+                "tcp://h:0",
+                "tcp://h:99999",
+                "http://x:1",
+                "tcp://a b:1",
+                "",
+                "tcp://127.0.0.1:1",
+            ],
+        ),
+        ("--engines", ["", ",,", "x", "opensees,,x", "OpenSees"]),
+    ):
         for v in values:
-            argv = tuple(a for a in base if a not in ("--engines", "nonsmooth")) \
-                if opt == "--engines" else base
+            argv = (
+                tuple(a for a in base if a not in ("--engines", "nonsmooth"))
+                if opt == "--engines"
+                else base
+            )
             fault = "connect-timeout" if v == "tcp://127.0.0.1:1" else ""
-            cases.append(Case(f"option:{opt}={v[:20]}", "option", (*argv, opt, v), fault=fault,
-                              target=OUT, target_kind="dir",
-                              expect=(3,) if fault else (0, 2), weight=3 if fault else 1))
+            cases.append(
+                Case(
+                    f"option:{opt}={v[:20]}",
+                    "option",
+                    (*argv, opt, v),
+                    fault=fault,
+                    target=OUT,
+                    target_kind="dir",
+                    expect=(3,) if fault else (0, 2),
+                    weight=3 if fault else 1,
+                )
+            )
     for v in ("nan", "inf", "-1", "0", "abc", "-inf", "1e400"):
-        cases.append(Case(f"option:stress-timeout={v}", "option",
-                          ("stress", "--quick", "--timeout", v, "-o", OUT), target=OUT,
-                          target_kind="dir", expect=(2,)))
+        cases.append(
+            Case(
+                f"option:stress-timeout={v}",
+                "option",
+                ("stress", "--quick", "--timeout", v, "-o", OUT),
+                target=OUT,
+                target_kind="dir",
+                expect=(2,),
+            )
+        )
     for v in ("0", "-5", "abc", "100000"):
-        cases.append(Case(f"option:bench-repeats={v}", "option",
-                          ("bench", "--quick", "--repeats", v, "-o", OUT), target=OUT,
-                          target_kind="dir", expect=(2,)))
-    for opt, v in (("--states", "-5"), ("--states", "0"), ("--states", "10000000000000"),
-                   ("--seed", "-1"), ("--seed", "1e3"), ("--states", "nan")):
-        cases.append(Case(f"option:verify-takeda{opt}={v}", "option",
-                          ("verify", "takeda", opt, v), nonsense=True, expect=(2,)))
+        cases.append(
+            Case(
+                f"option:bench-repeats={v}",
+                "option",
+                ("bench", "--quick", "--repeats", v, "-o", OUT),
+                target=OUT,
+                target_kind="dir",
+                expect=(2,),
+            )
+        )
+    for opt, v in (
+        ("--states", "-5"),
+        ("--states", "0"),
+        ("--states", "10000000000000"),
+        ("--seed", "-1"),
+        ("--seed", "1e3"),
+        ("--states", "nan"),
+    ):
+        cases.append(
+            Case(
+                f"option:verify-takeda{opt}={v}",
+                "option",
+                ("verify", "takeda", opt, v),
+                nonsense=True,
+                expect=(2,),
+            )
+        )
     return cases
 
 
@@ -347,9 +636,17 @@ def families() -> dict:
     """Family name -> case builder (the output families live in tests._fuzz_outputs)."""
     from _fuzz_outputs import fault_family, path_family
 
-    return {"set": _set_family, "file": _file_family, "override": _override_family,
-            "path": path_family, "fault": fault_family, "engine": _engine_family,
-            "vtk": _vtk_family, "name": _name_family, "option": _option_family}
+    return {
+        "set": _set_family,
+        "file": _file_family,
+        "override": _override_family,
+        "path": path_family,
+        "fault": fault_family,
+        "engine": _engine_family,
+        "vtk": _vtk_family,
+        "name": _name_family,
+        "option": _option_family,
+    }
 
 
 def generate() -> list[Case]:
@@ -372,8 +669,17 @@ def quick_subset(cases: list[Case], budget: int = 200) -> list[Case]:
     by_family: dict[str, list[Case]] = {}
     for c in cases:
         by_family.setdefault(c.family, []).append(c)
-    share = {"set": 45, "file": 30, "override": 15, "path": 30, "fault": 35, "engine": 15,
-             "vtk": 12, "name": 6, "option": 12}
+    share = {
+        "set": 45,
+        "file": 30,
+        "override": 15,
+        "path": 30,
+        "fault": 35,
+        "engine": 15,
+        "vtk": 12,
+        "name": 6,
+        "option": 12,
+    }
     out = []
     for fam, members in by_family.items():
         cheap = [c for c in members if c.weight <= 2]

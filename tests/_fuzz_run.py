@@ -57,6 +57,7 @@ class Outcome:
 
 # -- faults ---------------------------------------------------------------------------------
 
+
 class _Counter:
     def __init__(self, k: int):
         self.k, self.n = k, 0
@@ -133,8 +134,11 @@ def _inject(fault: str, root: Path, stack: contextlib.ExitStack) -> None:
 
         stack.enter_context(_patched(Figure, "savefig", savefig))
     elif kind in ("memory-engine", "interrupt-engine", "recursion-engine"):
-        exc = {"memory-engine": MemoryError, "interrupt-engine": KeyboardInterrupt,
-               "recursion-engine": RecursionError}[kind]
+        exc = {
+            "memory-engine": MemoryError,
+            "interrupt-engine": KeyboardInterrupt,
+            "recursion-engine": RecursionError,
+        }[kind]
 
         def run_engine(*a, **kw):
             raise exc()
@@ -178,8 +182,11 @@ def _readonly(code: int, root: Path, stack: contextlib.ExitStack) -> None:
         return real_open(p, flags, mode, *a, **kw)
 
     def bopen(p, mode="r", *a, **kw):
-        if isinstance(p, (str, bytes, os.PathLike)) and inside(p) and any(
-                m in mode for m in "wax+"):
+        if (
+            isinstance(p, (str, bytes, os.PathLike))
+            and inside(p)
+            and any(m in mode for m in "wax+")
+        ):
             fail(p)
         return real_bopen(p, mode, *a, **kw)
 
@@ -193,13 +200,18 @@ def _readonly(code: int, root: Path, stack: contextlib.ExitStack) -> None:
             fail(dst)
         return real_rename(src, dst, *a, **kw)
 
-    for obj, name, value in ((os, "mkdir", mkdir), (os, "open", osopen),
-                             (builtins, "open", bopen), (os, "replace", replace),
-                             (os, "rename", rename)):
+    for obj, name, value in (
+        (os, "mkdir", mkdir),
+        (os, "open", osopen),
+        (builtins, "open", bopen),
+        (os, "replace", replace),
+        (os, "rename", rename),
+    ):
         stack.enter_context(_patched(obj, name, value))
 
 
 # -- materialising and snapshots ------------------------------------------------------------
+
 
 def _fmt(text: str, root: Path) -> str:
     return text.replace("{tmp}", str(root))
@@ -252,12 +264,14 @@ def snapshot(root: Path) -> dict[str, str]:
     for dirpath, dirnames, filenames in os.walk(root):
         for name in dirnames + filenames:
             p = Path(dirpath) / name
-            out[str(p.relative_to(root))] = "dir" if p.is_dir() and not p.is_symlink() \
-                else _digest(p)
+            out[str(p.relative_to(root))] = (
+                "dir" if p.is_dir() and not p.is_symlink() else _digest(p)
+            )
     return out
 
 
 # -- running and classifying ----------------------------------------------------------------
+
 
 def _show_on_stderr(message, category, filename, lineno, file=None, line=None):
     sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
@@ -299,7 +313,7 @@ def _run(case, root: Path, result_dir: Path | None) -> Outcome:
         stack.enter_context(contextlib.redirect_stderr(err))
         try:
             code = main(argv)
-        except BaseException as exc:  # noqa: BLE001 - any escape is the finding
+        except BaseException as exc:
             code, escaped = None, exc
     stderr = err.getvalue()
     if escaped is not None:
@@ -312,8 +326,12 @@ def _run(case, root: Path, result_dir: Path | None) -> Outcome:
     if code == 0 and lines:
         return Outcome(case.id, "UNCLEAN", code, f"success with stderr {stderr[-300:]!r}")
     if case.expect and code not in case.expect:
-        return Outcome(case.id, "UNCLEAN", code, f"exit {code}, expected {case.expect}: "
-                       f"{stderr.strip()[-250:]}")
+        return Outcome(
+            case.id,
+            "UNCLEAN",
+            code,
+            f"exit {code}, expected {case.expect}: {stderr.strip()[-250:]}",
+        )
     partial = _partial(case, root, target, target_before, before, code)
     if partial:
         return Outcome(case.id, "PARTIAL OUTPUT", code, partial)
@@ -324,8 +342,7 @@ def _run(case, root: Path, result_dir: Path | None) -> Outcome:
     return Outcome(case.id, _STATUS.get(code, "UNCLEAN"), code, lines[0][:200] if lines else "")
 
 
-def _partial(case, root: Path, target: str, target_before: str, before: dict,
-             code: int) -> str:
+def _partial(case, root: Path, target: str, target_before: str, before: dict, code: int) -> str:
     after = snapshot(root)
     temps = [p for p in after if is_temporary(Path(p).name)]
     if temps:
@@ -351,8 +368,11 @@ def _partial(case, root: Path, target: str, target_before: str, before: dict,
         if code == 0 and marked:
             return "successful output folder still marked INCOMPLETE"
         if code != 0 and not marked and not (code == 1 and _failed_result(tpath)):
-            new = {p for p in after if p not in before and (str(root / p) + os.sep).startswith(
-                target + os.sep)}
+            new = {
+                p
+                for p in after
+                if p not in before and (str(root / p) + os.sep).startswith(target + os.sep)
+            }
             if new:
                 return f"failed command left {sorted(new)[:3]} without an INCOMPLETE marker"
         bad = _damaged_results(tpath)
@@ -385,7 +405,7 @@ def _damaged_results(folder: Path) -> str:
             try:
                 pd.read_csv(csv, comment="#")
                 json.loads(js.read_text())
-            except Exception as err:  # noqa: BLE001
+            except Exception as err:
                 return f"{e} result does not parse: {err}"[:200]
     return ""
 
@@ -393,8 +413,11 @@ def _damaged_results(folder: Path) -> str:
 def _nonsense(case, target: str, stdout: str) -> str:
     if case.nonsense:
         return "accepted input that must be refused"
-    if case.argv[:2] == ("scene", "validate") and case.fault != "stdout-full" \
-            and ": valid;" not in stdout:
+    if (
+        case.argv[:2] == ("scene", "validate")
+        and case.fault != "stdout-full"
+        and ": valid;" not in stdout
+    ):
         return "validate succeeded without saying valid"
     if case.target_kind == "dir" and target and Path(target).is_dir():
         for e in ENGINES:

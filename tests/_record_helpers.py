@@ -6,14 +6,16 @@ import json
 from pathlib import Path
 
 import numpy as np
+
 from deckpound.models.scene_io import load_scene
 
 DT = 0.01
 STATION = "Northridge-01, 1/17/1994, LA - Century City CC North, 090"
 
 
-def quake(n: int = 800, dt: float = DT, f: float = 2.0, peak: float = 0.3,
-          seed: int = 0) -> np.ndarray:
+def quake(
+    n: int = 800, dt: float = DT, f: float = 2.0, peak: float = 0.3, seed: int = 0
+) -> np.ndarray:
     """An earthquake-like, processed acceleration [g] with max|a| = peak: the second
     derivative of a displacement (enveloped chirp plus a little smoothed noise) that starts and
     ends at rest, so its trapezoidal integral does not drift."""
@@ -36,17 +38,27 @@ def fortran(v: float) -> str:
     return f"{sign}.{digits}E{e:+03d}".rjust(15)
 
 
-def write_at2(path: Path, acc, dt: float = DT, style: str = "nga", npts: int | None = None,
-              line4: str | None = None, extra: list[str] | None = None,
-              unit_line: str = "ACCELERATION TIME SERIES IN UNITS OF G") -> Path:
+def write_at2(
+    path: Path,
+    acc,
+    dt: float = DT,
+    style: str = "nga",
+    npts: int | None = None,
+    line4: str | None = None,
+    extra: list[str] | None = None,
+    unit_line: str = "ACCELERATION TIME SERIES IN UNITS OF G",
+) -> Path:
     """A PEER AT2 file: 'nga' (NGA-West2: NPTS=, DT=) or 'old' ('n dt NPTS, DT') header."""
     acc = list(acc)
     n = len(acc) if npts is None else npts
     if line4 is None:
-        line4 = (f"NPTS=   {n}, DT=   {dt:.4f} SEC" if style == "nga"
-                 else f"  {n}   {dt:.4f}    NPTS, DT")
+        line4 = (
+            f"NPTS=   {n}, DT=   {dt:.4f} SEC"
+            if style == "nga"
+            else f"  {n}   {dt:.4f}    NPTS, DT"
+        )
     fmt = (lambda v: f"{v:15.7E}") if style == "nga" else fortran
-    body = ["".join(fmt(v) for v in acc[i:i + 5]) for i in range(0, len(acc), 5)]
+    body = ["".join(fmt(v) for v in acc[i : i + 5]) for i in range(0, len(acc), 5)]
     head = ["PEER NGA STRONG MOTION DATABASE RECORD", STATION, unit_line, line4]
     path.write_text("\n".join(head + body + (extra or [])) + "\n")
     return path

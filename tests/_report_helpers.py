@@ -14,9 +14,11 @@ import re
 import pandas as pd
 
 VERB = re.compile(r"(?:, | and )?(?=\b(?:raises|lowers|changes) (?:the peak rotation|it)\b)")
-CLAUSE = re.compile(r"^(raises|lowers|changes) (?:the peak rotation|it) "
-                    r"(?:by less than [\d.]+ % )?(in|at) (.+?)"
-                    r"(?: \(×([\d.]+)(?:–([\d.]+))?\))?$")
+CLAUSE = re.compile(
+    r"^(raises|lowers|changes) (?:the peak rotation|it) "
+    r"(?:by less than [\d.]+ % )?(in|at) (.+?)"
+    r"(?: \(×([\d.]+)(?:–([\d.]+))?\))?$"
+)
 
 
 def split_list(text: str) -> list[str]:

@@ -11,4 +11,3 @@ from deckpound.models.scene_io import load_scene
 def bench_scene():
     """The built-in benchmark scene, unchanged."""
     return load_scene("saiidi-4span")
-

@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 
 from deckpound.analytic.hysteretic import HystereticMaterial
-from deckpound.models.plan import takeda_hysteretic_args
 from deckpound.engines import run_engine
 from deckpound.models.excitation import support_motion
+from deckpound.models.plan import takeda_hysteretic_args
 from deckpound.models.scene_io import load_scene
 from deckpound.models.sequence import bent_deformations
 
@@ -17,9 +17,17 @@ YIELDING = ["excitation.duration=6.0", "seats[0].gap=1.0", "seats[1].gap=1.0"]
 
 
 def test_adaptive_with_dense_commits_matches_converged_newmark():
-    newmark = run_engine("compliance", load_scene("saiidi-4span", YIELDING + ["compliance.dt=2e-05"]))
-    adaptive = run_engine("compliance", load_scene("saiidi-4span", YIELDING + [
-        "compliance.integrator=adaptive", "compliance.rtol=1e-08", "compliance.atol=1e-11"]))
+    newmark = run_engine(
+        "compliance", load_scene("saiidi-4span", YIELDING + ["compliance.dt=2e-05"])
+    )
+    adaptive = run_engine(
+        "compliance",
+        load_scene(
+            "saiidi-4span",
+            YIELDING
+            + ["compliance.integrator=adaptive", "compliance.rtol=1e-08", "compliance.atol=1e-11"],
+        ),
+    )
     assert max(np.max(np.abs(newmark[f"bent{i}_fy"])) for i in (1, 2, 3)) > 120.0  # yielding
     # commits 1e-4 s apart vs 2e-5 s: the Hysteretic commit-spacing effect is ~2e-5 of the peak
     for col in ("deck_theta", "deck_y_abs", "bent2_fy"):

@@ -6,8 +6,15 @@ import numpy as np
 import pytest
 
 from deckpound.compare.align import align, bin_average, bin_sum, common_time_base, long_table
-from deckpound.compare.metrics import (closure_times, compare_pair, correlation, nrmse, peak,
-                                       residual, time_of_peak)
+from deckpound.compare.metrics import (
+    closure_times,
+    compare_pair,
+    correlation,
+    nrmse,
+    peak,
+    residual,
+    time_of_peak,
+)
 from deckpound.models.result import Result
 
 

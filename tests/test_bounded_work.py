@@ -17,19 +17,30 @@ import time
 
 import numpy as np
 import pytest
+
+from deckpound.engines import run_engine
 from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene
 
-from deckpound.engines import run_engine
-
 # long runs (minutes if not interrupted): 4e7 Newmark / Moreau-Jean steps, stiff adaptive
 LONG = {
-    "compliance": ("compliance", ["excitation.duration=400", "compliance.dt=1e-5",
-                                  "run.output_dt=0.01"]),
-    "adaptive": ("compliance", ["compliance.integrator=adaptive", "contact.stiffness=1e12",
-                                "excitation.duration=60", "run.output_dt=0.01"]),
-    "nonsmooth": ("nonsmooth", ["excitation.duration=400", "nonsmooth.h=1e-5",
-                                "run.output_dt=0.01"]),
+    "compliance": (
+        "compliance",
+        ["excitation.duration=400", "compliance.dt=1e-5", "run.output_dt=0.01"],
+    ),
+    "adaptive": (
+        "compliance",
+        [
+            "compliance.integrator=adaptive",
+            "contact.stiffness=1e12",
+            "excitation.duration=60",
+            "run.output_dt=0.01",
+        ],
+    ),
+    "nonsmooth": (
+        "nonsmooth",
+        ["excitation.duration=400", "nonsmooth.h=1e-5", "run.output_dt=0.01"],
+    ),
 }
 
 CHILD = r"""
@@ -54,21 +65,26 @@ def test_ctrl_c_stops_a_long_run_within_two_seconds(which, tmp_path):
     script.write_text(CHILD)
     errfile = tmp_path / "stderr.txt"
     with open(errfile, "w") as err_out:
-        proc = subprocess.Popen([sys.executable, str(script), engine, *overrides],
-                                stdout=subprocess.PIPE, stderr=err_out, text=True, cwd=tmp_path)
+        proc = subprocess.Popen(
+            [sys.executable, str(script), engine, *overrides],
+            stdout=subprocess.PIPE,
+            stderr=err_out,
+            text=True,
+            cwd=tmp_path,
+        )
     try:
-        for line in proc.stdout:                 # the warm-up run prints its summary first
+        for line in proc.stdout:  # the warm-up run prints its summary first
             if line.strip() == "ready":
                 break
         assert proc.poll() is None, errfile.read_text()
-        time.sleep(1.5)                          # well inside the long loop
+        time.sleep(1.5)  # well inside the long loop
         assert proc.poll() is None, "the long run ended before it was interrupted"
         t0 = time.perf_counter()
         os.kill(proc.pid, signal.SIGINT)
         latency = None
         while latency is None and time.perf_counter() - t0 < 30.0:
             if "deckpound: interrupted" in errfile.read_text():
-                latency = time.perf_counter() - t0   # the loop stopped, the CLI said so
+                latency = time.perf_counter() - t0  # the loop stopped, the CLI said so
             else:
                 time.sleep(0.01)
         code = proc.wait(timeout=30)
@@ -78,8 +94,10 @@ def test_ctrl_c_stops_a_long_run_within_two_seconds(which, tmp_path):
             proc.kill()
             proc.wait()
     err = errfile.read_text()
-    print(f"{which}: 'interrupted' {latency} s after SIGINT, process gone after {exited:.2f} s "
-          f"(interpreter teardown), exit {code}")
+    print(
+        f"{which}: 'interrupted' {latency} s after SIGINT, process gone after {exited:.2f} s "
+        f"(interpreter teardown), exit {code}"
+    )
     assert code == 130, err
     assert "Traceback" not in err, err
     assert latency is not None and latency < 2.0
@@ -122,17 +140,17 @@ def test_interrupt_raises_keyboard_interrupt_by_default():
     timer.cancel()
 
 
-@pytest.mark.parametrize("engine,integrator", [("compliance", "newmark"),
-                                               ("compliance", "adaptive"),
-                                               ("nonsmooth", None)])
+@pytest.mark.parametrize(
+    "engine,integrator",
+    [("compliance", "newmark"), ("compliance", "adaptive"), ("nonsmooth", None)],
+)
 def test_the_loop_thread_changes_no_result(engine, integrator, monkeypatch):
     """Running the compiled loop in the helper thread (interruptible) and calling it directly
     give bit-identical results."""
     from deckpound.analytic import bundles
 
     ov = ["run.duration=3"] + ([f"compliance.integrator={integrator}"] if integrator else [])
-    scene = load_scene("saiidi-4span", ov + ["contact.friction=0.2",
-                                             "contact.friction_mode=stick"])
+    scene = load_scene("saiidi-4span", ov + ["contact.friction=0.2", "contact.friction_mode=stick"])
     threaded = run_engine(engine, scene)
 
     def direct(loop, args, stats):
@@ -147,8 +165,10 @@ def test_the_loop_thread_changes_no_result(engine, integrator, monkeypatch):
 
 
 def test_adaptive_step_budget_stops_with_the_time_reached():
-    scene = load_scene("saiidi-4span", ["compliance.integrator=adaptive", "run.duration=2",
-                                        "compliance.max_steps=3000"])
+    scene = load_scene(
+        "saiidi-4span",
+        ["compliance.integrator=adaptive", "run.duration=2", "compliance.max_steps=3000"],
+    )
     res = run_engine("compliance", scene)
     assert res.meta["failure"] == "step_budget"
     assert "compliance.max_steps = 3000" in res.meta["message"]
@@ -160,8 +180,9 @@ def test_adaptive_step_budget_stops_with_the_time_reached():
 
 def test_output_table_is_sized_before_allocating():
     """10⁷ rows of ~45 columns (3.4 GiB) are refused up front, naming run.output_dt."""
-    scene = load_scene("saiidi-4span", ["excitation.duration=100", "compliance.dt=1e-5",
-                                        "run.output_dt=1e-5"])
+    scene = load_scene(
+        "saiidi-4span", ["excitation.duration=100", "compliance.dt=1e-5", "run.output_dt=1e-5"]
+    )
     t0 = time.perf_counter()
     with pytest.raises(SceneError, match=r"run\.output_dt.*GiB"):
         run_engine("compliance", scene)

@@ -47,6 +47,7 @@ def assert_refused(code: int, err: str, field: str, *texts: str) -> None:
 
 # -- good input ----------------------------------------------------------------------------
 
+
 def test_version(capsys):
     code, out, err = cli(capsys, "--version")
     assert code == 0 and out.strip() == f"deckpound {__version__}" and not err
@@ -98,8 +99,16 @@ def test_scene_show_round_trips_through_validate(capsys, tmp_path):
 
 
 def test_scene_show_applies_overrides(capsys):
-    code, out, _ = cli(capsys, "scene", "show", "saiidi-4span", "--set", "contact.law=hertz",
-                       "--set", "seats[1].gap=0.02")
+    code, out, _ = cli(
+        capsys,
+        "scene",
+        "show",
+        "saiidi-4span",
+        "--set",
+        "contact.law=hertz",
+        "--set",
+        "seats[1].gap=0.02",
+    )
     s = scene_from_toml(out)
     assert code == 0 and s.contact.law == "hertz" and s.seats[1].gap == 0.02
 
@@ -122,6 +131,7 @@ def test_excitation_plot_writes_png(capsys, tmp_path):
 
 
 # -- bad input: one line naming the field, exit 2, nothing written ------------------------
+
 
 def _csv_scene_args(tmp_path: Path, mutate) -> list[str]:
     """--set arguments for a CSV record of the benchmark, written with ``mutate`` applied."""
@@ -170,48 +180,110 @@ BAD_SETS = [
     ("mass-zero", ["--set", "deck.mass=0"], "deck.mass", "must be > 0.0 t, got 0.0"),
     ("inertia-negative", ["--set", "seats[0].inertia=-0.1"], "seats[0].inertia", "> 0.0", "-0.1"),
     ("deck-inertia-zero", ["--set", "deck.inertia=0"], "deck.inertia", "> 0.0"),
-    ("stiffness-negative", ["--set", "bents[1].y.stiffness=-5"], "bents[1].y.stiffness",
-     "> 0.0 kN/m", "-5"),
+    (
+        "stiffness-negative",
+        ["--set", "bents[1].y.stiffness=-5"],
+        "bents[1].y.stiffness",
+        "> 0.0 kN/m",
+        "-5",
+    ),
     ("seat-stiffness-zero", ["--set", "seats[1].kx=0"], "seats[1].kx", "> 0.0 kN/m"),
     ("contact-stiffness-zero", ["--set", "contact.stiffness=0"], "contact.stiffness", "> 0.0"),
     ("gap-negative", ["--set", "seats[1].gap=-0.01"], "seats[1].gap", ">= 0.0 m, got -0.01"),
-    ("restitution-above-1", ["--set", "contact.restitution=1.5"], "contact.restitution",
-     "<= 1.0", "1.5"),
-    ("restitution-below-0", ["--set", "contact.restitution=-0.2"], "contact.restitution",
-     ">= 0.0", "-0.2"),
-    ("friction-negative", ["--set", "contact.friction=-0.3"], "contact.friction", ">= 0.0",
-     "-0.3"),
+    (
+        "restitution-above-1",
+        ["--set", "contact.restitution=1.5"],
+        "contact.restitution",
+        "<= 1.0",
+        "1.5",
+    ),
+    (
+        "restitution-below-0",
+        ["--set", "contact.restitution=-0.2"],
+        "contact.restitution",
+        ">= 0.0",
+        "-0.2",
+    ),
+    ("friction-negative", ["--set", "contact.friction=-0.3"], "contact.friction", ">= 0.0", "-0.3"),
     ("mass-nan", ["--set", "deck.mass=nan"], "deck.mass", "finite", "nan"),
     ("stiffness-inf", ["--set", "contact.stiffness=inf"], "contact.stiffness", "finite", "inf"),
     ("gap-minus-inf", ["--set", "seats[0].gap=-inf"], "seats[0].gap", "finite"),
     ("mass-huge", ["--set", "deck.mass=1e300"], "deck.mass", "1e+30"),
     ("mass-huge-int", ["--set", "deck.mass=1" + "0" * 400], "deck.mass", "too large"),
-    ("unknown-law", ["--set", "contact.law=hertzz"], "contact.law", "'hertzz'",
-     "allowed: linear, kelvin-voigt, hertz, hertz-damp, bilinear, hertzdamp"),
-    ("misspelt-key-set", ["--set", "contact.stifness=2e6"], "contact.stifness",
-     "did you mean 'stiffness'"),
-    ("unknown-key-set", ["--set", "deck.colour=1"], "deck.colour", "unknown key",
-     "allowed: length, width"),
+    (
+        "unknown-law",
+        ["--set", "contact.law=hertzz"],
+        "contact.law",
+        "'hertzz'",
+        "allowed: linear, kelvin-voigt, hertz, hertz-damp, bilinear, hertzdamp",
+    ),
+    (
+        "misspelt-key-set",
+        ["--set", "contact.stifness=2e6"],
+        "contact.stifness",
+        "did you mean 'stiffness'",
+    ),
+    (
+        "unknown-key-set",
+        ["--set", "deck.colour=1"],
+        "deck.colour",
+        "unknown key",
+        "allowed: length, width",
+    ),
     ("index-out-of-range", ["--set", "bents[5].station=1"], "bents[5].station", "out of range"),
     ("set-without-equals", ["--set", "deck.mass"], "--set", "PATH=VALUE"),
     ("damping-mode-too-high", ["--set", "damping.modes=[1, 9]"], "damping.modes", "<= 7"),
-    ("record-too-short", ["--set", "excitation.duration=0.01"], "excitation.duration",
-     "at least 16"),
+    (
+        "record-too-short",
+        ["--set", "excitation.duration=0.01"],
+        "excitation.duration",
+        "at least 16",
+    ),
     ("lag-beyond-record", ["--set", "excitation.lag=30"], "excitation.lag", "beyond the record"),
-    ("csv-decreasing-time", lambda p: _csv_scene_args(p, _decreasing), "excitation.file",
-     "decreasing"),
-    ("csv-duplicate-time", lambda p: _csv_scene_args(p, _duplicate), "excitation.file",
-     "duplicate"),
-    ("csv-mismatched-length", lambda p: _csv_scene_args(p, _short_column), "excitation.file",
-     "'bent2_x_vel'", "missing or not finite"),
-    ("csv-support-without-record", lambda p: _csv_scene_args(p, _no_record), "excitation.file",
-     "support 'bent3_y' has no record"),
-    ("csv-unknown-column", lambda p: _csv_scene_args(p, _unknown_column), "excitation.file",
-     "unknown column 'bent1_x_dips'"),
-    ("csv-nan", lambda p: _csv_scene_args(p, _nan_cell), "excitation.file", "'seat1_x_disp'",
-     "not finite"),
-    ("csv-missing-file", ["--set", "excitation.kind=csv", "--set", "excitation.file=nofile.csv"],
-     "excitation.file", "does not exist"),
+    (
+        "csv-decreasing-time",
+        lambda p: _csv_scene_args(p, _decreasing),
+        "excitation.file",
+        "decreasing",
+    ),
+    (
+        "csv-duplicate-time",
+        lambda p: _csv_scene_args(p, _duplicate),
+        "excitation.file",
+        "duplicate",
+    ),
+    (
+        "csv-mismatched-length",
+        lambda p: _csv_scene_args(p, _short_column),
+        "excitation.file",
+        "'bent2_x_vel'",
+        "missing or not finite",
+    ),
+    (
+        "csv-support-without-record",
+        lambda p: _csv_scene_args(p, _no_record),
+        "excitation.file",
+        "support 'bent3_y' has no record",
+    ),
+    (
+        "csv-unknown-column",
+        lambda p: _csv_scene_args(p, _unknown_column),
+        "excitation.file",
+        "unknown column 'bent1_x_dips'",
+    ),
+    (
+        "csv-nan",
+        lambda p: _csv_scene_args(p, _nan_cell),
+        "excitation.file",
+        "'seat1_x_disp'",
+        "not finite",
+    ),
+    (
+        "csv-missing-file",
+        ["--set", "excitation.kind=csv", "--set", "excitation.file=nofile.csv"],
+        "excitation.file",
+        "does not exist",
+    ),
 ]
 
 
@@ -219,11 +291,13 @@ def _args(case, tmp_path: Path) -> list[str]:
     return case(tmp_path) if callable(case) else list(case)
 
 
-@pytest.mark.parametrize("case,field,texts", [(c[1], c[2], c[3:]) for c in BAD_SETS],
-                         ids=[c[0] for c in BAD_SETS])
+@pytest.mark.parametrize(
+    "case,field,texts", [(c[1], c[2], c[3:]) for c in BAD_SETS], ids=[c[0] for c in BAD_SETS]
+)
 def test_bad_input_validate(capsys, tmp_path, case, field, texts):
-    code, out, err = cli(capsys, "scene", "validate", "saiidi-4span", *SHORT,
-                         *_args(case, tmp_path))
+    code, out, err = cli(
+        capsys, "scene", "validate", "saiidi-4span", *SHORT, *_args(case, tmp_path)
+    )
     assert_refused(code, err, field, *texts)
     assert not out
 
@@ -231,13 +305,15 @@ def test_bad_input_validate(capsys, tmp_path, case, field, texts):
 PLOT_CASES = [c for c in BAD_SETS if c[0] != "damping-mode-too-high"]  # plot needs no modes
 
 
-@pytest.mark.parametrize("case,field,texts", [(c[1], c[2], c[3:]) for c in PLOT_CASES],
-                         ids=[c[0] for c in PLOT_CASES])
+@pytest.mark.parametrize(
+    "case,field,texts", [(c[1], c[2], c[3:]) for c in PLOT_CASES], ids=[c[0] for c in PLOT_CASES]
+)
 def test_bad_input_plot_writes_nothing(capsys, tmp_path, case, field, texts):
     args = _args(case, tmp_path)
     out_dir = tmp_path / "out"
-    code, out, err = cli(capsys, "excitation", "plot", "saiidi-4span", *SHORT, *args,
-                         "-o", str(out_dir / "exc.png"))
+    code, _out, err = cli(
+        capsys, "excitation", "plot", "saiidi-4span", *SHORT, *args, "-o", str(out_dir / "exc.png")
+    )
     assert_refused(code, err, field, *texts)
     assert not out_dir.exists()
 
@@ -250,61 +326,101 @@ def _engine_available(name: str) -> bool:
         return False
 
 
-RUN_ENGINES = [pytest.param(e, marks=pytest.mark.skipif(not _engine_available(e),
-                                                        reason=f"engine {e} not built yet"))
-               for e in ("compliance", "opensees")]
+RUN_ENGINES = [
+    pytest.param(
+        e, marks=pytest.mark.skipif(not _engine_available(e), reason=f"engine {e} not built yet")
+    )
+    for e in ("compliance", "opensees")
+]
 
 
 @pytest.mark.parametrize("engine", RUN_ENGINES)
-@pytest.mark.parametrize("case,field,texts", [(c[1], c[2], c[3:]) for c in BAD_SETS],
-                         ids=[c[0] for c in BAD_SETS])
+@pytest.mark.parametrize(
+    "case,field,texts", [(c[1], c[2], c[3:]) for c in BAD_SETS], ids=[c[0] for c in BAD_SETS]
+)
 def test_bad_input_run_writes_nothing(capsys, tmp_path, case, field, texts, engine):
     args = _args(case, tmp_path)
     out_dir = tmp_path / "out"
-    code, out, err = cli(capsys, "run", "saiidi-4span", *SHORT, *args, "--engine", engine,
-                         "-o", str(out_dir))
+    code, _out, err = cli(
+        capsys, "run", "saiidi-4span", *SHORT, *args, "--engine", engine, "-o", str(out_dir)
+    )
     assert_refused(code, err, field, *texts)
     assert not out_dir.exists()
 
 
 def _bench_text() -> str:
     from deckpound.models.scene_io import builtin_scene_text
+
     return builtin_scene_text("saiidi-4span")
 
 
 BAD_FILES = [
-    ("misspelt-key", lambda t: t.replace("[deck]\nlength", "[deck]\nlenght"), "deck.lenght",
-     "did you mean 'length'"),
-    ("unknown-table", lambda t: t + "\n[contacts]\nlaw = 'linear'\n", "contacts",
-     "did you mean 'contact'"),
-    ("unknown-key-in-array-table",
-     lambda t: t.replace('name = "bent2"', 'name = "bent2"\nheight = 2'),
-     "bents[1].height", "unknown key"),
-    ("negative-gap", lambda t: t.replace("gap = 0.0127", "gap = -0.0127", 1), "seats[0].gap",
-     ">= 0.0 m"),
+    (
+        "misspelt-key",
+        lambda t: t.replace("[deck]\nlength", "[deck]\nlenght"),
+        "deck.lenght",
+        "did you mean 'length'",
+    ),
+    (
+        "unknown-table",
+        lambda t: t + "\n[contacts]\nlaw = 'linear'\n",
+        "contacts",
+        "did you mean 'contact'",
+    ),
+    (
+        "unknown-key-in-array-table",
+        lambda t: t.replace('name = "bent2"', 'name = "bent2"\nheight = 2'),
+        "bents[1].height",
+        "unknown key",
+    ),
+    (
+        "negative-gap",
+        lambda t: t.replace("gap = 0.0127", "gap = -0.0127", 1),
+        "seats[0].gap",
+        ">= 0.0 m",
+    ),
     ("nan-mass", lambda t: t.replace("mass = 140.5", "mass = nan"), "deck.mass", "finite"),
-    ("string-for-number", lambda t: t.replace("mass = 140.5", 'mass = "heavy"'), "deck.mass",
-     "must be a number in t, got 'heavy'"),
-    ("missing-required", lambda t: t.replace("mass = 140.5\n", ""), "deck.mass",
-     "required but missing"),
-    ("duplicate-key", lambda t: t.replace("mass = 140.5", "mass = 140.5\nmass = 1.0"),
-     "/", "not valid TOML"),
-    ("one-seat", lambda t: t.replace('[[seats]]\nname = "seat2"', '[seat2]\nname = "seat2"'),
-     "seat2", "unknown key"),
+    (
+        "string-for-number",
+        lambda t: t.replace("mass = 140.5", 'mass = "heavy"'),
+        "deck.mass",
+        "must be a number in t, got 'heavy'",
+    ),
+    (
+        "missing-required",
+        lambda t: t.replace("mass = 140.5\n", ""),
+        "deck.mass",
+        "required but missing",
+    ),
+    (
+        "duplicate-key",
+        lambda t: t.replace("mass = 140.5", "mass = 140.5\nmass = 1.0"),
+        "/",
+        "not valid TOML",
+    ),
+    (
+        "one-seat",
+        lambda t: t.replace('[[seats]]\nname = "seat2"', '[seat2]\nname = "seat2"'),
+        "seat2",
+        "unknown key",
+    ),
 ]
 
 
-@pytest.mark.parametrize("mutate,field,texts", [(c[1], c[2], c[3:]) for c in BAD_FILES],
-                         ids=[c[0] for c in BAD_FILES])
+@pytest.mark.parametrize(
+    "mutate,field,texts", [(c[1], c[2], c[3:]) for c in BAD_FILES], ids=[c[0] for c in BAD_FILES]
+)
 def test_bad_scene_file(capsys, tmp_path, mutate, field, texts):
     text = mutate(_bench_text())
     assert text != _bench_text()
     path = tmp_path / "scene.toml"
     path.write_text(text)
     out_png = tmp_path / "exc.png"
-    for argv in (["scene", "validate", str(path)],
-                 ["excitation", "plot", str(path), "-o", str(out_png)]):
-        code, out, err = cli(capsys, *argv)
+    for argv in (
+        ["scene", "validate", str(path)],
+        ["excitation", "plot", str(path), "-o", str(out_png)],
+    ):
+        code, _out, err = cli(capsys, *argv)
         assert_refused(code, err, field, *texts)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.toml"]
 
@@ -318,34 +434,46 @@ def test_unreadable_scene_file(capsys, tmp_path):
     assert_refused(code, err, "scene", "does not exist")
 
 
-@pytest.mark.parametrize("command", [["scene", "validate"], ["scene", "show"],
-                                     ["excitation", "plot"], ["run"]])
+@pytest.mark.parametrize(
+    "command", [["scene", "validate"], ["scene", "show"], ["excitation", "plot"], ["run"]]
+)
 def test_unknown_scene_lists_valid_ones(capsys, tmp_path, command):
-    extra = {"excitation": ["-o", str(tmp_path / "o.png")],
-             "run": ["--engine", "compliance", "-o", str(tmp_path / "o")]}.get(command[0], [])
-    code, out, err = cli(capsys, *command, "saiidi-5span", *extra)
-    assert_refused(code, err, "scene", "unknown scene 'saiidi-5span'",
-                   "built-in scenes: " + ", ".join(builtin_scene_names()))
+    extra = {
+        "excitation": ["-o", str(tmp_path / "o.png")],
+        "run": ["--engine", "compliance", "-o", str(tmp_path / "o")],
+    }.get(command[0], [])
+    code, _out, err = cli(capsys, *command, "saiidi-5span", *extra)
+    assert_refused(
+        code,
+        err,
+        "scene",
+        "unknown scene 'saiidi-5span'",
+        "built-in scenes: " + ", ".join(builtin_scene_names()),
+    )
     assert list(tmp_path.iterdir()) == []
 
 
 def test_unknown_engine_lists_valid_ones(capsys, tmp_path):
     out_dir = tmp_path / "out"
-    code, out, err = cli(capsys, "run", "saiidi-4span", "--engine", "foo", "-o", str(out_dir))
-    assert_refused(code, err, "engine", "unknown engine 'foo'",
-                   "valid engines: " + ", ".join(ENGINES))
+    code, _out, err = cli(capsys, "run", "saiidi-4span", "--engine", "foo", "-o", str(out_dir))
+    assert_refused(
+        code, err, "engine", "unknown engine 'foo'", "valid engines: " + ", ".join(ENGINES)
+    )
     assert not out_dir.exists()
 
 
-@pytest.mark.parametrize("argv,text", [
-    (["scene", "frobnicate"], "invalid choice: 'frobnicate'"),
-    (["scene", "validate"], "required: SCENE"),
-    (["run", "saiidi-4span", "-o", "x"], "required: --engine"),
-    (["excitation", "plot", "saiidi-4span"], "required: -o/--output"),
-    (["scene", "validate", "saiidi-4span", "--colour"], "unrecognized arguments: --colour"),
-])
+@pytest.mark.parametrize(
+    "argv,text",
+    [
+        (["scene", "frobnicate"], "invalid choice: 'frobnicate'"),
+        (["scene", "validate"], "required: SCENE"),
+        (["run", "saiidi-4span", "-o", "x"], "required: --engine"),
+        (["excitation", "plot", "saiidi-4span"], "required: -o/--output"),
+        (["scene", "validate", "saiidi-4span", "--colour"], "unrecognized arguments: --colour"),
+    ],
+)
 def test_usage_errors_are_one_line(capsys, argv, text):
-    code, out, err = cli(capsys, *argv)
+    code, _out, err = cli(capsys, *argv)
     assert code == 2 and len(err.splitlines()) == 1 and text in err
     assert err.startswith("deckpound: error: deckpound")
 
@@ -362,25 +490,47 @@ def test_plot_output_name_refused(capsys, tmp_path, name):
 
 def test_plot_output_under_a_file_refused(capsys, tmp_path):
     (tmp_path / "afile").write_text("x")
-    code, _, err = cli(capsys, "excitation", "plot", "saiidi-4span", *SHORT,
-                       "-o", str(tmp_path / "afile" / "exc.png"))
+    code, _, err = cli(
+        capsys,
+        "excitation",
+        "plot",
+        "saiidi-4span",
+        *SHORT,
+        "-o",
+        str(tmp_path / "afile" / "exc.png"),
+    )
     assert_refused(code, err, "--output", "cannot write")
 
 
 # -- the real process ----------------------------------------------------------------------
 
+
 def _process(tmp_path: Path, *argv: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "deckpound", *argv], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "deckpound", *argv],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_process_bad_value_exit_status_2(tmp_path):
     out_png = tmp_path / "exc.png"
-    p = _process(tmp_path, "excitation", "plot", "saiidi-4span", "--set",
-                 "contact.restitution=1.3", "-o", str(out_png))
+    p = _process(
+        tmp_path,
+        "excitation",
+        "plot",
+        "saiidi-4span",
+        "--set",
+        "contact.restitution=1.3",
+        "-o",
+        str(out_png),
+    )
     assert p.returncode == 2, p.stderr
     assert p.stderr.splitlines() == [
-        "deckpound: error: contact.restitution: must be <= 1.0, got 1.3"]
+        "deckpound: error: contact.restitution: must be <= 1.0, got 1.3"
+    ]
     assert "Traceback" not in p.stderr + p.stdout and not out_png.exists()
 
 
@@ -399,7 +549,7 @@ def test_verify_clone_cli_reports_agreement_and_speed(capsys):
 
     assert cli_main(["verify", "clone", "saiidi-4span", "--set", "excitation.duration=1.0"]) == 0
     out = capsys.readouterr().out
-    line = [ln for ln in out.splitlines() if ln.startswith("largest deviation")][0]
+    line = next(ln for ln in out.splitlines() if ln.startswith("largest deviation"))
     # the 1e-9 physics criterion is tests/test_clone_vs_opensees.py; this short, pounding-heavy
     # record amplifies OpenSees's accumulated-time interpolation of the records to ~4e-8
     assert float(line.split(":")[1].split()[0]) < 1e-6

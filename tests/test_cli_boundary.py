@@ -45,6 +45,7 @@ def one_line(err: str, start: str = "deckpound: error: ") -> str:
 
 # -- the boundary ---------------------------------------------------------------------------
 
+
 def test_help_documents_the_exit_statuses():
     code, out, _ = cli("--help")
     assert code == 0 and EXIT_CODES_HELP in out
@@ -52,16 +53,25 @@ def test_help_documents_the_exit_statuses():
         assert f"\n  {status}" in out
 
 
-@pytest.mark.parametrize("exc,code,text", [
-    (OSError(errno.EROFS, "Read-only file system", "/x/out"), 3,
-     "I/O error on '/x/out': Read-only file system"),
-    (OSError(errno.ENOSPC, "No space left on device", "/x/a.csv"), 3,
-     "I/O error on '/x/a.csv': no space left on the device"),
-    (MemoryError(), 3, "out of memory"),
-    (RecursionError(), 3, "nested too deeply"),
-    (ZeroDivisionError("boom"), 4, "internal error: ZeroDivisionError: boom (this is a bug"),
-    (KeyboardInterrupt(), 130, "deckpound: interrupted"),
-])
+@pytest.mark.parametrize(
+    "exc,code,text",
+    [
+        (
+            OSError(errno.EROFS, "Read-only file system", "/x/out"),
+            3,
+            "I/O error on '/x/out': Read-only file system",
+        ),
+        (
+            OSError(errno.ENOSPC, "No space left on device", "/x/a.csv"),
+            3,
+            "I/O error on '/x/a.csv': no space left on the device",
+        ),
+        (MemoryError(), 3, "out of memory"),
+        (RecursionError(), 3, "nested too deeply"),
+        (ZeroDivisionError("boom"), 4, "internal error: ZeroDivisionError: boom (this is a bug"),
+        (KeyboardInterrupt(), 130, "deckpound: interrupted"),
+    ],
+)
 def test_every_exception_becomes_one_line_and_a_status(monkeypatch, exc, code, text):
     def raising(args):
         raise exc
@@ -87,8 +97,9 @@ def test_library_chatter_on_stderr_is_held_back_unless_debugging(monkeypatch):
     from deckpound.models.errors import EngineFailure
 
     def chatty(args):
-        sys.stderr.write("WARNING: CTestNormDispIncr::test() - failed to converge \n"
-                         "after: 1 iterations\n")
+        sys.stderr.write(
+            "WARNING: CTestNormDispIncr::test() - failed to converge \nafter: 1 iterations\n"
+        )
         sys.stderr.write("OpenSees > analyze failed, ")
         sys.stderr.write("returned: -3 error flag\n")
         print("\rcases [####] 1/1", file=sys.stderr)  # a progress bar passes
@@ -113,28 +124,45 @@ def test_stdout_full_is_an_io_error(monkeypatch):
     with redirect_stdout(Full()), redirect_stderr(err):
         code = main(["scene", "show", "saiidi-4span"])
     assert code == 3
-    assert one_line(err.getvalue()) == ("deckpound: error: cannot write the output to stdout: no "
-                                         "space left on the device")
+    assert one_line(err.getvalue()) == (
+        "deckpound: error: cannot write the output to stdout: no space left on the device"
+    )
 
 
 # -- the crashes of the issue -------------------------------------------------------------
 
-@pytest.mark.parametrize("setting,field,text", [
-    ("opensees.max_iterations=9223372036854775808", "opensees.max_iterations", "<= 10000"),
-    ("compliance.max_iterations=1e308", "compliance.max_iterations", "got 1e+308"),
-    ("nonsmooth.max_iterations=" + "9" * 400, "nonsmooth.max_iterations", "400 digits"),
-    ("excitation.seed=1e20", "excitation.seed", "<= 9007199254740992"),
-    ("run.output_dt=1e25", "run.output_dt", "single row t = 0"),
-    ("run.output_dt=100", "run.output_dt", "single row t = 0"),
-    ("run.duration=1e-4", "run.duration", "opensees.dt = 0.0005 s"),
-    ("opensees.dt=30", "opensees.dt", "opensees.dt = 30 s"),
-])
+
+@pytest.mark.parametrize(
+    "setting,field,text",
+    [
+        ("opensees.max_iterations=9223372036854775808", "opensees.max_iterations", "<= 10000"),
+        ("compliance.max_iterations=1e308", "compliance.max_iterations", "got 1e+308"),
+        ("nonsmooth.max_iterations=" + "9" * 400, "nonsmooth.max_iterations", "400 digits"),
+        ("excitation.seed=1e20", "excitation.seed", "<= 9007199254740992"),
+        ("run.output_dt=1e25", "run.output_dt", "single row t = 0"),
+        ("run.output_dt=100", "run.output_dt", "single row t = 0"),
+        ("run.duration=1e-4", "run.duration", "opensees.dt = 0.0005 s"),
+        ("opensees.dt=30", "opensees.dt", "opensees.dt = 30 s"),
+    ],
+)
 @pytest.mark.parametrize("command", ["validate", "run"])
-def test_scenes_that_validated_and_then_crashed_are_refused(tmp_path, setting, field, text,
-                                                           command):
-    argv = (["scene", "validate", "saiidi-4span", "--set", setting] if command == "validate"
-            else ["run", "saiidi-4span", "--set", setting, "--engine", "opensees", "-o",
-                  str(tmp_path / "out")])
+def test_scenes_that_validated_and_then_crashed_are_refused(
+    tmp_path, setting, field, text, command
+):
+    argv = (
+        ["scene", "validate", "saiidi-4span", "--set", setting]
+        if command == "validate"
+        else [
+            "run",
+            "saiidi-4span",
+            "--set",
+            setting,
+            "--engine",
+            "opensees",
+            "-o",
+            str(tmp_path / "out"),
+        ]
+    )
     code, _out, err = cli(*argv)
     assert code == 2
     line = one_line(err)
@@ -152,10 +180,20 @@ def test_a_record_shorter_than_one_step_names_both(tmp_path):
     rows = [",".join(["t"] + [f"{c}_disp" for c in chans])]
     rows += [",".join([repr(float(x))] + ["0.0"] * len(chans)) for x in t]
     (tmp_path / "r.csv").write_text("\n".join(rows) + "\n")
-    code, _, err = cli("run", "saiidi-4span", "--set", "excitation.kind=csv", "--set",
-                       f"excitation.file={json.dumps(str(tmp_path / 'r.csv'))}",
-                       "--set", "excitation.scaling=none",
-                       "--engine", "opensees", "-o", str(tmp_path / "out"))
+    code, _, err = cli(
+        "run",
+        "saiidi-4span",
+        "--set",
+        "excitation.kind=csv",
+        "--set",
+        f"excitation.file={json.dumps(str(tmp_path / 'r.csv'))}",
+        "--set",
+        "excitation.scaling=none",
+        "--engine",
+        "opensees",
+        "-o",
+        str(tmp_path / "out"),
+    )
     assert code == 2
     line = one_line(err)
     assert "opensees.dt: " in line and "record length 0.0003 s" in line and "0.0005 s" in line
@@ -172,16 +210,30 @@ def test_deeply_nested_toml_is_refused(tmp_path, where):
     assert code == 2 and "too deeply" in one_line(err)
 
 
-@pytest.mark.parametrize("address,code,text", [
-    ("foo", 2, "must be a Dask scheduler address"), ("tcp://h:99999", 2, "[1, 65535]"),
-    ("tcp://127.0.0.1:1", 3, "cannot reach the Dask scheduler at tcp://127.0.0.1:1"),
-])
+@pytest.mark.parametrize(
+    "address,code,text",
+    [
+        ("foo", 2, "must be a Dask scheduler address"),
+        ("tcp://h:99999", 2, "[1, 65535]"),
+        ("tcp://127.0.0.1:1", 3, "cannot reach the Dask scheduler at tcp://127.0.0.1:1"),
+    ],
+)
 def test_bad_scheduler_address(tmp_path, monkeypatch, address, code, text):
     from deckpound.compare import cases
 
     monkeypatch.setattr(cases, "CONNECT_TIMEOUT", 1.0)
-    got, _, err = cli("compare", "saiidi-4span", *TINY, "--engines", "nonsmooth",
-                      "--no-progress", "--scheduler", address, "-o", str(tmp_path / "out"))
+    got, _, err = cli(
+        "compare",
+        "saiidi-4span",
+        *TINY,
+        "--engines",
+        "nonsmooth",
+        "--no-progress",
+        "--scheduler",
+        address,
+        "-o",
+        str(tmp_path / "out"),
+    )
     assert got == code and text in one_line(err)
     assert not (tmp_path / "out").exists()
 
@@ -200,13 +252,16 @@ def tiny_result(tmp_path_factory) -> Path:
     return out
 
 
-@pytest.mark.parametrize("damage,text", [
-    (("nonsmooth.json", b'{"x":'), "nonsmooth.json is not valid JSON"),
-    (("nonsmooth.json", b'{"engine": "nonsmooth"}'), "carries no scene"),
-    (("nonsmooth.json", b'{"scene": {"deck": 1}}'), "its scene is invalid"),
-    (("nonsmooth.csv", b"t,deck_x\n0,1\n"), "lacks the column 'deck_x_rel'"),
-    (("nonsmooth.csv", b"\x00\xff" * 50), "is not a table of numbers"),
-])
+@pytest.mark.parametrize(
+    "damage,text",
+    [
+        (("nonsmooth.json", b'{"x":'), "nonsmooth.json is not valid JSON"),
+        (("nonsmooth.json", b'{"engine": "nonsmooth"}'), "carries no scene"),
+        (("nonsmooth.json", b'{"scene": {"deck": 1}}'), "its scene is invalid"),
+        (("nonsmooth.csv", b"t,deck_x\n0,1\n"), "lacks the column 'deck_x_rel'"),
+        (("nonsmooth.csv", b"\x00\xff" * 50), "is not a table of numbers"),
+    ],
+)
 def test_export_vtk_refuses_damaged_results(tmp_path, tiny_result, damage, text):
     import shutil
 
@@ -233,8 +288,9 @@ def test_every_figure_renders_any_scene_name(tmp_path, tiny_result, name):
     scene = load_scene("saiidi-4span", ["excitation.duration=0.3"]).replace(name=name)
     r = Result.read(tiny_result, "nonsmooth")
     results = {"nonsmooth": r, f"nonsmooth {name}": r}
-    table = __import__("pandas").DataFrame({"engine": ["nonsmooth"] * 2, "run": [1, 2],
-                                            "pga": [0.1, 0.2], "peak_theta": [1e-3, 2e-3]})
+    table = __import__("pandas").DataFrame(
+        {"engine": ["nonsmooth"] * 2, "run": [1, 2], "pga": [0.1, 0.2], "peak_theta": [1e-3, 2e-3]}
+    )
     written = []
     written += plot_excitation(scene, support_motion(scene), tmp_path / "exc.png")
     written += figures.histories(results, scene, tmp_path / "h.png", title=name)
@@ -247,14 +303,18 @@ def test_every_figure_renders_any_scene_name(tmp_path, tiny_result, name):
 
 # -- outputs: links, read-only, partial ---------------------------------------------------
 
-@pytest.mark.parametrize("command", [
-    ["run", "saiidi-4span", *TINY, "--engine", "nonsmooth", "-o", "{link}"],
-    ["export", "saiidi-4span", *TINY, "--format", "py", "-o", "{filelink}"],
-    ["excitation", "plot", "saiidi-4span", *TINY, "-o", "{filelink}.png"],
-    ["paper", "--quick", *TINY, "-o", "{link}"],
-    ["export-vtk", "{res}", "-o", "{link}"],
-    ["compare", "saiidi-4span", *TINY, "--engines", "nonsmooth", "-o", "{link}"],
-])
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", "saiidi-4span", *TINY, "--engine", "nonsmooth", "-o", "{link}"],
+        ["export", "saiidi-4span", *TINY, "--format", "py", "-o", "{filelink}"],
+        ["excitation", "plot", "saiidi-4span", *TINY, "-o", "{filelink}.png"],
+        ["paper", "--quick", *TINY, "-o", "{link}"],
+        ["export-vtk", "{res}", "-o", "{link}"],
+        ["compare", "saiidi-4span", *TINY, "--engines", "nonsmooth", "-o", "{link}"],
+    ],
+)
 def test_outputs_never_go_through_symbolic_links(tmp_path, tiny_result, command):
     (tmp_path / "real").mkdir()
     (tmp_path / "link").symlink_to(tmp_path / "real")
@@ -262,8 +322,10 @@ def test_outputs_never_go_through_symbolic_links(tmp_path, tiny_result, command)
     (tmp_path / "victim").write_text("victim")
     (tmp_path / "filelink").symlink_to(tmp_path / "victim")
     (tmp_path / "filelink.png").symlink_to(tmp_path / "victim.png")
-    argv = [a.format(link=tmp_path / "link", filelink=tmp_path / "filelink", res=tiny_result)
-            for a in command]
+    argv = [
+        a.format(link=tmp_path / "link", filelink=tmp_path / "filelink", res=tiny_result)
+        for a in command
+    ]
     code, _, err = cli(*argv)
     assert code == 2 and "symbolic link" in one_line(err)
     assert not list((tmp_path / "real").iterdir())
@@ -287,8 +349,9 @@ def test_export_on_a_full_disk_writes_no_file(tmp_path, monkeypatch):
         real(fd, data)
 
     monkeypatch.setattr(dio, "_write_fd", fills_up)
-    code, _, err = cli("export", "saiidi-4span", *TINY, "--format", "tcl", "-o",
-                       str(tmp_path / "exp" / "m.tcl"))
+    code, _, err = cli(
+        "export", "saiidi-4span", *TINY, "--format", "tcl", "-o", str(tmp_path / "exp" / "m.tcl")
+    )
     assert code == 3 and "no space left" in one_line(err)
     assert not list((tmp_path / "exp").iterdir())
 
@@ -303,8 +366,9 @@ def test_run_failing_mid_write_leaves_no_half_result(tmp_path, monkeypatch):
         real(fd, data)
 
     monkeypatch.setattr(dio, "_write_fd", second_fails)
-    code, _, err = cli("run", "saiidi-4span", *TINY, "--engine", "nonsmooth", "-o",
-                       str(tmp_path / "out"))
+    code, _, err = cli(
+        "run", "saiidi-4span", *TINY, "--engine", "nonsmooth", "-o", str(tmp_path / "out")
+    )
     assert code == 3 and one_line(err)
     assert not (tmp_path / "out").exists()  # nothing of value written: no folder at all
 
@@ -317,8 +381,18 @@ def test_study_failing_is_marked_incomplete_then_resumes_from_the_cache(tmp_path
         raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "s" / "f.png"))
 
     monkeypatch.setattr(figures, "study_figure", dies)
-    argv = ["study", "friction", "saiidi-4span", "--quick", *TINY, "--workers", "1",
-            "--no-progress", "-o", str(tmp_path / "s")]
+    argv = [
+        "study",
+        "friction",
+        "saiidi-4span",
+        "--quick",
+        *TINY,
+        "--workers",
+        "1",
+        "--no-progress",
+        "-o",
+        str(tmp_path / "s"),
+    ]
     code, _, err = cli(*argv)
     assert code == 3 and "no space left" in one_line(err)
     marker = (tmp_path / "s" / INCOMPLETE).read_text()
@@ -345,8 +419,18 @@ def test_paper_failing_is_marked_incomplete_then_resumes(tmp_path, monkeypatch):
         raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "p" / "x"))
 
     monkeypatch.setattr(paper, "write_report", dies)
-    argv = ["paper", "--quick", "--studies", "friction", *TINY, "--workers", "1",
-            "--no-progress", "-o", str(tmp_path / "p")]
+    argv = [
+        "paper",
+        "--quick",
+        "--studies",
+        "friction",
+        *TINY,
+        "--workers",
+        "1",
+        "--no-progress",
+        "-o",
+        str(tmp_path / "p"),
+    ]
     code, _, err = cli(*argv)
     assert code == 3 and one_line(err)
     marker = (tmp_path / "p" / INCOMPLETE).read_text()
@@ -359,16 +443,31 @@ def test_paper_failing_is_marked_incomplete_then_resumes(tmp_path, monkeypatch):
 
 
 def _process(args, cwd):
-    return subprocess.Popen([sys.executable, "-m", "deckpound", *args], cwd=cwd,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "deckpound", *args],
+        cwd=cwd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def test_two_compares_on_one_folder_do_not_crash(tmp_path):
-    args = ["compare", "saiidi-4span", *TINY, "--engines", "compliance,nonsmooth", "--workers",
-            "1", "--no-progress", "-o", "out"]
+    args = [
+        "compare",
+        "saiidi-4span",
+        *TINY,
+        "--engines",
+        "compliance,nonsmooth",
+        "--workers",
+        "1",
+        "--no-progress",
+        "-o",
+        "out",
+    ]
     procs = [_process(args, tmp_path) for _ in range(2)]
     outs = [p.communicate(timeout=600) for p in procs]
-    for p, (out, err) in zip(procs, outs):
+    for p, (_out, err) in zip(procs, outs):
         assert p.returncode == 0, err
         assert "Traceback" not in err
     assert not (tmp_path / "out" / INCOMPLETE).exists()
@@ -380,7 +479,7 @@ def test_two_papers_on_one_folder_do_not_crash(tmp_path):
     args = ["paper", "--quick", *TINY, "--no-progress", "-o", "rep"]
     procs = [_process(args, tmp_path) for _ in range(2)]
     outs = [p.communicate(timeout=1800) for p in procs]
-    for p, (out, err) in zip(procs, outs):
+    for p, (_out, err) in zip(procs, outs):
         assert p.returncode == 0, err
         assert "Traceback" not in err
     assert not (tmp_path / "rep" / INCOMPLETE).exists()
@@ -393,8 +492,9 @@ def test_engine_memory_error_is_an_io_error_and_writes_nothing(tmp_path, monkeyp
         raise MemoryError
 
     monkeypatch.setattr(engines, "run_engine", oom)
-    code, _, err = cli("run", "saiidi-4span", *TINY, "--engine", "nonsmooth", "-o",
-                       str(tmp_path / "out"))
+    code, _, err = cli(
+        "run", "saiidi-4span", *TINY, "--engine", "nonsmooth", "-o", str(tmp_path / "out")
+    )
     assert code == 3 and "out of memory" in one_line(err)
     assert not (tmp_path / "out").exists()
     assert os.listdir(tmp_path) == []

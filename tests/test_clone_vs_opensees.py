@@ -17,7 +17,8 @@ from deckpound.models.scene_io import load_scene
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("deckpound.opensees_build.engine") is None
     or importlib.util.find_spec("openseespy") is None,
-    reason="OpenSees engine not available")
+    reason="OpenSees engine not available",
+)
 
 
 def _scene(duration=None):
@@ -29,29 +30,44 @@ def _scene(duration=None):
 
 def test_clone_agrees_with_opensees_first_5_s():
     from deckpound.analytic.verify import verify_clone
+
     rep = verify_clone(_scene(5.0))
-    print("largest deviation:", rep["worst"], "speed ratio:", rep["speed_ratio"],
-          "iterations:", rep["iterations"])
+    print(
+        "largest deviation:",
+        rep["worst"],
+        "speed ratio:",
+        rep["speed_ratio"],
+        "iterations:",
+        rep["iterations"],
+    )
     assert rep["status"] == {"opensees": "success", "compliance": "success"}
     # 1e-8 since issue 12 (the default damping leaves the seats to their dashpots: ~2e-9
     # of round-off in the contact forces, 4e-10 with Rayleigh on the seat springs)
     assert rep["worst"][1] <= 1e-8, rep["deviation"]
-    assert rep["worst_velocity"][1] <= 1e-8, rep["deviation"]   # 2/dt amplification, see verify
+    assert rep["worst_velocity"][1] <= 1e-8, rep["deviation"]  # 2/dt amplification, see verify
     assert rep["iterations"]["opensees"] == rep["iterations"]["compliance"]
 
 
 @pytest.mark.slow
 def test_clone_agrees_with_opensees_whole_record():
     from deckpound.analytic.verify import verify_clone
+
     rep = verify_clone(_scene())
-    print("largest deviation:", rep["worst"], "speed ratio:", rep["speed_ratio"],
-          "us/step:", rep["us_per_step"])
+    print(
+        "largest deviation:",
+        rep["worst"],
+        "speed ratio:",
+        rep["speed_ratio"],
+        "us/step:",
+        rep["us_per_step"],
+    )
     assert rep["worst"][1] <= 1e-6, rep["deviation"]
 
 
 @pytest.mark.slow
 def test_clone_speed_at_dt_1e4():
     from deckpound.analytic.compliance import run_compliance
+
     sc = load_scene("saiidi-4span", ["compliance.dt=1e-4"])
     run_compliance(sc)
     r = run_compliance(sc)

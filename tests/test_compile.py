@@ -2,10 +2,9 @@
 
 import warnings
 
-from deckpound.models.scene_io import load_scene
-
 from deckpound import cli, warmup
 from deckpound.engines import run_engine
+from deckpound.models.scene_io import load_scene
 
 
 def test_compile_command_reports_a_line_per_item_and_the_cache(capsys, tmp_path):

@@ -2,15 +2,21 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
+from _compliance_helpers import (
+    base_scene,
+    motion_from,
+    rest_motion,
+    with_bents,
+    with_compliance,
+    with_contact,
+    with_run,
+    with_seats,
+)
 
 from deckpound.analytic.compliance import run_compliance
 from deckpound.models.contact_params import kelvin_voigt_ratio
-
-from _compliance_helpers import (base_scene, motion_from, rest_motion, with_bents,
-                                 with_compliance, with_contact, with_run, with_seats)
 
 V_IMPACT = 0.5
 THETA0 = 0.01
@@ -38,8 +44,8 @@ def restitution(sc, **kw):
     assert np.max(fn) > 0 and np.all(r["fn_c1"] == 0)
     closed = np.flatnonzero(fn != 0)
     i0, i1 = closed[0], closed[-1]
-    before = np.polyfit(t[10:i0 - 5], g[10:i0 - 5], 1)[0]
-    after = np.polyfit(t[i1 + 5:-5], g[i1 + 5:-5], 1)[0]
+    before = np.polyfit(t[10 : i0 - 5], g[10 : i0 - 5], 1)[0]
+    after = np.polyfit(t[i1 + 5 : -5], g[i1 + 5 : -5], 1)[0]
     return -after / before, r
 
 
@@ -50,10 +56,10 @@ def test_kelvin_voigt_impact_returns_its_restitution(e):
     print(f"KV e = {e}: measured {e_meas:.6f}, zeta {kelvin_voigt_ratio(e):.4f}")
     # exact for the linear oscillator (OpenSees ViscoelasticGap keeps the tension tail)
     assert e_meas == pytest.approx(e, abs=2e-3)
-    assert np.min(r["fn_c2"]) < 0.0          # the tension tail is there (OpenSees-identical)
+    assert np.min(r["fn_c2"]) < 0.0  # the tension tail is there (OpenSees-identical)
     e_clip, rc = restitution(sc, kv_clip=True)
     assert np.min(rc["fn_c2"]) >= 0.0
-    assert e_clip > e_meas                    # clipping ends the contact earlier
+    assert e_clip > e_meas  # clipping ends the contact earlier
 
 
 def test_hertz_impact_is_elastic():
@@ -131,7 +137,7 @@ def test_sliding_deck_decelerates_at_mu_normal_over_mass():
     fn = r["fn_c1"] + r["fn_c2"]
     assert np.min(fn[10:]) > 0
     # Coulomb: ft = -mu fn while sliding (|v| >> v0)
-    sl = slice(10, 250)          # corner speed >> v0 there
+    sl = slice(10, 250)  # corner speed >> v0 there
     np.testing.assert_allclose(r["ft_c1"][sl], -MU * r["fn_c1"][sl], rtol=1e-6)
     acc = (y[2:] - 2 * y[1:-1] + y[:-2]) / (t[1] - t[0]) ** 2
     fy = sum(r[f"{b.name}_fy"] for b in sc.bents)
@@ -139,8 +145,14 @@ def test_sliding_deck_decelerates_at_mu_normal_over_mass():
     expected = (-MU * fn - fy)[1:-1] / sc.deck.mass
     w = slice(10, 249)
     err = np.max(np.abs(acc[w] - expected[w])) / np.max(np.abs(expected[w]))
-    print("deceleration vs mu*N/m: rel. error", err, "mean decel", -np.mean(acc[w]),
-          "mu N / m", np.mean(MU * fn[w]) / sc.deck.mass)
+    print(
+        "deceleration vs mu*N/m: rel. error",
+        err,
+        "mean decel",
+        -np.mean(acc[w]),
+        "mu N / m",
+        np.mean(MU * fn[w]) / sc.deck.mass,
+    )
     assert err < 1e-2
 
 
@@ -154,26 +166,33 @@ def test_stick_holds_a_load_below_mu_n_and_slip_mode_creeps():
         fn = r["fn_c1"] + r["fn_c2"]
         ft = r["ft_c1"] + r["ft_c2"]
         late = r.t >= 2.0
-        assert np.all(np.abs(ft[late]) < MU * fn[late])       # load below the Coulomb limit
+        assert np.all(np.abs(ft[late]) < MU * fn[late])  # load below the Coulomb limit
         i2 = np.searchsorted(r.t, 2.0)
         # tangential displacement of corner c1 (the deck may rotate about the held end)
         yc1 = r["deck_y_abs"] + sc.corners[0][0] * r["deck_theta"]
         moved[mode] = abs(yc1[-1] - yc1[i2])
     print("corner c1 tangential movement after the load is applied:", moved)
-    assert moved["stick"] < 1e-5          # elastic stick spring only (F/k_t ~ 1e-6 m): no slip
+    assert moved["stick"] < 1e-5  # elastic stick spring only (F/k_t ~ 1e-6 m): no slip
     assert moved["slip"] > 100 * moved["stick"] and moved["slip"] > 1e-4
 
 
 # ------------------------------------------------------------------------------- energy
-@pytest.mark.parametrize("overrides", [
-    (),
-    ("contact.law=kelvin-voigt", "contact.friction=0.4", "contact.friction_mode=stick"),
-    ("contact.law=hertz-damp", "contact.stiffness=3e7", "contact.friction=0.4",
-     "contact.friction_mode=slip"),
-    # issue 12: OpenSees's zeroLengthContact2D algorithm (its stick point jumps at a sliding
-    # commit; the force that acted, not the reported post-commit 0, does the work)
-    ("contact.friction=0.4", "contact.friction_mode=contact2d"),
-])
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        (),
+        ("contact.law=kelvin-voigt", "contact.friction=0.4", "contact.friction_mode=stick"),
+        (
+            "contact.law=hertz-damp",
+            "contact.stiffness=3e7",
+            "contact.friction=0.4",
+            "contact.friction_mode=slip",
+        ),
+        # issue 12: OpenSees's zeroLengthContact2D algorithm (its stick point jumps at a sliding
+        # commit; the force that acted, not the reported post-commit 0, does the work)
+        ("contact.friction=0.4", "contact.friction_mode=contact2d"),
+    ],
+)
 def test_energy_balance_closes(overrides):
     sc = base_scene("run.duration=4.0", *overrides)
     r = run_compliance(sc)
@@ -191,8 +210,9 @@ def test_energy_balance_closes(overrides):
 
 def test_adaptive_energy_balance_and_agreement_with_newmark():
     sc = base_scene("run.duration=2.5")
-    ra = run_compliance(with_compliance(sc, integrator="adaptive", rtol=1e-8, atol=1e-11,
-                                        max_step=0.005))
+    ra = run_compliance(
+        with_compliance(sc, integrator="adaptive", rtol=1e-8, atol=1e-11, max_step=0.005)
+    )
     rn = run_compliance(with_compliance(sc, dt=2.5e-5, tolerance=1e-12))
     assert ra.ok and rn.ok
     assert ra.meta["energy_closure"] < 1e-6

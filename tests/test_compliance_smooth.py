@@ -2,18 +2,22 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
+from _compliance_helpers import (
+    base_scene,
+    motion_from,
+    with_bents,
+    with_compliance,
+    with_run,
+    with_seats,
+)
 from scipy.integrate import solve_ivp
 
 from deckpound.analytic.compliance import run_compliance
 from deckpound.analytic.system import pack_system
 from deckpound.models.damping import damping_model
 from deckpound.models.plan import plan_of
-
-from _compliance_helpers import (base_scene, motion_from, with_bents, with_compliance, with_run,
-                                 with_seats)
 
 A = 0.02
 W1, W2 = 2 * np.pi * 1.5, 2 * np.pi * 2.3
@@ -59,10 +63,13 @@ def smooth():
         return np.concatenate([v, -F / M])
 
     tt = np.arange(0, int(round(T_END / 0.02)) + 1) * 0.02
-    sol = solve_ivp(f, (0, T_END), np.zeros(14), method="DOP853", rtol=1e-12, atol=1e-14,
-                    t_eval=tt)
-    ref = {"deck_x_abs": sol.y[4], "deck_y_abs": sol.y[5], "deck_theta": sol.y[6],
-           "seat1_x_abs": sol.y[0]}
+    sol = solve_ivp(f, (0, T_END), np.zeros(14), method="DOP853", rtol=1e-12, atol=1e-14, t_eval=tt)
+    ref = {
+        "deck_x_abs": sol.y[4],
+        "deck_y_abs": sol.y[5],
+        "deck_theta": sol.y[6],
+        "seat1_x_abs": sol.y[0],
+    }
     _ = K0, C
     return sc, motion, ref
 
@@ -88,8 +95,9 @@ def test_newmark_matches_independent_solution_and_is_second_order(smooth):
 
 def test_adaptive_error_within_tolerance(smooth):
     sc, motion, ref = smooth
-    r = run_compliance(with_compliance(sc, integrator="adaptive", rtol=1e-9, atol=1e-12,
-                                       max_step=0.005), motion)
+    r = run_compliance(
+        with_compliance(sc, integrator="adaptive", rtol=1e-9, atol=1e-12, max_step=0.005), motion
+    )
     assert r.ok
     e = _err(r, ref)
     print("adaptive error", e, r.meta["message"])
@@ -105,9 +113,9 @@ def test_failed_step_is_reported_without_nan():
     assert r.meta["failed_step"] >= 1 and r.meta["failed_time"] > 0
     assert all(np.all(np.isfinite(v)) for v in r.columns.values())
     from deckpound.models.errors import EngineFailure
+
     with pytest.raises(EngineFailure):
         run_compliance(sc, raise_on_failure=True)
-
 
 
 def test_non_finite_initial_state_is_refused():
@@ -116,8 +124,9 @@ def test_non_finite_initial_state_is_refused():
     u0[5] = np.nan
     for integrator in ("adaptive", "newmark"):
         with pytest.raises(ValueError, match="initial_state u0 must be 7 finite numbers"):
-            run_compliance(with_compliance(sc, integrator=integrator),
-                           initial_state=(u0, np.zeros(7)))
+            run_compliance(
+                with_compliance(sc, integrator=integrator), initial_state=(u0, np.zeros(7))
+            )
     with pytest.raises(ValueError, match="initial_state v0"):
         run_compliance(sc, initial_state=(np.zeros(7), np.zeros(6)))
 
@@ -132,9 +141,15 @@ def test_failure_time_of_an_adaptive_run_is_its_own():
     motion = support_motion(sc)
     ok = run_compliance(sc, motion)
     cols = {k: np.asarray(v) for k, v in ok.columns.items()}
-    out = RunOutput(columns=cols, status=Status.NOT_CONVERGED, message="step size underflow",
-                    failed_step=1234, failed_time=3.25)
-    meta = finish(get_engine("compliance"), sc, sc.compliance, motion, plan_of(sc), out, 0.1,
-                  []).meta
+    out = RunOutput(
+        columns=cols,
+        status=Status.NOT_CONVERGED,
+        message="step size underflow",
+        failed_step=1234,
+        failed_time=3.25,
+    )
+    meta = finish(
+        get_engine("compliance"), sc, sc.compliance, motion, plan_of(sc), out, 0.1, []
+    ).meta
     assert meta["status"] == "failed" and meta["failed_step"] == 1234
     assert meta["failed_time"] == 3.25 and meta["message"].endswith("(t = 3.25 s)")

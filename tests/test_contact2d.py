@@ -21,9 +21,15 @@ KN, KT, MU = 1.0e6, 1.0e5, 0.3
 
 
 def _row():
-    sc = load_scene("saiidi-4span", [f"contact.stiffness={KN}", f"contact.friction={MU}",
-                                     "contact.friction_mode=contact2d",
-                                     f"contact.tangential_stiffness={KT}"])
+    sc = load_scene(
+        "saiidi-4span",
+        [
+            f"contact.stiffness={KN}",
+            f"contact.friction={MU}",
+            "contact.friction_mode=contact2d",
+            f"contact.tangential_stiffness={KT}",
+        ],
+    )
     return cl.pack_contact(sc)
 
 
@@ -41,19 +47,19 @@ def _commit(cs, g, evaluated=True):
 def test_stick_then_slide_moves_the_stick_point_and_reports_zero():
     cp = _row()
     cs = cl.new_contact_state(np.full(4, 0.01))
-    g = -1e-3                                   # p = 1000 kN, μ p = 300 kN
+    g = -1e-3  # p = 1000 kN, μ p = 300 kN
     closed, lam, state, lt, d_ds, _ = _eval(cp, cs, g, 1e-3)
     assert closed and lam == pytest.approx(1000.0)
-    assert state == 1 and lt == pytest.approx(-KT * 1e-3) and d_ds == -KT   # stick: −k_t s
+    assert state == 1 and lt == pytest.approx(-KT * 1e-3) and d_ds == -KT  # stick: −k_t s
     _commit(cs, g)
-    assert cs[0, cl.S_CSTICK] == 0.0            # a stick commit keeps the stick point
+    assert cs[0, cl.S_CSTICK] == 0.0  # a stick commit keeps the stick point
     assert cs[0, cl.S_CFT] == pytest.approx(-100.0)
     # slide: |k_t (s − s_p)| = 500 > 300 → λ_T = −μ p, consistent tangent ∂λ_T/∂λ_N = −μ
     _, _, state, lt, d_ds, d_lam = _eval(cp, cs, g, 5e-3)
     assert state == 2 and lt == pytest.approx(-MU * 1000.0) and d_lam == -MU and d_ds == 0.0
     _commit(cs, g)
-    assert cs[0, cl.S_CSTICK] == 5e-3           # commitState: stickPt = ξ after a slide
-    assert cs[0, cl.S_CFT] == 0.0               # the force OpenSees reports after that commit
+    assert cs[0, cl.S_CSTICK] == 5e-3  # commitState: stickPt = ξ after a slide
+    assert cs[0, cl.S_CFT] == 0.0  # the force OpenSees reports after that commit
     # the next step restarts from the new stick point (no memory of μ p)
     _, _, state, lt, *_ = _eval(cp, cs, g, 5.5e-3)
     assert state == 1 and lt == pytest.approx(-KT * 0.5e-3)
@@ -63,8 +69,8 @@ def test_stick_point_survives_opening_unlike_the_stick_law():
     cp = _row()
     cs = cl.new_contact_state(np.full(4, 0.01))
     _eval(cp, cs, -1e-3, 1e-3)
-    _commit(cs, -1e-3)                          # stuck with λ_T = −100 kN
-    closed, lam, state, lt, *_ = _eval(cp, cs, 1e-3, 2e-3)   # open: no force at all
+    _commit(cs, -1e-3)  # stuck with λ_T = −100 kN
+    closed, lam, state, lt, *_ = _eval(cp, cs, 1e-3, 2e-3)  # open: no force at all
     assert not closed and lam == 0.0 and state == 0 and lt == 0.0
     _commit(cs, 1e-3, evaluated=False)
     # closes again at s = 1.5e-3: the old stick point (0) still acts
@@ -88,10 +94,13 @@ def test_engines_say_which_friction_models_they_express():
     c2d = load_scene("saiidi-4span", ["contact.friction=0.2", "contact.friction_mode=contact2d"])
     eng.refuse(c2d, eng.settings_of(c2d))
     comp = get_engine("compliance")
-    for ov, field in ((["compliance.integrator=adaptive"], "compliance.integrator"),
-                      (["contact.geometry=nonlinear"], "contact.geometry")):
-        sc = load_scene("saiidi-4span", ["contact.friction=0.2",
-                                         "contact.friction_mode=contact2d", *ov])
+    for ov, field in (
+        (["compliance.integrator=adaptive"], "compliance.integrator"),
+        (["contact.geometry=nonlinear"], "contact.geometry"),
+    ):
+        sc = load_scene(
+            "saiidi-4span", ["contact.friction=0.2", "contact.friction_mode=contact2d", *ov]
+        )
         with pytest.raises(SceneError, match=field.replace(".", r"\.")):
             comp.refuse(sc, comp.settings_of(sc))
 
@@ -103,9 +112,16 @@ def test_clone_agrees_with_opensees_with_friction():
     own stick law differs from OpenSees by 5 % in rotation and 115 % in friction force."""
     from deckpound.analytic.verify import verify_clone
 
-    sc = load_scene("saiidi-4span", ["opensees.tolerance=1e-12", "compliance.tolerance=1e-12",
-                                     "run.duration=5.0", "contact.friction=0.2",
-                                     "contact.friction_mode=contact2d"])
+    sc = load_scene(
+        "saiidi-4span",
+        [
+            "opensees.tolerance=1e-12",
+            "compliance.tolerance=1e-12",
+            "run.duration=5.0",
+            "contact.friction=0.2",
+            "contact.friction_mode=contact2d",
+        ],
+    )
     rep = verify_clone(sc)
     print("largest deviation:", rep["worst"], rep["worst_velocity"], rep["iterations"])
     assert rep["status"] == {"opensees": "success", "compliance": "success"}

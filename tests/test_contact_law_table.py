@@ -9,12 +9,12 @@ import dataclasses
 import numpy as np
 import pytest
 from _compliance_helpers import base_scene, with_contact, with_run
+
 from deckpound.analytic import contact_laws as cl
+from deckpound.engines import get_engine, run_engine
 from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_MODEL_TABLE, contact_law
 from deckpound.models.errors import SceneError
 from deckpound.models.scene import CONTACT_LAWS, FRICTION_MODES
-
-from deckpound.engines import get_engine, run_engine
 
 LAWS = [law.name for law in CONTACT_LAW_TABLE]
 MODELS = [m.name for m in FRICTION_MODEL_TABLE]
@@ -26,8 +26,8 @@ def _packed(law: str, **contact):
 
 
 def test_scene_choices_are_the_table():
-    assert CONTACT_LAWS == tuple(LAWS)
-    assert FRICTION_MODES == tuple(MODELS)
+    assert tuple(LAWS) == CONTACT_LAWS
+    assert tuple(MODELS) == FRICTION_MODES
     assert [law.code for law in CONTACT_LAW_TABLE] == list(range(len(LAWS)))
 
 
@@ -38,10 +38,10 @@ def test_every_law_has_a_kernel_branch_computing_its_equation(law):
     _, cp = _packed(law, stiffness=2.0e6, restitution=0.7)
     cl.check_kernel_branches(cp)
     row = cp[0]
-    for delta in (1e-5, 4e-4, 3e-3):            # below and above the bilinear yield (1 mm)
+    for delta in (1e-5, 4e-4, 3e-3):  # below and above the bilinear yield (1 mm)
         for rate in (0.0, 0.05, -0.02):
             cs = cl.new_contact_state(np.full(4, 0.01))[0]
-            cs[cl.S_CGD] = -0.3                  # committed approach velocity 0.3 m/s
+            cs[cl.S_CGD] = -0.3  # committed approach velocity 0.3 m/s
             closed, lam, dg, dgd = cl.normal_law(row, cs, -delta, -rate)
             want = contact_law(law).force(delta, rate, cl.law_parameters(row, cs))
             assert closed, (law, delta)
@@ -103,7 +103,7 @@ def test_reads_and_refusals_follow_the_table(law):
     ns_read = get_engine("nonsmooth").reads(sc, sc.nonsmooth)
     assert ("contact.law" in ns_read) == row.nonsmooth
     opensees = get_engine("opensees")
-    if law == "bilinear":      # ImpactMaterial runs only with fine sub-steps (issue 12)
+    if law == "bilinear":  # ImpactMaterial runs only with fine sub-steps (issue 12)
         with pytest.raises(SceneError, match="opensees.substeps >= 1000"):
             opensees.refuse(sc, sc.opensees)
         sc = sc.replace(opensees=dataclasses.replace(sc.opensees, substeps=1000))

@@ -18,21 +18,23 @@ from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene
 
 CHOICES = [
-    (),                                   # the default: bents, initial, absolute
-    ("damping.members=bents+seats",),     # the behaviour before issue 12
+    (),  # the default: bents, initial, absolute
+    ("damping.members=bents+seats",),  # the behaviour before issue 12
     ("damping.members=none",),
     ("damping.method=none",),
     ("damping.stiffness=committed",),
     ("damping.stiffness=current",),
     ("damping.mass=relative",),
     ("damping.members=bents+seats", "damping.stiffness=current", "damping.mass=relative"),
-    ("bents[0].cx=150", "bents[2].cy=300"),   # explicit bent dashpots (Viscous elements)
+    ("bents[0].cx=150", "bents[2].cy=300"),  # explicit bent dashpots (Viscous elements)
 ]
 
 
 def _scene(*ov, duration=3.0):
-    return load_scene("saiidi-4span", ["opensees.tolerance=1e-12", "compliance.tolerance=1e-12",
-                                       f"run.duration={duration}", *ov])
+    return load_scene(
+        "saiidi-4span",
+        ["opensees.tolerance=1e-12", "compliance.tolerance=1e-12", f"run.duration={duration}", *ov],
+    )
 
 
 @pytest.mark.skipif(importlib.util.find_spec("openseespy") is None, reason="no openseespy")
@@ -97,7 +99,7 @@ def test_relative_mass_damping_is_the_same_matrix_in_clone_and_nonsmooth():
         if mass == "relative":
             assert ps.a0 == 0.0 and len(dm.mass_dampers) == 3 * len(sc.bents) + 4
             # dashpots act against the table / actuator channels (S has their entries)
-            assert np.count_nonzero(ps.arrays.schan[plan.n_springs:] >= 0) == 2 * len(sc.bents) + 2
+            assert np.count_nonzero(ps.arrays.schan[plan.n_springs :] >= 0) == 2 * len(sc.bents) + 2
 
 
 def test_engines_refuse_what_they_cannot_express():
@@ -111,8 +113,11 @@ def test_engines_refuse_what_they_cannot_express():
         eng.refuse(_scene("damping.mass=relative", *ov), eng.settings_of(sc))
 
 
-@pytest.mark.parametrize("ov", [("damping.mass=relative",), ("damping.members=bents+seats",),
-                                ("damping.method=none",)], ids=lambda ov: ov[0])
+@pytest.mark.parametrize(
+    "ov",
+    [("damping.mass=relative",), ("damping.members=bents+seats",), ("damping.method=none",)],
+    ids=lambda ov: ov[0],
+)
 def test_nonsmooth_engine_applies_the_same_damping(ov):
     """The nonsmooth engine's smooth forces come from the same packing: with each choice its
     energy balance closes, and its peak transverse deck displacement (set by the bents and the
@@ -128,7 +133,7 @@ def test_nonsmooth_engine_applies_the_same_damping(ov):
     y0 = {e: np.max(np.abs(r["deck_y_rel"])) for e, r in base.items()}
     assert abs(y["nonsmooth"] / y["compliance"] - 1.0) < 1e-3, y
     shift = {e: y[e] / y0[e] - 1.0 for e in y}
-    if abs(shift["compliance"]) > 1e-2:       # a choice that moves y: both move alike
+    if abs(shift["compliance"]) > 1e-2:  # a choice that moves y: both move alike
         assert abs(shift["nonsmooth"] - shift["compliance"]) < 0.1 * abs(shift["compliance"])
-    else:                                     # (Rayleigh on the seats hardly moves the deck)
+    else:  # (Rayleigh on the seats hardly moves the deck)
         assert abs(shift["nonsmooth"]) < 1e-3, shift

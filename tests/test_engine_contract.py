@@ -23,6 +23,14 @@ import dataclasses
 
 import numpy as np
 import pytest
+from _compliance_helpers import (
+    base_scene,
+    motion_from,
+    with_bents,
+    with_contact,
+    with_run,
+    with_seats,
+)
 from scipy.integrate import solve_ivp
 
 from deckpound.engine_contract import OptionIgnored
@@ -31,16 +39,13 @@ from deckpound.models.damping import damping_model
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import plan_of, standard_columns
 
-from _compliance_helpers import base_scene, motion_from, with_bents, with_contact, with_run, \
-    with_seats
-
 BUILT_IN = engine_names()
 EXTRA = "linear-newmark"
 
 
 @pytest.fixture(scope="module", autouse=True)
 def extra_engine():
-    register(EXTRA, "_extra_engine:LinearNewmarkEngine")   # the one registry line
+    register(EXTRA, "_extra_engine:LinearNewmarkEngine")  # the one registry line
     yield
     unregister(EXTRA)
 
@@ -54,29 +59,45 @@ def with_step(engine: str, scene, dt: float):
 
 # -- the contract ---------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("engine", BUILT_IN + (EXTRA,))
 def test_contract(engine):
     sc = with_run(base_scene(), duration=0.3)
     r = run_engine(engine, sc)
     std = standard_columns([b.name for b in sc.bents])
-    assert list(r.columns)[:len(std)] == std
+    assert list(r.columns)[: len(std)] == std
     assert r.t[0] == 0.0 and np.allclose(np.diff(r.t), sc.run.output_dt)
     assert r.meta["status"] == "success" and r.meta["failure"] is None
-    for key in ("steps", "newton_iterations", "contact_solves", "gap_closures", "wall_time",
-                "compile_time", "scene_hash", "physics_hash", "settings_hash", "settings",
-                "version", "warnings", "units"):
+    for key in (
+        "steps",
+        "newton_iterations",
+        "contact_solves",
+        "gap_closures",
+        "wall_time",
+        "compile_time",
+        "scene_hash",
+        "physics_hash",
+        "settings_hash",
+        "settings",
+        "version",
+        "warnings",
+        "units",
+    ):
         assert key in r.meta, key
     assert r.meta["units"]["deck_theta"] == "rad" and r.meta["units"]["deck_vx_abs"] == "m/s"
     assert r.meta["units"]["bent1_dx"] == "m" and r.meta["units"]["fn_c1"] == "kN"
     for v in r.columns.values():
         assert np.all(np.isfinite(v))
     with pytest.raises(ValueError):
-        r.columns["t"][0] = 1.0                     # frozen
+        r.columns["t"][0] = 1.0  # frozen
     frame = r.to_frame()
     assert frame.index.name == "t" and frame.attrs["units"]["deck_x_abs"] == "m"
     ds = r.to_xarray()
     assert ds["gap"].dims == ("time", "corner") and ds["bent_force"].dims == (
-        "time", "bent", "direction")
+        "time",
+        "bent",
+        "direction",
+    )
 
 
 def test_unknown_engine_lists_the_valid_ones():
@@ -86,11 +107,13 @@ def test_unknown_engine_lists_the_valid_ones():
 
 def test_ignored_options_are_derived_from_reads():
     sc = with_run(with_contact(base_scene(), law="hertz", exponent=1.4), duration=0.05)
-    with pytest.warns(OptionIgnored, match="contact.exponent = 1.4 does nothing in the "
-                      f"{EXTRA} engine"):
+    with pytest.warns(
+        OptionIgnored, match=f"contact.exponent = 1.4 does nothing in the {EXTRA} engine"
+    ):
         run_engine(EXTRA, sc)
-    with pytest.warns(OptionIgnored, match="contact.law = 'hertz' does nothing in the "
-                      "nonsmooth engine"):
+    with pytest.warns(
+        OptionIgnored, match="contact.law = 'hertz' does nothing in the nonsmooth engine"
+    ):
         run_engine("nonsmooth", sc)
 
 
@@ -124,8 +147,7 @@ def smooth():
         return np.concatenate([v, -F / M])
 
     tt = np.arange(0, int(round(T_END / 0.02)) + 1) * 0.02
-    sol = solve_ivp(f, (0, T_END), np.zeros(14), method="DOP853", rtol=1e-12, atol=1e-14,
-                    t_eval=tt)
+    sol = solve_ivp(f, (0, T_END), np.zeros(14), method="DOP853", rtol=1e-12, atol=1e-14, t_eval=tt)
     ref = {"deck_x_abs": sol.y[4], "deck_y_abs": sol.y[5], "deck_theta": sol.y[6]}
     return sc, motion, ref
 
@@ -157,8 +179,11 @@ def impact_scene(engine: str, e: float):
     sc = with_bents(sc, kx=1e-9, ky=1e-9)
     sc = with_seats(sc, mass=1e12, inertia=1e12, cx=0.0, ctheta=0.0, gap=GAP)
     law = "linear" if e == 1.0 else "kelvin-voigt"
-    sc = with_contact(sc, law=law, restitution=e, stiffness=1e7) if engine != "nonsmooth" \
+    sc = (
+        with_contact(sc, law=law, restitution=e, stiffness=1e7)
+        if engine != "nonsmooth"
         else with_contact(sc, restitution=e)
+    )
     sc = sc.replace(initial=dataclasses.replace(sc.initial, deck_velocity=(-V0, 0.0, 0.0)))
     return with_run(sc, duration=0.06, output_dt=1e-3)
 
@@ -166,8 +191,12 @@ def impact_scene(engine: str, e: float):
 def _run_impact(engine, e):
     sc = impact_scene(engine, e)
     dt = 1e-4 if engine == "nonsmooth" else 1e-5
-    r = run_engine(engine, sc, motion_from(sc, np.array([0.0, 1.0]), {}, {}),
-                   settings=with_step(engine, sc, dt))
+    r = run_engine(
+        engine,
+        sc,
+        motion_from(sc, np.array([0.0, 1.0]), {}, {}),
+        settings=with_step(engine, sc, dt),
+    )
     assert r.ok, r.meta["message"]
     return sc, r
 
@@ -175,7 +204,7 @@ def _run_impact(engine, e):
 @pytest.mark.parametrize("engine", CONTACT_ENGINES)
 def test_symmetric_impact_rebounds_at_minus_e_v(engine):
     e = 0.6 if engine == "nonsmooth" else 1.0
-    sc, r = _run_impact(engine, e)
+    _sc, r = _run_impact(engine, e)
     v_out = r["deck_vx_abs"][-1]
     tol = 1e-9 if engine == "nonsmooth" else 2e-3
     print(f"{engine}: rebound {v_out / V0:.6f} (e = {e})")
@@ -189,14 +218,16 @@ def test_symmetric_impact_rebounds_at_minus_e_v(engine):
 def test_elastic_impact_gains_no_energy(engine):
     sc, r = _run_impact(engine, 1.0)
     m = sc.deck.mass
-    ke0 = 0.5 * m * V0 ** 2
-    ke1 = 0.5 * m * (r["deck_vx_abs"][-1] ** 2 + r["deck_vy_abs"][-1] ** 2) \
+    ke0 = 0.5 * m * V0**2
+    ke1 = (
+        0.5 * m * (r["deck_vx_abs"][-1] ** 2 + r["deck_vy_abs"][-1] ** 2)
         + 0.5 * sc.deck.inertia * r["deck_omega"][-1] ** 2
+    )
     print(f"{engine}: kinetic energy after/before {ke1 / ke0:.12f}")
     # θ = ½ with Newton's law conserves it exactly; a penalty contact switches on inside a
     # step, an O(dt) error of either sign (3e-6 at dt = 1e-5 s here)
     assert ke1 <= ke0 * (1 + (1e-9 if engine == "nonsmooth" else 1e-5))
-    assert ke1 >= ke0 * (1 - 1e-3)          # and an elastic impact keeps it
+    assert ke1 >= ke0 * (1 - 1e-3)  # and an elastic impact keeps it
 
 
 @pytest.mark.parametrize("engine", BUILT_IN)
@@ -211,19 +242,28 @@ def test_velocity_columns_are_the_rates_of_the_displacements(engine):
     w = 2 * np.pi * 1.5
     a = 0.02 * (1 - np.cos(w * t))
     plan = plan_of(sc)
-    motion = motion_from(sc, t, {ch: a for ch in plan.channels},
-                         {ch: 0.02 * w * np.sin(w * t) for ch in plan.channels})
+    motion = motion_from(
+        sc,
+        t,
+        dict.fromkeys(plan.channels, a),
+        {ch: 0.02 * w * np.sin(w * t) for ch in plan.channels},
+    )
     r = run_engine(engine, sc, motion, settings=with_step(engine, sc, 2e-4))
     assert r.ok
-    for disp, vel in (("deck_x_abs", "deck_vx_abs"), ("deck_y_abs", "deck_vy_abs"),
-                      ("deck_theta", "deck_omega"), ("seat1_x_abs", "seat1_vx_abs"),
-                      ("seat1_theta", "seat1_omega"), ("seat2_x_abs", "seat2_vx_abs"),
-                      ("seat2_theta", "seat2_omega")):
+    for disp, vel in (
+        ("deck_x_abs", "deck_vx_abs"),
+        ("deck_y_abs", "deck_vy_abs"),
+        ("deck_theta", "deck_omega"),
+        ("seat1_x_abs", "seat1_vx_abs"),
+        ("seat1_theta", "seat1_omega"),
+        ("seat2_x_abs", "seat2_vx_abs"),
+        ("seat2_theta", "seat2_omega"),
+    ):
         assert r.meta["units"][vel] == ("rad/s" if vel.endswith("omega") else "m/s")
         fd = np.gradient(r[disp], r.t)[1:-1]
         v = r[vel][1:-1]
         scale = max(np.max(np.abs(v)), 1e-12)
-        if np.max(np.abs(v)) < 1e-12:      # e.g. no rotation under uniform x/y motion
+        if np.max(np.abs(v)) < 1e-12:  # e.g. no rotation under uniform x/y motion
             assert np.max(np.abs(fd)) < 1e-9
             continue
         assert np.max(np.abs(fd - v)) <= 2e-3 * scale, (engine, vel)

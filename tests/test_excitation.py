@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import G, SupportMotion, support_motion
 from deckpound.models.mechanics import support_channels
@@ -47,7 +48,10 @@ def test_spectrum_is_earthquake_like():
     a = m.acc("bent1_y")
     f = np.fft.rfftfreq(len(a), m.t[1])
     p = np.abs(np.fft.rfft(a)) ** 2
-    band = lambda lo, hi: p[(f >= lo) & (f < hi)].sum() / p.sum()
+
+    def band(lo, hi):
+        return p[(f >= lo) & (f < hi)].sum() / p.sum()
+
     assert band(1.0, 10.0) > 0.7
     assert band(0.0, 0.3) < 0.01
     assert 1.5 < f[np.argmax(p)] < 8.0
@@ -91,8 +95,15 @@ def _write_csv(path, scene, n=50, dt=0.01, drop=None, extra=None, t_override=Non
 
 
 def _csv_scene(path, unit="m"):
-    return load_scene("saiidi-4span", ["excitation.kind=csv", f"excitation.file='{path}'",
-                                       f"excitation.disp_unit={unit}", "excitation.scaling=none"])
+    return load_scene(
+        "saiidi-4span",
+        [
+            "excitation.kind=csv",
+            f"excitation.file='{path}'",
+            f"excitation.disp_unit={unit}",
+            "excitation.scaling=none",
+        ],
+    )
 
 
 def test_csv_loader_reads_every_support(tmp_path):
@@ -106,14 +117,21 @@ def test_csv_loader_reads_every_support(tmp_path):
     np.testing.assert_allclose(mm.disp["seat2_x"], 1e-3 * m.disp["seat2_x"])
 
 
-@pytest.mark.parametrize("case,match", [
-    ({"drop": "bent2_y_disp"}, "support 'bent2_y' has no record"),
-    ({"extra": "bent9_x_disp"}, "unknown column 'bent9_x_disp'"),
-    ({"t_override": np.array([0.0, 0.1, 0.1, 0.2] + [0.3 + 0.1 * i for i in range(46)])},
-     "duplicate"),
-    ({"t_override": np.array([0.0, 0.2, 0.1] + [0.3 + 0.1 * i for i in range(47)])},
-     "decreasing"),
-])
+@pytest.mark.parametrize(
+    "case,match",
+    [
+        ({"drop": "bent2_y_disp"}, "support 'bent2_y' has no record"),
+        ({"extra": "bent9_x_disp"}, "unknown column 'bent9_x_disp'"),
+        (
+            {"t_override": np.array([0.0, 0.1, 0.1, 0.2] + [0.3 + 0.1 * i for i in range(46)])},
+            "duplicate",
+        ),
+        (
+            {"t_override": np.array([0.0, 0.2, 0.1] + [0.3 + 0.1 * i for i in range(47)])},
+            "decreasing",
+        ),
+    ],
+)
 def test_csv_refusals(tmp_path, case, match):
     p = tmp_path / "rec.csv"
     scene = _csv_scene(p)
@@ -134,8 +152,15 @@ def test_csv_mismatched_length_refused(tmp_path):
 
 
 def test_pulse_is_one_longitudinal_cycle_at_rest_after():
-    s = load_scene("saiidi-4span", ["excitation.kind=pulse", "excitation.pga=0.5",
-                                    "excitation.duration=2", "excitation.pulse_period=0.4"])
+    s = load_scene(
+        "saiidi-4span",
+        [
+            "excitation.kind=pulse",
+            "excitation.pga=0.5",
+            "excitation.duration=2",
+            "excitation.pulse_period=0.4",
+        ],
+    )
     m = support_motion(s)
     assert np.max(np.abs(m.acc("bent2_x"))) / G == pytest.approx(0.6, rel=1e-12)
     assert np.all(m.disp["bent2_y"] == 0) and m.disp["seat1_x"][-1] == 0.0

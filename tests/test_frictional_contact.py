@@ -5,6 +5,17 @@ import itertools
 
 import numpy as np
 import pytest
+from _contact_helpers import (
+    B_DECK,
+    I_DECK,
+    L_DECK,
+    M_DECK,
+    build,
+    check_laws,
+    corner_jacobian,
+    kinetic,
+    solve_for,
+)
 
 from deckpound.analytic.frictional_contact import (
     CONTACT_OPEN,
@@ -21,8 +32,6 @@ from deckpound.analytic.frictional_contact import (
     solve_contact_impulses_into,
 )
 from deckpound.analytic.lcp import lcp_lemke
-from _contact_helpers import (B_DECK, I_DECK, L_DECK, M_DECK, build, check_laws, corner_jacobian,
-                             kinetic, solve_for)
 
 # -------------------------------------------------------------- (a) point mass
 
@@ -174,7 +183,9 @@ def closed_form_face_pair(m, I, U, e, mu):
             C = np.array(cols).T  # generalised impulse per unknown
             rows = [wn[i] for i in act] + ([wt] if mode == "stick" else [])
             A = np.array([[rw @ Minv @ c for c in C.T] for rw in rows])
-            b = np.array([-(1 + e) * uNm[i] for i in act] + ([-(wt @ U)] if mode == "stick" else []))
+            b = np.array(
+                [-(1 + e) * uNm[i] for i in act] + ([-(wt @ U)] if mode == "stick" else [])
+            )
             x = np.linalg.solve(A, b)
             Pn = np.zeros(2)
             Pn[act] = x[: len(act)]
@@ -197,12 +208,12 @@ def closed_form_face_pair(m, I, U, e, mu):
 
 
 FACE_CASES = [
-    ((0.5, 0.0, 0.0), 0.6, 0.5),      # equal approach, no tangential motion
-    ((0.5, 0.02, 0.0), 0.6, 0.5),     # small tangential motion: stick
-    ((0.5, 0.6, 0.0), 0.6, 0.3),      # large tangential motion: slip
+    ((0.5, 0.0, 0.0), 0.6, 0.5),  # equal approach, no tangential motion
+    ((0.5, 0.02, 0.0), 0.6, 0.5),  # small tangential motion: stick
+    ((0.5, 0.6, 0.0), 0.6, 0.3),  # large tangential motion: slip
     ((0.5, -0.6, 0.0), 0.2, 0.3),
-    ((0.4, 0.1, 0.004), 0.5, 0.6),    # with rotation
-    ((0.5, 0.0, 0.0), 1.0, 0.0),      # frictionless elastic
+    ((0.4, 0.1, 0.004), 0.5, 0.6),  # with rotation
+    ((0.5, 0.0, 0.0), 1.0, 0.0),  # frictionless elastic
 ]
 
 
@@ -211,8 +222,7 @@ def test_face_pair_totals(case):
     U, e, mu = case
     U = np.asarray(U, float)
     Mmat = np.diag([M_DECK, M_DECK, I_DECK])
-    contacts = [((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)),
-                ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0))]
+    contacts = [((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)), ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0))]
     WN, WT = build(Mmat, contacts)
     G = delassus(Mmat, WN, WT)
     assert np.linalg.matrix_rank(G, tol=1e-12 * np.abs(G).max()) == 3  # singular
@@ -225,20 +235,21 @@ def test_face_pair_totals(case):
     np.testing.assert_allclose(res["Up"], Up, rtol=0, atol=1e-10 * np.abs(U).max())
     # canonical split: proportional to mu P_N, each within its cone
     if mu > 0:
-        np.testing.assert_allclose(res["PT"], Pt * res["PN"] / res["PN"].sum(),
-                                   rtol=0, atol=1e-10 * Ps)
+        np.testing.assert_allclose(
+            res["PT"], Pt * res["PN"] / res["PN"].sum(), rtol=0, atol=1e-10 * Ps
+        )
     check_laws(res, [e, e], [mu, mu], 1e-9 * np.abs(U).max())
     if U[1] == 0.0 and U[2] == 0.0:
         np.testing.assert_allclose(res["PN"], 0.5 * (1 + e) * M_DECK * U[0], rtol=1e-12)
         np.testing.assert_allclose(res["Up"], [-e * U[0], 0.0, 0.0], atol=1e-12)
 
 
-@pytest.mark.parametrize("mode,status", [(MODE_LEMKE_ST, STATUS_LEMKE_ST),
-                                         (MODE_ENUM, STATUS_ENUM)])
+@pytest.mark.parametrize(
+    "mode,status", [(MODE_LEMKE_ST, STATUS_LEMKE_ST), (MODE_ENUM, STATUS_ENUM)]
+)
 def test_face_pair_fallback_methods_agree(mode, status):
     Mmat = np.diag([M_DECK, M_DECK, I_DECK])
-    contacts = [((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)),
-                ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0))]
+    contacts = [((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)), ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0))]
     WN, WT = build(Mmat, contacts)
     for U, e, mu in FACE_CASES:
         U = np.asarray(U, float)
@@ -254,10 +265,12 @@ def test_four_contacts_singular_delassus():
     3-DOF deck: 4 contacts, G (8x8) of rank 3; one corner carries two contacts
     whose tangent is the other's normal."""
     Mmat = np.diag([M_DECK, M_DECK, I_DECK])
-    contacts = [((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)),
-                ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0)),
-                ((L_DECK / 2, B_DECK / 2), (0.0, -1.0)),
-                ((-L_DECK / 2, B_DECK / 2), (0.0, -1.0))]
+    contacts = [
+        ((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)),
+        ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0)),
+        ((L_DECK / 2, B_DECK / 2), (0.0, -1.0)),
+        ((-L_DECK / 2, B_DECK / 2), (0.0, -1.0)),
+    ]
     WN, WT = build(Mmat, contacts)
     for U in ([1.0, 0.5, 0.02], [1.0, 0.05, 0.0], [0.3, 0.3, -0.01], [0.2, 1.0, 0.0]):
         U = np.asarray(U, float)
@@ -270,9 +283,11 @@ def test_four_contacts_singular_delassus():
 def test_into_matches_wrapper_and_mu_zero_reduction():
     rng = np.random.default_rng(5)
     Mmat = np.diag([M_DECK, M_DECK, I_DECK])
-    contacts = [((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)),
-                ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0)),
-                ((-L_DECK / 2, B_DECK / 2), (0.0, -1.0))]
+    contacts = [
+        ((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)),
+        ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0)),
+        ((-L_DECK / 2, B_DECK / 2), (0.0, -1.0)),
+    ]
     WN, WT = build(Mmat, contacts)
     G = delassus(Mmat, WN, WT)
     U = np.array([0.7, 0.4, 0.01])
@@ -282,7 +297,9 @@ def test_into_matches_wrapper_and_mu_zero_reduction():
     ref = solve_contact_impulses(G, uN, uT, uN, e, mu, 0)
     PN, PT, a, b = (np.full(3, np.nan) for _ in range(4))
     state = np.full(3, -7, dtype=np.int64)
-    status, comp, cone = solve_contact_impulses_into(G, uN, uT, uN, e, mu, PN, PT, a, b, state, 0, 1e-9)
+    status, comp, cone = solve_contact_impulses_into(
+        G, uN, uT, uN, e, mu, PN, PT, a, b, state, 0, 1e-9
+    )
     for x, y in zip((PN, PT, a, b, state), ref[:5]):
         np.testing.assert_array_equal(x, y)
     assert (status, comp, cone) == ref[5:]
@@ -290,7 +307,7 @@ def test_into_matches_wrapper_and_mu_zero_reduction():
     # mu = 0 everywhere: normal-only LCP G_NN P + uN + e uN- (n = nc)
     mu0 = np.zeros(3)
     res = solve_contact_impulses(G, uN, uT, uN, e, mu0, 0)
-    z, w, st_, _ = lcp_lemke(G[:3, :3].copy(), uN + e * uN)
+    z, _w, st_, _ = lcp_lemke(G[:3, :3].copy(), uN + e * uN)
     assert st_ == 0
     np.testing.assert_allclose(res[0], z, rtol=1e-12, atol=1e-12 * z.max())
     np.testing.assert_array_equal(res[1], 0.0)
@@ -311,7 +328,7 @@ def test_wedge_newton_infeasible_reports_failure():
     the both-slip case gives P_N < 0, stick contradicts U_N+ = -e U_N- > 0).
     The solver must say so (status 3) and not crash; with e = 0 it solves."""
     Mmat = np.diag([1.0, 1.0])
-    WN = np.array([[1.0, 0.0], [0.0, 1.0]])   # walls x = 0 and y = 0
+    WN = np.array([[1.0, 0.0], [0.0, 1.0]])  # walls x = 0 and y = 0
     WT = np.array([[0.0, -1.0], [1.0, 0.0]])
     G = delassus(Mmat, WN, WT)
     U = np.array([-1.0, -0.7])
@@ -338,5 +355,3 @@ def test_kane_paradox_energy_gain_with_e_one():
     assert kinetic(Mmat, res["Up"]) > kinetic(Mmat, U) * (1 + 1e-6)
     kind, PN, PT = closed_form_single(m, I, (L_DECK / 2, B_DECK / 2), (-1.0, 0.0), U, 1.0, 0.5)
     assert kind == "stick" and abs(res["PT"][0] - PT) <= 1e-10 * PN
-
-

@@ -2,18 +2,26 @@
 laws hold, the fall-back methods give valid solutions, and impacts with e = 0 dissipate."""
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
-
 from _contact_helpers import B_DECK, I_DECK, L_DECK, M_DECK, build, check_laws, kinetic, solve_for
-from deckpound.analytic.frictional_contact import (MODE_ENUM, MODE_LEMKE_ST, STATUS_ENUM,
-                                                  STATUS_LEMKE, STATUS_LEMKE_ST)
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from deckpound.analytic.frictional_contact import (
+    MODE_ENUM,
+    MODE_LEMKE_ST,
+    STATUS_ENUM,
+    STATUS_LEMKE,
+    STATUS_LEMKE_ST,
+)
 
 # ------------------------------------------------------ (d) random properties
 
-DECK_CONTACTS = [((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)),
-                 ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0)),
-                 ((L_DECK / 2, B_DECK / 2), (0.0, -1.0)),
-                 ((-L_DECK / 2, B_DECK / 2), (0.0, -1.0))]
+DECK_CONTACTS = [
+    ((L_DECK / 2, B_DECK / 2), (-1.0, 0.0)),
+    ((L_DECK / 2, -B_DECK / 2), (-1.0, 0.0)),
+    ((L_DECK / 2, B_DECK / 2), (0.0, -1.0)),
+    ((-L_DECK / 2, B_DECK / 2), (0.0, -1.0)),
+]
 
 
 def _random_deck_problem(rng, nc):
@@ -35,9 +43,13 @@ def _random_deck_problem(rng, nc):
 
 
 @settings(max_examples=250, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), nc=st.integers(1, 4),
-       e_zero=st.booleans(), mu_max=st.sampled_from([0.0, 0.3, 1.0]),
-       free_differs=st.booleans())
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    nc=st.integers(1, 4),
+    e_zero=st.booleans(),
+    mu_max=st.sampled_from([0.0, 0.3, 1.0]),
+    free_differs=st.booleans(),
+)
 def test_random_contact_properties(seed, nc, e_zero, mu_max, free_differs):
     rng = np.random.default_rng(seed)
     Mmat, WN, WT = _random_deck_problem(rng, nc)
@@ -46,7 +58,9 @@ def test_random_contact_properties(seed, nc, e_zero, mu_max, free_differs):
     e = np.zeros(nc) if e_zero else rng.uniform(0, 1, nc)
     mu = rng.uniform(0, mu_max, nc)
     res = solve_for(Mmat, WN, WT, U, e, mu, U_free=Uf)
-    vs = max(np.abs(res["uNf"]).max(), np.abs(res["uTf"]).max(), np.abs(e * res["uNm"]).max(), 1e-300)
+    vs = max(
+        np.abs(res["uNf"]).max(), np.abs(res["uTf"]).max(), np.abs(e * res["uNm"]).max(), 1e-300
+    )
     assert res["status"] in (STATUS_LEMKE, STATUS_LEMKE_ST, STATUS_ENUM)
     check_laws(res, e, mu, 1e-9 * vs)
     np.testing.assert_allclose(WN.T @ res["Up"], res["uNp"], rtol=0, atol=1e-9 * vs)
@@ -60,8 +74,11 @@ def test_random_contact_properties(seed, nc, e_zero, mu_max, free_differs):
 
 
 @settings(max_examples=100, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), nc=st.integers(1, 4),
-       mode=st.sampled_from([MODE_LEMKE_ST, MODE_ENUM]))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    nc=st.integers(1, 4),
+    mode=st.sampled_from([MODE_LEMKE_ST, MODE_ENUM]),
+)
 def test_random_fallback_methods_valid(seed, nc, mode):
     rng = np.random.default_rng(seed)
     Mmat, WN, WT = _random_deck_problem(rng, nc)

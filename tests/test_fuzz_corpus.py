@@ -33,8 +33,20 @@ CASES = generate()
 def result_dir(tmp_path_factory) -> Path:
     """A tiny finished run (the input of the export-vtk cases)."""
     out = tmp_path_factory.mktemp("fuzz-result") / "res"
-    code = main(["run", "saiidi-4span", "--set", "excitation.duration=0.3", "--set",
-                 "run.output_dt=0.01", "--engine", "opensees", "-o", str(out)])
+    code = main(
+        [
+            "run",
+            "saiidi-4span",
+            "--set",
+            "excitation.duration=0.3",
+            "--set",
+            "run.output_dt=0.01",
+            "--engine",
+            "opensees",
+            "-o",
+            str(out),
+        ]
+    )
     assert code == 0 and (out / "opensees.csv").is_file()
     return out
 
@@ -83,8 +95,17 @@ def test_corpus_is_large_unique_and_has_a_quick_subset():
     assert len(CASES) >= 3000
     assert len({c.id for c in CASES}) == len(CASES)
     families = collections.Counter(c.family for c in CASES)
-    assert set(families) == {"set", "file", "override", "path", "fault", "engine", "vtk",
-                             "name", "option"}
+    assert set(families) == {
+        "set",
+        "file",
+        "override",
+        "path",
+        "fault",
+        "engine",
+        "vtk",
+        "name",
+        "option",
+    }
     quick = quick_subset(CASES)
     assert 150 <= len(quick) <= 220 and {c.family for c in quick} == set(families)
 
@@ -95,13 +116,33 @@ def test_classifier_catches_what_it_must(tmp_path, result_dir, monkeypatch):
 
     import deckpound._io as dio
 
-    bug = Case("probe:bug", "probe", ("run", "saiidi-4span", "--set", "excitation.duration=0.3",
-                                      "--engine", "nonsmooth", "-o", "{tmp}/out"),
-               target="{tmp}/out", target_kind="dir", nonsense=True)
+    bug = Case(
+        "probe:bug",
+        "probe",
+        (
+            "run",
+            "saiidi-4span",
+            "--set",
+            "excitation.duration=0.3",
+            "--engine",
+            "nonsmooth",
+            "-o",
+            "{tmp}/out",
+        ),
+        target="{tmp}/out",
+        target_kind="dir",
+        nonsense=True,
+    )
     assert run_case(bug, tmp_path / "a", result_dir).outcome == "SILENT NONSENSE"
     monkeypatch.setattr(dio, "output_folder", _leaky_folder)
-    leaky = Case("probe:leak", "probe", bug.argv, fault="enospc-write:2", target="{tmp}/out",
-                 target_kind="dir")
+    leaky = Case(
+        "probe:leak",
+        "probe",
+        bug.argv,
+        fault="enospc-write:2",
+        target="{tmp}/out",
+        target_kind="dir",
+    )
     assert run_case(leaky, tmp_path / "b", result_dir).outcome == "PARTIAL OUTPUT"
     monkeypatch.setattr("deckpound.cli._guarded_main", _raising_main)
     assert run_case(bug, tmp_path / "c", result_dir).outcome == "TRACEBACK"
@@ -137,34 +178,101 @@ def test_full_corpus(tmp_path, result_dir, memory_cap):
 
 # -- a sample as real processes -------------------------------------------------------------
 
+
 def _deckpound(args, cwd, **kw):
-    return subprocess.run([sys.executable, "-m", "deckpound", *args], cwd=cwd,
-                          capture_output="stdout" not in kw, text=True, timeout=300, check=False,
-                          **kw)
+    return subprocess.run(
+        [sys.executable, "-m", "deckpound", *args],
+        cwd=cwd,
+        capture_output="stdout" not in kw,
+        text=True,
+        timeout=300,
+        check=False,
+        **kw,
+    )
 
 
 PROCESS_SAMPLE = [  # (argv, exit status, stderr lines)
-    (["run", "saiidi-4span", "--set", "excitation.duration=0.3", "--engine", "opensees", "-o",
-      "out"], 0, 0),
-    (["run", "saiidi-4span", "--set", "opensees.max_iterations=9223372036854775808",
-      "--engine", "opensees", "-o", "out"], 2, 1),
-    (["run", "saiidi-4span", "--set", "opensees.dt=30", "--engine", "opensees", "-o", "out"],
-     2, 1),
-    (["run", "saiidi-4span", "--set", "excitation.duration=0.3", "--engine", "opensees", "-o",
-      "/proc/deckpound-fuzz/out"], 3, 1),
-    (["run", "saiidi-4span", "--set", "excitation.duration=0.3", "--engine", "opensees", "-o",
-      "link"], 2, 1),
+    (
+        [
+            "run",
+            "saiidi-4span",
+            "--set",
+            "excitation.duration=0.3",
+            "--engine",
+            "opensees",
+            "-o",
+            "out",
+        ],
+        0,
+        0,
+    ),
+    (
+        [
+            "run",
+            "saiidi-4span",
+            "--set",
+            "opensees.max_iterations=9223372036854775808",
+            "--engine",
+            "opensees",
+            "-o",
+            "out",
+        ],
+        2,
+        1,
+    ),
+    (["run", "saiidi-4span", "--set", "opensees.dt=30", "--engine", "opensees", "-o", "out"], 2, 1),
+    (
+        [
+            "run",
+            "saiidi-4span",
+            "--set",
+            "excitation.duration=0.3",
+            "--engine",
+            "opensees",
+            "-o",
+            "/proc/deckpound-fuzz/out",
+        ],
+        3,
+        1,
+    ),
+    (
+        [
+            "run",
+            "saiidi-4span",
+            "--set",
+            "excitation.duration=0.3",
+            "--engine",
+            "opensees",
+            "-o",
+            "link",
+        ],
+        2,
+        1,
+    ),
     (["scene", "validate", "deep.toml"], 2, 1),
     (["compare", "saiidi-4span", "--scheduler", "foo", "-o", "out"], 2, 1),
     (["stress", "--quick", "--timeout", "nan"], 2, 1),
     (["export-vtk", "bad", "-o", "vtk"], 2, 1),
-    (["export", "saiidi-4span", "--set", "excitation.duration=0.3", "--format", "tcl", "-o",
-      "/dev/full"], 3, 1),
+    (
+        [
+            "export",
+            "saiidi-4span",
+            "--set",
+            "excitation.duration=0.3",
+            "--format",
+            "tcl",
+            "-o",
+            "/dev/full",
+        ],
+        3,
+        1,
+    ),
 ]
 
 
-@pytest.mark.parametrize("argv,code,nlines", PROCESS_SAMPLE,
-                         ids=[" ".join(a[:2] + a[-1:]) for a, _, _ in PROCESS_SAMPLE])
+@pytest.mark.parametrize(
+    "argv,code,nlines", PROCESS_SAMPLE, ids=[" ".join(a[:2] + a[-1:]) for a, _, _ in PROCESS_SAMPLE]
+)
 def test_process_sample(tmp_path, argv, code, nlines):
     (tmp_path / "real").mkdir()
     os.symlink(tmp_path / "real", tmp_path / "link")
@@ -182,18 +290,35 @@ def test_process_sample(tmp_path, argv, code, nlines):
 
 def test_process_stdout_to_dev_full(tmp_path):
     with open("/dev/full", "w") as full:
-        p = _deckpound(["scene", "show", "saiidi-4span"], tmp_path, stdout=full,
-                       stderr=subprocess.PIPE)
+        p = _deckpound(
+            ["scene", "show", "saiidi-4span"], tmp_path, stdout=full, stderr=subprocess.PIPE
+        )
     assert p.returncode == 3
-    assert p.stderr.splitlines() == [("deckpound: error: cannot write the output to stdout: no "
-                                     "space left on the device")]
+    assert p.stderr.splitlines() == [
+        ("deckpound: error: cannot write the output to stdout: no space left on the device")
+    ]
 
 
 def test_process_sigint_exits_130_with_one_line(tmp_path):
-    proc = subprocess.Popen([sys.executable, "-m", "deckpound", "run", "saiidi-4span",
-                             "--engine", "opensees", "--set", "opensees.dt=1e-4", "-o", "out"],
-                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "deckpound",
+            "run",
+            "saiidi-4span",
+            "--engine",
+            "opensees",
+            "--set",
+            "opensees.dt=1e-4",
+            "-o",
+            "out",
+        ],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     time.sleep(4.0)  # imports done, OpenSees stepping
     proc.send_signal(signal.SIGINT)
     _out, err = proc.communicate(timeout=60)

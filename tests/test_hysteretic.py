@@ -28,38 +28,126 @@ ops = pytest.importorskip("openseespy.opensees")
 
 # ----------------------------------------------------------- parameter sets
 TAKEDA_2PT = {  # (s1p, e1p, s2p, e2p, s1n, e1n, s2n, e2n, px, py, d1, d2)
-    f"takeda2_b{b}": (350.0, 0.012, 420.0, 0.12, -350.0, -0.012, -420.0, -0.12,
-                      1.0, 1.0, 0.0, 0.0, b)
+    f"takeda2_b{b}": (
+        350.0,
+        0.012,
+        420.0,
+        0.12,
+        -350.0,
+        -0.012,
+        -420.0,
+        -0.12,
+        1.0,
+        1.0,
+        0.0,
+        0.0,
+        b,
+    )
     for b in (0.0, 0.3, 0.5, 0.8)
 }
 TAKEDA_3PT = {
-    f"takeda3_b{b}": (1.2e3, 3.1e-3, 1.5e3, 0.021, 1.55e3, 0.07,
-                      -1.1e3, -2.9e-3, -1.45e3, -0.019, -1.5e3, -0.065,
-                      1.0, 1.0, 0.0, 0.0, b)
+    f"takeda3_b{b}": (
+        1.2e3,
+        3.1e-3,
+        1.5e3,
+        0.021,
+        1.55e3,
+        0.07,
+        -1.1e3,
+        -2.9e-3,
+        -1.45e3,
+        -0.019,
+        -1.5e3,
+        -0.065,
+        1.0,
+        1.0,
+        0.0,
+        0.0,
+        b,
+    )
     for b in (0.0, 0.3, 0.5, 0.8)
 }
 GENERAL = {
     # pinched + damaged, 2-point, asymmetric
-    "general2": (100.0, 0.01, 150.0, 0.05, -80.0, -0.008, -130.0, -0.06,
-                 0.8, 0.2, 0.01, 0.02, 0.4),
+    "general2": (100.0, 0.01, 150.0, 0.05, -80.0, -0.008, -130.0, -0.06, 0.8, 0.2, 0.01, 0.02, 0.4),
     # pinched + damaged, 3-point with softening last branch (rotlim paths)
-    "general3_soft": (100.0, 0.01, 140.0, 0.03, 60.0, 0.08,
-                      -100.0, -0.01, -140.0, -0.03, -60.0, -0.08,
-                      0.5, 0.3, 0.02, 0.05, 0.3),
+    "general3_soft": (
+        100.0,
+        0.01,
+        140.0,
+        0.03,
+        60.0,
+        0.08,
+        -100.0,
+        -0.01,
+        -140.0,
+        -0.03,
+        -60.0,
+        -0.08,
+        0.5,
+        0.3,
+        0.02,
+        0.05,
+        0.3,
+    ),
     # strong softening to zero/negative force (posEnvlpRotlim finite)
-    "general3_collapse": (100.0, 0.01, 120.0, 0.02, 10.0, 0.06,
-                          -100.0, -0.01, -120.0, -0.02, -10.0, -0.06,
-                          0.3, 0.5, 0.0, 0.1, 0.0),
+    "general3_collapse": (
+        100.0,
+        0.01,
+        120.0,
+        0.02,
+        10.0,
+        0.06,
+        -100.0,
+        -0.01,
+        -120.0,
+        -0.02,
+        -10.0,
+        -0.06,
+        0.3,
+        0.5,
+        0.0,
+        0.1,
+        0.0,
+    ),
     # 2-point with damage2 where the 2- and 3-segment energyA differ
-    "general2_odd": (113.7, 0.0117, 171.3, 0.0631, -97.1, -0.0093, -149.9,
-                     -0.0577, 0.8, 0.2, 0.01, 0.03, 0.4),
+    "general2_odd": (
+        113.7,
+        0.0117,
+        171.3,
+        0.0631,
+        -97.1,
+        -0.0093,
+        -149.9,
+        -0.0577,
+        0.8,
+        0.2,
+        0.01,
+        0.03,
+        0.4,
+    ),
     # 2-point, damage only, no beta (beta omitted -> 12 args)
-    "general2_nobeta": (50.0, 0.002, 75.0, 0.03, -50.0, -0.002, -75.0, -0.03,
-                        0.6, 0.4, 0.05, 0.0),
+    "general2_nobeta": (50.0, 0.002, 75.0, 0.03, -50.0, -0.002, -75.0, -0.03, 0.6, 0.4, 0.05, 0.0),
     # 3-point with E2 > E1 (Eup != E1p) and pinching
-    "general3_stiffening": (10.0, 0.01, 40.0, 0.02, 50.0, 0.05,
-                            -10.0, -0.01, -40.0, -0.02, -50.0, -0.05,
-                            0.7, 0.6, 0.0, 0.0, 0.5),
+    "general3_stiffening": (
+        10.0,
+        0.01,
+        40.0,
+        0.02,
+        50.0,
+        0.05,
+        -10.0,
+        -0.01,
+        -40.0,
+        -0.02,
+        -50.0,
+        -0.05,
+        0.7,
+        0.6,
+        0.0,
+        0.0,
+        0.5,
+    ),
 }
 ALL_PARAMS = {**TAKEDA_2PT, **TAKEDA_3PT, **GENERAL}
 
@@ -73,18 +161,18 @@ def _scripted_history(args):
     ey = _yield_strain(args)
     n3 = len(args) >= 16
     eu = abs(args[5] if n3 else args[3])
-    h = [0.0, 0.0]                                   # virgin zero (quirk)
-    h += list(np.linspace(0.0, 0.8 * ey, 8))         # elastic
-    h += list(np.linspace(0.8 * ey, -0.6 * ey, 9))   # elastic reversal
-    h += list(np.linspace(-0.6 * ey, 3 * ey, 12))    # yield +
-    h += list(np.linspace(3 * ey, -4 * ey, 20))      # yield -
-    h += list(np.linspace(-4 * ey, 1.5 * ey, 10))    # inner reloading
-    h += list(np.linspace(1.5 * ey, 0.2 * ey, 6))    # inner unloading
-    for a in (0.3, 0.5, 0.1):                        # small cycles
+    h = [0.0, 0.0]  # virgin zero (quirk)
+    h += list(np.linspace(0.0, 0.8 * ey, 8))  # elastic
+    h += list(np.linspace(0.8 * ey, -0.6 * ey, 9))  # elastic reversal
+    h += list(np.linspace(-0.6 * ey, 3 * ey, 12))  # yield +
+    h += list(np.linspace(3 * ey, -4 * ey, 20))  # yield -
+    h += list(np.linspace(-4 * ey, 1.5 * ey, 10))  # inner reloading
+    h += list(np.linspace(1.5 * ey, 0.2 * ey, 6))  # inner unloading
+    for a in (0.3, 0.5, 0.1):  # small cycles
         h += [a * ey, -a * ey] * 3
     s = h[-1]
     h += [s, s, s + 1e-17, s - 1e-17, s + 2e-16, s + 3e-16, s]  # DBL_EPS quirk
-    h += list(np.linspace(s, 1.3 * eu, 15))          # beyond last point
+    h += list(np.linspace(s, 1.3 * eu, 15))  # beyond last point
     h += list(np.linspace(1.3 * eu, -1.3 * eu, 25))
     h += [0.0, 0.0, 1e-300, -1e-300, 0.0, 5e-17, 0.0]
     h += list(np.linspace(0.0, 2 * eu, 10)) + list(np.linspace(2 * eu, 0.0, 10))
@@ -102,13 +190,13 @@ def _random_history(args, n, rng):
     for i in range(n):
         r = rng.random()
         if r < 0.05:
-            pass                                     # exact repeat
+            pass  # exact repeat
         elif r < 0.10:
             x = x + rng.choice([-1.0, 1.0]) * rng.random() * 3e-16
         elif r < 0.13:
             x = 0.0
         elif r < 0.20:
-            x = rng.uniform(-1.5, 1.5) * eu          # big jump
+            x = rng.uniform(-1.5, 1.5) * eu  # big jump
         else:
             amp = min(1.5 * eu, amp * rng.uniform(0.95, 1.06))
             x = x + rng.normal() * 0.15 * amp
@@ -178,7 +266,7 @@ def compare_with_opensees(args, strains, element_copy=False):
     sc, tc = clone_history(args, strains, element_copy=element_copy)
     exact = (so == sc) & (to == tc)
     return {
-        "n_states": int(len(strains)),
+        "n_states": len(strains),
         "n_exact": int(exact.sum()),
         "max_rel_stress": float(_rel(sc, so).max(initial=0.0)),
         "max_rel_tangent": float(_rel(tc, to).max(initial=0.0)),
@@ -201,8 +289,7 @@ _TOTALS = {"n": 0, "exact": 0}
 def test_against_opensees(name):
     args = ALL_PARAMS[name]
     rng = np.random.default_rng(sum(map(ord, name)))
-    strains = np.concatenate([_scripted_history(args),
-                              _random_history(args, 700, rng)])
+    strains = np.concatenate([_scripted_history(args), _random_history(args, 700, rng)])
     res = compare_with_opensees(args, strains)
     _TOTALS["n"] += res["n_states"]
     _TOTALS["exact"] += res["n_exact"]
@@ -216,8 +303,7 @@ def test_total_state_count():
     """>= 10 000 compared states, all bit-identical (runs after the above)."""
     if _TOTALS["n"] == 0:
         pytest.skip("comparison tests did not run in this session")
-    print(f"\nHysteretic vs openseespy: {_TOTALS['exact']}/{_TOTALS['n']} "
-          f"states bit-identical")
+    print(f"\nHysteretic vs openseespy: {_TOTALS['exact']}/{_TOTALS['n']} states bit-identical")
     assert _TOTALS["n"] >= 10_000
     assert _TOTALS["exact"] == _TOTALS["n"]
 
@@ -225,10 +311,11 @@ def test_total_state_count():
 def test_dbl_epsilon_quirk_keeps_trial_stress():
     """|strain - committed| < DBL_EPSILON keeps previous *trial* output."""
     m = HystereticMaterial(*TAKEDA_2PT["takeda2_b0.5"])
-    m.set_trial_strain(0.02); m.commit()
-    m.set_trial_strain(0.01)                 # trial, not committed
+    m.set_trial_strain(0.02)
+    m.commit()
+    m.set_trial_strain(0.01)  # trial, not committed
     s_trial, t_trial = m.stress, m.tangent
-    m.set_trial_strain(0.02 + 1e-17)         # ~ committed strain
+    m.set_trial_strain(0.02 + 1e-17)  # ~ committed strain
     assert (m.stress, m.tangent) == (s_trial, t_trial)
     assert m.strain == 0.02 + 1e-17
 
@@ -246,22 +333,30 @@ def _element_run(args, steps):
     out = []
     with ops_domain():
         ops.model("basic", "-ndm", 1, "-ndf", 1)
-        ops.node(1, 0.0); ops.node(2, 0.0); ops.fix(1, 1)
+        ops.node(1, 0.0)
+        ops.node(2, 0.0)
+        ops.fix(1, 1)
         ops.uniaxialMaterial("Hysteretic", 1, *args)
         ops.element("zeroLength", 1, 1, 2, "-mat", 1, "-dir", 1)
-        ops.timeSeries("Linear", 1); ops.pattern("Plain", 1, 1)
+        ops.timeSeries("Linear", 1)
+        ops.pattern("Plain", 1, 1)
         ops.load(2, 1.0)
-        ops.system("FullGeneral"); ops.numberer("Plain")
-        ops.constraints("Plain"); ops.algorithm("Newton")
+        ops.system("FullGeneral")
+        ops.numberer("Plain")
+        ops.constraints("Plain")
+        ops.algorithm("Newton")
         for du, fail in steps:
-            ops.test(*(("NormDispIncr", -1.0, 1, 0) if fail
-                       else ("FixedNumIter", 1, 0)))
+            ops.test(*(("NormDispIncr", -1.0, 1, 0) if fail else ("FixedNumIter", 1, 0)))
             ops.integrator("DisplacementControl", 2, 1, du)
             ops.analysis("Static")
             ok = ops.analyze(1)
             assert (ok < 0) == fail
-            out.append(tuple(ops.eleResponse(1, "material", "1", k)[0]
-                             for k in ("strain", "stress", "tangent")))
+            out.append(
+                tuple(
+                    ops.eleResponse(1, "material", "1", k)[0]
+                    for k in ("strain", "stress", "tangent")
+                )
+            )
     return out
 
 
@@ -272,9 +367,19 @@ def test_revert_and_trial_quirks_against_opensees_element():
     for name in ("takeda2_b0.5", "general3_soft", "general2"):
         args = ALL_PARAMS[name]
         ey = _yield_strain(args)
-        steps = [(2 * ey, False), (-ey, True), (0.0, False), (-3 * ey, False),
-                 (1.5 * ey, True), (0.7 * ey, False), (-0.2 * ey, True),
-                 (0.0, False), (-4 * ey, False), (0.0, True), (5 * ey, False)]
+        steps = [
+            (2 * ey, False),
+            (-ey, True),
+            (0.0, False),
+            (-3 * ey, False),
+            (1.5 * ey, True),
+            (0.7 * ey, False),
+            (-0.2 * ey, True),
+            (0.0, False),
+            (-4 * ey, False),
+            (0.0, True),
+            (5 * ey, False),
+        ]
         ref = _element_run(args, steps)
         # elements hold getCopy() -> element_copy=True
         m = HystereticMaterial(*args, element_copy=True)
@@ -299,21 +404,20 @@ def test_element_copy_energy_convention():
     args = GENERAL["general2_odd"]
     p_true = pack_hysteretic(*args, element_copy=True)
     p_false = pack_hysteretic(*args, element_copy=False)
-    assert np.array_equal(p_true[:K.P_ENERGYA], p_false[:K.P_ENERGYA])
+    assert np.array_equal(p_true[: K.P_ENERGYA], p_false[: K.P_ENERGYA])
     assert p_true[K.P_ENERGYA] != p_false[K.P_ENERGYA]
 
-    strains = np.concatenate([_scripted_history(args),
-                              _random_history(args, 3000,
-                                              np.random.default_rng(1))])
+    strains = np.concatenate(
+        [_scripted_history(args), _random_history(args, 3000, np.random.default_rng(1))]
+    )
     res = compare_with_opensees(args, strains, element_copy=False)
     assert res["n_exact"] == res["n_states"], res
     res_t = compare_with_opensees(args, strains, element_copy=True)
-    assert res_t["n_exact"] < res_t["n_states"]          # convention matters
+    assert res_t["n_exact"] < res_t["n_states"]  # convention matters
     assert res_t["max_rel_stress"] <= 1e-12 and res_t["max_rel_tangent"] <= 1e-12
 
     rng = np.random.default_rng(5)
-    steps = [(float(rng.normal() * 0.02), bool(rng.random() < 0.15))
-             for _ in range(250)]
+    steps = [(float(rng.normal() * 0.02), bool(rng.random() < 0.15)) for _ in range(250)]
     ref = _element_run(args, steps)
     m = HystereticMaterial(*args, element_copy=True)
     for (du, fail), (e_ops, s_ops, t_ops) in zip(steps, ref):
@@ -344,8 +448,7 @@ def _kernel_drive(params, strains, ops_codes):
     return out
 
 
-@pytest.mark.parametrize("name", ["takeda2_b0.5", "takeda3_b0.8",
-                                  "general3_soft", "general2"])
+@pytest.mark.parametrize("name", ["takeda2_b0.5", "takeda3_b0.8", "general3_soft", "general2"])
 def test_kernel_matches_class(name):
     args = ALL_PARAMS[name]
     rng = np.random.default_rng(11)
@@ -365,13 +468,12 @@ def test_kernel_matches_class(name):
 def test_elastic_short_circuit_is_exact():
     """_degradation skips pow() for 0 <= mu <= 1; check vs the full formula."""
     rng = np.random.default_rng(3)
-    ratios = np.concatenate([rng.random(20000), [0.0, -0.0, 1.0,
-                             np.nextafter(1.0, 0.0), 5e-324]])
+    ratios = np.concatenate([rng.random(20000), [0.0, -0.0, 1.0, np.nextafter(1.0, 0.0), 5e-324]])
     betas = np.concatenate([rng.random(20000) * 3.0, [0.0, 0.5, 1.0, 3.0, 0.0]])
 
     @njit
     def full(r, b):
-        k = r ** b
+        k = r**b
         return 1.0 if k < 1.0 else 1.0 / k
 
     @njit
@@ -390,7 +492,8 @@ def test_revert_to_start_and_initial_tangent():
     m = HystereticMaterial(*args)
     assert m.initial_tangent == args[0] / args[1] == m.tangent
     fresh = clone_history(args, [0.01, -0.02, 0.003])
-    m.set_trial_strain(0.05); m.commit()
+    m.set_trial_strain(0.05)
+    m.commit()
     m.revert_to_start()
     assert (m.stress, m.strain, m.tangent) == (0.0, 0.0, m.initial_tangent)
     again = clone_history(args, [0.01, -0.02, 0.003])
@@ -399,8 +502,7 @@ def test_revert_to_start_and_initial_tangent():
 
 def test_beta_keyword_equals_positional():
     a = TAKEDA_2PT["takeda2_b0.3"]
-    np.testing.assert_array_equal(pack_hysteretic(*a),
-                                  pack_hysteretic(*a[:-1], beta=0.3))
+    np.testing.assert_array_equal(pack_hysteretic(*a), pack_hysteretic(*a[:-1], beta=0.3))
     assert pack_hysteretic(*a[:-1])[K.P_BETA] == 0.0
 
 
@@ -415,29 +517,32 @@ def _with(base, idx, val):
     return tuple(lst)
 
 
-@pytest.mark.parametrize("args,kw,match", [
-    (GOOD2[:11], {}, r"got 11 positional"),
-    (GOOD3 + (1.0,), {}, r"got 18 positional"),
-    (GOOD2, {"beta": 0.1}, r"beta was given both"),
-    (_with(GOOD2, 1, math.nan), {}, r"e1p must be finite, got nan"),
-    (_with(GOOD3, 4, math.inf), {}, r"s3p must be finite, got inf"),
-    (_with(GOOD2, 0, "100"), {}, r"s1p must be a real number"),
-    (_with(GOOD2, 1, -0.01), {}, r"e1p must be > 0.*got -0.01"),
-    (_with(GOOD2, 0, 0.0), {}, r"s1p must be > 0"),
-    (_with(GOOD2, 5, 0.01), {}, r"e1n must be < 0.*got 0.01"),
-    (_with(GOOD2, 4, 5.0), {}, r"s1n must be < 0"),
-    (_with(GOOD2, 3, 0.005), {}, r"e2p must be > e1p = 0.012, got 0.005"),
-    (_with(GOOD2, 7, -0.001), {}, r"e2n must be < e1n"),
-    (_with(GOOD3, 3, 0.001), {}, r"e2p must be > e1p"),
-    (_with(GOOD3, 5, 0.02), {}, r"e3p must be > e2p"),
-    (_with(GOOD3, 9, -0.001), {}, r"e2n must be < e1n"),
-    (_with(GOOD3, 11, -0.01), {}, r"e3n must be < e2n"),
-    (_with(GOOD3, 12, 1.2), {}, r"pinchX must lie in \[0, 1\], got 1.2"),
-    (_with(GOOD3, 13, -0.1), {}, r"pinchY must lie in \[0, 1\]"),
-    (_with(GOOD3, 14, -1.0), {}, r"damage1 must be >= 0"),
-    (_with(GOOD3, 15, -1.0), {}, r"damage2 must be >= 0"),
-    (_with(GOOD3, 16, -0.5), {}, r"beta must be >= 0, got -0.5"),
-])
+@pytest.mark.parametrize(
+    "args,kw,match",
+    [
+        (GOOD2[:11], {}, r"got 11 positional"),
+        (GOOD3 + (1.0,), {}, r"got 18 positional"),
+        (GOOD2, {"beta": 0.1}, r"beta was given both"),
+        (_with(GOOD2, 1, math.nan), {}, r"e1p must be finite, got nan"),
+        (_with(GOOD3, 4, math.inf), {}, r"s3p must be finite, got inf"),
+        (_with(GOOD2, 0, "100"), {}, r"s1p must be a real number"),
+        (_with(GOOD2, 1, -0.01), {}, r"e1p must be > 0.*got -0.01"),
+        (_with(GOOD2, 0, 0.0), {}, r"s1p must be > 0"),
+        (_with(GOOD2, 5, 0.01), {}, r"e1n must be < 0.*got 0.01"),
+        (_with(GOOD2, 4, 5.0), {}, r"s1n must be < 0"),
+        (_with(GOOD2, 3, 0.005), {}, r"e2p must be > e1p = 0.012, got 0.005"),
+        (_with(GOOD2, 7, -0.001), {}, r"e2n must be < e1n"),
+        (_with(GOOD3, 3, 0.001), {}, r"e2p must be > e1p"),
+        (_with(GOOD3, 5, 0.02), {}, r"e3p must be > e2p"),
+        (_with(GOOD3, 9, -0.001), {}, r"e2n must be < e1n"),
+        (_with(GOOD3, 11, -0.01), {}, r"e3n must be < e2n"),
+        (_with(GOOD3, 12, 1.2), {}, r"pinchX must lie in \[0, 1\], got 1.2"),
+        (_with(GOOD3, 13, -0.1), {}, r"pinchY must lie in \[0, 1\]"),
+        (_with(GOOD3, 14, -1.0), {}, r"damage1 must be >= 0"),
+        (_with(GOOD3, 15, -1.0), {}, r"damage2 must be >= 0"),
+        (_with(GOOD3, 16, -0.5), {}, r"beta must be >= 0, got -0.5"),
+    ],
+)
 def test_bad_arguments(args, kw, match):
     with pytest.raises(ValueError, match=match):
         HystereticMaterial(*args, **kw)
@@ -460,22 +565,23 @@ def _backbones(draw):
     pos = [s1p, e1p]
     neg = [s1n, e1n]
     for _ in range(2 if three else 1):
-        pos += [pos[-2] * draw(st.floats(-0.5, 2.0)),
-                pos[-1] * draw(st.floats(1.1, 6.0))]
-        neg += [neg[-2] * draw(st.floats(-0.5, 2.0)),
-                neg[-1] * draw(st.floats(1.1, 6.0))]
+        pos += [pos[-2] * draw(st.floats(-0.5, 2.0)), pos[-1] * draw(st.floats(1.1, 6.0))]
+        neg += [neg[-2] * draw(st.floats(-0.5, 2.0)), neg[-1] * draw(st.floats(1.1, 6.0))]
     takeda = draw(st.booleans())
     if takeda:
         rest = [1.0, 1.0, 0.0, 0.0]
     else:
-        rest = [draw(st.floats(0.0, 1.0)), draw(st.floats(0.0, 1.0)),
-                draw(st.floats(0.0, 0.1)), draw(st.floats(0.0, 0.1))]
+        rest = [
+            draw(st.floats(0.0, 1.0)),
+            draw(st.floats(0.0, 1.0)),
+            draw(st.floats(0.0, 0.1)),
+            draw(st.floats(0.0, 0.1)),
+        ]
     beta = draw(st.sampled_from([0.0, 0.3, 0.5, 0.8, 1.0]))
     return tuple(pos + neg + rest + [beta]), draw(st.integers(0, 2**31))
 
 
-@settings(max_examples=40, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(_backbones())
 def test_random_backbones_against_opensees(case):
     args, seed = case

@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 import scipy.signal
+
 from deckpound.models import _iir
 
 

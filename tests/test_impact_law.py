@@ -34,8 +34,7 @@ def rows():
 
 def test_readme_quotes_the_measurement(rows):
     text = README.read_text(encoding="utf-8")
-    m = re.search(r"<!-- impact-law-table[^>]*-->\n(.*?)\n<!-- /impact-law-table -->", text,
-                  re.S)
+    m = re.search(r"<!-- impact-law-table[^>]*-->\n(.*?)\n<!-- /impact-law-table -->", text, re.S)
     assert m, "README has no impact-law-table block"
     assert m.group(1).strip() == format_table(rows).strip()
 

@@ -10,8 +10,6 @@ import stat
 
 import numpy as np
 import pytest
-from deckpound.models.errors import SceneError
-from deckpound.models.result import Result
 
 import deckpound._io as dio
 from deckpound._io import (
@@ -23,6 +21,8 @@ from deckpound._io import (
     is_temporary,
     output_folder,
 )
+from deckpound.models.errors import SceneError
+from deckpound.models.result import Result
 
 
 def _temps(folder):
@@ -112,12 +112,13 @@ def test_symbolic_links_are_refused_and_their_targets_untouched(tmp_path):
     (tmp_path / "link.txt").symlink_to(victim)
     (tmp_path / "realdir").mkdir()
     (tmp_path / "linkdir").symlink_to(tmp_path / "realdir")
-    for write in (lambda: atomic_write_text(tmp_path / "link.txt", "evil"),
-                  lambda: atomic_write_files({tmp_path / "link.txt": "evil"}),
-                  lambda: atomic_path(tmp_path / "link.txt").__enter__(),
-                  lambda: Result(engine="link", columns={"t": np.zeros(2)}).write(
-                      tmp_path / "linkdir"),
-                  lambda: ensure_folder(tmp_path / "linkdir")):
+    for write in (
+        lambda: atomic_write_text(tmp_path / "link.txt", "evil"),
+        lambda: atomic_write_files({tmp_path / "link.txt": "evil"}),
+        lambda: atomic_path(tmp_path / "link.txt").__enter__(),
+        lambda: Result(engine="link", columns={"t": np.zeros(2)}).write(tmp_path / "linkdir"),
+        lambda: ensure_folder(tmp_path / "linkdir"),
+    ):
         with pytest.raises(SceneError, match="symbolic link"):
             write()
     assert victim.read_text() == "precious\n" and not list((tmp_path / "realdir").iterdir())
@@ -148,6 +149,7 @@ def test_devices_are_written_in_place_never_replaced():
 
 # -- output folders ---------------------------------------------------------------------------
 
+
 def test_output_folder_success_leaves_no_marker(tmp_path):
     with output_folder(tmp_path / "out", "test") as out:
         assert (out / INCOMPLETE).is_file()  # marked while the command runs
@@ -176,8 +178,9 @@ def test_output_folder_failure_after_output_is_marked_then_resumed(tmp_path):
 
 def test_output_folder_keeps_the_entry_of_a_concurrent_live_command(tmp_path):
     out = ensure_folder(tmp_path / "out")
-    other = (f"running abc123 pid={os.getpid()} host={socket.gethostname().split()[0]} "
-             "paper started now")
+    other = (
+        f"running abc123 pid={os.getpid()} host={socket.gethostname().split()[0]} paper started now"
+    )
     atomic_write_text(out / INCOMPLETE, other + "\n")
     with output_folder(out, "paper"):
         pass

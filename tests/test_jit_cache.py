@@ -15,15 +15,16 @@ SNIPPET = "import deckpound.analytic, numba; print(numba.config.CACHE_DIR)"
 def _cache_dir(env_updates: dict[str, str], drop=("NUMBA_CACHE_DIR",)) -> str:
     env = {k: v for k, v in os.environ.items() if k not in drop}
     env.update(env_updates)
-    out = subprocess.run([sys.executable, "-c", SNIPPET], env=env, capture_output=True,
-                         text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", SNIPPET], env=env, capture_output=True, text=True, check=True
+    )
     return out.stdout.strip().splitlines()[-1]
 
 
 def test_cache_directory_is_keyed_by_sources_and_switches(tmp_path):
     a = _cache_dir({"XDG_CACHE_HOME": str(tmp_path)})
     assert a.startswith(str(tmp_path / "deckpound" / "numba")), a
-    assert _cache_dir({"XDG_CACHE_HOME": str(tmp_path)}) == a          # deterministic
+    assert _cache_dir({"XDG_CACHE_HOME": str(tmp_path)}) == a  # deterministic
     # a switch frozen into the kernels at compile time gives another cache
     b = _cache_dir({"XDG_CACHE_HOME": str(tmp_path), "DECKPOUND_TAKEDA_SHORTCUT": "0"})
     assert b != a and b.startswith(str(tmp_path / "deckpound" / "numba"))

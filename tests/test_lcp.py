@@ -2,7 +2,8 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from deckpound.analytic.lcp import (
     LEMKE_RAY,
@@ -19,7 +20,7 @@ def _check_solution(M, q, z, w, tol=1e-12):
     roundoff = 1e-13 * scale * (1 + np.abs(M).max()) * (1 + np.abs(z).max())
     np.testing.assert_allclose(w, M @ z + q, rtol=0, atol=roundoff)
     nat, fb = lcp_residual(z, w)
-    size = scale + np.abs(M).max() * np.abs(z).max()   # magnitude of the terms summed in w
+    size = scale + np.abs(M).max() * np.abs(z).max()  # magnitude of the terms summed in w
     assert nat <= tol * size, nat
     assert fb <= 10 * tol * size * np.sqrt(len(q)), fb
 
@@ -69,7 +70,7 @@ def test_3x3_hand_solution():
     assert status == LEMKE_SOLVED
     np.testing.assert_allclose(z, [0.75, 0.0, 0.75], atol=1e-14)
     np.testing.assert_allclose(w, [0.0, 4.5, 0.0], atol=1e-14)
-    ze, we, st_, _ = lcp_enumerate(M, q)
+    ze, _we, st_, _ = lcp_enumerate(M, q)
     assert st_ == 0
     np.testing.assert_allclose(ze, z, atol=1e-14)
 
@@ -144,9 +145,9 @@ def test_ray_termination_infeasible_skew():
     # Lemke must end on a secondary ray (CPS Thm 4.4.13).
     M = np.array([[0.0, 1.0], [-1.0, 0.0]])
     q = np.array([-1.0, -1.0])
-    z, w, status, _ = lcp_lemke(M, q)
+    _z, _w, status, _ = lcp_lemke(M, q)
     assert status == LEMKE_RAY
-    ze, we, st_, res = lcp_enumerate(M, q)
+    _ze, _we, st_, res = lcp_enumerate(M, q)
     assert st_ == 1 and res > 0.5
 
 
@@ -167,7 +168,7 @@ def test_max_pivots_status():
 
 
 def test_enumeration_too_large():
-    z, w, status, res = lcp_enumerate(np.eye(13), -np.ones(13))
+    _z, _w, status, _res = lcp_enumerate(np.eye(13), -np.ones(13))
     assert status == 3
 
 
@@ -195,8 +196,7 @@ def _random_p_matrix(rng, n):
 
 
 @settings(max_examples=300, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 10),
-       logq=st.floats(-3.0, 3.0))
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 10), logq=st.floats(-3.0, 3.0))
 def test_lemke_p_matrix_matches_enumeration(seed, n, logq):
     rng = np.random.default_rng(seed)
     M = _random_p_matrix(rng, n)
@@ -204,7 +204,7 @@ def test_lemke_p_matrix_matches_enumeration(seed, n, logq):
     z, w, status, _ = lcp_lemke(M, q)
     assert status == LEMKE_SOLVED
     _check_solution(M, q, z, w, tol=1e-12)
-    ze, we, st_, _ = lcp_enumerate(M, q)
+    ze, _we, st_, _ = lcp_enumerate(M, q)
     assert st_ == 0
     # P-matrix: unique solution
     zs = 1.0 + np.abs(ze).max()

@@ -15,8 +15,8 @@ from deckpound.compare.memory import LONG_RUN, peak_rss
 
 def test_memory_does_not_grow_with_steps():
     common = ["compliance.dt=1e-05", "run.output_dt=0.01"]
-    small = peak_rss("compliance", ["excitation.duration=1.0"] + common)     # 1e5 steps
-    large = peak_rss("compliance", ["excitation.duration=10.0"] + common)    # 1e6 steps
+    small = peak_rss("compliance", ["excitation.duration=1.0"] + common)  # 1e5 steps
+    large = peak_rss("compliance", ["excitation.duration=10.0"] + common)  # 1e6 steps
     print("1e5 steps:", small, "\n1e6 steps:", large)
     assert small["status"] == large["status"] == "success"
     assert large["steps"] == 10 * small["steps"] == 1_000_000

@@ -4,11 +4,18 @@ engine, the benchmark, and the engine contract."""
 from __future__ import annotations
 
 import dataclasses
-
 import warnings
 
 import numpy as np
 import pytest
+from _compliance_helpers import (
+    base_scene,
+    rest_motion,
+    with_bents,
+    with_contact,
+    with_run,
+    with_seats,
+)
 
 from deckpound.analytic.compliance import run_compliance
 from deckpound.analytic.nonsmooth import ENERGY_COLUMNS, output_columns, run_nonsmooth
@@ -17,9 +24,6 @@ from deckpound.models.contact_params import effective_masses
 from deckpound.models.errors import EngineFailure
 from deckpound.models.result import standard_columns
 from deckpound.models.scene_io import load_scene
-
-from _compliance_helpers import base_scene, rest_motion, with_bents, with_contact, with_run, \
-    with_seats
 
 
 def short_scene(duration: float, *overrides: str):
@@ -34,29 +38,35 @@ def quiet(fn, *args, **kw):
 
 # ----------------------------------------------------------------------------- energy
 def free_scene(e, mu, theta, geometry="linear", dashpots=True, ratio=0.0, h=1e-3, T=3.0):
-    sc = base_scene(f"damping.ratio={ratio!r}", f"nonsmooth.h={h!r}",
-                    f"nonsmooth.theta={theta!r}", f"contact.geometry={geometry}")
-    sc = with_bents(sc)                                   # elastic: strain energy is ½kd²
+    sc = base_scene(
+        f"damping.ratio={ratio!r}",
+        f"nonsmooth.h={h!r}",
+        f"nonsmooth.theta={theta!r}",
+        f"contact.geometry={geometry}",
+    )
+    sc = with_bents(sc)  # elastic: strain energy is ½kd²
     if not dashpots:
         sc = with_seats(sc, cx=0.0, ctheta=0.0)
-    sc = with_contact(sc, restitution=e, friction=mu,
-                      friction_mode="slip" if mu > 0 else "none")
+    sc = with_contact(sc, restitution=e, friction=mu, friction_mode="slip" if mu > 0 else "none")
     return with_run(sc, duration=T, output_dt=h)
 
 
-V0 = np.array([0.0, 0.0, 0.0, 0.0, -0.8, 0.5, 0.03])   # deck thrown at seat 1, rotating
+V0 = np.array([0.0, 0.0, 0.0, 0.0, -0.8, 0.5, 0.03])  # deck thrown at seat 1, rotating
 
 
-@pytest.mark.parametrize("e,mu,theta,geometry,dashpots", [
-    (1.0, 0.0, 0.5, "linear", False),
-    (0.6, 0.0, 0.5, "linear", False),
-    (0.0, 0.0, 0.5, "linear", False),
-    (0.6, 0.0, 0.5, "nonlinear", True),
-    (1.0, 0.0, 0.5, "nonlinear", True),
-    (0.0, 0.3, 1.0, "linear", False),
-    (0.6, 0.3, 1.0, "linear", False),
-    (0.6, 0.5, 1.0, "nonlinear", True),
-])
+@pytest.mark.parametrize(
+    "e,mu,theta,geometry,dashpots",
+    [
+        (1.0, 0.0, 0.5, "linear", False),
+        (0.6, 0.0, 0.5, "linear", False),
+        (0.0, 0.0, 0.5, "linear", False),
+        (0.6, 0.0, 0.5, "nonlinear", True),
+        (1.0, 0.0, 0.5, "nonlinear", True),
+        (0.0, 0.3, 1.0, "linear", False),
+        (0.6, 0.3, 1.0, "linear", False),
+        (0.6, 0.5, 1.0, "nonlinear", True),
+    ],
+)
 def test_no_energy_gain_in_any_step(e, mu, theta, geometry, dashpots):
     """Free motion with impacts (supports at rest, elastic springs): the mechanical energy
     T + V never grows from one step to the next, and the discrete balance closes.
@@ -87,7 +97,7 @@ def test_no_energy_gain_in_any_step(e, mu, theta, geometry, dashpots):
         assert np.min(np.diff(r[col])) >= -1e-12 * E0, col
     assert r.meta["energy_error"] <= 1e-11 * E0
     if e == 1.0 and mu == 0.0 and not dashpots:
-        assert E[-1] == pytest.approx(E0, rel=1e-10)       # θ = ½, e = 1: conservative
+        assert E[-1] == pytest.approx(E0, rel=1e-10)  # θ = ½, e = 1: conservative
 
 
 def test_impact_law_option_changes_only_separating_corners():
@@ -118,12 +128,16 @@ def test_impact_law_option_changes_only_separating_corners():
 def test_penetration_is_measured_at_every_step():
     """Output every 50 steps: the per-step maximum of the kernel is larger than the rows'."""
     sc = base_scene("nonsmooth.h=1e-4", "damping.ratio=0.0")
-    sc = with_run(with_seats(with_bents(sc, kx=1e-9, ky=1e-9), mass=1e12, inertia=1e12,
-                             gap=0.01), duration=0.05, output_dt=5e-3)
+    sc = with_run(
+        with_seats(with_bents(sc, kx=1e-9, ky=1e-9), mass=1e12, inertia=1e12, gap=0.01),
+        duration=0.05,
+        output_dt=5e-3,
+    )
     sc = sc.replace(initial=dataclasses.replace(sc.initial, deck_velocity=(-0.5, 0.0, 0.0)))
     for engine, dt in (("nonsmooth", 1e-4), ("compliance", 1e-5)):
-        settings = dataclasses.replace(getattr(sc, engine), **{
-            "h" if engine == "nonsmooth" else "dt": dt})
+        settings = dataclasses.replace(
+            getattr(sc, engine), **{"h" if engine == "nonsmooth" else "dt": dt}
+        )
         r = quiet(run_engine, engine, sc, rest_motion(sc, 0.05), settings=settings)
         assert r.ok
         print(engine, r.meta["max_penetration"], r.meta["max_penetration_rows"])
@@ -152,15 +166,23 @@ def _fit(hs, errs):
 def test_second_order_without_contact():
     """θ = ½, no contact (gaps 1 m), pulse on every support through the springs: the smooth
     part is the trapezoidal rule, second order in deck_x (reference h = 2.5e-5)."""
+
     def scene(h):
-        sc = base_scene("excitation.kind=pulse", "excitation.duration=1.0",
-                        "excitation.pga=0.5", f"nonsmooth.h={h!r}", "run.output_dt=0.02")
+        sc = base_scene(
+            "excitation.kind=pulse",
+            "excitation.duration=1.0",
+            "excitation.pga=0.5",
+            f"nonsmooth.h={h!r}",
+            "run.output_dt=0.02",
+        )
         return with_seats(with_bents(sc), gap=1.0)
+
     ref = run_nonsmooth(scene(2.5e-5))
     assert ref.meta["gap_closures"] == 0
     hs = np.array([4e-3, 2e-3, 1e-3, 5e-4])
-    errs = [np.max(np.abs(run_nonsmooth(scene(float(h)))["deck_x_abs"] - ref["deck_x_abs"]))
-            for h in hs]
+    errs = [
+        np.max(np.abs(run_nonsmooth(scene(float(h)))["deck_x_abs"] - ref["deck_x_abs"])) for h in hs
+    ]
     p = _fit(hs, errs)
     print(f"smooth: errors {errs}, order {p:.3f}")
     assert 1.9 <= p <= 2.1
@@ -208,19 +230,27 @@ def test_first_order_with_impacts():
 def test_compliance_kelvin_voigt_approaches_nonsmooth_as_stiffness_grows():
     """Pulse scene (kind = pulse): compliance engine with Kelvin–Voigt contact of restitution e
     at k = 1e6, 1e7, 1e8 (dt = contact period / 20) against the nonsmooth engine (h = 1e-5)."""
-    ov = ("excitation.kind=pulse", "excitation.duration=1.5", "contact.law=kelvin-voigt",
-          "run.output_dt=0.001")
+    ov = (
+        "excitation.kind=pulse",
+        "excitation.duration=1.5",
+        "contact.law=kelvin-voigt",
+        "run.output_dt=0.001",
+    )
     ns = quiet(run_nonsmooth, base_scene(*ov, "nonsmooth.h=1e-05"))
     assert ns.ok and ns.meta["gap_closures"] > 10
-    meff = float(effective_masses(base_scene(*ov)).min())   # lightest corner mass [t]
+    meff = float(effective_masses(base_scene(*ov)).min())  # lightest corner mass [t]
     diffs = []
     for k in (1e6, 1e7, 1e8):
         tc = 2.0 * np.pi * np.sqrt(meff / k)
         dt = 0.001 / int(np.ceil(0.001 / (tc / 20.0)))
         r = run_compliance(base_scene(*ov, f"contact.stiffness={k!r}", f"compliance.dt={dt!r}"))
         assert r.ok
-        diffs.append({c: float(np.max(np.abs(r[c] - ns[c]))) for c in ("deck_x_abs", "seat1_x_abs",
-                                                                        "seat2_x_abs")})
+        diffs.append(
+            {
+                c: float(np.max(np.abs(r[c] - ns[c])))
+                for c in ("deck_x_abs", "seat1_x_abs", "seat2_x_abs")
+            }
+        )
     print("max |compliance - nonsmooth| per k:", diffs)
     for c in ("deck_x_abs", "seat1_x_abs"):
         d = [x[c] for x in diffs]
@@ -244,8 +274,8 @@ def test_benchmark_short_record_physics():
     assert all(np.all(np.isfinite(v)) for v in r.columns.values())
     assert r.meta["gap_closures"] > 0
     gaps = np.column_stack([r[f"gap_c{c}"] for c in range(1, 5)])
-    assert np.min(gaps) < 0.0                                    # gaps close at 1.0 g
-    assert np.max(np.abs(r["deck_theta"])) > 1e-4                # the deck rotates
+    assert np.min(gaps) < 0.0  # gaps close at 1.0 g
+    assert np.max(np.abs(r["deck_theta"])) > 1e-4  # the deck rotates
     # penetration of the Moreau–Jean scheme: O(h · closing speed)
     vclose = np.max(-np.diff(gaps, axis=0)) / sc.run.output_dt
     assert r.meta["max_penetration"] <= 2.0 * sc.nonsmooth.h * vclose
@@ -253,8 +283,9 @@ def test_benchmark_short_record_physics():
     # impulses ↔ averaged forces; states only where impulses are
     stride = round(sc.run.output_dt / sc.nonsmooth.h)
     for c in range(1, 5):
-        np.testing.assert_allclose(r[f"fn_c{c}"] * stride * sc.nonsmooth.h, r[f"pn_c{c}"],
-                                   rtol=1e-12, atol=0)
+        np.testing.assert_allclose(
+            r[f"fn_c{c}"] * stride * sc.nonsmooth.h, r[f"pn_c{c}"], rtol=1e-12, atol=0
+        )
         assert np.all(r[f"pn_c{c}"] >= 0.0)
         assert set(np.unique(r[f"state_c{c}"])) <= {0.0, 1.0, 2.0}
     assert r.meta["energy_closure"] <= 1e-10
@@ -268,17 +299,23 @@ def test_solvers_and_friction_on_benchmark():
     assert a.ok and b.ok
     np.testing.assert_allclose(b["deck_x_abs"], a["deck_x_abs"], rtol=0, atol=1e-12)
     with pytest.warns(UserWarning, match="set-valued Coulomb"):
-        f = run_nonsmooth(short_scene(2.0, "contact.friction=0.5", "contact.friction_mode=stick",
-                                      "contact.geometry=nonlinear"))
+        f = run_nonsmooth(
+            short_scene(
+                2.0,
+                "contact.friction=0.5",
+                "contact.friction_mode=stick",
+                "contact.geometry=nonlinear",
+            )
+        )
     assert f.ok, f.meta["message"]
     assert f.meta["max_cone_residual"] <= 1e-9
     states = np.concatenate([f[f"state_c{c}"] for c in range(1, 5)])
-    assert {1.0, 2.0} <= set(np.unique(states))                 # stick and slip both occur
+    assert {1.0, 2.0} <= set(np.unique(states))  # stick and slip both occur
     assert np.max(np.abs(f["deck_y_abs"] - a["deck_y_abs"])) > 0.0
 
 
 def test_failure_is_reported_and_raised():
-    sc = short_scene(2.0, "nonsmooth.max_iterations=1")          # Takeda yields: needs 2
+    sc = short_scene(2.0, "nonsmooth.max_iterations=1")  # Takeda yields: needs 2
     r = run_nonsmooth(sc)
     assert r.meta["status"] == "failed"
     assert r.meta["failed_step"] > 0
@@ -296,9 +333,20 @@ def test_contract_registry_and_warnings():
     assert r.engine == "nonsmooth" and r.ok
     for col in standard_columns([b.name for b in sc.bents]) + list(ENERGY_COLUMNS):
         assert col in r.columns
-    for key in ("wall_time", "steps", "newton_iterations", "gap_closures", "contact_solves",
-                "failures", "status", "message", "max_complementarity", "max_cone_residual",
-                "scene_hash", "scene"):
+    for key in (
+        "wall_time",
+        "steps",
+        "newton_iterations",
+        "gap_closures",
+        "contact_solves",
+        "failures",
+        "status",
+        "message",
+        "max_complementarity",
+        "max_cone_residual",
+        "scene_hash",
+        "scene",
+    ):
         assert key in r.meta
     assert r.t[1] == pytest.approx(sc.run.output_dt)
     with pytest.warns(UserWarning, match="does nothing"):

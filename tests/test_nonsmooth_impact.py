@@ -15,11 +15,16 @@ import itertools
 
 import numpy as np
 import pytest
+from _compliance_helpers import (
+    base_scene,
+    rest_motion,
+    with_bents,
+    with_contact,
+    with_run,
+    with_seats,
+)
 
 from deckpound.analytic.nonsmooth import run_nonsmooth
-
-from _compliance_helpers import base_scene, rest_motion, with_bents, with_contact, with_run, \
-    with_seats
 
 GAP = 0.05
 H = 1.0e-4
@@ -29,8 +34,7 @@ def impact_scene(e: float, mu: float, duration: float, h: float = H, theta: floa
     sc = base_scene("damping.ratio=0.0", f"nonsmooth.h={h!r}", f"nonsmooth.theta={theta!r}")
     sc = with_bents(sc, kx=1e-9, ky=1e-9)
     sc = with_seats(sc, mass=1e12, inertia=1e12, cx=0.0, ctheta=0.0, gap=GAP)
-    sc = with_contact(sc, restitution=e, friction=mu,
-                      friction_mode="slip" if mu > 0 else "none")
+    sc = with_contact(sc, restitution=e, friction=mu, friction_mode="slip" if mu > 0 else "none")
     return with_run(sc, duration=duration, output_dt=h)
 
 
@@ -62,7 +66,7 @@ def closed_form_single(Minv, wn, wt, U, e, mu):
     uN, uT = wn @ U, wt @ U
     assert uN < 0
     qN = (1.0 + e) * uN
-    det = gNN * gTT - gNT ** 2
+    det = gNN * gTT - gNT**2
     PN = -(gTT * qN - gNT * uT) / det
     PT = -(-gNT * qN + gNN * uT) / det
     if not (PN > 0 and abs(PT) <= mu * PN):
@@ -82,7 +86,7 @@ def closed_form_single(Minv, wn, wt, U, e, mu):
 @pytest.mark.parametrize("e", [0.0, 0.6, 1.0])
 def test_symmetric_frictionless_impact_rebounds_at_minus_e_v(e):
     v_in = 0.5
-    T = 0.12                                     # impact at t ≈ 0.1 s, then free flight
+    T = 0.12  # impact at t ≈ 0.1 s, then free flight
     sc = impact_scene(e, 0.0, T)
     u0, v0 = np.zeros(7), np.zeros(7)
     v0[4] = -v_in
@@ -105,9 +109,9 @@ def test_symmetric_frictionless_impact_rebounds_at_minus_e_v(e):
     # the impact is one step (no persistent contact impulse): impulse in exactly one row
     assert np.count_nonzero(r["pn_c1"]) == 1
     # energy: impact loss = (1 - e^2) T_normal, balance closes
-    dT = 0.5 * m * v_in ** 2 * (1.0 - e ** 2)
+    dT = 0.5 * m * v_in**2 * (1.0 - e**2)
     assert r["energy_impact"][-1] == pytest.approx(dT, rel=1e-8)
-    assert abs(r["energy_error"][-1]) <= 1e-12 * 0.5 * m * v_in ** 2
+    assert abs(r["energy_error"][-1]) <= 1e-12 * 0.5 * m * v_in**2
 
 
 # (v0 = [.., xd, yd, thd]) sliding: large transverse velocity; sticking: small one
@@ -121,10 +125,10 @@ ECCENTRIC = {
 @pytest.mark.parametrize("case", list(ECCENTRIC))
 def test_eccentric_single_corner_impact_matches_closed_form(case):
     vd, e, mu = ECCENTRIC[case]
-    th0 = 0.01                                   # c2 (y = +W/2) strikes, c1 stays open
+    th0 = 0.01  # c2 (y = +W/2) strikes, c1 stays open
     yc = 0.5 * base_scene().deck.width
     t_hit = (GAP - yc * th0) / abs(vd[0])
-    T = round((t_hit + 0.005) / H) * H          # a little after the impact step
+    T = round((t_hit + 0.005) / H) * H  # a little after the impact step
     sc = impact_scene(e, mu, T)
     u0, v0 = np.zeros(7), np.zeros(7)
     u0[6] = th0
@@ -160,11 +164,12 @@ def closed_form_face(Minv, rows, wt, U, e, mu):
             cols = cols + [wt] if mode == "stick" else [c - mode * mu * wt for c in cols]
             eqs = [rows[i] for i in actv] + ([wt] if mode == "stick" else [])
             A = np.array([[q @ Minv @ c for c in cols] for q in eqs])
-            b = np.array([-(1 + e) * uNm[i] for i in actv] + ([-(wt @ U)] if mode == "stick"
-                                                              else []))
+            b = np.array(
+                [-(1 + e) * uNm[i] for i in actv] + ([-(wt @ U)] if mode == "stick" else [])
+            )
             x = np.linalg.solve(A, b)
             Pn = np.zeros(2)
-            Pn[actv] = x[:len(actv)]
+            Pn[actv] = x[: len(actv)]
             Pt = x[-1] if mode == "stick" else -mode * mu * Pn.sum()
             Up = U + Minv @ (rows[0] * Pn[0] + rows[1] * Pn[1] + wt * Pt)
             ok = bool(np.all(Pn[actv] >= 0))
@@ -177,10 +182,15 @@ def closed_form_face(Minv, rows, wt, U, e, mu):
     return found
 
 
-@pytest.mark.parametrize("vd,e,mu", [((-0.5, 0.02, 0.0), 0.6, 0.5),     # stick
-                                     ((-0.5, 0.6, 0.0), 0.6, 0.3),      # slip
-                                     ((-0.5, -0.6, 0.0), 0.2, 0.3),     # slip, other way
-                                     ((-0.5, 0.0, 0.0), 1.0, 0.4)])     # no tangential motion
+@pytest.mark.parametrize(
+    "vd,e,mu",
+    [
+        ((-0.5, 0.02, 0.0), 0.6, 0.5),  # stick
+        ((-0.5, 0.6, 0.0), 0.6, 0.3),  # slip
+        ((-0.5, -0.6, 0.0), 0.2, 0.3),  # slip, other way
+        ((-0.5, 0.0, 0.0), 1.0, 0.4),
+    ],
+)  # no tangential motion
 def test_face_impact_totals_match_closed_form(vd, e, mu):
     """Both corners of the left face strike together (θ = θ̇ = 0). The face's impulses and the
     post-impact velocities are unique; the per-corner split of the tangential impulse is not
@@ -202,6 +212,7 @@ def test_face_impact_totals_match_closed_form(vd, e, mu):
     np.testing.assert_allclose(vf, Up, rtol=0, atol=1e-10 * 0.5)
     ptot = r["pn_c1"].sum() + r["pn_c2"].sum()
     assert ptot == pytest.approx(Pn.sum(), rel=1e-10)
-    np.testing.assert_allclose([r["pn_c1"].sum(), r["pn_c2"].sum()], Pn, rtol=0,
-                               atol=1e-10 * Pn.sum())
+    np.testing.assert_allclose(
+        [r["pn_c1"].sum(), r["pn_c2"].sum()], Pn, rtol=0, atol=1e-10 * Pn.sum()
+    )
     assert r["pt_c1"].sum() + r["pt_c2"].sum() == pytest.approx(Pt, rel=0, abs=1e-10 * Pn.sum())

@@ -23,13 +23,19 @@ import pytest
 
 from deckpound.models.scene_io import load_scene
 
-pytestmark = pytest.mark.skipif(importlib.util.find_spec("openseespy") is None,
-                                reason="openseespy not installed")
+pytestmark = pytest.mark.skipif(
+    importlib.util.find_spec("openseespy") is None, reason="openseespy not installed"
+)
 
 
 def _bench(law: str, duration: float = 5.0, **extra):
-    ov = ["opensees.tolerance=1e-12", "compliance.tolerance=1e-12", "opensees.mode=rigid",
-          f"run.duration={duration}", f"contact.law={law}"]
+    ov = [
+        "opensees.tolerance=1e-12",
+        "compliance.tolerance=1e-12",
+        "opensees.mode=rigid",
+        f"run.duration={duration}",
+        f"contact.law={law}",
+    ]
     ov += [f"{k}={v}" for k, v in extra.items()]
     return load_scene("saiidi-4span", ov)
 
@@ -41,8 +47,10 @@ def test_clone_agrees_with_opensees_for_the_law(law):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rep = verify_clone(_bench(law))
-    print(f"{law}: largest deviation {rep['worst']}, velocities {rep['worst_velocity']}, "
-          f"iterations {rep['iterations']}")
+    print(
+        f"{law}: largest deviation {rep['worst']}, velocities {rep['worst_velocity']}, "
+        f"iterations {rep['iterations']}"
+    )
     assert rep["status"] == {"opensees": "success", "compliance": "success"}
     assert rep["worst"][1] <= 1e-9, rep["deviation"]
     assert rep["worst_velocity"][1] <= 1e-8, rep["deviation"]
@@ -74,9 +82,18 @@ def test_hertzdamp_material_arithmetic_is_the_clones():
     cp = cl.pack_contact(sc, opensees_tangent=True)[0]
     g0 = 0.01
     k, n, xi_n = cp[cl.P_K], cp[cl.P_N], cp[cl.P_D]
-    path = [(0.002, -0.3), (-0.001, -0.2), (-0.0012, -0.25), (-0.002, 0.1), (-0.0015, 0.2),
-            (0.001, 0.3), (-0.0005, -0.4), (-0.0007, 0.0), (-0.0002, 0.5)]
-    cs4 = cl.new_contact_state(np.full(4, g0))       # contact_commit works on all 4 corners
+    path = [
+        (0.002, -0.3),
+        (-0.001, -0.2),
+        (-0.0012, -0.25),
+        (-0.002, 0.1),
+        (-0.0015, 0.2),
+        (0.001, 0.3),
+        (-0.0005, -0.4),
+        (-0.0007, 0.0),
+        (-0.0002, 0.5),
+    ]
+    cs4 = cl.new_contact_state(np.full(4, g0))  # contact_commit works on all 4 corners
     cs = cs4[0]
     with OpsSession() as ops:
         raw = ops.raw
@@ -103,14 +120,15 @@ def test_bilinear_runs_with_fine_substeps_close_to_the_continuous_law():
 
     from deckpound.engines import run_engine
 
-    sc = load_scene("saiidi-4span", ["contact.law=bilinear", "opensees.substeps=1000",
-                                     "run.duration=3.0"])
+    sc = load_scene(
+        "saiidi-4span", ["contact.law=bilinear", "opensees.substeps=1000", "run.duration=3.0"]
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ro = run_engine("opensees", sc)
         rc = run_engine("compliance", sc)
     assert ro.ok and rc.ok
-    assert ro.meta["rescued_by_substeps"] >= 1          # the closing steps need them
+    assert ro.meta["rescued_by_substeps"] >= 1  # the closing steps need them
     for col in ("deck_theta", "deck_x_abs"):
         po, pc = np.max(np.abs(ro[col])), np.max(np.abs(rc[col]))
         print(col, po, pc, abs(po - pc) / pc)
@@ -118,4 +136,4 @@ def test_bilinear_runs_with_fine_substeps_close_to_the_continuous_law():
     fo = max(np.max(ro[f"fn_c{c}"]) for c in range(1, 5))
     fc = max(np.max(rc[f"fn_c{c}"]) for c in range(1, 5))
     print("peak gap force", fo, fc, abs(fo - fc) / fc)
-    assert fo > fc                       # the closing-step spike of ImpactMaterial
+    assert fo > fc  # the closing-step spike of ImpactMaterial

@@ -12,14 +12,14 @@ import scipy.linalg
 pytest.importorskip("openseespy.opensees")
 
 from deckpound.models import mechanics
-from deckpound.models.plan import plan_of  # noqa: E402
-from deckpound.models.errors import EngineFailure  # noqa: E402
-from deckpound.models.excitation import SupportMotion, support_motion  # noqa: E402
-from deckpound.models.result import standard_columns  # noqa: E402
-from deckpound.models.scene import RunSettings, TakedaSpring  # noqa: E402
-from deckpound.models.scene_io import load_scene  # noqa: E402
-from deckpound.opensees_build import engine  # noqa: E402
-from deckpound.opensees_build.ops import OpsSession  # noqa: E402
+from deckpound.models.errors import EngineFailure
+from deckpound.models.excitation import SupportMotion, support_motion
+from deckpound.models.plan import plan_of
+from deckpound.models.result import standard_columns
+from deckpound.models.scene import RunSettings, TakedaSpring
+from deckpound.models.scene_io import load_scene
+from deckpound.opensees_build import engine
+from deckpound.opensees_build.ops import OpsSession
 
 warnings.filterwarnings("ignore", message="OpenSees: .* failed step")
 
@@ -38,8 +38,10 @@ def short(scene, duration, **opensees):
 
 def elastic_scene(scene, gap=5.0):
     """Bents that never yield and gaps that never close."""
+
     def big(s: TakedaSpring) -> TakedaSpring:
         return dc.replace(s, yield_force=1.0e9, ultimate_displacement=1.0e7)
+
     bents = tuple(dc.replace(b, x=big(b.x), y=big(b.y)) for b in scene.bents)
     seats = tuple(dc.replace(s, gap=gap) for s in scene.seats)
     return scene.replace(bents=bents, seats=seats)
@@ -67,14 +69,25 @@ def ramp_motion(scene, duration, amp, ramp=2.0, channels=None):
 
 # -- contract ----------------------------------------------------------------------------------
 
+
 def test_result_contract(bench):
     sc = short(bench, 0.5)
     r = engine.run_opensees(sc)
     assert list(r.columns) == standard_columns([b.name for b in sc.bents])
     assert r.t[0] == 0.0 and r.t[-1] == pytest.approx(0.5)
     assert np.allclose(np.diff(r.t), sc.run.output_dt)
-    for key in ("wall_time", "steps", "newton_iterations", "gap_closures", "failures", "status",
-                "message", "settings", "scene_hash", "version"):
+    for key in (
+        "wall_time",
+        "steps",
+        "newton_iterations",
+        "gap_closures",
+        "failures",
+        "status",
+        "message",
+        "settings",
+        "scene_hash",
+        "version",
+    ):
         assert key in r.meta
     assert r.meta["steps"] == 1000 and r.meta["failures"] == 0 and r.ok
     assert r.meta["settings"]["mode"] == "rigid"
@@ -85,6 +98,7 @@ def test_result_contract(bench):
 
 
 # -- contact-free linear response vs an independent ODE solution ----------------------------------
+
 
 def reference_response(scene, motion, t_out, a0=None, a1=None, relative_mass_damping=False):
     """7-DOF absolute-coordinate ODE: M ü + a0 M u̇ + Bᵀ[(a1 m k + c)(B u̇ − S v_g) + k (B u − S d_g)]
@@ -113,12 +127,11 @@ def reference_response(scene, motion, t_out, a0=None, a1=None, relative_mass_dam
     Minv = np.diag(1.0 / np.diag(M))
     nc = D.shape[1]
     Cm = a0 * M + B.T @ np.diag(a1 * k + c) @ B
-    A = np.block([[np.zeros((7, 7)), np.eye(7)],
-                  [-Minv @ B.T @ np.diag(kk) @ B, -Minv @ Cm]])
+    A = np.block([[np.zeros((7, 7)), np.eye(7)], [-Minv @ B.T @ np.diag(kk) @ B, -Minv @ Cm]])
     G = np.zeros((14, 2 * nc))
     G[7:, :nc] = Minv @ B.T @ np.diag(kk) @ S
     G[7:, nc:] = Minv @ B.T @ np.diag(a1 * k + c) @ S
-    if relative_mass_damping:   # a0 M (u̇ − v_support) on the deck x, y and the seats' x
+    if relative_mass_damping:  # a0 M (u̇ − v_support) on the deck x, y and the seats' x
         G[7 + 4, nc + 0] += a0
         G[7 + 5, nc + 1] += a0
         G[7 + 0, nc + nc - 2] += a0
@@ -126,10 +139,10 @@ def reference_response(scene, motion, t_out, a0=None, a1=None, relative_mass_dam
     n = 14 + 4 * nc
     Z = np.zeros((n, n))
     Z[:14, :14] = A
-    Z[:14, 14:14 + 2 * nc] = G
-    Z[14:14 + 2 * nc, 14 + 2 * nc:] = np.eye(2 * nc)
+    Z[:14, 14 : 14 + 2 * nc] = G
+    Z[14 : 14 + 2 * nc, 14 + 2 * nc :] = np.eye(2 * nc)
     E = scipy.linalg.expm(Z * h)
-    E1, E2, E3 = E[:14, :14], E[:14, 14:14 + 2 * nc], E[:14, 14 + 2 * nc:]
+    E1, E2, E3 = E[:14, :14], E[:14, 14 : 14 + 2 * nc], E[:14, 14 + 2 * nc :]
     W = np.hstack([D, V])
     x = np.zeros(14)
     states = [x[:7]]
@@ -157,8 +170,17 @@ def test_linear_response_matches_modal_reference(bench):
         r = engine.run_opensees(sc, motion)
         if ref is None:
             ref = reference_response(sc, motion, r.t)
-        got = np.column_stack([r["seat1_x_abs"], r["seat1_theta"], r["seat2_x_abs"], r["seat2_theta"],
-                               r["deck_x_abs"], r["deck_y_abs"], r["deck_theta"]])
+        got = np.column_stack(
+            [
+                r["seat1_x_abs"],
+                r["seat1_theta"],
+                r["seat2_x_abs"],
+                r["seat2_theta"],
+                r["deck_x_abs"],
+                r["deck_y_abs"],
+                r["deck_theta"],
+            ]
+        )
         scale = np.abs(ref).max(axis=0)
         # seat rotations are not excited without contact (both exactly zero)
         assert np.abs(got[:, [1, 3]]).max() < 1e-14 and scale[1] == scale[3] == 0.0
@@ -185,13 +207,15 @@ def test_rigid_and_stick_modes_agree(bench):
 
 # -- contact -------------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("law", ["linear", "bilinear", "kelvin-voigt", "hertz", "hertzdamp"])
 @pytest.mark.parametrize("direction", [-1.0, 1.0])
 def test_closing_gives_compression(bench, law, direction):
     """Tables pushed 5 cm along x: the deck closes the gaps on one side and opens the other."""
     sc = short(bench, 3.0, dt=1e-3)
-    sc = sc.replace(contact=dc.replace(sc.contact, law=law),
-                    opensees=dc.replace(sc.opensees, substeps=1000))
+    sc = sc.replace(
+        contact=dc.replace(sc.contact, law=law), opensees=dc.replace(sc.opensees, substeps=1000)
+    )
     r = engine.run_opensees(sc, ramp_motion(sc, 3.0, direction * 0.05))
     closing = ("c1", "c2") if direction < 0 else ("c3", "c4")
     opening = ("c3", "c4") if direction < 0 else ("c1", "c2")
@@ -200,11 +224,12 @@ def test_closing_gives_compression(bench, law, direction):
         assert r[f"gap_{c}"][-1] < 0.0
         assert r[f"fn_{c}"][-1] > 10.0
         if law == "linear":
-            np.testing.assert_allclose(r[f"fn_{c}"], k * np.maximum(0.0, -r[f"gap_{c}"]),
-                                       rtol=1e-9, atol=1e-6)
+            np.testing.assert_allclose(
+                r[f"fn_{c}"], k * np.maximum(0.0, -r[f"gap_{c}"]), rtol=1e-9, atol=1e-6
+            )
         elif law in ("kelvin-voigt", "bilinear"):  # quasi-static end: the K1 spring part
             assert r[f"fn_{c}"][-1] == pytest.approx(k * -r[f"gap_{c}"][-1], rel=0.05)
-        else:   # Hertzdamp (n = 1.5): k δ^n with the damping term small at the end
+        else:  # Hertzdamp (n = 1.5): k δ^n with the damping term small at the end
             n = sc.contact.exponent
             assert r[f"fn_{c}"][-1] == pytest.approx(k * (-r[f"gap_{c}"][-1]) ** n, rel=0.05)
     for c in opening:
@@ -221,10 +246,11 @@ def test_single_impact_conserves_momentum(bench):
     deck + seat is the same after the impact (trapezoidal rule, internal contact forces)."""
     tiny = TakedaSpring(stiffness=1e-6, yield_force=1.0, ultimate_displacement=1e7)
     sc = short(bench, 0.05, dt=5e-5)
-    sc = sc.replace(bents=tuple(dc.replace(b, x=tiny, y=tiny) for b in sc.bents),
-                    seats=tuple(dc.replace(s, kx=1e-6, ktheta=1e-6, cx=0.0, ctheta=0.0)
-                                for s in sc.seats),
-                    damping=dc.replace(sc.damping, ratio=0.0))
+    sc = sc.replace(
+        bents=tuple(dc.replace(b, x=tiny, y=tiny) for b in sc.bents),
+        seats=tuple(dc.replace(s, kx=1e-6, ktheta=1e-6, cx=0.0, ctheta=0.0) for s in sc.seats),
+        damping=dc.replace(sc.damping, ratio=0.0),
+    )
     v0 = -1.0
     with OpsSession() as ops:
         info, plan = engine.build(ops, sc, zero_motion(sc, 0.05))
@@ -235,11 +261,11 @@ def test_single_impact_conserves_momentum(bench):
         vs = o.nodeVel(info.seats[0], 1)
         vs2 = o.nodeVel(info.seats[1], 1)
     assert out["stats"]["status"] == "success"
-    assert out["stats"]["contact_events"] == 2           # c1 and c2 close once
+    assert out["stats"]["contact_events"] == 2  # c1 and c2 close once
     md, ms = sc.deck.mass, sc.seats[0].mass
     p0 = md * v0
     p1 = md * vd + ms * vs
-    assert vs < 1.5 * v0                                 # the seat was hit (moves -x, faster)
+    assert vs < 1.5 * v0  # the seat was hit (moves -x, faster)
     assert vs2 == pytest.approx(0.0, abs=1e-12)
     assert p1 == pytest.approx(p0, rel=1e-9)
 
@@ -257,7 +283,7 @@ def test_damping_force_definition(bench):
     motion = support_motion(sc)
     r = engine.run_opensees(sc, motion)
     got = np.column_stack([r["deck_x_abs"], r["deck_y_abs"], r["deck_theta"]])
-    a0, a1, _ = mechanics.rayleigh_coefficients(sc)
+    _a0, _a1, _ = mechanics.rayleigh_coefficients(sc)
 
     def err(**kw):
         ref = reference_response(sc, motion, r.t, **kw)[:, 4:]
@@ -291,11 +317,19 @@ def test_relative_mass_damping_matches_the_reference(bench):
 
 # -- failures and the substep fallback -------------------------------------------------------------
 
+
 class FailAt:
     """ops wrapper whose analyze call number ``at`` fails (test tolerance made impossible)."""
 
-    REBUILD = ("wipeAnalysis", "constraints", "numberer", "system", "algorithm", "integrator",
-               "analysis")
+    REBUILD = (
+        "wipeAnalysis",
+        "constraints",
+        "numberer",
+        "system",
+        "algorithm",
+        "integrator",
+        "analysis",
+    )
 
     def __init__(self, raw, at, rebuild=True):
         self.raw, self.at, self.calls, self.rebuild = raw, at, 0, rebuild
@@ -314,7 +348,11 @@ class FailAt:
 
 def _rigid_gap_mismatch(r, sc):
     (_, y1) = sc.corners[0]
-    pred = sc.seats[0].gap + (r["deck_x_abs"] - y1 * r["deck_theta"]) - (r["seat1_x_abs"] - y1 * r["seat1_theta"])
+    pred = (
+        sc.seats[0].gap
+        + (r["deck_x_abs"] - y1 * r["deck_theta"])
+        - (r["seat1_x_abs"] - y1 * r["seat1_theta"])
+    )
     return np.abs(pred - r["gap_c1"]).max()
 
 
@@ -324,7 +362,7 @@ def test_failed_step_rescued_without_corrupting_constraints(bench):
     base = engine.run_opensees(sc, motion)
     r = engine.run_opensees(sc, motion, _ops_wrapper=lambda raw: FailAt(raw, 1500))
     assert r.ok and r.meta["failures"] == 1 and r.meta["rescued_by_substeps"] == 1
-    assert _rigid_gap_mismatch(r, sc) < 1e-12           # rigid links still rigid
+    assert _rigid_gap_mismatch(r, sc) < 1e-12  # rigid links still rigid
     assert np.abs(r["deck_x_abs"] - base["deck_x_abs"]).max() < 1e-6
     # the OpenSees 3.7 quirk this guards against: retrying without rebuilding the analysis
     # leaves a permanent offset on the rigidLink-constrained corner nodes
@@ -348,6 +386,7 @@ def test_failure_reported_without_nan(bench):
 
 # -- benchmark runs ------------------------------------------------------------------------------
 
+
 def _pga_scene(bench, pga, duration):
     sc = short(bench, duration)
     return sc.replace(excitation=dc.replace(sc.excitation, pga=pga))
@@ -359,7 +398,7 @@ def test_strong_runs_pound_and_rotate(bench, pga):
     assert r.ok and r.meta["failures"] == 0
     assert r.meta["gap_closures"] > 10
     assert max(r[f"fn_c{c}"].max() for c in range(1, 5)) > 10.0
-    assert np.abs(r["deck_theta"]).max() > 1e-4       # rad; round-off would be ~1e-15
+    assert np.abs(r["deck_theta"]).max() > 1e-4  # rad; round-off would be ~1e-15
 
 
 def test_weak_run_report(bench):
@@ -372,14 +411,17 @@ def test_weak_run_report(bench):
 
 # -- friction ------------------------------------------------------------------------------------
 
+
 def test_friction_opposes_sliding_and_respects_coulomb(bench):
     """Deck thrown at seat 1 moving +y: the tangential force on the deck is negative (opposes
     the sliding), |ft| ≤ μ fn, and the seat (guided in y) stays put in y."""
     tiny = TakedaSpring(stiffness=1e-6, yield_force=1.0, ultimate_displacement=1e7)
     sc = short(bench, 0.03, dt=2e-5)
-    sc = sc.replace(bents=tuple(dc.replace(b, x=tiny, y=tiny) for b in sc.bents),
-                    damping=dc.replace(sc.damping, ratio=0.0),
-                    contact=dc.replace(sc.contact, friction=0.5, friction_mode="contact2d"))
+    sc = sc.replace(
+        bents=tuple(dc.replace(b, x=tiny, y=tiny) for b in sc.bents),
+        damping=dc.replace(sc.damping, ratio=0.0),
+        contact=dc.replace(sc.contact, friction=0.5, friction_mode="contact2d"),
+    )
     sc = sc.replace(run=RunSettings(duration=0.03, output_dt=2e-5))
     with OpsSession() as ops:
         info, plan = engine.build(ops, sc, zero_motion(sc, 0.03))

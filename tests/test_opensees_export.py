@@ -14,18 +14,18 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from deckpound.engine_contract import engine_columns  # noqa: E402
-from deckpound.models.plan import plan_of  # noqa: E402
+from deckpound.engine_contract import engine_columns
+from deckpound.models.plan import plan_of
 
 pytest.importorskip("openseespy.opensees")
 
-from deckpound.models.errors import SceneError  # noqa: E402
-from deckpound.models.scene import RunSettings  # noqa: E402
-from deckpound.models.result import scene_hash, standard_columns  # noqa: E402
-from deckpound.models.scene_io import load_scene  # noqa: E402
-from deckpound.opensees_build import engine, export, recorders  # noqa: E402
-from deckpound.opensees_build.model import gap_mapping  # noqa: E402
-from deckpound.opensees_build.ops import ArrayArg, OpsSession, render_commands  # noqa: E402
+from deckpound.models.errors import SceneError
+from deckpound.models.result import scene_hash
+from deckpound.models.scene import RunSettings
+from deckpound.models.scene_io import load_scene
+from deckpound.opensees_build import engine, export, recorders
+from deckpound.opensees_build.model import gap_mapping
+from deckpound.opensees_build.ops import ArrayArg, OpsSession, render_commands
 
 
 @pytest.fixture(scope="module")
@@ -48,10 +48,9 @@ def test_ops_session_wipes_and_tags():
         ops.model("basic", "-ndm", 2, "-ndf", 3)
         ops.node(ops.tag("node", "a"), 0.0, 1.5)
         assert ops.raw.getNodeTags() == [1]
-        ops.nodeDisp(1)                       # queries are not logged
-        with pytest.raises(RuntimeError):
-            with OpsSession():
-                pass
+        ops.nodeDisp(1)  # queries are not logged
+        with pytest.raises(RuntimeError), OpsSession():
+            pass
         assert [c.name for c in ops.log] == ["wipe", "model", "node"]
         assert render_commands(ops.log, "py").splitlines()[-1] == "ops.node(1, 0.0, 1.5)"
         assert render_commands(ops.log, "tcl").splitlines()[-1] == "node 1 0.0 1.5"
@@ -72,11 +71,16 @@ def test_exported_python_csv_reproduces_in_process_run(exported, tmp_path):
     """The optional --csv output is deckpound's own CSV, bit for bit."""
     sc, py, _ = exported
     r = engine.run_opensees(sc)
-    cp = subprocess.run([sys.executable, str(py), "--csv", "--out", str(tmp_path)],
-                        capture_output=True, text=True, timeout=120, check=False)
+    cp = subprocess.run(
+        [sys.executable, str(py), "--csv", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert cp.returncode == 0, cp.stderr[-2000:]
     df = pd.read_csv(tmp_path / "opensees.csv", dtype=float)
-    assert list(df.columns) == engine_columns(plan_of(sc))   # the engine's own columns
+    assert list(df.columns) == engine_columns(plan_of(sc))  # the engine's own columns
     assert len(df) == len(r.t)
     for c in df.columns:
         assert np.array_equal(df[c].to_numpy(), r[c]), c
@@ -123,7 +127,8 @@ def test_data_folder_manifest(exported):
     folder = py.parent / "model_data"
     manifest = json.loads((folder / "manifest.json").read_text())
     assert sorted(p.name for p in folder.iterdir()) == sorted(
-        [r["file"] for r in manifest["records"]] + ["manifest.json"])
+        [r["file"] for r in manifest["records"]] + ["manifest.json"]
+    )
     assert manifest["scene"] == {"name": sc.name, "sha256": scene_hash(sc)}
     assert manifest["units"]["force"] == "kN" and manifest["units"]["mass"] == "t"
     recs = manifest["records"]
@@ -158,7 +163,10 @@ def test_header_states_units_tags_signs_damping_and_fallback(exported):
         for name, tag in reg.items():
             assert f"{kind} {tag} '{name}'" in head, (kind, name)
     ray = next(c for c in log if c.name == "rayleigh")
-    assert f"alphaM = {ray.args[0]:.12g}" in flat and f"betaKinit (initial stiffness) = {ray.args[2]:.12g}" in flat
+    assert (
+        f"alphaM = {ray.args[0]:.12g}" in flat
+        and f"betaKinit (initial stiffness) = {ray.args[2]:.12g}" in flat
+    )
     # issue 12: the seat springs carry no Rayleigh damping by default (damping.members = bents)
     assert "-doRayleigh 1: 1 bent bent1, 2 bent bent2, 3 bent bent3 " in flat
     assert "zeroLengthContact2D): 4 seat1 spring, 5 seat1 dashpot" in flat
@@ -207,13 +215,22 @@ def test_recorded_velocities_are_the_newmark_velocities(bench, tmp_path):
     Newmark's average-acceleration rule gives (u[n+1] - u[n])/dt = (v[n] + v[n+1])/2."""
     sc = bench.replace(run=RunSettings(duration=0.3, output_dt=bench.opensees.dt))
     py = export.export_script(sc, "py", tmp_path / "v.py")
-    cp = subprocess.run([sys.executable, str(py), "--out", str(tmp_path / "out")],
-                        capture_output=True, text=True, timeout=120, check=False)
+    cp = subprocess.run(
+        [sys.executable, str(py), "--out", str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert cp.returncode == 0, cp.stderr[-2000:]
     dt = sc.opensees.dt
-    for col, vcol in (("deck_x_abs", "deck_vx_abs"), ("deck_y_abs", "deck_vy_abs"),
-                      ("deck_theta", "deck_omega"), ("seat1_x_abs", "seat1_vx_abs"),
-                      ("seat2_x_abs", "seat2_vx_abs")):
+    for col, vcol in (
+        ("deck_x_abs", "deck_vx_abs"),
+        ("deck_y_abs", "deck_vy_abs"),
+        ("deck_theta", "deck_omega"),
+        ("seat1_x_abs", "seat1_vx_abs"),
+        ("seat2_x_abs", "seat2_vx_abs"),
+    ):
         u = np.loadtxt(tmp_path / "out" / f"{col}.out")[:, 1]
         v = np.loadtxt(tmp_path / "out" / f"{vcol}.out")[:, 1]
         assert len(u) == len(v) == 601
@@ -284,6 +301,7 @@ def test_readme_shows_the_current_export_head():
 
 # -- sign convention and refusals ---------------------------------------------------------------
 
+
 def test_gap_mapping_signs(bench):
     for c in range(4):
         spec = gap_mapping(bench, c, deck_node=100, seat_node=200, mat_tag=7)
@@ -295,8 +313,13 @@ def test_gap_mapping_signs(bench):
     assert spec.material == "ImpactMaterial" and spec.args[3] < 0 and spec.args[4] < 0
 
 
-@pytest.mark.parametrize("law,why", [("hertz-damp", "OpenSees cannot express the 'hertz-damp'"),
-                                     ("bilinear", r"only with opensees.substeps >= 1000")])
+@pytest.mark.parametrize(
+    "law,why",
+    [
+        ("hertz-damp", "OpenSees cannot express the 'hertz-damp'"),
+        ("bilinear", r"only with opensees.substeps >= 1000"),
+    ],
+)
 def test_refuses_hertz_damp_and_bilinear(bench, law, why):
     """Issue 12: hertz-damp is not Hertzdamp's law (law = 'hertzdamp' is); ImpactMaterial
     fails at the first impact with the default 10 sub-steps, so bilinear is refused before
@@ -314,20 +337,23 @@ def test_refuses_slip_friction(bench):
 
 @pytest.mark.parametrize("law", ["kelvin-voigt", "hertz", "hertzdamp", "bilinear"])
 def test_refuses_law_with_friction(bench, law):
-    sc = bench.replace(contact=dc.replace(bench.contact, law=law, friction=0.2,
-                                          friction_mode="contact2d"),
-                       opensees=dc.replace(bench.opensees, substeps=1000))
+    sc = bench.replace(
+        contact=dc.replace(bench.contact, law=law, friction=0.2, friction_mode="contact2d"),
+        opensees=dc.replace(bench.opensees, substeps=1000),
+    )
     with pytest.raises(SceneError, match="cannot combine"):
         engine.run_opensees(sc)
 
 
 def test_warns_about_options_that_do_nothing(bench):
-    sc = bench.replace(contact=dc.replace(bench.contact, geometry="nonlinear"),
-                       run=RunSettings(duration=0.01))
+    sc = bench.replace(
+        contact=dc.replace(bench.contact, geometry="nonlinear"), run=RunSettings(duration=0.01)
+    )
     with pytest.warns(UserWarning, match="geometry"):
         engine.run_opensees(sc)
-    sc = bench.replace(contact=dc.replace(bench.contact, friction=0.3),
-                       run=RunSettings(duration=0.01))
+    sc = bench.replace(
+        contact=dc.replace(bench.contact, friction=0.3), run=RunSettings(duration=0.01)
+    )
     with pytest.warns(UserWarning, match="friction"):
         engine.run_opensees(sc)
     with warnings.catch_warnings():

@@ -18,18 +18,21 @@ import subprocess
 import sys
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
 from deckpound.models.errors import SceneError
 from deckpound.models.scene import RunSettings
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build import export
 from deckpound.opensees_build.quoting import comment_text, py_str, safe_file_name, tcl_word
-from hypothesis import given
-from hypothesis import strategies as st
 
 pytest.importorskip("openseespy.opensees")
-needs_tcl = pytest.mark.skipif(importlib.util.find_spec("opensees") is None,
-                               reason="the Tcl OpenSees interpreter (pip package 'opensees') is "
-                               "not installed; ./run.sh test installs it")
+needs_tcl = pytest.mark.skipif(
+    importlib.util.find_spec("opensees") is None,
+    reason="the Tcl OpenSees interpreter (pip package 'opensees') is "
+    "not installed; ./run.sh test installs it",
+)
 
 
 def hostile(marker_dir) -> list[str]:
@@ -65,22 +68,28 @@ def benign_texts(n: int) -> list[str]:
 
 # -- the quoting functions -----------------------------------------------------------------------
 
+
 @needs_tcl
 def test_tcl_word_reads_back_exactly_in_tcl(tmp_path):
     """Every string survives as one Tcl word, unchanged, with no substitution run."""
     words = hostile(tmp_path)[:-2] + ["", "plain", "a b", "{", "}", "\\", "é", "\u2028", "\t;#"]
     words = [w for w in words if all(ord(c) <= 0xFFFF for c in w)]
     lines = ["set fh [open [lindex $argv 0] w]"]
-    lines += [f"puts $fh h:[binary encode hex [encoding convertto utf-8 {tcl_word(w)}]]"
-              for w in words]
+    lines += [
+        f"puts $fh h:[binary encode hex [encoding convertto utf-8 {tcl_word(w)}]]" for w in words
+    ]
     lines.append("close $fh")
     out = tmp_path / "words.txt"
     script = tmp_path / "words.tcl"
     script.write_text("\n".join(lines) + "\n", encoding="ascii")
-    cp = subprocess.run([sys.executable, "-m", "opensees", "-"], capture_output=True, text=True,
-                        timeout=120, check=False,
-                        input=f"set argv [list {tcl_word(str(out))}]\n"
-                        f"source {tcl_word(str(script))}\n")
+    cp = subprocess.run(
+        [sys.executable, "-m", "opensees", "-"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+        input=f"set argv [list {tcl_word(str(out))}]\nsource {tcl_word(str(script))}\n",
+    )
     assert cp.returncode == 0, cp.stderr[-2000:]
     got = [bytes.fromhex(h[2:]).decode("utf-8") for h in out.read_text().splitlines()]
     assert got == words, [(a, b) for a, b in zip(got, words) if a != b]
@@ -118,6 +127,7 @@ def test_safe_file_name():
 
 # -- whole scripts -----------------------------------------------------------------------------
 
+
 @pytest.fixture(scope="module")
 def markers(tmp_path_factory):
     return tmp_path_factory.mktemp("markers")
@@ -129,8 +139,10 @@ def scripts(tmp_path_factory, markers):
     out = {}
     for kind, tx in (("hostile", texts), ("benign", benign_texts(len(texts)))):
         folder = tmp_path_factory.mktemp(kind)
-        out[kind] = {fmt: export.export_script(scene_with(tx), fmt, folder / f"model.{fmt}")
-                     for fmt in ("py", "tcl")}
+        out[kind] = {
+            fmt: export.export_script(scene_with(tx), fmt, folder / f"model.{fmt}")
+            for fmt in ("py", "tcl")
+        }
     return out
 
 
@@ -163,21 +175,37 @@ def test_tcl_comments_end_at_their_line(tmp_path, markers):
     lines = ["set n 0"]
     for t in hostile(markers):
         lines += [f"# {comment_text(t, 'tcl')}", "incr n"]
-        lines += ["proc p {} {", f"    # {comment_text(t, 'tcl')}", "    return ok", "}",
-                  "if {[p] eq {ok}} { incr n }"]
-    lines.append("puts \"count $n\"")
+        lines += [
+            "proc p {} {",
+            f"    # {comment_text(t, 'tcl')}",
+            "    return ok",
+            "}",
+            "if {[p] eq {ok}} { incr n }",
+        ]
+    lines.append('puts "count $n"')
     script = tmp_path / "comments.tcl"
     script.write_text("\n".join(lines) + "\n", encoding="ascii")
-    cp = subprocess.run([sys.executable, "-m", "opensees", "-"], capture_output=True, text=True,
-                        timeout=120, check=False, input=f"source {tcl_word(str(script))}\n")
+    cp = subprocess.run(
+        [sys.executable, "-m", "opensees", "-"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+        input=f"source {tcl_word(str(script))}\n",
+    )
     assert cp.returncode == 0, cp.stderr[-2000:]
     assert f"count {2 * len(hostile(markers))}" in cp.stdout
     assert list(markers.iterdir()) == []
 
 
 def test_hostile_python_script_runs_the_model_only(scripts, markers, tmp_path):
-    cp = subprocess.run([sys.executable, str(scripts["hostile"]["py"]), "--out", str(tmp_path)],
-                        capture_output=True, text=True, timeout=120, check=False)
+    cp = subprocess.run(
+        [sys.executable, str(scripts["hostile"]["py"]), "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     assert cp.returncode == 0, cp.stderr[-2000:]
     assert list(markers.iterdir()) == []
     assert (tmp_path / "deck_x_abs.out").read_text().count("\n") == 11
@@ -188,10 +216,15 @@ def test_hostile_tcl_script_runs_the_model_only(scripts, markers, tmp_path):
     outs = {}
     for kind in ("hostile", "benign"):
         out = tmp_path / kind
-        cp = subprocess.run([sys.executable, "-m", "opensees", "-"], capture_output=True,
-                            text=True, timeout=120, check=False,
-                            input=f"set outDir {tcl_word(str(out))}\n"
-                            f"source {tcl_word(str(scripts[kind]['tcl']))}\n")
+        cp = subprocess.run(
+            [sys.executable, "-m", "opensees", "-"],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=False,
+            input=f"set outDir {tcl_word(str(out))}\n"
+            f"source {tcl_word(str(scripts[kind]['tcl']))}\n",
+        )
         assert cp.returncode == 0, cp.stderr[-2000:]
         outs[kind] = {p.name: p.read_bytes() for p in out.iterdir()}
     assert list(markers.iterdir()) == []
@@ -208,8 +241,14 @@ HOSTILE_STEM = "m $x [exec touch o1] \"q\" {b} ; é ''' \\ [open o2 w]"
 def test_hostile_output_path_python(tmp_path, markers):
     sc = load_scene("saiidi-4span").replace(run=RunSettings(duration=0.02))
     script = export.export_script(sc, "py", tmp_path / "dir é" / f"{HOSTILE_STEM}.py")
-    cp = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                        timeout=120, check=False, cwd=markers)
+    cp = subprocess.run(
+        [sys.executable, str(script)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+        cwd=markers,
+    )
     assert cp.returncode == 0, cp.stderr[-2000:]
     assert (script.parent / f"{script.stem}_results" / "deck_x_abs.out").exists()
     assert list(markers.iterdir()) == []
@@ -219,9 +258,15 @@ def test_hostile_output_path_python(tmp_path, markers):
 def test_hostile_output_path_tcl(tmp_path, markers):
     sc = load_scene("saiidi-4span").replace(run=RunSettings(duration=0.02))
     script = export.export_script(sc, "tcl", tmp_path / "dir é" / f"{HOSTILE_STEM}.tcl")
-    cp = subprocess.run([sys.executable, "-m", "opensees", "-"], capture_output=True, text=True,
-                        timeout=120, check=False, cwd=markers,
-                        input=f"source {tcl_word(str(script))}\n")
+    cp = subprocess.run(
+        [sys.executable, "-m", "opensees", "-"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+        cwd=markers,
+        input=f"source {tcl_word(str(script))}\n",
+    )
     assert cp.returncode == 0, (cp.stdout + cp.stderr)[-2000:]
     assert (script.parent / f"{script.stem}_results" / "deck_x_abs.out").exists()
     assert list(markers.iterdir()) == []

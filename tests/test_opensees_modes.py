@@ -9,9 +9,9 @@ import pytest
 
 pytest.importorskip("openseespy.opensees")
 
-from deckpound.models import mechanics  # noqa: E402
-from deckpound.models.scene_io import load_scene  # noqa: E402
-from deckpound.opensees_build.modes import opensees_modes  # noqa: E402
+from deckpound.models import mechanics
+from deckpound.models.scene_io import load_scene
+from deckpound.opensees_build.modes import opensees_modes
 
 
 @pytest.fixture(scope="module")
@@ -23,7 +23,7 @@ def test_rigid_modes_equal_the_7dof_model(bench):
     ref = mechanics.natural_modes(bench)
     m = opensees_modes(bench)
     np.testing.assert_allclose(m.periods, ref.periods, rtol=1e-8)
-    for k in range(3):   # deck modes: distinct frequencies, shapes equal up to sign
+    for k in range(3):  # deck modes: distinct frequencies, shapes equal up to sign
         # (the seat modes come in equal-frequency pairs: any combination is a valid shape)
         a, b = m.shapes[:, k], ref.shapes[:, k]
         assert min(np.abs(a - b).max(), np.abs(a + b).max()) < 1e-6 * np.abs(b).max()

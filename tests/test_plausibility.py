@@ -7,13 +7,13 @@ import math
 
 import numpy as np
 import pytest
+
+from deckpound.cli import main
 from deckpound.models import plausibility
 from deckpound.models.contact_params import effective_masses
 from deckpound.models.errors import SceneError
 from deckpound.models.mechanics import natural_modes
 from deckpound.models.scene_io import load_scene
-
-from deckpound.cli import main
 
 
 def _scene(*overrides):
@@ -35,34 +35,34 @@ def test_the_benchmark_is_plausible_for_every_engine(bench_scene):
 
 def test_a_step_longer_than_the_record_is_refused_naming_both():
     report = plausibility.check(_scene("opensees.dt=30"))
-    (field, message), = _only(report, "error")
+    ((field, message),) = _only(report, "error")
     assert field == "opensees.dt"
     assert "opensees.dt = 30 s" in message and "record length 20 s" in message
 
 
 def test_a_run_shorter_than_one_step_names_run_duration():
     report = plausibility.check(_scene("run.duration=1e-4"), engines=("opensees",))
-    (field, message), = _only(report, "error")
+    ((field, message),) = _only(report, "error")
     assert field == "run.duration" and "run.duration = 0.0001 s" in message
     assert "opensees.dt = 0.0005 s" in message
 
 
 def test_fewer_than_ten_steps_are_refused():
     s = _scene("excitation.duration=0.3", "nonsmooth.h=0.05")
-    (field, message), = _only(plausibility.check(s, engines=("nonsmooth",)), "error")
+    ((field, message),) = _only(plausibility.check(s, engines=("nonsmooth",)), "error")
     assert field == "nonsmooth.h" and "6 steps" in message and "<= 0.03 s" in message
 
 
 def test_a_step_beyond_half_the_fundamental_period_is_refused():
     report = plausibility.check(_scene("opensees.dt=0.4"), engines=("opensees",))
-    (field, message), = _only(report, "error")
+    ((field, message),) = _only(report, "error")
     assert field == "opensees.dt" and "T1 = 0.611" in message and "<= 0.3055" in message
 
 
 def test_few_steps_per_shortest_period_warn():
     report = plausibility.check(_scene("nonsmooth.h=0.003"), engines=("nonsmooth",))
     assert report.ok
-    (field, message), = _only(report, "warning")
+    ((field, message),) = _only(report, "warning")
     assert field == "nonsmooth.h" and "T = 0.01566 s" in message and "5.22 steps" in message
 
 
@@ -76,10 +76,15 @@ def test_contacts_shorter_than_a_step_warn_for_compliant_engines_only():
     assert _only(plausibility.check(adaptive, engines=("compliance",)), "warning") == []
 
 
-@pytest.mark.parametrize("output_dt,level,text", [
-    ("1e25", "error", "single row t = 0"), ("100", "error", "single row t = 0"),
-    ("2.5", "warning", "stores only 9 rows"), ("1e-6", "warning", "output is stored every step"),
-])
+@pytest.mark.parametrize(
+    "output_dt,level,text",
+    [
+        ("1e25", "error", "single row t = 0"),
+        ("100", "error", "single row t = 0"),
+        ("2.5", "warning", "stores only 9 rows"),
+        ("1e-6", "warning", "output is stored every step"),
+    ],
+)
 def test_output_step(output_dt, level, text):
     report = plausibility.check(_scene(f"run.output_dt={output_dt}"), engines=("opensees",))
     found = _only(report, level)
@@ -88,7 +93,7 @@ def test_output_step(output_dt, level, text):
 
 def test_output_rows_bounded_before_allocating():
     s = _scene("excitation.duration=600", "opensees.dt=1e-4", "run.output_dt=1e-4")
-    (field, message), = _only(plausibility.check(s, engines=("opensees",)), "error")
+    ((field, message),) = _only(plausibility.check(s, engines=("opensees",)), "error")
     assert field == "run.output_dt" and "6e+06 rows" in message and ">= 0.0003 s" in message
 
 
@@ -109,8 +114,18 @@ def test_cli_validate_and_run_use_the_checks(capsys, tmp_path):
         code = main(["scene", "validate", "saiidi-4span", "--set", "nonsmooth.h=0.003"])
     out, err = capsys.readouterr()
     assert code == 0 and ": valid;" in out
-    code = main(["run", "saiidi-4span", "--set", "run.output_dt=100", "--engine", "nonsmooth",
-                 "-o", str(tmp_path / "out")])
+    code = main(
+        [
+            "run",
+            "saiidi-4span",
+            "--set",
+            "run.output_dt=100",
+            "--engine",
+            "nonsmooth",
+            "-o",
+            str(tmp_path / "out"),
+        ]
+    )
     _, err = capsys.readouterr()
     assert code == 2 and err.startswith("deckpound: error: run.output_dt: run.output_dt = 100 s")
     assert not (tmp_path / "out").exists()

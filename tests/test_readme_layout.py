@@ -18,9 +18,13 @@ README = ROOT / "README.md"
 BEGIN, END = "<!-- layout:begin -->", "<!-- layout:end -->"
 
 #: Top-level folders and the package each one installs as (pyproject ``package-dir``).
-FOLDERS = (("src/deckpound", "deckpound"), ("models", "deckpound.models"),
-           ("opensees_build", "deckpound.opensees_build"), ("analytic", "deckpound.analytic"),
-           ("compare", "deckpound.compare"))
+FOLDERS = (
+    ("src/deckpound", "deckpound"),
+    ("models", "deckpound.models"),
+    ("opensees_build", "deckpound.opensees_build"),
+    ("analytic", "deckpound.analytic"),
+    ("compare", "deckpound.compare"),
+)
 WIDTH = 100
 
 
@@ -34,8 +38,10 @@ def first_sentence(path: Path) -> str:
 
 def layout_block() -> str:
     """The generated Layout block (Markdown)."""
-    lines = ["Top-level folders are installed as packages (``pyproject.toml`` ``package-dir``):",
-             ""]
+    lines = [
+        "Top-level folders are installed as packages (``pyproject.toml`` ``package-dir``):",
+        "",
+    ]
     for folder, package in FOLDERS:
         lines.append(f"**`{folder}/` → `{package}`**")
         lines.append("")
@@ -44,13 +50,14 @@ def layout_block() -> str:
                 continue
             job = first_sentence(path)
             item = f"- `{path.name}`: {job}"
-            lines.extend(textwrap.wrap(item, WIDTH, subsequent_indent="  ",
-                                       break_on_hyphens=False))
+            lines.extend(textwrap.wrap(item, WIDTH, subsequent_indent="  ", break_on_hyphens=False))
         lines.append("")
-    lines.append("Also: `tests/` (pytest; `-m slow` for the whole-record and memory checks), "
-                 "`data/golden/` (golden OpenSees command log of the benchmark), `docs/results/` "
-                 "(latest benchmark, skips, stress and sequence tables and figures), `.ci/run` "
-                 "(CI: the README's test command).")
+    lines.append(
+        "Also: `tests/` (pytest; `-m slow` for the whole-record and memory checks), "
+        "`data/golden/` (golden OpenSees command log of the benchmark), `docs/results/` "
+        "(latest benchmark, skips, stress and sequence tables and figures), `.ci/run` "
+        "(CI: the README's test command)."
+    )
     return "\n".join(lines)
 
 
@@ -60,9 +67,12 @@ def readme_block(text: str) -> str | None:
 
 
 def test_every_module_has_a_docstring():
-    missing = [f"{folder}/{p.name}" for folder, _ in FOLDERS
-               for p in sorted((ROOT / folder).glob("*.py"))
-               if p.name != "__main__.py" and not first_sentence(p)]
+    missing = [
+        f"{folder}/{p.name}"
+        for folder, _ in FOLDERS
+        for p in sorted((ROOT / folder).glob("*.py"))
+        if p.name != "__main__.py" and not first_sentence(p)
+    ]
     assert not missing, f"modules without a docstring: {missing}"
 
 
@@ -76,7 +86,11 @@ if __name__ == "__main__":
     text = README.read_text(encoding="utf-8")
     if readme_block(text) is None:
         sys.exit(f"README lacks {BEGIN} … {END}")
-    new = re.sub(re.escape(BEGIN) + r"\n.*?\n" + re.escape(END),
-                 lambda _: f"{BEGIN}\n{layout_block()}\n{END}", text, flags=re.S)
+    new = re.sub(
+        re.escape(BEGIN) + r"\n.*?\n" + re.escape(END),
+        lambda _: f"{BEGIN}\n{layout_block()}\n{END}",
+        text,
+        flags=re.S,
+    )
     README.write_text(new, encoding="utf-8")
     print(f"wrote the Layout block of {README}")

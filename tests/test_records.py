@@ -16,14 +16,30 @@ import warnings
 import numpy as np
 import pytest
 from _record_helpers import DT, STATION, quake, record_scene, write_acc_csv, write_at2, write_text
+
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import G, RecordWarning, support_motion
 from deckpound.models.records import MAX_SAMPLES, read_at2, read_text
 from deckpound.models.scene_io import RecordPathWarning, load_scene, scene_to_toml
 
-PROVENANCE_KEYS = {"kind", "files", "header", "npts", "dt_record", "time_scale", "dt", "duration",
-                   "processing", "scaling", "target_pga", "scale_factor", "applied_pga", "seed",
-                   "warnings", "units"}
+PROVENANCE_KEYS = {
+    "kind",
+    "files",
+    "header",
+    "npts",
+    "dt_record",
+    "time_scale",
+    "dt",
+    "duration",
+    "processing",
+    "scaling",
+    "target_pga",
+    "scale_factor",
+    "applied_pga",
+    "seed",
+    "warnings",
+    "units",
+}
 
 
 def motion_and_warnings(scene):
@@ -35,15 +51,19 @@ def motion_and_warnings(scene):
 
 # -- AT2 headers ---------------------------------------------------------------------------
 
-@pytest.mark.parametrize("line4", [
-    "NPTS=   800, DT=   .0100 SEC",        # NGA-West2
-    "NPTS=800,DT=0.01 SEC",                # no spaces
-    "npts = 800 , dt = 1.0E-02 sec",       # lower case, exponent
-    "NPTS: 800  DT: .01",                  # colons, no comma
-    "  800   0.0100    NPTS, DT",          # older PEER files
-    "800 .01 NPTS,DT",
-    "800, 0.01, NPTS, DT",
-])
+
+@pytest.mark.parametrize(
+    "line4",
+    [
+        "NPTS=   800, DT=   .0100 SEC",  # NGA-West2
+        "NPTS=800,DT=0.01 SEC",  # no spaces
+        "npts = 800 , dt = 1.0E-02 sec",  # lower case, exponent
+        "NPTS: 800  DT: .01",  # colons, no comma
+        "  800   0.0100    NPTS, DT",  # older PEER files
+        "800 .01 NPTS,DT",
+        "800, 0.01, NPTS, DT",
+    ],
+)
 def test_at2_header_generations_read_the_same(tmp_path, line4):
     acc = quake()
     rec = read_at2(write_at2(tmp_path / "x.at2", acc, line4=line4))
@@ -68,8 +88,10 @@ def test_at2_one_value_more_than_npts_is_used_and_said(tmp_path):
     px = write_at2(tmp_path / "x.at2", list(acc) + [0.123], npts=800)
     py = write_at2(tmp_path / "y.at2", acc)
     m, warned = motion_and_warnings(record_scene("at2", px, py))
-    expected = (f"excitation.file_x ({px.resolve()}): holds 801 values but NPTS = 800: the first "
-                "800 are used, the last 1 ignored")
+    expected = (
+        f"excitation.file_x ({px.resolve()}): holds 801 values but NPTS = 800: the first "
+        "800 are used, the last 1 ignored"
+    )
     assert warned == [expected]
     assert m.provenance["warnings"] == [expected]
     assert m.provenance["npts"] == {"x": 800, "y": 800} and len(m.t) == 800
@@ -78,8 +100,11 @@ def test_at2_one_value_more_than_npts_is_used_and_said(tmp_path):
 def test_at2_fewer_values_than_npts_is_refused(tmp_path):
     """A cut download: the missing part may be the strong motion, so no guess is made."""
     p = write_at2(tmp_path / "x.at2", quake(), npts=900)
-    with pytest.raises(SceneError, match=r"NPTS=900 but the file holds 800 values \(a cut "
-                                         r"download\?\); if the file is complete, correct NPTS"):
+    with pytest.raises(
+        SceneError,
+        match=r"NPTS=900 but the file holds 800 values \(a cut "
+        r"download\?\); if the file is complete, correct NPTS",
+    ):
         read_at2(p)
 
 
@@ -100,6 +125,7 @@ def test_velocity_series_and_other_units_refused(tmp_path):
 
 # -- components ----------------------------------------------------------------------------
 
+
 def test_unequal_components_padded_with_zeros_and_said(tmp_path):
     """One station's components differ by a few samples (7999 vs 7995): the shorter is
     padded with zeros at its end, every recorded sample is kept."""
@@ -107,9 +133,11 @@ def test_unequal_components_padded_with_zeros_and_said(tmp_path):
     px = write_at2(tmp_path / "x.at2", ax, dt=0.005)
     py = write_at2(tmp_path / "y.at2", ay, dt=0.005)
     m, warned = motion_and_warnings(record_scene("at2", px, py, None, "excitation.scaling=none"))
-    expected = (f"excitation.file_y ({py.resolve()}): the transverse (y) component has 7995 "
-                "samples, 4 fewer than the longitudinal (x) one (7999): padded with zeros at the "
-                "end (0.02 s at rest)")
+    expected = (
+        f"excitation.file_y ({py.resolve()}): the transverse (y) component has 7995 "
+        "samples, 4 fewer than the longitudinal (x) one (7999): padded with zeros at the "
+        "end (0.02 s at rest)"
+    )
     assert warned == [expected] and m.provenance["warnings"] == [expected]
     assert len(m.t) == 7999 and m.t[-1] == pytest.approx(7998 * 0.005)
     np.testing.assert_allclose(m.acc("bent2_y")[:7995], ay * G, rtol=1e-7, atol=1e-12)
@@ -120,8 +148,12 @@ def test_unequal_components_padded_with_zeros_and_said(tmp_path):
 def test_one_direction_only_is_at_rest_and_said(tmp_path):
     py = write_at2(tmp_path / "y.at2", quake())
     m, warned = motion_and_warnings(record_scene("at2", None, py, None, "excitation.pga=0.4"))
-    assert warned == [("excitation.file_x is not given: the longitudinal (x) direction is at "
-                       "rest (its PGA target is not applied)")]
+    assert warned == [
+        (
+            "excitation.file_x is not given: the longitudinal (x) direction is at "
+            "rest (its PGA target is not applied)"
+        )
+    ]
     for ch in ("bent1_x", "bent3_x", "seat1_x", "seat2_x"):
         assert np.all(m.disp[ch] == 0.0) and np.all(m.vel[ch] == 0.0)
     assert m.provenance["applied_pga"] == {"x": 0.0, "y": pytest.approx(0.4, rel=1e-12)}
@@ -131,26 +163,40 @@ def test_one_direction_only_is_at_rest_and_said(tmp_path):
 def test_different_steps_refused(tmp_path):
     px = write_at2(tmp_path / "x.at2", quake(), dt=0.01)
     py = write_at2(tmp_path / "y.at2", quake(), dt=0.005)
-    with pytest.raises(SceneError, match=r"excitation.file_y: the record's step DT = 0.005 s "
-                                         r"differs from the x record's 0.01 s"):
+    with pytest.raises(
+        SceneError,
+        match=r"excitation.file_y: the record's step DT = 0.005 s "
+        r"differs from the x record's 0.01 s",
+    ):
         support_motion(record_scene("at2", px, py))
 
 
 # -- text and CSV --------------------------------------------------------------------------
 
+
 def test_text_record_comments_titles_separators_and_shifted_start(tmp_path):
     a = quake()
     t = 2.5 + np.arange(len(a)) * DT
-    p = write_text(tmp_path / "y.txt", t, a * 100 * G, sep=", ",
-                   header=["# Station ABC, event XYZ", "% second comment", "time, acc"])
+    p = write_text(
+        tmp_path / "y.txt",
+        t,
+        a * 100 * G,
+        sep=", ",
+        header=["# Station ABC, event XYZ", "% second comment", "time, acc"],
+    )
     rec = read_text(p)
     assert rec.header == "Station ABC, event XYZ" and rec.npts == len(a)
     assert rec.dt == pytest.approx(DT, rel=1e-9)
-    m, warned = motion_and_warnings(record_scene("text", None, p, None, "excitation.scaling=none",
-                                                 "excitation.acc_unit=cm/s^2"))
-    assert warned == [(f"excitation.file_y ({p.resolve()}): time starts at 2.5 s; the record "
-                       "is shifted to start at 0 s"),
-                      "excitation.file_x is not given: the longitudinal (x) direction is at rest"]
+    m, warned = motion_and_warnings(
+        record_scene("text", None, p, None, "excitation.scaling=none", "excitation.acc_unit=cm/s^2")
+    )
+    assert warned == [
+        (
+            f"excitation.file_y ({p.resolve()}): time starts at 2.5 s; the record "
+            "is shifted to start at 0 s"
+        ),
+        "excitation.file_x is not given: the longitudinal (x) direction is at rest",
+    ]
     np.testing.assert_allclose(m.acc("bent1_y"), a * G, rtol=1e-12)
     assert m.t[0] == 0.0
 
@@ -168,15 +214,23 @@ def test_csv_accelerations_unequal_and_one_direction(tmp_path):
     t = np.arange(500) * DT
     p = write_acc_csv(tmp_path / "r.csv", t, ax, ay)
     m, warned = motion_and_warnings(record_scene("csv", None, None, p, "excitation.scaling=none"))
-    assert warned == [(f"excitation.file ({p.resolve()}), column acc_y: the transverse (y) "
-                       "component has 497 samples, 3 fewer than the longitudinal (x) one (500): "
-                       "padded with zeros at the end (0.03 s at rest)")]
+    assert warned == [
+        (
+            f"excitation.file ({p.resolve()}), column acc_y: the transverse (y) "
+            "component has 497 samples, 3 fewer than the longitudinal (x) one (500): "
+            "padded with zeros at the end (0.03 s at rest)"
+        )
+    ]
     np.testing.assert_allclose(m.acc("bent1_x"), ax * G, rtol=1e-12)
     assert m.provenance["files"]["x"] == m.provenance["files"]["y"]
     only_x = write_acc_csv(tmp_path / "x.csv", t, ax)
     m, warned = motion_and_warnings(record_scene("csv", None, None, only_x))
-    assert warned == [("the CSV has no acc_y column: the transverse (y) direction is at rest "
-                       "(its PGA target is not applied)")]
+    assert warned == [
+        (
+            "the CSV has no acc_y column: the transverse (y) direction is at rest "
+            "(its PGA target is not applied)"
+        )
+    ]
     assert m.provenance["applied_pga"]["y"] == 0.0
 
 
@@ -192,8 +246,9 @@ def test_csv_empty_cell_inside_a_component_refused(tmp_path):
         support_motion(record_scene("csv", None, None, p))
 
 
-@pytest.mark.parametrize("kind,token", [("at2", "abc"), ("at2", "1.2.3"), ("text", "nan"),
-                                        ("csv", "0x1f")])
+@pytest.mark.parametrize(
+    "kind,token", [("at2", "abc"), ("at2", "1.2.3"), ("text", "nan"), ("csv", "0x1f")]
+)
 def test_non_numeric_token_quoted_with_its_line(tmp_path, kind, token):
     a = quake(100)
     if kind == "at2":
@@ -217,10 +272,13 @@ def test_non_numeric_token_quoted_with_its_line(tmp_path, kind, token):
     with pytest.raises(SceneError) as err:
         support_motion(scene)
     assert err.value.field == field
-    assert f"{where} holds '{token}'" in str(err.value) and "not finite or not a number" in str(err.value)
+    assert f"{where} holds '{token}'" in str(err.value) and "not finite or not a number" in str(
+        err.value
+    )
 
 
 # -- hardening (issue 16) ------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("kind", ["at2", "text", "csv"])
 def test_huge_pga_refused_naming_unit_and_direction_unless_forced(tmp_path, kind):
@@ -234,20 +292,28 @@ def test_huge_pga_refused_naming_unit_and_direction_unless_forced(tmp_path, kind
     else:
         args = ("csv", None, None, write_acc_csv(tmp_path / "x.csv", t, a))
     field = "excitation.file" if kind == "csv" else "excitation.file_x"
-    with pytest.raises(SceneError, match=rf"^{field}: the longitudinal \(x\) record reads as a "
-                                         r"PGA of 565 g \(values in g\); more than 5 g is refused"):
+    with pytest.raises(
+        SceneError,
+        match=rf"^{field}: the longitudinal \(x\) record reads as a "
+        r"PGA of 565 g \(values in g\); more than 5 g is refused",
+    ):
         support_motion(record_scene(*args))
-    m = support_motion(record_scene(*args, "excitation.allow_extreme=true",
-                                    "excitation.scaling=none"))
+    m = support_motion(
+        record_scene(*args, "excitation.allow_extreme=true", "excitation.scaling=none")
+    )
     assert m.provenance["applied_pga"]["x"] == pytest.approx(565.0, rel=1e-7)
 
 
 def test_scaled_beyond_5g_refused_after_scaling(tmp_path):
     p = write_at2(tmp_path / "x.at2", quake(peak=0.5))
-    with pytest.raises(SceneError, match=r"excitation.file_x: gives a longitudinal \(x\) PGA of "
-                                         r"10 g after scaling \(scaling = 'factor', scale = 20\)"):
-        support_motion(record_scene("at2", p, None, None, "excitation.scaling=factor",
-                                    "excitation.scale=20"))
+    with pytest.raises(
+        SceneError,
+        match=r"excitation.file_x: gives a longitudinal \(x\) PGA of "
+        r"10 g after scaling \(scaling = 'factor', scale = 20\)",
+    ):
+        support_motion(
+            record_scene("at2", p, None, None, "excitation.scaling=factor", "excitation.scale=20")
+        )
 
 
 def test_ten_million_row_csv_refused_cheaply(tmp_path):
@@ -277,8 +343,9 @@ def test_at2_npts_beyond_limit_refused_before_reading_values(tmp_path):
 def test_a_file_that_is_no_record_is_never_quoted(tmp_path, kind):
     """Errors quoted lines of any file named as a record (issue 16), e.g. a system file."""
     secret = tmp_path / "secrets.txt"
-    secret.write_text("root:x:0:0:root:/root:/bin/bash\nAPI_KEY=hunter2 NPTS\npassword 12\n"
-                      "token,abc\n" * 3)
+    secret.write_text(
+        "root:x:0:0:root:/root:/bin/bash\nAPI_KEY=hunter2 NPTS\npassword 12\ntoken,abc\n" * 3
+    )
     args = (kind, None, None, secret) if kind == "csv" else (kind, secret, None, None)
     with pytest.raises(SceneError) as err:
         support_motion(record_scene(*args))
@@ -300,17 +367,28 @@ def test_relative_record_path_resolved_and_outside_folder_noticed(tmp_path):
     scenes.mkdir(), data.mkdir()
     write_at2(data / "x.at2", quake())
     write_at2(scenes / "y.at2", quake(seed=3))
-    text = scene_to_toml(load_scene("saiidi-4span", ["excitation.kind=at2",
-                                                     "excitation.file_x='../data/x.at2'",
-                                                     "excitation.file_y='y.at2'"]))
+    text = scene_to_toml(
+        load_scene(
+            "saiidi-4span",
+            [
+                "excitation.kind=at2",
+                "excitation.file_x='../data/x.at2'",
+                "excitation.file_y='y.at2'",
+            ],
+        )
+    )
     (scenes / "s.toml").write_text(text)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         scene = load_scene(scenes / "s.toml")
     notices = [str(w.message) for w in caught if issubclass(w.category, RecordPathWarning)]
-    assert notices == [(f"excitation.file_x: the relative path '../data/x.at2' reaches outside "
-                        f"the scene's folder '{scenes.resolve()}'; it is read from "
-                        f"'{(data / 'x.at2').resolve()}'")]
+    assert notices == [
+        (
+            f"excitation.file_x: the relative path '../data/x.at2' reaches outside "
+            f"the scene's folder '{scenes.resolve()}'; it is read from "
+            f"'{(data / 'x.at2').resolve()}'"
+        )
+    ]
     assert scene.excitation.file_x == str((data / "x.at2").resolve())
     assert scene.excitation.file_y == str((scenes / "y.at2").resolve())
     m = support_motion(scene)
@@ -325,6 +403,7 @@ def test_missing_record_shown_resolved(tmp_path, monkeypatch):
 
 # -- provenance ----------------------------------------------------------------------------
 
+
 def test_provenance_keys_checksums_and_json(tmp_path):
     px = write_at2(tmp_path / "x.at2", quake(seed=1))
     py = write_at2(tmp_path / "y.at2", quake(seed=2), style="old")
@@ -332,16 +411,20 @@ def test_provenance_keys_checksums_and_json(tmp_path):
     prov = json.loads(json.dumps(m.provenance))
     assert set(prov) == PROVENANCE_KEYS
     for axis, path in (("x", px), ("y", py)):
-        assert prov["files"][axis] == {"path": str(path.resolve()),
-                                       "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
-                                       "bytes": path.stat().st_size}
+        assert prov["files"][axis] == {
+            "path": str(path.resolve()),
+            "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
+            "bytes": path.stat().st_size,
+        }
         assert prov["header"][axis] == STATION
     assert prov["kind"] == "at2" and prov["dt_record"] == 0.01 and prov["dt"] == 0.01
     assert prov["duration"] == pytest.approx(7.99) and prov["time_scale"] == 1.0
     assert prov["processing"].startswith("none") and prov["scaling"] == "pga"
     assert prov["target_pga"] == {"x": pytest.approx(0.72), "y": 0.6}
-    assert prov["applied_pga"] == {"x": pytest.approx(0.72, rel=1e-12),
-                                   "y": pytest.approx(0.6, rel=1e-12)}
+    assert prov["applied_pga"] == {
+        "x": pytest.approx(0.72, rel=1e-12),
+        "y": pytest.approx(0.6, rel=1e-12),
+    }
     assert prov["scale_factor"] == {"x": pytest.approx(0.72 / 0.3), "y": pytest.approx(2.0)}
     assert set(support_motion(load_scene("saiidi-4span")).provenance) == PROVENANCE_KEYS
 
@@ -356,14 +439,23 @@ def test_header_line_sanitised_to_one_line(tmp_path):
     assert header.isprintable()
 
 
-@pytest.mark.parametrize("path,reason", [("a\\u0000b.at2", "embedded null byte"),
-                                         ("~no_such_user_xyz/x.at2", "home directory")])
+@pytest.mark.parametrize(
+    "path,reason",
+    [("a\\u0000b.at2", "embedded null byte"), ("~no_such_user_xyz/x.at2", "home directory")],
+)
 def test_unusable_path_refused_in_one_line(tmp_path, path, reason):
-    with pytest.raises(SceneError, match=rf"^excitation.file_x: is not a usable file path "
-                                         rf"\(.*{reason}"):
-        support_motion(load_scene("saiidi-4span", ["excitation.kind=at2",
-                                                   f'excitation.file_x="{path}"']))
-    (tmp_path / "s.toml").write_text(scene_to_toml(load_scene("saiidi-4span")).replace(
-        'kind = "synthetic"', f'kind = "at2"\nfile_x = "{path}"'))
+    with pytest.raises(
+        SceneError,
+        match=rf"^excitation.file_x: is not a usable file path "
+        rf"\(.*{reason}",
+    ):
+        support_motion(
+            load_scene("saiidi-4span", ["excitation.kind=at2", f'excitation.file_x="{path}"'])
+        )
+    (tmp_path / "s.toml").write_text(
+        scene_to_toml(load_scene("saiidi-4span")).replace(
+            'kind = "synthetic"', f'kind = "at2"\nfile_x = "{path}"'
+        )
+    )
     with pytest.raises(SceneError, match=r"^excitation.file_x: is not a usable file path"):
         load_scene(tmp_path / "s.toml")

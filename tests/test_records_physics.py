@@ -11,10 +11,11 @@ import warnings
 import numpy as np
 import pytest
 from _record_helpers import quake, record_scene, write_at2, write_text
-from deckpound.models.excitation import G, RecordWarning, support_motion
-from deckpound.models.record_motion import DRIFT_FRACTION, integrate, remove_baseline
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
+from deckpound.models.excitation import G, RecordWarning, support_motion
+from deckpound.models.record_motion import DRIFT_FRACTION, integrate, remove_baseline
 
 
 def _motion(scene):
@@ -29,12 +30,16 @@ def _sine_errors(tmp_path, dt, amp=2.0, f=1.0, duration=4.0):
     w = 2 * np.pi * f
     t = np.arange(round(duration / dt) + 1) * dt
     p = write_text(tmp_path / f"sine_{dt}.txt", t, amp * np.sin(w * t))
-    m, warned = _motion(record_scene("text", p, None, None, "excitation.scaling=none",
-                                     "excitation.acc_unit=m/s^2"))
+    m, warned = _motion(
+        record_scene("text", p, None, None, "excitation.scaling=none", "excitation.acc_unit=m/s^2")
+    )
     v_exact = amp / w * (1 - np.cos(w * m.t))
-    d_exact = amp / w * m.t - amp / w ** 2 * np.sin(w * m.t)
-    return (np.max(np.abs(m.vel["bent1_x"] - v_exact)), np.max(np.abs(m.disp["bent1_x"] - d_exact)),
-            warned)
+    d_exact = amp / w * m.t - amp / w**2 * np.sin(w * m.t)
+    return (
+        np.max(np.abs(m.vel["bent1_x"] - v_exact)),
+        np.max(np.abs(m.disp["bent1_x"] - d_exact)),
+        warned,
+    )
 
 
 def test_integration_of_a_sine_is_second_order_and_within_the_trapezoid_bound(tmp_path):
@@ -43,7 +48,7 @@ def test_integration_of_a_sine_is_second_order_and_within_the_trapezoid_bound(tm
     amp, w, T, dt = 2.0, 2 * np.pi, 4.0, 0.01
     ev1, ed1, warned = _sine_errors(tmp_path, dt)
     ev2, ed2, _ = _sine_errors(tmp_path, dt / 2)
-    bound = dt ** 2 * amp * w / 6 * (1 + (w * dt) ** 2)  # leading term + O(dt⁴) allowance
+    bound = dt**2 * amp * w / 6 * (1 + (w * dt) ** 2)  # leading term + O(dt⁴) allowance
     assert ev1 <= bound and ed1 <= T * bound
     assert np.log2(ev1 / ev2) == pytest.approx(2.0, abs=0.05)
     assert np.log2(ed1 / ed2) == pytest.approx(2.0, abs=0.05)
@@ -63,40 +68,57 @@ def test_no_hidden_processing_records_are_integrated_as_given(tmp_path):
     v, d = integrate(m.acc("bent1_y"), 0.01)
     np.testing.assert_array_equal(m.vel["bent1_y"], v)
     np.testing.assert_array_equal(m.disp["bent1_y"], d)
-    assert m.provenance["processing"] == "none (trapezoidal integration of the acceleration as given)"
+    assert (
+        m.provenance["processing"] == "none (trapezoidal integration of the acceleration as given)"
+    )
 
 
 @pytest.mark.parametrize("target,ratio", [(0.075, 1.2), (0.5, 1.2), (1.0, 0.3), (2.0, 2.0)])
 def test_scaling_to_pga_is_exact_per_direction(tmp_path, target, ratio):
     px = write_at2(tmp_path / "x.at2", quake(peak=0.31, seed=1))
     py = write_at2(tmp_path / "y.at2", quake(peak=0.17, seed=2))
-    m, _ = _motion(record_scene("at2", px, py, None, f"excitation.pga={target}",
-                                f"excitation.longitudinal_ratio={ratio}"))
+    m, _ = _motion(
+        record_scene(
+            "at2",
+            px,
+            py,
+            None,
+            f"excitation.pga={target}",
+            f"excitation.longitudinal_ratio={ratio}",
+        )
+    )
     for ch in m.channels:
         want = target * (ratio if ch.endswith("_x") else 1.0)
         assert np.max(np.abs(m.acc(ch))) / G == pytest.approx(want, rel=1e-12)
-    assert m.provenance["applied_pga"] == {"x": pytest.approx(target * ratio, rel=1e-12),
-                                           "y": pytest.approx(target, rel=1e-12)}
+    assert m.provenance["applied_pga"] == {
+        "x": pytest.approx(target * ratio, rel=1e-12),
+        "y": pytest.approx(target, rel=1e-12),
+    }
     assert m.provenance["scale_factor"]["y"] == pytest.approx(target / 0.17, rel=1e-6)
 
 
 def test_scaling_by_factor_is_exactly_linear(tmp_path):
     px, py = write_at2(tmp_path / "x.at2", quake(seed=1)), write_at2(tmp_path / "y.at2", quake())
     base, _ = _motion(record_scene("at2", px, py, None, "excitation.scaling=none"))
-    m, _ = _motion(record_scene("at2", px, py, None, "excitation.scaling=factor",
-                                "excitation.scale=2.5"))
+    m, _ = _motion(
+        record_scene("at2", px, py, None, "excitation.scaling=factor", "excitation.scale=2.5")
+    )
     for ch in m.channels:  # equal to rounding: the factor multiplies a before integration
         for got, ref in ((m.disp[ch], base.disp[ch]), (m.vel[ch], base.vel[ch])):
-            np.testing.assert_allclose(got, 2.5 * ref, rtol=1e-12,
-                                       atol=1e-12 * np.max(np.abs(got)))
+            np.testing.assert_allclose(got, 2.5 * ref, rtol=1e-12, atol=1e-12 * np.max(np.abs(got)))
     assert m.provenance["scale_factor"] == {"x": 2.5, "y": 2.5}
     assert m.provenance["applied_pga"]["x"] == pytest.approx(2.5 * 0.3, rel=1e-7)
 
 
 @settings(max_examples=25, deadline=None)
-@given(amplitude=st.floats(1e-3, 4.0), pga=st.floats(0.01, 4.0), ratio=st.one_of(st.just(0.0), st.floats(0.01, 1.25)))
-def test_motion_scaled_to_pga_does_not_depend_on_the_record_amplitude(tmp_path_factory,
-                                                                      amplitude, pga, ratio):
+@given(
+    amplitude=st.floats(1e-3, 4.0),
+    pga=st.floats(0.01, 4.0),
+    ratio=st.one_of(st.just(0.0), st.floats(0.01, 1.25)),
+)
+def test_motion_scaled_to_pga_does_not_depend_on_the_record_amplitude(
+    tmp_path_factory, amplitude, pga, ratio
+):
     """Unit-scaling invariance: a record × c gives the same motion once scaled to its PGA."""
     folder = tmp_path_factory.mktemp("inv")
     a = quake(300)
@@ -134,11 +156,13 @@ def test_baseline_processing_removes_a_polynomial_drift(tmp_path):
     n, dt = 2000, 0.01
     clean = quake(n, dt)
     s = np.arange(n) / n
-    px = write_at2(tmp_path / "x.at2", clean + 0.0015 + 0.001 * s - 0.0008 * s ** 2)
+    px = write_at2(tmp_path / "x.at2", clean + 0.0015 + 0.001 * s - 0.0008 * s**2)
     py = write_at2(tmp_path / "y.at2", clean)
     sets = ("excitation.scaling=none",)
     raw, warned_raw = _motion(record_scene("at2", px, py, None, *sets))
-    fixed, warned = _motion(record_scene("at2", px, py, None, *sets, "excitation.processing=baseline"))
+    fixed, warned = _motion(
+        record_scene("at2", px, py, None, *sets, "excitation.processing=baseline")
+    )
     d_true = raw.disp["bent1_y"]  # the clean component, integrated as given
     peak = np.max(np.abs(d_true))
     assert abs(raw.disp["bent1_x"][-1]) > DRIFT_FRACTION * np.max(np.abs(raw.disp["bent1_x"]))
@@ -157,11 +181,21 @@ def test_highpass_processing_keeps_the_passband_and_removes_the_long_period(tmp_
     taper = np.sin(np.pi * t / t[-1]) ** 2
     a = taper * (0.2 * np.sin(2 * np.pi * 5.0 * t) + 0.1 * np.sin(2 * np.pi * 0.05 * t))
     p = write_text(tmp_path / "x.txt", t, a)
-    m, _ = _motion(record_scene("text", p, None, None, "excitation.scaling=none",
-                                "excitation.processing=highpass", "excitation.highpass=0.5"))
+    m, _ = _motion(
+        record_scene(
+            "text",
+            p,
+            None,
+            None,
+            "excitation.scaling=none",
+            "excitation.processing=highpass",
+            "excitation.highpass=0.5",
+        )
+    )
     mid = slice(n // 3, 2 * n // 3)
-    basis = np.column_stack([taper[mid] * f(2 * np.pi * fr * t[mid]) for fr in (5.0, 0.05)
-                             for f in (np.sin, np.cos)])
+    basis = np.column_stack(
+        [taper[mid] * f(2 * np.pi * fr * t[mid]) for fr in (5.0, 0.05) for f in (np.sin, np.cos)]
+    )
     c, *_ = np.linalg.lstsq(basis, m.acc("bent1_x")[mid] / G, rcond=None)
     assert np.hypot(c[0], c[1]) == pytest.approx(0.2, rel=1e-3)
     assert np.hypot(c[2], c[3]) < 1e-3 * 0.1

@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from _report_helpers import check_clauses, claims, expand_runs, mu_values
+
 from deckpound.compare import report_inputs, report_text
 from deckpound.compare.mechanism import mechanism_row, stick_states, tangential_output
 from deckpound.compare.report_text import (
@@ -37,10 +38,19 @@ def sequence(plain=PLAIN, rough=ROUGH, engines=("opensees", "compliance")) -> pd
     for e in engines:
         for mu, thetas in ((0.0, plain), (0.2, rough)):
             for k, (pga, th) in enumerate(zip(PGAS, thetas)):
-                rows.append({"run": k + 1, "pga": pga, "engine": e,
-                             "case": e if mu == 0 else f"{e} μ=0.2", "mu": mu,
-                             "friction_mode": "stick" if mu else "none", "peak_theta": th,
-                             "gap_closures": 0 if k == 0 else 4 * k, "status": "success"})
+                rows.append(
+                    {
+                        "run": k + 1,
+                        "pga": pga,
+                        "engine": e,
+                        "case": e if mu == 0 else f"{e} μ=0.2",
+                        "mu": mu,
+                        "friction_mode": "stick" if mu else "none",
+                        "peak_theta": th,
+                        "gap_closures": 0 if k == 0 else 4 * k,
+                        "status": "success",
+                    }
+                )
     return pd.DataFrame(rows)
 
 
@@ -57,8 +67,12 @@ def test_runs_text_and_directions():
     assert runs_text([3, 5, 7]) == "runs 3, 5 and 7"
     assert runs_text([5]) == "run 5"
     assert expand_runs("runs 1–2 and 4") == {1, 2, 4}
-    assert (direction(1.03), direction(0.97), direction(1.01), direction(np.nan)) == \
-        ("raises", "lowers", "unchanged", "undetermined")
+    assert (direction(1.03), direction(0.97), direction(1.01), direction(np.nan)) == (
+        "raises",
+        "lowers",
+        "unchanged",
+        "undetermined",
+    )
     assert mu_values("μ = 0.1, 0.2 and 0.5") == {0.1, 0.2, 0.5}
 
 
@@ -67,9 +81,11 @@ def test_sequence_sentences_agree_with_the_table():
     sentences = sequence_friction_sentences(friction_effect(seq))
     assert len(sentences) == 2
     s = sentences[0]
-    assert s.startswith("OpenSees: friction (μ = 0.2, with sticking) raises the peak rotation "
-                        "in runs 6–7 (×2.30–2.55), lowers it in runs 3 and 5 "
-                        "(×0.758–0.951)")
+    assert s.startswith(
+        "OpenSees: friction (μ = 0.2, with sticking) raises the peak rotation "
+        "in runs 6–7 (×2.30–2.55), lowers it in runs 3 and 5 "
+        "(×0.758–0.951)"
+    )
     for engine, sentence in zip(("opensees", "compliance"), sentences):
         check_clauses(claims(sentence), truth(seq, engine), expand_runs)
 
@@ -78,8 +94,8 @@ def test_changing_the_table_changes_the_sentences():
     """No templated number: other inputs, other words and numbers."""
     before = sequence_friction_sentences(friction_effect(sequence()))
     rough = list(ROUGH)
-    rough[6] = 2.0e-3    # friction now lowers run 7
-    rough[4] = 4.0e-3    # and raises run 5
+    rough[6] = 2.0e-3  # friction now lowers run 7
+    rough[4] = 4.0e-3  # and raises run 5
     seq = sequence(rough=rough)
     after = sequence_friction_sentences(friction_effect(seq))
     assert after != before
@@ -88,27 +104,39 @@ def test_changing_the_table_changes_the_sentences():
     check_clauses(claims(after[0]), truth(seq, "opensees"), expand_runs)
     h0 = headline_sentences(sequence(), friction_effect(sequence()), 7, "opensees")
     h1 = headline_sentences(seq, friction_effect(seq), 7, "opensees")
-    assert any("raises the peak rotation in OpenSees and compliance clone (×2.55)" in s
-               for s in h0)
-    assert any("lowers the peak rotation in OpenSees and compliance clone (×0.735)" in s
-               for s in h1)
+    assert any("raises the peak rotation in OpenSees and compliance clone (×2.55)" in s for s in h0)
+    assert any(
+        "lowers the peak rotation in OpenSees and compliance clone (×0.735)" in s for s in h1
+    )
     assert any("2.72 mrad" in s for s in h0) and not any("6.94 mrad" in s for s in h1)
 
 
 def test_headline_names_the_virgin_state_when_it_goes_the_other_way():
     seq = sequence()
-    study = pd.DataFrame([
-        {"label": f"{e} mu={mu}", "engine": e, "mu": mu, "state": "virgin", "status": "success",
-         "peak_theta": th}
-        for e in ("compliance", "nonsmooth") for mu, th in ((0.0, 3.62e-3), (0.2, 3.24e-3))])
+    study = pd.DataFrame(
+        [
+            {
+                "label": f"{e} mu={mu}",
+                "engine": e,
+                "mu": mu,
+                "state": "virgin",
+                "status": "success",
+                "peak_theta": th,
+            }
+            for e in ("compliance", "nonsmooth")
+            for mu, th in ((0.0, 3.62e-3), (0.2, 3.24e-3))
+        ]
+    )
     virgin = study_friction_effect(study)
     lines = headline_sentences(seq, friction_effect(seq), 7, "opensees", virgin=virgin)
     line = next(s for s in lines if s.startswith("From the virgin state"))
     assert "lowers the peak rotation in compliance clone and nonsmooth (×0.895)" in line
     assert line.endswith("the opposite of the carried state.")
-    check_clauses(claims(line), {"compliance": 3.24 / 3.62, "nonsmooth": 3.24 / 3.62},
-                  lambda t: {"compliance" if "compliance" in k else k
-                             for k in expand_engines(t)})
+    check_clauses(
+        claims(line),
+        {"compliance": 3.24 / 3.62, "nonsmooth": 3.24 / 3.62},
+        lambda t: {"compliance" if "compliance" in k else k for k in expand_engines(t)},
+    )
 
 
 def expand_engines(text: str) -> set[str]:
@@ -119,8 +147,16 @@ def test_study_sentences_agree_with_the_study_table():
     rows = []
     for e, base in (("compliance", 2.72e-3), ("nonsmooth", 2.71e-3)):
         for mu, f in ((0.0, 1.0), (0.1, 1.9), (0.2, 2.55), (0.3, 1.01), (0.5, 0.9)):
-            rows.append({"label": f"{e} mu={mu}", "engine": e, "mu": mu, "state": "run7",
-                         "peak_theta": base * f, "status": "success"})
+            rows.append(
+                {
+                    "label": f"{e} mu={mu}",
+                    "engine": e,
+                    "mu": mu,
+                    "state": "run7",
+                    "peak_theta": base * f,
+                    "status": "success",
+                }
+            )
     table = pd.DataFrame(rows)
     sentences = study_friction_sentences(study_friction_effect(table))
     assert "raises the peak rotation at μ = 0.1 and 0.2 (×1.90–2.55)" in sentences[0]
@@ -133,31 +169,46 @@ def test_study_sentences_agree_with_the_study_table():
 def test_state_sentences_name_the_state_and_its_numbers():
     scene = load_scene("saiidi-4span")
     seats = tuple(dataclasses.replace(s, gap=g) for s, g in zip(scene.seats, (0.007, 0.0184)))
-    bents = (dataclasses.replace(scene.bents[0], x=dataclasses.replace(scene.bents[0].x,
-                                                                       stiffness=3500.0)),
-             ) + scene.bents[1:]
+    bents = (
+        dataclasses.replace(
+            scene.bents[0], x=dataclasses.replace(scene.bents[0].x, stiffness=3500.0)
+        ),
+    ) + scene.bents[1:]
     carried = StartState("run7", scene.replace(seats=seats, bents=bents), scene, 7, "opensees")
     s = report_text.state_sentence(carried)
-    assert s.startswith("Starts from the state carried into run 7 by the opensees sequence "
-                        "(after runs 1–6): gaps 7.00 mm at seat 1 and 18.40 mm at seat 2, bent "
-                        "stiffness 50–100 % of the scene's")
+    assert s.startswith(
+        "Starts from the state carried into run 7 by the opensees sequence "
+        "(after runs 1–6): gaps 7.00 mm at seat 1 and 18.40 mm at seat 2, bent "
+        "stiffness 50–100 % of the scene's"
+    )
     v = report_text.state_sentence(StartState("virgin", scene, scene))
     assert v.startswith("Starts from the virgin state: the scene as given (gaps 12.70 mm")
 
 
 # -- inputs: provenance and notes -----------------------------------------------------------
 
+
 def at2_provenance() -> dict:
-    return {"kind": "at2", "files": {"x": {"path": "/data/CCN090.AT2", "sha256": "ab" * 32,
-                                           "bytes": 123456},
-                                     "y": {"path": "/data/CCN360.AT2", "sha256": "cd" * 32,
-                                           "bytes": 123400}},
-            "header": {"x": "Northridge-01, Century City CC North, 090"}, "npts": {"x": 7999,
-                                                                                  "y": 7995},
-            "dt_record": 0.01, "time_scale": 0.5, "dt": 0.005, "duration": 39.99,
-            "processing": "none", "scaling": "pga", "target_pga": {"x": 1.2, "y": 1.0},
-            "scale_factor": {"x": 4.2, "y": 3.1}, "applied_pga": {"x": 1.2, "y": 1.0},
-            "seed": None, "warnings": ["x has 4 samples more than y; y padded with zeros"]}
+    return {
+        "kind": "at2",
+        "files": {
+            "x": {"path": "/data/CCN090.AT2", "sha256": "ab" * 32, "bytes": 123456},
+            "y": {"path": "/data/CCN360.AT2", "sha256": "cd" * 32, "bytes": 123400},
+        },
+        "header": {"x": "Northridge-01, Century City CC North, 090"},
+        "npts": {"x": 7999, "y": 7995},
+        "dt_record": 0.01,
+        "time_scale": 0.5,
+        "dt": 0.005,
+        "duration": 39.99,
+        "processing": "none",
+        "scaling": "pga",
+        "target_pga": {"x": 1.2, "y": 1.0},
+        "scale_factor": {"x": 4.2, "y": 3.1},
+        "applied_pga": {"x": 1.2, "y": 1.0},
+        "seed": None,
+        "warnings": ["x has 4 samples more than y; y padded with zeros"],
+    }
 
 
 def test_an_at2_scene_is_described_by_its_files_never_as_synthetic():
@@ -168,15 +219,26 @@ def test_an_at2_scene_is_described_by_its_files_never_as_synthetic():
     assert "Time scale 0.5 (record step 0.01 s, model step 0.005 s)" in text
     assert "39.99 s" in text and "padded with zeros" in text
     assert "synthetic" not in text.lower() and "20 s" not in text
-    synth = " ".join(report_inputs.excitation_sentences(scene, {
-        "kind": "synthetic", "seed": 1994, "processing": "generator X", "duration": 20.0,
-        "dt": 0.005}))
+    synth = " ".join(
+        report_inputs.excitation_sentences(
+            scene,
+            {
+                "kind": "synthetic",
+                "seed": 1994,
+                "processing": "generator X",
+                "duration": 20.0,
+                "dt": 0.005,
+            },
+        )
+    )
     assert "synthetic" in synth and "seed 1994" in synth and "20 s" in synth
 
 
 def test_scaling_sentence_flags_labels_not_applied():
-    runs = [(1, 0.5, {"applied_pga": {"x": 0.6, "y": 0.5}}),
-            (2, 1.0, {"applied_pga": {"x": 1.2, "y": 0.9}})]
+    runs = [
+        (1, 0.5, {"applied_pga": {"x": 0.6, "y": 0.5}}),
+        (2, 1.0, {"applied_pga": {"x": 1.2, "y": 0.9}}),
+    ]
     s = report_inputs.scaling_sentence(report_inputs.record_table(runs), 1.2)
     assert "differs from the run's label by more than 1 % in run(s) 2 (up to 10" in s
     ok = report_inputs.scaling_sentence(report_inputs.record_table(runs[:1]), 1.2)
@@ -194,6 +256,7 @@ def test_notes_are_the_authors_and_stale_ones_are_marked():
 
 
 # -- mechanism ---------------------------------------------------------------------------------
+
 
 def _result(scene, theta, ft1=None, fn1=None, states=None) -> Result:
     n = len(theta)
@@ -218,9 +281,9 @@ def test_friction_impulse_sign_and_stick_share():
     negative peak rotation; half of the contact rows at the Coulomb limit (slip)."""
     scene = load_scene("saiidi-4span", ["contact.friction=0.2", "contact.friction_mode=stick"])
     n = 101
-    theta = -np.sin(np.linspace(0, np.pi, n)) * 1e-3          # one negative excursion
+    theta = -np.sin(np.linspace(0, np.pi, n)) * 1e-3  # one negative excursion
     fn = np.where((np.arange(n) > 20) & (np.arange(n) <= 60), 100.0, 0.0)
-    ft = np.where(np.arange(n) <= 40, 20.0, 10.0) * (fn > 0)   # 20 = μ·fn: slip, then stick
+    ft = np.where(np.arange(n) <= 40, 20.0, 10.0) * (fn > 0)  # 20 = μ·fn: slip, then stick
     row = mechanism_row(_result(scene, theta, ft, fn), scene)
     half = scene.deck.length / 2
     # trapezoid over the excursion, rows 0..50: ramp 20→21, 20 kN over 21..40, ramp, 10 kN to 50
@@ -247,42 +310,80 @@ def test_state_columns_win_and_zero_tangential_output_is_not_read():
     assert tangential_output(silent, 0.2) == (False, 1.0)
     row = mechanism_row(silent, scene)
     assert np.isnan(row["friction_impulse"]) and row["stick_source"] == "n/a"
-    assert "zero in 100 %" in report_text.mechanism_sentence(pd.Series({**row,
-                                                                         "engine": "opensees"}),
-                                                           "run 1")
+    assert "zero in 100 %" in report_text.mechanism_sentence(
+        pd.Series({**row, "engine": "opensees"}), "run 1"
+    )
 
 
 def test_impulse_agreement_reads_the_right_excursion():
-    effect = pd.DataFrame([
-        {"engine": "compliance", "run": 5, "direction": "lowers", "ratio": 0.76},
-        {"engine": "compliance", "run": 7, "direction": "raises", "ratio": 2.55},
-        {"engine": "compliance", "run": 6, "direction": "raises", "ratio": 2.3}])
-    mech = pd.DataFrame([
-        {"engine": "compliance", "run": 5, "mu": 0.2, "friction_impulse": 5.0,
-         "friction_impulse_ref": -12.0},
-        {"engine": "compliance", "run": 7, "mu": 0.2, "friction_impulse": 505.0,
-         "friction_impulse_ref": 3.0},
-        {"engine": "compliance", "run": 6, "mu": 0.2, "friction_impulse": -1.0,
-         "friction_impulse_ref": 1.0}])
+    effect = pd.DataFrame(
+        [
+            {"engine": "compliance", "run": 5, "direction": "lowers", "ratio": 0.76},
+            {"engine": "compliance", "run": 7, "direction": "raises", "ratio": 2.55},
+            {"engine": "compliance", "run": 6, "direction": "raises", "ratio": 2.3},
+        ]
+    )
+    mech = pd.DataFrame(
+        [
+            {
+                "engine": "compliance",
+                "run": 5,
+                "mu": 0.2,
+                "friction_impulse": 5.0,
+                "friction_impulse_ref": -12.0,
+            },
+            {
+                "engine": "compliance",
+                "run": 7,
+                "mu": 0.2,
+                "friction_impulse": 505.0,
+                "friction_impulse_ref": 3.0,
+            },
+            {
+                "engine": "compliance",
+                "run": 6,
+                "mu": 0.2,
+                "friction_impulse": -1.0,
+                "friction_impulse_ref": 1.0,
+            },
+        ]
+    )
     (s,) = report_text.impulse_agreement_sentences(effect, mech)
     assert "of the 3 run(s)" in s and "explains the change in 2" in s
     assert "(runs 5 and 7)" in s and "it does not in run 6" in s
 
 
 def test_sticking_sentence_pairs_stick_with_slip():
-    rows = [{"label": f"compliance {m} mu={mu}", "engine": "compliance", "mu": mu,
-             "friction_mode": m, "peak_theta": th, "status": "success"}
-            for mu, th_slip, th_stick in ((0.1, 3.277e-3, 3.298e-3), (0.2, 3.138e-3, 3.243e-3),
-                                          (0.4, 3.004e-3, 3.045e-3))
-            for m, th in (("slip", th_slip), ("stick", th_stick))]
+    rows = [
+        {
+            "label": f"compliance {m} mu={mu}",
+            "engine": "compliance",
+            "mu": mu,
+            "friction_mode": m,
+            "peak_theta": th,
+            "status": "success",
+        }
+        for mu, th_slip, th_stick in (
+            (0.1, 3.277e-3, 3.298e-3),
+            (0.2, 3.138e-3, 3.243e-3),
+            (0.4, 3.004e-3, 3.045e-3),
+        )
+        for m, th in (("slip", th_slip), ("stick", th_stick))
+    ]
     s = report_text.mode_pair_sentence(pd.DataFrame(rows))
     # issue 12: the sticking study now has two sticking models, named in the sentence
-    assert s == ("Against sliding only, the project's stick law raises the peak rotation at "
-                 "μ = 0.2 (×1.03) and changes it by less than 2 % at μ = 0.1 and 0.4.")
-    check_clauses(claims(s), {0.1: 3.298 / 3.277, 0.2: 3.243 / 3.138, 0.4: 3.045 / 3.004},
-                  mu_values)
+    assert s == (
+        "Against sliding only, the project's stick law raises the peak rotation at "
+        "μ = 0.2 (×1.03) and changes it by less than 2 % at μ = 0.1 and 0.4."
+    )
+    check_clauses(
+        claims(s), {0.1: 3.298 / 3.277, 0.2: 3.243 / 3.138, 0.4: 3.045 / 3.004}, mu_values
+    )
     assert report_text.mode_pair_sentence(pd.DataFrame(rows[:1])) == ""
-    c2d = [dict(r, friction_mode="contact2d", peak_theta=r["peak_theta"] * 0.9)
-           for r in rows if r["friction_mode"] == "stick"]
+    c2d = [
+        dict(r, friction_mode="contact2d", peak_theta=r["peak_theta"] * 0.9)
+        for r in rows
+        if r["friction_mode"] == "stick"
+    ]
     s2 = report_text.mode_pair_sentence(pd.DataFrame(rows + c2d))
     assert s2.startswith(s + " Against sliding only, OpenSees's zeroLengthContact2D algorithm")

@@ -18,15 +18,21 @@ import numpy as np
 import pandas as pd
 import pytest
 from _report_helpers import check_clauses, claims, expand_runs, mu_values, read_table
+
+from deckpound.cli import main
 from deckpound.compare.outputs import folder_size, parquet_units
 from deckpound.compare.paper import run_paper
 from deckpound.compare.report_text import direction, engine_label
 from deckpound.models.scene_io import load_scene
 
-from deckpound.cli import main
-
-TINY = ["excitation.duration=1.0", "run.output_dt=0.01", "opensees.dt=0.001",
-        "compliance.dt=0.001", "nonsmooth.h=0.001", "sequence.pgas=[0.5, 1.0]"]
+TINY = [
+    "excitation.duration=1.0",
+    "run.output_dt=0.01",
+    "opensees.dt=0.001",
+    "compliance.dt=0.001",
+    "nonsmooth.h=0.001",
+    "sequence.pgas=[0.5, 1.0]",
+]
 UMASK = 0o027
 #: the default report of the full benchmark must stay below 30 MB; measured: 3.2 MB with 23
 #: figures (it was 307 MB with every history as CSV and Parquet and PDF figures). A report's
@@ -41,8 +47,9 @@ def report(tmp_path_factory):
     scene = load_scene("saiidi-4span", TINY)
     old = os.umask(UMASK)
     try:
-        md = run_paper(scene, out, quick=True, workers=2, studies=("stiffness", "friction"),
-                       progress=False)
+        md = run_paper(
+            scene, out, quick=True, workers=2, studies=("stiffness", "friction"), progress=False
+        )
     finally:
         os.umask(old)
     return out, md
@@ -60,19 +67,36 @@ def section(text: str, title: str) -> str:
 def test_report_and_every_figure_written(report):
     out, md = report
     text = md.read_text()
-    for heading in ("What was run", "Excitation", "Headline", "Friction: where it raises",
-                    "Engines against OpenSees", ("Study: Contact stiffness, from the state "
-                    "carried into run 2"), "Study: Contact stiffness, from the virgin state",
-                    "Outputs", "The scene's notes"):
+    for heading in (
+        "What was run",
+        "Excitation",
+        "Headline",
+        "Friction: where it raises",
+        "Engines against OpenSees",
+        ("Study: Contact stiffness, from the state carried into run 2"),
+        "Study: Contact stiffness, from the virgin state",
+        "Outputs",
+        "The scene's notes",
+    ):
         assert f"## {heading}" in text, heading
     assert "ASSUMPTION" in text and "PAPER" in text
     html = (out / "report.html").read_text()
     assert html.startswith("<!doctype html>") and "<table" in html
     figs = out / "figures"
-    for name in ("peak_rotation_vs_pga", "friction_ratio_vs_run", "friction_mechanism_strongest",
-                 "run1_histories", "run2_histories", "contact_forces_strongest",
-                 "bent_hysteresis_strongest", "plan_at_peak_rotation", "study_stiffness_run2",
-                 "study_stiffness_virgin", "study_friction_run2", "study_friction_virgin"):
+    for name in (
+        "peak_rotation_vs_pga",
+        "friction_ratio_vs_run",
+        "friction_mechanism_strongest",
+        "run1_histories",
+        "run2_histories",
+        "contact_forces_strongest",
+        "bent_hysteresis_strongest",
+        "plan_at_peak_rotation",
+        "study_stiffness_run2",
+        "study_stiffness_virgin",
+        "study_friction_run2",
+        "study_friction_virgin",
+    ):
         assert (figs / f"{name}.png").stat().st_size > 1000, name
     assert not list(figs.glob("*.pdf"))  # PNG only unless asked
     linked = set(re.findall(r"\]\((figures/[^)]+)\)", text))
@@ -82,9 +106,17 @@ def test_report_and_every_figure_written(report):
 def test_tables_carry_units_and_the_default_report_is_small(report):
     out, _ = report
     seq = pd.read_csv(out / "tables" / "sequence.csv")
-    for header in ("peak_theta [rad]", "peak_y_rel [m]", "peak_y_abs [m]", "pga [g]",
-                   "applied_pga_y [g]", "gap1_start [m]", "wall_time [s]", "compile_time [s]",
-                   "bent1_kx [kN/m]"):
+    for header in (
+        "peak_theta [rad]",
+        "peak_y_rel [m]",
+        "peak_y_abs [m]",
+        "pga [g]",
+        "applied_pga_y [g]",
+        "gap1_start [m]",
+        "wall_time [s]",
+        "compile_time [s]",
+        "bent1_kx [kN/m]",
+    ):
         assert header in seq.columns, header
     assert set(seq["engine"]) == {"opensees", "compliance", "nonsmooth"}
     assert len(seq) == 2 * 6 and (seq["status"] == "success").all()
@@ -98,11 +130,16 @@ def test_tables_carry_units_and_the_default_report_is_small(report):
     size = folder_size(out, exclude=("cache",))
     n_figures = len(list((out / "figures").iterdir()))
     assert size < FULL_BUDGET * n_figures / FULL_FIGURES, size
-    biggest = max(p.stat().st_size for p in out.rglob("*") if p.is_file()
-                  and "cache" not in p.relative_to(out).parts)
+    biggest = max(
+        p.stat().st_size
+        for p in out.rglob("*")
+        if p.is_file() and "cache" not in p.relative_to(out).parts
+    )
     assert biggest < 0.5e6
-    said = re.search(r"This folder holds ([\d.]+) MB .* holds ([\d.]+) MB and is not part",
-                     (out / "report.md").read_text())
+    said = re.search(
+        r"This folder holds ([\d.]+) MB .* holds ([\d.]+) MB and is not part",
+        (out / "report.md").read_text(),
+    )
     assert said and float(said.group(1)) <= size * 1e-6 and float(said.group(2)) > 0
 
 
@@ -124,11 +161,16 @@ def test_friction_discussion_agrees_with_the_tables_for_every_state(report):
     fric = section(text, "Friction: where it raises")
     checked = 0
     for engine in ("opensees", "compliance", "nonsmooth"):
-        line = next(ln for ln in fric.splitlines()
-                    if ln.startswith(f"- {engine_label(engine)}: friction (μ = 0.2"))
+        line = next(
+            ln
+            for ln in fric.splitlines()
+            if ln.startswith(f"- {engine_label(engine)}: friction (μ = 0.2")
+        )
         g = seq[seq["engine"] == engine]
-        ratio = (g[g["mu"] > 0].set_index("run")["peak_theta"]
-                 / g[g["mu"] == 0].set_index("run")["peak_theta"]).to_dict()
+        ratio = (
+            g[g["mu"] > 0].set_index("run")["peak_theta"]
+            / g[g["mu"] == 0].set_index("run")["peak_theta"]
+        ).to_dict()
         check_clauses(claims(line), ratio, expand_runs)
         checked += 1
     # the friction study from each state it was run from
@@ -139,35 +181,46 @@ def test_friction_discussion_agrees_with_the_tables_for_every_state(report):
         label = states[block.split(".**")[0]]
         table = read_table(out / "tables" / f"study_friction_{label}.csv")
         for engine in ("compliance", "nonsmooth"):
-            line = next(ln for ln in block.splitlines()
-                        if ln.startswith(f"- {engine_label(engine)} (μ = 0:"))
+            line = next(
+                ln
+                for ln in block.splitlines()
+                if ln.startswith(f"- {engine_label(engine)} (μ = 0:")
+            )
             g = table[table["engine"] == engine].set_index("mu")["peak_theta"]
-            check_clauses(claims(line), {mu: g[mu] / g[0.0] for mu in g.index if mu > 0},
-                          mu_values)
+            check_clauses(claims(line), {mu: g[mu] / g[0.0] for mu in g.index if mu > 0}, mu_values)
             assert f"{1e3 * g[0.0]:.3g} mrad" in line
             checked += 1
     # the headline: the strongest run and the virgin state
     head = section(text, "Headline")
     strong = seq[seq["run"] == 2]
     line = next(ln for ln in head.splitlines() if ln.startswith("In that run friction"))
-    ratios = {engine_label(e): (strong[(strong["engine"] == e) & (strong["mu"] > 0)]
-                                ["peak_theta"].iloc[0]
-                                / strong[(strong["engine"] == e) & (strong["mu"] == 0)]
-                                ["peak_theta"].iloc[0]) for e in set(strong["engine"])}
+    ratios = {
+        engine_label(e): (
+            strong[(strong["engine"] == e) & (strong["mu"] > 0)]["peak_theta"].iloc[0]
+            / strong[(strong["engine"] == e) & (strong["mu"] == 0)]["peak_theta"].iloc[0]
+        )
+        for e in set(strong["engine"])
+    }
     check_clauses(claims(line), ratios, lambda t: set(re.split(r", | and ", t)))
     virgin = read_table(out / "tables" / "study_friction_virgin.csv")
     line = next(ln for ln in head.splitlines() if ln.startswith("From the virgin state"))
-    v = {engine_label(e): (virgin[(virgin["engine"] == e) & (virgin["mu"] == 0.2)]
-                           ["peak_theta"].iloc[0]
-                           / virgin[(virgin["engine"] == e) & (virgin["mu"] == 0)]
-                           ["peak_theta"].iloc[0]) for e in ("compliance", "nonsmooth")}
+    v = {
+        engine_label(e): (
+            virgin[(virgin["engine"] == e) & (virgin["mu"] == 0.2)]["peak_theta"].iloc[0]
+            / virgin[(virgin["engine"] == e) & (virgin["mu"] == 0)]["peak_theta"].iloc[0]
+        )
+        for e in ("compliance", "nonsmooth")
+    }
     check_clauses(claims(line), v, lambda t: set(re.split(r", | and ", t)))
     # the two start states side by side, per engine
     side = fric.split("**The two start states side by side**")[1]
     for engine in ("compliance", "nonsmooth"):
         line = next(ln for ln in side.splitlines() if ln.startswith(f"- {engine_label(engine)} at"))
-        found = re.findall(r"from (the state carried into run 2|the virgin state) \(gaps [^)]*\) "
-                           r"friction (raises|lowers) the peak rotation ×([\d.]+)", line)
+        found = re.findall(
+            r"from (the state carried into run 2|the virgin state) \(gaps [^)]*\) "
+            r"friction (raises|lowers) the peak rotation ×([\d.]+)",
+            line,
+        )
         assert len(found) == 2
         for state, word, shown in found:
             table = read_table(out / "tables" / f"study_friction_{states[state]}.csv")
@@ -185,9 +238,11 @@ def test_each_study_states_its_start_state(report):
     run2 = seq[(seq["run"] == 2) & (seq["case"] == "opensees")].iloc[0]
     for name, title in (("stiffness", "Contact stiffness"), ("friction", "Friction on/off")):
         carried = section(text, f"Study: {title}, from the state carried into run 2")
-        assert ("Starts from the state carried into run 2 by the opensees sequence (after run 1): "
-                f"gaps {1e3 * run2['gap1_start']:.2f} mm at seat 1 and "
-                f"{1e3 * run2['gap2_start']:.2f} mm at seat 2") in carried
+        assert (
+            "Starts from the state carried into run 2 by the opensees sequence (after run 1): "
+            f"gaps {1e3 * run2['gap1_start']:.2f} mm at seat 1 and "
+            f"{1e3 * run2['gap2_start']:.2f} mm at seat 2"
+        ) in carried
         table = read_table(out / "tables" / f"study_{name}_run2.csv")
         np.testing.assert_allclose(table["gap1_start"], run2["gap1_start"], rtol=1e-12)
         assert (table["state"] == "run2").all()
@@ -216,8 +271,17 @@ def test_cache_counts_per_engine_and_nonsmooth_h_reruns_no_opensees_case(report,
     assert "Result cache, per engine: OpenSees" in md.read_text()
     scene = load_scene("saiidi-4span", TINY + ["nonsmooth.h=0.0005"])
     again = tmp_path / "again"
-    md2 = run_paper(scene, again, quick=True, workers=2, studies=("friction",), progress=False,
-                    cache_dir=out / "cache", full_histories=True, formats=("pdf",))
+    md2 = run_paper(
+        scene,
+        again,
+        quick=True,
+        workers=2,
+        studies=("friction",),
+        progress=False,
+        cache_dir=out / "cache",
+        full_histories=True,
+        formats=("pdf",),
+    )
     counts = read_table(again / "tables" / "cache_counts.csv").set_index("engine")
     assert counts.loc["opensees", "misses"] == 0 and counts.loc["opensees", "hits"] == 4
     assert counts.loc["compliance", "misses"] == 0
@@ -232,20 +296,32 @@ def test_cache_counts_per_engine_and_nonsmooth_h_reruns_no_opensees_case(report,
     assert "deck_theta" in wide.columns and len(wide) == 101
     assert "deck_theta [rad]" in pd.read_csv(run2 / "aligned_opensees.csv").columns
     assert set(pd.read_parquet(run2 / "aligned_long.parquet")["engine"]) == {
-        "opensees", "compliance", "nonsmooth"}
+        "opensees",
+        "compliance",
+        "nonsmooth",
+    }
     assert (again / "figures" / "peak_rotation_vs_pga.pdf").stat().st_size > 1000
 
 
 def test_compare_then_vtk_series_readable(tmp_path):
     out = tmp_path / "cmp"
-    args = ["compare", "saiidi-4span", "--engines", "compliance,nonsmooth", "-o", str(out),
-            "--no-progress", "--workers", "1"] + [a for o in TINY[:5] for a in ("--set", o)]
+    args = [
+        "compare",
+        "saiidi-4span",
+        "--engines",
+        "compliance,nonsmooth",
+        "-o",
+        str(out),
+        "--no-progress",
+        "--workers",
+        "1",
+    ] + [a for o in TINY[:5] for a in ("--set", o)]
     assert main(args) == 0
     assert (out / "metrics.csv").is_file() and (out / "figures" / "histories.png").is_file()
     vtk = tmp_path / "vtk"
     assert main(["export-vtk", str(out), "-o", str(vtk)]) == 0
     files = sorted(p.name for p in vtk.rglob("*") if p.is_file())
-    assert files == ["compliance.xdmf", "nonsmooth.xdmf"]   # one file per engine, no others
+    assert files == ["compliance.xdmf", "nonsmooth.xdmf"]  # one file per engine, no others
     for engine in ("compliance", "nonsmooth"):
         with meshio.xdmf.TimeSeriesReader(vtk / f"{engine}.xdmf") as reader:
             points, cells = reader.read_points_cells()
@@ -282,12 +358,27 @@ def test_report_of_a_real_record_names_its_files_and_applies_its_labels(tmp_path
 
     px = write_at2(tmp_path / "x.at2", quake(401, 0.005, peak=0.44, seed=1), dt=0.005)
     py = write_at2(tmp_path / "y.at2", quake(397, 0.005, peak=0.31, seed=2), dt=0.005)
-    scene = record_scene("at2", px, py, None, "sequence.pgas=[0.25, 1.0]", "compliance.dt=0.001",
-                         "run.output_dt=0.01")
+    scene = record_scene(
+        "at2",
+        px,
+        py,
+        None,
+        "sequence.pgas=[0.25, 1.0]",
+        "compliance.dt=0.001",
+        "run.output_dt=0.01",
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        md = run_paper(scene, tmp_path / "rep", quick=True, workers=1, studies=("friction",),
-                       progress=False, engines=("compliance",), reference="compliance")
+        md = run_paper(
+            scene,
+            tmp_path / "rep",
+            quick=True,
+            workers=1,
+            studies=("friction",),
+            progress=False,
+            engines=("compliance",),
+            reference="compliance",
+        )
     text = md.read_text()
     exc = section(text, "Excitation")
     for p in (px, py):
@@ -295,7 +386,7 @@ def test_report_of_a_real_record_names_its_files_and_applies_its_labels(tmp_path
     assert "PEER AT2 record files" in exc and "padded with zeros" in exc
     assert "synthetic" not in exc.lower()
     assert "Applied transverse PGA equals the run's label in every run" in exc
-    assert "| 2 | 1 | 1 | 1 | 1.2 | 1.2 |" in exc   # run 2: label, targets and applied PGA
+    assert "| 2 | 1 | 1 | 1 | 1.2 | 1.2 |" in exc  # run 2: label, targets and applied PGA
     notes = section(text, "The scene's notes")
     assert "| excitation.kind | at2 | ASSUMPTION: a seeded synthetic" in notes
     assert "synthetic (built-in saiidi-4span)" in notes

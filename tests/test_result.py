@@ -17,8 +17,16 @@ def _result():
 
 def test_standard_columns_and_units():
     cols = standard_columns(["bent1"])
-    assert cols[:8] == ["t", "deck_x_abs", "deck_y_abs", "deck_theta", "seat1_x_abs", "seat1_theta",
-                        "seat2_x_abs", "seat2_theta"]
+    assert cols[:8] == [
+        "t",
+        "deck_x_abs",
+        "deck_y_abs",
+        "deck_theta",
+        "seat1_x_abs",
+        "seat1_theta",
+        "seat2_x_abs",
+        "seat2_theta",
+    ]
     assert "gap_c4" in cols and "fn_c1" in cols and "ft_c3" in cols and "bent1_fy" in cols
     assert column_unit("deck_theta") == "rad" and column_unit("fn_c2") == "kN"
     assert column_unit("gap_c1") == "m" and column_unit("bent1_fx") == "kN"

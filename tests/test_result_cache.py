@@ -16,6 +16,7 @@ import warnings
 
 import numpy as np
 import pytest
+
 from deckpound.compare.cases import ResultCache as ReExported
 from deckpound.compare.result_cache import MANIFEST, ResultCache
 from deckpound.models.result import Result
@@ -25,9 +26,11 @@ KEYS = [f"{i:064x}" for i in range(1, 5)]
 
 def _result(seed: int, n: int = 200) -> Result:
     rng = np.random.default_rng(seed)
-    return Result(engine="compliance", columns={"t": np.arange(n) * 0.01,
-                                                "deck_theta": rng.normal(size=n)},
-                  meta={"seed": seed})
+    return Result(
+        engine="compliance",
+        columns={"t": np.arange(n) * 0.01, "deck_theta": rng.normal(size=n)},
+        meta={"seed": seed},
+    )
 
 
 def test_reexported_from_cases():
@@ -47,8 +50,10 @@ def test_put_get_round_trip_with_checksums(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == [KEYS[0]]  # no temporary left
 
 
-@pytest.mark.parametrize("damage", ["truncate-csv", "edit-csv", "truncate-json", "manifest-sha",
-                                    "manifest-junk", "drop-csv"])
+@pytest.mark.parametrize(
+    "damage",
+    ["truncate-csv", "edit-csv", "truncate-json", "manifest-sha", "manifest-junk", "drop-csv"],
+)
 def test_a_damaged_entry_is_recomputed_with_a_warning(tmp_path, damage):
     cache = ResultCache(tmp_path)
     cache.put(KEYS[0], _result(1))
@@ -72,8 +77,9 @@ def test_a_damaged_entry_is_recomputed_with_a_warning(tmp_path, damage):
         assert cache.get(KEYS[0], "compliance") is None
     assert cache.corrupt == 1 and cache.misses == 1
     cache.put(KEYS[0], _result(2))  # the recomputed result replaces the damaged entry
-    np.testing.assert_array_equal(cache.get(KEYS[0], "compliance")["deck_theta"],
-                                  _result(2)["deck_theta"])
+    np.testing.assert_array_equal(
+        cache.get(KEYS[0], "compliance")["deck_theta"], _result(2)["deck_theta"]
+    )
     assert sorted(p.name for p in tmp_path.iterdir()) == [KEYS[0]]
 
 
@@ -119,9 +125,10 @@ def _hammer(args):
                     got = cache.get(key, "compliance")
                     reads += 1
                     if got is not None and not any(
-                            np.array_equal(got["deck_theta"], v) for v in expected.values()):
+                        np.array_equal(got["deck_theta"], v) for v in expected.values()
+                    ):
                         bad += 1
-            except BaseException as err:  # noqa: BLE001 - any exception is the finding
+            except BaseException as err:
                 errors.append(f"{type(err).__name__}: {err}")
     return errors, bad, reads
 
@@ -202,8 +209,9 @@ def test_changing_one_engines_settings_reruns_only_that_engine(tmp_path):
 
     sc = load_scene("saiidi-4span", ["run.duration=0.2"])
     engines = ("opensees", "compliance", "nonsmooth")
-    run_cases([Case(e, e, sc) for e in engines], cache=ResultCache(tmp_path), workers=1,
-              progress=False)
+    run_cases(
+        [Case(e, e, sc) for e in engines], cache=ResultCache(tmp_path), workers=1, progress=False
+    )
     changed = load_scene("saiidi-4span", ["run.duration=0.2", "nonsmooth.h=5e-4"])
     cache = ResultCache(tmp_path)
     run_cases([Case(e, e, changed) for e in engines], cache=cache, workers=1, progress=False)

@@ -3,6 +3,7 @@
 import os
 
 import numpy as np
+
 from deckpound.models import _rows_text
 from deckpound.models.result import Result
 

@@ -12,9 +12,15 @@ from hypothesis import strategies as st
 
 from deckpound.models._fields import to_mapping
 from deckpound.models.errors import SceneError
-from deckpound.models.scene_io import (apply_overrides, builtin_scene_names, load_scene,
-                                       scene_from_mapping, scene_from_toml, scene_schema,
-                                       scene_to_toml)
+from deckpound.models.scene_io import (
+    apply_overrides,
+    builtin_scene_names,
+    load_scene,
+    scene_from_mapping,
+    scene_from_toml,
+    scene_schema,
+    scene_to_toml,
+)
 
 
 def test_benchmark_paper_values(bench_scene):
@@ -39,8 +45,14 @@ def test_benchmark_notes_mark_sources_and_assumptions(bench_scene):
     notes = bench_scene.notes
     for key in ("deck.mass", "deck.inertia", "seats[0].kx", "damping.ratio"):
         assert notes[key].startswith("PAPER")
-    for key in ("deck.length", "deck.width", "bents[0].station", "bents[1].x.stiffness",
-                "contact.stiffness", "contact.restitution"):
+    for key in (
+        "deck.length",
+        "deck.width",
+        "bents[0].station",
+        "bents[1].x.stiffness",
+        "contact.stiffness",
+        "contact.restitution",
+    ):
         assert notes[key].startswith("ASSUMPTION")
 
 
@@ -59,11 +71,16 @@ def test_toml_round_trip_exact(bench_scene):
 
 
 @settings(max_examples=40, deadline=None)
-@given(k=st.floats(1e3, 1e12, allow_nan=False), e=st.one_of(st.just(0.0), st.floats(1e-9, 1.0)),
-       g=st.one_of(st.just(0.0), st.floats(1e-9, 0.5)))
+@given(
+    k=st.floats(1e3, 1e12, allow_nan=False),
+    e=st.one_of(st.just(0.0), st.floats(1e-9, 1.0)),
+    g=st.one_of(st.just(0.0), st.floats(1e-9, 0.5)),
+)
 def test_round_trip_arbitrary_floats(bench_scene, k, e, g):
-    s = load_scene("saiidi-4span", [f"contact.stiffness={k!r}", f"contact.restitution={e!r}",
-                                    f"seats[1].gap={g!r}"])
+    s = load_scene(
+        "saiidi-4span",
+        [f"contact.stiffness={k!r}", f"contact.restitution={e!r}", f"seats[1].gap={g!r}"],
+    )
     assert scene_from_toml(scene_to_toml(s)) == s
     assert s.contact.stiffness == k and s.seats[1].gap == g
 
@@ -79,8 +96,15 @@ def test_schema_validates_benchmark(bench_scene):
 
 
 def test_overrides_dotted_paths():
-    s = load_scene("saiidi-4span", ["contact.stiffness=2e6", "bents[1].y.beta=0.3",
-                                    "contact.law=hertz", "damping.modes=[1, 2]"])
+    s = load_scene(
+        "saiidi-4span",
+        [
+            "contact.stiffness=2e6",
+            "bents[1].y.beta=0.3",
+            "contact.law=hertz",
+            "damping.modes=[1, 2]",
+        ],
+    )
     assert s.contact.stiffness == 2e6 and s.bents[1].y.beta == 0.3
     assert s.contact.law == "hertz" and s.damping.modes == (1, 2)
 
@@ -134,13 +158,16 @@ def test_override_index_out_of_range():
         apply_overrides({"bents": [{}]}, ["bents[3].station=1"])
 
 
-@pytest.mark.parametrize("overrides,field", [
-    (["bents[0].name=seat1"], "bents[0].name"),
-    (["bents[1].name='a,b'"], "bents[1].name"),
-    (["compliance.dt=1e-9"], "compliance.dt"),
-    (["run.output_dt=1e-12"], "run.output_dt"),
-    (["opensees.substeps=100000"], "opensees.substeps"),
-])
+@pytest.mark.parametrize(
+    "overrides,field",
+    [
+        (["bents[0].name=seat1"], "bents[0].name"),
+        (["bents[1].name='a,b'"], "bents[1].name"),
+        (["compliance.dt=1e-9"], "compliance.dt"),
+        (["run.output_dt=1e-12"], "run.output_dt"),
+        (["opensees.substeps=100000"], "opensees.substeps"),
+    ],
+)
 def test_names_and_step_counts_refused(overrides, field):
     """Fuzzing found bent names that collide with seat channels and steps too small to run."""
     with pytest.raises(SceneError) as info:

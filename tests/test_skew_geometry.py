@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 import pytest
+
 from deckpound.analytic.kinematics import contact_kinematics, gap_hessian, pack_corners
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import plan_of

@@ -27,15 +27,15 @@ import pytest
 pytest.importorskip("openseespy.opensees")
 
 from _compliance_helpers import motion_from
+from test_tcl_export_runs import HAS_TCL, deviation, recorded, run_tcl
+from tests_helpers_scene import short_benchmark
+
+from deckpound.engines import run_engine
 from deckpound.models.plan import column_unit
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build import engine
 from deckpound.opensees_build.export import export_script
 from deckpound.opensees_build.model import gap_mapping, gap_orientation
-from test_tcl_export_runs import HAS_TCL, deviation, recorded, run_tcl
-from tests_helpers_scene import short_benchmark
-
-from deckpound.engines import run_engine
 
 
 @pytest.mark.parametrize("phi_deg", [0.0, 30.0, 60.0])

@@ -9,10 +9,10 @@ import dataclasses
 import numpy as np
 import pandas as pd
 import pytest
-from deckpound.models.scene_io import builtin_scene_names, load_scene
 
 from deckpound.cli import main
 from deckpound.engines import engine_names
+from deckpound.models.scene_io import builtin_scene_names, load_scene
 
 
 def test_skew_30_is_the_benchmark_with_a_30_degree_skew():

@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+
+from deckpound.cli import main
 from deckpound.compare import cases as cases_mod
 from deckpound.compare.cases import Case, ResultCache, run_cases
 from deckpound.compare.sequence_run import run_sequence
@@ -20,10 +22,14 @@ from deckpound.compare.studies import (
 from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene
 
-from deckpound.cli import main
-
-TINY = ["excitation.duration=1.0", "excitation.pga=1.0", "run.output_dt=0.01",
-        "opensees.dt=0.001", "compliance.dt=0.001", "nonsmooth.h=0.001"]
+TINY = [
+    "excitation.duration=1.0",
+    "excitation.pga=1.0",
+    "run.output_dt=0.01",
+    "opensees.dt=0.001",
+    "compliance.dt=0.001",
+    "nonsmooth.h=0.001",
+]
 
 
 @pytest.fixture(scope="module")
@@ -32,8 +38,10 @@ def tiny():
 
 
 def _cases(tiny):
-    return [Case(f"opensees g={g}", "opensees", modified(tiny, f"seats[0].gap={g}"), {"gap": g})
-            for g in (0.005, 0.0127)]
+    return [
+        Case(f"opensees g={g}", "opensees", modified(tiny, f"seats[0].gap={g}"), {"gap": g})
+        for g in (0.005, 0.0127)
+    ]
 
 
 def test_cache_miss_then_hit(tiny, tmp_path):
@@ -44,8 +52,9 @@ def test_cache_miss_then_hit(tiny, tmp_path):
     second = run_cases(_cases(tiny), cache=again, workers=1, progress=False)
     assert again.hits == 2 and again.misses == 0
     for k in first:
-        np.testing.assert_allclose(second[k]["deck_theta"], first[k]["deck_theta"], rtol=0,
-                                   atol=1e-15)
+        np.testing.assert_allclose(
+            second[k]["deck_theta"], first[k]["deck_theta"], rtol=0, atol=1e-15
+        )
 
 
 def test_resume_after_interrupted_run(tiny, tmp_path, monkeypatch):
@@ -73,8 +82,9 @@ def test_resume_after_interrupted_run(tiny, tmp_path, monkeypatch):
 def test_local_dask_cluster_equals_serial(tiny, tmp_path):
     distributed = pytest.importorskip("dask.distributed")
     serial = run_cases(_cases(tiny), workers=1, progress=False)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
         parallel = run_cases(_cases(tiny), scheduler=cluster.scheduler_address, progress=False)
     for k in serial:
         np.testing.assert_array_equal(parallel[k]["deck_theta"], serial[k]["deck_theta"])
@@ -108,17 +118,27 @@ def test_a_study_from_a_carried_state(tmp_path):
     assert state.scene.excitation.pga == 1.0
     assert [s.gap for s in state.scene.seats] == list(runs[1].state.gaps)
     assert state.scene.seats[0].gap != scene.seats[0].gap
-    strongest = start_state(scene, "strongest", sequence=runs)   # from a sequence already run
+    strongest = start_state(scene, "strongest", sequence=runs)  # from a sequence already run
     assert (strongest.label, strongest.engine) == ("run2", "compliance")
     assert strongest.scene == runs[1].scene == state.scene
-    table, _ = run_study("friction", scene, tmp_path / "out", quick=True, cache=cache,
-                         workers=1, progress=False, state=state, formats=("pdf",))
+    table, _ = run_study(
+        "friction",
+        scene,
+        tmp_path / "out",
+        quick=True,
+        cache=cache,
+        workers=1,
+        progress=False,
+        state=state,
+        formats=("pdf",),
+    )
     assert (table["state"] == "run2").all()
     np.testing.assert_allclose(table["gap1_start"], runs[1].state.gaps[0], rtol=0)
     assert (tmp_path / "out" / "friction_run2.csv").is_file()
     assert (tmp_path / "out" / "friction_run2.pdf").is_file()
-    virgin, _ = run_study("friction", scene, tmp_path / "out", quick=True, cache=cache,
-                          workers=1, progress=False)
+    virgin, _ = run_study(
+        "friction", scene, tmp_path / "out", quick=True, cache=cache, workers=1, progress=False
+    )
     assert (virgin["gap1_start"] == 0.0127).all()
     assert not np.allclose(virgin["peak_theta"], table["peak_theta"])
 
@@ -134,8 +154,21 @@ def test_state_names_are_checked():
 
 def test_study_cli_with_a_state(tmp_path, capsys):
     out = tmp_path / "s"
-    args = ["study", "friction", "saiidi-4span", "--quick", "--state", "run2", "--state-engine",
-            "compliance", "-o", str(out), "--no-progress", "--workers", "1"]
+    args = [
+        "study",
+        "friction",
+        "saiidi-4span",
+        "--quick",
+        "--state",
+        "run2",
+        "--state-engine",
+        "compliance",
+        "-o",
+        str(out),
+        "--no-progress",
+        "--workers",
+        "1",
+    ]
     assert main(args + [a for o in SEQ2 for a in ("--set", o)]) == 0
     printed = capsys.readouterr().out
     assert "run2" in printed and "peak_theta [rad]" in printed
@@ -146,8 +179,12 @@ def test_a_study_registered_the_old_way_runs_from_the_virgin_state():
     """Another engineer adds studies as Study(name, title, cases, x): still valid, virgin only."""
     s = Study("extra", "An extra study", friction_cases, "mu")
     assert not s.carried and s.unit == ""
-    assert {n for n, st in STUDIES.items() if st.carried} >= {"friction", "sticking",
-                                                             "stiffness", "law"}
+    assert {n for n, st in STUDIES.items() if st.carried} >= {
+        "friction",
+        "sticking",
+        "stiffness",
+        "law",
+    }
 
 
 def test_damping_study_cases_and_sentences(tiny):
@@ -158,19 +195,37 @@ def test_damping_study_cases_and_sentences(tiny):
 
     cases = damping_cases(tiny, quick=False)
     labels = {c.params["damping"] for c in cases}
-    assert len(labels) == 3 * 3 * 2 - 4          # members none: the stiffness does nothing
-    by_engine = {e: {c.params["damping"] for c in cases if c.engine == e}
-                 for e in ("opensees", "compliance", "nonsmooth")}
+    assert len(labels) == 3 * 3 * 2 - 4  # members none: the stiffness does nothing
+    by_engine = {
+        e: {c.params["damping"] for c in cases if c.engine == e}
+        for e in ("opensees", "compliance", "nonsmooth")
+    }
     assert by_engine["opensees"] == by_engine["compliance"] == labels
     assert all("initial" in lab or lab.startswith("none") for lab in by_engine["nonsmooth"])
-    table = pd.DataFrame([
-        {"engine": "opensees", "damping": "bents·initial·absolute", "peak_theta": 2e-3,
-         "peak_fn": 1000.0, "gap_closures": 10, "status": "success"},
-        {"engine": "opensees", "damping": "bents+seats·initial·absolute", "peak_theta": 2.2e-3,
-         "peak_fn": 700.0, "gap_closures": 5, "status": "success"},
-    ])
+    table = pd.DataFrame(
+        [
+            {
+                "engine": "opensees",
+                "damping": "bents·initial·absolute",
+                "peak_theta": 2e-3,
+                "peak_fn": 1000.0,
+                "gap_closures": 10,
+                "status": "success",
+            },
+            {
+                "engine": "opensees",
+                "damping": "bents+seats·initial·absolute",
+                "peak_theta": 2.2e-3,
+                "peak_fn": 700.0,
+                "gap_closures": 5,
+                "status": "success",
+            },
+        ]
+    )
     (s,) = damping_headlines(table)
-    assert s == ("opensees, from bents·initial·absolute: peak rotation 2 mrad ×1 "
-                 "(bents·initial·absolute) to ×1.1 (bents+seats·initial·absolute); peak gap "
-                 "force 1000 kN ×0.7 (bents+seats·initial·absolute) to ×1 "
-                 "(bents·initial·absolute); gap closures 10 (5–10).")
+    assert s == (
+        "opensees, from bents·initial·absolute: peak rotation 2 mrad ×1 "
+        "(bents·initial·absolute) to ×1.1 (bents+seats·initial·absolute); peak gap "
+        "force 1000 kN ×0.7 (bents+seats·initial·absolute) to ×1 "
+        "(bents·initial·absolute); gap closures 10 (5–10)."
+    )

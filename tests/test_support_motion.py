@@ -19,7 +19,7 @@ def test_record_at_is_np_interp_bit_for_bit():
     D = rng.standard_normal((400, 3))
     V = rng.standard_normal((400, 3))
     for dt in (1e-5, 3.3e-4, 5e-4, 7e-3, 0.05):
-        n = int(round((tb[-1] + 0.2) / dt))          # runs past the end: last value held
+        n = int(round((tb[-1] + 0.2) / dt))  # runs past the end: last value held
         UG = np.empty((n + 1, 3))
         VG = np.empty((n + 1, 3))
         record_at_times(tb, D, V, dt, 0, n + 1, UG, VG)
@@ -38,6 +38,7 @@ def test_scene_motion_matches_resample():
     sc = load_scene("saiidi-4span", ["excitation.duration=2.0"])
     m = support_motion(sc)
     from deckpound.models.mechanics import support_channels
+
     ch = support_channels(sc)
     tb, D, V = support_record(m, ch)
     res = m.resample(5e-4, 2.0)
@@ -49,6 +50,7 @@ def test_scene_motion_matches_resample():
 
 def test_compliance_channels_and_skips_keep_results():
     from deckpound.analytic.compliance import SKIPS, run_compliance
+
     sc = load_scene("saiidi-4span", ["run.duration=1.5", "contact.law=kelvin-voigt"])
     full = run_compliance(sc)
     # the standard columns are always stored (engine contract); ``channels`` selects the extras,
@@ -69,11 +71,14 @@ def test_compliance_channels_and_skips_keep_results():
 
 def test_adaptive_reports_step_sizes_in_and_out_of_contact():
     from deckpound.analytic.compliance import run_compliance
+
     # commit_step lifted so the error control alone sets the steps (after a yield the default
     # caps them at 1e-4 s in and out of contact alike)
-    sc = load_scene("saiidi-4span", ["run.duration=2.0", "compliance.integrator=adaptive",
-                                     "compliance.commit_step=0.01"])
+    sc = load_scene(
+        "saiidi-4span",
+        ["run.duration=2.0", "compliance.integrator=adaptive", "compliance.commit_step=0.01"],
+    )
     st = run_compliance(sc).meta["step_sizes"]
     assert st["free"]["steps"] > 0 and st["contact"]["steps"] > 0
     assert abs(st["free"]["time"] + st["contact"]["time"] - 2.0) < 1e-9
-    assert st["contact"]["median"] < st["free"]["median"]     # short steps in contact
+    assert st["contact"]["median"] < st["free"]["median"]  # short steps in contact

@@ -11,11 +11,11 @@ import time
 import numpy as np
 import pandas as pd
 import pytest
-from deckpound.compare import pool
-from deckpound.compare.cases import _map_parallel
 
 import deckpound as dp
 from deckpound import cli
+from deckpound.compare import pool
+from deckpound.compare.cases import _map_parallel
 
 SHORT = ["excitation.duration=2.0"]
 

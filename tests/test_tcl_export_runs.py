@@ -24,20 +24,22 @@ import warnings
 
 import numpy as np
 import pytest
+from tests_helpers_scene import short_benchmark
 
 from deckpound.engine_contract import engine_columns
+from deckpound.engines import run_engine
 from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import scene_from_mapping
 from deckpound.opensees_build.export import export_script
 from deckpound.opensees_build.quoting import tcl_word
 from deckpound.opensees_build.recorders import read_columns
-from tests_helpers_scene import short_benchmark
-
-from deckpound.engines import run_engine
 
 HAS_TCL = importlib.util.find_spec("opensees") is not None
-needs_tcl = pytest.mark.skipif(not HAS_TCL, reason="the Tcl OpenSees interpreter (pip package "
-                               "'opensees') is not installed; ./run.sh test installs it")
+needs_tcl = pytest.mark.skipif(
+    not HAS_TCL,
+    reason="the Tcl OpenSees interpreter (pip package "
+    "'opensees') is not installed; ./run.sh test installs it",
+)
 pytest.importorskip("openseespy.opensees")
 
 #: 2 s of the benchmark with Newton capped at 3 iterations: step 2105 (t = 1.0525 s) fails and
@@ -50,9 +52,15 @@ OVERRIDES = ("opensees.max_iterations=3", "run.output_dt=0.0025", "damping.membe
 
 def run_tcl(script, **kw) -> subprocess.CompletedProcess:
     """Source ``script`` in the Tcl OpenSees interpreter (path quoted for Tcl)."""
-    return subprocess.run([sys.executable, "-m", "opensees", "-"],
-                          input=f"source {tcl_word(str(script))}\n", capture_output=True,
-                          text=True, timeout=600, check=False, **kw)
+    return subprocess.run(
+        [sys.executable, "-m", "opensees", "-"],
+        input=f"source {tcl_word(str(script))}\n",
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+        **kw,
+    )
 
 
 def recorded(script, out_dir) -> dict[str, np.ndarray]:
@@ -95,8 +103,13 @@ def test_python_recorders_equal_the_in_process_run(trip):
     scene, folder, ref = trip
     script = export_script(scene, "py", folder / "modèle 1.py")
     out = folder / "py out"
-    cp = subprocess.run([sys.executable, str(script), "--out", str(out)], capture_output=True,
-                        text=True, timeout=600, check=False)
+    cp = subprocess.run(
+        [sys.executable, str(script), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
     assert cp.returncode == 0, cp.stderr[-2000:]
     stats = json.loads((out / "opensees.stats.json").read_text())
     assert (stats["failures"], stats["rescued"]) == (1, 1)
@@ -120,8 +133,10 @@ def test_tcl_recorders_match_the_in_process_run(trip):
     assert "success, failures: 1, rescued by sub-steps: 1" in cp.stdout
     dev = deviation(recorded(script, folder / "modèle 1_results"), ref)
     worst = max(dev.values())
-    print(f"Tcl recorders vs in-process: worst {worst:.2e} of the column peak "
-          f"({max(dev, key=dev.get)})")
+    print(
+        f"Tcl recorders vs in-process: worst {worst:.2e} of the column peak "
+        f"({max(dev, key=dev.get)})"
+    )
     assert worst <= 1e-10
 
 
@@ -133,9 +148,14 @@ def test_tcl_csv_block_reproduces_deckpound_csv(trip, tmp_path):
     scene, folder, ref = trip
     script = export_script(scene, "tcl", folder / "csv.tcl")
     out = tmp_path / "csv out"
-    cp = subprocess.run([sys.executable, "-m", "opensees", "-"], capture_output=True, text=True,
-                        timeout=600, check=False, input=f"set writeCsv 1\nset outDir {tcl_word(str(out))}\n"
-                        f"source {tcl_word(str(script))}\n")
+    cp = subprocess.run(
+        [sys.executable, "-m", "opensees", "-"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+        input=f"set writeCsv 1\nset outDir {tcl_word(str(out))}\nsource {tcl_word(str(script))}\n",
+    )
     assert cp.returncode == 0, (cp.stdout + cp.stderr)[-2000:]
     df = pd.read_csv(out / "opensees.csv")
     assert list(df.columns) == engine_columns(plan_of(scene))
@@ -164,8 +184,13 @@ def test_exports_of_variants_match_the_in_process_run(variant, tmp_path):
         assert np.max(np.abs(ref["ft_c1"])) > 1.0  # the corners stick and slip
     folder = tmp_path / "vari é"
     py = export_script(scene, "py", folder / "v.py")
-    cp = subprocess.run([sys.executable, str(py), "--out", str(folder / "py")],
-                        capture_output=True, text=True, timeout=600, check=False)
+    cp = subprocess.run(
+        [sys.executable, str(py), "--out", str(folder / "py")],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
     assert cp.returncode == (0 if ref.ok else 1), cp.stderr[-2000:]
     got = recorded(py, folder / "py")
     for c in got:

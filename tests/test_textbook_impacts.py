@@ -46,11 +46,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_nonsmooth_impact import closed_form_face, closed_form_single, left_rows
 
 from deckpound.engines import run_engine
 from deckpound.models.scene_io import load_scene
-
-from test_nonsmooth_impact import closed_form_face, closed_form_single, left_rows
 
 SCENE = Path(__file__).parent / "data" / "corner_impact.toml"
 
@@ -64,8 +63,7 @@ def minv_fixed(sc) -> np.ndarray:
 def cli_run(tmp_path, overrides: list[str], engine: str = "nonsmooth"):
     """``deckpound run SCENE --engine ENGINE --set ... -o DIR``; the CSV rows and JSON meta."""
     out = tmp_path / engine
-    cmd = [sys.executable, "-m", "deckpound", "run", str(SCENE), "--engine", engine,
-           "-o", str(out)]
+    cmd = [sys.executable, "-m", "deckpound", "run", str(SCENE), "--engine", engine, "-o", str(out)]
     for o in overrides:
         cmd += ["--set", o]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
@@ -79,9 +77,13 @@ def cli_run(tmp_path, overrides: list[str], engine: str = "nonsmooth"):
 
 def overrides_of(v, e, mu, theta0=0.01):
     fm = "stick" if mu > 0 else "none"
-    return [f"initial.deck_velocity=[{v[0]!r}, {v[1]!r}, {v[2]!r}]",
-            f"initial.deck=[0.0, 0.0, {theta0!r}]", f"contact.restitution={e!r}",
-            f"contact.friction={mu!r}", f"contact.friction_mode={fm}"]
+    return [
+        f"initial.deck_velocity=[{v[0]!r}, {v[1]!r}, {v[2]!r}]",
+        f"initial.deck=[0.0, 0.0, {theta0!r}]",
+        f"contact.restitution={e!r}",
+        f"contact.friction={mu!r}",
+        f"contact.friction_mode={fm}",
+    ]
 
 
 def v7(v):
@@ -123,13 +125,19 @@ def test_single_corner_impact_from_scene_file_matches_closed_form(case, tmp_path
     np.testing.assert_allclose(meta["final_v"][4:], Up[4:], rtol=0, atol=1e-10 * 0.5)
 
 
-@pytest.mark.parametrize("v,e,mu", [((-0.5, 0.02, 0.0), 0.5, 0.5),      # stick
-                                    ((-0.5, 0.6, 0.0), 0.5, 0.3),       # slide
-                                    ((-0.5, -0.6, 0.0), 0.0, 0.3)])     # slide, e = 0
+@pytest.mark.parametrize(
+    "v,e,mu",
+    [
+        ((-0.5, 0.02, 0.0), 0.5, 0.5),  # stick
+        ((-0.5, 0.6, 0.0), 0.5, 0.3),  # slide
+        ((-0.5, -0.6, 0.0), 0.0, 0.3),
+    ],
+)  # slide, e = 0
 def test_both_corners_of_one_face_from_scene_file(v, e, mu, tmp_path):
     # both corners 0.05 m away: the impact at t = 0.1 s, so run a little longer
-    cols, meta = cli_run(tmp_path, overrides_of(v, e, mu, theta0=0.0)
-                         + ["excitation.duration=0.12"])
+    cols, _meta = cli_run(
+        tmp_path, overrides_of(v, e, mu, theta0=0.0) + ["excitation.duration=0.12"]
+    )
     sc = load_scene(SCENE)
     yc = 0.5 * sc.deck.width
     rows = [left_rows(sc, -yc)[0], left_rows(sc, yc)[0]]
@@ -143,7 +151,8 @@ def test_both_corners_of_one_face_from_scene_file(v, e, mu, tmp_path):
     assert err <= 1e-10
     assert cols["pn_c1"].sum() + cols["pn_c2"].sum() == pytest.approx(Pn.sum(), rel=1e-10)
     assert cols["pt_c1"].sum() + cols["pt_c2"].sum() == pytest.approx(
-        Pt, rel=0, abs=1e-10 * Pn.sum())
+        Pt, rel=0, abs=1e-10 * Pn.sum()
+    )
 
 
 def _compliant_run(v, e, k, T=0.25):
@@ -151,8 +160,12 @@ def _compliant_run(v, e, k, T=0.25):
     e (frictionless), step = contact duration / 400, run to T [s] (the contact is over)."""
     from deckpound.models.plausibility import contact_duration
 
-    ov = overrides_of(v, e, 0.0) + ["contact.law=kelvin-voigt", f"contact.stiffness={k!r}",
-                                    "run.output_dt=1e-3", f"excitation.duration={T!r}"]
+    ov = overrides_of(v, e, 0.0) + [
+        "contact.law=kelvin-voigt",
+        f"contact.stiffness={k!r}",
+        "run.output_dt=1e-3",
+        f"excitation.duration={T!r}",
+    ]
     dt = contact_duration(load_scene(SCENE, ov)) / 400.0
     sc = load_scene(SCENE, ov + [f"compliance.dt={dt!r}"])
     with warnings.catch_warnings():
@@ -189,8 +202,10 @@ def test_compliance_converges_to_the_closed_form_as_stiffness_grows():
         errs_q.append(float(np.max(np.abs(q - q_rigid) / np.array([1.0, 1.0, yc]))))
         errs_v.append(float(np.max(np.abs(vv - Up[4:])) / 0.5))
     orders = [np.log10(errs_q[i] / errs_q[i + 1]) for i in range(len(ks) - 1)]
-    print(f"position errors {['%.3e' % x for x in errs_q]} m, observed orders per decade of k "
-          f"{['%.3f' % o for o in orders]}; velocity errors {['%.2e' % x for x in errs_v]}")
+    print(
+        f"position errors {[f'{x:.3e}' for x in errs_q]} m, observed orders per decade of k "
+        f"{[f'{o:.3f}' for o in orders]}; velocity errors {[f'{x:.2e}' for x in errs_v]}"
+    )
     assert all(0.4 < o < 0.6 for o in orders)
     # the velocity: Newton's for every k up to the switch error of the dashpot, whose force
     # −c ġ jumps to 0 when the gap reopens inside a step: O(ζ ω dt) = O(1/400) here
@@ -208,10 +223,17 @@ def test_opensees_runs_the_scene_file_and_agrees_with_the_clone():
         pytest.skip("openseespy not installed")
     from deckpound.analytic.verify import verify_clone
 
-    sc = load_scene(SCENE, ["initial.deck=[0.0, 0.0, 0.0]",
-                            "initial.deck_velocity=[-0.5, 0.3, 0.3]", "contact.law=linear",
-                            "excitation.duration=0.2", "opensees.dt=1e-5",
-                            "run.output_dt=1e-3"])
+    sc = load_scene(
+        SCENE,
+        [
+            "initial.deck=[0.0, 0.0, 0.0]",
+            "initial.deck_velocity=[-0.5, 0.3, 0.3]",
+            "contact.law=linear",
+            "excitation.duration=0.2",
+            "opensees.dt=1e-5",
+            "run.output_dt=1e-3",
+        ],
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rep = verify_clone(sc)
@@ -253,21 +275,37 @@ def test_opensees_starts_displaced_like_the_clone():
     from deckpound.analytic.verify import column_deviations
     from deckpound.models.plan import standard_columns
 
-    cases = [load_scene(SCENE, ["contact.law=linear", "opensees.dt=1e-5", "run.output_dt=1e-3",
-                                "excitation.duration=0.12", "compliance.dt=1e-5",
-                                "opensees.tolerance=1e-12", "compliance.tolerance=1e-12"]),
-             load_scene("saiidi-4span", ["initial.deck=[0.01, 0.005, 0.001]",
-                                         "initial.deck_velocity=[0.1, -0.2, 0.003]",
-                                         "run.duration=3", "opensees.tolerance=1e-12",
-                                         "compliance.tolerance=1e-12"])]
+    cases = [
+        load_scene(
+            SCENE,
+            [
+                "contact.law=linear",
+                "opensees.dt=1e-5",
+                "run.output_dt=1e-3",
+                "excitation.duration=0.12",
+                "compliance.dt=1e-5",
+                "opensees.tolerance=1e-12",
+                "compliance.tolerance=1e-12",
+            ],
+        ),
+        load_scene(
+            "saiidi-4span",
+            [
+                "initial.deck=[0.01, 0.005, 0.001]",
+                "initial.deck_velocity=[0.1, -0.2, 0.003]",
+                "run.duration=3",
+                "opensees.tolerance=1e-12",
+                "compliance.tolerance=1e-12",
+            ],
+        ),
+    ]
     for sc in cases:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             ro, rc = run_engine("opensees", sc), run_engine("compliance", sc)
         assert ro.ok and rc.ok
         cols = [c for c in standard_columns([b.name for b in sc.bents]) if c != "t"]
-        dev = column_deviations({c: rc[c][1:] for c in cols}, {c: ro[c][1:] for c in cols},
-                                cols)
+        dev = column_deviations({c: rc[c][1:] for c in cols}, {c: ro[c][1:] for c in cols}, cols)
         worst = max(dev.items(), key=lambda kv: kv[1])
         print(sc.name, worst, ro.meta["newton_iterations"], rc.meta["newton_iterations"])
         assert worst[1] <= 1e-8
@@ -280,9 +318,11 @@ def test_opensees_refuses_displaced_starts_it_cannot_make_exact():
     from deckpound.models.errors import SceneError
 
     eng = get_engine("opensees")
-    for ov, why in ((["initial.deck=[0.05, 0.0, 0.0]"], "every gap open"),
-                    (["initial.deck=[0.001, 0.0, 0.0]", "opensees.mode=stick"], "rigid mode"),
-                    (["initial.deck=[0.0, 0.025, 0.0]"], "bents elastic")):
+    for ov, why in (
+        (["initial.deck=[0.05, 0.0, 0.0]"], "every gap open"),
+        (["initial.deck=[0.001, 0.0, 0.0]", "opensees.mode=stick"], "rigid mode"),
+        (["initial.deck=[0.0, 0.025, 0.0]"], "bents elastic"),
+    ):
         sc = load_scene("saiidi-4span", ov)
         with pytest.raises(SceneError, match=why):
             eng.refuse(sc, sc.opensees)

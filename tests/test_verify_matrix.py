@@ -27,7 +27,7 @@ def _block(text: str) -> str:
     head = vm.BEGIN.split(":")[0]
     assert head in text and vm.END in text, "README has no verify-matrix block"
     start = text.index(head)
-    return text[start:text.index(vm.END, start) + len(vm.END)]
+    return text[start : text.index(vm.END, start) + len(vm.END)]
 
 
 def _rows(block: str) -> list[list[str]]:
@@ -55,28 +55,33 @@ def test_readme_block_is_the_commands_output_and_within_tolerance():
     assert rows[0] == list(vm.COLUMNS)
     body = rows[1:]
     quick = "(--quick)" in block
-    want = {(c.law, c.friction, f"{c.skew:g}", c.damping)
-            for c in (vm.QUICK_CASES if quick else vm.matrix_cases())}
+    want = {
+        (c.law, c.friction, f"{c.skew:g}", c.damping)
+        for c in (vm.QUICK_CASES if quick else vm.matrix_cases())
+    }
     assert {tuple(r[:4]) for r in body} == want
     for r in body:
         dev, vdev = float(r[4]), float(r[6])
         assert dev <= vm.TOLERANCE and vdev <= vm.TOLERANCE, r
         assert r[10] == "yes" and r[8] == "identical", r
-        assert float(r[9]) > 1.0, r            # the clone is faster than OpenSees
+        assert float(r[9]) > 1.0, r  # the clone is faster than OpenSees
     # same shape as a block the code renders from fake results
-    fake = [vm.CaseResult(c, c.label, ("fn_c1", 1e-9), ("seat1_omega", 2e-9), True, 30.0, True,
-                          {}, []) for c in (vm.QUICK_CASES if quick else vm.matrix_cases())]
+    fake = [
+        vm.CaseResult(c, c.label, ("fn_c1", 1e-9), ("seat1_omega", 2e-9), True, 30.0, True, {}, [])
+        for c in (vm.QUICK_CASES if quick else vm.matrix_cases())
+    ]
     from deckpound.models.scene_io import load_scene
 
     ctx = {"date": "2026-01-01", "python": "3.11.7", "machine": "x86_64"}
     mine = vm.readme_block(fake, load_scene("saiidi-4span"), quick=quick, ctx=ctx)
 
     def shape(b):
-        b = re.sub(r"\| [a-z_0-9]+ \|", "| C |", b)       # column names vary by case
+        b = re.sub(r"\| [a-z_0-9]+ \|", "| C |", b)  # column names vary by case
         return [re.sub(r"-?\d+(\.\d+)?(e[-+]?\d+)?", "N", ln) for ln in b.splitlines()]
 
-    assert [ln for ln in shape(block) if not ln.startswith("|")] == \
-           [ln for ln in shape(mine) if not ln.startswith("|")]
+    assert [ln for ln in shape(block) if not ln.startswith("|")] == [
+        ln for ln in shape(mine) if not ln.startswith("|")
+    ]
     assert len(block.splitlines()) == len(mine.splitlines())
 
 
@@ -102,9 +107,24 @@ def test_a_case_above_tolerance_fails_the_command(monkeypatch):
 def test_cli_single_case_maps_stick_to_contact2d_with_a_note():
     """The issue's "done when" command, over 2 s (the gaps close from 0.84 s)."""
     out = subprocess.run(
-        [sys.executable, "-m", "deckpound", "verify", "clone", "saiidi-4span",
-         "--set", "run.duration=2.0", "--set", "contact.friction=0.2",
-         "--set", "contact.friction_mode=stick"], capture_output=True, text=True, timeout=600)
+        [
+            sys.executable,
+            "-m",
+            "deckpound",
+            "verify",
+            "clone",
+            "saiidi-4span",
+            "--set",
+            "run.duration=2.0",
+            "--set",
+            "contact.friction=0.2",
+            "--set",
+            "contact.friction_mode=stick",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert out.returncode == 0, out.stdout + out.stderr
     assert "note: friction_mode = 'stick'" in out.stdout and "'contact2d'" in out.stdout
     assert "PASS: every column within 1e-06 of its peak" in out.stdout

@@ -21,8 +21,21 @@ from __future__ import annotations
 __version__ = "0.2.0"
 
 __all__ = [
-    "__version__", "load_scene", "run", "run_batch", "run_many", "compare", "Comparison",
-    "available_engines", "get_engine", "register_engine", "Result", "Scene", "plan_of", "support_motion", "builtin_scenes",
+    "Comparison",
+    "Result",
+    "Scene",
+    "__version__",
+    "available_engines",
+    "builtin_scenes",
+    "compare",
+    "get_engine",
+    "load_scene",
+    "plan_of",
+    "register_engine",
+    "run",
+    "run_batch",
+    "run_many",
+    "support_motion",
 ]
 
 _LAZY = {

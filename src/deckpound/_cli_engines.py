@@ -14,13 +14,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("run", help="run one engine on a scene and write DIR/<engine>.csv/.json")
     add_scene_args(p)
-    p.add_argument("--engine", required=True, metavar="NAME",
-                   help=f"one of: {', '.join(ENGINES)}")
+    p.add_argument("--engine", required=True, metavar="NAME", help=f"one of: {', '.join(ENGINES)}")
     p.add_argument("-o", "--output", required=True, metavar="DIR")
     p.set_defaults(func=_run)
 
-    p = sub.add_parser("export", help="write a standalone OpenSees script of a scene (plus its "
-                       "data folder <stem>_data/ with the records and manifest.json)")
+    p = sub.add_parser(
+        "export",
+        help="write a standalone OpenSees script of a scene (plus its "
+        "data folder <stem>_data/ with the records and manifest.json)",
+    )
     add_scene_args(p)
     p.add_argument("--format", required=True, choices=("tcl", "py"))
     p.add_argument("-o", "--output", required=True, metavar="FILE")
@@ -28,8 +30,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("modes", help="periods and mode shapes of the contact-free model")
     add_scene_args(p)
-    p.add_argument("--engine", default="opensees", choices=("opensees", "analytic"),
-                   help="OpenSees eigen (default) or the 7-DOF matrices")
+    p.add_argument(
+        "--engine",
+        default="opensees",
+        choices=("opensees", "analytic"),
+        help="OpenSees eigen (default) or the 7-DOF matrices",
+    )
     p.set_defaults(func=_modes)
 
     p = sub.add_parser("verify", help="cross-verify the clone against OpenSees")
@@ -37,19 +43,32 @@ def register(sub: argparse._SubParsersAction) -> None:
     vsub.required = True
     q = vsub.add_parser("takeda", help="Hysteretic clone vs OpenSees on random strain histories")
     q.add_argument("--states", type=int_in(1, 10_000_000), default=20000)
-    q.add_argument("--seed", type=int_in(0, 2 ** 63 - 1), default=0)
+    q.add_argument("--seed", type=int_in(0, 2**63 - 1), default=0)
     q.set_defaults(func=_verify_takeda)
-    q = vsub.add_parser("clone", help="compliance newmark vs OpenSees rigid: the matrix of "
-                        "contact laws x friction x skew x damping (one case with --set)")
+    q = vsub.add_parser(
+        "clone",
+        help="compliance newmark vs OpenSees rigid: the matrix of "
+        "contact laws x friction x skew x damping (one case with --set)",
+    )
     add_scene_args(q)
-    q.add_argument("--quick", action="store_true",
-                   help="a small subset of the matrix over the first 5 s")
-    q.add_argument("--write-readme", nargs="?", const="README.md", default=None, metavar="PATH",
-                   help="put the matrix table into the README (default ./README.md) in place "
-                   "of the previous one")
+    q.add_argument(
+        "--quick", action="store_true", help="a small subset of the matrix over the first 5 s"
+    )
+    q.add_argument(
+        "--write-readme",
+        nargs="?",
+        const="README.md",
+        default=None,
+        metavar="PATH",
+        help="put the matrix table into the README (default ./README.md) in place "
+        "of the previous one",
+    )
     q.set_defaults(func=_verify_clone)
-    q = vsub.add_parser("impact-law", help="nonsmooth engine: Newton's impact law vs the "
-                        "energy-safe variant on a scene, without and with friction")
+    q = vsub.add_parser(
+        "impact-law",
+        help="nonsmooth engine: Newton's impact law vs the "
+        "energy-safe variant on a scene, without and with friction",
+    )
     add_scene_args(q)
     q.set_defaults(func=_verify_impact_law)
 
@@ -61,8 +80,11 @@ def check_output_folder(path: str) -> Path:
 
     out = Path(path)
     if out.is_symlink():
-        raise SceneError("--output", f"{str(out)!r} is a symbolic link; deckpound never writes "
-                         "through links: give the real folder")
+        raise SceneError(
+            "--output",
+            f"{str(out)!r} is a symbolic link; deckpound never writes "
+            "through links: give the real folder",
+        )
     if out.exists() and not out.is_dir():
         raise SceneError("--output", f"{str(out)!r} exists and is not a folder")
     check_parent(out)
@@ -86,8 +108,10 @@ def _run(args) -> int:
     with output_folder(args.output, f"run {args.engine}") as out:
         csv_path, _ = result.write(out, parallel=True)  # the CSV text on two cores
     m = result.meta
-    print(f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
-          f"{m.get('gap_closures', 0)} gap closures; wrote {csv_path}")
+    print(
+        f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
+        f"{m.get('gap_closures', 0)} gap closures; wrote {csv_path}"
+    )
     if not result.ok:
         raise EngineFailure(m.get("message", "run failed"))
     return 0
@@ -107,8 +131,10 @@ def _export(args) -> int:
     motion = support_motion(scene)
     plausibility.enforce(scene, motion, engines=("opensees",))
     written = export_script(scene, args.format, out, motion)  # all files or none
-    print(f"wrote {written} and {written.parent / (written.stem + '_data')}/ (support records, "
-          f"manifest.json); recorder files go to {written.stem}_results/ when it runs")
+    print(
+        f"wrote {written} and {written.parent / (written.stem + '_data')}/ (support records, "
+        f"manifest.json); recorder files go to {written.stem}_results/ when it runs"
+    )
     return 0
 
 
@@ -137,9 +163,11 @@ def _verify_takeda(args) -> int:
     from deckpound.opensees_build.verify import verify_takeda
 
     report = verify_takeda(n_states=args.states, seed=args.seed)
-    print(f"Hysteretic clone vs OpenSees: {report['n_states']} states, "
-          f"{report['n_exact']} bit-identical; max relative deviation stress "
-          f"{report['max_rel_stress']:.3g}, tangent {report['max_rel_tangent']:.3g}")
+    print(
+        f"Hysteretic clone vs OpenSees: {report['n_states']} states, "
+        f"{report['n_exact']} bit-identical; max relative deviation stress "
+        f"{report['max_rel_stress']:.3g}, tangent {report['max_rel_tangent']:.3g}"
+    )
     return 0 if report["max_rel_stress"] <= 1e-12 and report["max_rel_tangent"] <= 1e-12 else 1
 
 
@@ -162,8 +190,13 @@ def _verify_clone(args) -> int:
             raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
     if pinned:
         return _verify_single(scene, verify_matrix)
-    return verify_matrix.main(scene, pinned=False, quick=args.quick, write_readme_to=target,
-                              log=lambda t: print(t, flush=True))
+    return verify_matrix.main(
+        scene,
+        pinned=False,
+        quick=args.quick,
+        write_readme_to=target,
+        log=lambda t: print(t, flush=True),
+    )
 
 
 def _verify_single(scene, verify_matrix) -> int:
@@ -177,13 +210,17 @@ def _verify_single(scene, verify_matrix) -> int:
     col, worst = report["worst"]
     vcol, vworst = report["worst_velocity"]
     us = report["us_per_step"]
-    print(f"largest deviation (relative to the column peak): {worst:.3e} in {col} "
-          f"(velocities: {vworst:.3e} in {vcol}); "
-          f"Newton iterations OpenSees {report['iterations']['opensees']}, clone "
-          f"{report['iterations']['compliance']}")
-    print(f"speed: OpenSees {us['opensees']:.1f} us/step, clone {us['compliance']:.2f} us/step "
-          f"(per-step ratio {us['opensees'] / us['compliance']:.1f}); whole-run wall-time ratio "
-          f"{report['speed_ratio']:.1f}")
+    print(
+        f"largest deviation (relative to the column peak): {worst:.3e} in {col} "
+        f"(velocities: {vworst:.3e} in {vcol}); "
+        f"Newton iterations OpenSees {report['iterations']['opensees']}, clone "
+        f"{report['iterations']['compliance']}"
+    )
+    print(
+        f"speed: OpenSees {us['opensees']:.1f} us/step, clone {us['compliance']:.2f} us/step "
+        f"(per-step ratio {us['opensees'] / us['compliance']:.1f}); whole-run wall-time ratio "
+        f"{report['speed_ratio']:.1f}"
+    )
     if any(s != "success" for s in report["status"].values()):
         raise EngineFailure(f"a run failed: {report['status']}")
     tol = verify_matrix.TOLERANCE
@@ -201,6 +238,8 @@ def _verify_impact_law(args) -> int:
     rows = impact_law_table(load_scene(args.scene, args.overrides))
     print(format_table(rows))
     if any(r["status"] != "success" for r in rows):
-        raise EngineFailure("a run failed: " + ", ".join(
-            f"{r['friction']}/{r['impact_law']}: {r['status']}" for r in rows))
+        raise EngineFailure(
+            "a run failed: "
+            + ", ".join(f"{r['friction']}/{r['impact_law']}: {r['status']}" for r in rows)
+        )
     return 0

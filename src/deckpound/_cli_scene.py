@@ -62,13 +62,15 @@ def _validate(args) -> int:
     report = plausibility.enforce(scene, motion)  # steps vs record, periods, contact, output
     rayleigh_coefficients(scene)  # refuses damping.modes beyond the number of modes
     # a free deck (bents = []) has three rigid-body modes (infinite periods): name them
-    finite = [T for T in report.periods if T != float("inf")]
+    finite = [T for T in report.periods if float("inf") != T]
     rigid = len(report.periods) - len(finite)
-    print(f"{scene.name}: valid; {len(scene.bents)} bents, gaps "
-          f"{scene.seats[0].gap:g}/{scene.seats[1].gap:g} m, record {motion.duration:g} s "
-          f"({len(motion.channels)} supports), analysis {report.duration:g} s, "
-          + (f"{rigid} rigid-body modes, " if rigid else "")
-          + f"periods {', '.join(f'{T:.3f}' for T in finite[:3])} s")
+    print(
+        f"{scene.name}: valid; {len(scene.bents)} bents, gaps "
+        f"{scene.seats[0].gap:g}/{scene.seats[1].gap:g} m, record {motion.duration:g} s "
+        f"({len(motion.channels)} supports), analysis {report.duration:g} s, "
+        + (f"{rigid} rigid-body modes, " if rigid else "")
+        + f"periods {', '.join(f'{T:.3f}' for T in finite[:3])} s"
+    )
     return 0
 
 

@@ -33,12 +33,25 @@ def _scheduler(text: str) -> str:
 def _parallel_args(p: argparse.ArgumentParser) -> None:
     from .cli import int_in
 
-    p.add_argument("--workers", type=int_in(1, 1024), default=None,
-                   help="local worker processes (default: one per core)")
-    p.add_argument("--scheduler", type=_scheduler, default=None, metavar="ADDRESS",
-                   help="run cases on a Dask distributed cluster, e.g. tcp://127.0.0.1:8786")
-    p.add_argument("--cache", default=None, metavar="DIR",
-                   help="result cache (default: OUT/cache); finished cases are never recomputed")
+    p.add_argument(
+        "--workers",
+        type=int_in(1, 1024),
+        default=None,
+        help="local worker processes (default: one per core)",
+    )
+    p.add_argument(
+        "--scheduler",
+        type=_scheduler,
+        default=None,
+        metavar="ADDRESS",
+        help="run cases on a Dask distributed cluster, e.g. tcp://127.0.0.1:8786",
+    )
+    p.add_argument(
+        "--cache",
+        default=None,
+        metavar="DIR",
+        help="result cache (default: OUT/cache); finished cases are never recomputed",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -55,30 +68,52 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("compare", help="run engines on one scene, align, compare, plot")
     add_scene_args(p)
-    p.add_argument("--engines", default=None,
-                   help="comma-separated engine names (default: every registered engine)")
-    p.add_argument("--reference", default=None, metavar="ENGINE",
-                   help="engine the others are compared with (default: opensees if run, "
-                   "else the first)")
-    p.add_argument("--measured", default=None, metavar="CSV",
-                   help="measured data (t + result column names) to compare against")
+    p.add_argument(
+        "--engines",
+        default=None,
+        help="comma-separated engine names (default: every registered engine)",
+    )
+    p.add_argument(
+        "--reference",
+        default=None,
+        metavar="ENGINE",
+        help="engine the others are compared with (default: opensees if run, else the first)",
+    )
+    p.add_argument(
+        "--measured",
+        default=None,
+        metavar="CSV",
+        help="measured data (t + result column names) to compare against",
+    )
     p.add_argument("-o", "--output", required=True, metavar="DIR")
     _parallel_args(p)
     p.set_defaults(func=_compare)
 
     p = sub.add_parser("study", help="a sensitivity study: table + figure")
-    p.add_argument("name", metavar="NAME", help="stiffness, friction, sticking, law, geometry, "
-                   "opensees-mode, skew, damping, sequence or variability")
+    p.add_argument(
+        "name",
+        metavar="NAME",
+        help="stiffness, friction, sticking, law, geometry, "
+        "opensees-mode, skew, damping, sequence or variability",
+    )
     add_scene_args(p)
-    p.add_argument("-o", "--output", default=None, metavar="DIR",
-                   help="output folder (default: study-NAME)")
+    p.add_argument(
+        "-o", "--output", default=None, metavar="DIR", help="output folder (default: study-NAME)"
+    )
     p.add_argument("--quick", action="store_true", help="fewer cases")
-    p.add_argument("--state", default="virgin", metavar="STATE",
-                   help="start state: virgin (the scene as given, default), runK (the gap and "
-                   "bent stiffness the sequence carries into run K, at run K's PGA) or strongest")
-    p.add_argument("--state-engine", default=None, metavar="ENGINE",
-                   help="engine whose sequence carries the state (default: the reference, "
-                   "opensees)")
+    p.add_argument(
+        "--state",
+        default="virgin",
+        metavar="STATE",
+        help="start state: virgin (the scene as given, default), runK (the gap and "
+        "bent stiffness the sequence carries into run K, at run K's PGA) or strongest",
+    )
+    p.add_argument(
+        "--state-engine",
+        default=None,
+        metavar="ENGINE",
+        help="engine whose sequence carries the state (default: the reference, opensees)",
+    )
     p.add_argument("--pdf", action="store_true", help="figures also as PDF")
     _parallel_args(p)
     _variability_args(p)
@@ -86,40 +121,56 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("paper", help="the main job: sequence x 3 engines + studies + report")
     _benchmark_scene_args(p, "deckpound-report", "fewer study cases")
-    p.add_argument("--studies", default=None,
-                   help="comma-separated subset of studies (default: all)")
-    p.add_argument("--full-histories", action="store_true",
-                   help="also write every run's aligned histories (Parquet and CSV, ~120 MB "
-                   "on the benchmark)")
+    p.add_argument(
+        "--studies", default=None, help="comma-separated subset of studies (default: all)"
+    )
+    p.add_argument(
+        "--full-histories",
+        action="store_true",
+        help="also write every run's aligned histories (Parquet and CSV, ~120 MB on the benchmark)",
+    )
     p.add_argument("--pdf", action="store_true", help="figures also as PDF")
     _parallel_args(p)
     p.set_defaults(func=_paper)
 
     p = sub.add_parser("bench", help="work-precision benchmark: wall time vs error, every engine")
     _benchmark_scene_args(p, "deckpound-bench", "fewer configurations, shorter records")
-    p.add_argument("--repeats", type=int_in(1, 1000), default=None,
-                   help="runs per configuration (median)")
-    p.add_argument("--skips", action="store_true",
-                   help="instead: time the compliance engine's work-saving skips on and off "
-                   "(identical results checked) and the adaptive step sizes in/out of contact")
+    p.add_argument(
+        "--repeats", type=int_in(1, 1000), default=None, help="runs per configuration (median)"
+    )
+    p.add_argument(
+        "--skips",
+        action="store_true",
+        help="instead: time the compliance engine's work-saving skips on and off "
+        "(identical results checked) and the adaptive step sizes in/out of contact",
+    )
     _speed_args(p)
     p.set_defaults(func=_bench)
 
     p = sub.add_parser("stress", help="stability stress test over hard settings, every engine")
     _benchmark_scene_args(p, "deckpound-stress", "a small subset of the grid")
-    p.add_argument("--engines", default=None,
-                   help="comma-separated engine names (default: every registered engine)")
+    p.add_argument(
+        "--engines",
+        default=None,
+        help="comma-separated engine names (default: every registered engine)",
+    )
     p.add_argument("--timeout", type=_seconds, default=300.0, help="seconds per cell")
     p.set_defaults(func=_stress)
 
     p = sub.add_parser("export-vtk", help="deck and seat outlines over time for ParaView")
     p.add_argument("result_dir", metavar="RESULT_DIR")
     p.add_argument("-o", "--output", required=True, metavar="DIR")
-    p.add_argument("--every", type=int_in(1, 10 ** 9), default=1,
-                   help="write every N-th output sample")
-    p.add_argument("--format", dest="fmt", choices=("xdmf", "pvd"), default="xdmf",
-                   help="xdmf: one time-series file per engine (default); pvd: a .pvd "
-                   "collection with one .vtu file per output time")
+    p.add_argument(
+        "--every", type=int_in(1, 10**9), default=1, help="write every N-th output sample"
+    )
+    p.add_argument(
+        "--format",
+        dest="fmt",
+        choices=("xdmf", "pvd"),
+        default="xdmf",
+        help="xdmf: one time-series file per engine (default); pvd: a .pvd "
+        "collection with one .vtu file per output time",
+    )
     p.set_defaults(func=_export_vtk)
 
 
@@ -131,8 +182,9 @@ def _engines(text: str | None) -> list[str]:
     names = [e.strip() for e in text.split(",") if e.strip()]
     for e in names:
         if e not in ENGINES:
-            raise SceneError("--engines", f"unknown engine {e!r}; valid engines: "
-                             f"{', '.join(ENGINES)}")
+            raise SceneError(
+                "--engines", f"unknown engine {e!r}; valid engines: {', '.join(ENGINES)}"
+            )
     if not names:
         raise SceneError("--engines", "names no engine")
     return names
@@ -157,7 +209,7 @@ def _compare(args) -> int:
 
     engines = _engines(args.engines)
     if args.reference is not None:
-        _engines(args.reference)   # an unknown name is refused with the valid ones
+        _engines(args.reference)  # an unknown name is refused with the valid ones
     check_output_folder(args.output)
     scene = _checked_scene(args, engines)
     measured = None
@@ -166,10 +218,17 @@ def _compare(args) -> int:
 
         measured = measured_result(args.measured)
     with output_folder(args.output, "compare") as out:
-        summary = run_compare(scene, engines, out, measured=measured, workers=args.workers,
-                              scheduler=args.scheduler, cache_dir=args.cache,
-                              progress=not args.no_progress,
-                              reference=args.reference)
+        summary = run_compare(
+            scene,
+            engines,
+            out,
+            measured=measured,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            cache_dir=args.cache,
+            progress=not args.no_progress,
+            reference=args.reference,
+        )
     print(summary)
     return 0
 
@@ -184,8 +243,9 @@ def _study(args) -> int:
     if args.name == "variability":
         return _variability(args)
     if args.name not in STUDY_NAMES:
-        raise SceneError("study", f"unknown study {args.name!r}; valid studies: "
-                         f"{', '.join(STUDY_NAMES)}")
+        raise SceneError(
+            "study", f"unknown study {args.name!r}; valid studies: {', '.join(STUDY_NAMES)}"
+        )
     out = check_output_folder(args.output or f"study-{args.name}")
     scene = _checked_scene(args, engine_names())
     formats = ("pdf",) if args.pdf else ()
@@ -198,21 +258,52 @@ def _study(args) -> int:
             from deckpound.compare.sequence_run import run_sequences
 
             if args.state != "virgin":
-                raise SceneError("--state", "applies to the sensitivity studies; the sequence "
-                                 "starts from the scene as given")
-            seqs = run_sequences(scene, list(engine_names()), cache_dir, args.workers,
-                                 args.scheduler, not args.no_progress)
+                raise SceneError(
+                    "--state",
+                    "applies to the sensitivity studies; the sequence "
+                    "starts from the scene as given",
+                )
+            seqs = run_sequences(
+                scene,
+                list(engine_names()),
+                cache_dir,
+                args.workers,
+                args.scheduler,
+                not args.no_progress,
+            )
             table = sequence_table(seqs)
             write_csv(table, out / "sequence.csv", sequence_units(table))
             figures.peak_vs_pga(table, scene, out / "sequence.png", formats=formats)
         else:
-            table, _ = run_study(args.name, scene, out, quick=args.quick,
-                                 cache=ResultCache(cache_dir), workers=args.workers,
-                                 scheduler=args.scheduler, progress=not args.no_progress,
-                                 state=args.state, state_engine=args.state_engine,
-                                 formats=formats)
-    cols = [c for c in ("label", "engine", "state", "run", "pga", "peak_theta", "peak_y_rel",
-                        "gap_closures", "wall_time", "status") if c in table]
+            table, _ = run_study(
+                args.name,
+                scene,
+                out,
+                quick=args.quick,
+                cache=ResultCache(cache_dir),
+                workers=args.workers,
+                scheduler=args.scheduler,
+                progress=not args.no_progress,
+                state=args.state,
+                state_engine=args.state_engine,
+                formats=formats,
+            )
+    cols = [
+        c
+        for c in (
+            "label",
+            "engine",
+            "state",
+            "run",
+            "pga",
+            "peak_theta",
+            "peak_y_rel",
+            "gap_closures",
+            "wall_time",
+            "status",
+        )
+        if c in table
+    ]
     from deckpound.compare.outputs import unit_header
     from deckpound.compare.paper import sequence_units
 
@@ -239,10 +330,18 @@ def _paper(args) -> int:
     # the folder is marked INCOMPLETE until the report is written; a re-run resumes from the
     # cache (default DIR/cache) and removes the marker
     with output_folder(args.output, "paper") as out:
-        report = run_paper(scene, out, quick=args.quick, workers=args.workers,
-                           scheduler=args.scheduler, cache_dir=args.cache, studies=studies,
-                           progress=not args.no_progress, full_histories=args.full_histories,
-                           formats=("pdf",) if args.pdf else ())
+        report = run_paper(
+            scene,
+            out,
+            quick=args.quick,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            cache_dir=args.cache,
+            studies=studies,
+            progress=not args.no_progress,
+            full_histories=args.full_histories,
+            formats=("pdf",) if args.pdf else (),
+        )
     print(f"wrote {report} and {report.with_suffix('.html')}")
     return 0
 
@@ -265,21 +364,52 @@ def _bench_body(args, scene) -> int:
         from deckpound.compare.skips import run_skips
 
         table, steps = run_skips(scene, args.output, quick=args.quick, repeats=args.repeats)
-        cols = ["scene", "skip", "time_with", "time_without", "speedup", "us_per_step_with",
-                "us_per_step_without", "max_abs_diff"]
+        cols = [
+            "scene",
+            "skip",
+            "time_with",
+            "time_without",
+            "speedup",
+            "us_per_step_with",
+            "us_per_step_without",
+            "max_abs_diff",
+        ]
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-        print(steps[["scene", "commit_cap", "where", "steps", "median", "min", "max", "time"]]
-              .to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+        print(
+            steps[
+                ["scene", "commit_cap", "where", "steps", "median", "min", "max", "time"]
+            ].to_string(index=False, float_format=lambda v: f"{v:.3g}")
+        )
         bad = table[(table["skip"] != "geometry") & ~table["identical"].astype(bool)]
-        print(f"wrote {args.output}; " + ("every skip gives identical results" if not len(bad)
-                                          else f"{len(bad)} skip(s) changed a result"))
+        print(
+            f"wrote {args.output}; "
+            + (
+                "every skip gives identical results"
+                if not len(bad)
+                else f"{len(bad)} skip(s) changed a result"
+            )
+        )
         return 0 if not len(bad) else 1
     if not args.speed_only:
         table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
-        cols = [c for c in ("scene", "config", "status", "wall", "compile_time", "us_per_step",
-                            "err_primary",
-                            "err_peak_theta", "err_peak_y", "nrmse_theta", "speedup_bound",
-                            "speedup_vs_opensees_equal_error") if c in table]
+        cols = [
+            c
+            for c in (
+                "scene",
+                "config",
+                "status",
+                "wall",
+                "compile_time",
+                "us_per_step",
+                "err_primary",
+                "err_peak_theta",
+                "err_peak_y",
+                "nrmse_theta",
+                "speedup_bound",
+                "speedup_vs_opensees_equal_error",
+            )
+            if c in table
+        ]
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     _speed_table(args)
     print(f"wrote {args.output}")
@@ -321,16 +451,29 @@ def _export_vtk(args) -> int:
 
 # -- the record-to-record variability study (issue 14: speed owner) ---------------------------
 
+
 def _variability_args(p: argparse.ArgumentParser) -> None:
     from .cli import int_in
 
     g = p.add_argument_group("variability study")
-    g.add_argument("--cases", type=int_in(1, 1_000_000), default=None,
-                   help="variability: N seeds of the synthetic record (default 1000)")
-    g.add_argument("--records", default=None, metavar="DIR",
-                   help="variability: every record file in DIR instead of seeds")
-    g.add_argument("--engine", default="compliance", metavar="NAME",
-                   help="variability: the engine (default: compliance)")
+    g.add_argument(
+        "--cases",
+        type=int_in(1, 1_000_000),
+        default=None,
+        help="variability: N seeds of the synthetic record (default 1000)",
+    )
+    g.add_argument(
+        "--records",
+        default=None,
+        metavar="DIR",
+        help="variability: every record file in DIR instead of seeds",
+    )
+    g.add_argument(
+        "--engine",
+        default="compliance",
+        metavar="NAME",
+        help="variability: the engine (default: compliance)",
+    )
 
 
 def _variability(args) -> int:
@@ -340,7 +483,7 @@ def _variability(args) -> int:
     from ._cli_engines import check_output_folder
     from .engines import get_engine
 
-    get_engine(args.engine)   # an unknown name is refused before any work
+    get_engine(args.engine)  # an unknown name is refused before any work
     if args.cases is not None and args.records is not None:
         raise SceneError("--cases", "give either --cases N or --records DIR, not both")
     cases = args.cases if args.records is None else None
@@ -350,26 +493,44 @@ def _variability(args) -> int:
     scene = _checked_scene(args, (args.engine,))
     with output_folder(out, "study variability") as out:
         table, summary = run_variability(
-            scene, out, engine=args.engine, cases=cases, records=args.records,
-            cache_dir=args.cache, workers=args.workers, scheduler=args.scheduler,
-            progress=not args.no_progress)
+            scene,
+            out,
+            engine=args.engine,
+            cases=cases,
+            records=args.records,
+            cache_dir=args.cache,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            progress=not args.no_progress,
+        )
     view = summary.set_index("quantity").loc[list(QUANTITIES)]
     print(view[["unit", "n", "median", "p16", "p84"]].to_string(float_format=lambda v: f"{v:.4g}"))
     failed = summary.attrs.get("failed", 0)
-    print(f"{len(table)} cases ({failed} not finished) in {summary.attrs['wall']:.1f} s; "
-          f"wrote {out}")
+    print(
+        f"{len(table)} cases ({failed} not finished) in {summary.attrs['wall']:.1f} s; wrote {out}"
+    )
     return 0 if not failed else 1
 
 
 # -- the README's speed table (issue 14: speed owner) ----------------------------------------
 
+
 def _speed_args(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("speed table")
-    g.add_argument("--speed-only", action="store_true",
-                   help="only the speed table (processes and in-process runs of every engine)")
-    g.add_argument("--write-readme", nargs="?", const="README.md", default=None, metavar="PATH",
-                   help="put the speed table into the README (default ./README.md) in place "
-                   "of the previous one")
+    g.add_argument(
+        "--speed-only",
+        action="store_true",
+        help="only the speed table (processes and in-process runs of every engine)",
+    )
+    g.add_argument(
+        "--write-readme",
+        nargs="?",
+        const="README.md",
+        default=None,
+        metavar="PATH",
+        help="put the speed table into the README (default ./README.md) in place "
+        "of the previous one",
+    )
 
 
 def _speed_table(args) -> None:
@@ -381,9 +542,12 @@ def _speed_table(args) -> None:
     if args.write_readme is not None and not Path(args.write_readme).is_file():
         raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
     repeats = args.repeats if args.repeats is not None else 3
-    rows, context = speed.measure(args.scene, args.overrides, repeats=repeats,
-                                  progress=lambda t: print(f"deckpound bench: {t}", file=sys.stderr,
-                                                         flush=True))
+    rows, context = speed.measure(
+        args.scene,
+        args.overrides,
+        repeats=repeats,
+        progress=lambda t: print(f"deckpound bench: {t}", file=sys.stderr, flush=True),
+    )
     block = speed.markdown(rows, context)
     print(block)
     atomic_write_text(Path(args.output) / "speed.md", block + "\n")

@@ -76,8 +76,11 @@ def _kind(path: Path, field: str) -> str:
     except NotADirectoryError:
         return "absent"  # below a file: check_parent names the problem
     if stat.S_ISLNK(st.st_mode):
-        raise SceneError(field, f"{str(path)!r} is a symbolic link (to {os.readlink(path)!r}); "
-                         "deckpound never writes through links: remove it or give another name")
+        raise SceneError(
+            field,
+            f"{str(path)!r} is a symbolic link (to {os.readlink(path)!r}); "
+            "deckpound never writes through links: remove it or give another name",
+        )
     if stat.S_ISDIR(st.st_mode):
         raise SceneError(field, f"{str(path)!r} is a folder; give a file name")
     if stat.S_ISREG(st.st_mode):
@@ -93,7 +96,7 @@ def _write_stream(path: Path, data: bytes) -> None:
     try:
         view = memoryview(data)
         while view:
-            view = view[os.write(fd, view):]
+            view = view[os.write(fd, view) :]
     except OSError as err:
         raise OSError(err.errno, err.strerror, str(path)) from None
     finally:
@@ -106,8 +109,9 @@ def check_parent(path: str | Path, field: str = "--output") -> None:
     for parent in path.parents:
         if parent.exists() or parent.is_symlink():
             if not parent.is_dir():
-                raise SceneError(field, f"cannot write {str(path)!r}: {str(parent)!r} is a file, "
-                                 "not a folder")
+                raise SceneError(
+                    field, f"cannot write {str(path)!r}: {str(parent)!r} is a file, not a folder"
+                )
             return
 
 
@@ -116,8 +120,11 @@ def ensure_folder(path: str | Path, field: str = "--output") -> Path:
     file in its place, or a file among its parents."""
     path = Path(path)
     if path.is_symlink():
-        raise SceneError(field, f"{str(path)!r} is a symbolic link (to {os.readlink(path)!r}); "
-                         "deckpound never writes through links: give the real folder")
+        raise SceneError(
+            field,
+            f"{str(path)!r} is a symbolic link (to {os.readlink(path)!r}); "
+            "deckpound never writes through links: give the real folder",
+        )
     if path.exists() and not path.is_dir():
         raise SceneError(field, f"{str(path)!r} exists and is not a folder")
     check_parent(path, field)
@@ -137,8 +144,7 @@ def _write_temporary(path: Path, data: bytes) -> Path:
     """``data`` in a new temporary file beside ``path`` (mode 0o666 less the umask)."""
     tmp = _tmp_name(path)
     try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0),
-                     0o666)
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
     except OSError as err:  # name the file the user asked for, not the temporary one
         raise OSError(err.errno, err.strerror, str(path)) from None
     try:
@@ -251,6 +257,7 @@ def write_csv(frame, path: str | Path, **kwargs) -> Path:
 
 # -- the INCOMPLETE marker of an output folder ----------------------------------------------
 
+
 @contextlib.contextmanager
 def _folder_lock(folder: Path) -> Iterator[None]:
     """An exclusive ``flock`` on the folder itself (no lock file left behind)."""
@@ -302,8 +309,10 @@ class _Marker:
     every line of commands that failed or died; the file goes when no line is left.
     """
 
-    HEADER = ("# deckpound: this folder is incomplete: a command writing it has not finished "
-              "(or failed). Re-run it to resume; finished cases come from the cache.")
+    HEADER = (
+        "# deckpound: this folder is incomplete: a command writing it has not finished "
+        "(or failed). Re-run it to resume; finished cases come from the cache."
+    )
 
     def __init__(self, folder: Path, command: str):
         self.path = folder / INCOMPLETE
@@ -323,26 +332,33 @@ class _Marker:
         stamp = time.strftime("%Y-%m-%dT%H:%M:%S")
         with _folder_lock(self.folder):
             lines = _entries(self.path)
-            lines.append(f"running {self.token} pid={os.getpid()} host={self.host} "
-                         f"{self.command} started {stamp}")
+            lines.append(
+                f"running {self.token} pid={os.getpid()} host={self.host} "
+                f"{self.command} started {stamp}"
+            )
             self._write(lines)
 
     def fail(self, reason: str) -> None:
         reason = " ".join(reason.split())[:300]
         with _folder_lock(self.folder):
-            lines = [f"failed {self.token} {self.command}: {reason}" if f" {self.token} " in ln
-                     else ln for ln in _entries(self.path)]
+            lines = [
+                f"failed {self.token} {self.command}: {reason}" if f" {self.token} " in ln else ln
+                for ln in _entries(self.path)
+            ]
             self._write(lines)
 
     def finish(self) -> None:
         with _folder_lock(self.folder):
-            keep = [ln for ln in _entries(self.path)
-                    if f" {self.token} " not in ln and _still_running(ln, self.host)]
+            keep = [
+                ln
+                for ln in _entries(self.path)
+                if f" {self.token} " not in ln and _still_running(ln, self.host)
+            ]
             self._write(keep)
 
 
 def _holds_only_marker(folder: Path) -> bool:
-    for root, dirs, files in os.walk(folder):
+    for root, _dirs, files in os.walk(folder):
         if any(not (Path(root) == folder and f == INCOMPLETE) for f in files):
             return False
     return True
@@ -382,6 +398,5 @@ def _remove_if_unused(folder: Path, marker: _Marker) -> None:
     command is writing into it."""
     with _folder_lock(folder):
         others = [ln for ln in _entries(marker.path) if ln.startswith("running")]
-        if _holds_only_marker(folder) and not any(_still_running(ln, marker.host)
-                                                  for ln in others):
+        if _holds_only_marker(folder) and not any(_still_running(ln, marker.host) for ln in others):
             shutil.rmtree(folder)

@@ -61,7 +61,7 @@ def install() -> bool:
                 cres = self._load_overload(sig, target_context)
             if cres is not None:
                 return cres
-        except Exception:  # noqa: BLE001, S110 - anything odd: numba's own, complete path
+        except Exception:
             pass
         return original(self, sig, target_context)
 

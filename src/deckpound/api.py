@@ -7,17 +7,33 @@ scenes come from :mod:`deckpound.models.scene_io`, engines from the registry
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any
 
-__all__ = ["load_scene", "run", "run_batch", "run_many", "compare", "Comparison",
-           "available_engines", "builtin_scenes"]
+__all__ = [
+    "Comparison",
+    "available_engines",
+    "builtin_scenes",
+    "compare",
+    "load_scene",
+    "run",
+    "run_batch",
+    "run_many",
+]
 
 #: the quantities :func:`compare` aligns and scores unless told otherwise (relative
 #: displacements: what the gaps and springs see)
-DEFAULT_QUANTITIES = ("deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel",
-                      "gap_c1", "gap_c3")
+DEFAULT_QUANTITIES = (
+    "deck_theta",
+    "deck_y_rel",
+    "deck_x_rel",
+    "seat1_x_rel",
+    "seat2_x_rel",
+    "gap_c1",
+    "gap_c3",
+)
 
 
 def _overrides(set_: Mapping[str, Any] | Iterable[str] | None) -> list[str]:
@@ -35,8 +51,9 @@ def _overrides(set_: Mapping[str, Any] | Iterable[str] | None) -> list[str]:
     return [str(s) for s in set_]
 
 
-def load_scene(ref: str | Path = "saiidi-4span",
-               set: Mapping[str, Any] | Iterable[str] | None = None):  # noqa: A002
+def load_scene(
+    ref: str | Path = "saiidi-4span", set: Mapping[str, Any] | Iterable[str] | None = None
+):
     """A scene by built-in name or TOML path, with field overrides.
 
     ``set`` maps dotted paths to values (``{"contact.stiffness": 2e6, "bents[1].y.beta": 0.3}``)
@@ -61,8 +78,15 @@ def available_engines() -> dict[str, str]:
     return {name: get_engine(name).title for name in engine_names()}
 
 
-def run(scene, engine: str = "compliance", *, settings: Any = None, motion=None,
-        raise_on_failure: bool = False, **options: Any):
+def run(
+    scene,
+    engine: str = "compliance",
+    *,
+    settings: Any = None,
+    motion=None,
+    raise_on_failure: bool = False,
+    **options: Any,
+):
     """Run one engine on a scene and return its :class:`~deckpound.models.result.Result`.
 
     ``settings`` replaces the engine's settings table of the scene (an instance of the engine's
@@ -70,13 +94,20 @@ def run(scene, engine: str = "compliance", *, settings: Any = None, motion=None,
     """
     from deckpound.engines import run_engine
 
-    return run_engine(engine, scene, motion, settings=settings,
-                      raise_on_failure=raise_on_failure, **options)
+    return run_engine(
+        engine, scene, motion, settings=settings, raise_on_failure=raise_on_failure, **options
+    )
 
 
-def run_batch(scenes: Iterable, engine: str = "compliance", *, workers: int | None = None,
-              scheduler: str | None = None, cache: str | Path | None = None,
-              progress: bool = False) -> list:
+def run_batch(
+    scenes: Iterable,
+    engine: str = "compliance",
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    cache: str | Path | None = None,
+    progress: bool = False,
+) -> list:
     """Run one engine on many scenes; the results in the order of ``scenes``.
 
     The cases run on ``workers`` local processes (default: one per core; 1: in this process)
@@ -89,13 +120,19 @@ def run_batch(scenes: Iterable, engine: str = "compliance", *, workers: int | No
     from deckpound.compare.pool import pool_scope
     from deckpound.engines import get_engine
 
-    get_engine(engine)   # an unknown name is refused with the list of valid ones
+    get_engine(engine)  # an unknown name is refused with the list of valid ones
     scenes = list(scenes)
     cases = [Case(f"{i}", engine, sc) for i, sc in enumerate(scenes)]
     store = ResultCache(cache) if cache is not None else None
     with pool_scope():
-        results = run_cases(cases, cache=store, workers=workers, scheduler=scheduler,
-                            progress=progress, title=f"{engine} batch")
+        results = run_cases(
+            cases,
+            cache=store,
+            workers=workers,
+            scheduler=scheduler,
+            progress=progress,
+            title=f"{engine} batch",
+        )
     return [results[c.label] for c in cases]
 
 
@@ -123,9 +160,16 @@ class Comparison:
     quantities: tuple[str, ...] = field(default=DEFAULT_QUANTITIES)
 
 
-def compare(scene, engines: Iterable[str] | None = None, *, reference: str | None = None,
-            quantities: Iterable[str] = DEFAULT_QUANTITIES, dt: float | None = None,
-            cache: str | Path | None = None, workers: int | None = 1) -> Comparison:
+def compare(
+    scene,
+    engines: Iterable[str] | None = None,
+    *,
+    reference: str | None = None,
+    quantities: Iterable[str] = DEFAULT_QUANTITIES,
+    dt: float | None = None,
+    cache: str | Path | None = None,
+    workers: int | None = 1,
+) -> Comparison:
     """Run ``engines`` (default: every registered engine) on ``scene``, align and score them
     against ``reference`` (default :data:`deckpound.engines.DEFAULT_REFERENCE`, or the first
     engine when that one is not run). ``cache`` is a result-cache folder (finished cases are
@@ -137,15 +181,17 @@ def compare(scene, engines: Iterable[str] | None = None, *, reference: str | Non
 
     names = list(engines) if engines is not None else list(engine_names())
     for n in names:
-        get_engine(n)   # unknown names are refused with the list of valid ones
+        get_engine(n)  # unknown names are refused with the list of valid ones
     ref = reference or (DEFAULT_REFERENCE if DEFAULT_REFERENCE in names else names[0])
     if ref not in names:
         names.insert(0, ref)
     store = ResultCache(cache) if cache is not None else None
-    results = run_cases([Case(n, n, scene) for n in names], cache=store, workers=workers,
-                        progress=False)
+    results = run_cases(
+        [Case(n, n, scene) for n in names], cache=store, workers=workers, progress=False
+    )
     qs = tuple(q for q in quantities if all(q in r.columns for r in results.values()))
     aligned = align(results, dt=dt, columns=list(qs))
     metrics = metrics_against(results, aligned, ref, list(qs))
-    return Comparison(results=results, aligned=aligned, metrics=metrics, reference=ref,
-                      quantities=qs)
+    return Comparison(
+        results=results, aligned=aligned, metrics=metrics, reference=ref, quantities=qs
+    )

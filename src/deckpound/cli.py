@@ -64,9 +64,13 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     from . import _cli_compile, _cli_engines, _cli_scene, _cli_study
 
-    parser = _Parser(prog="deckpound", description="Deck-abutment pounding of bridges, three "
-                     "ways from one scene: OpenSees, compliance and nonsmooth engines.",
-                     epilog=EXIT_CODES_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = _Parser(
+        prog="deckpound",
+        description="Deck-abutment pounding of bridges, three "
+        "ways from one scene: OpenSees, compliance and nonsmooth engines.",
+        epilog=EXIT_CODES_HELP,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--version", action="version", version=f"deckpound {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
@@ -77,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _one_line(text: str, limit: int = 600) -> str:
     line = " ".join(str(text).split())
-    return line if len(line) <= limit else line[:limit - 3] + "..."
+    return line if len(line) <= limit else line[: limit - 3] + "..."
 
 
 def _os_error_text(err: OSError) -> str:
@@ -136,9 +140,9 @@ class _QuietStderr:
 
     def __init__(self, stream, show_all: bool):
         self._stream, self._show_all = stream, show_all
-        self._passing = True   # the decision for the line being written
+        self._passing = True  # the decision for the line being written
         self._at_start = True  # the next write starts a new line
-        self.held = 0          # lines held back
+        self.held = 0  # lines held back
 
     def write(self, text):
         if self._show_all or not text:
@@ -148,7 +152,7 @@ class _QuietStderr:
             self.held += not self._passing
         self._at_start = text.endswith("\n")
         if "\n" in text[:-1] and not self._passing:  # several lines in one write
-            rest = text[text.index("\n") + 1:]
+            rest = text[text.index("\n") + 1 :]
             self._at_start = True
             return self.write(rest) if rest else len(text)
         return self._stream.write(text) if self._passing else len(text)
@@ -218,7 +222,7 @@ def _fast_exit(code: int) -> None:
 
     try:
         atexit._run_exitfuncs()
-    except BaseException:  # noqa: BLE001, S110 - the exit status is decided; nothing to report
+    except BaseException:
         pass
     os._exit(code)
 
@@ -277,8 +281,11 @@ def _guarded_main(argv: list[str] | None) -> int:
                 _report("error", _os_error_text(err))
             return EXIT_IO
         except MemoryError:
-            _report("error", "out of memory; reduce the record length, the output rate "
-                    "(run.output_dt) or the number of workers")
+            _report(
+                "error",
+                "out of memory; reduce the record length, the output rate "
+                "(run.output_dt) or the number of workers",
+            )
             return EXIT_IO
         except RecursionError:
             if debug:
@@ -288,8 +295,11 @@ def _guarded_main(argv: list[str] | None) -> int:
     except Exception as err:  # a bug: one line, the traceback only on request
         if debug:
             raise
-        _report("internal error", f"{type(err).__name__}: {err} (this is a bug in deckpound "
-                f"{__version__}; re-run with DECKPOUND_DEBUG=1 for the traceback and report it)")
+        _report(
+            "internal error",
+            f"{type(err).__name__}: {err} (this is a bug in deckpound "
+            f"{__version__}; re-run with DECKPOUND_DEBUG=1 for the traceback and report it)",
+        )
         return EXIT_BUG
 
 
@@ -312,8 +322,14 @@ def int_in(lo: int, hi: int):
 def add_scene_args(p: argparse.ArgumentParser) -> None:
     """SCENE positional and repeatable --set PATH=VALUE."""
     p.add_argument("scene", metavar="SCENE", help="built-in scene name or TOML file")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
-                   help="override a scene field, e.g. --set contact.stiffness=2e6 (repeatable)")
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="PATH=VALUE",
+        help="override a scene field, e.g. --set contact.stiffness=2e6 (repeatable)",
+    )
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -58,15 +58,36 @@ import numpy as np
 from deckpound import __version__
 from deckpound.models._fields import to_mapping
 from deckpound.models.errors import EngineFailure, SceneError
-from deckpound.models.plan import (CORNER_NAMES, DOF_COLUMNS, RELATIVE_COLUMNS, VELOCITY_COLUMNS,
-                                   Plan, plan_of)
-from deckpound.models.result import (STATUS_FAILED, STATUS_SUCCESS, Result, physics_hash,
-                                     scene_hash, settings_hash)
+from deckpound.models.plan import (
+    CORNER_NAMES,
+    DOF_COLUMNS,
+    VELOCITY_COLUMNS,
+    Plan,
+    plan_of,
+)
+from deckpound.models.result import (
+    STATUS_FAILED,
+    STATUS_SUCCESS,
+    Result,
+    physics_hash,
+    scene_hash,
+    settings_hash,
+)
 from deckpound.models.scene import Contact, Deck, Scene
 
-__all__ = ["Engine", "Status", "RunOutput", "OptionIgnored", "QualityWarning", "OPTION_FIELDS",
-           "PENETRATION_WARN_FRACTION", "engine_columns",
-           "output_stride", "finish", "ignored_options"]
+__all__ = [
+    "OPTION_FIELDS",
+    "PENETRATION_WARN_FRACTION",
+    "Engine",
+    "OptionIgnored",
+    "QualityWarning",
+    "RunOutput",
+    "Status",
+    "engine_columns",
+    "finish",
+    "ignored_options",
+    "output_stride",
+]
 
 
 class OptionIgnored(UserWarning):
@@ -78,7 +99,7 @@ class QualityWarning(UserWarning):
     :data:`PENETRATION_WARN_FRACTION` of the gap); also listed in ``meta["warnings"]``."""
 
 
-class Status(str, enum.Enum):
+class Status(str, enum.Enum):  # noqa: UP042 (str() must stay "Status.X" for messages)
     """How a run ended (``Result.meta["failure"]`` holds the name for a failed run)."""
 
     SUCCESS = "success"
@@ -106,7 +127,8 @@ _STATUS_TEXT = {
 
 #: Scene options whose meaning depends on the engine (the "option ignored" warnings look here).
 OPTION_FIELDS = tuple(f"contact.{f.name}" for f in dataclasses.fields(Contact)) + (
-    "deck.stick_modulus",)
+    "deck.stick_modulus",
+)
 _DEFAULTS = {"contact": Contact(), "deck": None}
 _DECK_DEFAULTS = {f.name: f.default for f in dataclasses.fields(Deck)}
 
@@ -169,7 +191,7 @@ class RunOutput:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
-def ignored_options(engine: "Engine", scene: Scene, settings: Any) -> list[str]:
+def ignored_options(engine: Engine, scene: Scene, settings: Any) -> list[str]:
     """Engine-dependent options set away from their default that the engine does not read."""
     read = engine.reads(scene, settings)
     out = []
@@ -225,12 +247,16 @@ class Engine:
         """Refuse what the engine cannot express; return (and warn) the option notes."""
         settings = self.settings_of(scene) if settings is None else settings
         if not isinstance(settings, self.Settings):
-            raise SceneError(self.settings_field or self.name,
-                             f"expects {self.Settings.__name__} settings, got "
-                             f"{type(settings).__name__}")
+            raise SceneError(
+                self.settings_field or self.name,
+                f"expects {self.Settings.__name__} settings, got {type(settings).__name__}",
+            )
         self.refuse(scene, settings)
-        msgs = [f"{p} = {_value(scene, p)!r} does nothing in the {self.name} engine"
-                + _why(self, p, scene) for p in ignored_options(self, scene, settings)]
+        msgs = [
+            f"{p} = {_value(scene, p)!r} does nothing in the {self.name} engine"
+            + _why(self, p, scene)
+            for p in ignored_options(self, scene, settings)
+        ]
         msgs += [f"{self.name} engine: {n}" for n in self.notes(scene, settings)]
         if warn:
             for m in msgs:
@@ -238,8 +264,15 @@ class Engine:
         return msgs
 
     # -- running ----------------------------------------------------------------------------
-    def run(self, scene: Scene, settings: Any = None, motion=None, *,
-            raise_on_failure: bool = False, **options: Any) -> Result:
+    def run(
+        self,
+        scene: Scene,
+        settings: Any = None,
+        motion=None,
+        *,
+        raise_on_failure: bool = False,
+        **options: Any,
+    ) -> Result:
         """Run the engine on ``scene`` and return its Result (the shared template)."""
         from deckpound.models.excitation import support_motion
 
@@ -251,8 +284,9 @@ class Engine:
         plan = plan_of(scene)
         out = self._run(plan, scene, settings, motion, **options)
         total = time.perf_counter() - t0
-        return finish(self, scene, settings, motion, plan, out, total, msgs,
-                      raise_on_failure=raise_on_failure)
+        return finish(
+            self, scene, settings, motion, plan, out, total, msgs, raise_on_failure=raise_on_failure
+        )
 
     def _run(self, plan: Plan, scene: Scene, settings: Any, motion, **options: Any) -> RunOutput:
         raise NotImplementedError(f"engine {self.name!r} does not implement _run")
@@ -279,8 +313,11 @@ def _relative_columns(plan: Plan, motion, cols: dict[str, np.ndarray]) -> dict[s
     same arithmetic as the engines' compiled interpolator), held after the record ends.
     """
     t = cols["t"]
-    ug = np.column_stack([np.interp(t, motion.t, motion.disp[ch]) for ch in plan.channels]) \
-        if len(t) else np.zeros((0, len(plan.channels)))
+    ug = (
+        np.column_stack([np.interp(t, motion.t, motion.disp[ch]) for ch in plan.channels])
+        if len(t)
+        else np.zeros((0, len(plan.channels)))
+    )
     out: dict[str, np.ndarray] = {}
     tx, ty = plan.table_channels("x"), plan.table_channels("y")
     mean_x = ug[:, tx].mean(axis=1) if tx else np.zeros(len(t))
@@ -320,30 +357,47 @@ def _contact_quality(engine: Engine, scene: Scene, cols: dict, out: RunOutput) -
         pen, basis = max(float(out.max_penetration), rows_pen), "every step"
     else:
         pen, basis = rows_pen, "output rows"
-    q: dict[str, Any] = {"max_penetration": pen, "max_penetration_basis": basis,
-                         "max_penetration_rows": rows_pen}
+    q: dict[str, Any] = {
+        "max_penetration": pen,
+        "max_penetration_basis": basis,
+        "max_penetration_rows": rows_pen,
+    }
     if out.max_complementarity_residual is not None:
         q["max_complementarity_residual"] = float(out.max_complementarity_residual)
     g0 = min(seat.gap for seat in scene.seats)
     frac = PENETRATION_WARN_FRACTION[bool(engine.compliant_contact)]
     if g0 > 0.0 and pen > frac * g0:
-        why = ("the contact stiffness is too low for this gap" if engine.compliant_contact
-               else "the time step is too long (penetration is O(h·v) in a rigid-contact "
-               "scheme)")
+        why = (
+            "the contact stiffness is too low for this gap"
+            if engine.compliant_contact
+            else "the time step is too long (penetration is O(h·v) in a rigid-contact scheme)"
+        )
         q["quality_warnings"] = [
             f"penetration {pen:.3g} m exceeds {frac:.0%} of the smallest "
-            f"initial gap {g0:.3g} m ({basis}): {why}"]
+            f"initial gap {g0:.3g} m ({basis}): {why}"
+        ]
     return q
 
 
-def finish(engine: Engine, scene: Scene, settings: Any, motion, plan: Plan, out: RunOutput,
-           total_time: float, notes: list[str], *, raise_on_failure: bool = False) -> Result:
+def finish(
+    engine: Engine,
+    scene: Scene,
+    settings: Any,
+    motion,
+    plan: Plan,
+    out: RunOutput,
+    total_time: float,
+    notes: list[str],
+    *,
+    raise_on_failure: bool = False,
+) -> Result:
     """The shared epilogue: standard columns in order, statistics, status and metadata."""
     cols = dict(out.columns)
     missing = [c for c in engine_columns(plan) if c not in cols]
     if missing:
-        raise RuntimeError(f"engine {engine.name!r} returned no column {missing[0]!r} "
-                           "(engine contract, point 5)")
+        raise RuntimeError(
+            f"engine {engine.name!r} returned no column {missing[0]!r} (engine contract, point 5)"
+        )
     cols.update(_relative_columns(plan, motion, cols))
     order = plan.column_names
     columns = {k: cols[k] for k in order}

@@ -19,8 +19,16 @@ from typing import Any
 from deckpound.engine_contract import Engine, output_stride
 from deckpound.models.errors import SceneError
 
-__all__ = ["ENGINES", "DEFAULT_REFERENCE", "get_engine", "engine_names", "register",
-           "run_engine", "output_stride", "engine_style"]
+__all__ = [
+    "DEFAULT_REFERENCE",
+    "ENGINES",
+    "engine_names",
+    "engine_style",
+    "get_engine",
+    "output_stride",
+    "register",
+    "run_engine",
+]
 
 ENGINES: dict[str, str] = {
     "opensees": "deckpound.opensees_build.engine:OpenSeesEngine",
@@ -59,8 +67,7 @@ def unregister(name: str) -> None:
 def get_engine(name: str) -> Engine:
     """The engine registered as ``name`` (unknown names list the valid ones)."""
     if name not in ENGINES:
-        raise SceneError("engine", f"unknown engine {name!r}; valid engines: "
-                         f"{', '.join(ENGINES)}")
+        raise SceneError("engine", f"unknown engine {name!r}; valid engines: {', '.join(ENGINES)}")
     if name not in _INSTANCES:
         from deckpound._kernel_load import install
 
