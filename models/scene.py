@@ -18,6 +18,55 @@ from dataclasses import dataclass
 from ._fields import spec, validate
 from .contact_laws_table import FRICTION_CODES, LAW_CODES, contact_law
 from .errors import SceneError
+from .scene_excitation import (
+    ABSURD_PGA,
+    EXTREME_PGA,
+    RECORD_KINDS,
+    Excitation,
+    Sequence,
+    check_sequence_pgas,
+)
+from .scene_settings import (  # engine sections and limits, re-exported (see __all__)
+    IMPACT_LAWS,
+    MAX_ITERATIONS,
+    MAX_STEPS,
+    ComplianceSettings,
+    NonsmoothSettings,
+    OpenSeesSettings,
+    RunSettings,
+)
+
+__all__ = [
+    "ABSURD_PGA",
+    "CONTACT_LAWS",
+    "DAMPING_MASS",
+    "DAMPING_MEMBERS",
+    "DAMPING_STIFFNESS",
+    "EXTREME_PGA",
+    "FRICTION_MODES",
+    "GEOMETRIES",
+    "IMPACT_LAWS",
+    "MAX_ITERATIONS",
+    "MAX_SKEW",
+    "MAX_STEPS",
+    "RECORD_KINDS",
+    "SUPPORTS_PER_BENT",
+    "Bent",
+    "ComplianceSettings",
+    "Contact",
+    "Damping",
+    "Deck",
+    "Excitation",
+    "Initial",
+    "NonsmoothSettings",
+    "OpenSeesSettings",
+    "RunSettings",
+    "Scene",
+    "Seat",
+    "Sequence",
+    "TakedaSpring",
+    "check_sequence_pgas",
+]
 
 CONTACT_LAWS = tuple(LAW_CODES)  # the rows of contact_laws_table, in code order
 FRICTION_MODES = tuple(FRICTION_CODES)
@@ -25,14 +74,8 @@ DAMPING_MEMBERS = ("bents", "bents+seats", "none")
 DAMPING_STIFFNESS = ("initial", "committed", "current")
 DAMPING_MASS = ("absolute", "relative")
 GEOMETRIES = ("linear", "nonlinear")
-#: the nonsmooth engine's impact laws (:func:`deckpound.analytic.nonsmooth.separating_restitution`)
-IMPACT_LAWS = ("newton", "energy-safe")
 SUPPORTS_PER_BENT = ("x", "y")
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,31}$")
-#: largest number of time steps one run may take (a 60 s record at 1e-5 s is 6e6)
-MAX_STEPS = 50_000_000
-#: largest number of Newton iterations per step (more means the step does not converge)
-MAX_ITERATIONS = 10_000
 
 
 #: largest skew angle [degrees]: acute corners sharper than 15° are far outside bridge practice
@@ -278,345 +321,6 @@ class Damping:
             value = getattr(self, name)
             if len(value) != 2 or value[0] == value[1]:
                 raise SceneError(name, f"must hold two different values, got {list(value)}")
-
-
-#: largest PGA [g] accepted in any direction unless ``excitation.allow_extreme`` (recorded
-#: ground motions stay below about 4 g; more is a wrong unit or a typing error)
-EXTREME_PGA = 5.0
-#: largest PGA [g] accepted even with ``allow_extreme`` (no physical value; overflow ahead)
-ABSURD_PGA = 1000.0
-RECORD_KINDS = ("csv", "at2", "text")
-
-
-@dataclass(frozen=True, kw_only=True)
-class Excitation:
-    """Multi-support excitation: 3 shake tables (x, y) and 2 seat actuators (x).
-
-    kind = synthetic: a seeded earthquake-like record (filtered white noise, envelope, and the
-    generator's built-in baseline correction: ``highpass``, taper) scaled to ``pga``
-    (transverse) and ``longitudinal_ratio`` · pga (x);
-    kind = at2: PEER AT2 acceleration records [g] ``file_x`` and ``file_y``;
-    kind = text: two-column records (time [s], acceleration [``acc_unit``]) ``file_x``,
-    ``file_y``; for both, one of the two may be left out (that direction is at rest);
-    kind = csv: ``file`` with ``time_column`` and either ground accelerations ``acc_x``,
-    ``acc_y`` [``acc_unit``] or, per support channel, displacements ``<channel>_disp`` and
-    optionally ``<channel>_vel`` [``disp_unit``] (channels bent1_x, bent1_y, ..., seat1_x,
-    seat2_x);
-    kind = pulse: one longitudinal displacement pulse d = D(1 − cos 2πt/T)/2 for t ≤ T
-    (``pulse_period`` T), max acceleration pga · longitudinal_ratio, no transverse motion —
-    the canonical single-impact input;
-    kind = none: every support at rest for ``duration`` seconds (or ``run.duration``) — free
-    vibration from the ``[initial]`` state, the textbook impact problems.
-
-    Records (at2, text, csv) are applied at every table (x and y), the actuators follow x;
-    they are time-scaled by ``time_scale``, processed by ``processing`` (default none: real
-    records are already processed) and scaled by ``scaling`` (default pga: to ``pga`` in y and
-    ``longitudinal_ratio`` · pga in x, like the synthetic record, so a sequence or study run
-    labelled 0.5 g is driven at 0.5 g). See :mod:`deckpound.models.record_motion`. Any
-    direction above ``EXTREME_PGA`` g is refused unless ``allow_extreme``.
-    """
-
-    kind: str = spec(
-        "synthetic",
-        doc="record source",
-        choices=("synthetic", "csv", "at2", "text", "pulse", "none"),
-    )
-    pga: float = spec(
-        0.5,
-        unit="g",
-        doc="transverse peak ground acceleration (run label; > 5 g needs allow_extreme)",
-        gt=0.0,
-        le=100.0,
-    )
-    longitudinal_ratio: float = spec(
-        1.2, unit="-", doc="longitudinal PGA / transverse PGA", ge=0.0, le=10.0
-    )
-    seed: int = spec(1994, doc="random seed of the synthetic record", ge=0)
-    duration: float = spec(20.0, unit="s", doc="synthetic record length", gt=0.0, le=600.0)
-    dt: float = spec(0.005, unit="s", doc="synthetic record sampling step", gt=0.0, le=0.1)
-    dominant_frequency: float = spec(
-        3.5, unit="Hz", doc="Kanai-Tajimi ground frequency of the synthetic record", gt=0.0
-    )
-    ground_damping: float = spec(
-        0.6, unit="-", doc="Kanai-Tajimi ground damping ratio", gt=0.0, lt=5.0
-    )
-    highpass: float = spec(
-        0.5,
-        unit="Hz",
-        doc="high-pass corner: the synthetic generator's "
-        "baseline correction, and records with processing = highpass "
-        "(model time)",
-        gt=0.0,
-    )
-    lag: float = spec(0.0, unit="s", doc="time lag between successive bent tables", ge=0.0)
-    incoherence: float = spec(
-        0.0,
-        unit="-",
-        doc="fraction of independent noise at each table (0 = coherent)",
-        ge=0.0,
-        le=1.0,
-    )
-    file: str | None = spec(None, doc="CSV file (kind = csv), relative to the scene file")
-    time_column: str = spec("t", doc="CSV time column")
-    disp_unit: str = spec("m", doc="CSV displacement unit", choices=("m", "cm", "mm", "in"))
-    acc_unit: str = spec(
-        "g",
-        doc="acceleration unit of text and CSV records (AT2: always g)",
-        choices=("g", "m/s^2", "cm/s^2"),
-    )
-    file_x: str | None = spec(
-        None, doc="x (longitudinal) record (kind = at2 or text), relative to the scene file"
-    )
-    file_y: str | None = spec(
-        None, doc="y (transverse) record (kind = at2 or text), relative to the scene file"
-    )
-    scaling: str = spec(
-        "pga",
-        doc="records: pga = to pga (y) and longitudinal_ratio*pga (x); "
-        "factor = times scale; none = as read",
-        choices=("pga", "factor", "none"),
-    )
-    scale: float = spec(1.0, unit="-", doc="factor applied to records (scaling = factor)", gt=0.0)
-    time_scale: float = spec(
-        1.0,
-        unit="-",
-        doc="similitude time scale of records: t_model = "
-        "time_scale*t (accelerations kept: v x time_scale, "
-        "d x time_scale^2)",
-        gt=0.0,
-        le=10.0,
-    )
-    processing: str = spec(
-        "none",
-        doc="records: none = integrate as given; baseline = remove "
-        "a fitted polynomial baseline; highpass = zero-phase Butterworth at "
-        "highpass Hz",
-        choices=("none", "baseline", "highpass"),
-    )
-    allow_extreme: bool = spec(False, doc="accept a PGA above 5 g in any direction")
-    pulse_period: float = spec(0.5, unit="s", doc="period of the pulse (kind = pulse)", gt=0.0)
-
-    def __post_init__(self) -> None:
-        validate(self)
-        if self.kind == "csv" and not self.file:
-            raise SceneError("file", "is required when kind = 'csv'")
-        if self.kind in ("at2", "text") and not (self.file_x or self.file_y):
-            raise SceneError(
-                "file_x",
-                f"or file_y is required when kind = {self.kind!r} (one "
-                "record per direction; a direction without one is at rest)",
-            )
-        record = self.kind in RECORD_KINDS
-        for name, value, default, why in (
-            ("scaling", self.scaling, "pga", "generated records are made at pga"),
-            ("time_scale", self.time_scale, 1.0, "generated records are made at model time"),
-            (
-                "processing",
-                self.processing,
-                "none",
-                "the synthetic generator has its own baseline correction (highpass)",
-            ),
-        ):
-            if not record and value != default:
-                raise SceneError(
-                    name,
-                    f"applies to records (kind = csv, at2, text), not to kind "
-                    f"= {self.kind!r} ({why}); must be {default!r}, got {value!r}",
-                )
-        if record and self.incoherence > 0.0:
-            raise SceneError(
-                "incoherence",
-                f"applies to the synthetic record only (a record is "
-                f"applied at every table, delayed by lag); must be 0.0 for kind = "
-                f"{self.kind!r}, got {self.incoherence}",
-            )
-        if self.scale != 1.0 and self.scaling != "factor":
-            raise SceneError(
-                "scale",
-                f"is used only with scaling = 'factor' (scaling is "
-                f"{self.scaling!r}); must be 1.0, got {self.scale}",
-            )
-        if self.kind == "at2" and self.acc_unit != "g":
-            raise SceneError(
-                "acc_unit",
-                f"must be 'g' for AT2 records (the format's unit), got {self.acc_unit!r}",
-            )
-        self.check_pga(self.pga, "pga")
-
-    def check_pga(self, pga: float, field: str) -> None:
-        """Refuse a label ``pga`` [g] whose transverse or longitudinal target exceeds
-        EXTREME_PGA, unless allow_extreme (records scaled otherwise are checked when loaded)."""
-        if self.allow_extreme or self.scaling != "pga":
-            return
-        for what, value in (("transverse", pga), ("longitudinal", pga * self.longitudinal_ratio)):
-            if value > EXTREME_PGA:
-                extra = (
-                    ""
-                    if what == "transverse"
-                    else f" = {pga:g} g x longitudinal_ratio {self.longitudinal_ratio:g}"
-                )
-                raise SceneError(
-                    field,
-                    f"gives a {what} PGA of {value:g} g{extra}; at most "
-                    f"{EXTREME_PGA:g} g is allowed unless excitation.allow_extreme = "
-                    f"true, got {pga}",
-                )
-
-
-def check_sequence_pgas(scene: Scene) -> None:
-    """Validate every run of the sequence up front: each label through the excitation's PGA
-    check (a 6 g run is refused naming ``sequence.pgas[i]``, not half-way through a run)."""
-    for i, pga in enumerate(scene.sequence.pgas):
-        scene.excitation.check_pga(pga, f"sequence.pgas[{i}]")
-
-
-@dataclass(frozen=True, kw_only=True)
-class RunSettings:
-    """What every engine shares: how long to run and how often to store output."""
-
-    duration: float | None = spec(
-        None, unit="s", doc="analysis length (default: the record length)", gt=0.0
-    )
-    output_dt: float = spec(0.005, unit="s", doc="output step of the stored result", gt=0.0)
-
-    def __post_init__(self) -> None:
-        validate(self)
-
-
-@dataclass(frozen=True, kw_only=True)
-class OpenSeesSettings:
-    """Settings of the OpenSees engine (plain data; the scene does not import OpenSees)."""
-
-    mode: str = spec(
-        "rigid",
-        doc="rigid: 7-DOF rigid bodies via constraints; stick: stiff elastic sticks (paper)",
-        choices=("rigid", "stick"),
-    )
-    dt: float = spec(5.0e-4, unit="s", doc="analysis time step", gt=0.0)
-    gamma: float = spec(0.5, unit="-", doc="Newmark gamma", gt=0.0, le=1.0)
-    beta: float = spec(0.25, unit="-", doc="Newmark beta", gt=0.0, le=0.5)
-    algorithm: str = spec(
-        "Newton",
-        doc="solution algorithm",
-        choices=("Newton", "ModifiedNewton", "KrylovNewton", "NewtonLineSearch"),
-    )
-    test: str = spec(
-        "NormDispIncr",
-        doc="convergence test",
-        choices=("NormDispIncr", "EnergyIncr", "NormUnbalance"),
-    )
-    tolerance: float = spec(1.0e-10, unit="m", doc="convergence tolerance", gt=0.0)
-    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1, le=MAX_ITERATIONS)
-    system: str = spec(
-        "BandGeneral",
-        doc="linear system",
-        choices=("BandGeneral", "UmfPack", "FullGeneral", "SparseGeneral"),
-    )
-    fallback: str = spec(
-        "substep",
-        doc="on a failed step: none, or rebuild the analysis and sub-step",
-        choices=("none", "substep"),
-    )
-    substeps: int = spec(10, doc="sub-steps per step in the fallback", ge=2, le=1000)
-    stick_elements: int = spec(4, doc="elements per deck half in stick mode", ge=1, le=100)
-
-    def __post_init__(self) -> None:
-        validate(self)
-
-
-@dataclass(frozen=True, kw_only=True)
-class ComplianceSettings:
-    """Settings of the pure-Python compliance engine."""
-
-    integrator: str = spec(
-        "newmark",
-        doc="newmark: fixed-step Newmark-Newton (OpenSees clone); "
-        "adaptive: error-controlled with event location",
-        choices=("newmark", "adaptive"),
-    )
-    dt: float = spec(5.0e-4, unit="s", doc="time step (newmark)", gt=0.0)
-    tolerance: float = spec(1.0e-10, unit="m", doc="Newton NormDispIncr tolerance", gt=0.0)
-    max_iterations: int = spec(50, doc="Newton iterations per step", ge=1, le=MAX_ITERATIONS)
-    rtol: float = spec(1.0e-6, unit="-", doc="relative tolerance (adaptive)", gt=0.0)
-    atol: float = spec(1.0e-9, unit="m", doc="absolute tolerance (adaptive)", gt=0.0)
-    max_step: float = spec(0.01, unit="s", doc="largest step (adaptive)", gt=0.0)
-    commit_step: float = spec(
-        1.0e-4,
-        unit="s",
-        doc="largest step (adaptive) once a Takeda spring has yielded: "
-        "the Hysteretic state depends on where it is committed",
-        gt=0.0,
-    )
-    contact_tangent: str = spec(
-        "consistent",
-        doc="Newton's contact tangent (newmark): "
-        "consistent = the laws' derivatives; opensees = what the OpenSees "
-        "materials report (ViscoelasticGap: no damping tangent; "
-        "Hertzdamp: opposite sign, no damping tangent) — the same "
-        "forces, OpenSees's Newton iterates (round-off agreement)",
-        choices=("consistent", "opensees"),
-    )
-    max_steps: int = spec(
-        10_000_000,
-        doc="step budget (adaptive): Runge-Kutta steps tried, "
-        "accepted or rejected, before the run stops with status step_budget; "
-        "about 50x the 0.2 million steps of the 20 s benchmark, 1-3 min of "
-        "loop at 6-20 us per step",
-        ge=1,
-        le=10**12,
-    )
-
-    def __post_init__(self) -> None:
-        validate(self)
-
-
-@dataclass(frozen=True, kw_only=True)
-class NonsmoothSettings:
-    """Settings of the nonsmooth (Moreau-Jean) engine."""
-
-    h: float = spec(1.0e-3, unit="s", doc="time step", gt=0.0)
-    theta: float = spec(0.5, unit="-", doc="theta of the Moreau-Jean scheme", ge=0.5, le=1.0)
-    solver: str = spec("lemke", doc="contact problem solver", choices=("lemke", "enumeration"))
-    tolerance: float = spec(1.0e-10, unit="-", doc="complementarity tolerance", gt=0.0)
-    max_iterations: int = spec(
-        50, doc="Newton iterations per step for the Takeda springs", ge=1, le=MAX_ITERATIONS
-    )
-    impact_law: str = spec(
-        "newton",
-        doc="newton: Newton's law 0 <= U_N+ + e U_N- at every "
-        "active corner (Siconos' Moreau-Jean); energy-safe: restitution "
-        "max(e, (1-theta)/theta) at active corners already separating "
-        "(U_N- > 0), so no normal impulse does positive work",
-        choices=IMPACT_LAWS,
-    )
-
-    def __post_init__(self) -> None:
-        validate(self)
-
-
-@dataclass(frozen=True, kw_only=True)
-class Sequence:
-    """The experiment's sequence of runs on one specimen, carrying damage from run to run.
-
-    Start-of-run gap: each seat's gap minus the residual closing displacement of the previous
-    run (deck end relative to the seat face, averaged over the face's two corners), floored at 0.
-    Bent stiffness: k_next = min(k, k0·μ^(−β)) with μ = peak |deformation| / yield deformation
-    of the previous run (the Takeda unloading stiffness at that peak), per bent and direction.
-    """
-
-    pgas: tuple[float, ...] = spec(
-        (0.075, 0.15, 0.25, 0.5, 0.75, 1.0, 1.0),
-        unit="g",
-        doc="transverse PGA label of each run",
-        gt=0.0,
-    )
-    carry_gap: bool = spec(True, doc="start each run from the previous run's residual gap")
-    carry_stiffness: bool = spec(True, doc="degrade bent stiffness by the previous peak")
-
-    def __post_init__(self) -> None:
-        validate(self)
-        if not self.pgas:
-            raise SceneError("pgas", "must hold at least one run")
 
 
 @dataclass(frozen=True, kw_only=True)
