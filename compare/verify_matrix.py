@@ -43,6 +43,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from deckpound.compare import readme_blocks
 from deckpound.models.scene import Scene
 
 COMMAND = "deckpound verify clone saiidi-4span --write-readme"
@@ -60,6 +61,11 @@ LAW_EXCLUSIONS = {
     "open strain: it runs only with >= 1000 sub-steps and its gap force then jumps "
     "at closure (+34 % on the first impact), a documented difference from the "
     "clone's continuous law, not round-off (README, known limitations)",
+    "hertzdamp": "over the whole 20 s record OpenSees's Newton fails in about 1,900 steps with "
+    "Hertzdamp (its tangent has the wrong sign) and rescues them by sub-stepping, which the "
+    "clone's rescue does not follow step for step: 3e-7 of each peak over the first 5 s "
+    "(tests/test_opensees_contact_laws.py), 8e-2 over the whole record (README, known "
+    "limitations)",
 }
 #: damping choices OpenSees expresses: label → overrides
 DAMPING_CASES = {
@@ -251,20 +257,12 @@ def readme_block(
 
 def replace_block(text: str, block: str) -> str:
     """``text`` with its verify-matrix block replaced by ``block`` (appended if it has none)."""
-    head = BEGIN.split(":")[0]
-    if head in text and END in text:
-        start = text.index(head)
-        stop = text.index(END, start) + len(END)
-        return text[:start] + block + text[stop:]
-    return text.rstrip("\n") + "\n\n" + block + "\n"
+    return readme_blocks.replace_block(text, BEGIN, END, block)
 
 
 def write_readme(path: str | Path, block: str) -> Path:
     """Put ``block`` into the README at ``path`` (atomically)."""
-    from deckpound._io import atomic_write_text
-
-    path = Path(path)
-    return atomic_write_text(path, replace_block(path.read_text(), block), field="--write-readme")
+    return readme_blocks.write_block(path, BEGIN, END, block)
 
 
 def main(

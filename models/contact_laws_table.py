@@ -149,8 +149,8 @@ _HERTZ_DAMP_REFUSAL = (
     "Hertzdamp.cpp); law = 'hertzdamp' is that material exactly, in every engine; " + _OPENSEES_LAWS
 )
 _FLORES_REFUSAL = (
-    "OpenSees has no material with the 'flores' law (λ = k δ^n (1 + 8(1−e)/(5e) δ̇/v⁻)): "
-    "Hertzdamp's damping is the Lankarani–Nikravesh form; " + _OPENSEES_LAWS
+    "OpenSees cannot express the 'flores' law (λ = k δ^n (1 + 8(1−e)/(5e) δ̇/v⁻)): no "
+    "material has it (Hertzdamp's damping is the Lankarani–Nikravesh form); " + _OPENSEES_LAWS
 )
 #: Fewest OpenSees sub-steps per failed step that run the 'bilinear' law (ImpactMaterial)
 BILINEAR_MIN_SUBSTEPS = 1000
@@ -162,7 +162,7 @@ BILINEAR_OPENSEES_REASON = (
     "K1·(committed strain − gap) at closure and Newton finds no equilibrium in most closing "
     "steps; on the benchmark it fails at t = 0.84 s with 10 sub-steps and at 11.58 s with 100, "
     "while with 1000 the 20 s record completes (116 closing steps rescued); its motion is then "
-    "the clone's continuous bilinear law's to ~1e-5 (peak rotation), but the jump of the "
+    "the clone's continuous bilinear law's to ~2e-4 (peak deck x), but the jump of the "
     "closing sub-step spikes the gap force (+34 % on the first impact); got "
     "opensees.substeps = {got}"
 )

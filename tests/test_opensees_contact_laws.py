@@ -52,8 +52,13 @@ def test_clone_agrees_with_opensees_for_the_law(law):
         f"iterations {rep['iterations']}"
     )
     assert rep["status"] == {"opensees": "success", "compliance": "success"}
-    assert rep["worst"][1] <= 1e-9, rep["deviation"]
-    assert rep["worst_velocity"][1] <= 1e-8, rep["deviation"]
+    # Hertz: the same Newton iterates, round-off. Kelvin–Voigt and Hertzdamp: the two Newton
+    # paths differ by a few iterations where a gap reopens (README, known limitations), which
+    # amplifies round-off (measured 3.0e-7 for Hertzdamp with the default damping): the verify
+    # tolerance then applies
+    tol = 1e-8 if law == "hertz" else 1e-6
+    assert rep["worst"][1] <= tol, rep["deviation"]
+    assert rep["worst_velocity"][1] <= tol, rep["deviation"]
     # identical Newton iteration counts for hertz (and the linear gap); Kelvin–Voigt and
     # Hertzdamp reach the same answers (above) in slightly different counts (measured
     # 47,935 vs 48,185 and 109,452 vs 133,702 over 5 s). Kelvin–Voigt: first in the step
@@ -112,8 +117,8 @@ def test_hertzdamp_material_arithmetic_is_the_clones():
 def test_bilinear_runs_with_fine_substeps_close_to_the_continuous_law():
     """ImpactMaterial (law = 'bilinear', opensees.substeps = 1000): the closing steps fail and
     are rescued by 1000 sub-steps. The motion is the clone's continuous Muthukumar law's to
-    ~1e-5 (first 3 s: peak rotation 1.5e-5, peak deck x 7.2e-5; whole record: peak rotation
-    9e-6), but the gap force is not: the jump K1·(committed strain − gap) of the closing
+    ~2e-4 (first 3 s, with the seats damped by their dashpots only (issue 12 default): peak
+    deck x 2.1e-4; with Rayleigh on the seats too it was 7.2e-5), but the gap force is not: the jump K1·(committed strain − gap) of the closing
     sub-step adds a spike (first 3 s: peak gap force 236 kN against the continuous law's 176
     kN, +34 %) — documented, not cloned."""
     import numpy as np
@@ -132,7 +137,7 @@ def test_bilinear_runs_with_fine_substeps_close_to_the_continuous_law():
     for col in ("deck_theta", "deck_x_abs"):
         po, pc = np.max(np.abs(ro[col])), np.max(np.abs(rc[col]))
         print(col, po, pc, abs(po - pc) / pc)
-        assert abs(po - pc) <= 1e-4 * pc
+        assert abs(po - pc) <= 5e-4 * pc
     fo = max(np.max(ro[f"fn_c{c}"]) for c in range(1, 5))
     fc = max(np.max(rc[f"fn_c{c}"]) for c in range(1, 5))
     print("peak gap force", fo, fc, abs(fo - fc) / fc)

@@ -70,6 +70,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "energy-safe variant on a scene, without and with friction",
     )
     add_scene_args(q)
+    q.add_argument(
+        "--write-readme",
+        nargs="?",
+        const="README.md",
+        default=None,
+        metavar="PATH",
+        help="put the table into the README (default ./README.md) in place of the previous one",
+    )
     q.set_defaults(func=_verify_impact_law)
 
 
@@ -232,7 +240,7 @@ def _verify_single(scene, verify_matrix) -> int:
 
 
 def _verify_impact_law(args) -> int:
-    from deckpound.compare.impact_law import format_table, impact_law_table
+    from deckpound.compare.impact_law import format_table, impact_law_table, write_readme
     from deckpound.models.scene_io import load_scene
 
     rows = impact_law_table(load_scene(args.scene, args.overrides))
@@ -242,4 +250,10 @@ def _verify_impact_law(args) -> int:
             "a run failed: "
             + ", ".join(f"{r['friction']}/{r['impact_law']}: {r['status']}" for r in rows)
         )
+    if args.write_readme is not None:
+        if args.overrides:
+            raise SceneError(
+                "--write-readme", "the README quotes the built-in scene: not with --set"
+            )
+        print(f"wrote the table into {write_readme(args.write_readme, rows)}")
     return 0
