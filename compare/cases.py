@@ -41,6 +41,7 @@ __all__ = [
     "ResultCache",
     "case_key",
     "check_scheduler_address",
+    "engine_expresses",
     "run_case",
     "run_cases",
 ]
@@ -99,6 +100,24 @@ def case_key(engine: str, scene: Scene) -> str:
         separators=(",", ":"),
     )
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def engine_expresses(engine: str, scene: Scene, study: str) -> bool:
+    """Whether ``engine`` runs ``scene`` (its validation-time refusals); a refused case of a
+    study is left out with a logged warning that names the reason."""
+    import logging
+
+    from deckpound.engines import get_engine
+
+    eng = get_engine(engine)
+    try:
+        eng.refuse(scene, eng.settings_of(scene))
+    except SceneError as err:
+        logging.getLogger(__name__).warning(
+            "%s study: %s leaves out %s: %s", study, engine, scene.name, err
+        )
+        return False
+    return True
 
 
 def run_case(engine: str, scene: Scene) -> Result:

@@ -13,21 +13,18 @@ report states, per engine, how far each choice moves these from the scene's own 
 
 from __future__ import annotations
 
-import logging
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 from deckpound.models.scene import DAMPING_MASS, DAMPING_MEMBERS, DAMPING_STIFFNESS, Scene
 
-from .cases import Case
+from .cases import Case, engine_expresses
 
 __all__ = ["damping_cases", "damping_figure", "damping_headlines", "damping_row"]
 
-log = logging.getLogger(__name__)
 
 QUICK = (
     ("bents", "initial", "absolute"),
@@ -52,18 +49,6 @@ def _choices(quick: bool) -> list[tuple[str, str, str]]:
     ]
 
 
-def _expresses(engine: str, scene: Scene) -> bool:
-    from deckpound.engines import get_engine
-
-    eng = get_engine(engine)
-    try:
-        eng.refuse(scene, eng.settings_of(scene))
-    except SceneError as err:
-        log.warning("damping study: %s leaves out %s: %s", engine, scene.name, err)
-        return False
-    return True
-
-
 def damping_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """members × stiffness × mass × engine (module docstring); the other damping fields
     (ratio, method) as the scene has them."""
@@ -81,7 +66,7 @@ def damping_cases(scene: Scene, quick: bool = False) -> list[Case]:
         )
         label = f"{members}·{stiffness}·{mass}"
         for engine in engine_names():
-            if _expresses(engine, sc):
+            if engine_expresses(engine, sc, "damping"):
                 cases.append(
                     Case(
                         f"{engine} {label}",

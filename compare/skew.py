@@ -37,19 +37,17 @@ velocities 1e-8) and returns one row per angle, ready to join a ``verify clone``
 
 from __future__ import annotations
 
-import logging
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from deckpound.models.contact_laws_table import DEFAULT_FRICTION
-from deckpound.models.errors import SceneError
 from deckpound.models.plan import CORNER_NAMES
 from deckpound.models.result import Result, in_contact
 from deckpound.models.scene import Scene
 
-from .cases import Case
+from .cases import Case, engine_expresses
 
 __all__ = [
     "FRICTION",
@@ -63,7 +61,6 @@ __all__ = [
     "verify_skew",
 ]
 
-log = logging.getLogger(__name__)
 
 #: skew angles of the study [degrees]
 SKEWS = (0.0, 15.0, 30.0, 45.0, 60.0)
@@ -82,18 +79,6 @@ VERIFY_VELOCITY_TOLERANCE = 1e-8
 
 
 # -- cases --------------------------------------------------------------------------------------
-
-
-def _can_run(engine: str, scene: Scene) -> bool:
-    from deckpound.engines import get_engine
-
-    eng = get_engine(engine)
-    try:
-        eng.refuse(scene, eng.settings_of(scene))
-    except SceneError as err:
-        log.warning("skew study: %s cannot run %s: %s", engine, scene.name, err)
-        return False
-    return True
 
 
 def skew_cases(scene: Scene, quick: bool = False) -> list[Case]:
@@ -116,7 +101,7 @@ def skew_cases(scene: Scene, quick: bool = False) -> list[Case]:
             penalty = modified(base, f"compliance.dt={dt!r}", f"opensees.dt={dt!r}")
             for engine in engine_names():
                 sc = base if engine == "nonsmooth" else penalty
-                if not _can_run(engine, sc):
+                if not engine_expresses(engine, sc, "skew"):
                     continue
                 friction = (
                     "none" if mu == 0 else "Coulomb" if engine == "nonsmooth" else DEFAULT_FRICTION
