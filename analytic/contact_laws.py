@@ -597,7 +597,7 @@ def eval_closed(contact, cs, cw, u, v, un):
     return nclosed
 
 
-@kernel
+@kernel(inline="always")
 def eval_contacts(contact, cs, cw, u, v, un):
     """Gap check (call-free, cheap); returns 0 when every corner is open (fc, lam, lt zeroed),
     −1 when :func:`eval_closed` must evaluate the laws (some g ≤ 0, or nonlinear kinematics).

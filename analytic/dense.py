@@ -1,7 +1,11 @@
 """Small dense linear algebra for the step loops (numba): LU with partial pivoting.
 
 The 7×7 iteration matrices of the analytic engines are factored and solved here in place,
-without allocation, so the compiled step loops never call into LAPACK's Python layer.
+without allocation, so the compiled step loops never call into LAPACK's Python layer. The size
+is the compile-time constant :data:`~deckpound.models.plan.N_DOF` (every matrix of the step
+loops is N_DOF × N_DOF), so LLVM unrolls the loops: the factorisation takes about half the time
+of the same code with the size read from the array (measured by a micro-benchmark), with the
+same operations in the same order (identical factors).
 """
 
 from __future__ import annotations
@@ -9,12 +13,13 @@ from __future__ import annotations
 import numpy as np
 
 from deckpound.analytic._jit import kernel
+from deckpound.models.plan import N_DOF
 
 
 @kernel
 def lu_factor(A, piv):
-    """In-place LU with partial pivoting of a small dense matrix. Returns False if singular."""
-    n = A.shape[0]
+    """In-place LU with partial pivoting of an N_DOF × N_DOF matrix. Returns False if singular."""
+    n = N_DOF
     for k in range(n):
         p = k
         amax = abs(A[k, k])
@@ -42,8 +47,8 @@ def lu_factor(A, piv):
 
 @kernel
 def lu_solve(LU, piv, b, x):
-    """Solve with the factors of :func:`lu_factor` (x may alias b)."""
-    n = LU.shape[0]
+    """Solve with the factors of :func:`lu_factor` (x may alias b; N_DOF long)."""
+    n = N_DOF
     for i in range(n):
         x[i] = b[i]
     for k in range(n):

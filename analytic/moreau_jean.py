@@ -348,6 +348,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     W[0] = ke0 + es0
     W[1] = es0
     contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
+    contact_kinematics(q, geom, nonlinear, gap, WN, WT)
     _energies(sa, hstate, q, v, ug, W, energy)
     _store(output, 0, 0.0, q, v, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state, energy)
     row = 1
@@ -388,8 +389,13 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
             qk[j] = q[j]
             vk[j] = v[j]
             qM[j] = q[j] + 0.5 * h * v[j]
-        # ---- active set at the predicted mid-step position
-        contact_kinematics(qM, geom, nonlinear, gap, WN, WT)
+        # ---- active set at the predicted mid-step position (linear kinematics: W_N, W_T are
+        # constant, filled before the loop, so only the gaps change)
+        if nonlinear:
+            contact_kinematics(qM, geom, nonlinear, gap, WN, WT)
+        else:
+            for c in range(4):
+                gap[c] = linear_gap(geom[c], qM)
         nact = 0
         for c in range(4):
             if gap[c] <= 0.0:
