@@ -13,7 +13,13 @@ For every registered engine, on one scene (the benchmark by default), in one sit
   loading the compiled kernels from the cache (0 for OpenSees);
 * ``no set-up [s]``: the process time of the first run with an empty kernel cache (what every
   user paid before ``deckpound compile`` existed, and pays if the set-up step is skipped);
-* ratios: OpenSees's time over the engine's, for the warm processes and in-process.
+* ratios: OpenSees's time over the engine's, for the warm processes and in-process;
+* a **machine-speed reference** under the table: the time per iteration of a fixed compiled loop
+  (:func:`reference_loop_ns`, a 7×7 Gaussian elimination with pivoting, the kind of work the
+  step loops do), measured before and after the table. A shared or throttled
+  machine runs the same code markedly slower at one moment than at another (this project's
+  2-core machine has shown 2x between sittings); the reference says how fast the machine was
+  while the table was measured, so µs/step from two sittings or machines can be compared.
 
 The table is printed and written as Markdown between the markers :data:`BEGIN` and :data:`END`;
 ``--write-readme`` puts it into the README in place of the previous one, so the README's
@@ -105,6 +111,7 @@ def measure(
     engines = list(engines or engine_names())
     say = progress or (lambda text: None)
     load_before = os.getloadavg()
+    reference_before = reference_loop_ns()
     rows = []
     with tempfile.TemporaryDirectory(prefix="deckpound-speed-") as tmp:
         tmp = Path(tmp)
@@ -136,6 +143,7 @@ def measure(
     context = {
         "load_before": load_before,
         "load_after": os.getloadavg(),
+        "reference_ns": (reference_before, reference_loop_ns()),
         "cpus": os.cpu_count(),
         "machine": platform.machine(),
         "python": platform.python_version(),
@@ -145,6 +153,57 @@ def measure(
         "repeats": repeats,
     }
     return rows, context
+
+
+_REFERENCE_ITERATIONS = 100_000
+
+
+def reference_loop_ns(repeats: int = 5) -> float:
+    """Nanoseconds per pass of a fixed compiled loop (best of ``repeats``, compile excluded).
+
+    One pass is a Gaussian elimination with partial pivoting of a fixed 7×7 matrix, copied in
+    first: the kind of work the step loops do (small arrays in the first-level cache, dependent
+    floating-point chains, data-dependent pivot branches), written out here so that it does not
+    change when the project's kernels do. Its time tracks the speed of the machine at that
+    moment (clock, contention), not the project's code.
+    """
+    from numba import njit
+
+    @njit(cache=False)
+    def eliminate(n, A0, A):
+        s = 0.0
+        for r in range(n):
+            for i in range(7):
+                for j in range(7):
+                    A[i, j] = A0[i, j]
+            A[0, 0] += 1e-9 * (r & 7)
+            for k in range(7):
+                p = k
+                for i in range(k + 1, 7):
+                    if abs(A[i, k]) > abs(A[p, k]):
+                        p = i
+                if p != k:
+                    for j in range(7):
+                        t = A[k, j]
+                        A[k, j] = A[p, j]
+                        A[p, j] = t
+                for i in range(k + 1, 7):
+                    lik = A[i, k] / A[k, k]
+                    for j in range(k + 1, 7):
+                        A[i, j] -= lik * A[k, j]
+            s += A[6, 6]
+        return s
+
+    # a fixed, well-conditioned matrix whose pivots move (a reversed diagonal plus a ramp)
+    A0 = np.fliplr(np.eye(7)) * 5.0 + np.arange(49.0).reshape(7, 7) / 49.0
+    A = A0.copy()
+    eliminate(10, A0, A)  # compile
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        eliminate(_REFERENCE_ITERATIONS, A0, A)
+        best = min(best, time.perf_counter() - t0)
+    return 1e9 * best / _REFERENCE_ITERATIONS
 
 
 def _fmt(v: float, digits: int = 3) -> str:
@@ -178,6 +237,13 @@ def markdown(rows: list[EngineSpeed], context: dict, reference: str = "opensees"
         f"cores, {context['machine']}, Python {context['python']}, {context['date']}; "
         f"load average {lb[0]:.2f} before, {la[0]:.2f} after."
     )
+    if "reference_ns" in context:
+        rb, ra = context["reference_ns"]
+        how += (
+            f" Machine speed while measuring: a fixed compiled reference loop (a 7×7 "
+            f"elimination) took {rb:.0f} ns per pass before and {ra:.0f} after "
+            "(`compare.speed.reference_loop_ns`; lower is faster)."
+        )
     lines += ["", how, "", END]
     return "\n".join(lines)
 

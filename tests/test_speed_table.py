@@ -34,6 +34,7 @@ def _fake(engines):
     ctx = {
         "load_before": (0.5, 0, 0),
         "load_after": (0.9, 0, 0),
+        "reference_ns": (140.0, 150.0),
         "cpus": 2,
         "machine": "x86_64",
         "python": "3.11.7",
@@ -72,3 +73,10 @@ def test_markdown_ratios_and_replacement(tmp_path):
     assert readme.read_text().count(speed.BEGIN) == 1
     nan_row = speed.EngineSpeed("x")
     assert "–" in speed.markdown([nan_row], ctx) and np.isnan(nan_row.warm)
+
+
+def test_reference_loop_measures_time_per_iteration():
+    """The machine-speed reference is a positive, finite time per pass of a 7×7 elimination:
+    ~140 flops and ~100 loads and stores, so ≥ 10 ns on any core and far below a millisecond."""
+    ns = speed.reference_loop_ns(repeats=2)
+    assert np.isfinite(ns) and 10.0 < ns < 1e5
