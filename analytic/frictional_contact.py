@@ -344,32 +344,17 @@ def solve_contact_impulses_into(
         done = _keep_if_better(
             G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, STATUS_LEMKE, tolv
         )
-    # 2. Lemke, Stewart-Trinkle formulation (copositive)
-    if (not done) and nf > 0 and (mode in (MODE_AUTO, MODE_LEMKE_ST)):
-        Ast, qst = build_lcp_st(G, qN, uT_free, mu, fidx, nf, s)
-        z, _w, _st, _npiv = lcp_lemke(Ast, qst)
-        extract_st(z, fidx, nf, s, cN, cT)
-        done = _keep_if_better(
-            G,
-            uN_free,
-            uT_free,
-            uN_minus,
-            e,
-            mu,
-            cN,
-            cT,
-            vN,
-            vT,
-            bN,
-            bT,
-            best,
-            STATUS_LEMKE_ST,
-            tolv,
-        )
-    elif mode == MODE_LEMKE_ST and nf == 0:
-        # frictionless: the ST form is the normal LCP
-        z, _w, _st, _npiv = lcp_lemke(A3, q3)
-        extract3(z, mu, fidx, nf, s, cN, cT)
+    # 2. Lemke, Stewart-Trinkle formulation (copositive); frictionless, the ST form is the
+    # normal LCP (asked for explicitly with MODE_LEMKE_ST)
+    with_friction = (not done) and nf > 0 and (mode in (MODE_AUTO, MODE_LEMKE_ST))
+    if with_friction or (mode == MODE_LEMKE_ST and nf == 0):
+        if with_friction:
+            Ast, qst = build_lcp_st(G, qN, uT_free, mu, fidx, nf, s)
+            z, _w, _st, _npiv = lcp_lemke(Ast, qst)
+            extract_st(z, fidx, nf, s, cN, cT)
+        else:
+            z, _w, _st, _npiv = lcp_lemke(A3, q3)
+            extract3(z, mu, fidx, nf, s, cN, cT)
         done = _keep_if_better(
             G,
             uN_free,
