@@ -121,7 +121,7 @@ def run_adaptive(
     )
     contact = bd.Contact(corners, cp, scene.contact.geometry == "nonlinear")
     stats = bd.new_stats()
-    args = (ps.arrays, contact, bd.Record(tb, UG, VG), opts, output, work, stats)
+    args = (ps.arrays, contact, bd.record(tb, UG, VG), opts, output, work, stats)
     compile_time = ensure_compiled(adaptive_run, *args)
     t1 = _time.perf_counter()
     interrupted = bd.run_loop(adaptive_run, args, stats)

@@ -66,6 +66,7 @@ __all__ = [
     "check_output_size",
     "new_contact_work",
     "new_stats",
+    "record",
     "row_views",
     "run_loop",
     "stats_dict",
@@ -82,8 +83,19 @@ __all__ = [
 #: kinematics.
 Contact = namedtuple("Contact", ["corners", "params", "nonlinear"])
 #: The support record: ``t`` (n,) [s], ``disp`` (n, n_channels) [m or rad], ``vel`` (n,
-#: n_channels) [m/s or rad/s] (:func:`deckpound.analytic.support_motion.support_record`).
-Record = namedtuple("Record", ["t", "disp", "vel"])
+#: n_channels) [m/s or rad/s] (:func:`deckpound.analytic.support_motion.support_record`) and
+#: their segment slopes ``dslope``, ``vslope`` (same shapes; per second,
+#: :func:`deckpound.analytic.support_motion.record_slopes`). Build with :func:`record`.
+Record = namedtuple("Record", ["t", "disp", "vel", "dslope", "vslope"])
+
+
+def record(tb, D, V) -> Record:
+    """The :data:`Record` bundle of a support record at its own samples (slopes computed)."""
+    from deckpound.analytic.support_motion import record_slopes
+
+    return Record(tb, D, V, *record_slopes(tb, D, V))
+
+
 #: The output: ``table`` (rows, n_selected) written row by row, ``select`` (n_selected,) int64
 #: indices into the loop's full row, ``row`` the full-row buffer.
 Output = namedtuple("Output", ["table", "select", "row"])

@@ -313,7 +313,7 @@ def _run_newmark(
     work = newmark_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, len(ps.channels))
     contact = bd.Contact(corners, cp, scene.contact.geometry == "nonlinear")
     stats = bd.new_stats()
-    args = (ps.arrays, contact, bd.Record(*record), opts, output, work, stats)
+    args = (ps.arrays, contact, bd.record(*record), opts, output, work, stats)
     compile_time = ensure_compiled(newmark_run, *args)
     t1 = _time.perf_counter()
     interrupted = bd.run_loop(newmark_run, args, stats)

@@ -271,7 +271,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     nbs = sa.nbs
     geom = contact.corners
     nonlinear = contact.nonlinear
-    tb, DG, VGR = record.t, record.disp, record.vel
+    tb, DG, VGR, SDG, SVG = record.t, record.disp, record.vel, record.dslope, record.vslope
     nsteps, h, theta, ecoef, esep, mu = opt.nsteps, opt.h, opt.theta, opt.ecoef, opt.esep, opt.mu
     mode, rtol, ftol, maxit, stride = opt.mode, opt.rtol, opt.ftol, opt.maxit, opt.stride
     halt = stats.halt
@@ -333,7 +333,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     th = theta
     th1 = 1.0 - theta
     # ---- initial state
-    jrec = record_at(tb, DG, VGR, 0.0, 0, ug, vg)
+    jrec = record_at(tb, DG, VGR, SDG, SVG, 0.0, 0, ug, vg)
     for j in range(7):
         q[j] = u0[j]
         v[j] = v0[j]
@@ -376,7 +376,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
         for k in range(nch):
             ugo[k] = ug[k]
             vgo[k] = vg[k]
-        jrec = record_at(tb, DG, VGR, (n + 1) * h, jrec, ug, vg)
+        jrec = record_at(tb, DG, VGR, SDG, SVG, (n + 1) * h, jrec, ug, vg)
         for i in range(ns):
             ch = sa.schan[i]
             if ch >= 0:

@@ -269,7 +269,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     nbs = sa.nbs
     cp = contact.params
     nonlinear = contact.nonlinear
-    tb, DG, VGR = record.t, record.disp, record.vel
+    tb, DG, VGR, SDG, SVG = record.t, record.disp, record.vel, record.dslope, record.vslope
     nsteps, dt, tol, maxit, stride = opt.nsteps, opt.dt, opt.tol, opt.maxit, opt.stride
     substeps = opt.substeps
     ns = sa.k0.shape[0]
@@ -332,7 +332,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     if not lu_factor(LUel, pivel):
         _set_stats(stats, RUN_SINGULAR, 0, 0, 0, 0, 0, 0, 0, 0, dt)
         return
-    jrec = record_at(tb, DG, VGR, 0.0, 0, ug1, vg1)
+    jrec = record_at(tb, DG, VGR, SDG, SVG, 0.0, 0, ug1, vg1)
     for k in range(nch):
         ug[k] = ug1[k]
         vg[k] = vg1[k]
@@ -396,7 +396,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
         for k in range(nch):
             ug0[k] = ug1[k]
             vg0[k] = vg1[k]
-        jrec = record_at(tb, DG, VGR, (n + 1) * dt, jrec, ug1, vg1)
+        jrec = record_at(tb, DG, VGR, SDG, SVG, (n + 1) * dt, jrec, ug1, vg1)
         nsub = 1
         while True:
             h = dt / nsub

@@ -227,7 +227,7 @@ class NonsmoothEngine(Engine):
         h, theta = ns_set.h, ns_set.theta
         duration = analysis_duration(scene, motion)
         ps = pack_system(plan, damping_model(scene, plan))
-        record = bd.Record(*support_record(motion, ps.channels))
+        record = bd.record(*support_record(motion, ps.channels))
         ct = scene.contact
         mu = float(ct.friction) if ct.has_friction else 0.0
         stride = output_stride(h, scene.run.output_dt)

@@ -6,7 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from deckpound.analytic.support_motion import record_at, record_at_times, support_record
+from deckpound.analytic.support_motion import (
+    record_at,
+    record_at_times,
+    record_slopes,
+    support_record,
+)
 from deckpound.models.excitation import support_motion
 from deckpound.models.plan import standard_columns
 from deckpound.models.scene_io import load_scene
@@ -18,11 +23,12 @@ def test_record_at_is_np_interp_bit_for_bit():
     tb -= tb[0]
     D = rng.standard_normal((400, 3))
     V = rng.standard_normal((400, 3))
+    SD, SV = record_slopes(tb, D, V)
     for dt in (1e-5, 3.3e-4, 5e-4, 7e-3, 0.05):
         n = int(round((tb[-1] + 0.2) / dt))  # runs past the end: last value held
         UG = np.empty((n + 1, 3))
         VG = np.empty((n + 1, 3))
-        record_at_times(tb, D, V, dt, 0, n + 1, UG, VG)
+        record_at_times(tb, D, V, SD, SV, dt, 0, n + 1, UG, VG)
         t = np.arange(n + 1) * dt
         for k in range(3):
             assert np.array_equal(UG[:, k], np.interp(t, tb, D[:, k]))
@@ -30,7 +36,7 @@ def test_record_at_is_np_interp_bit_for_bit():
     # samples hit exactly, any hint works
     ug, vg = np.empty(3), np.empty(3)
     for j in (0, 399, 57):
-        record_at(tb, D, V, tb[123], j, ug, vg)
+        record_at(tb, D, V, SD, SV, tb[123], j, ug, vg)
         assert np.array_equal(ug, D[123]) and np.array_equal(vg, V[123])
 
 
@@ -44,7 +50,7 @@ def test_scene_motion_matches_resample():
     res = m.resample(5e-4, 2.0)
     UG, VG = res.matrices(ch)
     A, B = np.empty_like(UG), np.empty_like(VG)
-    record_at_times(tb, D, V, 5e-4, 0, UG.shape[0], A, B)
+    record_at_times(tb, D, V, *record_slopes(tb, D, V), 5e-4, 0, UG.shape[0], A, B)
     assert np.array_equal(A, UG) and np.array_equal(B, VG)
 
 
