@@ -49,17 +49,36 @@ import numpy as np
 
 from deckpound.analytic._jit import compiled, kernel
 
-__all__ = ["build_lcp3", "build_lcp_st", "extract3", "extract_st"]
+__all__ = [
+    "build_lcp3",
+    "build_lcp3_into",
+    "build_lcp_st",
+    "build_lcp_st_into",
+    "extract3",
+    "extract_st",
+]
 
 
 @compiled
 def build_lcp3(G, qN, uT_free, mu, fidx, nf, s):
     """3-unknown LCP (scaled impulses).  fidx[k] = contact of k-th
-    frictional contact."""
+    frictional contact.  Returns (A, q), size nc + 2 nf."""
+    n = qN.shape[0] + 2 * nf
+    A = np.empty((n, n))
+    q = np.empty(n)
+    build_lcp3_into(G, qN, uT_free, mu, fidx, nf, s, A, q)
+    return A, q
+
+
+@kernel
+def build_lcp3_into(G, qN, uT_free, mu, fidx, nf, s, A, q):
+    """:func:`build_lcp3` into A (n, n), q (n,), n = nc + 2 nf (overwritten)."""
     nc = qN.shape[0]
     n = nc + 2 * nf
-    A = np.zeros((n, n))
-    q = np.zeros(n)
+    for i in range(n):
+        q[i] = 0.0
+        for j in range(n):
+            A[i, j] = 0.0
     # friction coefficient per contact (0 for frictionless)
     for i in range(nc):
         q[i] = qN[i]
@@ -84,7 +103,6 @@ def build_lcp3(G, qN, uT_free, mu, fidx, nf, s):
         r2 = nc + nf + k
         A[r2, i] = 2.0 * mu[i]
         A[r2, nc + k] = -1.0
-    return A, q
 
 
 @kernel
@@ -100,11 +118,24 @@ def extract3(z, mu, fidx, nf, s, P_N, P_T):
 
 @compiled
 def build_lcp_st(G, qN, uT_free, mu, fidx, nf, s):
-    """Stewart-Trinkle / Anitescu-Potra LCP: unknowns (P_N, b+, b-, lam)."""
+    """Stewart-Trinkle / Anitescu-Potra LCP: unknowns (P_N, b+, b-, lam).  Returns (A, q),
+    size nc + 3 nf."""
+    n = qN.shape[0] + 3 * nf
+    A = np.empty((n, n))
+    q = np.empty(n)
+    build_lcp_st_into(G, qN, uT_free, mu, fidx, nf, s, A, q)
+    return A, q
+
+
+@kernel
+def build_lcp_st_into(G, qN, uT_free, mu, fidx, nf, s, A, q):
+    """:func:`build_lcp_st` into A (n, n), q (n,), n = nc + 3 nf (overwritten)."""
     nc = qN.shape[0]
     n = nc + 3 * nf
-    A = np.zeros((n, n))
-    q = np.zeros(n)
+    for i in range(n):
+        q[i] = 0.0
+        for j in range(n):
+            A[i, j] = 0.0
     for i in range(nc):
         q[i] = qN[i]
         for j in range(nc):
@@ -135,7 +166,6 @@ def build_lcp_st(G, qN, uT_free, mu, fidx, nf, s):
         A[rl, i] = mu[i]
         A[rl, nc + k] = -1.0
         A[rl, nc + nf + k] = -1.0
-    return A, q
 
 
 @kernel

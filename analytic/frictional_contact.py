@@ -93,12 +93,14 @@ C. Glocker, "Concepts for modeling impacts without friction", Acta Mech.
 
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 
 from deckpound.analytic._jit import compiled, kernel
 
-from .coulomb_lcp import build_lcp3, build_lcp_st, extract3, extract_st
-from .lcp import ENUM_MAX_N, lcp_enumerate, lcp_lemke
+from .coulomb_lcp import build_lcp3_into, build_lcp_st_into, extract3, extract_st
+from .lcp import ENUM_MAX_N, lcp_enumerate_into, lcp_lemke_into, lcp_work
 
 __all__ = [
     "CONTACT_OPEN",
@@ -112,10 +114,13 @@ __all__ = [
     "STATUS_FAILED",
     "STATUS_LEMKE",
     "STATUS_LEMKE_ST",
+    "ContactSolveWork",
     "contact_residuals",
+    "contact_solve_work",
     "delassus",
     "solve_contact_impulses",
     "solve_contact_impulses_into",
+    "solve_contact_impulses_with",
     "velocity_update",
 ]
 
@@ -236,15 +241,16 @@ def _keep_if_better(
     return r <= tolv
 
 
-@compiled
-def _split_shared_tangents(G, mu, P_N, P_T):
+@kernel
+def _split_shared_tangents(G, mu, P_N, P_T, group):
     """Contacts whose tangent columns of W coincide (||W_Ti - W_Tj||^2_M^-1
     = G_TiTi + G_TjTj - 2 G_TiTj = 0) share one tangential velocity; only
     the sum of their P_T is determined.  Redistribute the sum in proportion
     to mu_i P_N,i (cone- and velocity-preserving, deterministic).  Returns
-    True if anything was changed."""
+    True if anything was changed.  ``group`` (≥ nc,) int64 scratch."""
     nc = P_N.shape[0]
-    group = np.full(nc, -1, dtype=np.int64)
+    for i in range(nc):
+        group[i] = -1
     changed = False
     for i in range(nc):
         if group[i] >= 0 or not mu[i] > 0.0:
@@ -279,6 +285,60 @@ def _split_shared_tangents(G, mu, P_N, P_T):
     return changed
 
 
+#: Scratch of :func:`solve_contact_impulses_with` for up to nc contacts
+#: (:func:`contact_solve_work`): per contact (nc,) qN, bN, bT, cN, cT, vN, vT float and fidx,
+#: group int64; best (4,); the LCPs A3 (3nc, 3nc), q3 (3nc,), Ast (4nc, 4nc), qst (4nc,), their
+#: solution z, w (4nc,) and the LCP solvers' scratch ``lcp`` (:data:`.lcp.LcpWork`, size 4nc).
+ContactSolveWork = namedtuple(
+    "ContactSolveWork",
+    [
+        "qN",
+        "bN",
+        "bT",
+        "cN",
+        "cT",
+        "vN",
+        "vT",
+        "fidx",
+        "group",
+        "best",
+        "A3",
+        "q3",
+        "Ast",
+        "qst",
+        "z",
+        "w",
+        "lcp",
+    ],
+)
+
+
+@compiled
+def contact_solve_work(nc):
+    """The scratch of :func:`solve_contact_impulses_with` for up to ``nc`` contacts (zeroed)."""
+    n3 = 3 * nc
+    nst = 4 * nc
+    return ContactSolveWork(
+        np.zeros(nc),
+        np.zeros(nc),
+        np.zeros(nc),
+        np.zeros(nc),
+        np.zeros(nc),
+        np.zeros(nc),
+        np.zeros(nc),
+        np.zeros(nc, dtype=np.int64),
+        np.zeros(nc, dtype=np.int64),
+        np.zeros(4),
+        np.zeros((n3, n3)),
+        np.zeros(n3),
+        np.zeros((nst, nst)),
+        np.zeros(nst),
+        np.zeros(nst),
+        np.zeros(nst),
+        lcp_work(nst),
+    )
+
+
 @compiled
 def solve_contact_impulses_into(
     G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus, state, mode=0, rtol=1e-9
@@ -306,7 +366,34 @@ def solve_contact_impulses_into(
     (status, comp_res, cone_res): status 0/1/2 verified (by method 3-unknown
     Lemke / Stewart-Trinkle Lemke / enumeration), 3 failed (best candidate
     returned); residuals in velocity units.
+
+    Allocates its scratch (:func:`contact_solve_work`) and calls
+    :func:`solve_contact_impulses_with`, which a step loop calls with a preallocated one.
     """
+    return solve_contact_impulses_with(
+        G,
+        uN_free,
+        uT_free,
+        uN_minus,
+        e,
+        mu,
+        P_N,
+        P_T,
+        uN_plus,
+        uT_plus,
+        state,
+        mode,
+        rtol,
+        contact_solve_work(uN_free.shape[0]),
+    )
+
+
+@kernel
+def solve_contact_impulses_with(
+    G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus, state, mode, rtol, work
+):
+    """:func:`solve_contact_impulses_into` with its scratch ``work``
+    (:func:`contact_solve_work` for ≥ nc contacts): no allocation."""
     nc = uN_free.shape[0]
     if nc == 0:
         return STATUS_LEMKE, 0.0, 0.0
@@ -317,29 +404,41 @@ def solve_contact_impulses_into(
     if vscale == 0.0:
         tolv = 1e-300
     s = _impulse_scale(G, nc)
-    qN = np.empty(nc)
+    qN = work.qN[:nc]
     for i in range(nc):
         qN[i] = uN_free[i] + e[i] * uN_minus[i]
-    fidx = np.empty(nc, dtype=np.int64)
+    fidx = work.fidx[:nc]
     nf = 0
     for i in range(nc):
         if mu[i] > 0.0:
             fidx[nf] = i
             nf += 1
 
-    bN = np.zeros(nc)
-    bT = np.zeros(nc)
-    cN = np.empty(nc)
-    cT = np.empty(nc)
-    vN = np.empty(nc)
-    vT = np.empty(nc)
-    best = np.array([np.inf, np.inf, np.inf, STATUS_FAILED])  # residual, comp, cone, status
+    bN = work.bN[:nc]
+    bT = work.bT[:nc]
+    for i in range(nc):
+        bN[i] = 0.0
+        bT[i] = 0.0
+    cN = work.cN[:nc]
+    cT = work.cT[:nc]
+    vN = work.vN[:nc]
+    vT = work.vT[:nc]
+    best = work.best  # residual, comp, cone, status
+    best[0] = np.inf
+    best[1] = np.inf
+    best[2] = np.inf
+    best[3] = STATUS_FAILED
     done = False
 
     # 1. Lemke, 3-unknown formulation
-    A3, q3 = build_lcp3(G, qN, uT_free, mu, fidx, nf, s)
+    n3 = nc + 2 * nf
+    A3 = work.A3[:n3, :n3]
+    q3 = work.q3[:n3]
+    build_lcp3_into(G, qN, uT_free, mu, fidx, nf, s, A3, q3)
+    z = work.z[:n3]
+    w = work.w[:n3]
     if mode in (MODE_AUTO, MODE_LEMKE3):
-        z, _w, _st, _npiv = lcp_lemke(A3, q3)
+        lcp_lemke_into(A3, q3, z, w, work.lcp, 0, 1e-12)
         extract3(z, mu, fidx, nf, s, cN, cT)
         done = _keep_if_better(
             G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, STATUS_LEMKE, tolv
@@ -349,11 +448,15 @@ def solve_contact_impulses_into(
     with_friction = (not done) and nf > 0 and (mode in (MODE_AUTO, MODE_LEMKE_ST))
     if with_friction or (mode == MODE_LEMKE_ST and nf == 0):
         if with_friction:
-            Ast, qst = build_lcp_st(G, qN, uT_free, mu, fidx, nf, s)
-            z, _w, _st, _npiv = lcp_lemke(Ast, qst)
-            extract_st(z, fidx, nf, s, cN, cT)
+            nst = nc + 3 * nf
+            Ast = work.Ast[:nst, :nst]
+            qst = work.qst[:nst]
+            build_lcp_st_into(G, qN, uT_free, mu, fidx, nf, s, Ast, qst)
+            zst = work.z[:nst]
+            lcp_lemke_into(Ast, qst, zst, work.w[:nst], work.lcp, 0, 1e-12)
+            extract_st(zst, fidx, nf, s, cN, cT)
         else:
-            z, _w, _st, _npiv = lcp_lemke(A3, q3)
+            lcp_lemke_into(A3, q3, z, w, work.lcp, 0, 1e-12)
             extract3(z, mu, fidx, nf, s, cN, cT)
         done = _keep_if_better(
             G,
@@ -374,7 +477,7 @@ def solve_contact_impulses_into(
         )
     # 3. enumeration of the 3-unknown LCP
     if (not done) and (mode in (MODE_AUTO, MODE_ENUM)) and nc + 2 * nf <= ENUM_MAX_N:
-        z, _w, _st, _res = lcp_enumerate(A3, q3)
+        lcp_enumerate_into(A3, q3, z, w, work.lcp, 1e-10)
         extract3(z, mu, fidx, nf, s, cN, cT)
         _keep_if_better(
             G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, STATUS_ENUM, tolv
@@ -386,12 +489,14 @@ def solve_contact_impulses_into(
     # canonical split of tangential impulses among contacts with identical
     # tangent columns (two corners of one face)
     if nf > 1:
-        cN[:] = bN
-        cT[:] = bT
-        if _split_shared_tangents(G, mu, cN, cT):
+        for i in range(nc):
+            cN[i] = bN[i]
+            cT[i] = bT[i]
+        if _split_shared_tangents(G, mu, cN, cT, work.group):
             comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT)
             if max(comp, cone) <= max(best[0], tolv):
-                bT[:] = cT
+                for i in range(nc):
+                    bT[i] = cT[i]
                 best_comp = comp
                 best_cone = cone
 

@@ -4,7 +4,10 @@ Problem LCP(q, M): find z in R^n such that
 
     w = M z + q,    0 <= w  _|_  z >= 0     (z_i >= 0, w_i >= 0, z_i w_i = 0).
 
-Functions (all ``@njit``, pure, float64 arrays, no Python objects):
+Functions (all ``@njit``, pure, float64 arrays, no Python objects; each solver also comes as
+an ``…_into`` kernel that writes into given arrays and takes its scratch from a preallocated
+:func:`lcp_work`, so the nonsmooth step loop solves its contacts without allocating — the
+allocating functions below are thin wrappers of those, same arithmetic):
 
 ``lcp_lemke(M, q, max_pivots=0, tol=1e-12) -> (z, w, status, n_pivots)``
     Lemke's complementary pivoting method (Lemke 1965) with the covering
@@ -46,6 +49,8 @@ K. G. Murty, "Linear Complementarity, Linear and Nonlinear Programming",
 
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 
 from deckpound.analytic._jit import compiled, kernel
@@ -54,10 +59,15 @@ __all__ = [
     "LEMKE_MAX_PIVOTS",
     "LEMKE_RAY",
     "LEMKE_SOLVED",
+    "LcpWork",
     "lcp_enumerate",
+    "lcp_enumerate_into",
     "lcp_lemke",
+    "lcp_lemke_into",
     "lcp_residual",
+    "lcp_work",
     "solve_dense_cp",
+    "solve_dense_cp_into",
 ]
 
 LEMKE_SOLVED = 0
@@ -88,6 +98,39 @@ def lcp_residual(z, w):
     return nat, np.sqrt(fb2)
 
 
+#: Scratch arrays of the allocation-free solvers (:func:`lcp_work`): for an LCP of size ≤ n,
+#: T (n, 2n + 2) Lemke tableau; A (n, n), b, x, y (n,) float the dense sub-solves; zp, wp (n,)
+#: the polished candidate; z, w (n,) the enumeration's candidate; basis, rows, cand, idx,
+#: perm (n,) int64; mask (n,) bool.
+LcpWork = namedtuple(
+    "LcpWork",
+    ["T", "A", "b", "x", "y", "zp", "wp", "z", "w", "basis", "rows", "cand", "idx", "perm", "mask"],
+)
+
+
+@compiled
+def lcp_work(n):
+    """Scratch for LCPs of size ≤ n (:data:`LcpWork`, zeroed; allocated once per run or per
+    call of an allocating wrapper — the ``…_into`` solvers write into views of it)."""
+    return LcpWork(
+        np.zeros((n, 2 * n + 2)),
+        np.zeros((n, n)),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=np.int64),
+        np.zeros(n, dtype=np.bool_),
+    )
+
+
 @compiled
 def solve_dense_cp(A, b, x, rtol):
     """Solve A x = b in place (x is output) by Gaussian elimination with
@@ -100,7 +143,15 @@ def solve_dense_cp(A, b, x, rtol):
     (then x is a least-effort basic solution, not a solution).
     """
     m = A.shape[0]
-    perm = np.arange(m)
+    return solve_dense_cp_into(A, b, x, rtol, np.empty(m, dtype=np.int64), np.empty(m))
+
+
+@kernel
+def solve_dense_cp_into(A, b, x, rtol, perm, y):
+    """:func:`solve_dense_cp` with its scratch given: perm (≥ m,) int64, y (≥ m,)."""
+    m = A.shape[0]
+    for i in range(m):
+        perm[i] = i
     amax = 0.0
     bmax = 0.0
     for i in range(m):
@@ -159,7 +210,8 @@ def solve_dense_cp(A, b, x, rtol):
     for i in range(rank, m):
         if abs(b[i]) > btol:
             consistent = False
-    y = np.zeros(m)
+    for k in range(m):
+        y[k] = 0.0
     for k in range(rank - 1, -1, -1):
         s = b[k]
         for j in range(k + 1, rank):
@@ -170,29 +222,26 @@ def solve_dense_cp(A, b, x, rtol):
     return rank, consistent
 
 
-@compiled
-def _polish(M, q, basic_z, z):
+@kernel
+def _polish(M, q, basic_z, z, ws):
     """Direct solve on the complementary basis: z_a = -M_aa^{-1} q_a, z = 0
-    off a.  ``basic_z`` is a boolean mask.  Writes z; returns consistency."""
+    off a.  ``basic_z`` is a boolean mask; ``ws`` the :data:`LcpWork`.  Writes z; returns
+    consistency."""
     n = q.shape[0]
+    idx = ws.idx
     m = 0
     for i in range(n):
         if basic_z[i]:
+            idx[m] = i
             m += 1
-    idx = np.empty(m, dtype=np.int64)
-    k = 0
-    for i in range(n):
-        if basic_z[i]:
-            idx[k] = i
-            k += 1
-    A = np.empty((m, m))
-    b = np.empty(m)
+    A = ws.A[:m, :m]
+    b = ws.b[:m]
+    x = ws.x[:m]
     for r in range(m):
         b[r] = -q[idx[r]]
         for c in range(m):
             A[r, c] = M[idx[r], idx[c]]
-    x = np.empty(m)
-    rank, ok = solve_dense_cp(A, b, x, 1e-14)
+    rank, ok = solve_dense_cp_into(A, b, x, 1e-14, ws.perm, ws.y)
     for i in range(n):
         z[i] = 0.0
     for r in range(m):
@@ -218,12 +267,13 @@ def _pivot(T, r, c):
                 T[i, c] = 0.0
 
 
-@compiled
-def _lex_select(T, rows, nrows, c, n, rtol):
+@kernel
+def _lex_select(T, rows, nrows, c, n, rtol, cand):
     """Among candidate rows (first nrows entries of ``rows``, all tied in the
     minimum ratio), pick the lexicographic minimum of T[i, 0:n] / T[i, c]
-    (rows of the basis inverse, Cottle-Pang-Stone Sec. 4.9)."""
-    cand = rows.copy()
+    (rows of the basis inverse, Cottle-Pang-Stone Sec. 4.9); ``cand`` scratch (≥ nrows,)."""
+    for k in range(nrows):
+        cand[k] = rows[k]
     nc = nrows
     for j in range(n):
         if nc <= 1:
@@ -266,11 +316,23 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
 
     Covering vector d = 1; lexicographic minimum-ratio rule; when z0 is among
     the tied blocking rows it leaves (terminating).  References: Lemke (1965);
-    Cottle, Pang & Stone (1992) Algorithm 4.4.5 and Sec. 4.9.
+    Cottle, Pang & Stone (1992) Algorithm 4.4.5 and Sec. 4.9.  The allocating wrapper of
+    :func:`lcp_lemke_into`.
     """
     n = q.shape[0]
     z = np.zeros(n)
     w = np.empty(n)
+    status, npiv = lcp_lemke_into(M, q, z, w, lcp_work(n), max_pivots, tol)
+    return z, w, status, npiv
+
+
+@kernel
+def lcp_lemke_into(M, q, z, w, ws, max_pivots, tol):
+    """:func:`lcp_lemke` writing z, w (n,) with the scratch ``ws`` (:func:`lcp_work` of size
+    ≥ n); returns (status, n_pivots)."""
+    n = q.shape[0]
+    for i in range(n):
+        z[i] = 0.0
     if max_pivots <= 0:
         max_pivots = 50 * (n + 1)
     qmin = 0.0
@@ -281,7 +343,7 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
     if qmin >= 0.0:
         for i in range(n):
             w[i] = q[i]
-        return z, w, LEMKE_SOLVED, 0
+        return LEMKE_SOLVED, 0
     mscale = 0.0
     for i in range(n):
         for j in range(n):
@@ -289,15 +351,21 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
     # columns: [w_0..w_{n-1}, z_0..z_{n-1}, z0, rhs]
     # variable ids: 0..n-1 -> w_i, n..2n-1 -> z_i, 2n -> z0
     ncol = 2 * n + 2
-    T = np.zeros((n, ncol))
+    T = ws.T[:n, :ncol]
+    for i in range(n):
+        for j in range(ncol):
+            T[i, j] = 0.0
     for i in range(n):
         T[i, i] = 1.0
         for j in range(n):
             T[i, n + j] = -M[i, j]
         T[i, 2 * n] = -1.0
         T[i, 2 * n + 1] = q[i] / qscale
-    basis = np.arange(n)  # basis[i] = variable id basic in row i
-    rows = np.empty(n, dtype=np.int64)
+    basis = ws.basis  # basis[i] = variable id basic in row i
+    for i in range(n):
+        basis[i] = i
+    rows = ws.rows
+    cand = ws.cand
     # initial pivot: z0 enters, leaving row = argmin q_i (lexicographic ties)
     nt = 0
     qm = qmin / qscale
@@ -309,7 +377,8 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
         # lexicographic minimum of (q_i, e_i^T) over the tied rows (the z0
         # column is -d = -1 in every row): the row of B^-1 = I that is
         # lexicographically smallest, i.e. the largest index.
-        cand = rows.copy()
+        for k in range(nt):
+            cand[k] = rows[k]
         ncand = nt
         for j in range(n):
             if ncand <= 1:
@@ -366,7 +435,7 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
         elif nt == 1:
             r = rows[0]
         else:
-            r = _lex_select(T, rows, nt, c, n, tol)
+            r = _lex_select(T, rows, nt, c, n, tol, cand)
         leaving = basis[r]
         _pivot(T, r, c)
         basis[r] = c
@@ -387,17 +456,19 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
         w[i] = s
     if status == LEMKE_SOLVED:
         # polish on the final complementary basis
-        mask = np.zeros(n, dtype=np.bool_)
+        mask = ws.mask
+        for i in range(n):
+            mask[i] = False
         for i in range(n):
             v = basis[i]
             if v >= n and v < 2 * n:
                 mask[v - n] = True
-        zp = np.empty(n)
-        ok = _polish(M, q, mask, zp)
+        zp = ws.zp[:n]
+        ok = _polish(M, q, mask, zp, ws)
         if ok:
             for i in range(n):
                 zp[i] = max(zp[i], 0.0)
-            wp = np.empty(n)
+            wp = ws.wp[:n]
             for i in range(n):
                 s = q[i]
                 for j in range(n):
@@ -406,9 +477,10 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
             r0, _ = lcp_residual(z, w)
             r1, _ = lcp_residual(zp, wp)
             if r1 <= r0:
-                z = zp
-                w = wp
-    return z, w, status, npiv
+                for i in range(n):
+                    z[i] = zp[i]
+                    w[i] = wp[i]
+    return status, npiv
 
 
 @compiled
@@ -421,43 +493,53 @@ def lcp_enumerate(M, q, tol=1e-10):
     Singular principal submatrices are solved in the basic-solution sense
     (complete pivoting, free unknowns set to zero), so degenerate problems
     whose solutions live on singular bases are still found when a basic
-    solution exists.  Cost ~ 2^n n^3 / 3 flops.
+    solution exists.  Cost ~ 2^n n^3 / 3 flops.  The allocating wrapper of
+    :func:`lcp_enumerate_into`.
     """
     n = q.shape[0]
     zbest = np.zeros(n)
-    wbest = q.copy()
+    wbest = np.empty(n)
+    status, best = lcp_enumerate_into(M, q, zbest, wbest, lcp_work(n), tol)
+    return zbest, wbest, status, best
+
+
+@kernel
+def lcp_enumerate_into(M, q, zbest, wbest, ws, tol):
+    """:func:`lcp_enumerate` writing zbest, wbest (n,) with the scratch ``ws``
+    (:func:`lcp_work` of size ≥ n); returns (status, residual)."""
+    n = q.shape[0]
+    for i in range(n):
+        zbest[i] = 0.0
+        wbest[i] = q[i]
     qscale = 0.0
     for i in range(n):
         qscale = max(qscale, abs(q[i]))
     if n > ENUM_MAX_N:
         nat, _ = lcp_residual(zbest, wbest)
-        return zbest, wbest, ENUM_TOO_LARGE, nat
+        return ENUM_TOO_LARGE, nat
     best, _ = lcp_residual(zbest, wbest)
     thr = tol * (1.0 + qscale)
     if best <= 1e-3 * thr:
-        return zbest, wbest, 0, best
-    A = np.empty((n, n))
-    b = np.empty(n)
-    x = np.empty(n)
-    idx = np.empty(n, dtype=np.int64)
-    z = np.empty(n)
-    w = np.empty(n)
+        return 0, best
+    idx = ws.idx
+    z = ws.z[:n]
+    w = ws.w[:n]
     for mask in range(1, 1 << n):
         m = 0
         for i in range(n):
             if (mask >> i) & 1:
                 idx[m] = i
                 m += 1
-        As = A[:m, :m]
-        bs = b[:m]
-        xs = x[:m]
+        As = ws.A[:m, :m]
+        bs = ws.b[:m]
+        xs = ws.x[:m]
         for r in range(m):
             bs[r] = -q[idx[r]]
             for c in range(m):
                 As[r, c] = M[idx[r], idx[c]]
         # inconsistent (singular) systems yield a candidate whose residual
         # is large; the residual comparison below rejects it.
-        solve_dense_cp(As, bs, xs, 1e-13)
+        solve_dense_cp_into(As, bs, xs, 1e-13, ws.perm, ws.y)
         for i in range(n):
             z[i] = 0.0
         for r in range(m):
@@ -470,9 +552,10 @@ def lcp_enumerate(M, q, tol=1e-10):
         nat, _ = lcp_residual(z, w)
         if nat < best:
             best = nat
-            zbest[:] = z
-            wbest[:] = w
+            for i in range(n):
+                zbest[i] = z[i]
+                wbest[i] = w[i]
             if best <= 1e-3 * thr:
                 break
     status = 0 if best <= thr else 1
-    return zbest, wbest, status, best
+    return status, best

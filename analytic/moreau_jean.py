@@ -85,7 +85,7 @@ from deckpound.analytic.bundles import (
 )
 from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.frictional_contact import STATUS_FAILED
-from deckpound.analytic.impulses import solve_active_impulses
+from deckpound.analytic.impulses import impulse_work, solve_active_impulses
 from deckpound.analytic.kinematics import contact_kinematics, linear_gap
 from deckpound.analytic.nonsmooth import ENERGY_COLUMNS
 from deckpound.analytic.support_motion import record_at
@@ -158,10 +158,10 @@ MoreauJeanCorners = namedtuple("MoreauJeanCorners", _CORNER)
 #: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states; final (2, 7)
 #: displacement and velocity at the last accepted step; dof, spring, corner the groups above;
 #: ug, vg, ugo, vgo supports now and at the last step; W (6,) running work totals [kJ];
-#: energy (N_ENERGY,).
+#: energy (N_ENERGY,); impulse the contact solve's scratch (:func:`.impulses.impulse_work`).
 MoreauJeanWork = namedtuple(
     "MoreauJeanWork",
-    ("u0", "v0", "hstate", "final", "dof", "spring", "corner") + _CH + ("W", "energy"),
+    ("u0", "v0", "hstate", "final", "dof", "spring", "corner") + _CH + ("W", "energy", "impulse"),
 )
 
 
@@ -243,6 +243,7 @@ def moreau_jean_workspace(u0, v0, hstate, ns: int, nch: int) -> MoreauJeanWork:
         **bd.row_views(_CH, nch),
         W=np.zeros(6),
         energy=np.zeros(N_ENERGY),
+        impulse=impulse_work(4),
     )
 
 
@@ -464,6 +465,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
                     P_T,
                     state,
                     vnew,
+                    wk.impulse,
                 )
                 solves += 1
                 if cst == STATUS_FAILED:
