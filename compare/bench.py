@@ -14,12 +14,17 @@ and the NRMSE of the rotation history on a common time base (:mod:`.metrics`). T
 ratio to OpenSees at equal error interpolates OpenSees's own work–precision curve (log–log)
 at the configuration's primary error (peak rotation; peak deck x for the rotation-free
 single pulse, see :data:`PRIMARY`), or gives a bound outside OpenSees's measured range
-(column ``speedup_bound``). Output: ``bench.csv`` and ``work_precision.png``.
+(column ``speedup_bound``). Output: ``bench.csv``, ``bench_context.json`` (date, machine,
+repeats, the machine-speed reference before and after, the scene's default steps) and
+``work_precision.png``; :mod:`.bench_readme` renders them into the README.
 Timings are measurements, not pass/fail tests.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import platform
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,11 +32,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from deckpound._io import atomic_write_text
 from deckpound.models.scene import Scene
 
 from .align import align
 from .guarded import run_guarded
 from .metrics import nrmse, peak
+from .speed import reference_loop_ns
 from .studies import modified
 
 
@@ -223,6 +230,7 @@ def run_bench(
     repeats = repeats if repeats is not None else (1 if quick else 3)
     # the analytic kernels are loaded once, here: every guarded child is forked with them
     warm([it for it in ITEMS if it.engine in ("compliance", "nonsmooth")])
+    reference_before = reference_loop_ns()
     cfgs = configs(quick)
     sc = scenes(base, quick)
     bar = Progress(len(sc) * (len(cfgs) + len(REFERENCES)), "bench", progress)
@@ -255,6 +263,7 @@ def run_bench(
                 family=cfg.family,
                 status=outcome.status,
                 wall=wall,
+                overrides=" ".join(ov),
             )
             r = outcome.result
             if r is not None:
@@ -278,6 +287,22 @@ def run_bench(
     table["speedup_bound"] = kind
     table.attrs["wall"] = time.perf_counter() - t0
     table.to_csv(out / "bench.csv", index=False)
+    context = {
+        "date": time.strftime("%Y-%m-%d"),
+        "cpus": os.cpu_count(),
+        "machine": platform.machine(),
+        "python": platform.python_version(),
+        "repeats": repeats,
+        "quick": quick,
+        "scene": base.name,
+        "reference_ns": [reference_before, reference_loop_ns()],
+        "defaults": {
+            "opensees": {"dt": base.opensees.dt},
+            "compliance": {"dt": base.compliance.dt},
+            "nonsmooth": {"h": base.nonsmooth.h},
+        },
+    }
+    atomic_write_text(out / "bench_context.json", json.dumps(context, indent=1) + "\n")
     figures(table, base, out)
     return table
 

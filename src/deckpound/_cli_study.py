@@ -155,6 +155,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="comma-separated engine names (default: every registered engine)",
     )
     p.add_argument("--timeout", type=_seconds, default=300.0, help="seconds per cell")
+    p.add_argument(
+        "--write-readme",
+        nargs="?",
+        const="README.md",
+        default=None,
+        metavar="PATH",
+        help="put the stability paragraph into the README (default ./README.md), its "
+        "stress.csv and heat maps copied into docs/results beside it (not with --quick)",
+    )
     p.set_defaults(func=_stress)
 
     p = sub.add_parser("export-vtk", help="deck and seat outlines over time for ParaView")
@@ -360,6 +369,8 @@ def _bench(args) -> int:
 def _bench_body(args, scene) -> int:
     from deckpound.compare.bench import run_bench
 
+    if args.write_readme is not None and not Path(args.write_readme).is_file():
+        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
     if args.skips:
         from deckpound.compare.skips import run_skips
 
@@ -389,6 +400,11 @@ def _bench_body(args, scene) -> int:
                 else f"{len(bad)} skip(s) changed a result"
             )
         )
+        if args.write_readme is not None and not args.quick:
+            from deckpound.compare import readme_results
+
+            path = readme_results.write_skips(args.write_readme, args.output)
+            print(f"wrote the skips paragraph into {path}")
         return 0 if not len(bad) else 1
     if not args.speed_only:
         table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
@@ -411,6 +427,12 @@ def _bench_body(args, scene) -> int:
             if c in table
         ]
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+        if args.write_readme is not None and not args.quick:
+            # the shortened records of --quick are not the README's work-precision table
+            from deckpound.compare import bench_readme
+
+            path = bench_readme.write_readme(args.write_readme, args.output)
+            print(f"wrote the work-precision table into {path} (sources in {bench_readme.RESULTS})")
     _speed_table(args)
     print(f"wrote {args.output}")
     return 0
@@ -425,12 +447,19 @@ def _stress(args) -> int:
 
     engines = tuple(_engines(args.engines))
     out = check_output_folder(args.output)
+    if args.write_readme is not None and not Path(args.write_readme).is_file():
+        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
     scene = load_scene(args.scene, args.overrides)
     with output_folder(out, "stress"):
         table = run_stress(scene, out, quick=args.quick, engines=engines, timeout=args.timeout)
     bad = table[(table["status"] != "success") | (~table["finite"])]
     print(table.groupby(["engine", "status"]).size().to_string())
     print(f"{len(table)} cells, {len(bad)} not finished with finite output; wrote {args.output}")
+    if args.write_readme is not None and not args.quick:
+        from deckpound.compare import readme_results
+
+        path = readme_results.write_stress(args.write_readme, out)
+        print(f"wrote the stability paragraph into {path}")
     return 0
 
 
@@ -529,7 +558,8 @@ def _speed_args(p: argparse.ArgumentParser) -> None:
         default=None,
         metavar="PATH",
         help="put the speed table into the README (default ./README.md) in place "
-        "of the previous one",
+        "of the previous one; without --quick also the work-precision table (its bench.csv, "
+        "bench_context.json and figure copied into docs/results beside the README)",
     )
 
 
