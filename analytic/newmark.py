@@ -34,6 +34,7 @@ from collections import namedtuple
 import numpy as np
 
 from deckpound.analytic import bundles as bd
+from deckpound.analytic import contact_assembly as ca
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.bundles import (
@@ -209,14 +210,14 @@ def _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact):
     spring_deformations(sa, u, v, sup.ug, sup.vg, d, dd)
     spring_update_materials(sa.hparams, hstate, sa.kind, d)
     nonel = spring_assemble(sa, hstate, d, dd, v, dof.f, spr.fs, spr.kt)
-    ncl = cl.eval_contacts(contact, cs, cw, u, v, dof.un)
+    ncl = ca.eval_contacts(contact, cs, cw, u, v, dof.un)
     evaluated = cw.evaluated
     if not skip_contact and not contact.nonlinear:
         for c in range(4):
             evaluated[c] = True
         ncl = -1
     if ncl < 0:
-        cl.eval_closed(contact, cs, cw, u, v, dof.un)
+        ca.eval_closed(contact, cs, cw, u, v, dof.un)
     R, f, a = dof.R, dof.f, dof.a
     for j in range(7):
         R[j] = cw.fc[j] - f[j] - sa.mass[j] * a[j]
@@ -455,7 +456,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                             Keff[i, i] += c3 * mass[i]
                         spring_damping_tangent(sa, c2, Keff)
                         if anyev:
-                            cl.contact_tangent(contact, cw, u, c2, Keff, H)
+                            ca.contact_tangent(contact, cw, u, c2, Keff, H)
                         for i in range(7):
                             for j in range(7):
                                 LU[i, j] = Keff[i, j]
@@ -504,7 +505,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                     if cs[c, cl.S_CCLOSED] == 0.0 and cs[c, cl.S_TCLOSED] != 0.0 and evaluated[c]:
                         events += 1
                 if nonlinear and not anyev:
-                    cl.gaps_and_rates(contact, u, v, cw)
+                    ca.gaps_and_rates(contact, u, v, cw)
                 cl.contact_commit(cs, g, gd, evaluated)
                 # penetration at every converged (sub)step, not only on output rows
                 for c in range(4):
