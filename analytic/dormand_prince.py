@@ -16,6 +16,7 @@ from collections import namedtuple
 import numpy as np
 
 from deckpound.analytic import bundles as bd
+from deckpound.analytic import contact_assembly as ca
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._hysteretic_kernel import C_ROTMAX, C_ROTMIN, T_STRESS
 from deckpound.analytic._jit import kernel
@@ -158,9 +159,9 @@ def _rhs(t, y, sa, contact, record, ws, dy):
     spring_deformations(sa, u, v, ug, vg, ws.d, ws.dd)
     spring_update_materials(sa.hparams, ws.hstate, sa.kind, ws.d)
     spring_assemble(sa, ws.hstate, ws.d, ws.dd, v, ws.f, ws.fs, ws.kt)
-    n = cl.eval_contacts(contact, ws.cstate, cw, u, v, ws.uc)
+    n = ca.eval_contacts(contact, ws.cstate, cw, u, v, ws.uc)
     if n < 0:
-        cl.eval_closed(contact, ws.cstate, cw, u, v, ws.uc)
+        ca.eval_closed(contact, ws.cstate, cw, u, v, ws.uc)
     for j in range(7):
         dy[j] = v[j]
         dy[7 + j] = (cw.fc[j] - ws.f[j]) / sa.mass[j]
@@ -203,7 +204,7 @@ def _events(y, sa, contact, ws, ev):
     nbs = sa.nbs
     u = y[0:7]
     v = y[7:14]
-    cl.gaps_and_rates(contact, u, v, cw)
+    ca.gaps_and_rates(contact, u, v, cw)
     for c in range(4):
         ev[c] = cw.g[c]
     for i in range(nbs):
@@ -233,7 +234,7 @@ def _event_value(kind_idx, y, sa, contact, record, t, ws):
     cw = ws.cw
     u = y[0:7]
     v = y[7:14]
-    cl.gaps_and_rates(contact, u, v, cw)
+    ca.gaps_and_rates(contact, u, v, cw)
     nbs2 = kind_idx - 4
     if kind_idx < 4:
         return cw.g[kind_idx]

@@ -99,6 +99,18 @@ import numpy as np
 
 from deckpound.analytic._jit import compiled, kernel
 
+from .contact_checks import (
+    STATUS_ENUM,
+    STATUS_FAILED,
+    STATUS_LEMKE,
+    STATUS_LEMKE_ST,
+    contact_residuals,
+    contact_velocities,
+    evaluate_candidate,
+    impulse_scale,
+    keep_if_better,
+    split_shared_tangents,
+)
 from .coulomb_lcp import build_lcp3_into, build_lcp_st_into, extract3, extract_st
 from .lcp import ENUM_MAX_N, lcp_enumerate_into, lcp_lemke_into, lcp_work
 
@@ -128,10 +140,6 @@ CONTACT_OPEN = 0
 CONTACT_STICK = 1
 CONTACT_SLIP = 2
 
-STATUS_LEMKE = 0  # verified, Lemke on the 3-unknown LCP
-STATUS_LEMKE_ST = 1  # verified, Lemke on the Stewart-Trinkle LCP
-STATUS_ENUM = 2  # verified, enumeration
-STATUS_FAILED = 3  # nothing verified; best candidate returned
 
 MODE_AUTO = 0
 MODE_LEMKE3 = 1
@@ -159,130 +167,6 @@ def velocity_update(M, W_N, W_T, U_free, P_N, P_T):
     """U+ = U_free + M^-1 (W_N P_N + W_T P_T)."""
     r = W_N @ P_N + W_T @ P_T
     return U_free + np.linalg.solve(np.ascontiguousarray(M), r)
-
-
-@kernel
-def _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus):
-    nc = uN_free.shape[0]
-    for i in range(nc):
-        sN = uN_free[i]
-        sT = uT_free[i]
-        for j in range(nc):
-            sN += G[i, j] * P_N[j] + G[i, nc + j] * P_T[j]
-            sT += G[nc + i, j] * P_N[j] + G[nc + i, nc + j] * P_T[j]
-        uN_plus[i] = sN
-        uT_plus[i] = sT
-
-
-@kernel
-def contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus):
-    """(comp_res, cone_res) in velocity units, see module docstring."""
-    nc = P_N.shape[0]
-    comp = 0.0
-    cone = 0.0
-    for i in range(nc):
-        gN = G[i, i]
-        if not gN > 0.0:
-            gN = 1.0
-        xi = uN_plus[i] + e[i] * uN_minus[i]
-        a = gN * P_N[i]
-        m = min(xi, a)
-        comp = max(comp, abs(m))
-        gT = G[nc + i, nc + i]
-        if not gT > 0.0:
-            gT = gN
-        bound = gT * mu[i] * (max(0.0, P_N[i]))
-        y = gT * P_T[i] - uT_plus[i]
-        if y > bound:
-            y = bound
-        elif y < -bound:
-            y = -bound
-        r = abs(gT * P_T[i] - y)
-        cone = max(cone, r)
-    return comp, cone
-
-
-@kernel
-def _impulse_scale(G, nc):
-    s = 0.0
-    for i in range(nc):
-        s += G[i, i]
-    s /= nc
-    if not s > 0.0:
-        return 1.0
-    return 1.0 / s
-
-
-@kernel
-def _evaluate(G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus):
-    _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus)
-    comp, cone = contact_residuals(G, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus)
-    return comp, cone
-
-
-@kernel
-def _keep_if_better(
-    G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, verified_status, tolv
-):
-    """Check the candidate impulses (cN, cT) against the contact laws; keep them in (bN, bT)
-    when their residual max(comp, cone) beats ``best[0]``, with best = [residual, comp, cone,
-    status]: ``verified_status`` if the residual is ≤ tolv, else STATUS_FAILED. Returns True
-    when the candidate is verified."""
-    comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT)
-    r = max(comp, cone)
-    if r < best[0]:
-        best[0] = r
-        best[1] = comp
-        best[2] = cone
-        best[3] = verified_status if r <= tolv else STATUS_FAILED
-        for i in range(cN.shape[0]):
-            bN[i] = cN[i]
-            bT[i] = cT[i]
-    return r <= tolv
-
-
-@kernel
-def _split_shared_tangents(G, mu, P_N, P_T, group):
-    """Contacts whose tangent columns of W coincide (||W_Ti - W_Tj||^2_M^-1
-    = G_TiTi + G_TjTj - 2 G_TiTj = 0) share one tangential velocity; only
-    the sum of their P_T is determined.  Redistribute the sum in proportion
-    to mu_i P_N,i (cone- and velocity-preserving, deterministic).  Returns
-    True if anything was changed.  ``group`` (≥ nc,) int64 scratch."""
-    nc = P_N.shape[0]
-    for i in range(nc):
-        group[i] = -1
-    changed = False
-    for i in range(nc):
-        if group[i] >= 0 or not mu[i] > 0.0:
-            continue
-        group[i] = i
-        gi = G[nc + i, nc + i]
-        m = 1
-        for j in range(i + 1, nc):
-            if group[j] >= 0 or not mu[j] > 0.0:
-                continue
-            gj = G[nc + j, nc + j]
-            d = gi + gj - 2.0 * G[nc + i, nc + j]
-            if abs(d) <= 1e-12 * (gi + gj):
-                group[j] = i
-                m += 1
-        if m < 2:
-            continue
-        tot = 0.0
-        cap = 0.0
-        for j in range(i, nc):
-            if group[j] == i:
-                tot += P_T[j]
-                pn = max(0.0, P_N[j])
-                cap += mu[j] * pn
-        if not cap > 0.0:
-            continue
-        for j in range(i, nc):
-            if group[j] == i:
-                pn = max(0.0, P_N[j])
-                P_T[j] = tot * (mu[j] * pn / cap)
-        changed = True
-    return changed
 
 
 #: Scratch of :func:`solve_contact_impulses_with` for up to nc contacts
@@ -403,7 +287,7 @@ def solve_contact_impulses_with(
     tolv = rtol * vscale
     if vscale == 0.0:
         tolv = 1e-300
-    s = _impulse_scale(G, nc)
+    s = impulse_scale(G, nc)
     qN = work.qN[:nc]
     for i in range(nc):
         qN[i] = uN_free[i] + e[i] * uN_minus[i]
@@ -440,7 +324,7 @@ def solve_contact_impulses_with(
     if mode in (MODE_AUTO, MODE_LEMKE3):
         lcp_lemke_into(A3, q3, z, w, work.lcp, 0, 1e-12)
         extract3(z, mu, fidx, nf, s, cN, cT)
-        done = _keep_if_better(
+        done = keep_if_better(
             G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, STATUS_LEMKE, tolv
         )
     # 2. Lemke, Stewart-Trinkle formulation (copositive); frictionless, the ST form is the
@@ -458,7 +342,7 @@ def solve_contact_impulses_with(
         else:
             lcp_lemke_into(A3, q3, z, w, work.lcp, 0, 1e-12)
             extract3(z, mu, fidx, nf, s, cN, cT)
-        done = _keep_if_better(
+        done = keep_if_better(
             G,
             uN_free,
             uT_free,
@@ -479,7 +363,7 @@ def solve_contact_impulses_with(
     if (not done) and (mode in (MODE_AUTO, MODE_ENUM)) and nc + 2 * nf <= ENUM_MAX_N:
         lcp_enumerate_into(A3, q3, z, w, work.lcp, 1e-10)
         extract3(z, mu, fidx, nf, s, cN, cT)
-        _keep_if_better(
+        keep_if_better(
             G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, STATUS_ENUM, tolv
         )
     best_comp = best[1]
@@ -492,8 +376,8 @@ def solve_contact_impulses_with(
         for i in range(nc):
             cN[i] = bN[i]
             cT[i] = bT[i]
-        if _split_shared_tangents(G, mu, cN, cT, work.group):
-            comp, cone = _evaluate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT)
+        if split_shared_tangents(G, mu, cN, cT, work.group):
+            comp, cone = evaluate_candidate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT)
             if max(comp, cone) <= max(best[0], tolv):
                 for i in range(nc):
                     bT[i] = cT[i]
@@ -504,7 +388,7 @@ def solve_contact_impulses_with(
     for i in range(nc):
         P_N[i] = bN[i]
         P_T[i] = bT[i]
-    _contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus)
+    contact_velocities(G, uN_free, uT_free, P_N, P_T, uN_plus, uT_plus)
     ptol = rtol * s * vscale
     for i in range(nc):
         if P_N[i] <= ptol:

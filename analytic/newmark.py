@@ -29,11 +29,10 @@ change). Output every :func:`deckpound.engines.output_stride` steps.
 
 from __future__ import annotations
 
-from collections import namedtuple
-
 import numpy as np
 
 from deckpound.analytic import bundles as bd
+from deckpound.analytic import contact_assembly as ca
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.bundles import (
@@ -45,9 +44,15 @@ from deckpound.analytic.bundles import (
 )
 from deckpound.analytic.compliance import ENERGY_COLUMNS
 from deckpound.analytic.dense import lu_factor, lu_solve
+from deckpound.analytic.newmark_work import (
+    N_ENERGY,
+    NewmarkOptions,
+    NewmarkWork,
+    newmark_workspace,
+    output_energies,
+    store_row,
+)
 from deckpound.analytic.support_motion import record_at
-from deckpound.analytic.system import C_BENT as _C_BENT
-from deckpound.analytic.system import C_FT as _C_FT
 from deckpound.analytic.system import (
     spring_assemble,
     spring_commit,
@@ -57,7 +62,6 @@ from deckpound.analytic.system import (
     spring_stored_energy,
     spring_tangent,
     spring_update_materials,
-    store_standard,
 )
 
 __all__ = [
@@ -71,126 +75,7 @@ __all__ = [
     "newmark_workspace",
 ]
 
-N_ENERGY = len(ENERGY_COLUMNS)
 GAMMA, BETA = 0.5, 0.25
-
-#: The scalars of :func:`newmark_run`: ``nsteps`` steps of ``dt`` [s]; Newton ``tol`` [m]
-#: (NormDispIncr) and ``maxit``; output every ``stride`` steps; ``substeps`` of the fallback
-#: for a failed step (≤ 1: none); the work-saving skips (bool, True = on, the default; results
-#: are identical either way, see ``compliance.SKIPS``): ``skip_contact`` (contact laws and
-#: contact tangent skipped while every gap is open), ``reuse_factors`` (the tangent
-#: factorisation reused while the matrix is bitwise the last one); ``want_energy`` (energy work
-#: terms accumulated; False when no energy column is requested).
-NewmarkOptions = namedtuple(
-    "NewmarkOptions",
-    [
-        "nsteps",
-        "dt",
-        "tol",
-        "maxit",
-        "stride",
-        "substeps",
-        "skip_contact",
-        "reuse_factors",
-        "want_energy",
-    ],
-)
-# workspace rows by shape: (7,) DOF vectors, (7, 7) matrices, (7,) pivots, (ns,) per spring,
-# (4,) per corner, (n_channels,) supports
-_V7 = ("u", "v", "a", "un", "vn", "an", "us", "vs", "as_", "du", "R", "f")
-_M77 = ("K", "Keff", "LU", "H", "Kel", "LUel")
-_PIV = ("piv", "pivel")
-_NS = ("fs", "kt", "kt_fact", "d_prev", "dd_prev", "fs_prev", "d_new", "dd_new", "cv_prev")
-_V4 = ("lam_prev", "lt_prev", "g_prev")
-_CH = ("ug", "vg", "ugo", "ug0", "vg0", "ug1", "vg1")
-#: DOF vectors (7,): u, v, a trial state, un, vn, an start of the (sub)step, us, vs, as_ start
-#: of the step, du Newton increment, R residual, f internal force.
-NewmarkDofs = namedtuple("NewmarkDofs", _V7)
-#: (7, 7) matrices: K, Keff, LU (tangent, effective tangent, its factors), H gap Hessian, Kel,
-#: LUel (elastic effective tangent and factors); pivots piv, pivel (7,) int64.
-NewmarkMatrices = namedtuple("NewmarkMatrices", _M77 + _PIV)
-#: Per spring (ns,): fs, kt forces and tangents, kt_fact tangents of the factors held in LU,
-#: d/dd/fs_prev last committed, d/dd_new trial deformations and rates, cv_prev the last committed
-#: tangent-dependent damping coefficient βK k_t + βKc k_c.
-NewmarkSprings = namedtuple("NewmarkSprings", _NS)
-#: Supports (n_channels,): ug, vg trial, ugo last (sub)step, ug0, vg0 start and ug1, vg1 end of
-#: the step.
-NewmarkSupports = namedtuple("NewmarkSupports", _CH)
-#: The workspace of :func:`newmark_run` (:func:`newmark_workspace`), one named field per array,
-#: grouped by shape (a group is loaded as one value in the compiled code: small groups keep
-#: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states, cstate (4, N_CS)
-#: corner states; cw the ContactWork; dof, mat, spring, support the groups above;
-#: lam/lt/g_prev last committed contact forces and gaps (4,); W (5,) running work [input,
-#: springs, viscous, contact, friction] [kJ]; energy (N_ENERGY,) the output energies.
-NewmarkWork = namedtuple(
-    "NewmarkWork",
-    ("u0", "v0", "hstate", "cstate", "cw", "dof", "mat", "spring", "support")
-    + _V4
-    + ("W", "energy"),
-)
-
-
-def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
-    """The workspace of :func:`newmark_run` (zeroed; ns springs, nch support channels) around
-    the initial state u0, v0 (7,) and the virgin material and corner states. Allocated here
-    because the kernel runs without numba's runtime."""
-    return NewmarkWork(
-        u0=u0,
-        v0=v0,
-        hstate=hstate,
-        cstate=cstate,
-        cw=bd.new_contact_work(),
-        dof=NewmarkDofs(**bd.row_views(_V7, 7)),
-        mat=NewmarkMatrices(**bd.row_views(_M77, 7, 7), **bd.row_views(_PIV, 7, dtype=np.int64)),
-        spring=NewmarkSprings(**bd.row_views(_NS, ns)),
-        support=NewmarkSupports(**bd.row_views(_CH, nch)),
-        **bd.row_views(_V4, 4),
-        W=np.zeros(5),
-        energy=np.zeros(N_ENERGY),
-    )
-
-
-@kernel
-def _store(output, row, t, u, v, cw, cs, fs, nbs, energy):
-    """Output row ``row``: the full row into ``output.row``, then the selected columns into
-    ``output.table``."""
-    buf = output.row
-    store_standard(buf, t, u, v, cw.g, cw.lam, cw.lt, fs, nbs)
-    # ft: the committed tangential force (the trial one for every model but contact2d, whose
-    # element reports 0 after a sliding commit, as OpenSees's recorders see it)
-    for c in range(4):
-        buf[_C_FT + c] = cs[c, cl.S_CFT]
-    base = _C_BENT + nbs
-    for k in range(energy.shape[0]):
-        buf[base + k] = energy[k]
-    sel = output.select
-    table = output.table
-    for q in range(sel.shape[0]):
-        table[row, q] = buf[sel[q]]
-
-
-@kernel
-def _energies(sa, hstate, cp, cs, u, v, ug, W, energy):
-    """Output energies from the running work totals W = [input, springs, viscous, contact,
-    friction]."""
-    ke = 0.0
-    for j in range(7):
-        ke += 0.5 * sa.mass[j] * v[j] * v[j]
-    es = spring_stored_energy(sa, hstate, u, ug)
-    ec = cl.contact_stored_energy(cp, cs)
-    efs = 0.0  # stick-spring part of ec
-    for c in range(4):
-        if cl.has_stick_spring(cp[c, cl.P_FMODE]) and cs[c, cl.S_CFT] != 0.0:
-            efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
-    energy[0] = W[0]
-    energy[1] = ke
-    energy[2] = es
-    energy[3] = W[2]
-    energy[4] = W[1] - es
-    energy[5] = ec
-    energy[6] = W[3] - (ec - efs)
-    energy[7] = W[4] - efs
-    energy[8] = W[0] - (ke + W[1] + W[2] + W[3] + W[4])
 
 
 @kernel(inline="always")
@@ -209,14 +94,14 @@ def _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact):
     spring_deformations(sa, u, v, sup.ug, sup.vg, d, dd)
     spring_update_materials(sa.hparams, hstate, sa.kind, d)
     nonel = spring_assemble(sa, hstate, d, dd, v, dof.f, spr.fs, spr.kt)
-    ncl = cl.eval_contacts(contact, cs, cw, u, v, dof.un)
+    ncl = ca.eval_contacts(contact, cs, cw, u, v, dof.un)
     evaluated = cw.evaluated
     if not skip_contact and not contact.nonlinear:
         for c in range(4):
             evaluated[c] = True
         ncl = -1
     if ncl < 0:
-        cl.eval_closed(contact, cs, cw, u, v, dof.un)
+        ca.eval_closed(contact, cs, cw, u, v, dof.un)
     R, f, a = dof.R, dof.f, dof.a
     for j in range(7):
         R[j] = cw.fc[j] - f[j] - sa.mass[j] * a[j]
@@ -364,8 +249,8 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     W[0] = ke0 + es0 + ec0
     W[1] = es0
     W[3] = ec0
-    _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
-    _store(output, 0, 0.0, u, v, cw, cs, fs, nbs, energy)
+    output_energies(sa, hstate, cp, cs, u, v, ug, W, energy)
+    store_row(output, 0, 0.0, u, v, cw, cs, fs, nbs, energy)
     row = 1
     total_it = 0
     events = 0
@@ -455,7 +340,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                             Keff[i, i] += c3 * mass[i]
                         spring_damping_tangent(sa, c2, Keff)
                         if anyev:
-                            cl.contact_tangent(contact, cw, u, c2, Keff, H)
+                            ca.contact_tangent(contact, cw, u, c2, Keff, H)
                         for i in range(7):
                             for j in range(7):
                                 LU[i, j] = Keff[i, j]
@@ -504,7 +389,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                     if cs[c, cl.S_CCLOSED] == 0.0 and cs[c, cl.S_TCLOSED] != 0.0 and evaluated[c]:
                         events += 1
                 if nonlinear and not anyev:
-                    cl.gaps_and_rates(contact, u, v, cw)
+                    ca.gaps_and_rates(contact, u, v, cw)
                 cl.contact_commit(cs, g, gd, evaluated)
                 # penetration at every converged (sub)step, not only on output rows
                 for c in range(4):
@@ -572,7 +457,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
         # --- output
         if (n + 1) % stride == 0:
             if want_energy:
-                _energies(sa, hstate, cp, cs, u, v, ug, W, energy)
-            _store(output, row, (n + 1) * dt, u, v, cw, cs, fs, nbs, energy)
+                output_energies(sa, hstate, cp, cs, u, v, ug, W, energy)
+            store_row(output, row, (n + 1) * dt, u, v, cw, cs, fs, nbs, energy)
             row += 1
     _set_stats(stats, RUN_OK, row, 0, nsteps, total_it, events, reused, maxit_seen, rescued, dt)

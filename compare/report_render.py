@@ -17,6 +17,9 @@ import pandas as pd
 
 from .outputs import write_text
 
+#: display scales of the report tables: m → mm, rad → mrad
+MM, MRAD = 1e3, 1e3
+
 
 @dataclass(frozen=True)
 class Table:

@@ -32,13 +32,13 @@ Springs: bents — zeroLength table → deck bent node, Hysteretic (Takeda stand
 seats — zeroLength actuator → seat, Elastic k in x and θ, and a second zeroLength with
 Viscous(c, α = 1) dashpots (no Rayleigh on it: see the comment in :func:`build_model`).
 Damping (:mod:`deckpound.models.damping`, the scene's ``[damping]``): ``rayleigh αM βK βKinit
-βKc`` (:func:`rayleigh_factors`: a1 on the stiffness the scene names), ``-doRayleigh 1`` on the
-members the scene names (:func:`rayleigh_members`: the bents by default, the seat springs too
+βKc`` (:func:`.damping.rayleigh_factors`: a1 on the stiffness the scene names), ``-doRayleigh 1`` on the
+members the scene names (:func:`.damping.rayleigh_members`: the bents by default, the seat springs too
 with ``bents+seats``); αM = a0 on the absolute velocities of the deck and seat nodes, or, with
-``mass = relative``, Viscous dashpots from support reference nodes (:func:`mass_dampers`). Gap
+``mass = relative``, Viscous dashpots from support reference nodes (:func:`.damping.mass_dampers`). Gap
 elements, guides and sticks take no Rayleigh damping.
 
-Gaps: see :func:`gap_mapping` — the ONE place where the positive physical gap g₀ and the
+Gaps: see :func:`.gaps.gap_mapping` — the ONE place where the positive physical gap g₀ and the
 closing direction are mapped to OpenSees' node order, element orientation and negative
 (compression) parameters. Skewed decks (φ ≠ 0): the gap elements act along the face normal
 (zeroLength ``-orient``, zeroLengthContact2D ``-normal``), the seats still slide along x; the
@@ -48,18 +48,18 @@ seat guide spring then carries the normal force's y component n_y·f_N, so its s
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from deckpound.models.contact_laws_table import contact_law
-from deckpound.models.contact_params import kelvin_voigt_damping
 from deckpound.models.damping import damping_model
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import plan_of, takeda_hysteretic_args
 from deckpound.models.scene import Scene
 
+from .damping import mass_dampers, rayleigh_factors, rayleigh_members
+from .gaps import SIDES, contact_normal, gap_mapping
 from .ops import ArrayArg, OpsSession
 
 #: stiffness of the seat y guide springs [kN/m] (seat y stays ~ F_t / k ≈ 0)
@@ -74,13 +74,10 @@ GUIDE_STIFFNESS = 1.0e10
 #: only coupled through the contacts (LU pivots on it harmlessly; checked by the skew
 #: clone-vs-OpenSees test). Kept separate so a straight deck's command log is unchanged.
 SKEW_GUIDE_STIFFNESS = 1.0e16
-#: "infinite" yield force of the linear gap (ElasticPPGap) [kN]
-HUGE_FORCE = 1.0e20
 #: samples of the last value appended to every support record (a Path series returns 0 at and
 #: after its last sample; time advances by repeated addition of dt and may overshoot)
 RECORD_PAD = 16
 CORNER_NAMES = ("c1", "c2", "c3", "c4")
-SIDES = (1.0, 1.0, -1.0, -1.0)
 
 
 @dataclass
@@ -108,21 +105,6 @@ class ModelInfo:
     notes: list[str] = field(default_factory=list)
 
 
-@dataclass(frozen=True)
-class GapSpec:
-    """One corner's gap element: node order, orientation and material (OpenSees signs).
-
-    ``orient``: the six numbers of zeroLength ``-orient x1 x2 x3 yp1 yp2 yp3``, or None for
-    OpenSees' default (local x = global X), which is what a straight deck uses.
-    """
-
-    i_node: int
-    j_node: int
-    material: str
-    args: tuple[float, ...]
-    orient: tuple[float, ...] | None = None
-
-
 # -- checks -------------------------------------------------------------------------------
 
 
@@ -135,7 +117,6 @@ def refuse_scene(scene: Scene) -> None:
     from deckpound.models.contact_laws_table import (
         BILINEAR_MIN_SUBSTEPS,
         BILINEAR_OPENSEES_REASON,
-        contact_law,
         friction_model,
     )
 
@@ -165,70 +146,6 @@ def refuse_scene(scene: Scene) -> None:
                 "friction: zeroLengthContact2D is a linear penalty contact; use "
                 "law = 'linear' with friction",
             )
-
-
-# -- the one sign-convention function -------------------------------------------------------
-
-
-def gap_orientation(scene: Scene) -> tuple[float, ...] | None:
-    """zeroLength ``-orient`` of the gap elements: local x = a = (cos φ, −sin φ), the right end
-    face's outward normal (= side·n for every corner, n the gap-opening normal), local y' =
-    t = (sin φ, cos φ) (so local z = a × t = +Z and direction 3 stays the plan rotation).
-    None for a straight deck: OpenSees' default orientation is then the same a = X."""
-    if scene.deck.skew == 0.0:
-        return None
-    phi = math.radians(scene.deck.skew)
-    cs, sn = math.cos(phi), math.sin(phi)
-    return (cs, -sn, 0.0, sn, cs, 0.0)
-
-
-def gap_mapping(scene: Scene, corner: int, deck_node: int, seat_node: int, mat_tag: int) -> GapSpec:
-    """Node order, orientation and OpenSees material of corner ``corner`` (0..3).
-
-    Physical gap (positive when open), measured along the corner's gap-opening normal n of the
-    plan's corner table: g = g₀ + n·(u_deck − u_seat); n = side·a with a = (cos φ, −sin φ),
-    side = +1 for c1, c2 (seat 1, left) and −1 for c3, c4 (a = X for a straight deck). The
-    zeroLength element's direction-1 strain is a·(u_j − u_i) with a its local x axis
-    (:func:`gap_orientation`; checked against openseespy in ``tests/test_skew_opensees.py``),
-    so the nodes are ordered (seat, deck) for side +1 and (deck, seat) for side −1:
-    strain = side·a·(u_deck − u_seat) = g − g₀, and closing is negative (compression). The
-    materials take a negative gap −g₀ (and negative yield values), so their stress is ≤ 0 and
-    the contact force fn = −stress ≥ 0 acts on the deck along n.
-    """
-    side = SIDES[corner]
-    g0 = scene.seats[0].gap if corner < 2 else scene.seats[1].gap
-    i, j = (seat_node, deck_node) if side > 0 else (deck_node, seat_node)
-    orient = gap_orientation(scene)
-    c = scene.contact
-    if c.law == "linear":
-        return GapSpec(i, j, "ElasticPPGap", (mat_tag, c.stiffness, -HUGE_FORCE, -g0), orient)
-    if c.law == "bilinear":
-        return GapSpec(
-            i,
-            j,
-            "ImpactMaterial",
-            (mat_tag, c.stiffness, c.bilinear_ratio * c.stiffness, -c.bilinear_yield, -g0),
-            orient,
-        )
-    if c.law == "kelvin-voigt":
-        damp = float(kelvin_voigt_damping(scene)[corner])
-        return GapSpec(i, j, "ViscoelasticGap", (mat_tag, c.stiffness, damp, -g0), orient)
-    if c.law in ("hertz", "hertzdamp"):
-        # Hertzdamp(Kh, ξ_n, gap, n): ξ_n = 0 is the undamped Hertz law k δ^n exactly; the
-        # clone's 'hertzdamp' law is this material's arithmetic (contact_laws.py)
-        law = contact_law(c.law)
-        xi_n = law.hysteresis(c.restitution) if law.hysteresis is not None else 0.0
-        return GapSpec(i, j, "Hertzdamp", (mat_tag, c.stiffness, xi_n, -g0, c.exponent), orient)
-    raise SceneError("contact.law", f"OpenSees cannot express the {c.law!r} law")
-
-
-def contact_normal(corner) -> tuple[float, float]:
-    """zeroLengthContact2D ``-normal`` of a corner: −n, from the deck corner towards the seat
-    (the element's gap is −(−n)·(X_j + u_j − X_i − u_i) with i = seat point, j = deck corner,
-    so it is g₀ + n·(u_deck − u_seat) when the nodes sit g₀ apart along n). ``+ 0.0`` keeps a
-    straight deck's (±1, 0) free of a −0.0 in the command log."""
-    nx, ny = corner.normal
-    return (-nx + 0.0, -ny + 0.0)
 
 
 # -- geometry helpers ---------------------------------------------------------------------
@@ -585,72 +502,6 @@ def build_model(
         tangents=tuple(c.tangent for c in plan.corners),
         stick_elements=tuple(sticks),
     )
-
-
-def rayleigh_members(scene: Scene) -> tuple[bool, bool]:
-    """(bents, seat springs) take the stiffness-proportional part (``-doRayleigh 1``)."""
-    d = scene.damping
-    return d.members in ("bents", "bents+seats"), d.members == "bents+seats"
-
-
-def rayleigh_factors(scene: Scene, damping) -> tuple[float, float, float, float]:
-    """``rayleigh αM βK βKinit βKc``: αM = a0 on absolute velocities (0 when the mass part is
-    relative: dashpots then carry it, :func:`mass_dampers`), a1 on the tangent the scene names
-    (current → βK, initial → βKinit, committed → βKc)."""
-    a1 = damping.a1
-    st = scene.damping.stiffness
-    return (
-        damping.a0_absolute,
-        a1 if st == "current" else 0.0,
-        a1 if st == "initial" else 0.0,
-        a1 if st == "committed" else 0.0,
-    )
-
-
-def mass_dampers(
-    ops: OpsSession, scene: Scene, damping, deck: int, seats, acts, supports: str
-) -> list[int]:
-    """The mass-proportional part on relative velocities (``damping.mass = relative``): a
-    zeroLength with Viscous(a0 m / n, α = 1) materials in x, y, θ from a reference node per bent
-    table — at the deck centre, imposed x and y motion of that table, θ fixed — to the deck
-    centre, and one from each seat's actuator to the seat (x, θ); the same dashpots as
-    :func:`deckpound.models.damping.relative_mass_dampers`. No Rayleigh on them. Returns the
-    reference nodes (one per bent, in bent order; their motion is imposed with the tables')."""
-    if not damping.mass_dampers:
-        return []
-    T = ops.tag
-    plan_mass = plan_of(scene).mass
-    nb = len(scene.bents)
-    a0 = damping.a0
-    ops.comment(
-        "mass-proportional damping on relative velocities: Viscous dashpots to the supports"
-    )
-    refs = []
-    for _k, b in enumerate(scene.bents or [None]):
-        name = b.name if b is not None else "fixed"
-        rn = T("node", f"deck ref {name}")
-        ops.node(rn, 0.0, 0.0)
-        moving = b is not None and supports == "motion"
-        ops.fix(rn, 0 if moving else 1, 0 if moving else 1, 1)
-        if b is not None:
-            refs.append(rn)
-        n = max(nb, 1)
-        mats = []
-        for dirn, dof in (("x", 4), ("y", 5), ("theta", 6)):
-            m = T("material", f"deck mass damper {name} {dirn}")
-            ops.uniaxialMaterial("Viscous", m, a0 * plan_mass[dof] / n, 1.0)
-            mats.append(m)
-        e = T("element", f"deck mass damper {name}")
-        ops.element("zeroLength", e, rn, deck, "-mat", *mats, "-dir", 1, 2, 3)
-    for j in range(2):
-        mats = []
-        for dirn, dof in (("x", 2 * j), ("theta", 2 * j + 1)):
-            m = T("material", f"seat{j + 1} mass damper {dirn}")
-            ops.uniaxialMaterial("Viscous", m, a0 * plan_mass[dof], 1.0)
-            mats.append(m)
-        e = T("element", f"seat{j + 1} mass damper")
-        ops.element("zeroLength", e, acts[j], seats[j], "-mat", *mats, "-dir", 1, 3)
-    return refs
 
 
 def analysis_commands(scene: Scene) -> list[tuple]:

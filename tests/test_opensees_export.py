@@ -24,7 +24,7 @@ from deckpound.models.result import scene_hash
 from deckpound.models.scene import RunSettings
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build import engine, export, recorders
-from deckpound.opensees_build.model import gap_mapping
+from deckpound.opensees_build.gaps import gap_mapping
 from deckpound.opensees_build.ops import ArrayArg, OpsSession, render_commands
 
 

@@ -3,7 +3,7 @@
 * the zeroLength orientation convention, checked on openseespy itself: with
   ``-orient a1 a2 0 t1 t2 0`` the direction-1 deformation is a·(u_j − u_i) and node j's
   resisting force is σ·a — so local x = a = (cos φ, −sin φ) turns the straight deck's node
-  order into a gap along the skew normal (:func:`deckpound.opensees_build.model.gap_mapping`);
+  order into a gap along the skew normal (:func:`deckpound.opensees_build.gaps.gap_mapping`);
 * closing motion gives compression at every skew, with the gap from the node displacements and
   the force from the oriented element consistent (f_N = −k g while closed), for the zeroLength
   gap and for zeroLengthContact2D (friction, ``-normal``);
@@ -35,7 +35,7 @@ from deckpound.models.plan import column_unit
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build import engine
 from deckpound.opensees_build.export import export_script
-from deckpound.opensees_build.model import gap_mapping, gap_orientation
+from deckpound.opensees_build.gaps import gap_mapping, gap_orientation
 
 
 @pytest.mark.parametrize("phi_deg", [0.0, 30.0, 60.0])
