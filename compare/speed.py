@@ -151,6 +151,8 @@ def measure(
         "scene": scene_ref,
         "overrides": overrides,
         "repeats": repeats,
+        # without .pyc files every process recompiles every imported module's source
+        "bytecode_cache": not os.environ.get("PYTHONDONTWRITEBYTECODE"),
     }
     return rows, context
 
@@ -221,9 +223,9 @@ def markdown(rows: list[EngineSpeed], context: dict, reference: str = "opensees"
             r.engine,
             _fmt(r.first),
             _fmt(r.warm),
-            _fmt(warm_ratio, 2),
+            _fmt(warm_ratio, 3),
             _fmt(r.in_process),
-            _fmt(inproc_ratio, 2),
+            _fmt(inproc_ratio, 3),
             _fmt(r.us_per_step),
             _fmt(r.kernel_load, 2),
             _fmt(r.no_setup),
@@ -237,6 +239,11 @@ def markdown(rows: list[EngineSpeed], context: dict, reference: str = "opensees"
         f"cores, {context['machine']}, Python {context['python']}, {context['date']}; "
         f"load average {lb[0]:.2f} before, {la[0]:.2f} after."
     )
+    if not context.get("bytecode_cache", True):
+        how += (
+            " Python's bytecode cache was off (PYTHONDONTWRITEBYTECODE): every process "
+            "recompiled the sources it imported."
+        )
     if "reference_ns" in context:
         rb, ra = context["reference_ns"]
         how += (
