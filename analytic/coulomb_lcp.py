@@ -59,6 +59,15 @@ __all__ = [
 ]
 
 
+@kernel
+def _zero(A, q, n):
+    """A[:n, :n] = 0, q[:n] = 0 (the builders write only the non-zeros)."""
+    for i in range(n):
+        q[i] = 0.0
+        for j in range(n):
+            A[i, j] = 0.0
+
+
 @compiled
 def build_lcp3(G, qN, uT_free, mu, fidx, nf, s):
     """3-unknown LCP (scaled impulses).  fidx[k] = contact of k-th
@@ -74,11 +83,7 @@ def build_lcp3(G, qN, uT_free, mu, fidx, nf, s):
 def build_lcp3_into(G, qN, uT_free, mu, fidx, nf, s, A, q):
     """:func:`build_lcp3` into A (n, n), q (n,), n = nc + 2 nf (overwritten)."""
     nc = qN.shape[0]
-    n = nc + 2 * nf
-    for i in range(n):
-        q[i] = 0.0
-        for j in range(n):
-            A[i, j] = 0.0
+    _zero(A, q, nc + 2 * nf)
     # friction coefficient per contact (0 for frictionless)
     for i in range(nc):
         q[i] = qN[i]
@@ -131,11 +136,7 @@ def build_lcp_st(G, qN, uT_free, mu, fidx, nf, s):
 def build_lcp_st_into(G, qN, uT_free, mu, fidx, nf, s, A, q):
     """:func:`build_lcp_st` into A (n, n), q (n,), n = nc + 3 nf (overwritten)."""
     nc = qN.shape[0]
-    n = nc + 3 * nf
-    for i in range(n):
-        q[i] = 0.0
-        for j in range(n):
-            A[i, j] = 0.0
+    _zero(A, q, nc + 3 * nf)
     for i in range(nc):
         q[i] = qN[i]
         for j in range(nc):

@@ -126,13 +126,7 @@ def solve_active_impulses(
     pT = work.pT[:nc]
     uNp = work.uNp[:nc]
     uTp = work.uTp[:nc]
-    st = work.st[:nc]
-    for a in range(nc):
-        pN[a] = 0.0
-        pT[a] = 0.0
-        uNp[a] = 0.0
-        uTp[a] = 0.0
-        st[a] = 0
+    st = work.st[:nc]  # outputs: the solve writes every entry
     status, comp, cone = solve_contact_impulses_with(
         G, uNf, uTf, uNm, ea, ma, pN, pT, uNp, uTp, st, mode, rtol, work.contact
     )
