@@ -49,6 +49,10 @@ fi
 # 4. the job
 cmd="${1:-paper}"; shift || true
 case "$cmd" in
-  test) exec "$venv/bin/python" -m pytest -q -p no:cacheprovider "$@" ;;
+  test) # one pytest worker per core (pytest-xdist, at most 4; none on one core); a file's tests
+        # stay on one worker so its module fixtures are built once. "-n 0" in ARGS runs serially.
+        workers="$(nproc 2>/dev/null || echo 1)"; [ "$workers" -gt 4 ] && workers=4
+        [ "$workers" -le 1 ] && workers=0
+        exec "$venv/bin/python" -m pytest -q -p no:cacheprovider -n "$workers" --dist loadfile "$@" ;;
   *)    exec "$venv/bin/deckpound" "$cmd" "$@" ;;
 esac
