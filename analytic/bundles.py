@@ -125,6 +125,7 @@ COUNT_NAMES = (
     "factorisations",
     "rejected_steps",
     "rhs_calls",
+    "unmoved_iterates",
 )
 (
     CNT_STATUS,
@@ -141,6 +142,7 @@ COUNT_NAMES = (
     CNT_FACTORISATIONS,
     CNT_REJECTED,
     CNT_RHS_CALLS,
+    CNT_UNMOVED,
 ) = range(len(COUNT_NAMES))
 #: Names of ``Stats.value`` entries, in index order: largest verified complementarity and cone
 #: residuals of the contact solves [m/s], time reached [s], and the largest penetration

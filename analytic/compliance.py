@@ -74,9 +74,15 @@ SUBSTEPS = 10  # sub-steps of the fallback for a failed step (OpenSees engine de
 #:   every iteration. (The material kernel's own short-circuit, ``pow`` skipped while the
 #:   ductility is ≤ 1, is measured separately, see
 #:   :data:`deckpound.analytic._hysteretic_kernel.ELASTIC_SHORTCUT`.)
+#: * ``unmoved_iterate`` — no force evaluation at a converged Newton iterate whose last
+#:   increment left every displacement bitwise unchanged (the round-off correction of a step
+#:   that stayed on its material branches with every gap open, most steps): the Takeda trial
+#:   states, spring forces and gaps are functions of u alone, so they are those of the last
+#:   evaluation, and only the spring and gap rates are recomputed at the new u̇; off: the
+#:   forces are evaluated at every iterate, as OpenSees does.
 #: * ``decimate`` — output stored every output step only; off: every step is stored and the
 #:   result decimated afterwards.
-SKIPS = ("contact", "friction", "factor_reuse", "decimate")
+SKIPS = ("contact", "friction", "factor_reuse", "unmoved_iterate", "decimate")
 
 #: failure messages by loop status code (:mod:`deckpound.analytic.bundles` ``RUN_*``)
 _STATUS_TEXT = {
@@ -306,6 +312,7 @@ def _run_newmark(
         substeps=int(substeps),
         skip_contact=on["contact"],
         reuse_factors=on["factor_reuse"],
+        skip_unmoved=on["unmoved_iterate"],
         want_energy=any(c in ENERGY_COLUMNS for c in cols),
     )
     output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(len(full)))
@@ -337,6 +344,7 @@ def _run_newmark(
         "contact_tangent": settings.contact_tangent,
         "max_step_iterations": st["max_step_iterations"],
         "elastic_factor_reuses": st["factor_reuses"],
+        "unmoved_iterates": st["unmoved_iterates"],
         "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
         "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
         "contact_stored + contact_dissipated + friction) [kJ]",

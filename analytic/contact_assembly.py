@@ -29,7 +29,7 @@ from deckpound.analytic.kinematics import (
     linear_gap_rate,
 )
 
-__all__ = ["contact_tangent", "eval_closed", "eval_contacts", "gaps_and_rates"]
+__all__ = ["contact_tangent", "eval_closed", "eval_contacts", "gap_rates", "gaps_and_rates"]
 
 
 @njit(cache=True, inline="always")
@@ -38,6 +38,22 @@ def _linear_gaps(u, v, corners, g, gd):
     for c in range(4):
         g[c] = linear_gap(corners[c], u)
         gd[c] = linear_gap_rate(corners[c], v)
+
+
+@kernel(inline="always")
+def gap_rates(contact, v, cw):
+    """Gap rates cw.gd = W_N u̇ of the four corners at the u of the last evaluation (its
+    Jacobian cw.WN when nonlinear), the same operations as :func:`eval_contacts` and
+    :func:`gaps_and_rates`."""
+    if not contact.nonlinear:
+        for c in range(4):
+            cw.gd[c] = linear_gap_rate(contact.corners[c], v)
+    else:
+        for c in range(4):
+            s = 0.0
+            for j in range(7):
+                s += cw.WN[c, j] * v[j]
+            cw.gd[c] = s
 
 
 @kernel

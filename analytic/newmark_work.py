@@ -36,7 +36,9 @@ N_ENERGY = len(ENERGY_COLUMNS)
 #: for a failed step (≤ 1: none); the work-saving skips (bool, True = on, the default; results
 #: are identical either way, see ``compliance.SKIPS``): ``skip_contact`` (contact laws and
 #: contact tangent skipped while every gap is open), ``reuse_factors`` (the tangent
-#: factorisation reused while the matrix is bitwise the last one); ``want_energy`` (energy work
+#: factorisation reused while the matrix is bitwise the last one), ``skip_unmoved`` (no force
+#: evaluation at a converged iterate whose last increment left every displacement bitwise
+#: unchanged: only the spring and gap rates are updated); ``want_energy`` (energy work
 #: terms accumulated; False when no energy column is requested).
 NewmarkOptions = namedtuple(
     "NewmarkOptions",
@@ -49,6 +51,7 @@ NewmarkOptions = namedtuple(
         "substeps",
         "skip_contact",
         "reuse_factors",
+        "skip_unmoved",
         "want_energy",
     ],
 )

@@ -50,6 +50,7 @@ STRESS_FILES = ("stress.csv", "stress_stiffness_dt.png", "stress_sweeps.png")
 SKIP_TEXT = {
     "contact": "contact laws skipped while every predicted gap is open",
     "factor_reuse": "factor reuse of the elastic tangent",
+    "unmoved_iterate": "no re-evaluation at a converged iterate that did not move",
     "decimate": "output decimation",
     "channels": "requested channels only",
     "friction": "no friction work at μ = 0",

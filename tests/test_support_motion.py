@@ -75,6 +75,24 @@ def test_compliance_channels_and_skips_keep_results():
         run_compliance(sc, channels=["nope"])
 
 
+def test_unmoved_iterates_are_most_converged_steps_and_change_nothing():
+    """The benchmark's steps converge at Newton's second iterate, whose round-off increment
+    (~1e-23 m against u ~ 1e-2 m) leaves u bitwise unchanged: the skip fires at most steps,
+    and its results are the forces-re-evaluated ones bit for bit."""
+    from deckpound.analytic.compliance import run_compliance
+
+    sc = load_scene("saiidi-4span", ["run.duration=3.0"])
+    on = run_compliance(sc)
+    off = run_compliance(sc, _skips={"unmoved_iterate": False})
+    steps = on.meta["steps"]
+    assert on.meta["unmoved_iterates"] > 0.5 * steps, on.meta["unmoved_iterates"]
+    assert off.meta["unmoved_iterates"] == 0
+    assert on.meta["newton_iterations"] == off.meta["newton_iterations"]
+    assert on.meta["gap_closures"] == off.meta["gap_closures"] > 0
+    for c in on.columns:
+        assert np.array_equal(on.columns[c], off.columns[c]), c
+
+
 def test_adaptive_reports_step_sizes_in_and_out_of_contact():
     from deckpound.analytic.compliance import run_compliance
 
