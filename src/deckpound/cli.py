@@ -62,7 +62,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import _cli_compile, _cli_engines, _cli_scene, _cli_study
+    from . import _cli_bench, _cli_compile, _cli_engines, _cli_scene, _cli_study
 
     parser = _Parser(
         prog="deckpound",
@@ -74,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"deckpound {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for module in (_cli_scene, _cli_engines, _cli_study, _cli_compile):
+    for module in (_cli_scene, _cli_engines, _cli_study, _cli_bench, _cli_compile):
         module.register(sub)
     return parser
 

@@ -1,0 +1,199 @@
+"""CLI: the measurement commands ``bench`` (work–precision, skips, speed table) and ``stress``."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from deckpound.models.errors import SceneError
+
+from ._cli_study import _benchmark_scene_args, _engines, _seconds
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    from .cli import int_in
+
+    p = sub.add_parser("bench", help="work-precision benchmark: wall time vs error, every engine")
+    _benchmark_scene_args(p, "deckpound-bench", "fewer configurations, shorter records")
+    p.add_argument(
+        "--repeats", type=int_in(1, 1000), default=None, help="runs per configuration (median)"
+    )
+    p.add_argument(
+        "--skips",
+        action="store_true",
+        help="instead: time the compliance engine's work-saving skips on and off "
+        "(identical results checked) and the adaptive step sizes in/out of contact",
+    )
+    _speed_args(p)
+    p.set_defaults(func=_bench)
+
+    p = sub.add_parser("stress", help="stability stress test over hard settings, every engine")
+    _benchmark_scene_args(p, "deckpound-stress", "a small subset of the grid")
+    p.add_argument(
+        "--engines",
+        default=None,
+        help="comma-separated engine names (default: every registered engine)",
+    )
+    p.add_argument("--timeout", type=_seconds, default=300.0, help="seconds per cell")
+    p.add_argument(
+        "--write-readme",
+        nargs="?",
+        const="README.md",
+        default=None,
+        metavar="PATH",
+        help="put the stability paragraph into the README (default ./README.md), its "
+        "stress.csv and heat maps copied into docs/results beside it (not with --quick)",
+    )
+    p.set_defaults(func=_stress)
+
+
+def _bench(args) -> int:
+    from deckpound._io import output_folder
+    from deckpound.models.scene_io import load_scene
+
+    from ._cli_engines import check_output_folder
+
+    scene = load_scene(args.scene, args.overrides)
+    with output_folder(check_output_folder(args.output), "bench"):
+        return _bench_body(args, scene)
+
+
+def _bench_body(args, scene) -> int:
+    from deckpound.compare.bench import run_bench
+
+    if args.write_readme is not None and not Path(args.write_readme).is_file():
+        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
+    if args.skips:
+        from deckpound.compare.skips import run_skips
+
+        table, steps = run_skips(scene, args.output, quick=args.quick, repeats=args.repeats)
+        cols = [
+            "scene",
+            "skip",
+            "time_with",
+            "time_without",
+            "speedup",
+            "us_per_step_with",
+            "us_per_step_without",
+            "max_abs_diff",
+        ]
+        print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+        print(
+            steps[
+                ["scene", "commit_cap", "where", "steps", "median", "min", "max", "time"]
+            ].to_string(index=False, float_format=lambda v: f"{v:.3g}")
+        )
+        bad = table[(table["skip"] != "geometry") & ~table["identical"].astype(bool)]
+        print(
+            f"wrote {args.output}; "
+            + (
+                "every skip gives identical results"
+                if not len(bad)
+                else f"{len(bad)} skip(s) changed a result"
+            )
+        )
+        if args.write_readme is not None and not args.quick:
+            from deckpound.compare import readme_results
+
+            path = readme_results.write_skips(args.write_readme, args.output)
+            print(f"wrote the skips paragraph into {path}")
+        return 0 if not len(bad) else 1
+    if not args.speed_only:
+        table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
+        cols = [
+            c
+            for c in (
+                "scene",
+                "config",
+                "status",
+                "wall",
+                "compile_time",
+                "us_per_step",
+                "err_primary",
+                "err_peak_theta",
+                "err_peak_y",
+                "nrmse_theta",
+                "speedup_bound",
+                "speedup_vs_opensees_equal_error",
+            )
+            if c in table
+        ]
+        print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+        if args.write_readme is not None and not args.quick:
+            # the shortened records of --quick are not the README's work-precision table
+            from deckpound.compare import bench_readme
+
+            path = bench_readme.write_readme(args.write_readme, args.output)
+            print(f"wrote the work-precision table into {path} (sources in {bench_readme.RESULTS})")
+    _speed_table(args)
+    print(f"wrote {args.output}")
+    return 0
+
+
+def _stress(args) -> int:
+    from deckpound._io import output_folder
+    from deckpound.compare.stress import run_stress
+    from deckpound.models.scene_io import load_scene
+
+    from ._cli_engines import check_output_folder
+
+    engines = tuple(_engines(args.engines))
+    out = check_output_folder(args.output)
+    if args.write_readme is not None and not Path(args.write_readme).is_file():
+        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
+    scene = load_scene(args.scene, args.overrides)
+    with output_folder(out, "stress"):
+        table = run_stress(scene, out, quick=args.quick, engines=engines, timeout=args.timeout)
+    bad = table[(table["status"] != "success") | (~table["finite"])]
+    print(table.groupby(["engine", "status"]).size().to_string())
+    print(f"{len(table)} cells, {len(bad)} not finished with finite output; wrote {args.output}")
+    if args.write_readme is not None and not args.quick:
+        from deckpound.compare import readme_results
+
+        path = readme_results.write_stress(args.write_readme, out)
+        print(f"wrote the stability paragraph into {path}")
+    return 0
+
+
+# -- the README's speed table (issue 14: speed owner) ----------------------------------------
+
+
+def _speed_args(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("speed table")
+    g.add_argument(
+        "--speed-only",
+        action="store_true",
+        help="only the speed table (processes and in-process runs of every engine)",
+    )
+    g.add_argument(
+        "--write-readme",
+        nargs="?",
+        const="README.md",
+        default=None,
+        metavar="PATH",
+        help="put the speed table into the README (default ./README.md) in place "
+        "of the previous one; without --quick also the work-precision table (its bench.csv, "
+        "bench_context.json and figure copied into docs/results beside the README)",
+    )
+
+
+def _speed_table(args) -> None:
+    import sys
+
+    from deckpound._io import atomic_write_text
+    from deckpound.compare import speed
+
+    if args.write_readme is not None and not Path(args.write_readme).is_file():
+        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
+    repeats = args.repeats if args.repeats is not None else 3
+    rows, context = speed.measure(
+        args.scene,
+        args.overrides,
+        repeats=repeats,
+        progress=lambda t: print(f"deckpound bench: {t}", file=sys.stderr, flush=True),
+    )
+    block = speed.markdown(rows, context)
+    print(block)
+    atomic_write_text(Path(args.output) / "speed.md", block + "\n")
+    if args.write_readme is not None:
+        print(f"wrote the speed table into {speed.write_readme(args.write_readme, block)}")
