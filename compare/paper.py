@@ -37,7 +37,7 @@ from .cases import ResultCache
 from .mechanism import MECHANISM_UNITS, mechanism_row
 from .metrics import closure_times_per_corner, compare_pair, peak
 from .outputs import folder, folder_size, write_csv, write_text
-from .report_text import friction_effect
+from .report_text_friction import friction_effect
 from .sequence_run import SequenceRun, run_sequences, strongest_run
 from .studies import (
     ROW_UNITS,

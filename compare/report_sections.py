@@ -20,6 +20,7 @@ from deckpound.models.result import scene_hash
 from . import figures
 from . import report_inputs as inputs
 from . import report_text as text
+from . import report_text_friction as ftext
 from .report_friction import friction
 from .report_render import MM, MRAD, Bullets, Figure, Table, render, view
 from .studies import STUDIES
@@ -200,7 +201,7 @@ def headline(d) -> list:
 def _study_effect(d, state: str) -> pd.DataFrame | None:
     for r in d.studies:
         if r.name == "friction" and r.state.label == state:
-            return text.study_friction_effect(r.table)
+            return ftext.study_friction_effect(r.table)
     return None
 
 
