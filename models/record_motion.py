@@ -41,12 +41,11 @@ from ._iir import butter_highpass_sos, sosfiltfilt
 from .errors import SceneError
 from .excitation import G, SupportMotion, _check_lag, _shift, make_provenance
 from .mechanics import support_channels
+from .record_csv import CsvRecord, read_csv_record
 from .records import (
     MIN_SAMPLES,
-    CsvRecord,
     RecordFile,
     read_at2,
-    read_csv_record,
     read_text,
     uniform_step,
 )
