@@ -39,11 +39,11 @@ import numpy as np
 from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import ensure_compiled
 from deckpound.analytic.compliance import _STATUS_TEXT, ENERGY_COLUMNS, pack_run
-from deckpound.analytic.dormand_prince import (
+from deckpound.analytic.dormand_prince import adaptive_run
+from deckpound.analytic.dormand_prince_work import (
     H_BINS_PER_DECADE,
     H_LOG_MIN,
     AdaptiveOptions,
-    adaptive_run,
     adaptive_workspace,
 )
 from deckpound.analytic.system import initial_dofs

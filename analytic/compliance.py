@@ -97,7 +97,7 @@ _STATUS_TEXT = {
 
 def output_columns(scene: Scene) -> list[str]:
     """Column names of the compliance result (standard columns, then the energies)."""
-    from deckpound.models.plan import standard_columns
+    from deckpound.models.columns import standard_columns
 
     return standard_columns([b.name for b in scene.bents]) + list(ENERGY_COLUMNS)
 

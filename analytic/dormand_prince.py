@@ -4,14 +4,14 @@ Driven by :func:`deckpound.analytic.adaptive.run_adaptive`, where the scheme, th
 the events and the commit rule are described. One numba function (:func:`adaptive_run`) runs
 the whole record; the right-hand side, the event functions, the Hermite interpolant and one
 Runge–Kutta step are kernels (:mod:`deckpound.analytic._jit`, no numba runtime: every array is
-in the workspace of :func:`adaptive_workspace`). It takes the named bundles of
-:mod:`deckpound.analytic.bundles`; its scalars are :data:`AdaptiveOptions`. The tableau is a
+in the workspace of
+:func:`deckpound.analytic.dormand_prince_work.adaptive_workspace`). It takes the named bundles of
+:mod:`deckpound.analytic.bundles`; its scalars are
+:data:`deckpound.analytic.dormand_prince_work.AdaptiveOptions`. The tableau is a
 module constant (numba freezes global arrays into the compiled code).
 """
 
 from __future__ import annotations
-
-from collections import namedtuple
 
 import numpy as np
 
@@ -27,6 +27,7 @@ from deckpound.analytic.bundles import (
     RUN_STEP_BUDGET,
     RUN_STEP_UNDERFLOW,
 )
+from deckpound.analytic.dormand_prince_work import H_BINS_PER_DECADE, H_LOG_MIN, H_NBINS, NT, NY
 from deckpound.analytic.system import (
     C_BENT,
     spring_assemble,
@@ -37,16 +38,7 @@ from deckpound.analytic.system import (
     store_standard,
 )
 
-__all__ = [
-    "H_BINS_PER_DECADE",
-    "H_LOG_MIN",
-    "H_NBINS",
-    "TABLEAU",
-    "AdaptiveOptions",
-    "AdaptiveWork",
-    "adaptive_run",
-    "adaptive_workspace",
-]
+__all__ = ["TABLEAU", "adaptive_run"]
 
 # Dormand–Prince 5(4) tableau
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
@@ -61,63 +53,6 @@ _B5 = _A[6].copy()
 _E = _B5 - np.array(
     [5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40]
 )
-NY = 14  # u, v
-NE = 5  # energy integrals: input, springs, viscous, contact, friction
-NT = NY + NE
-# accepted-step-size statistics: log10(h) histogram, H_BINS_PER_DECADE bins per decade from
-# 10**H_LOG_MIN to 1 s, row 0 = out of contact, row 1 = in contact (a gap ≤ 0 at either end)
-H_LOG_MIN = -14.0
-H_BINS_PER_DECADE = 20
-H_NBINS = int(-H_LOG_MIN) * H_BINS_PER_DECADE
-
-
-#: The scalars of :func:`adaptive_run`: end time ``t_end`` and output interval ``out_dt`` [s];
-#: error tolerances ``rtol`` [-] and ``atol`` [m, m/s]; largest step ``max_step`` and, once a
-#: Takeda spring has yielded, ``commit_step`` [s]; step budget ``max_steps`` (Runge–Kutta steps
-#: tried, accepted or rejected: each costs the same work).
-AdaptiveOptions = namedtuple(
-    "AdaptiveOptions", ["t_end", "out_dt", "rtol", "atol", "max_step", "commit_step", "max_steps"]
-)
-_NS = ("d", "dd", "fs", "kt")
-_NT = ("y", "k1", "ytmp", "ynew", "yev")
-#: The workspace of :func:`adaptive_run` (:func:`adaptive_workspace`): u0, v0 initial state;
-#: hstate, cstate material and corner states; cw the ContactWork; uc (7,) displacement at the
-#: last commit; ug, vg supports; d, dd, fs, kt (ns,) spring deformations, rates, forces,
-#: tangents; f (7,) internal force; y, k1, ytmp, ynew, yev (NT,) state [u, u̇, energy
-#: integrals], its rate, stage / new / interpolated states; K (7, NT) stage rates; ev0, ev1 event
-#: values at the step's ends; hist (2, H_NBINS) int64 and hstat (2, 3) accepted-step-size
-#: statistics (row 0 out of contact, row 1 in contact; hstat = [min, max, sum]).
-AdaptiveWork = namedtuple(
-    "AdaptiveWork",
-    ("u0", "v0", "hstate", "cstate", "cw", "uc", "ug", "vg", "f")
-    + _NS
-    + _NT
-    + ("K", "ev0", "ev1", "hist", "hstat"),
-)
-
-
-def adaptive_workspace(u0, v0, hstate, cstate, ns: int, nch: int, nbs: int) -> AdaptiveWork:
-    """The workspace of :func:`adaptive_run` (zeroed) around the initial state u0, v0 (7,) and
-    the virgin material and corner states; ns springs, nch channels, nbs bent springs."""
-    nev = 4 + nbs + 8
-    return AdaptiveWork(
-        u0=u0,
-        v0=v0,
-        hstate=hstate,
-        cstate=cstate,
-        cw=bd.new_contact_work(),
-        uc=np.zeros(7),
-        ug=np.zeros(nch),
-        vg=np.zeros(nch),
-        f=np.zeros(7),
-        **bd.row_views(_NS, ns),
-        **bd.row_views(_NT, NT),
-        K=np.zeros((7, NT)),
-        ev0=np.zeros(nev),
-        ev1=np.zeros(nev),
-        hist=np.zeros((2, H_NBINS), dtype=np.int64),
-        hstat=np.zeros((2, 3)),
-    )
 
 
 @kernel
@@ -298,7 +233,8 @@ def _any_yielded(sa, hstate):
 @kernel(nogil=True)
 def adaptive_run(system, contact, record, opt, output, work, stats):
     """The adaptive loop over [0, opt.t_end] (bundles of :mod:`deckpound.analytic.bundles`,
-    scalars :data:`AdaptiveOptions`, workspace :data:`AdaptiveWork`).
+    scalars :data:`.dormand_prince_work.AdaptiveOptions`, workspace
+    :data:`.dormand_prince_work.AdaptiveWork`).
 
     Fills ``output.table`` (rows at k·out_dt) and ``stats``: count = status (RUN_OK,
     RUN_STEP_UNDERFLOW, RUN_NONFINITE, RUN_STEP_BUDGET, RUN_INTERRUPTED), rows, steps

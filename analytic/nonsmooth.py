@@ -91,7 +91,7 @@ IMPULSE_COLUMNS = (
 
 def output_columns(scene: Scene) -> list[str]:
     """Column names of the nonsmooth result (standard, impulses, contact states, energies)."""
-    from deckpound.models.plan import standard_columns
+    from deckpound.models.columns import standard_columns
 
     return (
         standard_columns([b.name for b in scene.bents])

@@ -16,7 +16,7 @@ import dataclasses
 
 import numpy as np
 
-from deckpound.models.plan import column_unit, standard_columns
+from deckpound.models.columns import column_unit, standard_columns
 from deckpound.models.scene import Scene
 
 __all__ = ["column_deviations", "opensees_friction", "verify_clone"]

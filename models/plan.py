@@ -13,7 +13,7 @@ A :class:`Plan` is derived from a scene (:func:`plan_of`) and holds, written onc
   d = Σ b_j u_j − s·u_g[channel]), initial stiffness, dashpot and — for bents — the 13 numbers of
   the OpenSees ``Hysteretic`` material;
 * the support channels (``<bent>_x``, ``<bent>_y`` per shake table, ``seat1_x``, ``seat2_x``);
-* the result **columns** (:class:`Column`) with units and labels.
+* the result **columns** (:class:`deckpound.models.columns.Column`) with units and labels.
 
 Geometry (DESIGN, skewed decks): with skew angle φ the deck is a parallelogram whose end faces
 are the lines x = ±L/2 + y·tan φ; the corners sit at (±L/2 + y_c tan φ, y_c), y_c = ∓W/2.
@@ -40,10 +40,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .scene import Scene, TakedaSpring
+
+if TYPE_CHECKING:
+    from .columns import Column
 
 __all__ = [
     "CORNER_NAMES",
@@ -55,13 +59,10 @@ __all__ = [
     "N_DOF",
     "SEAT_THETA",
     "SEAT_X",
-    "Column",
     "Corner",
     "Plan",
     "Spring",
-    "column_unit",
     "plan_of",
-    "standard_columns",
     "support_channels",
     "takeda_hysteretic_args",
 ]
@@ -197,17 +198,6 @@ class Spring:
     takeda: tuple[float, ...] | None = None
 
 
-@dataclass(frozen=True)
-class Column:
-    """One result column: name, unit, one-line meaning and its labels (for named dimensions)."""
-
-    name: str
-    unit: str
-    doc: str
-    group: str
-    labels: tuple[tuple[str, str], ...] = ()
-
-
 def takeda_hysteretic_args(spring: TakedaSpring) -> tuple[float, ...]:
     """The 13 numbers after the tag of OpenSees ``uniaxialMaterial Hysteretic`` for a bent spring.
 
@@ -231,117 +221,6 @@ def support_channels(scene: Scene) -> tuple[str, ...]:
     for b in scene.bents:
         names += [f"{b.name}_x", f"{b.name}_y"]
     return tuple(names) + ("seat1_x", "seat2_x")
-
-
-def _unit_of(name: str) -> str:
-    if name == "t":
-        return "s"
-    if name.endswith(("_theta",)):
-        return "rad"
-    if name.endswith("_omega"):
-        return "rad/s"
-    if name.startswith(("deck_v", "seat1_v", "seat2_v")):
-        return "m/s"
-    if name.startswith(("gap_", "deck_", "seat", "ux_", "uy_")) or name.endswith(("_dx", "_dy")):
-        return "m"
-    if name.startswith(("fn_", "ft_")) or name.endswith(("_fx", "_fy")):
-        return "kN"
-    if name.startswith(("pn_", "pt_")):
-        return "kN*s"
-    if name.startswith("state_"):
-        return "0 open, 1 stick, 2 slip"
-    if name.startswith("energy_"):
-        return "kJ"
-    return "-"
-
-
-def column_unit(name: str) -> str:
-    """SI unit of a result column, from its name (engine-specific extras included)."""
-    return _unit_of(name)
-
-
-def standard_columns(bent_names) -> list[str]:
-    """Names of the columns every engine's result holds, in order (see :meth:`Plan.columns`)."""
-    return [c.name for c in _columns(tuple(bent_names))]
-
-
-def _columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
-    cols = [Column("t", "s", "time", "time")]
-    for name, _ in DOF_COLUMNS:
-        part = name.split("_")[0]
-        cols.append(
-            Column(
-                name,
-                _unit_of(name),
-                f"{part} displacement, absolute",
-                "absolute",
-                (("body", part),),
-            )
-        )
-    for name in RELATIVE_COLUMNS:
-        part = name.split("_")[0]
-        what = "the mean shake-table motion" if part == "deck" else "its actuator"
-        cols.append(
-            Column(
-                name, "m", f"{part} displacement relative to {what}", "relative", (("body", part),)
-            )
-        )
-    for name, _ in VELOCITY_COLUMNS:
-        part = name.split("_")[0]
-        cols.append(
-            Column(
-                name, _unit_of(name), f"{part} velocity, absolute", "velocity", (("body", part),)
-            )
-        )
-    for c in CORNER_NAMES:
-        cols.append(
-            Column(
-                f"gap_{c}", "m", f"gap at corner {c} (< 0: penetration)", "gap", (("corner", c),)
-            )
-        )
-    for c in CORNER_NAMES:
-        cols.append(
-            Column(
-                f"fn_{c}",
-                "kN",
-                f"normal contact force at {c} (compression > 0)",
-                "normal_force",
-                (("corner", c),),
-            )
-        )
-    for c in CORNER_NAMES:
-        cols.append(
-            Column(
-                f"ft_{c}",
-                "kN",
-                f"tangential contact force on the deck at {c} along the face tangent",
-                "tangential_force",
-                (("corner", c),),
-            )
-        )
-    for b in bent_names:
-        for d in ("x", "y"):
-            cols.append(
-                Column(
-                    f"{b}_f{d}",
-                    "kN",
-                    f"bent {b} spring force in {d}",
-                    "bent_force",
-                    (("bent", b), ("direction", d)),
-                )
-            )
-    for b in bent_names:
-        for d in ("x", "y"):
-            cols.append(
-                Column(
-                    f"{b}_d{d}",
-                    "m",
-                    f"bent {b} spring deformation in {d} (deck point above the bent − table)",
-                    "bent_deformation",
-                    (("bent", b), ("direction", d)),
-                )
-            )
-    return tuple(cols)
 
 
 @dataclass(frozen=True, eq=False)
@@ -430,8 +309,10 @@ class Plan:
     # -- columns ---------------------------------------------------------------------------
     @cached_property
     def columns(self) -> tuple[Column, ...]:
-        """The standard result columns (every engine), in order."""
-        return _columns(self.bent_names)
+        """The standard result columns (every engine), in order (:mod:`.columns`)."""
+        from .columns import result_columns
+
+        return result_columns(self.bent_names)
 
     @property
     def column_names(self) -> list[str]:

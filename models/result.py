@@ -32,8 +32,9 @@ from typing import Any
 import numpy as np
 
 from ._fields import to_mapping
+from .columns import column_unit, standard_columns
 from .errors import SceneError
-from .plan import CORNER_NAMES, column_unit, standard_columns
+from .plan import CORNER_NAMES
 
 __all__ = [
     "N_CORNERS",

@@ -35,9 +35,10 @@ from scipy.integrate import solve_ivp
 
 from deckpound.engine_contract import OptionIgnored
 from deckpound.engines import engine_names, get_engine, register, run_engine, unregister
+from deckpound.models.columns import standard_columns
 from deckpound.models.damping import damping_model
 from deckpound.models.errors import SceneError
-from deckpound.models.plan import plan_of, standard_columns
+from deckpound.models.plan import plan_of
 
 BUILT_IN = engine_names()
 EXTRA = "linear-newmark"

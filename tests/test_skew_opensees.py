@@ -31,7 +31,7 @@ from test_tcl_export_runs import HAS_TCL, deviation, recorded, run_tcl
 from tests_helpers_scene import short_benchmark
 
 from deckpound.engines import run_engine
-from deckpound.models.plan import column_unit
+from deckpound.models.columns import column_unit
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build import engine
 from deckpound.opensees_build.export import export_script

@@ -12,8 +12,8 @@ from deckpound.analytic.support_motion import (
     record_slopes,
     support_record,
 )
+from deckpound.models.columns import standard_columns
 from deckpound.models.excitation import support_motion
-from deckpound.models.plan import standard_columns
 from deckpound.models.scene_io import load_scene
 
 

@@ -273,7 +273,7 @@ def test_opensees_starts_displaced_like_the_clone():
     if importlib.util.find_spec("openseespy") is None:
         pytest.skip("openseespy not installed")
     from deckpound.analytic.verify import column_deviations
-    from deckpound.models.plan import standard_columns
+    from deckpound.models.columns import standard_columns
 
     cases = [
         load_scene(

@@ -1,0 +1,84 @@
+"""The scalars and the workspace of the Dormand–Prince loop (:func:`.dormand_prince.adaptive_run`).
+
+Sizes of its state vector (u, u̇ and the energy integrals), the accepted-step-size histogram,
+:data:`AdaptiveOptions` and :func:`adaptive_workspace` (every array the loop uses, allocated
+once per run: the loop itself cannot allocate, see :mod:`deckpound.analytic._jit`).
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+from deckpound.analytic import bundles as bd
+
+__all__ = [
+    "H_BINS_PER_DECADE",
+    "H_LOG_MIN",
+    "H_NBINS",
+    "NE",
+    "NT",
+    "NY",
+    "AdaptiveOptions",
+    "AdaptiveWork",
+    "adaptive_workspace",
+]
+
+NY = 14  # u, v
+NE = 5  # energy integrals: input, springs, viscous, contact, friction
+NT = NY + NE
+# accepted-step-size statistics: log10(h) histogram, H_BINS_PER_DECADE bins per decade from
+# 10**H_LOG_MIN to 1 s, row 0 = out of contact, row 1 = in contact (a gap ≤ 0 at either end)
+H_LOG_MIN = -14.0
+H_BINS_PER_DECADE = 20
+H_NBINS = int(-H_LOG_MIN) * H_BINS_PER_DECADE
+
+
+#: The scalars of :func:`adaptive_run`: end time ``t_end`` and output interval ``out_dt`` [s];
+#: error tolerances ``rtol`` [-] and ``atol`` [m, m/s]; largest step ``max_step`` and, once a
+#: Takeda spring has yielded, ``commit_step`` [s]; step budget ``max_steps`` (Runge–Kutta steps
+#: tried, accepted or rejected: each costs the same work).
+AdaptiveOptions = namedtuple(
+    "AdaptiveOptions", ["t_end", "out_dt", "rtol", "atol", "max_step", "commit_step", "max_steps"]
+)
+_NS = ("d", "dd", "fs", "kt")
+_NT = ("y", "k1", "ytmp", "ynew", "yev")
+#: The workspace of :func:`adaptive_run` (:func:`adaptive_workspace`): u0, v0 initial state;
+#: hstate, cstate material and corner states; cw the ContactWork; uc (7,) displacement at the
+#: last commit; ug, vg supports; d, dd, fs, kt (ns,) spring deformations, rates, forces,
+#: tangents; f (7,) internal force; y, k1, ytmp, ynew, yev (NT,) state [u, u̇, energy
+#: integrals], its rate, stage / new / interpolated states; K (7, NT) stage rates; ev0, ev1 event
+#: values at the step's ends; hist (2, H_NBINS) int64 and hstat (2, 3) accepted-step-size
+#: statistics (row 0 out of contact, row 1 in contact; hstat = [min, max, sum]).
+AdaptiveWork = namedtuple(
+    "AdaptiveWork",
+    ("u0", "v0", "hstate", "cstate", "cw", "uc", "ug", "vg", "f")
+    + _NS
+    + _NT
+    + ("K", "ev0", "ev1", "hist", "hstat"),
+)
+
+
+def adaptive_workspace(u0, v0, hstate, cstate, ns: int, nch: int, nbs: int) -> AdaptiveWork:
+    """The workspace of :func:`adaptive_run` (zeroed) around the initial state u0, v0 (7,) and
+    the virgin material and corner states; ns springs, nch channels, nbs bent springs."""
+    nev = 4 + nbs + 8
+    return AdaptiveWork(
+        u0=u0,
+        v0=v0,
+        hstate=hstate,
+        cstate=cstate,
+        cw=bd.new_contact_work(),
+        uc=np.zeros(7),
+        ug=np.zeros(nch),
+        vg=np.zeros(nch),
+        f=np.zeros(7),
+        **bd.row_views(_NS, ns),
+        **bd.row_views(_NT, NT),
+        K=np.zeros((7, NT)),
+        ev0=np.zeros(nev),
+        ev1=np.zeros(nev),
+        hist=np.zeros((2, H_NBINS), dtype=np.int64),
+        hstat=np.zeros((2, 3)),
+    )
