@@ -83,7 +83,7 @@ from deckpound.analytic._hysteretic_layout import (  # noqa: F401 (re-exported: 
     T_TANGENT,
     pack_hysteretic_params,
 )
-from deckpound.analytic._jit import compiled, kernel
+from deckpound.analytic._jit import kernel
 
 __all__ = [
     *_layout.__all__,
@@ -222,10 +222,12 @@ def _cached_degradation(p, s, rot, rot1, ik, irot):
 
 
 # ------------------------------------------------------------------- kernels
-@compiled
 def hyst_init_state(params):
     """Return a fresh state array (OpenSees constructor: revertToStart +
-    revertToLastCommit).  ``params`` as built by ``pack_hysteretic``."""
+    revertToLastCommit).  ``params`` as built by ``pack_hysteretic``.
+
+    Plain Python (called once per spring and run, before the loop): a compiled version cost
+    a fresh process ~70 ms to load from numba's cache, against microseconds to run."""
     s = np.zeros(N_STATE, dtype=np.float64)
     s[T_TANGENT] = params[P_E1P_SLOPE]
     return s

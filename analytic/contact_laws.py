@@ -486,19 +486,22 @@ def law_parameters(cp_row, cs_row) -> dict:
 def check_kernel_branches(cp) -> None:
     """Raise NotImplementedError if a corner's law or friction code has no kernel branch.
 
-    Probes :func:`normal_law` and :func:`friction_law` (the compiled dispatch itself, on a
-    scratch state) at a closed state; the final branch of each gives a non-finite force.
+    Probes :func:`normal_law` and :func:`friction_law` on a scratch state at a closed state;
+    the final branch of each gives a non-finite force. The probe runs their Python source
+    (``py_func``: the branches numba compiles, no compiled code needed): calling the compiled
+    kernels from Python would load each from numba's cache, ~60 ms of every fresh process
+    (``tests/test_contact_law_table.py`` checks the compiled kernels' branches).
     """
     for row in cp:
         cs = np.zeros(N_CS)
-        closed, lam, dg, _ = normal_law(row, cs, -1.0e-3, 0.0)
+        closed, lam, dg, _ = normal_law.py_func(row, cs, -1.0e-3, 0.0)
         if not (closed and np.isfinite(lam) and np.isfinite(dg)):
             raise NotImplementedError(
                 f"contact law code {int(row[P_LAW])} has no branch in "
                 "deckpound.analytic.contact_laws.normal_law (table: "
                 "deckpound.models.contact_laws_table)"
             )
-        _, lt, *_ = friction_law(row, cs, 1.0, 0.0, 0.0)
+        _, lt, *_ = friction_law.py_func(row, cs, 1.0, 0.0, 0.0)
         if not np.isfinite(lt):
             raise NotImplementedError(
                 f"friction code {int(row[P_FMODE])} has no branch in "

@@ -308,9 +308,8 @@ def test_element_copy_energy_convention():
 
 # ------------------------------------------------------- kernel vs class
 @njit(cache=True)
-def _kernel_drive(params, strains, ops_codes):
-    """ops_codes: 0 = trial+commit, 1 = trial only, 2 = trial+revert."""
-    st = K.hyst_init_state(params)
+def _kernel_drive(params, st, strains, ops_codes):
+    """ops_codes: 0 = trial+commit, 1 = trial only, 2 = trial+revert; st: the initial state."""
     n = strains.shape[0]
     out = np.empty((n, 2))
     for i in range(n):
@@ -330,7 +329,8 @@ def test_kernel_matches_class(name):
     rng = np.random.default_rng(11)
     strains = _random_history(args, 3000, rng)
     codes = rng.choice([0, 0, 0, 1, 2], size=strains.size).astype(np.int64)
-    kout = _kernel_drive(pack_hysteretic(*args), strains, codes)
+    params = pack_hysteretic(*args)
+    kout = _kernel_drive(params, K.hyst_init_state(params), strains, codes)
     m = HystereticMaterial(*args)
     for i, e in enumerate(strains):
         m.set_trial_strain(e)
