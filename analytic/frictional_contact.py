@@ -197,9 +197,9 @@ ContactSolveWork = namedtuple(
 )
 
 
-@compiled
 def contact_solve_work(nc):
-    """The scratch of :func:`solve_contact_impulses_with` for up to ``nc`` contacts (zeroed)."""
+    """The scratch of :func:`solve_contact_impulses_with` for up to ``nc`` contacts (zeroed;
+    plain Python, see :func:`deckpound.analytic.lcp.lcp_work`)."""
     n3 = 3 * nc
     nst = 4 * nc
     return ContactSolveWork(
@@ -223,7 +223,6 @@ def contact_solve_work(nc):
     )
 
 
-@compiled
 def solve_contact_impulses_into(
     G, uN_free, uT_free, uN_minus, e, mu, P_N, P_T, uN_plus, uT_plus, state, mode=0, rtol=1e-9
 ):
@@ -400,7 +399,6 @@ def solve_contact_impulses_with(
     return best_status, best_comp, best_cone
 
 
-@compiled
 def solve_contact_impulses(G, uN_free, uT_free, uN_minus, e, mu, mode=0, rtol=1e-9):
     """Allocating wrapper of :func:`solve_contact_impulses_into`.
 

@@ -4,10 +4,10 @@ Problem LCP(q, M): find z in R^n such that
 
     w = M z + q,    0 <= w  _|_  z >= 0     (z_i >= 0, w_i >= 0, z_i w_i = 0).
 
-Functions (all ``@njit``, pure, float64 arrays, no Python objects; each solver also comes as
-an ``…_into`` kernel that writes into given arrays and takes its scratch from a preallocated
-:func:`lcp_work`, so the nonsmooth step loop solves its contacts without allocating — the
-allocating functions below are thin wrappers of those, same arithmetic):
+Functions (float64 arrays; each solver is an ``…_into`` numba kernel that writes into given
+arrays and takes its scratch from a preallocated :func:`lcp_work`, so the nonsmooth step loop
+solves its contacts without allocating — the allocating functions below are thin Python
+wrappers of those, same arithmetic):
 
 ``lcp_lemke(M, q, max_pivots=0, tol=1e-12) -> (z, w, status, n_pivots)``
     Lemke's complementary pivoting method (Lemke 1965) with the covering
@@ -53,7 +53,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from deckpound.analytic._jit import compiled, kernel
+from deckpound.analytic._jit import kernel
 from deckpound.analytic.dense import solve_dense_cp_into
 
 __all__ = [
@@ -107,10 +107,11 @@ LcpWork = namedtuple(
 )
 
 
-@compiled
 def lcp_work(n):
     """Scratch for LCPs of size ≤ n (:data:`LcpWork`, zeroed; allocated once per run or per
-    call of an allocating wrapper — the ``…_into`` solvers write into views of it)."""
+    call of an allocating wrapper — the ``…_into`` solvers write into views of it). Plain
+    Python, like the allocating wrappers: nothing compiled calls them, and a compiled builder
+    cost a fresh process a load from numba's cache (~0.2 s for the nonsmooth engine's)."""
     return LcpWork(
         np.zeros((n, 2 * n + 2)),
         np.zeros((n, n)),
@@ -205,7 +206,6 @@ def _lex_select(T, rows, nrows, c, n, rtol, cand):
     return cand[0]
 
 
-@compiled
 def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
     """Lemke's method for w = M z + q, 0 <= w _|_ z >= 0.
 
@@ -391,7 +391,6 @@ def lcp_lemke_into(M, q, z, w, ws, max_pivots, tol):
     return status, npiv
 
 
-@compiled
 def lcp_enumerate(M, q, tol=1e-10):
     """Solve LCP(q, M) by enumerating all 2^n complementary index sets.
 
