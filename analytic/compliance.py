@@ -109,6 +109,7 @@ def pack_run(plan: Plan, scene: Scene, motion: SupportMotion, *, kv_clip: bool =
     of steps (the kernels interpolate it, see :mod:`deckpound.analytic.support_motion`).
     """
     from deckpound.analytic import contact_laws as cl
+    from deckpound.analytic.contact_law_checks import check_kernel_branches
     from deckpound.analytic.kinematics import K_G0, pack_corners
     from deckpound.analytic.support_motion import support_record
     from deckpound.analytic.system import pack_system
@@ -117,7 +118,7 @@ def pack_run(plan: Plan, scene: Scene, motion: SupportMotion, *, kv_clip: bool =
     ps = pack_system(plan, damping_model(scene, plan))
     record = support_record(motion, ps.channels)
     cp = cl.pack_contact(scene, kv_clip=kv_clip)
-    cl.check_kernel_branches(cp)
+    check_kernel_branches(cp)
     corners = pack_corners(plan)
     cs = cl.new_contact_state(corners[:, K_G0])
     return ps, record, cp, cs, corners

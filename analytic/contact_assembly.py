@@ -43,8 +43,8 @@ def _linear_gaps(u, v, corners, g, gd):
 @kernel(inline="always")
 def gap_rates(contact, v, cw):
     """Gap rates cw.gd = W_N u̇ of the four corners at the u of the last evaluation (its
-    Jacobian cw.WN when nonlinear), the same operations as :func:`eval_contacts` and
-    :func:`gaps_and_rates`."""
+    Jacobian cw.WN when nonlinear), the same operations as :func:`eval_contacts` (linear
+    kinematics); :func:`gaps_and_rates` uses it for the nonlinear one."""
     if not contact.nonlinear:
         for c in range(4):
             cw.gd[c] = linear_gap_rate(contact.corners[c], v)
@@ -65,11 +65,7 @@ def gaps_and_rates(contact, u, v, cw):
         _linear_gaps(u, v, contact.corners, cw.g, cw.gd)
     else:
         contact_kinematics(u, contact.corners, True, cw.g, cw.WN, cw.WT)
-        for c in range(4):
-            s = 0.0
-            for j in range(7):
-                s += cw.WN[c, j] * v[j]
-            cw.gd[c] = s
+        gap_rates(contact, v, cw)
 
 
 @kernel

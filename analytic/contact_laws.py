@@ -9,7 +9,8 @@ Newton. The generalised contact force on the 7 DOF is W_Nᵀ λ_N + W_Tᵀ λ_T 
 The laws and friction models, their codes, parameters and OpenSees counterparts are rows of
 :mod:`deckpound.models.contact_laws_table`; the kernels dispatch on the named codes ``LAW_*`` and
 ``FRICTION_*`` derived from it, one branch per row, and a code without a branch gives a
-non-finite force (the run fails; :func:`check_kernel_branches` refuses it before the run).
+non-finite force (the run fails; :func:`.contact_law_checks.check_kernel_branches` refuses it
+before the run).
 
 Normal laws (``scene.contact.law``), each the arithmetic of the OpenSees material the OpenSees
 engine uses (strain ε = g − g₀, OpenSees gap = −g₀, so ε − gap = g):
@@ -84,12 +85,10 @@ __all__ = [
     "N_CP",
     "N_CS",
     "V_IMPACT_MIN",
-    "check_kernel_branches",
     "contact_commit",
     "contact_revert",
     "contact_stored_energy",
     "friction_law",
-    "law_parameters",
     "new_contact_state",
     "normal_law",
     "pack_contact",
@@ -461,50 +460,3 @@ def contact_stored_energy(cp, cs):
         if has_stick_spring(cp[c, P_FMODE]) and cs[c, S_CFT] != 0.0:
             e += 0.5 * cs[c, S_CFT] ** 2 / cp[c, P_KT]
     return e
-
-
-def law_parameters(cp_row, cs_row) -> dict:
-    """The packed parameters of one corner by the names the table's ``force`` functions use
-    (:mod:`deckpound.models.contact_laws_table`); ``v_impact``: the committed approach
-    velocity −ġ."""
-    return {
-        "k": cp_row[P_K],
-        "n": cp_row[P_N],
-        "c": cp_row[P_C],
-        "hc": cp_row[P_D],
-        "k2": cp_row[P_K2],
-        "dy": cp_row[P_DY],
-        "e": cp_row[P_E],
-        "mu": cp_row[P_MU],
-        "kt": cp_row[P_KT],
-        "v0": cp_row[P_V0],
-        "v_min": V_IMPACT_MIN,
-        "v_impact": -cs_row[S_CGD],
-    }
-
-
-def check_kernel_branches(cp) -> None:
-    """Raise NotImplementedError if a corner's law or friction code has no kernel branch.
-
-    Probes :func:`normal_law` and :func:`friction_law` on a scratch state at a closed state;
-    the final branch of each gives a non-finite force. The probe runs their Python source
-    (``py_func``: the branches numba compiles, no compiled code needed): calling the compiled
-    kernels from Python would load each from numba's cache, ~60 ms of every fresh process
-    (``tests/test_contact_law_table.py`` checks the compiled kernels' branches).
-    """
-    for row in cp:
-        cs = np.zeros(N_CS)
-        closed, lam, dg, _ = normal_law.py_func(row, cs, -1.0e-3, 0.0)
-        if not (closed and np.isfinite(lam) and np.isfinite(dg)):
-            raise NotImplementedError(
-                f"contact law code {int(row[P_LAW])} has no branch in "
-                "deckpound.analytic.contact_laws.normal_law (table: "
-                "deckpound.models.contact_laws_table)"
-            )
-        _, lt, *_ = friction_law.py_func(row, cs, 1.0, 0.0, 0.0)
-        if not np.isfinite(lt):
-            raise NotImplementedError(
-                f"friction code {int(row[P_FMODE])} has no branch in "
-                "deckpound.analytic.contact_laws.friction_law (table: "
-                "deckpound.models.contact_laws_table)"
-            )

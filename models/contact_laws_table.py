@@ -54,7 +54,7 @@ class ContactLaw:
     params : scene fields the compliance engine's force depends on.
     equation : the force law in one line (docs, messages).
     force : λ_N(δ, δ̇, p) [kN] on first loading from the open state (virgin corner; δ > 0
-        closed), p the packed parameters by name (:func:`deckpound.analytic.contact_laws.
+        closed), p the packed parameters by name (:func:`deckpound.analytic.contact_law_checks.
         law_parameters`); the executable form of ``equation`` the kernel is tested against.
     opensees : OpenSees uniaxial material expressing it, or None; opensees_refusal : the
         refusal message when None.

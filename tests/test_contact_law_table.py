@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from _compliance_helpers import base_scene, with_contact, with_run
 
+from deckpound.analytic import contact_law_checks as clc
 from deckpound.analytic import contact_laws as cl
 from deckpound.engines import get_engine, run_engine
 from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_MODEL_TABLE, contact_law
@@ -36,14 +37,14 @@ def test_every_law_has_a_kernel_branch_computing_its_equation(law):
     """First loading of a virgin corner (committed open, approach velocity v) at several
     penetrations and rates: the compiled branch gives the table's force, open gives zero."""
     _, cp = _packed(law, stiffness=2.0e6, restitution=0.7)
-    cl.check_kernel_branches(cp)
+    clc.check_kernel_branches(cp)
     row = cp[0]
     for delta in (1e-5, 4e-4, 3e-3):  # below and above the bilinear yield (1 mm)
         for rate in (0.0, 0.05, -0.02):
             cs = cl.new_contact_state(np.full(4, 0.01))[0]
             cs[cl.S_CGD] = -0.3  # committed approach velocity 0.3 m/s
             closed, lam, dg, dgd = cl.normal_law(row, cs, -delta, -rate)
-            want = contact_law(law).force(delta, rate, cl.law_parameters(row, cs))
+            want = contact_law(law).force(delta, rate, clc.law_parameters(row, cs))
             assert closed, (law, delta)
             assert lam == pytest.approx(want, rel=1e-12, abs=1e-9), (law, delta, rate)
             assert np.isfinite(dg) and np.isfinite(dgd)
@@ -60,7 +61,7 @@ def test_every_friction_model_has_a_kernel_branch_computing_its_equation(mode):
         cs = np.zeros(cl.N_CS)
         _, lt, *_ = cl.friction_law(row, cs, lam_n, ds, ut)
         model = FRICTION_MODEL_TABLE[int(row[cl.P_FMODE])]
-        want = model.force(lam_n, ds, ut, cl.law_parameters(row, cs)) if lam_n > 0 else 0.0
+        want = model.force(lam_n, ds, ut, clc.law_parameters(row, cs)) if lam_n > 0 else 0.0
         assert lt == pytest.approx(want, rel=1e-12, abs=1e-12), (mode, lam_n, ds, ut)
 
 
@@ -74,11 +75,11 @@ def test_unknown_codes_fail_loudly():
     closed, lam, dg, _ = cl.normal_law(bad[0], cs, -1e-3, 0.0)
     assert closed and np.isnan(lam) and np.isnan(dg)
     with pytest.raises(NotImplementedError, match="normal_law"):
-        cl.check_kernel_branches(bad)
+        clc.check_kernel_branches(bad)
     bad = cp.copy()
     bad[:, cl.P_FMODE] = len(MODELS)
     with pytest.raises(NotImplementedError, match="friction_law"):
-        cl.check_kernel_branches(bad)
+        clc.check_kernel_branches(bad)
 
 
 def test_a_run_with_an_unknown_code_is_refused(monkeypatch):
