@@ -80,23 +80,34 @@ def remove_baseline(a: np.ndarray, dt: float, degree: int = BASELINE_DEGREE) -> 
     return a - basis @ coef
 
 
+def highpass_padded(a: np.ndarray, dt: float, corner: float, record: str) -> np.ndarray:
+    """Zero-phase 4th-order Butterworth high-pass at ``corner`` Hz of ``a`` padded with one
+    record length of zeros on each side; returns the whole padded signal (3n samples), pads
+    included. ``record`` names the record in the refusal of a corner outside (1e-6·Nyquist,
+    Nyquist) (the filter design is singular below). Shared by the users' records
+    (:func:`highpass_filtered`) and the synthetic generator
+    (:func:`deckpound.models.synthetic_motion.baseline_corrected`).
+    """
+    nyq = 0.5 / dt
+    if not 1e-6 * nyq <= corner < nyq:
+        raise SceneError(
+            "excitation.highpass",
+            f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
+            f"of {record}, got {corner}",
+        )
+    sos = butter_highpass_sos(4, corner / nyq)
+    n = len(a)
+    return sosfiltfilt(sos, np.concatenate([np.zeros(n), a, np.zeros(n)]))
+
+
 def highpass_filtered(a: np.ndarray, dt: float, corner: float) -> np.ndarray:
     """Zero-phase 4th-order Butterworth high-pass at ``corner`` Hz (zero padding both sides).
 
     The pads (one record length each) hold the filter's transients; they are cut off again,
     so v and d start from rest at t = 0.
     """
-    nyq = 0.5 / dt
-    if not 1e-6 * nyq <= corner < nyq:  # below 1e-6·nyq the filter design is singular
-        raise SceneError(
-            "excitation.highpass",
-            f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
-            f"of the record (after time scaling), got {corner}",
-        )
-    sos = butter_highpass_sos(4, corner / nyq)
     n = len(a)
-    padded = np.concatenate([np.zeros(n), a, np.zeros(n)])
-    return sosfiltfilt(sos, padded)[n : 2 * n]
+    return highpass_padded(a, dt, corner, "the record (after time scaling)")[n : 2 * n]
 
 
 def processing_label(exc: Excitation) -> str:

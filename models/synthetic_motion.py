@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._iir import butter_highpass_sos, sosfiltfilt
 from .errors import SceneError
 from .excitation import (
     G,
@@ -21,6 +20,7 @@ from .excitation import (
     _synthetic_samples,
     make_provenance,
 )
+from .record_motion import highpass_padded
 from .scene import Excitation, Scene
 
 # -- signal processing ---------------------------------------------------------------------
@@ -56,16 +56,9 @@ def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.
     re-derived spectrally from the tapered displacement. The three are then consistent and
     the record starts and ends at rest (final displacement and velocity exactly zero).
     """
-    nyq = 0.5 / dt
-    if not 1e-6 * nyq <= highpass < nyq:  # below 1e-6·nyq the filter design is singular
-        raise SceneError(
-            "excitation.highpass",
-            f"must lie between {1e-6 * nyq:g} Hz and the Nyquist frequency {nyq:g} Hz "
-            f"of the record, got {highpass}",
-        )
-    sos = butter_highpass_sos(4, highpass / nyq)
     pad = len(acc)
-    a = sosfiltfilt(sos, np.concatenate([np.zeros(pad), acc, np.zeros(pad)]))
+    # integrated over the padded signal, pre-event filter transient included, then cut
+    a = highpass_padded(acc, dt, highpass, "the record")
     v = np.concatenate([[0.0], np.cumsum(0.5 * (a[1:] + a[:-1]) * dt)])
     d = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)])
     d = d[pad : 2 * pad]

@@ -166,3 +166,12 @@ def test_pulse_is_one_longitudinal_cycle_at_rest_after():
     assert np.all(m.disp["bent2_y"] == 0) and m.disp["seat1_x"][-1] == 0.0
     w = 2 * np.pi / 0.4
     assert m.disp["bent1_x"].max() == pytest.approx(2 * 0.6 * G / w**2, rel=1e-3)
+
+
+def test_generator_refuses_a_highpass_corner_outside_the_record_band():
+    """The synthetic generator shares the records' high-pass (record_motion.highpass_padded):
+    a corner at or above the Nyquist frequency is refused by field, with the band."""
+    sc = load_scene("saiidi-4span", ["excitation.highpass=1000"])
+    with pytest.raises(SceneError, match="excitation.highpass") as err:
+        support_motion(sc)
+    assert "Nyquist frequency 100 Hz of the record, got 1000.0" in str(err.value)
