@@ -16,6 +16,18 @@ import numpy as np
 from deckpound.models.scene import Scene
 
 
+def _rigid_body_field(ops, set_node, prefixes: tuple[str, ...], cx, cy, ct) -> None:
+    """Set, committed, the rigid-body field (cx − ct·y, cy + ct·x, ct) of the deck at the
+    node ``deck`` and every node named with one of ``prefixes``, at the node's coordinates
+    (``set_node``: ops.setNodeDisp, setNodeVel or setNodeAccel)."""
+    raw = ops.raw
+    for name, tag in ops.tags("node").items():
+        if name == "deck" or name.startswith(prefixes):
+            x, y = raw.nodeCoord(tag)
+            for dof, value in ((1, cx - ct * y), (2, cy + ct * x), (3, ct)):
+                set_node(tag, dof, value, "-commit")
+
+
 def set_initial_displacement(ops, scene: Scene) -> None:
     """Give every node of the deck the rigid-body displacement of ``scene.initial.deck`` =
     (x, y, θ) in the small-rotation map of the rigidLinks (x − θ y, y + θ x, θ at the node's
@@ -25,13 +37,8 @@ def set_initial_displacement(ops, scene: Scene) -> None:
     dx, dy, th = scene.initial.deck
     if not (dx or dy or th):
         return
-    raw = ops.raw
     ops.comment(f"initial deck displacement {dx!r} m, {dy!r} m, {th!r} rad")
-    for name, tag in ops.tags("node").items():
-        if name == "deck" or name.startswith("deck "):
-            x, y = raw.nodeCoord(tag)
-            for dof, d in ((1, dx - th * y), (2, dy + th * x), (3, th)):
-                ops.setNodeDisp(tag, dof, d, "-commit")
+    _rigid_body_field(ops, ops.setNodeDisp, ("deck ",), dx, dy, th)
 
 
 def set_initial_acceleration(ops, scene: Scene, motion) -> None:
@@ -57,16 +64,11 @@ def set_initial_acceleration(ops, scene: Scene, motion) -> None:
     ax, ay, al = acc[DECK_X], acc[DECK_Y], acc[DECK_THETA]
     if not (ax or ay or al):
         return
-    raw = ops.raw
     ops.comment(
         f"initial deck acceleration {ax!r} m/s2, {ay!r} m/s2, {al!r} rad/s2 "
         "(equilibrium of the initial state)"
     )
-    for name, tag in ops.tags("node").items():
-        if name == "deck" or name.startswith("deck "):
-            x, y = raw.nodeCoord(tag)
-            for dof, a in ((1, ax - al * y), (2, ay + al * x), (3, al)):
-                ops.setNodeAccel(tag, dof, a, "-commit")
+    _rigid_body_field(ops, ops.setNodeAccel, ("deck ",), ax, ay, al)
 
 
 def set_initial_velocity(ops, scene: Scene) -> None:
@@ -76,13 +78,8 @@ def set_initial_velocity(ops, scene: Scene) -> None:
     vx, vy, om = scene.initial.deck_velocity
     if not (vx or vy or om):
         return
-    raw = ops.raw
     ops.comment(f"initial deck velocity {vx!r} m/s, {vy!r} m/s, {om!r} rad/s")
-    for name, tag in ops.tags("node").items():
-        if name == "deck" or name.startswith(("deck ", "stick ")):
-            x, y = raw.nodeCoord(tag)
-            for dof, v in ((1, vx - om * y), (2, vy + om * x), (3, om)):
-                ops.setNodeVel(tag, dof, v, "-commit")
+    _rigid_body_field(ops, ops.setNodeVel, ("deck ", "stick "), vx, vy, om)
 
 
 def refuse_initial_displacement(scene: Scene, settings) -> None:
