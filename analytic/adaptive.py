@@ -118,6 +118,7 @@ def run_adaptive(
         max_step=float(cset.max_step),
         commit_step=float(cset.commit_step),
         max_steps=int(cset.max_steps),
+        flush_subnormals=cset.subnormals == "flush",
     )
     contact = bd.Contact(corners, cp, scene.contact.geometry == "nonlinear")
     stats = bd.new_stats()

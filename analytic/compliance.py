@@ -157,6 +157,11 @@ class ComplianceEngine(Engine):
             read |= set(friction_model(ct.friction_mode).params)
         return read
 
+    def notes(self, scene: Scene, settings) -> list[str]:
+        from deckpound.analytic.fp_mode import flush_note
+
+        return flush_note("compliance.subnormals", settings.subnormals)
+
     def refuse(self, scene: Scene, settings) -> None:
         """contact2d is OpenSees's discrete, step-by-step algorithm (its stick point moves at
         every sliding commit, so the answer depends on where the steps fall) on the element's
@@ -315,6 +320,7 @@ def _run_newmark(
         reuse_factors=on["factor_reuse"],
         skip_unmoved=on["unmoved_iterate"],
         want_energy=any(c in ENERGY_COLUMNS for c in cols),
+        flush_subnormals=settings.subnormals == "flush",
     )
     output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(len(full)))
     u0, v0 = initial_dofs(initial_state)

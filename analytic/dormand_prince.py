@@ -28,6 +28,7 @@ from deckpound.analytic.bundles import (
     RUN_STEP_UNDERFLOW,
 )
 from deckpound.analytic.dormand_prince_work import H_BINS_PER_DECADE, H_LOG_MIN, H_NBINS, NT, NY
+from deckpound.analytic.fp_mode import flush_enter, flush_leave
 from deckpound.analytic.system import (
     C_BENT,
     spring_assemble,
@@ -232,6 +233,16 @@ def _any_yielded(sa, hstate):
 
 @kernel(nogil=True)
 def adaptive_run(system, contact, record, opt, output, work, stats):
+    """:func:`_adaptive_loop` with subnormal numbers flushed to zero while it runs when
+    ``opt.flush_subnormals`` (:mod:`deckpound.analytic.fp_mode`; the thread's floating-point
+    mode is restored on every way out)."""
+    saved = flush_enter(opt.flush_subnormals)
+    _adaptive_loop(system, contact, record, opt, output, work, stats)
+    flush_leave(saved)
+
+
+@kernel(inline="always")
+def _adaptive_loop(system, contact, record, opt, output, work, stats):
     """The adaptive loop over [0, opt.t_end] (bundles of :mod:`deckpound.analytic.bundles`,
     scalars :data:`.dormand_prince_work.AdaptiveOptions`, workspace
     :data:`.dormand_prince_work.AdaptiveWork`).

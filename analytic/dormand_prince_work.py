@@ -38,9 +38,20 @@ H_NBINS = int(-H_LOG_MIN) * H_BINS_PER_DECADE
 #: The scalars of :func:`adaptive_run`: end time ``t_end`` and output interval ``out_dt`` [s];
 #: error tolerances ``rtol`` [-] and ``atol`` [m, m/s]; largest step ``max_step`` and, once a
 #: Takeda spring has yielded, ``commit_step`` [s]; step budget ``max_steps`` (Runge–Kutta steps
-#: tried, accepted or rejected: each costs the same work).
+#: tried, accepted or rejected: each costs the same work); ``flush_subnormals``
+#: (``compliance.subnormals = "flush"``, :mod:`deckpound.analytic.fp_mode`).
 AdaptiveOptions = namedtuple(
-    "AdaptiveOptions", ["t_end", "out_dt", "rtol", "atol", "max_step", "commit_step", "max_steps"]
+    "AdaptiveOptions",
+    [
+        "t_end",
+        "out_dt",
+        "rtol",
+        "atol",
+        "max_step",
+        "commit_step",
+        "max_steps",
+        "flush_subnormals",
+    ],
 )
 _NS = ("d", "dd", "fs", "kt")
 _NT = ("y", "k1", "ytmp", "ynew", "yev")

@@ -82,6 +82,7 @@ from deckpound.analytic.bundles import (
     RUN_SINGULAR,
 )
 from deckpound.analytic.dense import lu_factor, lu_solve
+from deckpound.analytic.fp_mode import flush_enter, flush_leave
 from deckpound.analytic.frictional_contact import STATUS_FAILED
 from deckpound.analytic.impulses import solve_active_impulses
 from deckpound.analytic.kinematics import contact_kinematics, linear_gap
@@ -129,6 +130,16 @@ def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
 
 @kernel(nogil=True)
 def moreau_jean_run(system, contact, record, opt, output, work, stats):
+    """:func:`_moreau_jean_loop` with subnormal numbers flushed to zero while it runs when
+    ``opt.flush_subnormals`` (:mod:`deckpound.analytic.fp_mode`; the thread's floating-point
+    mode is restored on every way out)."""
+    saved = flush_enter(opt.flush_subnormals)
+    _moreau_jean_loop(system, contact, record, opt, output, work, stats)
+    flush_leave(saved)
+
+
+@kernel(inline="always")
+def _moreau_jean_loop(system, contact, record, opt, output, work, stats):
     """The Moreau–Jean step loop over ``opt.nsteps`` steps of length opt.h.
 
     Bundles of :mod:`deckpound.analytic.bundles` (``system``, ``contact`` — its corner table

@@ -36,10 +36,24 @@ N_ENERGY = len(ENERGY_COLUMNS)
 #: (:func:`deckpound.analytic.nonsmooth.separating_restitution`); friction coefficient ``mu``;
 #: contact solver ``mode`` (:mod:`deckpound.analytic.frictional_contact` ``MODE_*``); ``rtol``
 #: relative acceptance of the contact solution; ``ftol`` [kN] Newton acceptance of the spring
-#: forces and ``maxit`` Newton iterations; output every ``stride`` steps.
+#: forces and ``maxit`` Newton iterations; output every ``stride`` steps; ``flush_subnormals``
+#: (``nonsmooth.subnormals = "flush"``, :mod:`deckpound.analytic.fp_mode`).
 MoreauJeanOptions = namedtuple(
     "MoreauJeanOptions",
-    ["nsteps", "h", "theta", "ecoef", "esep", "mu", "mode", "rtol", "ftol", "maxit", "stride"],
+    [
+        "nsteps",
+        "h",
+        "theta",
+        "ecoef",
+        "esep",
+        "mu",
+        "mode",
+        "rtol",
+        "ftol",
+        "maxit",
+        "stride",
+        "flush_subnormals",
+    ],
 )
 _V7 = ("q", "v", "qk", "vk", "qM", "vfree", "vnew", "R", "dv", "Fk", "f")
 _NS = (

@@ -44,6 +44,7 @@ from deckpound.analytic.bundles import (
 )
 from deckpound.analytic.compliance import ENERGY_COLUMNS
 from deckpound.analytic.dense import lu_factor, lu_solve
+from deckpound.analytic.fp_mode import flush_enter, flush_leave
 from deckpound.analytic.newmark_work import (
     N_ENERGY,
     NewmarkOptions,
@@ -128,6 +129,16 @@ def _set_stats(
 
 @kernel(nogil=True)
 def newmark_run(system, contact, record, opt, output, work, stats):
+    """:func:`_newmark_loop` with subnormal numbers flushed to zero while it runs when
+    ``opt.flush_subnormals`` (:mod:`deckpound.analytic.fp_mode`; the thread's floating-point
+    mode is restored on every way out)."""
+    saved = flush_enter(opt.flush_subnormals)
+    _newmark_loop(system, contact, record, opt, output, work, stats)
+    flush_leave(saved)
+
+
+@kernel(inline="always")
+def _newmark_loop(system, contact, record, opt, output, work, stats):
     """Run the OpenSees-clone Newmark–Newton loop over ``opt.nsteps`` steps of size opt.dt.
 
     Bundles of :mod:`deckpound.analytic.bundles`: ``system`` (SystemArrays), ``contact``

@@ -39,7 +39,8 @@ N_ENERGY = len(ENERGY_COLUMNS)
 #: factorisation reused while the matrix is bitwise the last one), ``skip_unmoved`` (no force
 #: evaluation at a converged iterate whose last increment left every displacement bitwise
 #: unchanged: only the spring and gap rates are updated); ``want_energy`` (energy work
-#: terms accumulated; False when no energy column is requested).
+#: terms accumulated; False when no energy column is requested); ``flush_subnormals``
+#: (``compliance.subnormals = "flush"``, :mod:`deckpound.analytic.fp_mode`).
 NewmarkOptions = namedtuple(
     "NewmarkOptions",
     [
@@ -53,6 +54,7 @@ NewmarkOptions = namedtuple(
         "reuse_factors",
         "skip_unmoved",
         "want_energy",
+        "flush_subnormals",
     ],
 )
 # workspace rows by shape: (7,) DOF vectors, (7, 7) matrices, (7,) pivots, (ns,) per spring,

@@ -170,18 +170,18 @@ class NonsmoothEngine(Engine):
         return read
 
     def notes(self, scene: Scene, settings) -> list[str]:
+        from deckpound.analytic.fp_mode import flush_note
         from deckpound.models.contact_laws_table import RIGID_CONTACT, friction_model
 
         ct = scene.contact
         how = friction_model(ct.friction_mode).nonsmooth
+        notes = flush_note("nonsmooth.subnormals", settings.subnormals)
         if ct.has_friction and how:
-            return [
-                (
-                    f"contact.friction_mode = {ct.friction_mode!r} means {how} "
-                    f"(mu = {ct.friction:g}): {RIGID_CONTACT}"
-                )
-            ]
-        return []
+            notes.append(
+                f"contact.friction_mode = {ct.friction_mode!r} means {how} "
+                f"(mu = {ct.friction:g}): {RIGID_CONTACT}"
+            )
+        return notes
 
     def _run(
         self,
@@ -253,6 +253,7 @@ class NonsmoothEngine(Engine):
             ftol=_force_tolerance(ps, ns_set.tolerance),
             maxit=int(ns_set.max_iterations),
             stride=int(stride),
+            flush_subnormals=ns_set.subnormals == "flush",
         )
         contact = bd.Contact(pack_corners(plan), pack_contact(scene), ct.geometry == "nonlinear")
         stats = bd.new_stats()

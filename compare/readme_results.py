@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from deckpound.compare import readme_blocks
+from deckpound.models.scene_settings import SUBNORMALS_UNCHANGED_ABOVE as UNCHANGED_ABOVE
 
 __all__ = [
     "SKIPS_BEGIN",
@@ -56,7 +57,10 @@ SKIP_TEXT = {
     "friction": "no friction work at μ = 0",
     "takeda_pow": "the Takeda elastic short-circuit",
     "geometry": "linear kinematics unless the nonlinear one is asked for",
+    "subnormals": "subnormal numbers flushed to zero",
 }
+#: rows that are choices with (slightly) different results, not skips
+NOT_SKIPS = ("geometry", "subnormals")
 
 
 def _need(table: pd.DataFrame, name: str, columns: tuple[str, ...]) -> None:
@@ -105,11 +109,17 @@ def render_skips(skips: pd.DataFrame, steps: pd.DataFrame) -> str:
                 " (a model choice, not a skip: largest result difference "
                 f"{g['max_abs_diff'].max():.1e})"
             )
+        elif skip == "subnormals":
+            worst = g["max_abs_diff"].max()
+            text += (
+                " (a floating-point choice, not a skip: largest result difference "
+                f"{worst:.1e}" + (")" if worst <= UNCHANGED_ABOVE else ", **above 1e-250**)")
+            )
         elif not g["identical"].astype(bool).all():
             bad = ", ".join(g.loc[~g["identical"].astype(bool), "scene"])
             text += f" (**results differ** on {bad})"
         parts.append(text)
-    skips_identical = skips[skips["skip"] != "geometry"]["identical"].astype(bool).all()
+    skips_identical = skips[~skips["skip"].isin(NOT_SKIPS)]["identical"].astype(bool).all()
     lines = [
         SKIPS_BEGIN,
         "",

@@ -18,6 +18,9 @@ be 0: a skip never changes a result). Further rows:
 * ``geometry`` — the nonlinear kinematics against the linear one: not a skip with identical
   results but the price of asking for the geometric-nonlinear terms (difference reported for
   information).
+* ``subnormals`` — ``compliance.subnormals = "flush"`` (the default) against ``"keep"``
+  (:mod:`deckpound.analytic.fp_mode`): not a skip either; the results differ only below
+  1e-250 (the largest difference over every column is reported).
 
 The adaptive integrator's step-size distribution in and out of contact (median, min, max of
 the accepted steps, from its ``step_sizes`` metadata) is reported for the same scenes, twice:
@@ -229,6 +232,19 @@ def run_skips(
                 max_diff(ref, r, ["deck_theta"]),
                 "linear vs nonlinear kinematics: a different model; max_abs_diff is that of "
                 "deck_theta [rad], for information",
+            )
+            keep = modified(sc, "compliance.subnormals=keep")
+            run_compliance(keep, m)
+            _a, t_a, r, t_keep = _paired(
+                lambda: run_compliance(sc, m), lambda: run_compliance(keep, m), repeats
+            )
+            add(
+                "subnormals",
+                t_a,
+                t_keep,
+                max_diff(ref, r),
+                "subnormal numbers flushed to zero (the default) vs kept: a floating-point "
+                "choice, not a skip; max_abs_diff over every column",
             )
             ad = modified(sc, "compliance.integrator=adaptive")
             lifted = modified(ad, f"compliance.commit_step={ad.compliance.max_step!r}")
