@@ -78,6 +78,21 @@ def test_skips_sentence_gives_ranges_and_says_when_a_skip_changed_a_result():
     assert "**Some skip changed a result**" in bad and "identical to the last bit" not in bad
 
 
+def test_flushed_subnormals_are_a_choice_whose_difference_must_stay_below_1e_250():
+    skips, steps = _skips()
+    row = dict(scene="a", skip="subnormals", speedup=1.3, identical=False)
+    small = pd.concat([skips, pd.DataFrame([dict(row, max_abs_diff=1.8e-304)])])
+    text = rr.render_skips(small, steps)
+    assert "subnormal numbers flushed to zero 1.3× (a floating-point choice, not a skip: " in text
+    assert "largest result difference 1.8e-304)" in text
+    assert "Every skip gives results identical to the last bit." in text
+    assert not len(rr.skip_failures(small))
+    big = pd.concat([skips, pd.DataFrame([dict(row, max_abs_diff=1e-12)])])
+    assert "largest result difference 1.0e-12, **above 1e-250**)" in rr.render_skips(big, steps)
+    assert list(rr.skip_failures(big)["skip"]) == ["subnormals"]
+    assert list(rr.skip_failures(_skips(identical=False)[0])["skip"]) == ["decimate", "decimate"]
+
+
 def _stress(extra=()):
     rows = [
         dict(engine=e, stiffness=k, dt=dt, status="success", finite=True,

@@ -83,7 +83,9 @@ def _bench_body(args, scene) -> int:
                 ["scene", "commit_cap", "where", "steps", "median", "min", "max", "time"]
             ].to_string(index=False, float_format=lambda v: f"{v:.3g}")
         )
-        bad = table[(table["skip"] != "geometry") & ~table["identical"].astype(bool)]
+        from deckpound.compare.readme_results import skip_failures
+
+        bad = skip_failures(table)
         print(
             f"wrote {args.output}; "
             + (
