@@ -233,16 +233,6 @@ def _any_yielded(sa, hstate):
 
 @kernel(nogil=True)
 def adaptive_run(system, contact, record, opt, output, work, stats):
-    """:func:`_adaptive_loop` with subnormal numbers flushed to zero while it runs when
-    ``opt.flush_subnormals`` (:mod:`deckpound.analytic.fp_mode`; the thread's floating-point
-    mode is restored on every way out)."""
-    saved = flush_enter(opt.flush_subnormals)
-    _adaptive_loop(system, contact, record, opt, output, work, stats)
-    flush_leave(saved)
-
-
-@kernel(inline="always")
-def _adaptive_loop(system, contact, record, opt, output, work, stats):
     """The adaptive loop over [0, opt.t_end] (bundles of :mod:`deckpound.analytic.bundles`,
     scalars :data:`.dormand_prince_work.AdaptiveOptions`, workspace
     :data:`.dormand_prince_work.AdaptiveWork`).
@@ -254,6 +244,9 @@ def _adaptive_loop(system, contact, record, opt, output, work, stats):
     work.hstat: accepted step sizes. ``stats.halt[0]`` ≠ 0 stops the loop before the next step
     attempt (RUN_INTERRUPTED); so does ``opt.max_steps`` attempts (RUN_STEP_BUDGET).
     """
+    # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
+    # deckpound.analytic.fp_mode); every return below restores the thread's mode first
+    saved = flush_enter(opt.flush_subnormals)
     sa = system
     ws = work
     hstate, cs, cw = ws.hstate, ws.cstate, ws.cw
@@ -428,6 +421,7 @@ def _adaptive_loop(system, contact, record, opt, output, work, stats):
     cnt[bd.CNT_EVENTS] = events
     cnt[bd.CNT_RHS_CALLS] = calls
     stats.value[bd.VAL_TIME] = t
+    flush_leave(saved)
 
 
 @kernel

@@ -130,16 +130,6 @@ def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
 
 @kernel(nogil=True)
 def moreau_jean_run(system, contact, record, opt, output, work, stats):
-    """:func:`_moreau_jean_loop` with subnormal numbers flushed to zero while it runs when
-    ``opt.flush_subnormals`` (:mod:`deckpound.analytic.fp_mode`; the thread's floating-point
-    mode is restored on every way out)."""
-    saved = flush_enter(opt.flush_subnormals)
-    _moreau_jean_loop(system, contact, record, opt, output, work, stats)
-    flush_leave(saved)
-
-
-@kernel(inline="always")
-def _moreau_jean_loop(system, contact, record, opt, output, work, stats):
     """The Moreau–Jean step loop over ``opt.nsteps`` steps of length opt.h.
 
     Bundles of :mod:`deckpound.analytic.bundles` (``system``, ``contact`` — its corner table
@@ -158,6 +148,9 @@ def _moreau_jean_loop(system, contact, record, opt, output, work, stats):
     ``work.final`` (2, 7) = displacement and velocity at the last accepted step.
     ``stats.halt[0]`` ≠ 0 stops the loop at the next Newton iteration (RUN_INTERRUPTED).
     """
+    # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
+    # deckpound.analytic.fp_mode); every return below restores the thread's mode first
+    saved = flush_enter(opt.flush_subnormals)
     sa = system
     Cmat = sa.C
     nbs = sa.nbs
@@ -503,3 +496,4 @@ def _moreau_jean_loop(system, contact, record, opt, output, work, stats):
     stats.value[bd.VAL_MAX_CONE] = max_cone
     stats.value[bd.VAL_MAX_PEN] = max_pen
     stats.value[bd.VAL_TIME] = (nsteps if status == RUN_OK else failed - 1) * h
+    flush_leave(saved)

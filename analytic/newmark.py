@@ -129,16 +129,6 @@ def _set_stats(
 
 @kernel(nogil=True)
 def newmark_run(system, contact, record, opt, output, work, stats):
-    """:func:`_newmark_loop` with subnormal numbers flushed to zero while it runs when
-    ``opt.flush_subnormals`` (:mod:`deckpound.analytic.fp_mode`; the thread's floating-point
-    mode is restored on every way out)."""
-    saved = flush_enter(opt.flush_subnormals)
-    _newmark_loop(system, contact, record, opt, output, work, stats)
-    flush_leave(saved)
-
-
-@kernel(inline="always")
-def _newmark_loop(system, contact, record, opt, output, work, stats):
     """Run the OpenSees-clone Newmark–Newton loop over ``opt.nsteps`` steps of size opt.dt.
 
     Bundles of :mod:`deckpound.analytic.bundles`: ``system`` (SystemArrays), ``contact``
@@ -160,6 +150,9 @@ def _newmark_loop(system, contact, record, opt, output, work, stats):
     matrix), max iterations of a step, steps rescued by sub-stepping. ``stats.halt[0]`` ≠ 0
     stops the loop at the next Newton iteration (status RUN_INTERRUPTED).
     """
+    # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
+    # deckpound.analytic.fp_mode); every return below restores the thread's mode first
+    saved = flush_enter(opt.flush_subnormals)
     sa = system
     Cmat = sa.C
     nbs = sa.nbs
@@ -228,6 +221,7 @@ def _newmark_loop(system, contact, record, opt, output, work, stats):
             LUel[i, j] = Kel[i, j]
     if not lu_factor(LUel, pivel):
         _set_stats(stats, RUN_SINGULAR, 0, 0, 0, 0, 0, 0, 0, 0, dt)
+        flush_leave(saved)
         return
     jrec = record_at(tb, DG, VGR, SDG, SVG, 0.0, 0, ug1, vg1)
     for k in range(nch):
@@ -285,6 +279,7 @@ def _newmark_loop(system, contact, record, opt, output, work, stats):
                 rescued,
                 dt,
             )
+            flush_leave(saved)
             return
         for j in range(7):
             us[j] = u[j]
@@ -476,6 +471,7 @@ def _newmark_loop(system, contact, record, opt, output, work, stats):
             _set_stats(
                 stats, status, row, n + 1, n, total_it, events, reused, maxit_seen, rescued, dt
             )
+            flush_leave(saved)
             return
         # --- output
         if (n + 1) % stride == 0:
@@ -484,3 +480,4 @@ def _newmark_loop(system, contact, record, opt, output, work, stats):
             store_row(output, row, (n + 1) * dt, u, v, cw, cs, fs, nbs, energy)
             row += 1
     _set_stats(stats, RUN_OK, row, 0, nsteps, total_it, events, reused, maxit_seen, rescued, dt)
+    flush_leave(saved)
