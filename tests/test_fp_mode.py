@@ -106,6 +106,33 @@ def test_the_threads_floating_point_mode_is_restored(engine, sets):
     assert seen == [True]
 
 
+@pytest.mark.parametrize("engine", ["compliance", "nonsmooth"])
+def test_the_mode_is_restored_after_an_interrupted_run(monkeypatch, engine):
+    """The loop stops at its first interrupt check (the halt flag set before it starts) and
+    leaves through its interrupt exit, in a worker thread that then computes with subnormals."""
+    from deckpound.analytic import bundles as bd
+
+    new_stats = bd.new_stats
+
+    def halted():
+        stats = new_stats()
+        stats.halt[0] = 1
+        return stats
+
+    monkeypatch.setattr(bd, "new_stats", halted)
+    scene = load_scene("saiidi-4span", ["run.duration=0.5"])
+    seen: list[tuple[str, bool]] = []
+
+    def worker():
+        r = run_engine(engine, scene, on_interrupt="return")
+        seen.append((r.meta["failure"], _subnormals_survive_in_this_thread()))
+
+    t = threading.Thread(target=worker)
+    t.start()
+    t.join()
+    assert seen == [("interrupted", True)]
+
+
 def test_a_bad_value_names_the_field_and_the_choices():
     with pytest.raises(SceneError) as err:
         load_scene("saiidi-4span", ["nonsmooth.subnormals=drop"])
