@@ -49,6 +49,25 @@ from deckpound.models.scene import Scene
 
 from .studies import modified
 
+#: (row, the alternative's override, columns of max_abs_diff (None: every column), note): the
+#: rows that time a modelling or floating-point choice against its default
+CHOICES = (
+    (
+        "geometry",
+        "contact.geometry=nonlinear",
+        ["deck_theta"],
+        "linear vs nonlinear kinematics: a different model; max_abs_diff is that of "
+        "deck_theta [rad], for information",
+    ),
+    (
+        "subnormals",
+        "compliance.subnormals=keep",
+        None,
+        "subnormal numbers flushed to zero (the default) vs kept: a floating-point "
+        "choice, not a skip; max_abs_diff over every column",
+    ),
+)
+
 
 def skip_scenes(base: Scene, quick: bool) -> dict[str, Scene]:
     d = 10.0 if quick else 20.0
@@ -220,32 +239,14 @@ def run_skips(
                 max_diff(ref, r, ["t", "deck_theta"]),
                 "deck_theta only vs every column",
             )
-            nl = modified(sc, "contact.geometry=nonlinear")
-            run_compliance(nl, m)
-            _a, t_a, r, t_nl = _paired(
-                lambda: run_compliance(sc, m), lambda: run_compliance(nl, m), repeats
-            )
-            add(
-                "geometry",
-                t_a,
-                t_nl,
-                max_diff(ref, r, ["deck_theta"]),
-                "linear vs nonlinear kinematics: a different model; max_abs_diff is that of "
-                "deck_theta [rad], for information",
-            )
-            keep = modified(sc, "compliance.subnormals=keep")
-            run_compliance(keep, m)
-            _a, t_a, r, t_keep = _paired(
-                lambda: run_compliance(sc, m), lambda: run_compliance(keep, m), repeats
-            )
-            add(
-                "subnormals",
-                t_a,
-                t_keep,
-                max_diff(ref, r),
-                "subnormal numbers flushed to zero (the default) vs kept: a floating-point "
-                "choice, not a skip; max_abs_diff over every column",
-            )
+            # choices with other results, not skips: the default against the alternative
+            for label, override, diff_cols, note in CHOICES:
+                other = modified(sc, override)
+                run_compliance(other, m)  # compile / warm
+                _a, t_a, r, t_other = _paired(
+                    lambda: run_compliance(sc, m), lambda: run_compliance(other, m), repeats
+                )
+                add(label, t_a, t_other, max_diff(ref, r, diff_cols), note)
             ad = modified(sc, "compliance.integrator=adaptive")
             lifted = modified(ad, f"compliance.commit_step={ad.compliance.max_step!r}")
             for cap, scn in (("default", ad), ("lifted", lifted)):
