@@ -4,8 +4,8 @@ A quantity that decays freely passes through the subnormal range (|x| < 2.2e-308
 gradual underflow) on its way to zero. On x86-64 every floating-point operation with a
 subnormal input or output takes a microcode assist of about a hundred cycles. On the
 benchmark, the free seat rotations decay through that range once pounding stops
-(t > 13.6 s): a third of the steps then run about 40 % slower, for numbers that are zero for
-any physical purpose.
+(t > 13.6 s), and from then on every step pays for numbers that are zero for any physical
+purpose (the ``subnormals`` row of ``deckpound bench --skips`` measures the whole run).
 
 ``subnormals = "flush"`` sets the FTZ (flush-to-zero, bit 15) and DAZ (denormals-are-zero,
 bit 6) bits of the SSE control register MXCSR for the duration of a step loop, in the thread
@@ -13,7 +13,7 @@ that runs it, and restores the register when the loop ends. Every result that wo
 subnormal becomes ±0 (an absolute change below 2.2e-308 per operation), and what follows from
 it can differ by as little: on the benchmark, in all three analytic integrators, every stored
 value larger than :data:`UNCHANGED_ABOVE` in magnitude is bit-identical with ``"keep"`` (the
-seat rotations differ below 1e-287 m, rad; checked by the tests). ``"keep"`` leaves the IEEE
+seat rotations and their rates differ below 1e-287 rad, rad/s; checked by the tests). ``"keep"`` leaves the IEEE
 default, as OpenSees (its own C++ arithmetic) always does.
 
 The MXCSR access is x86-64 only (:data:`FLUSH_AVAILABLE`); on other machines the loops keep
