@@ -2,7 +2,7 @@
 
 A quantity that decays freely passes through the subnormal range (|x| < 2.2e-308, IEEE 754
 gradual underflow) on its way to zero. On x86-64 every floating-point operation with a
-subnormal input or output takes a microcode assist of about a hundred cycles. On the
+subnormal input or output takes a microcode assist, many times slower than a normal operation. On the
 benchmark, the free seat rotations decay through that range once pounding stops
 (t > 13.6 s), and from then on every step pays for numbers that are zero for any physical
 purpose (the ``subnormals`` row of ``deckpound bench --skips`` measures the whole run).

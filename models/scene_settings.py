@@ -23,8 +23,8 @@ SUBNORMAL_MODES = ("flush", "keep")
 SUBNORMALS_UNCHANGED_ABOVE = 1.0e-250
 _SUBNORMALS_DOC = (
     "numbers below 2.2e-308 in the step loop: flush = set to zero (x86 FTZ/DAZ: results "
-    "change only below 1e-250, and a freely decaying DOF no longer costs about 100 cycles "
-    "per operation in that range); keep = IEEE gradual underflow, as OpenSees"
+    "change only below 1e-250, and a freely decaying DOF no longer takes the processor's "
+    "slow path for subnormals); keep = IEEE gradual underflow, as OpenSees"
 )
 
 
