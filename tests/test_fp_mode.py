@@ -133,6 +133,37 @@ def test_the_mode_is_restored_after_an_interrupted_run(monkeypatch, engine):
     assert seen == [("interrupted", True)]
 
 
+
+def test_the_mode_is_restored_after_a_singular_start(monkeypatch):
+    """The Newmark loop's first exit: the elastic effective tangent K + c₂C + c₃M cannot be
+    factorised (here every mass, stiffness and damping coefficient is zero), so the loop stops
+    before its first step and returns the thread's mode on the way out."""
+    from deckpound.analytic import system
+
+    pack_system = system.pack_system
+
+    def degenerate(plan, damping):
+        ps = pack_system(plan, damping)
+        for name in ("mass", "k0", "crate", "cdash", "C"):
+            getattr(ps.arrays, name)[...] = 0.0
+        return ps
+
+    monkeypatch.setattr(system, "pack_system", degenerate)
+    scene = load_scene("saiidi-4span", ["run.duration=0.5"])
+    seen: list[tuple[str, str, bool]] = []
+
+    def worker():
+        r = run_engine("compliance", scene, on_interrupt="return")
+        seen.append((r.meta["failure"], r.meta["status"], _subnormals_survive_in_this_thread()))
+
+    t = threading.Thread(target=worker)
+    t.start()
+    t.join()
+    assert len(seen) == 1
+    failure, status, survive = seen[0]
+    assert "singular" in str(failure), (failure, status)
+    assert survive
+
 def test_a_bad_value_names_the_field_and_the_choices():
     with pytest.raises(SceneError) as err:
         load_scene("saiidi-4span", ["nonsmooth.subnormals=drop"])
