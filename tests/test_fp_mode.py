@@ -133,7 +133,6 @@ def test_the_mode_is_restored_after_an_interrupted_run(monkeypatch, engine):
     assert seen == [("interrupted", True)]
 
 
-
 def test_the_mode_is_restored_after_a_singular_start(monkeypatch):
     """The Newmark loop's first exit: the elastic effective tangent K + c₂C + c₃M cannot be
     factorised (here every mass, stiffness and damping coefficient is zero), so the loop stops
@@ -163,6 +162,7 @@ def test_the_mode_is_restored_after_a_singular_start(monkeypatch):
     failure, status, survive = seen[0]
     assert "singular" in str(failure), (failure, status)
     assert survive
+
 
 def test_a_bad_value_names_the_field_and_the_choices():
     with pytest.raises(SceneError) as err:
