@@ -260,7 +260,7 @@ class Result:
     # -- files -----------------------------------------------------------------------
     def write(self, folder: str | Path, *, parallel: bool = False) -> tuple[Path, Path]:
         """Write ``<engine>.csv`` and ``<engine>.json`` into ``folder``, both or neither
-        (``parallel``: format the CSV on two cores, see :meth:`csv_bytes`)."""
+        (``parallel``: see :meth:`csv_bytes`)."""
         from deckpound._io import atomic_write_files, ensure_folder
 
         folder = ensure_folder(folder, "result folder")
@@ -273,15 +273,15 @@ class Result:
 
     def csv_bytes(self, *, parallel: bool = False) -> bytes:
         """The columns as CSV: a ``# units:`` comment line, the header, then the rows (the
-        shortest text of each double that reads back as the same double). ``parallel``: a
-        forked child formats half of the rows (:mod:`._rows_text`; the same bytes)."""
-        from ._rows_text import format_rows
+        shortest text of each double that reads back as the same double: ``repr``'s text, written
+        by ``orjson``, see :mod:`._rows_text`). ``parallel``: without ``orjson``, a forked child
+        formats half of the rows with ``repr`` (the same bytes)."""
+        from ._rows_text import format_array
 
         names = list(self.columns)
         head = ["# units: " + ",".join(column_unit(n) for n in names), ",".join(names)]
         arr = np.column_stack([self.columns[n] for n in names]) if names else np.empty((0, 0))
-        # tolist() gives Python floats: their repr is 3-5x faster than the numpy scalars'
-        body = format_rows(arr.astype(float).tolist(), parallel=parallel)
+        body = format_array(arr.astype(float), parallel=parallel)
         return ("\n".join(head) + "\n" + body).encode()
 
     def json_bytes(self) -> bytes:
