@@ -258,30 +258,28 @@ class Result:
         return ds
 
     # -- files -----------------------------------------------------------------------
-    def write(self, folder: str | Path, *, parallel: bool = False) -> tuple[Path, Path]:
-        """Write ``<engine>.csv`` and ``<engine>.json`` into ``folder``, both or neither
-        (``parallel``: see :meth:`csv_bytes`)."""
+    def write(self, folder: str | Path) -> tuple[Path, Path]:
+        """Write ``<engine>.csv`` and ``<engine>.json`` into ``folder``, both or neither."""
         from deckpound._io import atomic_write_files, ensure_folder
 
         folder = ensure_folder(folder, "result folder")
         csv_path, json_path = folder / f"{self.engine}.csv", folder / f"{self.engine}.json"
         atomic_write_files(
-            {csv_path: self.csv_bytes(parallel=parallel), json_path: self.json_bytes()},
+            {csv_path: self.csv_bytes(), json_path: self.json_bytes()},
             field="result folder",
         )
         return csv_path, json_path
 
-    def csv_bytes(self, *, parallel: bool = False) -> bytes:
+    def csv_bytes(self) -> bytes:
         """The columns as CSV: a ``# units:`` comment line, the header, then the rows (the
         shortest text of each double that reads back as the same double: ``repr``'s text, written
-        by ``orjson``, see :mod:`._rows_text`). ``parallel``: without ``orjson``, a forked child
-        formats half of the rows with ``repr`` (the same bytes)."""
+        by ``orjson``, see :mod:`._rows_text`)."""
         from ._rows_text import format_array
 
         names = list(self.columns)
         head = ["# units: " + ",".join(column_unit(n) for n in names), ",".join(names)]
         arr = np.column_stack([self.columns[n] for n in names]) if names else np.empty((0, 0))
-        body = format_array(arr.astype(float), parallel=parallel)
+        body = format_array(arr.astype(float))
         return ("\n".join(head) + "\n" + body).encode()
 
     def json_bytes(self) -> bytes:

@@ -1,7 +1,6 @@
 """Result CSV text (models/_rows_text.py): every value as ``repr(float)`` writes it, whether
-``orjson`` writes it (the default), ``repr`` on one core, or ``repr`` on two."""
+``orjson`` writes it (the default) or ``repr`` itself (without ``orjson``)."""
 
-import os
 import sys
 
 import numpy as np
@@ -72,7 +71,6 @@ def test_without_orjson_the_repr_text_is_written(monkeypatch):
     expected = r.csv_bytes()
     monkeypatch.setitem(sys.modules, "orjson", None)  # import orjson now raises ImportError
     assert r.csv_bytes() == expected
-    assert r.csv_bytes(parallel=True) == expected
     table = np.column_stack(list(r.columns.values()))
     assert _rows_text.format_array(table) == _repr_text(table)
 
@@ -85,29 +83,7 @@ def test_shapes_without_values():
 
 def test_written_results_read_back_bit_for_bit(tmp_path):
     r = _result(4001)
-    r.write(tmp_path, parallel=True)
+    r.write(tmp_path)
     back = Result.read(tmp_path, "e")
     for k, v in r.columns.items():
         np.testing.assert_array_equal(back.columns[k], v)
-
-
-def test_parallel_repr_text_is_byte_identical():
-    rows = np.column_stack(list(_result(4001).columns.values())).tolist()
-    assert _rows_text.format_rows(rows, parallel=True) == _rows_text.format_rows(rows)
-
-
-def test_small_tables_and_failed_children_fall_back(monkeypatch):
-    small = np.column_stack(list(_result(10).columns.values())).tolist()
-    assert _rows_text.format_rows(small, parallel=True) == _rows_text.format_rows(small)
-    big = np.column_stack(list(_result(4001).columns.values())).tolist()
-    expected = _rows_text.format_rows(big)
-    real_fork = os.fork
-
-    def fork_and_fail():
-        pid = real_fork()
-        if pid == 0:
-            os._exit(3)  # a child that dies before writing anything
-        return pid
-
-    monkeypatch.setattr(_rows_text.os, "fork", fork_and_fail)
-    assert _rows_text.format_rows(big, parallel=True) == expected

@@ -114,7 +114,7 @@ def _run(args) -> int:
     plausibility.enforce(scene, motion, engines=(args.engine,))
     result = run_engine(args.engine, scene, motion)
     with output_folder(args.output, f"run {args.engine}") as out:
-        csv_path, _ = result.write(out, parallel=True)  # the CSV text on two cores
+        csv_path, _ = result.write(out)
     m = result.meta
     print(
         f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
