@@ -41,8 +41,8 @@ def format_array(table: np.ndarray) -> str:
     try:
         import orjson
     except ImportError:
-        return format_rows(table.tolist())
-    if table.ndim != 2 or table.shape[0] == 0 or table.shape[1] == 0:
+        orjson = None
+    if orjson is None or table.ndim != 2 or table.size == 0:
         return format_rows(table.tolist())
     rows = table.tolist()
     magnitude = np.abs(table)

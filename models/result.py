@@ -279,7 +279,7 @@ class Result:
         names = list(self.columns)
         head = ["# units: " + ",".join(column_unit(n) for n in names), ",".join(names)]
         arr = np.column_stack([self.columns[n] for n in names]) if names else np.empty((0, 0))
-        body = format_array(arr.astype(float))
+        body = format_array(arr)
         return ("\n".join(head) + "\n" + body).encode()
 
     def json_bytes(self) -> bytes:
