@@ -42,6 +42,8 @@ def _compile(args) -> int:
                 raise SceneError(
                     "--engines", f"unknown engine {e!r}; valid engines: {', '.join(engine_names())}"
                 )
+    modules = warmup.byte_compile()
+    print(f"deckpound compile: Python bytecode of {modules} modules written", flush=True)
     where = warmup.cache_location()
     print(f"deckpound compile: kernels are cached in {where}", flush=True)
     t0 = time.perf_counter()

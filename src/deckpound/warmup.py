@@ -24,7 +24,16 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
-__all__ = ["ITEMS", "Item", "WarmResult", "cache_location", "warm", "warm_item"]
+__all__ = [
+    "ITEMS",
+    "PACKAGES",
+    "Item",
+    "WarmResult",
+    "byte_compile",
+    "cache_location",
+    "warm",
+    "warm_item",
+]
 
 #: length of the warm-up runs [s]: a few output steps; compiling does not depend on it
 WARM_DURATION = 0.02
@@ -102,6 +111,43 @@ def cache_location() -> str:
     import deckpound.analytic  # noqa: F401  (places the source-keyed cache)
 
     return str(numba.config.CACHE_DIR or "numba's default (__pycache__ beside the sources)")
+
+
+#: deckpound's packages: their modules are byte-compiled by :func:`byte_compile`
+PACKAGES = (
+    "deckpound",
+    "deckpound.models",
+    "deckpound.opensees_build",
+    "deckpound.analytic",
+    "deckpound.compare",
+)
+
+
+def byte_compile() -> int:
+    """Write Python's bytecode cache (``__pycache__/*.pyc``) of every deckpound module.
+
+    Python writes a module's bytecode when it first imports it, unless
+    ``PYTHONDONTWRITEBYTECODE`` is set (common in containers and CI images); then every process
+    compiles each deckpound module it imports from source again (``builtins.compile`` in a
+    cProfile of a warm ``deckpound run``; ``deckpound bench --quick`` measures the processes
+    with the variable as the user's environment has it). An editable
+    install (``./run.sh``'s ``pip install -e``) gets no bytecode from pip, so the set-up writes
+    it here; Python reads a ``.pyc`` whatever that variable says, and ignores one whose source
+    has changed since. Returns the number of modules; raises OSError when a file cannot be
+    written.
+    """
+    import compileall
+    import importlib
+    from pathlib import Path
+
+    count = 0
+    for name in PACKAGES:
+        for folder in importlib.import_module(name).__path__:
+            ok = compileall.compile_dir(folder, maxlevels=0, quiet=1)
+            if not ok:
+                raise OSError(f"could not byte-compile the modules in {folder}")
+            count += len(list(Path(folder).glob("*.py")))
+    return count
 
 
 class _CompileCounter:
