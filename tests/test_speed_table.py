@@ -51,12 +51,24 @@ def test_readme_block_is_the_commands_output():
     assert speed.BEGIN in text and speed.END in text, "README has no speed-table block"
     start = text.index(speed.BEGIN)
     block = text[start : text.index(speed.END, start) + len(speed.END)]
-    expected = speed.markdown(*_fake(engine_names()))
-    assert _shape(block) == _shape(expected), (
+    rows, ctx = _fake(engine_names())
+    # the line under the table says how Python's bytecode cache stood while measuring
+    bytecode = ({}, {"bytecode_cache": False, "bytecode_stale": 0}, {"bytecode_cache": False})
+    expected = [_shape(speed.markdown(rows, {**ctx, **b})) for b in bytecode]
+    assert _shape(block) in expected, (
         "the README's speed table is not the output of `deckpound bench --quick --write-readme`"
     )
     rows = [ln for ln in block.splitlines() if ln.startswith("| ") and "engine" not in ln]
     assert [r.split(" | ")[0][2:] for r in rows] == list(engine_names())
+
+
+def test_bytecode_sentence_follows_the_measurement():
+    rows, ctx = _fake(["opensees", "compliance"])
+    assert "bytecode" not in speed.markdown(rows, ctx)
+    read = speed.markdown(rows, {**ctx, "bytecode_cache": False, "bytecode_stale": 0})
+    assert "the processes read the bytecode that `deckpound compile` wrote" in read
+    stale = speed.markdown(rows, {**ctx, "bytecode_cache": False, "bytecode_stale": 3})
+    assert "3 deckpound modules had no current bytecode" in stale
 
 
 def test_markdown_ratios_and_replacement(tmp_path):

@@ -31,6 +31,7 @@ __all__ = [
     "WarmResult",
     "byte_compile",
     "cache_location",
+    "stale_bytecode",
     "warm",
     "warm_item",
 ]
@@ -137,17 +138,43 @@ def byte_compile() -> int:
     written.
     """
     import compileall
+
+    folders = _package_folders()
+    for folder in folders:
+        if not compileall.compile_dir(str(folder), maxlevels=0, quiet=1):
+            raise OSError(f"could not byte-compile the modules in {folder}")
+    return sum(len(list(folder.glob("*.py"))) for folder in folders)
+
+
+def stale_bytecode() -> list[str]:
+    """The deckpound modules whose bytecode cache is missing or does not match the source
+    (Python then compiles them from source on import, and under ``PYTHONDONTWRITEBYTECODE``
+    in every process). Empty after :func:`byte_compile`."""
+    import importlib.util
+    import struct
+
+    stale = []
+    for folder in _package_folders():
+        for src in sorted(folder.glob("*.py")):
+            try:
+                with open(importlib.util.cache_from_source(str(src)), "rb") as f:
+                    head = f.read(16)
+            except OSError:
+                stale.append(str(src))
+                continue
+            st = src.stat()
+            # timestamp-based .pyc header: magic, flags 0, source mtime, source size
+            want = struct.pack("<III", 0, int(st.st_mtime) & 0xFFFFFFFF, st.st_size & 0xFFFFFFFF)
+            if head[:4] != importlib.util.MAGIC_NUMBER or head[4:16] != want:
+                stale.append(str(src))
+    return stale
+
+
+def _package_folders():
     import importlib
     from pathlib import Path
 
-    count = 0
-    for name in PACKAGES:
-        for folder in importlib.import_module(name).__path__:
-            ok = compileall.compile_dir(folder, maxlevels=0, quiet=1)
-            if not ok:
-                raise OSError(f"could not byte-compile the modules in {folder}")
-            count += len(list(Path(folder).glob("*.py")))
-    return count
+    return [Path(f) for name in PACKAGES for f in importlib.import_module(name).__path__]
 
 
 class _CompileCounter:
