@@ -18,8 +18,9 @@ for engine in ("compliance", "nonsmooth"):
     r = dp.run(scene, engine=engine)
     out[engine] = {k: np.asarray(v).tolist() for k, v in r.columns.items()}
 from deckpound._kernel_load import installed
+from numba.core.runtime import rtsys
 print(json.dumps({"installed": installed(), "refreshed": "numba.np.linalg" in sys.modules,
-                  "columns": out}))
+                  "runtime": rtsys._init, "columns": out}))
 """
 
 
@@ -43,7 +44,35 @@ def test_fast_load_skips_the_refresh_and_gives_identical_results():
     fast = _run(True)
     assert not slow["installed"] and slow["refreshed"]
     assert fast["installed"] and not fast["refreshed"]  # numba's registries were not loaded
+    assert not fast["runtime"]  # the step loops do not use numba's runtime: not initialised
     assert fast["columns"] == slow["columns"]
+
+
+def test_a_cached_kernel_that_allocates_gets_the_runtime():
+    """A cached kernel whose code calls numba's runtime (an allocating one) initialises it
+    before its code is linked: unresolved, its NRT symbols would stop the process in LLVM."""
+    code = (
+        "from deckpound._kernel_load import install; install()\n"
+        "import numpy as np\n"
+        "from numba.core.runtime import rtsys\n"
+        "from deckpound.analytic.dense import solve_dense_cp\n"
+        "A = np.array([[2.0, 0.0], [0.0, 4.0]]); b = np.array([2.0, 4.0]); x = np.zeros(2)\n"
+        "print(solve_dense_cp(A, b, x, 1e-12), x.tolist(), rtsys._init)"
+    )
+    for _ in range(2):  # the second process loads the kernel from the cache the first filled
+        p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr[-2000:]
+    assert p.stdout.strip() == "(2, True) [1.0, 1.0] True"
+
+
+def test_uses_runtime_is_conservative():
+    from deckpound._kernel_load import uses_runtime
+
+    assert not uses_runtime(("lib", "object", (b"\x7fELF...numba_gil_ensure", b"bc")))
+    assert uses_runtime(("lib", "object", (b"\x7fELF...NRT_decref", b"bc")))
+    assert uses_runtime(("lib", "object", (b"..._nrt_get_sample_external_allocator", b"bc")))
+    assert uses_runtime(("lib", "bitcode", b"BC"))  # not object code: cannot tell
+    assert uses_runtime(None) and uses_runtime(("lib", "object"))
 
 
 def test_compiling_after_a_fast_load_still_works():

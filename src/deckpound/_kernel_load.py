@@ -8,9 +8,14 @@ start although a cached kernel needs none of it. A cached kernel is machine code
 description of its calling convention; rebuilding it needs the code generator, the runtime's
 symbols (NRT) and numba's C helpers, which the target context has from its construction.
 
-:func:`install` wraps numba's ``Cache.load_overload``: on a lookup it initialises the runtime
-(NRT; cheap, idempotent) and tries the cached entry without the refresh. Everything else stays
-numba's: a miss, a stale entry or any error while rebuilding falls back to numba's own path
+:func:`install` wraps numba's ``Cache.load_overload``: on a lookup it reads the cached entry and
+rebuilds it without the refresh. numba's runtime (NRT) is initialised first only when the entry's
+machine code refers to it (:func:`uses_runtime`): the initialisation JIT-compiles the runtime's
+own functions, about 15 ms of every process, and the compliance engine's step loop, compiled
+without the runtime (:mod:`deckpound.analytic._jit`), never calls them. A library whose code names
+an NRT symbol that was never registered would stop the process inside LLVM (an unresolved
+symbol is a fatal error there, not an exception), so the test is conservative: any occurrence of
+"nrt", in any case, in the object code initialises the runtime. Everything else stays numba's: a miss, a stale entry or any error while rebuilding falls back to numba's own path
 (refresh, then load or compile), and every compilation refreshes the contexts itself (numba's
 compiler does so before typing), so a process that compiles later is unaffected.
 
@@ -23,7 +28,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["install", "installed"]
+__all__ = ["install", "installed", "uses_runtime"]
 
 _STATE = {"installed": False}
 
@@ -56,9 +61,8 @@ def install() -> bool:
 
     def load_overload(self, sig, target_context):
         try:
-            rtsys.initialize(target_context)
             with self._guard_against_spurious_io_errors():
-                cres = self._load_overload(sig, target_context)
+                cres = _load_without_refresh(self, sig, target_context, rtsys)
             if cres is not None:
                 return cres
         except Exception:
@@ -70,3 +74,28 @@ def install() -> bool:
     cache_cls.load_overload = load_overload
     _STATE["installed"] = True
     return True
+
+
+def _load_without_refresh(cache, sig, target_context, rtsys):
+    """numba's ``Cache._load_overload`` with the runtime initialised only when the entry needs
+    it. Returns the rebuilt compile result, or None (disabled cache, no entry)."""
+    if not cache._enabled:
+        return None
+    data = cache._cache_file.load(cache._index_key(sig, target_context.codegen()))
+    if data is None:
+        return None
+    if uses_runtime(data[0]):
+        rtsys.initialize(target_context)
+    return cache._impl.rebuild(target_context, data)
+
+
+def uses_runtime(libdata) -> bool:
+    """Whether a cached library (numba's ``serialize_using_object_code`` state: name, kind,
+    (object code, bitcode)) may refer to numba's runtime: True unless it is object code in which
+    "nrt" does not occur in any case (the runtime's symbols are ``NRT_*`` and ``_nrt_*``)."""
+    try:
+        _name, kind, data = libdata
+        code = bytes(data[0])
+    except (TypeError, ValueError, IndexError):
+        return True
+    return kind != "object" or b"nrt" in code.lower()
