@@ -9,15 +9,17 @@ description of its calling convention; rebuilding it needs the code generator, t
 symbols (NRT) and numba's C helpers, which the target context has from its construction.
 
 :func:`install` wraps numba's ``Cache.load_overload``: on a lookup it reads the cached entry and
-rebuilds it without the refresh. numba's runtime (NRT) is initialised first only when the entry's
-machine code refers to it (:func:`uses_runtime`): the initialisation JIT-compiles the runtime's
-own functions, about 15 ms of every process, and the compliance engine's step loop, compiled
-without the runtime (:mod:`deckpound.analytic._jit`), never calls them. A library whose code names
-an NRT symbol that was never registered would stop the process inside LLVM (an unresolved
-symbol is a fatal error there, not an exception), so the test is conservative: any occurrence of
-"nrt", in any case, in the object code initialises the runtime. Everything else stays numba's: a miss, a stale entry or any error while rebuilding falls back to numba's own path
-(refresh, then load or compile), and every compilation refreshes the contexts itself (numba's
-compiler does so before typing), so a process that compiles later is unaffected.
+rebuilds it without the refresh. numba's runtime (NRT) is initialised first only when the
+entry's machine code refers to it (:func:`uses_runtime`): the initialisation JIT-compiles the
+runtime's own functions in every process (part of the "kernel load" column of ``deckpound
+bench``'s speed table), and the step loops, compiled without the runtime
+(:mod:`deckpound.analytic._jit`), never call them. A library whose code names an NRT symbol that
+was never registered would stop the process inside LLVM (an unresolved symbol is a fatal error
+there, not an exception), so the test is conservative: any occurrence of "nrt", in any case, in
+the object code initialises the runtime. Everything else stays numba's: a miss, a stale entry or
+any error while rebuilding falls back to numba's own path (refresh, then load or compile), and
+every compilation refreshes the contexts itself (numba's compiler does so before typing), so a
+process that compiles later is unaffected.
 
 ``DECKPOUND_NUMBA_FASTLOAD=0`` turns it off. It is installed by the engine registry before an
 engine module is imported (:func:`deckpound.engines.get_engine`), by ``deckpound compile`` and
