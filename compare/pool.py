@@ -8,8 +8,9 @@ the later ones reuse it, so each worker imports and loads its kernels once per c
 scope a map starts its own pool and stops it when done.
 
 Workers (:func:`worker_init`) die with their parent (:mod:`._workers`), ignore SIGINT — a Ctrl-C
-in a terminal reaches the whole process group; the parent alone decides — and load cached
-kernels the fast way (:mod:`deckpound._kernel_load`).
+in a terminal reaches the whole process group; the parent alone decides — take SIGTERM's default
+action (the CLI turns SIGTERM into a Ctrl-C in the parent only) and load cached kernels the fast
+way (:mod:`deckpound._kernel_load`).
 
 Interrupts: on Ctrl-C (or any error) while a map runs, the parent kills every worker at once
 (SIGKILL: a worker inside a compiled loop cannot be asked), cancels what is queued and re-raises;
@@ -40,7 +41,10 @@ def worker_init(parent_pid: int) -> None:
 
     die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    # the CLI's SIGTERM handler (forked with the parent) is the parent's: a worker told to
+    # terminate does so at once
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
     from deckpound._kernel_load import install
 
     install()
@@ -119,9 +123,9 @@ def map_local(items: list, args_of: Callable, func: Callable, on_done: Callable,
     from concurrent.futures import FIRST_COMPLETED, wait
 
     pool, owned = _acquire(min(n, len(items)) if not _SCOPE.active else n)
-    # the workers are forked during the first submit: SIGINT blocked meanwhile, so that no
-    # worker can take a Ctrl-C before its initializer ignores it
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    # the workers are forked during the first submit: SIGINT and SIGTERM blocked meanwhile, so
+    # that no worker can take either before its initializer has set what it does with them
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
         futures = {pool.submit(func, *args_of(it)): it for it in items}
     finally:

@@ -138,7 +138,13 @@ def _alive(pid: int) -> bool:
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc needed")
-def test_ctrl_c_stops_every_worker_with_one_line_and_resumes(tmp_path):
+@pytest.mark.parametrize(
+    ("sig", "status", "word"),
+    [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated (SIGTERM)")],
+)
+def test_ctrl_c_stops_every_worker_with_one_line_and_resumes(tmp_path, sig, status, word):
+    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) and SIGTERM (to the
+    command alone, as ``kill`` or ``timeout`` send it) stop the same clean way."""
     argv = [
         sys.executable,
         "-m",
@@ -173,12 +179,15 @@ def test_ctrl_c_stops_every_worker_with_one_line_and_resumes(tmp_path):
         time.sleep(0.2)
     workers = _children(proc.pid)
     assert proc.poll() is None and len(workers) >= 2, "the study ended before the interrupt"
-    os.killpg(proc.pid, signal.SIGINT)
+    if sig == signal.SIGINT:
+        os.killpg(proc.pid, sig)
+    else:
+        os.kill(proc.pid, sig)
     out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err
+    assert proc.returncode == status, err
     lines = err.splitlines()
     assert len(lines) == 1 and "Traceback" not in err + out, err
-    assert lines[0].startswith("deckpound: interrupted: study variability: ")
+    assert lines[0].startswith(f"deckpound: {word}: study variability: ")
     assert "cached in" in lines[0] and "run the same command again to resume" in lines[0]
     time.sleep(0.5)
     assert not [p for p in workers if _alive(p)]  # every worker is gone

@@ -15,6 +15,9 @@ Every command ends in exactly one of these exit statuses, with at most one line 
 4    internal error: a bug in deckpound (please report it with ``DECKPOUND_DEBUG=1``, which
      prints the traceback)
 130  interrupted (Ctrl-C)
+143  terminated (SIGTERM: ``kill``, ``timeout``, a batch scheduler): the same clean stop as
+     Ctrl-C — workers killed, one line saying what is cached, resumable; a second SIGTERM
+     ends the process at once
 ===  ==========================================================================================
 
 An output folder of a command that failed or was interrupted is either removed (if the command
@@ -37,6 +40,7 @@ from deckpound import __version__
 from deckpound.models.errors import EngineFailure, SceneError
 
 EXIT_OK, EXIT_ENGINE, EXIT_INPUT, EXIT_IO, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+EXIT_TERMINATED = 143  # 128 + SIGTERM, what a shell reports for a process ended by SIGTERM
 EXIT_CODES_HELP = """exit status:
   0    success
   1    engine failure (the message names the step and time)
@@ -45,6 +49,7 @@ EXIT_CODES_HELP = """exit status:
        unreachable Dask scheduler
   4    internal error (a bug: re-run with DECKPOUND_DEBUG=1 for the traceback and report it)
   130  interrupted
+  143  terminated (SIGTERM), stopped as cleanly as by Ctrl-C
 A failed command leaves no new output folder, or one marked by a file INCOMPLETE
 (re-run the command to resume). Messages of the engines' libraries (OpenSees) are
 shown only with DECKPOUND_DEBUG=1."""
@@ -203,11 +208,42 @@ def main(argv: list[str] | None = None) -> int:
     The program itself (``argv`` None: the console script, ``python -m deckpound``) ends
     through :func:`_fast_exit` once everything is written and flushed.
     """
+    if argv is None:
+        _stop_on_sigterm()
     code = _main(argv)
     if argv is None:  # the program itself (console script, python -m deckpound)
         _quiet_exit()
         _fast_exit(code)
     return code
+
+
+#: set by the SIGTERM handler: the KeyboardInterrupt it raised is a termination
+_TERMINATED = [False]
+
+
+def _stop_on_sigterm() -> None:
+    """Make SIGTERM stop the program as Ctrl-C does (exit 143 instead of 130).
+
+    Python's default for SIGTERM ends the process on the spot: no line saying what is cached,
+    and a sweep's output marked INCOMPLETE with nothing said. The handler raises
+    KeyboardInterrupt in the main thread, so every clean-up a Ctrl-C runs (a compiled loop
+    halted, workers killed, the resume line) runs; a second SIGTERM while that clean-up runs
+    ends the process at once (workers die with it, :mod:`deckpound.compare._workers`). Installed
+    only over the default action, by the program itself (not when :func:`main` is called from
+    Python); sweep workers put the default back (:func:`deckpound.compare.pool.worker_init`).
+    """
+    import signal
+
+    if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+        return
+
+    def on_sigterm(signum, frame):
+        if _TERMINATED[0]:
+            os._exit(EXIT_TERMINATED)
+        _TERMINATED[0] = True
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, on_sigterm)
 
 
 def _fast_exit(code: int) -> None:
@@ -266,8 +302,11 @@ def _guarded_main(argv: list[str] | None) -> int:
             _report("engine failure", str(err))
             return EXIT_ENGINE
         except KeyboardInterrupt as err:  # a sweep says what is cached and how to resume
-            _report("", f"interrupted: {err}" if str(err) else "interrupted")
-            return EXIT_INTERRUPTED
+            how, code = "interrupted", EXIT_INTERRUPTED
+            if _TERMINATED[0]:
+                how, code = "terminated (SIGTERM)", EXIT_TERMINATED
+            _report("", f"{how}: {err}" if str(err) else how)
+            return code
         except BrokenPipeError:
             _silence_stdout()  # `deckpound ... | head`: the reader has all it wanted
             return EXIT_OK
