@@ -42,6 +42,20 @@ def test_byte_compile_writes_a_valid_pyc_for_every_module():
     assert warmup.stale_bytecode() == []
 
 
+def test_compile_goes_on_when_the_bytecode_cannot_be_written(monkeypatch, capsys):
+    """A read-only install: the kernels are still compiled, the bytecode is a warning."""
+
+    def refuse():
+        raise OSError("could not byte-compile the modules in /usr/lib/deckpound")
+
+    monkeypatch.setattr(warmup, "byte_compile", refuse)
+    monkeypatch.setattr(warmup, "ITEMS", (warmup.Item("takeda", "material"),))
+    assert cli.main(["compile"]) == 0
+    out, err = capsys.readouterr()
+    assert "could not byte-compile the modules in /usr/lib/deckpound" in err
+    assert "kernels are cached in" in out
+
+
 def test_stale_bytecode_sees_a_changed_source(tmp_path, monkeypatch):
     """A .pyc whose recorded source mtime or size differs from the source's is stale."""
     import compileall

@@ -42,8 +42,15 @@ def _compile(args) -> int:
                 raise SceneError(
                     "--engines", f"unknown engine {e!r}; valid engines: {', '.join(engine_names())}"
                 )
-    modules = warmup.byte_compile()
-    print(f"deckpound compile: Python bytecode of {modules} modules written", flush=True)
+    try:
+        modules = warmup.byte_compile()
+        print(f"deckpound compile: Python bytecode of {modules} modules written", flush=True)
+    except OSError as err:  # e.g. a read-only site-packages: the kernels matter more
+        print(
+            f"deckpound: warning: {err}: where PYTHONDONTWRITEBYTECODE is set, every process "
+            "compiles deckpound's modules from source",
+            file=sys.stderr,
+        )
     where = warmup.cache_location()
     print(f"deckpound compile: kernels are cached in {where}", flush=True)
     t0 = time.perf_counter()

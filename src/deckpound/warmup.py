@@ -141,7 +141,7 @@ def byte_compile() -> int:
 
     folders = _package_folders()
     for folder in folders:
-        if not compileall.compile_dir(str(folder), maxlevels=0, quiet=1):
+        if not compileall.compile_dir(str(folder), maxlevels=0, quiet=2):
             raise OSError(f"could not byte-compile the modules in {folder}")
     return sum(len(list(folder.glob("*.py"))) for folder in folders)
 
