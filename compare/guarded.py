@@ -27,6 +27,11 @@ class GuardedOutcome:
 
 
 def _child(conn, engine: str, scene: Scene, warm: bool = False) -> None:
+    import signal
+
+    # the CLI's SIGTERM handler is forked with the parent's memory; a child told to terminate
+    # (multiprocessing ends daemonic children so at exit) does so at once
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
         from deckpound.compare.cases import run_case
 
