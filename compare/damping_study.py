@@ -146,6 +146,13 @@ def damping_headlines(table: pd.DataFrame) -> list[str]:
             ("peak_fn", "peak gap force", "kN", 1.0),
         ):
             ratio = g[q] / ref[q] if ref[q] > 0 else pd.Series(np.nan, index=g.index)
+            if not ratio.notna().any():
+                # a reference of zero (no contact in a short or weak record) has no ratios
+                parts.append(
+                    f"{name} {scale * ref[q]:.4g} {unit} in the reference case, "
+                    f"{scale * g[q].min():.4g}–{scale * g[q].max():.4g} {unit} over the choices"
+                )
+                continue
             lo, hi = ratio.idxmin(), ratio.idxmax()
             parts.append(
                 f"{name} {scale * ref[q]:.4g} {unit} ×{ratio[lo]:.3g} "

@@ -229,3 +229,7 @@ def test_damping_study_cases_and_sentences(tiny):
         "force 1000 kN ×0.7 (bents+seats·initial·absolute) to ×1 "
         "(bents·initial·absolute); gap closures 10 (5–10)."
     )
+    # no contact in the reference case (a short or weak record): no ratio to a zero force
+    table.loc[0, "peak_fn"] = 0.0
+    (s,) = damping_headlines(table)
+    assert "peak gap force 0 kN in the reference case, 0–700 kN over the choices;" in s
