@@ -15,7 +15,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from deckpound.models.result import Result
@@ -145,8 +144,8 @@ def damping_headlines(table: pd.DataFrame) -> list[str]:
             ("peak_theta", "peak rotation", "mrad", 1e3),
             ("peak_fn", "peak gap force", "kN", 1.0),
         ):
-            ratio = g[q] / ref[q] if ref[q] > 0 else pd.Series(np.nan, index=g.index)
-            if not ratio.notna().any():
+            ratio = g[q] / ref[q] if ref[q] > 0 else None
+            if ratio is None or not ratio.notna().any():
                 # a reference of zero (no contact in a short or weak record) has no ratios
                 parts.append(
                     f"{name} {scale * ref[q]:.4g} {unit} in the reference case, "

@@ -418,7 +418,6 @@ def test_paper_failing_is_marked_incomplete_then_resumes(tmp_path, monkeypatch):
     def dies(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "p" / "x"))
 
-    # the paper job imports the writer when it writes (compare/paper.py)
     monkeypatch.setattr(report_sections, "write_report", dies)
     argv = [
         "paper",
