@@ -4,10 +4,11 @@ Every string that reaches an exported script passes through one of these functio
 
 * :func:`tcl_word` — a Tcl word that the parser reads back as exactly ``s``: a bare word when
   ``s`` holds only ``[A-Za-z0-9_.+-]`` (so ordinary commands read as usual), otherwise a
-  double-quoted word with ``\\ " $ [ ]`` and every non-printable or non-ASCII character
+  double-quoted word with ``\\ " $ [ ] { }`` and every non-printable or non-ASCII character
   backslash-escaped (``\\uXXXX``), so neither substitution nor a word or command break can
-  happen inside it. Tcl 8.6 has no characters outside the Basic Multilingual Plane: such a
-  string is refused (:class:`ValueError`) rather than silently changed.
+  happen inside it, and a braced body (``if {...} {...}``, ``proc``) holding the word still
+  ends at its own closing brace. Tcl 8.6 has no characters outside the Basic Multilingual
+  Plane: such a string is refused (:class:`ValueError`) rather than silently changed.
 * :func:`py_str` — a Python string literal (``ascii()``: ASCII only, quotes escaped).
 * :func:`comment_text` — text for a ``#`` comment line in either language: printable ASCII on
   one line; a backslash is doubled (so a line can never end in a Tcl line continuation), braces
@@ -34,6 +35,12 @@ _TCL_ESC = {
     "$": "\\$",
     "[": "\\[",
     "]": "\\]",
+    # a quoted word can sit inside a braced body (an ``if`` or ``proc`` body): Tcl finds the
+    # end of that body by counting braces without regard to quotes, so a bare brace in the
+    # word would end the body early and run the rest of the word as commands; an escaped
+    # brace is not counted and reads back as the brace
+    "{": "\\{",
+    "}": "\\}",
     "\n": "\\n",
     "\t": "\\t",
     "\r": "\\r",

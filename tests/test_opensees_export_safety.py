@@ -254,10 +254,16 @@ def test_hostile_output_path_python(tmp_path, markers):
     assert list(markers.iterdir()) == []
 
 
+#: file names reported to run code or break the Tcl script: unbalanced braces end the braced
+#: ``if`` body that holds the output folder's name
+BRACE_STEMS = ["x} ; exec touch PWNED ; {", "a}b{"]
+
+
 @needs_tcl
-def test_hostile_output_path_tcl(tmp_path, markers):
+@pytest.mark.parametrize("stem", [HOSTILE_STEM, *BRACE_STEMS])
+def test_hostile_output_path_tcl(tmp_path, markers, stem):
     sc = load_scene("saiidi-4span").replace(run=RunSettings(duration=0.02))
-    script = export.export_script(sc, "tcl", tmp_path / "dir é" / f"{HOSTILE_STEM}.tcl")
+    script = export.export_script(sc, "tcl", tmp_path / "dir é" / f"{stem}.tcl")
     cp = subprocess.run(
         [sys.executable, "-m", "opensees", "-"],
         capture_output=True,
