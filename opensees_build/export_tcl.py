@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from .export_header import ExportParts, header_lines
 from .ops import render_commands
-from .quoting import comment_text, tcl_word
+from .quoting import comment_text, tcl_path_word, tcl_word
 from .recorders import render_recorders
 
 
@@ -48,8 +48,8 @@ def tcl_script(p: ExportParts) -> str:
     return f"""{head}
 
 set here [file dirname [file normalize [info script]]]
-set dataDir [file join $here {tcl_word(p.data_dir)}]
-if {{![info exists outDir]}} {{ set outDir [file join $here {tcl_word(p.out_dir)}] }}
+set dataDir [file join $here {tcl_path_word(p.data_dir)}]
+if {{![info exists outDir]}} {{ set outDir [file join $here {tcl_path_word(p.out_dir)}] }}
 if {{![info exists writeCsv]}} {{ set writeCsv 0 }}
 file mkdir $outDir
 

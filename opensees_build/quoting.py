@@ -9,6 +9,9 @@ Every string that reaches an exported script passes through one of these functio
   happen inside it, and a braced body (``if {...} {...}``, ``proc``) holding the word still
   ends at its own closing brace. Tcl 8.6 has no characters outside the Basic Multilingual
   Plane: such a string is refused (:class:`ValueError`) rather than silently changed.
+* :func:`tcl_path_word` — a relative file or folder name as the Tcl word of ``file join $dir
+  NAME``: :func:`tcl_word`, with ``./`` put before a name that starts with ``~`` (Tcl 8.6 reads
+  ``~x`` as the home folder of user ``x``, and ``file join`` drops everything before it).
 * :func:`py_str` — a Python string literal (``ascii()``: ASCII only, quotes escaped).
 * :func:`comment_text` — text for a ``#`` comment line in either language: printable ASCII on
   one line; a backslash is doubled (so a line can never end in a Tcl line continuation), braces
@@ -25,7 +28,7 @@ from __future__ import annotations
 import hashlib
 import re
 
-__all__ = ["comment_text", "py_str", "safe_file_name", "tcl_word", "wrap_comment"]
+__all__ = ["comment_text", "py_str", "safe_file_name", "tcl_path_word", "tcl_word", "wrap_comment"]
 
 _BARE = re.compile(r"[A-Za-z0-9_.+\-]+")
 _FILE = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.\-]*")
@@ -71,6 +74,13 @@ def tcl_word(s: str) -> str:
         else:
             out.append(_uescape(ch))
     return '"' + "".join(out) + '"'
+
+
+def tcl_path_word(name: str) -> str:
+    """``name`` (a relative path) as a Tcl word for ``file join $dir NAME`` (see the module
+    docstring); ``file join`` removes the ``./`` again, so the joined path is ``$dir/NAME``."""
+    name = str(name)
+    return tcl_word(f"./{name}" if name.startswith("~") else name)
 
 
 def py_str(s: str) -> str:
