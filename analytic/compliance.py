@@ -40,24 +40,13 @@ from typing import ClassVar
 import numpy as np
 
 from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
+from deckpound.models.columns import ENERGY_COLUMNS  # the energy columns [kJ]
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import ComplianceSettings, Scene
 
 __all__ = ["ENERGY_COLUMNS", "SKIPS", "ComplianceEngine", "output_columns", "run_compliance"]
 
-#: Energy columns of the compliance result, in the order the kernels write them [kJ].
-ENERGY_COLUMNS = (
-    "energy_input",
-    "energy_kinetic",
-    "energy_strain",
-    "energy_viscous",
-    "energy_hysteretic",
-    "energy_contact_stored",
-    "energy_contact_dissipated",
-    "energy_friction",
-    "energy_error",
-)
 SUBSTEPS = 10  # sub-steps of the fallback for a failed step (OpenSees engine default)
 #: The skips the engine can turn off for measurement (``_skips={name: False}``);
 #: results are identical with and without each (``compare/skips.py`` measures and checks):

@@ -12,7 +12,25 @@ from dataclasses import dataclass
 
 from .plan import CORNER_NAMES, DOF_COLUMNS, RELATIVE_COLUMNS, VELOCITY_COLUMNS
 
-__all__ = ["Column", "column_unit", "result_columns", "standard_columns"]
+__all__ = ["ENERGY_COLUMNS", "Column", "column_unit", "result_columns", "standard_columns"]
+
+#: The work–energy balance columns of the penalty engines (compliance, OpenSees) [kJ], in
+#: order: ``energy_input`` (work of the support reactions −∫ f_springᵀ S du_g plus the initial
+#: mechanical energy), ``energy_kinetic``, ``energy_strain`` (recoverable energy of the bent and
+#: seat springs), ``energy_viscous`` (Rayleigh and dashpots), ``energy_hysteretic`` (Takeda),
+#: ``energy_contact_stored``, ``energy_contact_dissipated``, ``energy_friction`` (dissipated by
+#: slip) and ``energy_error`` = input − all the others. Work terms are trapezoidal over each step.
+ENERGY_COLUMNS = (
+    "energy_input",
+    "energy_kinetic",
+    "energy_strain",
+    "energy_viscous",
+    "energy_hysteretic",
+    "energy_contact_stored",
+    "energy_contact_dissipated",
+    "energy_friction",
+    "energy_error",
+)
 
 
 @dataclass(frozen=True)
