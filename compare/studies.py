@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from deckpound.models._fields import to_mapping
-from deckpound.models.contact_params import effective_masses
+from deckpound.models.contact_params import contact_period
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
@@ -55,12 +55,9 @@ def modified(scene: Scene, *overrides: str) -> Scene:
 
 
 def contact_step(scene: Scene, per_period: int = 20) -> float:
-    """Compliance time step resolving the stiffest contact oscillation (linearised) [s]."""
-    k = scene.contact.stiffness
-    if scene.contact.law in ("hertz", "hertz-damp", "hertzdamp"):
-        k = k * np.sqrt(0.01)  # secant stiffness at 10 mm penetration, an upper estimate
-    period = 2.0 * np.pi * np.sqrt(float(np.min(effective_masses(scene))) / k)
-    return float(min(scene.compliance.dt, period / per_period))
+    """Compliance time step resolving the stiffest contact oscillation (linearised) [s]:
+    ``per_period`` steps per :func:`~deckpound.models.contact_params.contact_period`."""
+    return float(min(scene.compliance.dt, contact_period(scene) / per_period))
 
 
 def _compliance(scene: Scene, *overrides: str) -> Scene:

@@ -9,6 +9,12 @@ The damping of the damped laws comes from the restitution coefficient e:
 
 m_eff of a corner is the mass the contact sees at rest: m_eff = 1 / (w_N M⁻¹ w_Nᵀ), w_N the
 corner's row of ∂g_N/∂u (:meth:`deckpound.models.plan.Plan.effective_masses`).
+
+The contact period T_c = 2π √(m_eff / k_eff) of the stiffest corner (k_eff the contact
+stiffness; for the Hertz laws the secant stiffness k δ^(n−1) at δ = :data:`HERTZ_SECANT_DEPTH`)
+sets the step of the fixed-step penalty engines (:func:`contact_resolving_step`): one rule,
+read by the compliance clone and the OpenSees engine alike, so the two keep running the same
+steps and agreeing to round-off.
 """
 
 from __future__ import annotations
@@ -17,6 +23,9 @@ import numpy as np
 
 from .plan import plan_of
 from .scene import Scene
+
+#: penetration at which the Hertz secant stiffness is taken for the contact period [m]
+HERTZ_SECANT_DEPTH = 0.01
 
 
 def effective_masses(scene: Scene) -> np.ndarray:
@@ -36,3 +45,37 @@ def kelvin_voigt_damping(scene: Scene) -> np.ndarray:
     """Dashpot of each corner [kN·s/m]: c = 2 ζ(e) √(k m_eff)."""
     z = kelvin_voigt_ratio(scene.contact.restitution)
     return 2.0 * z * np.sqrt(scene.contact.stiffness * effective_masses(scene))
+
+
+def contact_period(scene: Scene) -> float:
+    """Period of the stiffest corner's contact oscillation, T_c = 2π √(m_eff / k_eff) [s].
+
+    k_eff is ``contact.stiffness`` (K1 of the bilinear law); for the Hertz laws the secant
+    stiffness k δ^(n−1) at δ = :data:`HERTZ_SECANT_DEPTH`. NaN when there is no contact
+    stiffness or no moving mass.
+    """
+    ct = scene.contact
+    k = ct.stiffness
+    if ct.law in ("hertz", "hertz-damp", "hertzdamp"):
+        k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
+    m = float(np.min(effective_masses(scene)))
+    return float(2.0 * np.pi * np.sqrt(m / k)) if k > 0 and m > 0 else float("nan")
+
+
+def contact_resolving_step(scene: Scene, dt: float) -> float:
+    """The step a fixed-step penalty engine runs [s]: ``dt``, or shorter where the contact needs it.
+
+    With n = ``run.steps_per_contact_period`` > 0 and T_c = :func:`contact_period`, a step
+    dt > T_c / n is replaced by ``output_dt / ceil(output_dt / (T_c / n))`` — the longest step
+    ≤ T_c / n that still divides the output step, so the stored rows stay on the output
+    times — or by T_c / n itself when the output step is shorter. n = 0 keeps ``dt``.
+    """
+    n = scene.run.steps_per_contact_period
+    period = contact_period(scene)
+    if n <= 0.0 or not np.isfinite(period) or dt <= period / n:
+        return float(dt)
+    limit = period / n
+    out = scene.run.output_dt
+    if out <= limit:
+        return float(limit)
+    return float(out / np.ceil(out / limit))

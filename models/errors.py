@@ -40,3 +40,9 @@ class SceneError(ValueError):
 
 class EngineFailure(RuntimeError):
     """An engine could not finish a run (raised only when the caller asks for exceptions)."""
+
+
+class DoubtfulResult(EngineFailure):
+    """A run finished but failed a quality check (energy created by a contact, a work–energy
+    balance that does not close): its answer is not to be trusted as it stands. The CLI exits
+    with the engine-failure status unless ``run.accept_doubtful`` is set."""

@@ -36,6 +36,29 @@ class RunSettings:
         None, unit="s", doc="analysis length (default: the record length)", gt=0.0
     )
     output_dt: float = spec(0.005, unit="s", doc="output step of the stored result", gt=0.0)
+    steps_per_contact_period: float = spec(
+        3.5,
+        unit="-",
+        doc="fewest steps per contact oscillation period 2π√(m_eff/k) of the fixed-step "
+        "penalty engines (compliance newmark, OpenSees): a longer dt is shortened to resolve "
+        "the contact; 0 runs dt as given",
+        ge=0.0,
+        le=1000.0,
+    )
+    energy_tolerance: float = spec(
+        0.01,
+        unit="-",
+        doc="energy a contact may create (negative contact or friction dissipation), or the "
+        "work-energy balance may miss, as a fraction of the input energy before a run is "
+        "'doubtful'",
+        gt=0.0,
+        le=1.0,
+    )
+    accept_doubtful: bool = spec(
+        False,
+        doc="a doubtful run (energy created by a contact) still exits 0 and counts as a "
+        "success in studies",
+    )
 
     def __post_init__(self) -> None:
         validate(self)
