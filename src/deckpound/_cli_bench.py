@@ -8,6 +8,7 @@ from pathlib import Path
 from deckpound.models.errors import SceneError
 
 from ._cli_study import _benchmark_scene_args, _engines, _seconds
+from ._terminal import terminal_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -98,7 +99,7 @@ def _bench_body(args, scene) -> int:
             from deckpound.compare import readme_results
 
             path = readme_results.write_skips(args.write_readme, args.output)
-            print(f"wrote the skips paragraph into {path}")
+            print(f"wrote the skips paragraph into {terminal_text(path)}")
         return 0 if not len(bad) else 1
     if not args.speed_only:
         table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
@@ -126,9 +127,12 @@ def _bench_body(args, scene) -> int:
             from deckpound.compare import bench_readme
 
             path = bench_readme.write_readme(args.write_readme, args.output)
-            print(f"wrote the work-precision table into {path} (sources in {bench_readme.RESULTS})")
+            print(
+                f"wrote the work-precision table into {terminal_text(path)} "
+                f"(sources in {bench_readme.RESULTS})"
+            )
     _speed_table(args)
-    print(f"wrote {args.output}")
+    print(f"wrote {terminal_text(args.output)}")
     return 0
 
 
@@ -148,12 +152,15 @@ def _stress(args) -> int:
         table = run_stress(scene, out, quick=args.quick, engines=engines, timeout=args.timeout)
     bad = table[(table["status"] != "success") | (~table["finite"])]
     print(table.groupby(["engine", "status"]).size().to_string())
-    print(f"{len(table)} cells, {len(bad)} not finished with finite output; wrote {args.output}")
+    print(
+        f"{len(table)} cells, {len(bad)} not finished with finite output; "
+        f"wrote {terminal_text(args.output)}"
+    )
     if args.write_readme is not None and not args.quick:
         from deckpound.compare import readme_results
 
         path = readme_results.write_stress(args.write_readme, out)
-        print(f"wrote the stability paragraph into {path}")
+        print(f"wrote the stability paragraph into {terminal_text(path)}")
     return 0
 
 
@@ -198,4 +205,5 @@ def _speed_table(args) -> None:
     print(block)
     atomic_write_text(Path(args.output) / "speed.md", block + "\n")
     if args.write_readme is not None:
-        print(f"wrote the speed table into {speed.write_readme(args.write_readme, block)}")
+        written = speed.write_readme(args.write_readme, block)
+        print(f"wrote the speed table into {terminal_text(written)}")

@@ -6,6 +6,8 @@ import argparse
 import sys
 import time
 
+from ._terminal import terminal_text
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -47,11 +49,11 @@ def _compile(args) -> int:
         print(f"deckpound compile: Python bytecode of {modules} modules written", flush=True)
     except OSError as err:  # e.g. a read-only site-packages: the kernels matter more
         print(
-            f"deckpound: warning: {err}: where PYTHONDONTWRITEBYTECODE is set, every process "
-            "compiles deckpound's modules from source",
+            f"deckpound: warning: {terminal_text(err)}: where PYTHONDONTWRITEBYTECODE is set, "
+            "every process compiles deckpound's modules from source",
             file=sys.stderr,
         )
-    where = warmup.cache_location()
+    where = terminal_text(warmup.cache_location())
     print(f"deckpound compile: kernels are cached in {where}", flush=True)
     t0 = time.perf_counter()
 

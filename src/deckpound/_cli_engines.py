@@ -7,6 +7,8 @@ from pathlib import Path
 
 from deckpound.models.errors import EngineFailure, SceneError
 
+from ._terminal import terminal_text
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     from .cli import add_scene_args, int_in
@@ -118,7 +120,7 @@ def _run(args) -> int:
     m = result.meta
     print(
         f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
-        f"{m.get('gap_closures', 0)} gap closures; wrote {csv_path}"
+        f"{m.get('gap_closures', 0)} gap closures; wrote {terminal_text(csv_path)}"
     )
     if not result.ok:
         raise EngineFailure(m.get("message", "run failed"))
@@ -140,8 +142,10 @@ def _export(args) -> int:
     plausibility.enforce(scene, motion, engines=("opensees",))
     written = export_script(scene, args.format, out, motion)  # all files or none
     print(
-        f"wrote {written} and {written.parent / (written.stem + '_data')}/ (support records, "
-        f"manifest.json); recorder files go to {written.stem}_results/ when it runs"
+        f"wrote {terminal_text(written)} and "
+        f"{terminal_text(written.parent / (written.stem + '_data'))}/ (support records, "
+        f"manifest.json); recorder files go to {terminal_text(written.stem)}_results/ "
+        "when it runs"
     )
     return 0
 
@@ -255,5 +259,5 @@ def _verify_impact_law(args) -> int:
             raise SceneError(
                 "--write-readme", "the README quotes the built-in scene: not with --set"
             )
-        print(f"wrote the table into {write_readme(args.write_readme, rows)}")
+        print(f"wrote the table into {terminal_text(write_readme(args.write_readme, rows))}")
     return 0

@@ -8,6 +8,8 @@ from pathlib import Path
 
 from deckpound.models.errors import SceneError
 
+from ._terminal import terminal_text
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     from .cli import add_scene_args
@@ -65,7 +67,7 @@ def _validate(args) -> int:
     finite = [T for T in report.periods if float("inf") != T]
     rigid = len(report.periods) - len(finite)
     print(
-        f"{scene.name}: valid; {len(scene.bents)} bents, gaps "
+        f"{terminal_text(scene.name)}: valid; {len(scene.bents)} bents, gaps "
         f"{scene.seats[0].gap:g}/{scene.seats[1].gap:g} m, record {motion.duration:g} s "
         f"({len(motion.channels)} supports), analysis {report.duration:g} s, "
         + (f"{rigid} rigid-body modes, " if rigid else "")
@@ -96,5 +98,5 @@ def _plot(args) -> int:
     from deckpound.compare.plotting import plot_excitation
 
     plot_excitation(scene, motion, out)  # atomic (compare.style.save); OSError: exit status 3
-    print(f"wrote {out}")
+    print(f"wrote {terminal_text(out)}")
     return 0

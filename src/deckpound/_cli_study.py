@@ -9,6 +9,8 @@ from pathlib import Path
 from deckpound.engines import engine_names
 from deckpound.models.errors import SceneError
 
+from ._terminal import terminal_text
+
 
 def _seconds(text: str) -> float:
     """A positive, finite number of seconds (refuses nan, inf, 0 and negatives)."""
@@ -205,7 +207,7 @@ def _compare(args) -> int:
             progress=not args.no_progress,
             reference=args.reference,
         )
-    print(summary)
+    print(terminal_text(summary, keep_newlines=True))
     return 0
 
 
@@ -284,7 +286,7 @@ def _study(args) -> int:
     from deckpound.compare.paper import sequence_units
 
     print(unit_header(table[cols], sequence_units(table)).to_string(index=False))
-    print(f"wrote {out}")
+    print(f"wrote {terminal_text(out)}")
     return 0
 
 
@@ -318,7 +320,7 @@ def _paper(args) -> int:
             full_histories=args.full_histories,
             formats=("pdf",) if args.pdf else (),
         )
-    print(f"wrote {report} and {report.with_suffix('.html')}")
+    print(f"wrote {terminal_text(report)} and {terminal_text(report.with_suffix('.html'))}")
     return 0
 
 
@@ -333,7 +335,7 @@ def _export_vtk(args) -> int:
     with output_folder(args.output, "export-vtk") as out:
         written = export_vtk(args.result_dir, out, args.every, fmt=args.fmt, results=results)
     for p in written:
-        print(f"wrote {p}")
+        print(f"wrote {terminal_text(p)}")
     return 0
 
 
@@ -395,6 +397,7 @@ def _variability(args) -> int:
     print(view[["unit", "n", "median", "p16", "p84"]].to_string(float_format=lambda v: f"{v:.4g}"))
     failed = summary.attrs.get("failed", 0)
     print(
-        f"{len(table)} cases ({failed} not finished) in {summary.attrs['wall']:.1f} s; wrote {out}"
+        f"{len(table)} cases ({failed} not finished) in {summary.attrs['wall']:.1f} s; "
+        f"wrote {terminal_text(out)}"
     )
     return 0 if not failed else 1

@@ -37,6 +37,7 @@ import sys
 import warnings
 
 from deckpound import __version__
+from deckpound._terminal import terminal_text
 from deckpound.models.errors import EngineFailure, SceneError
 
 EXIT_OK, EXIT_ENGINE, EXIT_INPUT, EXIT_IO, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
@@ -85,7 +86,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _one_line(text: str, limit: int = 600) -> str:
-    line = " ".join(str(text).split())
+    # line breaks and other white space become one space; ESC, BEL, bidi controls... in a
+    # name or path quoted by the message are shown escaped, never sent to the terminal
+    line = terminal_text(" ".join(str(text).split()))
     return line if len(line) <= limit else line[: limit - 3] + "..."
 
 
@@ -99,7 +102,11 @@ def _os_error_text(err: OSError) -> str:
 
 
 def _report(kind: str, message: str) -> None:
-    text = f"deckpound: {kind}: {_one_line(message)}" if kind else f"deckpound: {message}"
+    text = (
+        f"deckpound: {kind}: {_one_line(message)}"
+        if kind
+        else f"deckpound: {terminal_text(message)}"
+    )
     try:
         print(text, file=sys.stderr, flush=True)
     except (OSError, ValueError):
