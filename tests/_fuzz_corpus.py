@@ -21,6 +21,9 @@ engine        steps and output rates against the analysis length (30 s step on a
 vtk           ``export-vtk`` of damaged result folders
 name          hostile scene names (TeX, control characters) through every figure
 option        bad option values (--workers, --every, --timeout, --scheduler, --engines)
+script        ``export`` to hostile file names (braces, ``[exec ...]``, ``$``, quotes, newlines,
+              ``~``, control and bidi characters) and hostile scene names validated and
+              exported (:mod:`tests._fuzz_scripts`)
 ============  ===============================================================================
 
 Each :class:`Case` states its command line (``{tmp}`` is the case's own folder), the files,
@@ -307,6 +310,7 @@ def families() -> dict:
     run-side ones in tests._fuzz_run_families)."""
     from _fuzz_outputs import fault_family, path_family
     from _fuzz_run_families import engine_family, name_family, option_family, vtk_family
+    from _fuzz_scripts import script_family
 
     return {
         "set": _set_family,
@@ -318,6 +322,7 @@ def families() -> dict:
         "vtk": vtk_family,
         "name": name_family,
         "option": option_family,
+        "script": script_family,
     }
 
 
@@ -335,7 +340,7 @@ def generate() -> list[Case]:
     return out
 
 
-def quick_subset(cases: list[Case], budget: int = 200) -> list[Case]:
+def quick_subset(cases: list[Case], budget: int = 210) -> list[Case]:
     """A deterministic, stratified sample of about ``budget`` cases (every family, costly
     families thinned by their weight)."""
     by_family: dict[str, list[Case]] = {}
@@ -351,6 +356,7 @@ def quick_subset(cases: list[Case], budget: int = 200) -> list[Case]:
         "vtk": 12,
         "name": 6,
         "option": 12,
+        "script": 12,
     }
     out = []
     for fam, members in by_family.items():

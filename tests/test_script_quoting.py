@@ -16,13 +16,18 @@ sandbox that records what it calls:
 * Python: the syntax tree must equal that of a plain-text export once string constants are
   blanked (no new code), and ``build()`` and ``add_recorders()``, run against a fake
   ``openseespy.opensees``, must call exactly the command log and the recorders.
+
+The corpus's script family (:mod:`tests._fuzz_scripts`: the two reported file names among
+others) goes through the CLI itself: each case must end with the exit status the corpus states,
+print no control character raw, and the scripts it writes must pass the same sandbox.
 """
 
 from __future__ import annotations
 
 import ast
+import contextlib
 import dataclasses as dc
-import functools
+import io
 import os
 import shutil
 import subprocess
@@ -32,10 +37,14 @@ import types
 from pathlib import Path
 
 import pytest
+from _fuzz_run import materialise
+from _fuzz_scripts import script_family
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from deckpound.cli import main
 from deckpound.models.errors import SceneError
+from deckpound.models.result import scene_hash
 from deckpound.models.scene import RunSettings
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build import engine, export
@@ -233,23 +242,18 @@ def run_tcl_sandbox(script: Path, ops_names: set[str]) -> tuple[list[list], list
     return [c[1:] for c in calls if c[0] == "ops"], [c for c in calls if c[0] != "ops"]
 
 
-def check_tcl(sc, stem: str, folder: Path) -> None:
-    script = folder / f"{stem}.tcl"
-    if any(ord(ch) > 0xFFFF for ch in str(script.resolve())):
-        with pytest.raises(SceneError, match="--output"):
-            export.export_script(sc, "tcl", script)
-        assert list(folder.iterdir()) == []
-        return
-    export.export_script(sc, "tcl", script)
-    parts, _ = export.export_parts(sc, "tcl", stem)
-    here = os.path.realpath(folder)
+def verify_tcl_script(sc, script: Path) -> None:
+    """``script`` (the Tcl export of ``sc``) calls exactly deckpound's command log, the
+    recorders and the step loop's commands, and of the rest only its path helpers, ``file
+    mkdir`` of its results folder and the status line."""
+    parts, _ = export.export_parts(sc, "tcl", script.stem)
+    here = os.path.realpath(script.parent)
     want = model_calls(sc, parts, os.path.join(here, parts.data_dir))
     want += recorder_calls(parts, os.path.join(here, parts.out_dir)) + step_calls(parts)
     names = {c[0] for c in want} | {"wipeAnalysis", "nodeDisp", "nodeVel", "eleResponse"}
     names |= {c[0] for c in parts.plan["analysis"]}
     ops_calls, other = run_tcl_sandbox(script, names)
     assert_calls(ops_calls, want)
-    # the script's own helpers: paths, the results folder, the status line; nothing else
     for c in other:
         assert c[0] == "tcl", c
         if c[1:3] == ["file", "mkdir"]:
@@ -258,6 +262,11 @@ def check_tcl(sc, stem: str, folder: Path) -> None:
             assert c[2] in ("join", "dirname", "normalize"), c
         else:
             assert c[1:] == ["puts", "success, failures: 0, rescued by sub-steps: 0"], c
+
+
+def beyond_bmp(path: Path) -> bool:
+    """Tcl 8.6 cannot hold a character outside the Basic Multilingual Plane."""
+    return any(ord(ch) > 0xFFFF for ch in str(path.resolve()))
 
 
 # -- Python ------------------------------------------------------------------------------------
@@ -298,21 +307,37 @@ def run_python_build(script: Path, out: Path) -> list[list]:
     return fake.calls
 
 
-@functools.cache
-def plain_python_tree() -> str:
-    """The blanked syntax tree of the benchmark's Python export with plain text."""
-    with tempfile.TemporaryDirectory() as tmp:
-        script = export.export_script(base_scene(), "py", Path(tmp) / "model.py")
-        return _blank_strings(ast.parse(script.read_text(encoding="ascii")))
+def plain_text(sc):
+    """``sc`` with plain text wherever the tests put hostile text."""
+    notes = dict.fromkeys(sc.notes, "plain note")
+    seats = tuple(dc.replace(s, name=f"seat{j + 1}") for j, s in enumerate(sc.seats))
+    return sc.replace(name="plain", description="plain", notes=notes, seats=seats)
 
 
-def check_python(sc, stem: str, folder: Path) -> None:
-    script = export.export_script(sc, "py", folder / f"{stem}.py")
+_PLAIN_TREES: dict[str, str] = {}
+
+
+def plain_python_tree(sc) -> str:
+    """The blanked syntax tree of the Python export of ``plain_text(sc)`` (record names as
+    deckpound gives them: call this outside :class:`_HostileRecordNames`)."""
+    plain = plain_text(sc)
+    key = scene_hash(plain)
+    if key not in _PLAIN_TREES:
+        with tempfile.TemporaryDirectory() as tmp:
+            script = export.export_script(plain, "py", Path(tmp) / "model.py")
+            _PLAIN_TREES[key] = _blank_strings(ast.parse(script.read_text(encoding="ascii")))
+    return _PLAIN_TREES[key]
+
+
+def verify_python_script(sc, script: Path, plain_tree: str) -> None:
+    """``script`` (the Python export of ``sc``) is ASCII, has the code of a plain-text export
+    (``plain_tree``) and its ``build()`` and ``add_recorders()`` call exactly deckpound's
+    command log and the recorders."""
     text = script.read_text(encoding="ascii")  # ASCII only: no encoding trick, no bidi text
-    assert _blank_strings(ast.parse(text)) == plain_python_tree()  # no code added or removed
-    parts, _ = export.export_parts(sc, "py", stem)
+    assert _blank_strings(ast.parse(text)) == plain_tree  # no code added or removed
+    parts, _ = export.export_parts(sc, "py", script.stem)
     here = os.path.dirname(os.path.abspath(script))
-    out = str(folder / "py-out")
+    out = str(script.parent / "py-out")
     want = model_calls(sc, parts, os.path.join(here, parts.data_dir)) + recorder_calls(parts, out)
     assert_calls(run_python_build(script, out), want)
 
@@ -331,11 +356,56 @@ def check_python(sc, stem: str, folder: Path) -> None:
 @example(text="plain", stem=BRACE_STEMS[1], record="r")
 @example(text="}{ [exec touch PWNED] $x \\", stem="~x", record="} ; exec touch PWNED ; {")
 def test_exported_scripts_run_the_model_and_nothing_else(text, stem, record):
+    sc = hostile_scene(text)
+    plain_tree = plain_python_tree(sc)
     with tempfile.TemporaryDirectory() as tmp, _HostileRecordNames(record):
         folder = Path(tmp) / "out"
         folder.mkdir()
-        sc = hostile_scene(text)
-        check_tcl(sc, stem, folder)
-        check_python(sc, stem, folder)
-        leftovers = {p.name for p in Path(tmp).rglob("*")} - {"out", "py-out"}
-        assert "PWNED" not in leftovers
+        tcl = folder / f"{stem}.tcl"
+        if beyond_bmp(tcl):
+            with pytest.raises(SceneError, match="--output"):
+                export.export_script(sc, "tcl", tcl)
+            assert list(folder.iterdir()) == []
+        else:
+            verify_tcl_script(sc, export.export_script(sc, "tcl", tcl))
+        verify_python_script(sc, export.export_script(sc, "py", folder / f"{stem}.py"), plain_tree)
+        assert "PWNED" not in {p.name for p in Path(tmp).rglob("*")}
+
+
+# -- the corpus's script family ----------------------------------------------------------------
+
+
+def _printable_lines(text: str) -> bool:
+    return all(line.isprintable() for line in text.split("\n"))
+
+
+#: the family's Python exports to hostile file names run with -m slow only: the property test
+#: above covers them by default, the Tcl ones and the hostile scenes run here
+FAMILY = [
+    pytest.param(c, marks=pytest.mark.slow)
+    if c.id.startswith("script:stem-") and c.id.endswith(":py")
+    else c
+    for c in script_family()
+]
+
+
+@pytest.mark.skipif(TCLSH is None, reason="tclsh (Tcl 8.6) is not installed")
+@pytest.mark.parametrize("case", FAMILY, ids=lambda c: c.id)
+def test_corpus_script_family(case, tmp_path):
+    """Each hostile export or scene of the corpus ends as the corpus expects, prints no
+    control character raw, and the scripts it writes run the model and nothing else."""
+    argv = materialise(case, tmp_path / "case", None)
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(argv)
+    assert code in case.expect, err.getvalue()
+    assert _printable_lines(out.getvalue()) and _printable_lines(err.getvalue()), (out, err)
+    if code == 0 and argv[0] == "export":
+        sets = [argv[k + 1] for k, a in enumerate(argv) if a == "--set"]
+        sc = load_scene(argv[1], sets)
+        script = Path(argv[-1])
+        if script.suffix == ".tcl":
+            verify_tcl_script(sc, script)
+        else:
+            verify_python_script(sc, script, plain_python_tree(sc))
+    assert "PWNED" not in {p.name for p in tmp_path.rglob("*")}
