@@ -229,7 +229,7 @@ def run_cases(
     bar.advance(len(cases) - len(todo))
 
     def finish(case: Case, result: Result) -> None:
-        if cache is not None and result.ok:
+        if cache is not None and (result.ok or result.doubtful):  # finished answers
             cache.put(case.key, result)
         results[case.label] = result
         bar.advance()

@@ -172,8 +172,22 @@ def study_spread_sentence(table: pd.DataFrame) -> str:
         f"{num(1e3 * hi['peak_theta'])} mrad ({hi['label']}), a spread of "
         f"{num(100 * spread, 2)} % of the lowest"
     )
-    failed = len(table) - len(ok)
-    return s + (f"; {failed} case(s) failed." if failed else ".")
+    return s + left_out_clause(table) + "."
+
+
+def left_out_clause(table: pd.DataFrame) -> str:
+    """"; 2 case(s) doubtful (…), 1 failed: left out" for the cases a headline does not use:
+    a doubtful case finished but failed a quality check (energy created at a contact), so its
+    peaks are not quoted; the study table still lists it with its status."""
+    status = table["status"] if "status" in table else pd.Series([], dtype=object)
+    doubtful = int((status == "doubtful").sum())
+    failed = int((~status.isin(["success", "doubtful"])).sum())
+    parts = []
+    if doubtful:
+        parts.append(f"{doubtful} case(s) doubtful (energy created at a contact)")
+    if failed:
+        parts.append(f"{failed} failed")
+    return "; " + ", ".join(parts) + ": left out" if parts else ""
 
 
 def state_comparison_sentence(carried: pd.DataFrame, virgin: pd.DataFrame, run: int) -> str:

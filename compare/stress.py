@@ -61,8 +61,8 @@ def cell_scene(base: Scene, engine: str, cell: dict, duration: float) -> Scene:
     ov = [f"excitation.duration={duration!r}", f"run.output_dt={max(0.005, step or 0.0)!r}"]
     if "stiffness" in cell:
         ov.append(f"contact.stiffness={cell['stiffness']!r}")
-    if step is not None:
-        ov.append(f"{step_field(engine)}={step!r}")
+    if step is not None:  # the cell's own step: the contact-step rule would shorten it
+        ov += [f"{step_field(engine)}={step!r}", "run.steps_per_contact_period=0"]
     if "pga" in cell:
         ov.append(f"excitation.pga={cell['pga']!r}")
     if "gap" in cell:

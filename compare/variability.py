@@ -130,12 +130,17 @@ def row_key(engine: str, scene: Scene) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+#: statuses of a finished case, cached and not recomputed: a doubtful case (energy created at a
+#: contact) is a deterministic answer too; its row keeps its status and the summary leaves it out
+FINISHED = ("success", "doubtful")
+
+
 def _read_row(path: Path) -> dict | None:
     try:
         row = json.loads(path.read_text())
     except (OSError, ValueError):
         return None  # absent or damaged: recomputed
-    return row if isinstance(row, dict) and row.get("status") == "success" else None
+    return row if isinstance(row, dict) and row.get("status") in FINISHED else None
 
 
 def run_variability(
@@ -179,7 +184,7 @@ def run_variability(
 
     def done(i: int, row: dict) -> None:
         rows[i] = row
-        if row.get("status") == "success":
+        if row.get("status") in FINISHED:
             atomic_write_text(rows_dir / f"{keys[i]}.json", json.dumps(row), field="--cache")
         bar.advance()
 
@@ -239,7 +244,9 @@ def summarize(table) -> object:
             )
         rows.append(stats)
     frame = pd.DataFrame(rows)
-    frame.attrs["failed"] = int(len(table) - len(ok))
+    status = table.get("status")
+    frame.attrs["doubtful"] = int((status == "doubtful").sum()) if status is not None else 0
+    frame.attrs["failed"] = int(len(table) - len(ok)) - frame.attrs["doubtful"]
     return frame
 
 
