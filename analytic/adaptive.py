@@ -46,6 +46,7 @@ from deckpound.analytic.dormand_prince_work import (
     AdaptiveOptions,
     adaptive_workspace,
 )
+from deckpound.analytic.peaks import new_peaks, peak_columns, step_closures, step_peaks
 from deckpound.analytic.system import initial_dofs
 from deckpound.engine_contract import RunOutput, Status, engine_columns
 from deckpound.models.excitation import analysis_duration
@@ -103,8 +104,12 @@ def run_adaptive(
     nout = round(duration / out_dt) + 1
     cols = engine_columns(plan) + list(ENERGY_COLUMNS)
     bd.check_output_size(nout, len(cols))
+    peaks = new_peaks(ps.channels, plan.bent_names, ps.n_bent_springs)
     output = bd.Output(
-        np.zeros((nout, len(cols))), np.arange(len(cols), dtype=np.int64), np.zeros(len(cols))
+        np.zeros((nout, len(cols))),
+        np.arange(len(cols), dtype=np.int64),
+        np.zeros(len(cols)),
+        peaks,
     )
     u0, v0 = initial_dofs(initial_state)
     work = adaptive_workspace(
@@ -171,5 +176,7 @@ def run_adaptive(
         compile_time=compile_time,
         loop_time=loop,
         max_penetration=st["max_penetration"],
+        peaks=step_peaks(peaks, peak_columns(engine_columns(plan), plan.bent_names)),
+        gap_closures_per_corner=step_closures(peaks),
         extra=extra,
     )

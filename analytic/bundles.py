@@ -17,7 +17,8 @@ namedtuples of arrays need none)::
   [m], velocity [m/s] per channel, :mod:`.support_motion`).
 * ``options`` — the loop's own scalars (step, tolerances, stride, switches), a namedtuple
   defined next to the loop.
-* ``output`` — :data:`Output`: the output table, the selected columns, a row buffer.
+* ``output`` — :data:`Output`: the output table, the selected columns, a row buffer and the
+  per-step peaks and gap closures (:mod:`.peaks`).
 * ``work`` — the loop's workspace, a namedtuple with one named field per array (built by one
   function per loop; this also holds the evolving state: material and contact states).
 * ``stats`` — :data:`Stats`: integer counts and float values with named indices
@@ -97,8 +98,9 @@ def record(tb, D, V) -> Record:
 
 
 #: The output: ``table`` (rows, n_selected) written row by row, ``select`` (n_selected,) int64
-#: indices into the loop's full row, ``row`` the full-row buffer.
-Output = namedtuple("Output", ["table", "select", "row"])
+#: indices into the loop's full row, ``row`` the full-row buffer, ``peaks`` the peaks of the
+#: columns and the gap closures over every step (:data:`deckpound.analytic.peaks.Peaks`).
+Output = namedtuple("Output", ["table", "select", "row", "peaks"])
 #: Statistics: ``count`` int64 (:data:`COUNT_NAMES`, indices ``CNT_*``), ``value`` float64
 #: (:data:`VALUE_NAMES`, indices ``VAL_*``), ``halt`` int64 (1,) — set to 1 to stop the loop.
 Stats = namedtuple("Stats", ["count", "value", "halt"])

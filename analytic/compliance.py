@@ -267,6 +267,7 @@ def _run_newmark(
     from deckpound.analytic.system import initial_dofs
 
     on = dict.fromkeys(SKIPS, True)
+    from deckpound.analytic.peaks import new_peaks, peak_columns, step_closures, step_peaks
     for k, v in (skips or {}).items():
         if k not in on:
             raise ValueError(f"unknown skip {k!r}; valid: {', '.join(SKIPS)}")
@@ -311,7 +312,8 @@ def _run_newmark(
         want_energy=any(c in ENERGY_COLUMNS for c in cols),
         flush_subnormals=settings.subnormals == "flush",
     )
-    output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(len(full)))
+    peaks = new_peaks(ps.channels, plan.bent_names, ps.n_bent_springs)
+    output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(len(full)), peaks)
     u0, v0 = initial_dofs(initial_state)
     work = newmark_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, len(ps.channels))
     contact = bd.Contact(corners, cp, scene.contact.geometry == "nonlinear")
@@ -372,6 +374,8 @@ def _run_newmark(
     )
 
 
+        peaks=step_peaks(peaks, peak_columns(engine_cols, plan.bent_names)),
+        gap_closures_per_corner=step_closures(peaks),
 def run_compliance(
     scene: Scene, motion: SupportMotion | None = None, *, raise_on_failure: bool = False, **options
 ):

@@ -29,6 +29,7 @@ from deckpound.analytic.bundles import (
 )
 from deckpound.analytic.dormand_prince_work import H_BINS_PER_DECADE, H_LOG_MIN, H_NBINS, NT, NY
 from deckpound.analytic.fp_mode import flush_enter, flush_leave
+from deckpound.analytic.peaks import track_step
 from deckpound.analytic.system import (
     C_BENT,
     spring_assemble,
@@ -237,7 +238,8 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
     scalars :data:`.dormand_prince_work.AdaptiveOptions`, workspace
     :data:`.dormand_prince_work.AdaptiveWork`).
 
-    Fills ``output.table`` (rows at k·out_dt) and ``stats``: count = status (RUN_OK,
+    Fills ``output.table`` (rows at k·out_dt), ``output.peaks`` (peaks and gap closures over
+    every accepted step, :mod:`.peaks`) and ``stats``: count = status (RUN_OK,
     RUN_STEP_UNDERFLOW, RUN_NONFINITE, RUN_STEP_BUDGET, RUN_INTERRUPTED), rows, steps
     (accepted), rejected, events, rhs calls; value[VAL_TIME] = the time reached [s],
     value[VAL_MAX_PEN] the largest penetration over the accepted steps [m]; work.hist,
@@ -277,6 +279,7 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
     y[15] = es0
     y[17] = ec0
     _adaptive_store(sa, contact, ws, output, 0, 0.0)
+    _adaptive_track(sa, ws, output.peaks, 0.0)
     row = 1
     nout = output.table.shape[0]
     h = min(max_step, out_dt, 1e-4)
@@ -378,6 +381,7 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
         calls += 1
         _events(y, sa, contact, ws, ev0)
         steps += 1
+        _adaptive_track(sa, ws, output.peaks, t)
         if ev0[0] <= 0.0 or ev0[1] <= 0.0 or ev0[2] <= 0.0 or ev0[3] <= 0.0:
             in_contact = True
         hs = t - t_start
@@ -422,6 +426,17 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
     cnt[bd.CNT_RHS_CALLS] = calls
     stats.value[bd.VAL_TIME] = t
     flush_leave(saved)
+
+
+@kernel
+def _adaptive_track(sa, ws, pk, t):
+    """Peaks and gap closures of the accepted step ending at t (:mod:`.peaks`): the engine
+    columns as :func:`_adaptive_store` writes them, from the state of the last :func:`_rhs`
+    call at (t, y)."""
+    y = ws.y
+    cw = ws.cw
+    store_standard(pk.row, t, y[0:7], y[7:14], cw.g, cw.lam, cw.lt, ws.hstate[:, T_STRESS], sa.nbs)
+    track_step(pk, t, y[0:7], ws.ug, ws.d, sa.nbs)
 
 
 @kernel

@@ -95,6 +95,7 @@ from deckpound.analytic.moreau_jean_work import (
     store_row,
 )
 from deckpound.analytic.nonsmooth import ENERGY_COLUMNS
+from deckpound.analytic.peaks import track_step
 from deckpound.analytic.support_motion import record_at
 from deckpound.analytic.system import (
     spring_assemble,
@@ -103,6 +104,7 @@ from deckpound.analytic.system import (
     spring_stored_energy,
     spring_tangent,
     spring_update_materials,
+    store_standard,
 )
 
 __all__ = [
@@ -145,7 +147,9 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     contact steps, Newton iterations, max iterations of a step, iteration-matrix
     factorisations; ``stats.value``: max complementarity and cone residuals, max penetration
     over every accepted step [m];
-    ``work.final`` (2, 7) = displacement and velocity at the last accepted step.
+    ``work.final`` (2, 7) = displacement and velocity at the last accepted step;
+    ``output.peaks``: peaks and gap closures over every step (:mod:`.peaks`; the forces of a
+    step are its impulses divided by h).
     ``stats.halt[0]`` ≠ 0 stops the loop at the next Newton iteration (RUN_INTERRUPTED).
     """
     # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
@@ -236,6 +240,12 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     contact_kinematics(q, geom, nonlinear, gap, WN, WT)
     output_energies(sa, hstate, q, v, ug, W, energy)
     store_row(output, 0, 0.0, q, v, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state, energy)
+    # peaks and gap closures of every step (.peaks): the step's forces are its impulses / h
+    pk = output.peaks
+    fn_step, ft_step = pk.force[0], pk.force[1]
+    inv_h = 1.0 / h
+    store_standard(pk.row, 0.0, q, v, gapo, fn_step, ft_step, fs_k, nbs)
+    track_step(pk, 0.0, q, ug, d_k, nbs)
     row = 1
     solves = 0
     events = 0
@@ -429,11 +439,13 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
         # ---- penetration at q_{k+1}, every step (the output rows see one step in `stride`)
         if nonlinear:
             contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
-            for c in range(4):
-                max_pen = max(max_pen, -gapo[c])
         else:
             for c in range(4):
-                max_pen = max(max_pen, -linear_gap(geom[c], q))
+                gapo[c] = linear_gap(geom[c], q)
+        for c in range(4):
+            max_pen = max(max_pen, -gapo[c])
+            fn_step[c] = 0.0
+            ft_step[c] = 0.0
         if nact > 0:
             for a in range(nact):
                 c = act[a]
@@ -447,9 +459,13 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
                 W[4] -= P_T[c] * uT
                 pn_acc[c] += P_N[c]
                 pt_acc[c] += P_T[c]
+                fn_step[c] = P_N[c] * inv_h
+                ft_step[c] = P_T[c] * inv_h
         else:
             for c in range(4):
                 state[c] = 0
+        store_standard(pk.row, (n + 1) * h, q, v, gapo, fn_step, ft_step, fs, nbs)
+        track_step(pk, (n + 1) * h, q, ug, d, nbs)
         # ---- output
         if (n + 1) % stride == 0:
             contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)

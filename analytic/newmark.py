@@ -49,10 +49,12 @@ from deckpound.analytic.newmark_work import (
     N_ENERGY,
     NewmarkOptions,
     NewmarkWork,
+    fill_row,
     newmark_workspace,
     output_energies,
     store_row,
 )
+from deckpound.analytic.peaks import track_step
 from deckpound.analytic.support_motion import record_at
 from deckpound.analytic.system import (
     spring_assemble,
@@ -144,7 +146,8 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     A step that fails is redone from its start in ``opt.substeps`` sub-steps (supports
     linearly interpolated), as the OpenSees engine's ``fallback = "substep"``.
 
-    Fills ``output.table`` (one row per output) and ``stats.count``: status (RUN_OK,
+    Fills ``output.table`` (one row per output), ``output.peaks`` (the peaks of every column
+    and the gap closures over every converged (sub)step, :mod:`.peaks`) and ``stats.count``: status (RUN_OK,
     RUN_NOT_CONVERGED, RUN_SINGULAR, RUN_NONFINITE, RUN_INTERRUPTED), rows written, failed
     step, steps completed, Newton iterations, contact events, factorisations reused (same
     matrix), max iterations of a step, steps rescued by sub-stepping. ``stats.halt[0]`` ≠ 0
@@ -257,6 +260,9 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     W[3] = ec0
     output_energies(sa, hstate, cp, cs, u, v, ug, W, energy)
     store_row(output, 0, 0.0, u, v, cw, cs, fs, nbs, energy)
+    pk = output.peaks
+    fill_row(pk.row, 0.0, u, v, cw, cs, fs, nbs)
+    track_step(pk, 0.0, u, ug, d_new, nbs)
     row = 1
     total_it = 0
     events = 0
@@ -413,6 +419,10 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 for c in range(4):
                     if -g[c] > stats.value[bd.VAL_MAX_PEN]:
                         stats.value[bd.VAL_MAX_PEN] = -g[c]
+                # peaks of every column and gap closures at every converged (sub)step
+                t_now = (n + 1) * dt if ksub == nsub - 1 else n * dt + (ksub + 1) * h
+                fill_row(pk.row, t_now, u, v, cw, cs, fs, nbs)
+                track_step(pk, t_now, u, ug, d_new, nbs)
                 # --- energy (trapezoidal work over the (sub)step)
                 if not want_energy:
                     continue

@@ -2,8 +2,9 @@
 
 :data:`NewmarkOptions` (the loop's scalars), the workspace bundles and
 :func:`newmark_workspace` that allocates them (the loop itself runs without numba's runtime and
-cannot allocate), and the two per-output-row kernels: :func:`output_energies` (the energy
-columns from the running work totals) and :func:`store_row` (one row of the result table).
+cannot allocate), and the per-row kernels: :func:`output_energies` (the energy columns from
+the running work totals), :func:`store_row` (one row of the result table) and :func:`fill_row`
+(its engine columns, also every step's row of the peaks).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ __all__ = [
     "N_ENERGY",
     "NewmarkOptions",
     "NewmarkWork",
+    "fill_row",
     "newmark_workspace",
     "output_energies",
     "store_row",
@@ -112,16 +114,24 @@ def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
     )
 
 
-@kernel
-def store_row(output, row, t, u, v, cw, cs, fs, nbs, energy):
-    """Output row ``row``: the full row into ``output.row``, then the selected columns into
-    ``output.table``."""
-    buf = output.row
+@kernel(inline="always")
+def fill_row(buf, t, u, v, cw, cs, fs, nbs):
+    """The engine columns of the state (t, u, v) into ``buf`` (layout of
+    :func:`deckpound.analytic.system.store_standard`): every output row, and every step's
+    row of the peaks (:mod:`.peaks`)."""
     store_standard(buf, t, u, v, cw.g, cw.lam, cw.lt, fs, nbs)
     # ft: the committed tangential force (the trial one for every model but contact2d, whose
     # element reports 0 after a sliding commit, as OpenSees's recorders see it)
     for c in range(4):
         buf[_C_FT + c] = cs[c, cl.S_CFT]
+
+
+@kernel
+def store_row(output, row, t, u, v, cw, cs, fs, nbs, energy):
+    """Output row ``row``: the full row into ``output.row``, then the selected columns into
+    ``output.table``."""
+    buf = output.row
+    fill_row(buf, t, u, v, cw, cs, fs, nbs)
     base = _C_BENT + nbs
     for k in range(energy.shape[0]):
         buf[base + k] = energy[k]

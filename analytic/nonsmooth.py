@@ -208,6 +208,7 @@ class NonsmoothEngine(Engine):
             moreau_jean_run,
             moreau_jean_workspace,
         )
+        from deckpound.analytic.peaks import new_peaks, peak_columns, step_closures, step_peaks
         from deckpound.analytic.support_motion import support_record
         from deckpound.analytic.system import initial_dofs, pack_system
         from deckpound.models.damping import damping_model
@@ -234,10 +235,12 @@ class NonsmoothEngine(Engine):
         nsteps = round(duration / h)
         cols = engine_columns(plan) + list(IMPULSE_COLUMNS) + list(ENERGY_COLUMNS)
         bd.check_output_size(nsteps // stride + 1, len(cols))
+        peaks = new_peaks(ps.channels, plan.bent_names, ps.n_bent_springs)
         output = bd.Output(
             np.zeros((nsteps // stride + 1, len(cols))),
             np.arange(len(cols), dtype=np.int64),
             np.zeros(len(cols)),
+            peaks,
         )
         u0, v0 = initial_dofs(initial_state)
         work = moreau_jean_workspace(u0, v0, ps.new_state(), ps.n_springs, len(ps.channels))
@@ -307,6 +310,8 @@ class NonsmoothEngine(Engine):
             loop_time=loop,
             max_penetration=st["max_penetration"],
             max_complementarity_residual=st["max_complementarity"],
+            peaks=step_peaks(peaks, peak_columns(engine_columns(plan), plan.bent_names)),
+            gap_closures_per_corner=step_closures(peaks),
             extra=extra,
         )
 

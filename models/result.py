@@ -9,9 +9,10 @@ engine's extras) and metadata. Its units come from the plan model's column table
 Metadata every engine fills through the shared epilogue (:func:`deckpound.engine_contract.finish`):
 ``status`` (``"success"`` or ``"failed"``), ``failure`` (a :class:`~deckpound.engine_contract.Status`
 name), ``message``, ``failed_step``/``failed_time`` on failure, ``steps``, ``newton_iterations``,
-``contact_solves``, ``gap_closures`` (see :func:`gap_closures`), ``failures``, ``wall_time``
-(run time without compilation) and ``compile_time`` [s], ``scene_hash``, ``physics_hash``,
-``settings``, ``settings_hash``, ``version``, ``units``.
+``contact_solves``, ``gap_closures`` (see :func:`gap_closures`; ``gap_closures_basis``),
+``peaks`` (``{column: [peak, time]}`` over every step, :meth:`Result.peak`; ``peaks_basis``),
+``failures``, ``wall_time`` (run time without compilation) and ``compile_time`` [s],
+``scene_hash``, ``physics_hash``, ``settings``, ``settings_hash``, ``version``, ``units``.
 
 Files: ``DIR/<engine>.csv`` (the columns; units in a ``# units:`` comment line) and
 ``DIR/<engine>.json`` (the metadata), written as a pair all or nothing (temporary files renamed
@@ -46,8 +47,10 @@ __all__ = [
     "gap_closures",
     "physics_hash",
     "physics_mapping",
+    "in_contact",
     "scene_hash",
     "settings_hash",
+    "row_peak",
     "standard_columns",
 ]
 
@@ -97,7 +100,13 @@ def closure_times(t: np.ndarray, gap: np.ndarray, fn: np.ndarray | None = None) 
 def in_contact(columns: dict[str, np.ndarray], corner: str) -> np.ndarray | None:
     """Whether a corner is in contact at each output row: its gap is closed (g ≤ 0) or it
     carried a normal force over the row (fn > 0; for the nonsmooth engine fn is the impulse of
-    the output interval divided by its length, so a rigid impact that leaves g ≥ 0 counts)."""
+    the output interval divided by its length, so a rigid impact that leaves g ≥ 0 counts).
+
+    The one contact test: the engines apply it at every step
+    (:func:`deckpound.analytic.peaks.in_contact_now`, and the OpenSees loop and the exported
+    scripts with the same two comparisons). For every penalty law the force is zero while
+    g > 0, so it is g ≤ 0 there; the force term is for rigid contact, whose impact impulse can
+    reverse the approach within a step and leave g ≥ 0 at both ends of it."""
     g = columns.get(f"gap_{corner}")
     if g is None:
         return None
@@ -109,11 +118,15 @@ def in_contact(columns: dict[str, np.ndarray], corner: str) -> np.ndarray | None
 
 
 def gap_closures(columns: dict[str, np.ndarray]) -> dict[str, int]:
-    """Gap closures per corner: the output rows at which a corner goes from out of contact to
-    in contact (:func:`in_contact`), the first row counting when it starts in contact. The one
-    definition of ``gap_closures`` (engine metadata, ``deckpound run``, the report and the
-    studies all read it): counted on the stored output, so it does not depend on an engine's
-    internal step."""
+    """Gap closures per corner on output rows: the rows at which a corner goes from out of
+    contact to in contact (:func:`in_contact`), the first row counting when it starts in
+    contact.
+
+    The definition of ``gap_closures`` is this, applied at **every step**: the engines count
+    it in their step loops (``meta["gap_closures_basis"] = "every step"``; a closure between
+    two output rows is not lost, so the count does not depend on ``run.output_dt``). This
+    function is the fallback for results without that count (measured data, old results:
+    basis ``"output rows"``)."""
     out = {}
     for c in CORNER_NAMES:
         closed = in_contact(columns, c)
@@ -127,6 +140,15 @@ def gap_closures(columns: dict[str, np.ndarray]) -> dict[str, int]:
 @dataclass(frozen=True)
 class Result:
     """Time series of one engine run plus metadata (frozen; columns are read-only arrays).
+
+def row_peak(name: str, t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
+    """(peak, time [s]) of a column on its rows: the largest |x| and its first time; for a
+    gap column (``gap_*``) the smallest (most negative) value. (nan, nan) without rows."""
+    if not len(x):
+        return float("nan"), float("nan")
+    k = int(np.argmin(x)) if name.startswith("gap_") else int(np.argmax(np.abs(x)))
+    return (float(x[k]) if name.startswith("gap_") else float(abs(x[k]))), float(t[k])
+
 
     Attributes
     ----------
@@ -163,6 +185,7 @@ class Result:
         object.__setattr__(self, "meta", meta)
 
     # -- access ----------------------------------------------------------------------
+            meta["gap_closures_basis"] = "output rows"
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
 
@@ -180,7 +203,8 @@ class Result:
 
     @property
     def gap_closures(self) -> int:
-        """Total gap closures on the output rows (see :func:`gap_closures`)."""
+        """Total gap closures (every step when the engine counted them, else on the output
+        rows: ``meta["gap_closures_basis"]``; see :func:`gap_closures`)."""
         return int(self.meta.get("gap_closures", 0))
 
     def with_meta(self, **changes: Any) -> Result:
@@ -193,6 +217,37 @@ class Result:
 
         frame = pd.DataFrame(
             {k: v for k, v in self.columns.items() if k != "t"}, index=pd.Index(self.t, name="t")
+    # -- peaks -----------------------------------------------------------------------
+    def _step_peak(self, column: str):
+        if column not in self.columns:
+            raise KeyError(f"no column {column!r} in the {self.engine} result")
+        peaks = self.meta.get("peaks")
+        entry = peaks.get(column) if isinstance(peaks, dict) else None
+        return entry if entry is not None and len(entry) == 2 else None
+
+    def peak(self, column: str) -> float:
+        """The peak of a column: the largest |x| (for a gap, ``gap_*``, the smallest, most
+        negative value: the deepest penetration) over **every step** of the run when the engine
+        measured it (``meta["peaks"]``), else over the output rows (measured data, old results,
+        columns an engine does not track: energies, impulses); :meth:`peak_basis` says which.
+        NaN for a result without rows."""
+        entry = self._step_peak(column)
+        if entry is not None:
+            return float(entry[0])
+        return row_peak(column, self.t, self.columns[column])[0]
+
+    def peak_time(self, column: str) -> float:
+        """The first time [s] at which :meth:`peak` is reached (same basis)."""
+        entry = self._step_peak(column)
+        if entry is not None:
+            return float(entry[1])
+        return row_peak(column, self.t, self.columns[column])[1]
+
+    def peak_basis(self, column: str) -> str:
+        """``"every step"`` or ``"output rows"``: what :meth:`peak` of ``column`` is taken
+        over."""
+        return "every step" if self._step_peak(column) is not None else "output rows"
+
         )
         frame.attrs = {
             "units": self.units,
@@ -208,6 +263,8 @@ class Result:
         one variable over (time, corner); bent forces and deformations (``<bent>_fx``…) one
         variable each over (time, bent, direction); everything else a variable over time.
         Units are in each variable's ``attrs["units"]``.
+            # {column: [peak, time]} over every step (Result.peak); the rows may miss them
+            "peaks": dict(self.meta.get("peaks") or {}),
         """
         import xarray as xr
 

@@ -35,11 +35,17 @@ A new engine is one module plus one registry entry. It must:
    without it the epilogue takes the penetration from the output rows and says so
    (``meta["max_penetration_basis"]``). The epilogue turns a penetration beyond
    :data:`PENETRATION_WARN_FRACTION` of the gap into a :class:`QualityWarning`.
+9. Optionally measure, at every step, the peak of each standard column and the gap closures
+   (``RunOutput.peaks``, ``RunOutput.gap_closures_per_corner``; the analytic engines with
+   :mod:`deckpound.analytic.peaks`, OpenSees in its step loop): the epilogue puts them into
+   ``meta["peaks"]`` and ``meta["gap_closures"]`` (:meth:`deckpound.models.result.Result.peak`
+   reads them); without them it takes both from the output rows and says so
+   (``meta["peaks_basis"]``, ``meta["gap_closures_basis"]``).
 
 :meth:`Engine.run` (not overridden) does the rest the same way for every engine: validation,
 support motion, timing, and the epilogue :func:`finish`, which adds the columns computed from
 the plan and the support motion (displacements relative to the supports, bent deformations),
-counts gap closures once (:func:`deckpound.models.result.gap_closures`), and builds the
+puts the engine's every-step peaks and gap closures into the metadata (point 9), and builds the
 metadata (status, message, failure step/time, statistics, wall and compile time, hashes,
 settings, record provenance, warnings).
 """
@@ -69,7 +75,9 @@ from deckpound.models.result import (
     STATUS_FAILED,
     STATUS_SUCCESS,
     Result,
+    gap_closures,
     physics_hash,
+    row_peak,
     scene_hash,
     settings_hash,
 )
@@ -171,6 +179,14 @@ class RunOutput:
         every contact solve, in the engine's unit (m/s for the nonsmooth engine's velocity-
         level Newton law), or None when the engine has no such problem (penalty contact
         violates complementarity by construction: its measure is the penetration).
+    peaks : ``{column: (peak, time [s])}`` over **every** step (sub-steps and adaptive steps
+        included): the largest |x| of each standard column the engine tracks (for a gap the
+        smallest, most negative value), independent of the output rate
+        (:mod:`deckpound.analytic.peaks`); None when the engine does not track them (the
+        epilogue then says ``meta["peaks_basis"] = "output rows"``).
+    gap_closures_per_corner : ``{"c1": n, ...}`` closures counted at every step with the one
+        contact test (:func:`deckpound.models.result.in_contact`); None: counted on the
+        output rows (``meta["gap_closures_basis"]``).
     extra : engine-specific metadata (documented by the engine).
     """
 
@@ -188,6 +204,8 @@ class RunOutput:
     loop_time: float = 0.0
     max_penetration: float | None = None
     max_complementarity_residual: float | None = None
+    peaks: dict[str, tuple[float, float]] | None = None
+    gap_closures_per_corner: dict[str, int] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
 
@@ -379,6 +397,39 @@ def _contact_quality(engine: Engine, scene: Scene, cols: dict, out: RunOutput) -
     return q
 
 
+def _step_statistics(columns: dict[str, np.ndarray], out: RunOutput) -> dict[str, Any]:
+    """``peaks`` ({column: [peak, time]}, JSON-safe) and the gap closures of a run, with their
+    bases (``"every step"`` or ``"output rows"``).
+
+    The engine's every-step peaks (:attr:`RunOutput.peaks`) are kept unless an output row
+    exceeds one (a column the epilogue derives, e.g. a relative displacement, is computed from
+    the rows with other round-off than the engine's per-step value): the peak is then the row's,
+    so it never falls below a stored value. Closures: the engine's per-step count, else
+    :func:`deckpound.models.result.gap_closures` of the rows."""
+    q: dict[str, Any] = {}
+    if out.peaks is not None:
+        peaks = {}
+        for name, (value, when) in out.peaks.items():
+            if name in columns and len(columns[name]):
+                rv, rt = row_peak(name, columns["t"], columns[name])
+                beyond = rv < value if name.startswith("gap_") else rv > value
+                if beyond:
+                    value, when = rv, rt
+            peaks[name] = [float(value), float(when)]
+        q["peaks"] = peaks
+        q["peaks_basis"] = "every step"
+    else:
+        q["peaks_basis"] = "output rows"
+    if out.gap_closures_per_corner is not None:
+        per, basis = {c: int(n) for c, n in out.gap_closures_per_corner.items()}, "every step"
+    else:
+        per, basis = gap_closures(columns), "output rows"
+    q["gap_closures"] = sum(per.values())
+    q["gap_closures_per_corner"] = per
+    q["gap_closures_basis"] = basis
+    return q
+
+
 def finish(
     engine: Engine,
     scene: Scene,
@@ -433,6 +484,7 @@ def finish(
         meta["record"] = provenance
     meta.update(out.extra)
     meta.update(_contact_quality(engine, scene, cols, out))
+    meta.update(_step_statistics(columns, out))
     for text in meta.get("quality_warnings", []):
         meta["warnings"].append(text)
         warnings.warn(f"{engine.name} engine: {text}", QualityWarning, stacklevel=3)

@@ -1,0 +1,173 @@
+"""Peaks of the result columns and gap closures, taken at every step of the compiled loops.
+
+The output rows see one step in ``stride`` (``run.output_dt`` / the engine's step): a peak or
+a closure between two rows is lost, and how much depends on the output rate (issue 28: the
+benchmark's peak deck rotation read 0.81 mrad instead of 3.62 at ``run.output_dt = 0.5``).
+Every step loop therefore calls :func:`track_step` once per accepted step (every sub-step of
+a rescued step, every adaptive step) and once at t = 0, with the state it commits:
+
+* the step's row in the **peak layout** is written into ``Peaks.row``: the engine columns in
+  the layout of :func:`deckpound.analytic.system.store_standard` (time, absolute displacements
+  and velocities, gaps, normal and tangential contact forces, bent spring forces), then the
+  displacements relative to the supports (:data:`deckpound.models.plan.RELATIVE_COLUMNS`:
+  deck x, y relative to the mean shake-table motion, each seat relative to its actuator) and
+  the bent deformations d = B u − S u_g of the ``nbs`` bent springs — the columns
+  :func:`deckpound.engine_contract.finish` derives from the output rows, here from the
+  support displacement at the step (:func:`peak_columns` names the layout);
+* ``Peaks.value`` / ``Peaks.time`` keep, per column, the largest |x| and the first time it
+  was reached [s] — for the gaps the smallest (most negative: the deepest penetration)
+  signed value instead;
+* ``Peaks.closures`` counts, per corner, the steps at which the corner goes from out of
+  contact to in contact (:func:`in_contact_now`, the one definition; a run that starts in
+  contact counts one: ``Peaks.inside`` starts False).
+
+The engine fills the standard part of ``Peaks.row`` itself (its force columns differ: the
+compliance engines' λ_N, λ_T; the nonsmooth engine's impulse of the step divided by the step,
+``Peaks.force`` is its scratch) and then calls :func:`track_step`. The arrays are allocated by
+:func:`new_peaks` (the loops run without numba's runtime) and read back by
+:func:`step_peaks` and :func:`step_closures` into :class:`~deckpound.engine_contract.
+RunOutput`. The tracking reads and writes only its own arrays: the result columns are those
+of a run without it, bit for bit.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+from deckpound.analytic._jit import kernel
+from deckpound.analytic.system import C_BENT, C_FN, C_GAP
+from deckpound.models.plan import (
+    CORNER_NAMES,
+    DECK_X,
+    DECK_Y,
+    RELATIVE_COLUMNS,
+    SEAT_X,
+)
+
+__all__ = [
+    "Peaks",
+    "in_contact_now",
+    "new_peaks",
+    "peak_columns",
+    "step_closures",
+    "step_peaks",
+    "track_step",
+]
+
+#: The per-step peaks bundle (a field of :data:`deckpound.analytic.bundles.Output`):
+#: ``row`` (n,) the step's row in the peak layout (module docstring), ``value`` (n,) the peak
+#: of each column so far (max |x|; min x for the gaps), ``time`` (n,) when it was reached [s];
+#: ``tx``, ``ty`` int64 the support channels of the shake tables in x and y (their mean is the
+#: reference of deck_x_rel, deck_y_rel), ``seat`` (2,) int64 the actuator channel of each seat;
+#: ``inside`` (4,) bool corner in contact at the last step, ``closures`` (4,) int64 closures per
+#: corner; ``force`` (2, 4) scratch for the step's normal and tangential forces.
+Peaks = namedtuple(
+    "Peaks", ["row", "value", "time", "tx", "ty", "seat", "inside", "closures", "force"]
+)
+
+
+def peak_columns(engine_columns: list[str], bent_names) -> list[str]:
+    """Column names of the peak layout: the engine columns (``t`` first, as
+    :func:`deckpound.engine_contract.engine_columns`), the relative displacements, then the
+    bent deformations ``<bent>_dx``, ``<bent>_dy``."""
+    out = list(engine_columns) + list(RELATIVE_COLUMNS)
+    for b in bent_names:
+        out += [f"{b}_dx", f"{b}_dy"]
+    return out
+
+
+def new_peaks(channels, bent_names, n_bent_springs: int) -> Peaks:
+    """Zeroed :data:`Peaks` for a model with these support ``channels`` (the order of u_g) and
+    bents; the gap entries start at +inf (their statistic is the minimum)."""
+    n = C_BENT + 2 * n_bent_springs + len(RELATIVE_COLUMNS)
+    channels = list(channels)
+    value = np.zeros(n)
+    value[C_GAP : C_GAP + len(CORNER_NAMES)] = np.inf
+    return Peaks(
+        row=np.zeros(n),
+        value=value,
+        time=np.zeros(n),
+        tx=np.array([channels.index(f"{b}_x") for b in bent_names], dtype=np.int64),
+        ty=np.array([channels.index(f"{b}_y") for b in bent_names], dtype=np.int64),
+        seat=np.array([channels.index("seat1_x"), channels.index("seat2_x")], dtype=np.int64),
+        inside=np.zeros(len(CORNER_NAMES), dtype=np.bool_),
+        closures=np.zeros(len(CORNER_NAMES), dtype=np.int64),
+        force=np.zeros((2, len(CORNER_NAMES))),
+    )
+
+
+@kernel(inline="always")
+def in_contact_now(gap, fn):
+    """Whether a corner is in contact at a step: its gap is closed (g ≤ 0 [m]) or it carried a
+    normal force over the step (fn > 0 [kN]).
+
+    The one contact test of the gap-closure count (every engine, the exported scripts and
+    :func:`deckpound.models.result.in_contact` on output rows). For the penalty laws every law
+    gives zero force while g > 0, so the test is g ≤ 0; the force term is there for rigid
+    contact: the nonsmooth engine's impact impulse of a step can reverse the approach within
+    the step, leaving g ≥ 0 at both its ends, and the impact is still a contact."""
+    return gap <= 0.0 or fn > 0.0
+
+
+@kernel(inline="always")
+def track_step(pk, t, u, ug, d, nbs):
+    """Complete the step's row in ``pk.row`` (its standard part written by the engine) with
+    the relative displacements and bent deformations, then update the peaks and the closures.
+
+    u (7,) displacements [m, rad] and ug (n_channels,) support displacements [m] at the step,
+    d the spring deformations d = B u − S u_g (the first ``nbs`` are the bents'), t [s]."""
+    row = pk.row
+    base = C_BENT + nbs
+    mx = 0.0
+    for k in range(pk.tx.shape[0]):
+        mx += ug[pk.tx[k]]
+    my = 0.0
+    for k in range(pk.ty.shape[0]):
+        my += ug[pk.ty[k]]
+    if pk.tx.shape[0] > 0:
+        mx = mx / pk.tx.shape[0]
+        my = my / pk.ty.shape[0]
+    row[base] = u[DECK_X] - mx
+    row[base + 1] = u[DECK_Y] - my
+    row[base + 2] = u[SEAT_X[0]] - ug[pk.seat[0]]
+    row[base + 3] = u[SEAT_X[1]] - ug[pk.seat[1]]
+    for i in range(nbs):
+        row[base + 4 + i] = d[i]
+    value, time = pk.value, pk.time
+    # the gaps: the most negative value; every other column: the largest |x| (t excluded)
+    for k in range(1, C_GAP):
+        a = abs(row[k])
+        if a > value[k]:
+            value[k] = a
+            time[k] = t
+    for c in range(4):
+        k = C_GAP + c
+        if row[k] < value[k]:
+            value[k] = row[k]
+            time[k] = t
+        now = in_contact_now(row[k], row[C_FN + c])
+        if now and not pk.inside[c]:
+            pk.closures[c] += 1
+        pk.inside[c] = now
+    for k in range(C_GAP + 4, row.shape[0]):
+        a = abs(row[k])
+        if a > value[k]:
+            value[k] = a
+            time[k] = t
+
+
+def step_peaks(pk: Peaks, names: list[str]) -> dict[str, tuple[float, float]]:
+    """``{column: (peak, time)}`` of :func:`track_step`'s statistics, ``names`` from
+    :func:`peak_columns` (``t`` left out; a gap's peak is its smallest value)."""
+    return {
+        n: (float(pk.value[k]), float(pk.time[k]))
+        for k, n in enumerate(names)
+        if n != "t" and np.isfinite(pk.value[k])
+    }
+
+
+def step_closures(pk: Peaks) -> dict[str, int]:
+    """Gap closures per corner counted at every step (``{"c1": n, ...}``)."""
+    return {c: int(pk.closures[k]) for k, c in enumerate(CORNER_NAMES)}
