@@ -16,8 +16,7 @@ reaches stdout or stderr raw.
 
 from __future__ import annotations
 
-import json
-
+import tomli_w
 from _fuzz_corpus import BENCH_TOML, SHORT, Case
 
 #: file name stems: each would run code, break the script or fool the terminal if written raw
@@ -61,15 +60,14 @@ HOSTILE_NAMES = [
 
 
 def _scene_file(name: str) -> bytes:
-    """The short benchmark's TOML with ``name`` as its name and description (a JSON string
-    with ASCII escapes is a TOML basic string)."""
+    """The short benchmark's TOML with ``name`` as its name and description."""
     out, top = [], True
     for line in BENCH_TOML.splitlines(keepends=True):
         top &= not line.startswith("[")  # the scene's own keys come before the first table
         if top and line.startswith("name = "):
-            line = f"name = {json.dumps(name)}\n"
+            line = tomli_w.dumps({"name": name})
         elif top and line.startswith("description = "):
-            line = f"description = {json.dumps(name + chr(10) + name)}\n"
+            line = tomli_w.dumps({"description": f"{name}\n{name}"})
         out.append(line)
     return "".join(out).encode("utf-8")
 

@@ -7,14 +7,13 @@ escaped (``\\x1b``, ``\\r``, ``\\u202e``), on stdout and stderr alike.
 
 from __future__ import annotations
 
-import json
-
+import tomli_w
 from hypothesis import given
 from hypothesis import strategies as st
 
 from deckpound._terminal import terminal_text
 from deckpound.cli import main
-from deckpound.models.scene_io import load_scene, scene_to_toml
+from deckpound.models.scene_io import load_scene, scene_from_toml, scene_to_toml
 
 SHORT = ["--set", "excitation.duration=2"]
 #: an erase-screen and a window-title sequence, BEL, CR, RLO, C1 CSI, LRI, LRM, DEL, NUL
@@ -58,8 +57,7 @@ def hostile_scene_file(folder, name: str = HOSTILE):
     text = scene_to_toml(load_scene("saiidi-4span"))
     line = next(x for x in text.splitlines() if x.startswith("name = "))
     path = folder / "hostile.toml"
-    # a JSON string with ensure_ascii is a valid TOML basic string (\uXXXX escapes)
-    path.write_text(text.replace(line, f"name = {json.dumps(name)}"), encoding="utf-8")
+    path.write_text(text.replace(line, tomli_w.dumps({"name": name}).strip()), encoding="utf-8")
     assert load_scene(str(path)).name == name
     return path
 
@@ -95,3 +93,15 @@ def test_export_escapes_the_file_name_it_names(tmp_path, capsys):
     assert (tmp_path / f"{stem}.py").is_file()  # the file has the name asked for
     assert_nothing_raw(out, err)
     assert "a\\x1b]0;owned\\x07\\u202egnp.py" in out, out
+
+
+def test_scene_show_writes_controls_as_toml_escapes(tmp_path, capsys):
+    """``scene show`` prints the same scene (it reads back equal) with nothing raw: the
+    characters TOML allows raw in a string (TAB, C1, bidi, a tag character) are escaped."""
+    name = HOSTILE.replace("\x00", "") + "\ttab \x85 \u2028 \U000e0041"
+    path = hostile_scene_file(tmp_path, name)
+    code, out, err = cli(capsys, "scene", "show", str(path))
+    assert code == 0, err
+    assert_nothing_raw(out, err)
+    assert scene_from_toml(out) == load_scene(str(path))
+    assert "\\u202e" in out and "\\U000e0041" in out

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from deckpound.models.errors import SceneError
 
-from ._terminal import terminal_text
+from ._terminal import terminal_text, terminal_toml
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -48,7 +48,8 @@ def _list(args) -> int:
 def _show(args) -> int:
     from deckpound.models.scene_io import load_scene, scene_to_toml
 
-    text = scene_to_toml(load_scene(args.scene, args.overrides))
+    # control and bidi characters of a name or note as TOML escapes: the same scene, shown safely
+    text = terminal_toml(scene_to_toml(load_scene(args.scene, args.overrides)))
     sys.stdout.write(text)  # a full or closed stdout: OSError, exit status 3 (cli.main)
     return 0
 

@@ -7,13 +7,14 @@ the rest overwrites what was printed, BEL rings, and the bidirectional controls 
 U+2066–U+2069, U+200E/U+200F) reorder the text that follows (``gnp.exe`` shown as ``exe.png``).
 :func:`terminal_text` shows every such character in Python's escape form (``\\x1b``, ``\\r``,
 ``\\u202e``). The CLI writes every user-given name and path through it, and every message on
-stderr (:func:`deckpound.cli.main`). Machine-readable output (JSON, TOML, CSV) is escaped by its
-own format and not by this function.
+stderr (:func:`deckpound.cli.main`). ``scene show`` prints TOML, whose basic strings may hold
+such characters raw: :func:`terminal_toml` writes them as TOML escapes, which read back as the
+same characters.
 """
 
 from __future__ import annotations
 
-__all__ = ["terminal_text"]
+__all__ = ["terminal_text", "terminal_toml"]
 
 
 def _shown(ch: str) -> str:
@@ -39,3 +40,21 @@ def terminal_text(text: object, *, keep_newlines: bool = False) -> str:
     if text.isprintable():
         return text
     return "".join(_shown(ch) for ch in text)
+
+
+def terminal_toml(text: str) -> str:
+    """TOML text written by ``tomli_w`` with every character that is not printable, except the
+    line breaks, written as a TOML escape (``\\uXXXX``, ``\\UXXXXXXXX``). Lossless: ``tomli_w``
+    writes such characters (TAB, C1 and bidi controls, separators; it escapes the other C0
+    controls and DEL itself) only inside basic strings, where the escape stands for the same
+    character."""
+    if all(line.isprintable() for line in text.split("\n")):
+        return text
+    return "".join(
+        ch
+        if ch == "\n" or ch.isprintable()
+        else f"\\u{ord(ch):04x}"
+        if ord(ch) <= 0xFFFF
+        else f"\\U{ord(ch):08x}"
+        for ch in text
+    )
