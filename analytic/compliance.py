@@ -264,10 +264,10 @@ def _run_newmark(
         newmark_run,
         newmark_workspace,
     )
+    from deckpound.analytic.peaks import new_peaks, peak_columns, step_closures, step_peaks
     from deckpound.analytic.system import initial_dofs
 
     on = dict.fromkeys(SKIPS, True)
-    from deckpound.analytic.peaks import new_peaks, peak_columns, step_closures, step_peaks
     for k, v in (skips or {}).items():
         if k not in on:
             raise ValueError(f"unknown skip {k!r}; valid: {', '.join(SKIPS)}")
@@ -370,12 +370,12 @@ def _run_newmark(
         compile_time=compile_time,
         loop_time=loop,
         max_penetration=st["max_penetration"],
+        peaks=step_peaks(peaks, peak_columns(engine_cols, plan.bent_names)),
+        gap_closures_per_corner=step_closures(peaks),
         extra=extra,
     )
 
 
-        peaks=step_peaks(peaks, peak_columns(engine_cols, plan.bent_names)),
-        gap_closures_per_corner=step_closures(peaks),
 def run_compliance(
     scene: Scene, motion: SupportMotion | None = None, *, raise_on_failure: bool = False, **options
 ):

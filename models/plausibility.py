@@ -18,12 +18,16 @@ contact duration t_c       t_c ≈ π √(m_eff / k) (half a period of the stiff
 output step                longer than the analysis (only t = 0 stored): refused; fewer than
                            :data:`MIN_OUTPUT_ROWS` rows: warning; more than
                            :data:`MAX_OUTPUT_ROWS` rows (memory): refused
+magnitudes                 values no bridge has (a gap or deck size in mm, a deck mass in kg,
+                           a stiffness in N/m, a dimension of 1e30, μ = 100): warnings, and
+                           refusals naming the value probably meant unless allow_extreme
+                           (:mod:`.magnitudes`; checked first, the others assume sound values)
 =========================  ================================================================
 
 The findings are data (:class:`Finding`, :class:`Plausibility`); :func:`enforce` turns them
-into warnings and a :class:`~.errors.SceneError` for the CLI and, later, the engines' shared
-validation. The engines' steps are read from the engine registry (each engine declares its
-step field and whether its contact is compliant).
+into warnings (:class:`PlausibilityWarning`) and a :class:`~.errors.SceneError` for the CLI
+and, later, the engines' shared validation. The engines' steps are read from the engine
+registry (each engine declares its step field and whether its contact is compliant).
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import SceneError
+from .magnitudes import magnitude_findings
 from .scene import Scene
 
 #: fewest steps an analysis may hold (fewer resolve no history at all)
@@ -48,6 +53,10 @@ MIN_OUTPUT_ROWS = 10
 MAX_OUTPUT_ROWS = 2_000_000
 #: penetration at which the Hertz secant stiffness is taken for the contact duration [m]
 HERTZ_SECANT_DEPTH = 0.01
+
+
+class PlausibilityWarning(UserWarning):
+    """A plausibility finding that does not refuse the scene (:func:`enforce`)."""
 
 
 @dataclass(frozen=True)
@@ -133,6 +142,9 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
         motion = support_motion(scene)
     report = Plausibility(duration=analysis_duration(scene, motion))
     add = report.findings.append
+    report.findings += [Finding(*found) for found in magnitude_findings(scene)]
+    if report.errors:
+        return report  # the checks below assume values a bridge can have
     D, src = report.duration, _source(scene, motion)
     steps = engine_steps(scene, engines)
 
@@ -264,7 +276,7 @@ def enforce(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> 
     """:func:`check`, then warn about each warning and raise the first error as SceneError."""
     report = check(scene, motion, engines)
     for f in report.warnings:
-        warnings.warn(f"{f.field}: {f.message}", stacklevel=2)
+        warnings.warn(f"{f.field}: {f.message}", PlausibilityWarning, stacklevel=2)
     if report.errors:
         first = report.errors[0]
         raise SceneError(first.field, first.message)

@@ -35,7 +35,7 @@ import numpy as np
 from ._fields import to_mapping
 from .columns import column_unit, standard_columns
 from .errors import SceneError
-from .plan import CORNER_NAMES
+from .plan import CORNER_NAMES, RELATIVE_COLUMNS
 
 __all__ = [
     "N_CORNERS",
@@ -45,12 +45,13 @@ __all__ = [
     "closure_times",
     "column_unit",
     "gap_closures",
+    "in_contact",
+    "peak_columns",
     "physics_hash",
     "physics_mapping",
-    "in_contact",
+    "row_peak",
     "scene_hash",
     "settings_hash",
-    "row_peak",
     "standard_columns",
 ]
 
@@ -137,9 +138,16 @@ def gap_closures(columns: dict[str, np.ndarray]) -> dict[str, int]:
     return out
 
 
-@dataclass(frozen=True)
-class Result:
-    """Time series of one engine run plus metadata (frozen; columns are read-only arrays).
+def peak_columns(engine_columns, bent_names) -> list[str]:
+    """The columns whose peaks the engines track at every step, in their order: the engine
+    columns (``t`` first, :func:`deckpound.engine_contract.engine_columns`), the relative
+    displacements (:data:`deckpound.models.plan.RELATIVE_COLUMNS`), then the bent deformations
+    ``<bent>_dx``, ``<bent>_dy`` (the columns the epilogue derives from the output rows)."""
+    out = list(engine_columns) + list(RELATIVE_COLUMNS)
+    for b in bent_names:
+        out += [f"{b}_dx", f"{b}_dy"]
+    return out
+
 
 def row_peak(name: str, t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
     """(peak, time [s]) of a column on its rows: the largest |x| and its first time; for a
@@ -149,6 +157,10 @@ def row_peak(name: str, t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
     k = int(np.argmin(x)) if name.startswith("gap_") else int(np.argmax(np.abs(x)))
     return (float(x[k]) if name.startswith("gap_") else float(abs(x[k]))), float(t[k])
 
+
+@dataclass(frozen=True)
+class Result:
+    """Time series of one engine run plus metadata (frozen; columns are read-only arrays).
 
     Attributes
     ----------
@@ -181,11 +193,11 @@ def row_peak(name: str, t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
             per = gap_closures(cols)
             meta["gap_closures"] = sum(per.values())
             meta["gap_closures_per_corner"] = per
+            meta["gap_closures_basis"] = "output rows"
         object.__setattr__(self, "columns", cols)
         object.__setattr__(self, "meta", meta)
 
     # -- access ----------------------------------------------------------------------
-            meta["gap_closures_basis"] = "output rows"
     def __getitem__(self, name: str) -> np.ndarray:
         return self.columns[name]
 
@@ -207,16 +219,6 @@ def row_peak(name: str, t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
         rows: ``meta["gap_closures_basis"]``; see :func:`gap_closures`)."""
         return int(self.meta.get("gap_closures", 0))
 
-    def with_meta(self, **changes: Any) -> Result:
-        """A copy with metadata entries added or replaced."""
-        return Result(engine=self.engine, columns=self.columns, meta={**self.meta, **changes})
-
-    def to_frame(self):
-        """pandas DataFrame with time [s] as the index; ``attrs`` holds units, engine, status."""
-        import pandas as pd
-
-        frame = pd.DataFrame(
-            {k: v for k, v in self.columns.items() if k != "t"}, index=pd.Index(self.t, name="t")
     # -- peaks -----------------------------------------------------------------------
     def _step_peak(self, column: str):
         if column not in self.columns:
@@ -248,11 +250,23 @@ def row_peak(name: str, t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
         over."""
         return "every step" if self._step_peak(column) is not None else "output rows"
 
+    def with_meta(self, **changes: Any) -> Result:
+        """A copy with metadata entries added or replaced."""
+        return Result(engine=self.engine, columns=self.columns, meta={**self.meta, **changes})
+
+    def to_frame(self):
+        """pandas DataFrame with time [s] as the index; ``attrs`` holds units, engine, status."""
+        import pandas as pd
+
+        frame = pd.DataFrame(
+            {k: v for k, v in self.columns.items() if k != "t"}, index=pd.Index(self.t, name="t")
         )
         frame.attrs = {
             "units": self.units,
             "engine": self.engine,
             "status": self.meta.get("status"),
+            # {column: [peak, time]} over every step (Result.peak); the rows may miss them
+            "peaks": dict(self.meta.get("peaks") or {}),
         }
         return frame
 
@@ -263,8 +277,6 @@ def row_peak(name: str, t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
         one variable over (time, corner); bent forces and deformations (``<bent>_fx``…) one
         variable each over (time, bent, direction); everything else a variable over time.
         Units are in each variable's ``attrs["units"]``.
-            # {column: [peak, time]} over every step (Result.peak); the rows may miss them
-            "peaks": dict(self.meta.get("peaks") or {}),
         """
         import xarray as xr
 

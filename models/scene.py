@@ -358,6 +358,13 @@ class Scene:
 
     name: str = spec(doc="scene name")
     description: str = spec("", doc="free text")
+    allow_extreme: bool = spec(
+        False,
+        doc="accept magnitudes no bridge has, which the plausibility checks refuse otherwise "
+        "(a deck or gap given in mm, a deck mass in kg, a dimension or mass beyond any "
+        "structure, friction far above any surface: deckpound.models.plausibility); for "
+        "numerical experiments. The PGA has its own excitation.allow_extreme",
+    )
     deck: Deck = spec(doc="the deck")
     bents: tuple[Bent, ...] = spec(doc="the bents, left to right")
     seats: tuple[Seat, ...] = spec(doc="seat 1 (left) and seat 2 (right)")

@@ -7,6 +7,7 @@ import importlib.resources
 import json
 import re
 import tomllib
+import unicodedata
 import warnings
 from collections.abc import Iterable
 from pathlib import Path
@@ -216,13 +217,60 @@ def _parse_value(text: str) -> Any:
     return value
 
 
+_CONTROL_NAMES = {
+    "\t": "CHARACTER TABULATION",
+    "\n": "LINE FEED",
+    "\r": "CARRIAGE RETURN",
+    "\x1b": "ESCAPE",
+    "\x00": "NULL",
+    "\x7f": "DELETE",
+}
+
+
+def _control_character(text: str) -> int | None:
+    """Index of the first control character in ``text`` (Unicode categories Cc — C0 and C1
+    controls, DEL, tab, newline, carriage return, escape — and Zl, Zp: line and paragraph
+    separators), or None."""
+    for i, c in enumerate(text):
+        if unicodedata.category(c) in ("Cc", "Zl", "Zp"):
+            return i
+    return None
+
+
+def check_override_text(item: str) -> None:
+    """Refuse a ``--set`` override holding a control character, naming it (escaped).
+
+    An override is one line of printable text. A newline inside it would otherwise be read as
+    TOML's line break, so ``deck.length=33.5\\nfoo=1`` set deck.length and silently dropped
+    ``foo=1``; an escape or carriage return would reach the terminal in messages.
+    """
+    i = _control_character(item)
+    if i is None:
+        return
+    c = item[i]
+    name = unicodedata.name(c, "") or _CONTROL_NAMES.get(c, "control character")
+    shown = item if len(item) <= 80 else item[:77] + "..."
+    where = "key" if "=" not in item or i < item.index("=") else "value"
+    raise SceneError(
+        "--set",
+        f"override {ascii(shown)} holds a control character in its {where} "
+        f"(U+{ord(c):04X} {name.lower()}, character {i + 1}); an override is one line of "
+        "printable text: give each field its own --set",
+    )
+
+
 def apply_overrides(data: dict[str, Any], overrides: Iterable[str]) -> dict[str, Any]:
     """Apply ``dotted.path[index]=value`` overrides to a raw scene mapping (a copy).
 
     Values are parsed as TOML (``2e6``, ``true``, ``[1, 3]``, ``"text"``); a bare word is a
-    string. Unknown paths are refused when the scene is validated.
+    string. Unknown paths are refused when the scene is validated; an override holding a
+    control character (a newline, a tab, an escape, ...) is refused before it is parsed
+    (:func:`check_override_text`).
     """
     data = copy.deepcopy(data)
+    overrides = list(overrides)
+    for item in overrides:
+        check_override_text(item)
     for item in overrides:
         if "=" not in item:
             raise SceneError("--set", f"expects PATH=VALUE, got {item!r}")
