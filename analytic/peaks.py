@@ -13,7 +13,8 @@ a rescued step, every adaptive step) and once at t = 0, with the state it commit
   deck x, y relative to the mean shake-table motion, each seat relative to its actuator) and
   the bent deformations d = B u − S u_g of the ``nbs`` bent springs — the columns
   :func:`deckpound.engine_contract.finish` derives from the output rows, here from the
-  support displacement at the step (:func:`peak_columns` names the layout);
+  support displacement at the step (:func:`deckpound.models.result.peak_columns` names the
+  layout);
 * ``Peaks.value`` / ``Peaks.time`` keep, per column, the largest |x| and the first time it
   was reached [s] — for the gaps the smallest (most negative: the deepest penetration)
   signed value instead;
@@ -38,13 +39,8 @@ import numpy as np
 
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.system import C_BENT, C_FN, C_GAP
-from deckpound.models.plan import (
-    CORNER_NAMES,
-    DECK_X,
-    DECK_Y,
-    RELATIVE_COLUMNS,
-    SEAT_X,
-)
+from deckpound.models.plan import CORNER_NAMES, DECK_X, DECK_Y, RELATIVE_COLUMNS, SEAT_X
+from deckpound.models.result import peak_columns
 
 __all__ = [
     "Peaks",
@@ -66,16 +62,6 @@ __all__ = [
 Peaks = namedtuple(
     "Peaks", ["row", "value", "time", "tx", "ty", "seat", "inside", "closures", "force"]
 )
-
-
-def peak_columns(engine_columns: list[str], bent_names) -> list[str]:
-    """Column names of the peak layout: the engine columns (``t`` first, as
-    :func:`deckpound.engine_contract.engine_columns`), the relative displacements, then the
-    bent deformations ``<bent>_dx``, ``<bent>_dy``."""
-    out = list(engine_columns) + list(RELATIVE_COLUMNS)
-    for b in bent_names:
-        out += [f"{b}_dx", f"{b}_dy"]
-    return out
 
 
 def new_peaks(channels, bent_names, n_bent_springs: int) -> Peaks:
@@ -160,7 +146,8 @@ def track_step(pk, t, u, ug, d, nbs):
 
 def step_peaks(pk: Peaks, names: list[str]) -> dict[str, tuple[float, float]]:
     """``{column: (peak, time)}`` of :func:`track_step`'s statistics, ``names`` from
-    :func:`peak_columns` (``t`` left out; a gap's peak is its smallest value)."""
+    :func:`deckpound.models.result.peak_columns` (``t`` left out; a gap's peak is its smallest
+    value)."""
     return {
         n: (float(pk.value[k]), float(pk.time[k]))
         for k, n in enumerate(names)

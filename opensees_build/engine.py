@@ -37,6 +37,7 @@ import numpy as np
 from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.excitation import analysis_duration
 from deckpound.models.plan import Plan
+from deckpound.models.result import peak_columns
 from deckpound.models.scene import OpenSeesSettings, Scene
 
 from . import initial_state
@@ -126,6 +127,63 @@ def sample_row(ops, plan, t):
     return row
 
 
+def new_tracker(ops, plan):
+    """The peaks and gap closures over every step (:func:`track_step`), started at t = 0.
+
+    Columns plan['peak_columns']: the engine columns (:func:`sample_row`), the displacements
+    relative to the supports (deck x, y to the mean table motion, seats to their actuators)
+    and the bent deformations (deck point above the bent - table, x then y, per bent), as the
+    epilogue derives them from the output rows. 'value' is the largest |x| of each column so
+    far (for the gaps the smallest, most negative value), 'time' its first time [s];
+    'closures' counts per corner the steps at which the corner goes from out of contact to in
+    contact (gap <= 0 or fn > 0), a corner in contact at t = 0 counting one."""
+    cols = plan["peak_columns"]
+    g0 = cols.index("gap_c1")
+    value = [0.0] * len(cols)
+    for c in range(4):
+        value[g0 + c] = math.inf
+    tr = {
+        "value": value,
+        "time": [0.0] * len(cols),
+        "gap": g0,
+        "fn": cols.index("fn_c1"),
+        "abs": list(range(1, g0)) + list(range(g0 + 4, len(cols))),
+        "inside": [False] * 4,
+        "closures": [0] * 4,
+    }
+    track_step(ops, plan, tr, 0.0)
+    return tr
+
+
+def track_step(ops, plan, tr, t):
+    """Update the tracker of :func:`new_tracker` with the converged state at time t [s]."""
+    row = sample_row(ops, plan, t)
+    tables = plan["tables"]
+    ux = [ops.nodeDisp(tn, 1) for tn in tables]
+    uy = [ops.nodeDisp(tn, 2) for tn in tables]
+    mx = sum(ux) / len(ux) if ux else 0.0
+    my = sum(uy) / len(uy) if uy else 0.0
+    a1, a2 = plan["actuators"]
+    row += [row[1] - mx, row[2] - my, row[4] - ops.nodeDisp(a1, 1), row[6] - ops.nodeDisp(a2, 1)]
+    for k, xb in enumerate(plan["bent_x"]):
+        row += [row[1] - ux[k], row[2] + xb * row[3] - uy[k]]
+    value, when, g0, f0 = tr["value"], tr["time"], tr["gap"], tr["fn"]
+    for k in tr["abs"]:
+        a = abs(row[k])
+        if a > value[k]:
+            value[k] = a
+            when[k] = t
+    for c in range(4):
+        g = row[g0 + c]
+        if g < value[g0 + c]:
+            value[g0 + c] = g
+            when[g0 + c] = t
+        now = bool(plan["gap_elements"]) and (g <= 0.0 or row[f0 + c] > 0.0)
+        if now and not tr["inside"][c]:
+            tr["closures"][c] += 1
+        tr["inside"][c] = now
+
+
 def run_steps(ops, plan, log=None):
     """Step the defined model plan['n_steps'] times with analyze(1, dt).
 
@@ -135,19 +193,19 @@ def run_steps(ops, plan, log=None):
     the Transformation handler otherwise keeps a stale increment on constrained nodes; there
     is no revertToLastCommit command in openseespy 3.7) with plan['substeps']
     sub-steps, each checked. A non-finite state is a failure. Returns a dict with the rows and
-    the statistics.
+    the statistics, among them 'peaks' ({column: [peak, time]}) and 'gap_closures' (total and
+    per corner) over every converged step and sub-step (:func:`new_tracker`).
     """
     dt = plan["dt"]
     n_steps = plan["n_steps"]
     stride = plan["stride"]
     rows = [sample_row(ops, plan, 0.0)]
-    closed = [g < 0.0 for g in corner_gaps(ops, plan)] if plan["gap_elements"] else []
+    tr = new_tracker(ops, plan)
     stats = {
         "steps": 0,
         "iterations": 0,
         "failures": 0,
         "rescued": 0,
-        "contact_events": 0,
         "status": "success",
         "message": "",
         "failed_time": None,
@@ -157,6 +215,7 @@ def run_steps(ops, plan, log=None):
         ok = ops.analyze(1, dt)
         if ok == 0:
             stats["iterations"] += ops.testIter()
+            track_step(ops, plan, tr, n * dt)
         else:
             stats["failures"] += 1
             if log is not None:
@@ -170,6 +229,8 @@ def run_steps(ops, plan, log=None):
                     if ok != 0:
                         break
                     stats["iterations"] += ops.testIter()
+                    last = _k == plan["substeps"] - 1
+                    track_step(ops, plan, tr, n * dt if last else (n - 1) * dt + (_k + 1) * h)
                 ops.wipeAnalysis()
                 define_analysis(ops, plan)
                 if ok == 0:
@@ -194,13 +255,6 @@ def run_steps(ops, plan, log=None):
             )
             break
         stats["steps"] = n
-        if plan["gap_elements"]:
-            gaps = corner_gaps(ops, plan)
-            for c in range(4):
-                now = gaps[c] < 0.0
-                if now and not closed[c]:
-                    stats["contact_events"] += 1
-                closed[c] = now
         if n % stride == 0:
             row = sample_row(ops, plan, n * dt)
             if not all(math.isfinite(v) for v in row):
@@ -210,6 +264,13 @@ def run_steps(ops, plan, log=None):
                 stats["message"] = f"non-finite state at step {n} (t = {n * dt:.6g} s)"
                 break
             rows.append(row)
+    stats["gap_closures"] = sum(tr["closures"])
+    stats["gap_closures_per_corner"] = {f"c{c + 1}": tr["closures"][c] for c in range(4)}
+    stats["peaks"] = {
+        name: [tr["value"][k], tr["time"][k]]
+        for k, name in enumerate(plan["peak_columns"])
+        if k > 0 and math.isfinite(tr["value"][k])
+    }
     return {"rows": rows, "stats": stats}
 
 
@@ -244,6 +305,8 @@ def make_plan(scene: Scene, info, duration: float) -> dict:
         "friction": info.friction,
         "analysis": [list(c) for c in analysis_commands(scene)],
         "columns": engine_columns(plan_of(scene)),
+        "bent_x": list(plan_of(scene).bent_x),
+        "peak_columns": peak_columns(engine_columns(plan_of(scene)), info.bent_names),
     }
 
 
@@ -266,6 +329,10 @@ def build(ops, scene: Scene, motion=None):
     res = motion.resample(step, duration)
     info = build_model(ops, scene, res)
     plan = make_plan(scene, info, duration)
+    # the support nodes whose displacements the step loop reads (relative columns)
+    nodes = ops.tags("node")
+    plan["tables"] = [nodes[f"table {b}"] for b in info.bent_names]
+    plan["actuators"] = [nodes["actuator1"], nodes["actuator2"]]
     ops.comment("analysis")
     for cmd in plan["analysis"]:
         ops.call(*cmd)
@@ -380,6 +447,8 @@ class OpenSeesEngine(Engine):
             failed_steps=st["failures"],
             rescued_steps=st["rescued"],
             loop_time=loop,
+            peaks={k: (v[0], v[1]) for k, v in st["peaks"].items()},
+            gap_closures_per_corner=st["gap_closures_per_corner"],
             extra={
                 "openseespy": openseespy_version(),
                 "dt": splan["dt"],

@@ -30,6 +30,8 @@ RUNTIME = (
     engine.corner_gaps,
     engine.contact_forces,
     engine.sample_row,
+    engine.new_tracker,
+    engine.track_step,
     engine.run_steps,
 )
 
@@ -144,7 +146,8 @@ def main(argv=None):
                 w.writerow([repr(float(v)) for v in row])
     with open(os.path.join(a.out, "opensees.stats.json"), "w") as fh:
         json.dump(out["stats"], fh, indent=2)
-    print(out["stats"]["status"], out["stats"]["message"])
+    st = out["stats"]
+    print(st["status"], st["message"], "gap_closures:", st["gap_closures"])
     return 0 if out["stats"]["status"] == "success" else 1
 
 

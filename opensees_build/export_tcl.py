@@ -10,7 +10,9 @@ Layout (each part generated; scene text appears only in the header comments):
 4. the step plan as variables and ``defineAnalysis`` (re-issued by the fallback);
 5. the recorders (:mod:`.recorders`) and ``record`` at t = 0;
 6. the step loop: ``analyze 1 $dt`` with every return code checked and the sub-step fallback of
-   :func:`deckpound.opensees_build.engine.run_steps`, optionally writing deckpound's CSV.
+   :func:`deckpound.opensees_build.engine.run_steps`, the gap closures counted at every
+   converged step and sub-step as the engine counts them (printed as ``gap_closures``),
+   optionally writing deckpound's CSV.
 """
 
 from __future__ import annotations
@@ -140,8 +142,35 @@ proc sampleRow {{t}} {{
     return $row
 }}
 
+# gap closures at every converged step and sub-step (deckpound's one definition, the engine's
+# track_step): a corner is in contact when its gap is <= 0 or its normal force > 0; a closure
+# is a step at which a corner goes from out of contact to in contact (in contact at t = 0: one)
+set inside {{0 0 0 0}}
+set gapClosures 0
+proc countClosures {{}} {{
+    global inside gapClosures hasGaps gapEles friction nX nY
+    if {{!$hasGaps}} {{ return }}
+    set g [cornerGaps]
+    for {{set c 0}} {{$c < 4}} {{incr c}} {{
+        set now [expr {{[lindex $g $c] <= 0.0}}]
+        if {{!$now}} {{
+            set e [lindex $gapEles $c]
+            if {{$friction}} {{
+                set f [eleResponse $e force]
+                set fn [expr {{-([lindex $nX $c] * [lindex $f 3] + [lindex $nY $c] * [lindex $f 4])}}]
+            }} else {{
+                set fn [expr {{-[lindex [eleResponse $e basicForce] 0]}}]
+            }}
+            set now [expr {{$fn > 0.0}}]
+        }}
+        if {{$now && ![lindex $inside $c]}} {{ incr gapClosures }}
+        lset inside $c $now
+    }}
+}}
+
 # --- step loop (deckpound's run_steps): every analyze checked, sub-step fallback ---
 record
+countClosures
 if {{$writeCsv}} {{
     set fh [open [file join $outDir opensees.csv] w]
     puts $fh [join [list {columns}] ","]
@@ -152,6 +181,7 @@ set rescued 0
 set status success
 for {{set n 1}} {{$n <= $nSteps}} {{incr n}} {{
     set ok [analyze 1 $dt]
+    if {{$ok == 0}} {{ countClosures }}
     if {{$ok != 0}} {{
         incr failures
         puts "step $n (t = [expr {{$n * $dt}}] s) failed with code $ok"
@@ -162,6 +192,7 @@ for {{set n 1}} {{$n <= $nSteps}} {{incr n}} {{
             for {{set k 0}} {{$k < $nSub}} {{incr k}} {{
                 set ok [analyze 1 $h]
                 if {{$ok != 0}} {{ break }}
+                countClosures
             }}
             wipeAnalysis
             defineAnalysis
@@ -179,6 +210,6 @@ for {{set n 1}} {{$n <= $nSteps}} {{incr n}} {{
 }}
 if {{$writeCsv}} {{ close $fh }}
 wipe
-puts "$status, failures: $failures, rescued by sub-steps: $rescued"
+puts "$status, failures: $failures, rescued by sub-steps: $rescued, gap_closures: $gapClosures"
 if {{$status != "success"}} {{ exit 1 }}
 """
