@@ -24,6 +24,9 @@ option        bad option values (--workers, --every, --timeout, --scheduler, --e
 script        ``export`` to hostile file names (braces, ``[exec ...]``, ``$``, quotes, newlines,
               ``~``, control and bidi characters) and hostile scene names validated and
               exported (:mod:`tests._fuzz_scripts`)
+input         unit slips (a gap or deck size in mm, a deck mass in kg), absurd magnitudes,
+              --set overrides with control characters, a CSV velocity column that is not
+              its displacement's derivative: exit 2 (:mod:`tests._fuzz_magnitudes`)
 ============  ===============================================================================
 
 Each :class:`Case` states its command line (``{tmp}`` is the case's own folder), the files,
@@ -308,6 +311,7 @@ def _override_family() -> list[Case]:
 def families() -> dict:
     """Family name -> case builder (the output families live in tests._fuzz_outputs, the
     run-side ones in tests._fuzz_run_families)."""
+    from _fuzz_magnitudes import input_family
     from _fuzz_outputs import fault_family, path_family
     from _fuzz_run_families import engine_family, name_family, option_family, vtk_family
     from _fuzz_scripts import script_family
@@ -323,6 +327,7 @@ def families() -> dict:
         "name": name_family,
         "option": option_family,
         "script": script_family,
+        "input": input_family,
     }
 
 
@@ -340,7 +345,7 @@ def generate() -> list[Case]:
     return out
 
 
-def quick_subset(cases: list[Case], budget: int = 210) -> list[Case]:
+def quick_subset(cases: list[Case], budget: int = 220) -> list[Case]:
     """A deterministic, stratified sample of about ``budget`` cases (every family, costly
     families thinned by their weight)."""
     by_family: dict[str, list[Case]] = {}
@@ -357,6 +362,7 @@ def quick_subset(cases: list[Case], budget: int = 210) -> list[Case]:
         "name": 6,
         "option": 12,
         "script": 12,
+        "input": 10,
     }
     out = []
     for fam, members in by_family.items():

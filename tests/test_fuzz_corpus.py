@@ -106,6 +106,7 @@ def test_corpus_is_large_unique_and_has_a_quick_subset():
         "name",
         "option",
         "script",
+        "input",
     }
     quick = quick_subset(CASES)
     assert 150 <= len(quick) <= 220 and {c.family for c in quick} == set(families)

@@ -39,7 +39,13 @@ PROVENANCE_KEYS = {
     "seed",
     "warnings",
     "units",
+    "pga_before_scaling",
 }
+SCALED = "excitation.scaling: the record is scaled, "
+WHY = (
+    ": scaling = 'pga' scales each direction to its target (transverse to pga, longitudinal "
+    "to longitudinal_ratio × pga; scaling = 'none' keeps the record as read)"
+)
 
 
 def motion_and_warnings(scene):
@@ -92,8 +98,13 @@ def test_at2_one_value_more_than_npts_is_used_and_said(tmp_path):
         f"excitation.file_x ({px.resolve()}): holds 801 values but NPTS = 800: the first "
         "800 are used, the last 1 ignored"
     )
-    assert warned == [expected]
-    assert m.provenance["warnings"] == [expected]
+    # the scaling to the default targets (pga 1 g, x 1.2 g) is said last
+    scaled = (
+        f"{SCALED}longitudinal (x) × 4 (PGA 0.3 g to 1.2 g), transverse (y) × 3.33333 "
+        f"(PGA 0.3 g to 1 g){WHY}"
+    )
+    assert warned == [expected, scaled]
+    assert m.provenance["warnings"] == [expected, scaled]
     assert m.provenance["npts"] == {"x": 800, "y": 800} and len(m.t) == 800
 
 
@@ -152,7 +163,8 @@ def test_one_direction_only_is_at_rest_and_said(tmp_path):
         (
             "excitation.file_x is not given: the longitudinal (x) direction is at "
             "rest (its PGA target is not applied)"
-        )
+        ),
+        f"{SCALED}transverse (y) × 1.33333 (PGA 0.3 g to 0.4 g){WHY}",
     ]
     for ch in ("bent1_x", "bent3_x", "seat1_x", "seat2_x"):
         assert np.all(m.disp[ch] == 0.0) and np.all(m.vel[ch] == 0.0)
@@ -229,7 +241,8 @@ def test_csv_accelerations_unequal_and_one_direction(tmp_path):
         (
             "the CSV has no acc_y column: the transverse (y) direction is at rest "
             "(its PGA target is not applied)"
-        )
+        ),
+        f"{SCALED}longitudinal (x) × 4 (PGA 0.3 g to 1.2 g){WHY}",
     ]
     assert m.provenance["applied_pga"]["y"] == 0.0
 
@@ -426,7 +439,12 @@ def test_provenance_keys_checksums_and_json(tmp_path):
         "y": pytest.approx(0.6, rel=1e-12),
     }
     assert prov["scale_factor"] == {"x": pytest.approx(0.72 / 0.3), "y": pytest.approx(2.0)}
-    assert set(support_motion(load_scene("saiidi-4span")).provenance) == PROVENANCE_KEYS
+    assert prov["pga_before_scaling"] == {"x": pytest.approx(0.3), "y": pytest.approx(0.3)}
+    assert prov["units"]["pga_before_scaling"] == "g"
+    assert prov["warnings"][-1].startswith(f"{SCALED}longitudinal (x) × 2.4 (PGA 0.3 g to 0.72 g)")
+    # a generated motion is made at its PGA, never scaled: no PGA before scaling
+    synthetic = support_motion(load_scene("saiidi-4span")).provenance
+    assert set(synthetic) == PROVENANCE_KEYS - {"pga_before_scaling"}
 
 
 def test_header_line_sanitised_to_one_line(tmp_path):

@@ -42,10 +42,10 @@ def test_sequence_applies_every_label_to_a_real_unequal_pair(unequal_pair):
         assert applied["x"] == pytest.approx(1.2 * pga, rel=0.01)
         measured_y = max(np.max(np.abs(m.acc(c))) for c in m.channels if c.endswith("_y")) / G
         assert measured_y == pytest.approx(applied["y"], rel=1e-12)
-        assert (
-            len(m.provenance["warnings"]) == 1
-            and "padded with zeros" in m.provenance["warnings"][0]
-        )
+        padded, scaled = m.provenance["warnings"]  # the tolerance, then the scaling said
+        assert "padded with zeros" in padded
+        assert scaled.startswith("excitation.scaling: the record is scaled, longitudinal (x) × ")
+        assert f"g to {pga:g} g)" in scaled
         peaks_y.append(np.max(np.abs(m.disp["bent1_y"])))
     # the runs differ as their labels do (issue 13: runs 4-7 gave the same response)
     np.testing.assert_allclose(

@@ -104,6 +104,7 @@ def check_output_folder(path: str) -> Path:
 def _run(args) -> int:
     from deckpound.models import plausibility
     from deckpound.models.excitation import support_motion
+    from deckpound.models.record_motion import scaling_summary
     from deckpound.models.scene_io import load_scene
 
     from ._io import output_folder
@@ -118,9 +119,11 @@ def _run(args) -> int:
     with output_folder(args.output, f"run {args.engine}") as out:
         csv_path, _ = result.write(out)
     m = result.meta
+    scaled = scaling_summary(m.get("record"))  # any scaling of a user's record is said
+    scaled = f"; {scaled}" if scaled else ""
     print(
         f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
-        f"{m.get('gap_closures', 0)} gap closures; wrote {terminal_text(csv_path)}"
+        f"{m.get('gap_closures', 0)} gap closures{scaled}; wrote {terminal_text(csv_path)}"
     )
     if not result.ok:
         raise EngineFailure(m.get("message", "run failed"))
