@@ -343,7 +343,9 @@ def plan_snapshot(
     scale: float = PLAN_SCALE,
     formats: tuple[str, ...] = (),
 ) -> list[Path]:
-    """Plan view of deck and seats at each engine's peak rotation (displacements × scale)."""
+    """Plan view of deck and seats at each engine's peak rotation (displacements × scale): the
+    output row of the largest |θ_d| (the drawn state is a stored row; the title gives its time
+    and rotation, which the every-step peak :meth:`Result.peak` may exceed between rows)."""
     fig, axes = new_figure(len(results), 1, width=8.0, height=2.0)
     for i, (label, r) in enumerate(results.items()):
         k = int(np.argmax(np.abs(r["deck_theta"])))

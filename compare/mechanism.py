@@ -2,8 +2,10 @@
 
 For one result (corner positions, normals and tangents from the plan model):
 
-* **peak excursion**: the peak |θ_d| and the excursion that reaches it, from the last change of
-  sign of θ_d before the peak to the peak (``t_start`` … ``t_peak``);
+* **peak excursion**: the peak |θ_d| and its time (``peak_theta``, ``t_peak``: over every step,
+  :meth:`deckpound.models.result.Result.peak`) and the excursion that reaches it on the output
+  rows, from the last change of sign of θ_d before the row of the largest |θ_d| to that row
+  (``t_start`` …; the impulses below are integrals over the rows);
 * **angular impulses about the deck centre over that excursion**, signed so that positive means
   *towards* the peak rotation: friction, J_T = sgn θ_p ∫ Σ_c (r_c × ft_c t_c) dt, and normal
   contact, J_N = sgn θ_p ∫ Σ_c (r_c × fn_c n_c) dt [kN·m·s] (r_c the corner at rest; the
@@ -141,8 +143,8 @@ def mechanism_row(
     usable, zero = tangential_output(result, mu)
     nan = float("nan")
     row.update(
-        peak_theta=abs(float(th[i])),
-        t_peak=float(t[i]),
+        peak_theta=result.peak("deck_theta"),
+        t_peak=result.peak_time("deck_theta"),
         t_start=float(t[i0]),
         friction_impulse=sign * _integral(t[i0 : i + 1], mt[i0 : i + 1]) if usable else nan,
         normal_impulse=sign * _integral(t[i0 : i + 1], mn[i0 : i + 1]),

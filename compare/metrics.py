@@ -2,15 +2,20 @@
 
 For a quantity x (test) and r (reference) on one time base t:
 
-* peak            P(x) = max |x|; ``peak_ratio`` = P(x) / P(r)
-* time of peak    t at which |x| is largest
-* NRMSE           √(mean((x − r)²)) / P(r)          (normalised by the reference peak)
+* peak            P(x) = max |x| over **every step** of the run (:meth:`Result.peak
+                  <deckpound.models.result.Result.peak>`; for a gap the smallest, most
+                  negative value; the output rows only for results without every-step
+                  peaks: measured data, old results); ``peak_ratio`` = P(x) / P(r)
+* time of peak    t at which P(x) is reached (:meth:`Result.peak_time`, same basis)
+* NRMSE           √(mean((x − r)²)) / max |r| on the aligned rows
 * correlation     Pearson ρ(x, r) (NaN when either is constant)
 * residual        mean of x over the last 2 % of the record (permanent offset)
-* gap closures    closures of a gap on the output rows (g goes from > 0 to ≤ 0) and their
-  times — the one definition, :func:`deckpound.models.result.gap_closures`
+* gap closures    steps at which a corner goes from out of contact to in contact, counted at
+  every step by the engines (``meta["gap_closures"]``, the one definition:
+  :func:`deckpound.models.result.gap_closures`); their times on the output rows
 
-Peaks and times are taken on each engine's own (native) output, so alignment cannot blunt them.
+Peaks and times are each engine's own, over every step, so neither alignment nor the output rate
+can blunt them; NRMSE and correlation compare the aligned rows.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from deckpound.models.result import Result, closure_times
 
 
 def peak(x: np.ndarray) -> float:
+    """max |x| of an array (rows); a result's peak is :meth:`Result.peak`, over every step."""
     return float(np.max(np.abs(x))) if len(x) else float("nan")
 
 
@@ -57,11 +63,12 @@ def closure_times_per_corner(result: Result) -> dict[str, list[float]]:
 
 
 def summary(result: Result, quantities: list[str]) -> dict[str, float]:
-    """Peak, time of peak and residual of quantities on a result's native output."""
+    """Peak and time of peak (over every step, :meth:`Result.peak`) and residual (the last
+    output rows) of quantities of a result."""
     out = {}
     for q in quantities:
-        out[f"peak_{q}"] = peak(result[q])
-        out[f"tpeak_{q}"] = time_of_peak(result.t, result[q])
+        out[f"peak_{q}"] = result.peak(q)
+        out[f"tpeak_{q}"] = result.peak_time(q)
         out[f"residual_{q}"] = residual(result[q])
     out["gap_closures"] = result.gap_closures
     return out
@@ -74,19 +81,23 @@ def compare_pair(
     aligned_ref: pd.DataFrame,
     quantities: list[str],
 ) -> pd.DataFrame:
-    """One row per quantity: peaks, peak ratio, peak times, NRMSE, correlation, residuals."""
+    """One row per quantity: peaks and peak times (over every step, :meth:`Result.peak`), peak
+    ratio, NRMSE and correlation (aligned rows), residuals; ``peak_basis`` says what the two
+    peaks were taken over."""
     rows = []
     for q in quantities:
         x, r = aligned_test[q].to_numpy(), aligned_ref[q].to_numpy()
-        px, pr = peak(test[q]), peak(ref[q])
+        px, pr = test.peak(q), ref.peak(q)
+        basis = {test.peak_basis(q), ref.peak_basis(q)}
         rows.append(
             {
                 "quantity": q,
                 "peak": px,
                 "peak_ref": pr,
-                "peak_ratio": px / pr if pr > 0 else float("nan"),
-                "t_peak": time_of_peak(test.t, test[q]),
-                "t_peak_ref": time_of_peak(ref.t, ref[q]),
+                "peak_ratio": px / pr if pr != 0 else float("nan"),
+                "t_peak": test.peak_time(q),
+                "t_peak_ref": ref.peak_time(q),
+                "peak_basis": basis.pop() if len(basis) == 1 else "mixed",
                 "nrmse": nrmse(x, r),
                 "correlation": correlation(x, r),
                 "residual": residual(test[q]),

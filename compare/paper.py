@@ -35,7 +35,7 @@ from . import figures
 from .align import align, write_tables
 from .cases import ResultCache
 from .mechanism import MECHANISM_UNITS, mechanism_row
-from .metrics import closure_times_per_corner, compare_pair, peak
+from .metrics import closure_times_per_corner, compare_pair
 from .outputs import folder, folder_size, write_csv, write_text
 from .report_text_friction import friction_effect
 from .sequence_run import SequenceRun, run_sequences, strongest_run
@@ -118,12 +118,12 @@ def sequence_table(sequences: dict[str, list[SequenceRun]]) -> pd.DataFrame:
                 row[f"{b.name}_kx"], row[f"{b.name}_ky"] = kx, ky
             firsts = [t[0] for t in closure_times_per_corner(r).values() if t]
             row.update(
-                peak_theta=peak(r["deck_theta"]),
-                peak_y_rel=peak(r["deck_y_rel"]),
-                peak_x_rel=peak(r["deck_x_rel"]),
-                peak_y_abs=peak(r["deck_y_abs"]),
-                peak_x_abs=peak(r["deck_x_abs"]),
-                peak_fn=max(peak(r[f"fn_c{c}"]) for c in range(1, 5)),
+                peak_theta=r.peak("deck_theta"),  # every step (Result.peak)
+                peak_y_rel=r.peak("deck_y_rel"),
+                peak_x_rel=r.peak("deck_x_rel"),
+                peak_y_abs=r.peak("deck_y_abs"),
+                peak_x_abs=r.peak("deck_x_abs"),
+                peak_fn=max(r.peak(f"fn_c{c}") for c in range(1, 5)),
                 gap_closures=r.gap_closures,
                 first_closure=min(firsts) if firsts else np.nan,
                 wall_time=r.meta.get("wall_time", np.nan),

@@ -43,7 +43,6 @@ from deckpound.models.scene_io import apply_overrides, scene_from_mapping
 
 from .cases import Case, ResultCache, run_cases
 from .damping_study import damping_cases, damping_figure, damping_headlines, damping_row
-from .metrics import peak
 from .skew import skew_cases, skew_figure, skew_headlines, skew_row
 
 ENGINES_ALL = ("opensees", "compliance", "nonsmooth")
@@ -85,19 +84,20 @@ ROW_UNITS = {
 
 def case_row(case: Case, result: Result, state: str = "virgin") -> dict:
     """Headline numbers of one case: peaks of the deck displacements relative to the supports
-    (``_rel``) and absolute (``_abs``), the start state and gaps, the run time without
-    compilation (``wall_time``) and the compilation time apart."""
+    (``_rel``) and absolute (``_abs``), of the rotation and of the normal gap force, over every
+    step (:meth:`Result.peak`), the gap closures (every step), the start state and gaps, the run
+    time without compilation (``wall_time``) and the compilation time apart."""
     row = dict(label=case.label, engine=case.engine, **case.params)
     row.update(
         state=state,
         gap1_start=case.scene.seats[0].gap,
         gap2_start=case.scene.seats[1].gap,
-        peak_theta=peak(result["deck_theta"]),
-        peak_x_rel=peak(result["deck_x_rel"]),
-        peak_y_rel=peak(result["deck_y_rel"]),
-        peak_x_abs=peak(result["deck_x_abs"]),
-        peak_y_abs=peak(result["deck_y_abs"]),
-        peak_fn=max(peak(result[f"fn_c{c}"]) for c in range(1, 5)),
+        peak_theta=result.peak("deck_theta"),
+        peak_x_rel=result.peak("deck_x_rel"),
+        peak_y_rel=result.peak("deck_y_rel"),
+        peak_x_abs=result.peak("deck_x_abs"),
+        peak_y_abs=result.peak("deck_y_abs"),
+        peak_fn=max(result.peak(f"fn_c{c}") for c in range(1, 5)),
         gap_closures=result.gap_closures,
         wall_time=result.meta.get("wall_time", float("nan")),
         compile_time=result.meta.get("compile_time", float("nan")),

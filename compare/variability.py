@@ -96,7 +96,6 @@ def case_row(engine: str, scene: Scene) -> dict:
     """Run one case (in a worker) and return its row; a refused or failed case gives a row
     with its status and message, never an exception."""
     from deckpound.compare.cases import run_case
-    from deckpound.compare.metrics import peak
 
     t0 = time.perf_counter()
     try:
@@ -107,9 +106,9 @@ def case_row(engine: str, scene: Scene) -> dict:
         return {"status": "refused", "message": str(err), "process_time": 0.0}
     per = r.meta.get("gap_closures_per_corner", {})
     row = {
-        "peak_theta": peak(r["deck_theta"]),
-        "peak_y": peak(r["deck_y_rel"]),
-        "peak_x": peak(r["deck_x_rel"]),
+        "peak_theta": r.peak("deck_theta"),  # every step (Result.peak)
+        "peak_y": r.peak("deck_y_rel"),
+        "peak_x": r.peak("deck_x_rel"),
         "gap_closures": int(r.meta.get("gap_closures", 0)),
         **{f"closures_{c}": int(v) for c, v in sorted(per.items())},
         "status": str(r.meta.get("status")),

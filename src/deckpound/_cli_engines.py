@@ -123,7 +123,8 @@ def _run(args) -> int:
     scaled = f"; {scaled}" if scaled else ""
     print(
         f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
-        f"{m.get('gap_closures', 0)} gap closures{scaled}; wrote {terminal_text(csv_path)}"
+        f"{m.get('gap_closures', 0)} gap closures, peak θ_d "
+        f"{1e3 * result.peak('deck_theta'):.3f} mrad{scaled}; wrote {terminal_text(csv_path)}"
     )
     if not result.ok:
         raise EngineFailure(m.get("message", "run failed"))
