@@ -17,7 +17,9 @@ contact duration t_c       t_c ≈ π √(m_eff / k) (half a period of the stiff
                            the step that would resolve them (compliant engines only)
 output step                longer than the analysis (only t = 0 stored): refused; fewer than
                            :data:`MIN_OUTPUT_ROWS` rows: warning; more than
-                           :data:`MAX_OUTPUT_ROWS` rows (memory): refused
+                           :data:`MAX_OUTPUT_ROWS` rows (memory): refused; longer than a
+                           quarter of a deck mode's period (:func:`output_resolution`):
+                           warning naming the periods the rows cannot resolve
 magnitudes                 values no bridge has (a gap or deck size in mm, a deck mass in kg,
                            a stiffness in N/m, a dimension of 1e30, μ = 100): warnings, and
                            refusals naming the value probably meant unless allow_extreme
@@ -120,6 +122,48 @@ def contact_duration(scene: Scene) -> float:
         k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
     m = float(np.min(effective_masses(scene)))
     return float(math.pi * math.sqrt(m / k)) if k > 0 and m > 0 else math.nan
+
+
+#: fewest output rows per natural period of a deck mode before a warning (T/4: a quarter
+#: period between rows, the coarsest sampling that still shows the swing's extremes)
+ROWS_PER_DECK_PERIOD = 4
+
+
+def output_resolution(scene: Scene) -> Finding | None:
+    """A warning when ``run.output_dt`` is longer than T / :data:`ROWS_PER_DECK_PERIOD` of a
+    deck mode of the contact-free model (:func:`~.mechanics.natural_modes`; a deck mode: the
+    deck's x, y, θ carry most of its mass-normalised kinetic energy, Σ_deck m φ² ≥ ½), naming
+    the periods the rows cannot resolve; None otherwise.
+
+    The stored histories then alias the deck's swing; the peaks and gap closures the engines
+    report are taken at every step (:meth:`deckpound.models.result.Result.peak`) and do not
+    depend on the output step."""
+    from .mechanics import natural_modes
+    from .plan import DECK_THETA, DECK_X, DECK_Y, DOF_NAMES, plan_of
+
+    modes = natural_modes(scene)
+    mass = np.diag(plan_of(scene).mass_matrix)
+    deck = [DECK_X, DECK_Y, DECK_THETA]
+    out_dt = scene.run.output_dt
+    missed = []
+    for k, T in enumerate(modes.periods):
+        share = mass * modes.shapes[:, k] ** 2
+        if math.isfinite(T) and share[deck].sum() >= 0.5 * share.sum():
+            if out_dt > T / ROWS_PER_DECK_PERIOD:
+                dof = DOF_NAMES[int(np.argmax(np.abs(modes.shapes[:, k])))]  # as `deckpound modes`
+                missed.append((float(T), k + 1, dof))
+    if not missed:
+        return None
+    names = ", ".join(f"{T:.3g} s (mode {k}, {dof})" for T, k, dof in sorted(missed, reverse=True))
+    shortest = min(T for T, _, _ in missed)
+    return Finding(
+        "warning",
+        "run.output_dt",
+        f"run.output_dt = {out_dt:g} s is longer than a quarter of the deck's natural "
+        f"period{'s' if len(missed) > 1 else ''} {names}: the stored rows cannot resolve "
+        f"the deck's swing (the histories alias; peaks and gap closures are taken at every "
+        f"step); use run.output_dt <= {shortest / ROWS_PER_DECK_PERIOD:.3g} s",
+    )
 
 
 def _source(scene: Scene, motion) -> str:
@@ -238,6 +282,9 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
         # each engine stores every round(output_dt / h)-th step (engines.output_stride)
         stored = [max(1, round(out_dt / h)) * h for _, _, h, _ in steps] or [out_dt]
         most, fewest = int(D / min(stored)) + 1, int(D / max(stored)) + 1
+        coarse = output_resolution(scene)
+        if coarse is not None:
+            add(coarse)
         if most > MAX_OUTPUT_ROWS:
             add(
                 Finding(
