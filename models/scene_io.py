@@ -253,7 +253,7 @@ def check_override_text(item: str) -> None:
     where = "key" if "=" not in item or i < item.index("=") else "value"
     raise SceneError(
         "--set",
-        f"override {ascii(shown)} holds a control character in its {where} "
+        f"override {shown!a} holds a control character in its {where} "
         f"(U+{ord(c):04X} {name.lower()}, character {i + 1}); an override is one line of "
         "printable text: give each field its own --set",
     )

@@ -116,13 +116,13 @@ def _bents(factor):
 
 
 def test_bents_in_n_per_m_give_a_deck_period_no_bridge_has():
-    ((field, message),) = _only(_findings(*_bents(1000.0)), "warning")
-    assert field == "bents" and "0.0193 s (deck_theta)" in message and "in N/m" in message
+    (message,) = [m for f, m in _only(_findings(*_bents(1000.0)), "warning") if f == "bents"]
+    assert "0.0193 s (deck_theta)" in message and "in N/m" in message
 
 
 def test_bents_in_mn_per_m_give_a_deck_period_no_bridge_has():
-    ((field, message),) = _only(_findings(*_bents(0.001)), "warning")
-    assert field == "bents" and "fundamental period in the contact-free model is 19.3 s" in message
+    (message,) = [m for f, m in _only(_findings(*_bents(0.001)), "warning") if f == "bents"]
+    assert "fundamental period in the contact-free model is 19.3 s" in message
     assert "bent stiffnesses in MN/m, or a deck mass in kg?" in message
 
 

@@ -22,7 +22,7 @@ from deckpound.cli import main
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import RecordWarning, support_motion
 from deckpound.models.mechanics import support_channels
-from deckpound.models.record_motion import velocity_tolerance
+from deckpound.models.record_checks import velocity_tolerance
 from deckpound.models.scene_io import load_scene
 
 

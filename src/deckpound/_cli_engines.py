@@ -104,7 +104,7 @@ def check_output_folder(path: str) -> Path:
 def _run(args) -> int:
     from deckpound.models import plausibility
     from deckpound.models.excitation import support_motion
-    from deckpound.models.record_motion import scaling_summary
+    from deckpound.models.record_checks import scaling_summary
     from deckpound.models.scene_io import load_scene
 
     from ._io import output_folder
