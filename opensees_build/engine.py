@@ -41,6 +41,7 @@ from deckpound.models.result import peak_columns
 from deckpound.models.scene import OpenSeesSettings, Scene
 
 from . import initial_state
+from .energy import EnergyBalance, energy_closure
 
 ENGINE = "opensees"
 
@@ -184,8 +185,11 @@ def track_step(ops, plan, tr, t):
         tr["inside"][c] = now
 
 
-def run_steps(ops, plan, log=None):
+def run_steps(ops, plan, log=None, on_step=None):
     """Step the defined model plan['n_steps'] times with analyze(1, dt).
+
+    ``on_step(ops, n)``, if given, is called after every converged analyze of step n (the
+    step, or each sub-step of a rescued step): the energy balance of :mod:`.energy`.
 
     Every return code is checked; a failed step counts as a failure and, with
     plan['fallback'] == 'substep', is retried (the failed analyze has reverted the domain to
@@ -215,6 +219,8 @@ def run_steps(ops, plan, log=None):
         ok = ops.analyze(1, dt)
         if ok == 0:
             stats["iterations"] += ops.testIter()
+            if on_step is not None:
+                on_step(ops, n)
             track_step(ops, plan, tr, n * dt)
         else:
             stats["failures"] += 1
@@ -229,6 +235,8 @@ def run_steps(ops, plan, log=None):
                     if ok != 0:
                         break
                     stats["iterations"] += ops.testIter()
+                    if on_step is not None:
+                        on_step(ops, n)
                     last = _k == plan["substeps"] - 1
                     track_step(ops, plan, tr, n * dt if last else (n - 1) * dt + (_k + 1) * h)
                 ops.wipeAnalysis()
@@ -407,12 +415,14 @@ class OpenSeesEngine(Engine):
             if _before_run is not None:
                 _before_run(raw, info, splan)
             runner_ops = _ops_wrapper(raw) if _ops_wrapper is not None else raw
+            balance = EnergyBalance(raw, scene, info, splan, ops.tags("element"))
             t1 = time.perf_counter()
-            out = run_steps(runner_ops, splan, log=messages.append)
+            out = run_steps(runner_ops, splan, log=messages.append, on_step=balance)
             loop = time.perf_counter() - t1
         cols = splan["columns"]
         arr = np.array(out["rows"], dtype=float).reshape(-1, len(cols))
         columns = {c: arr[:, k].copy() for k, c in enumerate(cols)}
+        columns.update(balance.columns(len(arr)))  # the energy columns [kJ], every step's work
         st = out["stats"]
         ok = st["status"] == "success"
         nonfinite = "non-finite" in st["message"]
@@ -454,6 +464,7 @@ class OpenSeesEngine(Engine):
                 "dt": splan["dt"],
                 "build_time": t1 - t0,
                 "step_log": messages[:100],
+                "energy_closure": energy_closure(columns),
             },
         )
 

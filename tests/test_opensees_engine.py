@@ -12,6 +12,7 @@ import scipy.linalg
 pytest.importorskip("openseespy.opensees")
 
 from deckpound.models import mechanics
+from deckpound.models.columns import ENERGY_COLUMNS
 from deckpound.models.contact_laws_table import BILINEAR_MIN_SUBSTEPS
 from deckpound.models.errors import EngineFailure
 from deckpound.models.excitation import SupportMotion, support_motion
@@ -74,7 +75,8 @@ def ramp_motion(scene, duration, amp, ramp=2.0, channels=None):
 def test_result_contract(bench):
     sc = short(bench, 0.5)
     r = engine.run_opensees(sc)
-    assert list(r.columns) == standard_columns([b.name for b in sc.bents])
+    # the standard columns, then the work-energy balance (opensees_build/energy.py)
+    assert list(r.columns) == standard_columns([b.name for b in sc.bents]) + list(ENERGY_COLUMNS)
     assert r.t[0] == 0.0 and r.t[-1] == pytest.approx(0.5)
     assert np.allclose(np.diff(r.t), sc.run.output_dt)
     for key in (
