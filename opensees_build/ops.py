@@ -28,9 +28,31 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import openseespy.opensees as _ops
 
 from .quoting import comment_text, py_str, tcl_word
+
+
+def _load_openseespy():
+    """openseespy's ``opensees`` module, or an ImportError named ``openseespy`` that says why
+    it cannot be loaded.
+
+    openseespy's package turns every failure of its binary module into
+    ``RuntimeError("Failed to import openseespy on Linux.")`` (a bare ``except``), so a
+    missing shared library or too little memory to map it (``ulimit -v``) looked like a bug in
+    deckpound. The innermost cause is named instead; the CLI reports an ImportError of a
+    library as a resource or environment failure (exit status 3)."""
+    try:
+        import openseespy.opensees as module
+    except Exception as err:  # MemoryError included: it is an Exception
+        cause, seen = err, 0
+        while (cause.__cause__ or cause.__context__) is not None and seen < 16:
+            cause, seen = cause.__cause__ or cause.__context__, seen + 1
+        why = f"{type(cause).__name__}: {cause}" if str(cause) else type(cause).__name__
+        raise ImportError(f"openseespy cannot be loaded ({why})", name="openseespy") from err
+    return module
+
+
+_ops = _load_openseespy()
 
 __all__ = ["ArrayArg", "Command", "OpsSession", "openseespy_version", "render_value"]
 

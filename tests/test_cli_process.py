@@ -1,11 +1,15 @@
 """The command-line contract in a real ``python -m deckpound`` process: exit status 2 and one
-error line for bad input, ``--version``; and ``deckpound verify clone`` (issue 4)."""
+error line for bad input, ``--version``; ``deckpound verify clone`` (issue 4); closed stdout
+and stderr, and libraries that cannot be loaded (issue 28)."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 from deckpound import __version__
 
@@ -59,3 +63,116 @@ def test_verify_clone_cli_reports_agreement_and_speed(capsys):
     # record amplifies OpenSees's accumulated-time interpolation of the records to ~4e-8
     assert float(line.split(":")[1].split()[0]) < 1e-6
     assert "us/step" in out
+
+
+# -- closed standard streams and libraries that cannot be loaded (issue 28) -----------------
+
+
+def _closed(tmp_path: Path, redirect: str, *argv: str) -> subprocess.CompletedProcess:
+    """``python -m deckpound ARGV`` with a standard stream closed by the shell (``>&-``,
+    ``2>&-``), as a user's script or a cron job may start it."""
+    return subprocess.run(
+        ["sh", "-c", f'exec "$0" "$@" {redirect}', sys.executable, "-m", "deckpound", *argv],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_closed_stdout_is_an_io_failure_in_one_line(tmp_path):
+    """`deckpound scene list >&-` ended in 'internal error' and a traceback, exit 1."""
+    p = _closed(tmp_path, ">&-", "scene", "list")
+    assert p.returncode == 3, p.stderr
+    assert p.stderr.splitlines() == [
+        "deckpound: error: cannot write the output to stdout: it is closed (give a file or "
+        "/dev/null instead)"
+    ]
+    # bad input stays bad input, whatever stdout is
+    p = _closed(tmp_path, ">&-", "scene", "validate", "nosuch.toml")
+    assert p.returncode == 2 and len(p.stderr.splitlines()) == 1, p.stderr
+
+
+def test_closed_stderr_changes_no_exit_status(tmp_path):
+    """`deckpound scene validate nosuch.toml 2>&-` exited 1 instead of 2."""
+    for argv, code in ((["scene", "validate", "nosuch.toml"], 2), (["scene", "list"], 0)):
+        assert _process(tmp_path, *argv).returncode == code
+        p = _closed(tmp_path, "2>&-", *argv)
+        assert p.returncode == code and p.stderr == "", p.stderr
+    p = _closed(tmp_path, ">&- 2>&-", "scene", "list")
+    assert p.returncode == 3 and p.stderr == ""
+
+
+def _fake_package(root: Path, dotted: str, body: str) -> None:
+    """A package ``dotted`` under ``root`` whose innermost ``__init__`` is ``body``."""
+    parts = dotted.split(".")
+    root.joinpath(*parts).mkdir(parents=True)
+    for i in range(1, len(parts)):
+        root.joinpath(*parts[:i], "__init__.py").touch()
+    root.joinpath(*parts, "__init__.py").write_text(body)
+
+
+# openseespy's package turns every failure of its binary into this RuntimeError (bare except)
+OPENSEESPY_FAILING = """
+try:
+    raise {error}
+except:  # noqa: E722
+    raise RuntimeError("Failed to import openseespy on Linux.")
+"""
+LIBRARY_FAILURES = {  # case: (package, __init__ body, command, words the line must hold)
+    "openseespy-memory": (
+        "openseespy.opensees",
+        OPENSEESPY_FAILING.format(
+            error='ImportError("opensees.so: failed to map segment from shared object")'
+        ),
+        ["run", "saiidi-4span", "--engine", "opensees", "-o", "out"],
+        ("not enough memory to load the library 'openseespy'", "ulimit -v"),
+    ),
+    "openseespy-oom": (
+        "openseespy.opensees",
+        OPENSEESPY_FAILING.format(error="MemoryError()"),
+        ["run", "saiidi-4span", "--engine", "opensees", "-o", "out"],
+        ("not enough memory to load the library 'openseespy'", "OpenSees engine"),
+    ),
+    "openseespy-broken": (
+        "openseespy.opensees",
+        OPENSEESPY_FAILING.format(error='ImportError("libgfortran.so.5: cannot open shared")'),
+        ["run", "saiidi-4span", "--engine", "opensees", "-o", "out"],
+        ("'openseespy' (needed for the OpenSees engine) cannot be loaded", "libgfortran"),
+    ),
+    "matplotlib": (
+        "matplotlib",
+        'raise ImportError("libstdc++.so.6: cannot open", name="matplotlib._c_internal_utils")',
+        ["excitation", "plot", "saiidi-4span", "-o", "out.png"],
+        ("'matplotlib' (needed for figures) cannot be loaded", "pip install"),
+    ),
+    "dask": (
+        "dask",
+        "",  # an installation without dask.distributed
+        ["compare", "saiidi-4span", "--scheduler", "tcp://127.0.0.1:1", "-o", "out"],
+        ("'dask' (needed for --scheduler) cannot be loaded", "dask[distributed]"),
+    ),
+}
+
+
+@pytest.mark.parametrize("case", list(LIBRARY_FAILURES))
+def test_a_library_that_cannot_be_loaded_is_a_resource_failure(tmp_path, case):
+    """Under `ulimit -v 409600` the OpenSees engine exited 4 ('internal error: Failed to
+    import openseespy'): a library that cannot be loaded — no memory to map it, missing,
+    broken — is exit status 3 with one line naming it and what to do; nothing is written."""
+    package, body, argv, words = LIBRARY_FAILURES[case]
+    _fake_package(tmp_path / "site", package, body)
+    env = {**os.environ, "PYTHONPATH": str(tmp_path / "site")}
+    p = subprocess.run(
+        [sys.executable, "-m", "deckpound", *argv, "--set", "excitation.duration=0.3"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
+    assert p.returncode == 3, p.stderr
+    lines = p.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("deckpound: error: "), p.stderr
+    assert all(w in lines[0] for w in words), lines[0]
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["site"]

@@ -1,12 +1,16 @@
 """Safe outputs (issue 16): atomic files, no writing through links, umask modes, devices kept,
-and the INCOMPLETE marker of output folders (deckpound._io)."""
+and the INCOMPLETE marker of output folders (deckpound._io); temporaries of killed writes
+removed and one command per output folder (issue 28)."""
 
 from __future__ import annotations
 
 import errno
 import os
+import signal
 import socket
 import stat
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -14,13 +18,17 @@ import pytest
 import deckpound._io as dio
 from deckpound._io import (
     INCOMPLETE,
+    LOCK_FILE,
     atomic_path,
     atomic_write_files,
     atomic_write_text,
+    claim_folder,
+    command_scope,
     ensure_folder,
     is_temporary,
     output_folder,
 )
+from deckpound.cli import main as cli_main
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 
@@ -212,3 +220,178 @@ def test_result_read_refuses_damaged_files(tmp_path):
     (tmp_path / "e.csv").write_bytes(b"")
     with pytest.raises(SceneError, match="e.csv is not a table of numbers"):
         Result.read(tmp_path, "e")
+
+
+# -- temporaries of killed writes, one command per folder (issue 28) ------------------------
+
+# a child process that writes a file through deckpound._io and stops inside the write:
+# "kill" dies there (SIGKILL to itself: the child, never the test runner), "wait" waits for a
+# line on stdin and then finishes the write
+WRITER = r"""
+import os, signal, sys
+from deckpound._io import atomic_path
+with atomic_path(sys.argv[1]) as tmp:
+    tmp.write_bytes(b"t,x\n" * 1000)
+    print(tmp.name, flush=True)
+    if sys.argv[2] == "kill":
+        os.kill(os.getpid(), signal.SIGKILL)
+    sys.stdin.readline()
+"""
+
+
+def _writer(target, how):
+    proc = subprocess.Popen(
+        [sys.executable, "-c", WRITER, str(target), how],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    return proc, proc.stdout.readline().strip()
+
+
+def test_temporaries_of_killed_writes_are_removed_by_the_next_write(tmp_path):
+    """A SIGKILL during a write left a 30 MB '.…deckpound-tmp.csv' that no later command
+    removed; the next write into the folder removes it, never a live writer's temporary."""
+    out = ensure_folder(tmp_path / "out")
+    killed, dead_name = _writer(out / "opensees.csv", "kill")
+    assert killed.wait(timeout=120) == -signal.SIGKILL and (out / dead_name).is_file()
+    killed.communicate(timeout=60)  # closes its pipes
+    live, live_name = _writer(out / "other.csv", "wait")
+    dead_pid = dead_name.split(".")[-3].split("-")[0]
+    # the same dead writer: a name from before the host tag, and one from another host
+    old_style = f".a.csv.{dead_pid}-0123abcd.deckpound-tmp.csv"
+    tag = dead_name.split(".")[-3].split("-")[1]
+    foreign = f".b.csv.{dead_pid}-{'0' if tag[0] != '0' else '1'}{tag[1:]}-0123abcd.deckpound-tmp"
+    user_file = "notes.deckpound-tmp.txt"  # not deckpound's pattern: the user's own file
+    for name in (old_style, foreign, user_file):
+        (out / name).write_text("x")
+    try:
+        code = cli_main(
+            ["run", "saiidi-4span", "--set", "excitation.duration=0.3", "--engine", "nonsmooth"]
+            + ["-o", str(out)]
+        )
+        assert code == 0
+        left = {p.name for p in out.iterdir()}
+        assert dead_name not in left and old_style not in left
+        assert {live_name, foreign, user_file} <= left and "nonsmooth.csv" in left
+    finally:
+        live.communicate("\n", timeout=120)
+        live.stdout.close()
+    assert live.returncode == 0 and (out / "other.csv").is_file()  # its write finished
+    assert live_name not in {p.name for p in out.iterdir()}
+
+
+HOLDER = r"""
+import sys
+from deckpound._io import claim_folder, command_scope
+with command_scope("deckpound run saiidi-4span --set deck.mass=99 -o " + sys.argv[1]):
+    claim_folder(sys.argv[1])
+    print("held", flush=True)
+    sys.stdin.readline()
+"""
+TINY = ("--set", "excitation.duration=0.3")
+FOLDER_COMMANDS = {  # every command that writes an output folder ({out}; {tmp}: the test's)
+    "run": ("run", "saiidi-4span", *TINY, "--engine", "nonsmooth", "-o", "{out}"),
+    "compare": ("compare", "saiidi-4span", *TINY, "--engines", "nonsmooth", "-o", "{out}"),
+    "study": ("study", "friction", "saiidi-4span", "--quick", "-o", "{out}"),
+    "variability": ("study", "variability", "saiidi-4span", "--quick", "-o", "{out}"),
+    "paper": ("paper", "--quick", *TINY, "-o", "{out}"),
+    "export": ("export", "saiidi-4span", *TINY, "--format", "tcl", "-o", "{out}/m.tcl"),
+    "export-vtk": ("export-vtk", "{tmp}/res", "-o", "{out}"),
+    "bench": ("bench", "--quick", "-o", "{out}"),
+    "stress": ("stress", "--quick", "-o", "{out}"),
+}
+
+
+@pytest.mark.parametrize("command", list(FOLDER_COMMANDS))
+def test_a_folder_in_use_is_refused_naming_its_holder(tmp_path, command, capsys):
+    """Two commands on one output folder both exited 0 and the last writer won silently: a
+    second command is refused (exit 2) naming the first's command line and PID, and writes
+    nothing; once the holder has ended, the same command runs."""
+    out = tmp_path / "out"
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLDER, str(out)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        argv = [a.format(out=out, tmp=tmp_path) for a in FOLDER_COMMANDS[command]]
+        capsys.readouterr()
+        code = cli_main(argv)
+        err = capsys.readouterr().err
+        left = sorted(p.name for p in out.iterdir())
+    finally:
+        holder.communicate("\n", timeout=60)
+    assert code == 2, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("deckpound: error: --output: "), err
+    assert f"is in use by 'deckpound run saiidi-4span --set deck.mass=99 -o {out}'" in err
+    assert f"(PID {holder.pid}, started " in err
+    assert left == [LOCK_FILE]  # the holder's, untouched
+    assert holder.returncode == 0 and not out.exists()  # the holder created it, then removed it
+
+
+def test_a_lock_held_by_the_test_process_stops_a_real_command(tmp_path):
+    """The lock holds between processes (the CLI in a subprocess, this process holding the
+    folder with the same function); released, the folder is free again and no lock file is
+    left."""
+    out = tmp_path / "out"
+    argv = [sys.executable, "-m", "deckpound", *FOLDER_COMMANDS["run"]]
+    argv = [a.format(out=out) for a in argv]
+    with command_scope("deckpound paper --quick -o out"):
+        claim_folder(out)
+        p = subprocess.run(argv, capture_output=True, text=True, timeout=300, check=False)
+        assert p.returncode == 2, p.stderr
+        assert f"in use by 'deckpound paper --quick -o out' (PID {os.getpid()}," in p.stderr
+        assert sorted(x.name for x in out.iterdir()) == [LOCK_FILE]
+    assert not out.exists()  # created for the claim, empty, removed with it
+    p = subprocess.run(argv, capture_output=True, text=True, timeout=300, check=False)
+    assert p.returncode == 0 and p.stderr == "", p.stderr
+    assert sorted(x.name for x in out.iterdir()) == ["nonsmooth.csv", "nonsmooth.json"]
+
+
+def test_a_lock_left_by_a_killed_command_is_taken_over_with_a_warning(tmp_path):
+    out = ensure_folder(tmp_path / "out")
+    killed = subprocess.Popen([sys.executable, "-c", "pass"])
+    killed.wait()
+    host = socket.gethostname().split()[0]
+    (out / LOCK_FILE).write_text(
+        f"pid={killed.pid} host={host} started=2020-01-01T00:00:00 command=deckpound compare x\n"
+    )
+    took_over = rf"'deckpound compare x' \(PID {killed.pid}, .*ended without releasing it"
+    with pytest.warns(UserWarning, match=took_over), output_folder(out, "run"):
+        assert (out / LOCK_FILE).read_text().startswith(f"pid={os.getpid()} ")
+    assert sorted(p.name for p in out.iterdir()) == []
+
+
+KILLED_WITH_A_WORKER = r"""
+import multiprocessing, os, signal, sys, time
+from deckpound._io import claim_folder, command_scope
+with command_scope("deckpound compare x -o out"):
+    claim_folder(sys.argv[1])
+    worker = multiprocessing.get_context("fork").Process(target=time.sleep, args=(120,))
+    worker.start()
+    print(worker.pid, flush=True)
+    os.kill(os.getpid(), signal.SIGKILL)  # this child process dies; its worker runs on
+"""
+
+
+def test_a_worker_left_by_a_killed_command_does_not_hold_its_folder(tmp_path):
+    """A forked worker shares its parent's lock descriptor; it closes its copy, so a command
+    killed while its workers run frees the folder at once (taken over with a warning)."""
+    out = tmp_path / "out"
+    parent = subprocess.Popen(
+        [sys.executable, "-c", KILLED_WITH_A_WORKER, str(out)], stdout=subprocess.PIPE, text=True
+    )
+    worker = int(parent.stdout.readline())
+    parent.stdout.close()  # the worker holds the pipe's other end: no waiting for its end
+    assert parent.wait(timeout=120) == -signal.SIGKILL
+    try:
+        os.kill(worker, 0)  # still running
+        with command_scope("deckpound run y"), pytest.warns(UserWarning, match="taking it over"):
+            claim_folder(out)
+    finally:
+        os.kill(worker, signal.SIGKILL)
+    assert list(out.iterdir()) == []  # the killed command's lock file went with the new claim

@@ -85,8 +85,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def check_output_folder(path: str) -> Path:
     """Refuse, before any work, an output folder that can never be written: a symbolic link,
-    a file in its place, a file among its parents (exit status 2)."""
-    from ._io import check_parent
+    a file in its place, a file among its parents, or one in use by another running command
+    (exit status 2); lock it for the rest of the command (:func:`deckpound._io.claim_folder`)."""
+    from ._io import check_parent, claim_folder
 
     out = Path(path)
     if out.is_symlink():
@@ -98,6 +99,7 @@ def check_output_folder(path: str) -> Path:
     if out.exists() and not out.is_dir():
         raise SceneError("--output", f"{str(out)!r} exists and is not a folder")
     check_parent(out)
+    claim_folder(out)
     return out
 
 
@@ -137,10 +139,11 @@ def _export(args) -> int:
     from deckpound.models.scene_io import load_scene
     from deckpound.opensees_build.export import export_script
 
-    from ._io import check_parent, check_target
+    from ._io import check_parent, check_target, claim_folder_of
 
     out = check_target(args.output)  # a folder or a symbolic link: refused
     check_parent(out)
+    claim_folder_of(out)
     scene = load_scene(args.scene, args.overrides)
     motion = support_motion(scene)
     plausibility.enforce(scene, motion, engines=("opensees",))

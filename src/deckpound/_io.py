@@ -22,8 +22,17 @@ Every file a deckpound command writes goes through this module, for three promis
 folder holds a marker file ``INCOMPLETE`` naming the command; on success the marker is
 removed, on failure it stays (with the reason), so a half-finished folder is never mistaken
 for a result, and re-running the command resumes (finished cases come from the cache) and
-removes it. A folder the command created and left empty is removed instead. The marker is
-shared safely by concurrent commands on one folder (``flock`` on the folder).
+removes it. A folder the command created and left empty is removed instead.
+
+**One command per folder.** A command holds an exclusive ``flock`` on a lock file
+``.deckpound-lock`` in each output folder while it runs (:func:`claim_folder`,
+:func:`folder_lock`; the CLI releases them when the command ends), with its PID, host, start
+time and command line written into it. A second command on the same folder is refused (exit
+status 2) naming that holder; the kernel drops the lock when the holder dies, so a lock file
+left by a killed command is taken over with a warning. **Temporaries of killed writers** (a
+SIGKILL between the temporary file and its rename) are removed by the next write into their
+folder (:func:`remove_stale_temporaries`): a temporary's name carries its writer's PID and host,
+and only those whose writer is no longer alive on this host are removed.
 """
 
 from __future__ import annotations
@@ -31,20 +40,37 @@ from __future__ import annotations
 import contextlib
 import errno
 import fcntl
+import hashlib
 import os
+import re
 import secrets
 import shutil
 import socket
 import stat
 import time
+import warnings
 from collections.abc import Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from deckpound.models.errors import SceneError
 
 #: name of the marker file of an unfinished output folder
 INCOMPLETE = "INCOMPLETE"
+#: name of the lock file of an output folder in use (removed when its command ends)
+LOCK_FILE = ".deckpound-lock"
 _TMP_TAG = ".deckpound-tmp"
+_HOST = (socket.gethostname().split() or ["localhost"])[0]
+#: six hex digits naming this host in temporary names (a shared folder's other hosts' PIDs
+#: cannot be checked from here)
+_HOST_TAG = hashlib.sha256(_HOST.encode("utf-8", "replace")).hexdigest()[:6]
+#: ``.NAME.PID-HOST-RANDOM.deckpound-tmp[SUFFIX]``; names written before the host tag have none
+_TMP_NAME = re.compile(
+    r"^\..+\.(?P<pid>\d{1,10})-(?:(?P<host>[0-9a-f]{6})-)?[0-9a-f]{8}"
+    + re.escape(_TMP_TAG)
+    + r"(?:\.[^.]*)?$",
+    re.DOTALL,
+)
 
 
 def is_temporary(name: str) -> bool:
@@ -54,9 +80,51 @@ def is_temporary(name: str) -> bool:
 
 def _tmp_name(path: Path) -> Path:
     """A fresh temporary name beside ``path`` that keeps its suffix (matplotlib and pandas
-    choose the format from it)."""
-    token = f"{os.getpid()}-{secrets.token_hex(4)}"
+    choose the format from it) and names its writer (PID and host) for
+    :func:`remove_stale_temporaries`."""
+    _sweep_once(path.parent)
+    token = f"{os.getpid()}-{_HOST_TAG}-{secrets.token_hex(4)}"
     return path.with_name(f".{path.name}.{token}{_TMP_TAG}{path.suffix}")
+
+
+def remove_stale_temporaries(folder: str | Path) -> list[Path]:
+    """Remove from ``folder`` (not below it) the temporary files and folders of this module's
+    naming pattern whose writer died before its rename (a SIGKILL, a power cut); return them.
+
+    A temporary is removed only if its name carries a PID that is not alive on this host (and
+    this host's tag, for the names that have one): a live writer's file, another program's
+    file or another host's file is never touched."""
+    removed: list[Path] = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed  # not there yet, or not readable: the write itself says what is wrong
+    for entry in entries:
+        match = _TMP_NAME.match(entry.name)
+        if match is None or match["host"] not in (None, _HOST_TAG):
+            continue
+        if _pid_alive(int(match["pid"])):
+            continue
+        try:
+            if entry.is_dir(follow_symlinks=False):
+                shutil.rmtree(entry.path)
+            else:
+                os.unlink(entry.path)
+        except OSError:
+            continue  # removed by another command meanwhile, or not ours to remove
+        removed.append(Path(entry.path))
+    return removed
+
+
+#: folders already cleared of stale temporaries by this process (until the command ends)
+_SWEPT: set[str] = set()
+
+
+def _sweep_once(folder: Path) -> None:
+    key = os.path.abspath(folder)
+    if key not in _SWEPT:
+        _SWEPT.add(key)
+        remove_stale_temporaries(folder)
 
 
 def check_target(path: str | Path, field: str = "--output") -> Path:
@@ -270,13 +338,254 @@ def _folder_lock(folder: Path) -> Iterator[None]:
 
 
 def _pid_alive(pid: int) -> bool:
+    if pid <= 0:
+        return True  # never a writer's PID (and os.kill(0, 0) would ask the process group)
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:
         return True
+    except (OverflowError, ValueError):
+        return False  # beyond any PID the kernel hands out
     return True
+
+
+# -- one command per output folder ----------------------------------------------------------
+
+
+@dataclass
+class _Claim:
+    """This process's lock on one output folder."""
+
+    folder: Path
+    fd: int | None  # the locked lock file (None: the file system cannot lock; warned)
+    created: list[Path]  # folders the claim created, innermost first (removed if left empty)
+    for_command: bool = False  # held until the command ends (:func:`release_folders`)
+    scopes: int = 0  # open :func:`folder_lock` blocks
+    key: tuple[int, int] = field(default=(0, 0))
+
+
+#: this process's claims by the folder's (device, inode)
+_CLAIMS: dict[tuple[int, int], _Claim] = {}
+#: the command line written into lock files (the CLI sets it, :func:`command_scope`)
+_COMMAND = ["deckpound (Python API)"]
+
+
+def _printable(text: str) -> str:
+    """``text`` on one line with control characters escaped (it is quoted in messages)."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+def _holder_line() -> str:
+    stamp = time.strftime("%Y-%m-%dT%H:%M:%S")
+    return f"pid={os.getpid()} host={_HOST} started={stamp} command={_printable(_COMMAND[0])}\n"
+
+
+def _holder(text: str) -> dict[str, str]:
+    """The fields of a lock file's line (empty if the holder has not written it yet)."""
+    match = re.match(r"pid=(\d+) host=(\S*) started=(\S*) command=(.*)", text.strip())
+    if match is None:
+        return {}
+    return dict(zip(("pid", "host", "started", "command"), match.groups()))
+
+
+def _describe(holder: dict[str, str]) -> str:
+    if not holder:
+        return "another deckpound command (it has not written its name yet)"
+    where = f" on host {holder['host']}" if holder["host"] != _HOST else ""
+    return (
+        f"{holder['command']!r} (PID {holder['pid']}{where}, started "
+        f"{holder['started'].replace('T', ' ')})"
+    )
+
+
+def _read_fd(fd: int) -> str:
+    try:
+        return os.pread(fd, 4096, 0).decode("utf-8", "replace")
+    except OSError:
+        return ""
+
+
+def _open_lock_file(lock: Path) -> int:
+    flags = os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        return os.open(lock, os.O_RDWR | flags, 0o666)
+    except PermissionError:  # another user's lock file: a read-only descriptor locks as well
+        return os.open(lock, os.O_RDONLY | flags)
+
+
+def _lock(folder: Path, field: str) -> int | None:
+    """Take the lock file of ``folder``; refuse (:class:`SceneError`) if a live command holds
+    it. Returns the locked descriptor (None where the file system has no locks)."""
+    lock = folder / LOCK_FILE
+    while True:
+        fd = _open_lock_file(lock)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = _holder(_read_fd(fd))
+            for _ in range(50):  # the holder writes its line just after it took the lock
+                if holder:
+                    break
+                time.sleep(0.02)
+                holder = _holder(_read_fd(fd))
+            os.close(fd)
+            ended = ""
+            if holder and holder["host"] == _HOST and not _pid_alive(int(holder["pid"])):
+                ended = " (that process has ended; a process it started still holds the lock)"
+            raise SceneError(
+                field,
+                f"the folder {str(folder)!r} is in use by {_describe(holder)}{ended}; wait "
+                "until it ends or give another output folder",
+            ) from None
+        except OSError as err:
+            os.close(fd)
+            if err.errno not in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOTSUP, errno.EINVAL):
+                raise
+            warnings.warn(
+                f"the file system of {str(folder)!r} cannot lock files ({err.strerror}): a "
+                "second command writing into this folder at the same time would not be "
+                "stopped",
+                stacklevel=3,
+            )
+            return None
+        try:  # the holder before us may have removed the file between our open and lock
+            same = os.path.samestat(os.fstat(fd), os.stat(lock, follow_symlinks=False))
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    previous = _holder(_read_fd(fd))
+    if previous and previous["pid"] != str(os.getpid()):
+        warnings.warn(
+            f"the folder {str(folder)!r} was locked by {_describe(previous)}, which ended "
+            "without releasing it (killed?); taking it over",
+            stacklevel=3,
+        )
+    with contextlib.suppress(OSError):  # a read-only descriptor: the lock holds, unnamed
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, _holder_line().encode("utf-8"), 0)
+    return fd
+
+
+def _acquire(path: str | Path, field: str, *, through_links: bool) -> _Claim:
+    """This process's claim on folder ``path`` (created if needed), new or existing."""
+    path = Path(path)
+    missing = []
+    for folder in (path, *path.parents):
+        if os.path.lexists(folder):
+            break
+        missing.append(folder)
+    if through_links:
+        if path.exists() and not path.is_dir():
+            raise SceneError(field, f"{str(path)!r} exists and is not a folder")
+        check_parent(path, field)
+        path.mkdir(parents=True, exist_ok=True)
+    else:
+        ensure_folder(path, field)
+    st = os.stat(path)
+    key = (st.st_dev, st.st_ino)
+    claim = _CLAIMS.get(key)
+    if claim is None:
+        try:
+            fd = _lock(path, field)
+        except BaseException:
+            _remove_created(missing)
+            raise
+        claim = _CLAIMS[key] = _Claim(path, fd, missing, key=key)
+        _SWEPT.discard(os.path.abspath(path))
+        _sweep_once(path)
+    return claim
+
+
+def _remove_created(folders: list[Path]) -> None:
+    for folder in folders:  # innermost first; stops at the first that is not empty
+        try:
+            os.rmdir(folder)
+        except FileNotFoundError:
+            continue  # removed already (a failed command's empty output folder)
+        except OSError:
+            return
+
+
+def _release(claim: _Claim) -> None:
+    _CLAIMS.pop(claim.key, None)
+    if claim.fd is not None:
+        lock = claim.folder / LOCK_FILE
+        with contextlib.suppress(OSError):  # ours only: the folder may be gone or re-made
+            if os.path.samestat(os.fstat(claim.fd), os.stat(lock, follow_symlinks=False)):
+                os.unlink(lock)  # while still locked, so no one locks the removed file
+        os.close(claim.fd)  # releases the lock
+    _remove_created(claim.created)
+
+
+def claim_folder(path: str | Path, field: str = "--output", *, through_links: bool = False):
+    """Lock output folder ``path`` (created if needed) until the command ends
+    (:func:`release_folders`): a second command on it is refused with a :class:`SceneError`
+    naming this one. A symbolic link in place of ``path`` is refused unless ``through_links``
+    (the folder of an output *file*, which may be a link). Returns the folder."""
+    claim = _acquire(path, field, through_links=through_links)
+    claim.for_command = True
+    return claim.folder
+
+
+def claim_folder_of(path: str | Path, field: str = "--output") -> None:
+    """Lock the folder that output file ``path`` goes into (not for a device or pipe, which
+    is written in place)."""
+    if _kind(Path(path), field) != "stream":
+        claim_folder(Path(path).parent, field, through_links=True)
+
+
+@contextlib.contextmanager
+def folder_lock(path: str | Path, field: str = "--output") -> Iterator[_Claim]:
+    """Lock output folder ``path`` (created if needed) for the block, unless this process
+    holds it already (then it stays held as before)."""
+    claim = _acquire(path, field, through_links=False)
+    claim.scopes += 1
+    try:
+        yield claim
+    finally:
+        claim.scopes -= 1
+        if not claim.scopes and not claim.for_command and _CLAIMS.get(claim.key) is claim:
+            _release(claim)
+
+
+def _forget_claims_in_child() -> None:
+    """A forked child (a sweep's worker, a guarded stress-test child) does not hold its
+    parent's folders: its copies of the lock descriptors are closed (the lock stays with the
+    parent's), so that workers left running after the parent was killed do not keep the folder
+    locked in a dead command's name, and the child never removes the parent's lock file."""
+    for claim in _CLAIMS.values():
+        if claim.fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(claim.fd)
+    _CLAIMS.clear()
+
+
+os.register_at_fork(after_in_child=_forget_claims_in_child)
+
+
+def release_folders() -> None:
+    """Release every folder this process holds (the end of a command) and forget which
+    folders were cleared of stale temporaries."""
+    for claim in list(_CLAIMS.values()):
+        _release(claim)
+    _SWEPT.clear()
+
+
+@contextlib.contextmanager
+def command_scope(command: str) -> Iterator[None]:
+    """One command: ``command`` (its command line) is what lock files name; every folder it
+    claimed is released when the block ends."""
+    before = _COMMAND[0]
+    _COMMAND[0] = command
+    try:
+        yield
+    finally:
+        _COMMAND[0] = before
+        release_folders()
 
 
 def _entries(marker: Path) -> list[str]:
@@ -359,7 +668,7 @@ class _Marker:
 
 def _holds_only_marker(folder: Path) -> bool:
     for root, _dirs, files in os.walk(folder):
-        if any(not (Path(root) == folder and f == INCOMPLETE) for f in files):
+        if any(not (Path(root) == folder and f in (INCOMPLETE, LOCK_FILE)) for f in files):
             return False
     return True
 
@@ -367,30 +676,31 @@ def _holds_only_marker(folder: Path) -> bool:
 @contextlib.contextmanager
 def output_folder(path: str | Path, command: str, *, field: str = "--output") -> Iterator[Path]:
     """The output folder of one command (see the module docstring): created if needed (a
-    symbolic link or a file in its place refused), marked ``INCOMPLETE`` while the block
-    runs, unmarked on success; on failure marked with the reason, or removed if this command
-    created it and wrote nothing into it."""
-    path = Path(path)
-    existed = path.exists() or path.is_symlink()
-    folder = ensure_folder(path, field)
-    marker = _Marker(folder, command)
-    try:
-        marker.start()
-    except BaseException:
-        if not existed:
-            shutil.rmtree(folder, ignore_errors=True)
-        raise
-    try:
-        yield folder
-    except BaseException as err:
-        reason = f"{type(err).__name__}: {err}" if str(err) else type(err).__name__
-        with contextlib.suppress(OSError):
-            marker.fail(reason)
-        if not existed:
+    symbolic link or a file in its place refused), locked against other commands
+    (:func:`folder_lock`), marked ``INCOMPLETE`` while the block runs, unmarked on success; on
+    failure marked with the reason, or removed if this command created it and wrote nothing
+    into it."""
+    with folder_lock(path, field) as claim:
+        folder = Path(path)
+        existed = not claim.created
+        marker = _Marker(folder, command)
+        try:
+            marker.start()
+        except BaseException:
+            if not existed:
+                shutil.rmtree(folder, ignore_errors=True)
+            raise
+        try:
+            yield folder
+        except BaseException as err:
+            reason = f"{type(err).__name__}: {err}" if str(err) else type(err).__name__
             with contextlib.suppress(OSError):
-                _remove_if_unused(folder, marker)
-        raise
-    marker.finish()
+                marker.fail(reason)
+            if not existed:
+                with contextlib.suppress(OSError):
+                    _remove_if_unused(folder, marker)
+            raise
+        marker.finish()
 
 
 def _remove_if_unused(folder: Path, marker: _Marker) -> None:

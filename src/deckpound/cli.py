@@ -8,10 +8,13 @@ Every command ends in exactly one of these exit statuses, with at most one line 
 1    engine failure: an engine could not finish (its status message names step and time)
 2    bad input: scene, record, override or option refused (the line names the field, the
      value and what is allowed), including output paths that can never be written (below a
-     file, a symbolic link, a folder where a file is expected) — refused before any work
+     file, a symbolic link, a folder where a file is expected) and an output folder in use by
+     another running command (the line names its command line and PID) — refused before any
+     work
 3    I/O or resource failure: the system refused (read-only or full disk, no permission,
      ``/proc``, stdout closed or full, out of memory, stack exhausted, an unreachable Dask
-     scheduler)
+     scheduler), or a library an engine or a command needs cannot be loaded (missing, broken,
+     or no memory to load it: openseespy, matplotlib, dask)
 4    internal error: a bug in deckpound (please report it with ``DECKPOUND_DEBUG=1``, which
      prints the traceback)
 130  interrupted (Ctrl-C)
@@ -22,7 +25,11 @@ Every command ends in exactly one of these exit statuses, with at most one line 
 
 An output folder of a command that failed or was interrupted is either removed (if the command
 created it and wrote nothing) or holds a file ``INCOMPLETE`` naming the command; re-running
-the command resumes and removes it (:mod:`deckpound._io`). What the engines' libraries print on
+the command resumes and removes it (:mod:`deckpound._io`, which also locks output folders and
+removes temporary files left by killed writes). A closed stdout or stderr (``>&-``) changes no
+exit status except that output which cannot be written to stdout is an I/O failure (3); the
+closed descriptor is pointed at ``/dev/null`` first, so no output file can take its number and
+receive the libraries' messages. What the engines' libraries print on
 stderr (OpenSees's solver chatter) is held back so that a failure stays one line;
 ``DECKPOUND_DEBUG=1`` shows it. Subcommands live in small modules
 (``_cli_*``) that each register themselves on the parser.
@@ -32,11 +39,14 @@ from __future__ import annotations
 
 import argparse
 import errno
+import io
 import os
+import shlex
 import sys
 import warnings
 
 from deckpound import __version__
+from deckpound._io import command_scope
 from deckpound._terminal import terminal_text
 from deckpound.models.errors import EngineFailure, SceneError
 
@@ -45,9 +55,10 @@ EXIT_TERMINATED = 143  # 128 + SIGTERM, what a shell reports for a process ended
 EXIT_CODES_HELP = """exit status:
   0    success
   1    engine failure (the message names the step and time)
-  2    bad input: scene, record, override or option refused (one line names the field)
-  3    I/O or resource failure: read-only or full disk, no permission, out of memory,
-       unreachable Dask scheduler
+  2    bad input: scene, record, override or option refused (one line names the field),
+       or the output folder is in use by another command (named with its PID)
+  3    I/O or resource failure: read-only or full disk, no permission, stdout closed or
+       full, out of memory, unreachable Dask scheduler, a library that cannot be loaded
   4    internal error (a bug: re-run with DECKPOUND_DEBUG=1 for the traceback and report it)
   130  interrupted
   143  terminated (SIGTERM), stopped as cleanly as by Ctrl-C
@@ -65,6 +76,12 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str):
         raise UsageError(f"{self.prog}: {message}")
+
+    def _print_message(self, message, file=None):
+        # argparse's own version swallows OSError: --help into a closed or full stdout would
+        # end in success with nothing written; here it is an I/O failure like any output
+        if message:
+            (file or sys.stderr).write(message)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -109,8 +126,8 @@ def _report(kind: str, message: str) -> None:
     )
     try:
         print(text, file=sys.stderr, flush=True)
-    except (OSError, ValueError):
-        pass  # stderr itself is gone: the exit status is all that is left
+    except Exception:
+        pass  # stderr itself is gone: the exit status is all that is left, and stays the same
 
 
 class StdoutError(OSError):
@@ -142,6 +159,25 @@ class _GuardedStdout:
 
     def __getattr__(self, name):
         return getattr(self._stream, name)
+
+
+class _ClosedStdout(io.TextIOBase):
+    """Stands for a stdout that was closed when the program started (``>&-``: Python sets
+    ``sys.stdout`` to None): writing the command's output to it fails as writing to a closed
+    descriptor does, an I/O failure (exit status 3); a command that prints nothing succeeds."""
+
+    def write(self, text):
+        if text:
+            raise OSError(errno.EBADF, "it is closed (give a file or /dev/null instead)")
+        return 0
+
+
+class _ClosedStderr(io.TextIOBase):
+    """Stands for a stderr that was closed when the program started: messages are lost, the
+    exit status is what it would have been."""
+
+    def write(self, text):
+        return len(text)
 
 
 class _QuietStderr:
@@ -197,7 +233,8 @@ def _quiet_exit() -> None:
     """In the real process, after the last word: stdout flushed, stderr to /dev/null, so that
     libraries cannot add lines at interpreter exit (OpenSees prints 'Process 0 Terminating')."""
     try:
-        sys.stdout.flush()
+        if sys.stdout is not None:  # None: closed when the program started
+            sys.stdout.flush()
     except (OSError, ValueError):
         _silence_stdout()
     try:
@@ -216,12 +253,34 @@ def main(argv: list[str] | None = None) -> int:
     through :func:`_fast_exit` once everything is written and flushed.
     """
     if argv is None:
+        _fill_closed_descriptors()
         _stop_on_sigterm()
     code = _main(argv)
     if argv is None:  # the program itself (console script, python -m deckpound)
         _quiet_exit()
         _fast_exit(code)
     return code
+
+
+def _fill_closed_descriptors() -> None:
+    """Point a standard descriptor (0, 1, 2) that was closed when the program started
+    (``>&-``) at ``/dev/null``. Left free, its number would go to the next file opened — an
+    output file or a lock file — and whatever the engines' libraries write to fd 1 or 2 would
+    land in it. ``sys.stdout``/``sys.stderr`` stay None, so :func:`_main` still treats them as
+    closed."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+            continue
+        except OSError:
+            pass
+        try:
+            null = os.open(os.devnull, os.O_RDWR)
+        except OSError:
+            return
+        if null != fd:
+            os.dup2(null, fd)
+            os.close(null)
 
 
 #: set by the SIGTERM handler: the KeyboardInterrupt it raised is a termination
@@ -273,10 +332,13 @@ def _fast_exit(code: int) -> None:
 def _main(argv: list[str] | None) -> int:
     stdout, stderr = sys.stdout, sys.stderr
     debug = os.environ.get("DECKPOUND_DEBUG", "").strip() not in ("", "0")
-    sys.stdout = _GuardedStdout(stdout)
-    sys.stderr = _QuietStderr(stderr, show_all=debug)
+    # None: closed when the program started (`>&-`); the exit status must not depend on it
+    sys.stdout = _GuardedStdout(stdout if stdout is not None else _ClosedStdout())
+    sys.stderr = _QuietStderr(stderr if stderr is not None else _ClosedStderr(), show_all=debug)
+    words = sys.argv[1:] if argv is None else argv
     try:
-        return _guarded_main(argv)
+        with command_scope(shlex.join(["deckpound", *map(str, words)])):
+            return _guarded_main(argv)
     finally:
         if isinstance(sys.stdout, _GuardedStdout):
             sys.stdout = stdout
@@ -338,6 +400,12 @@ def _guarded_main(argv: list[str] | None) -> int:
                 raise
             _report("error", "input nested too deeply (Python's recursion limit was reached)")
             return EXIT_IO
+        except ImportError as err:
+            library = _library_of(err)
+            if debug or library is None:
+                raise  # deckpound's own module: a bug (below)
+            _report("error", _library_failure(library, err))
+            return EXIT_IO
     except Exception as err:  # a bug: one line, the traceback only on request
         if debug:
             raise
@@ -347,6 +415,54 @@ def _guarded_main(argv: list[str] | None) -> int:
             f"{__version__}; re-run with DECKPOUND_DEBUG=1 for the traceback and report it)",
         )
         return EXIT_BUG
+
+
+#: what each optional library is needed for, for the message when it cannot be loaded
+_LIBRARY_USE = {
+    "openseespy": "the OpenSees engine",
+    "matplotlib": "figures",
+    "dask": "--scheduler",
+    "distributed": "--scheduler",
+}
+#: the pip requirement that installs each library, where it is not the library's own name
+_LIBRARY_PIP = {"dask": "'dask[distributed]'", "distributed": "'dask[distributed]'"}
+
+
+def _library_of(err: ImportError) -> str | None:
+    """The top-level name of the library whose import failed, or None if it is one of
+    deckpound's own modules (a bug, exit status 4). Without a module name, the module whose
+    code raised the error decides."""
+    name = err.name
+    if not name:
+        tb = err.__traceback__
+        while tb is not None and tb.tb_next is not None:
+            tb = tb.tb_next
+        name = tb.tb_frame.f_globals.get("__name__", "") if tb is not None else ""
+    top = str(name or "").split(".")[0]
+    return None if top in ("", "deckpound", "__main__") else top
+
+
+def _library_failure(library: str, err: ImportError) -> str:
+    """One line: which library, why (memory or a missing/broken install), what to do."""
+    use = f" (needed for {_LIBRARY_USE[library]})" if library in _LIBRARY_USE else ""
+    chain, cause = [], err
+    while cause is not None and len(chain) < 16:
+        chain.append(cause)
+        cause = cause.__cause__ or cause.__context__
+    text = " ".join(str(c) for c in chain).lower()
+    short_of_memory = any(isinstance(c, MemoryError) for c in chain) or any(
+        w in text for w in ("memory", "failed to map segment")
+    )
+    if short_of_memory:
+        return (
+            f"not enough memory to load the library {library!r}{use}: {err}; free memory "
+            "or raise the process's memory limit (ulimit -v)"
+        )
+    return (
+        f"the library {library!r}{use} cannot be loaded: {err}; it is missing or broken in "
+        "this Python environment: reinstall it (pip install --force-reinstall "
+        f"{_LIBRARY_PIP.get(library, library)})"
+    )
 
 
 def int_in(lo: int, hi: int):
