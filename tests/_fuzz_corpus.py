@@ -27,6 +27,8 @@ script        ``export`` to hostile file names (braces, ``[exec ...]``, ``$``, q
 input         unit slips (a gap or deck size in mm, a deck mass in kg), absurd magnitudes,
               --set overrides with control characters, a CSV velocity column that is not
               its displacement's derivative: exit 2 (:mod:`tests._fuzz_magnitudes`)
+stream        closed stdout and stderr: exit 3 only for output that cannot reach stdout
+              (:mod:`tests._fuzz_run_families`)
 ============  ===============================================================================
 
 Each :class:`Case` states its command line (``{tmp}`` is the case's own folder), the files,
@@ -313,7 +315,13 @@ def families() -> dict:
     run-side ones in tests._fuzz_run_families)."""
     from _fuzz_magnitudes import input_family
     from _fuzz_outputs import fault_family, path_family
-    from _fuzz_run_families import engine_family, name_family, option_family, vtk_family
+    from _fuzz_run_families import (
+        engine_family,
+        name_family,
+        option_family,
+        stream_family,
+        vtk_family,
+    )
     from _fuzz_scripts import script_family
 
     return {
@@ -328,6 +336,7 @@ def families() -> dict:
         "option": option_family,
         "script": script_family,
         "input": input_family,
+        "stream": stream_family,
     }
 
 
@@ -345,7 +354,7 @@ def generate() -> list[Case]:
     return out
 
 
-def quick_subset(cases: list[Case], budget: int = 220) -> list[Case]:
+def quick_subset(cases: list[Case], budget: int = 230) -> list[Case]:
     """A deterministic, stratified sample of about ``budget`` cases (every family, costly
     families thinned by their weight)."""
     by_family: dict[str, list[Case]] = {}
@@ -363,6 +372,7 @@ def quick_subset(cases: list[Case], budget: int = 220) -> list[Case]:
         "option": 12,
         "script": 12,
         "input": 10,
+        "stream": 10,
     }
     out = []
     for fam, members in by_family.items():

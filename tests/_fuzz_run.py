@@ -16,7 +16,8 @@ Outcomes: ``refused`` (exit 2), ``engine failure`` (1), ``I/O error`` (3), ``int
 
 Faults are injected by patching (``os.fsync``, ``os.replace``, the write loop of
 :mod:`deckpound._io`, ``os.mkdir``/``os.open``/``open`` for a read-only folder, matplotlib's
-``savefig``, the engine entry point, stdout) only for the duration of one case.
+``savefig``, the engine entry point, stdout; stdout or stderr closed: None in ``sys``, as
+Python sets them when the shell closed them) only for the duration of one case.
 """
 
 from __future__ import annotations
@@ -144,8 +145,8 @@ def _inject(fault: str, root: Path, stack: contextlib.ExitStack) -> None:
             raise exc()
 
         stack.enter_context(_patched(engines, "run_engine", run_engine))
-    elif kind == "stdout-full":
-        pass  # handled by the runner (stdout replacement)
+    elif kind in ("stdout-full", "stdout-closed", "stderr-closed", "streams-closed"):
+        pass  # handled by the runner (stdout and stderr replaced)
     elif kind == "connect-timeout":
         from deckpound.compare import cases
 
@@ -303,14 +304,17 @@ def _run(case, root: Path, result_dir: Path | None) -> Outcome:
     before = snapshot(root)
     target_before = _target_state(target)
     out, err = (_FullStdout() if case.fault == "stdout-full" else io.StringIO()), io.StringIO()
+    # a stream closed by the shell (`>&-`, `2>&-`) is None in sys for Python
+    closed_out = case.fault in ("stdout-closed", "streams-closed")
+    closed_err = case.fault in ("stderr-closed", "streams-closed")
     escaped = None
     with contextlib.ExitStack() as stack:
         stack.enter_context(warnings.catch_warnings())
         warnings.showwarning = _show_on_stderr
         if case.fault:
             _inject(case.fault, root, stack)
-        stack.enter_context(contextlib.redirect_stdout(out))
-        stack.enter_context(contextlib.redirect_stderr(err))
+        stack.enter_context(contextlib.redirect_stdout(None if closed_out else out))
+        stack.enter_context(contextlib.redirect_stderr(None if closed_err else err))
         try:
             code = main(argv)
         except BaseException as exc:
@@ -321,6 +325,8 @@ def _run(case, root: Path, result_dir: Path | None) -> Outcome:
     if code == 4 or "Traceback" in stderr:
         return Outcome(case.id, "TRACEBACK", code, stderr[-300:])
     lines = [ln for ln in stderr.splitlines() if not ln.startswith("deckpound: warning:")]
+    if closed_err:
+        lines = ["deckpound: (stderr closed: its line is lost)"] if code != 0 else []
     if code != 0 and (len(lines) != 1 or not lines[0].startswith("deckpound: ")):
         return Outcome(case.id, "UNCLEAN", code, f"stderr {stderr[-300:]!r}")
     if code == 0 and lines:
@@ -336,7 +342,8 @@ def _run(case, root: Path, result_dir: Path | None) -> Outcome:
     if partial:
         return Outcome(case.id, "PARTIAL OUTPUT", code, partial)
     if code == 0:
-        nonsense = _nonsense(case, target, out.getvalue() if case.fault != "stdout-full" else "")
+        shown = out.getvalue() if case.fault != "stdout-full" and not closed_out else ""
+        nonsense = _nonsense(case, target, shown)
         if nonsense:
             return Outcome(case.id, "SILENT NONSENSE", code, nonsense)
     return Outcome(case.id, _STATUS.get(code, "UNCLEAN"), code, lines[0][:200] if lines else "")

@@ -5,6 +5,8 @@ engine   steps and output rates against the analysis length (30 s step on a shor
 vtk      ``export-vtk`` of damaged result folders
 name     hostile scene names (TeX, control characters) through every figure
 option   bad option values (--workers, --every, --timeout, --scheduler, --engines)
+stream   closed stdout and stderr (``>&-``, ``2>&-``): exit 3 only for output that cannot
+         be written to stdout, otherwise the status of open streams
 """
 
 from __future__ import annotations
@@ -338,4 +340,73 @@ def option_family() -> list[Case]:
                 expect=(2,),
             )
         )
+    return cases
+
+
+#: how the stream cases close stdout and stderr (:mod:`tests._fuzz_run` sets ``sys.stdout`` /
+#: ``sys.stderr`` to None for them, what Python does when ``>&-`` / ``2>&-`` closed them)
+STREAM_FAULTS = ("stdout-closed", "stderr-closed", "streams-closed")
+
+
+def stream_family() -> list[Case]:
+    """Closed stdout and stderr: a command whose output cannot be written to stdout is an I/O
+    failure (3); everything else ends as it would with both open (stderr never matters)."""
+    cases = []
+    prints = (  # (id, argv, exit status with stdout open): each prints to stdout
+        ("list", ("scene", "list"), 0),
+        ("show", ("scene", "show", "saiidi-4span"), 0),
+        ("validate", ("scene", "validate", "saiidi-4span", *SHORT), 0),
+        ("help", ("--help",), 0),
+        ("version", ("--version",), 0),
+    )
+    silent = (  # (id, argv, exit status, output folder): they print nothing before they end
+        ("missing-scene", ("scene", "validate", "{tmp}/nosuch.toml"), 2, ""),
+        ("bad-value", ("scene", "validate", "saiidi-4span", "--set", "deck.mass=-1"), 2, ""),
+        ("bad-option", ("scene", "list", "--no-such-option"), 2, ""),
+        ("unknown-engine", ("run", "saiidi-4span", "--engine", "x", "-o", OUT), 2, OUT),
+        (
+            "engine-fails",
+            ("run", "saiidi-4span", *SHORT, "--set", "nonsmooth.max_iterations=1")
+            + ("--set", "nonsmooth.tolerance=1e-30", "--engine", "nonsmooth", "-o", OUT),
+            1,
+            OUT,
+        ),
+    )
+    for fault in STREAM_FAULTS:
+        for cid, argv, code in prints:
+            closed_stdout = fault != "stderr-closed"
+            cases.append(
+                Case(
+                    f"stream:{fault}:{cid}",
+                    "stream",
+                    argv,
+                    fault=fault,
+                    expect=(3,) if closed_stdout else (code,),
+                )
+            )
+        for cid, argv, code, out in silent:
+            if cid == "engine-fails" and fault != "stderr-closed":
+                continue  # its summary line comes first: stdout's failure is met first
+            cases.append(
+                Case(
+                    f"stream:{fault}:{cid}",
+                    "stream",
+                    argv,
+                    fault=fault,
+                    target=out,
+                    target_kind="dir" if out else "",
+                    expect=(code,),
+                )
+            )
+    cases.append(  # with stderr closed a run succeeds and writes its result whole
+        Case(
+            "stream:stderr-closed:run",
+            "stream",
+            ("run", "saiidi-4span", *SHORT, "--engine", "nonsmooth", "-o", OUT),
+            fault="stderr-closed",
+            target=OUT,
+            target_kind="dir",
+            expect=(0,),
+        )
+    )
     return cases
