@@ -41,6 +41,7 @@ import numpy as np
 
 from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.columns import ENERGY_COLUMNS  # the energy columns [kJ]
+from deckpound.models.contact_params import contact_resolving_step
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import ComplianceSettings, Scene
@@ -128,8 +129,8 @@ class ComplianceEngine(Engine):
         "label": "compliance clone",
     }
 
-    def fixed_step(self, settings) -> float | None:
-        return settings.dt if settings.integrator == "newmark" else None
+    def fixed_step(self, scene: Scene, settings) -> float | None:
+        return super().fixed_step(scene, settings) if settings.integrator == "newmark" else None
 
     def reads(self, scene: Scene, settings) -> set[str]:
         """The law's and the friction model's parameters, from their rows of
@@ -138,6 +139,8 @@ class ComplianceEngine(Engine):
 
         ct = scene.contact
         read = {"contact.law", "contact.stiffness", "contact.geometry"}
+        if settings.integrator == "newmark":
+            read.add("run.steps_per_contact_period")
         read |= set(contact_law(ct.law).params)
         if ct.friction_mode != "none":
             read.add("contact.friction")
@@ -272,7 +275,7 @@ def _run_newmark(
         if k not in on:
             raise ValueError(f"unknown skip {k!r}; valid: {', '.join(SKIPS)}")
         on[k] = bool(v)
-    dt = settings.dt
+    dt = contact_resolving_step(scene, settings.dt)
     duration = analysis_duration(scene, motion)
     ps, record, cp, cs, corners = pack_run(plan, scene, motion, kv_clip=kv_clip)
     # Newton's contact tangent: the laws' derivatives, or what OpenSees's materials report
@@ -335,6 +338,7 @@ def _run_newmark(
     ok = status == Status.SUCCESS
     extra = {
         "integrator": "newmark",
+        "dt": float(dt),
         "gamma": GAMMA,
         "beta": BETA,
         "kv_clip": kv_clip,

@@ -176,7 +176,7 @@ def study_spread_sentence(table: pd.DataFrame) -> str:
 
 
 def left_out_clause(table: pd.DataFrame) -> str:
-    """"; 2 case(s) doubtful (…), 1 failed: left out" for the cases a headline does not use:
+    """ "; 2 case(s) doubtful (…), 1 failed: left out" for the cases a headline does not use:
     a doubtful case finished but failed a quality check (energy created at a contact), so its
     peaks are not quoted; the study table still lists it with its status."""
     status = table["status"] if "status" in table else pd.Series([], dtype=object)

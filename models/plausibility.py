@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .contact_params import contact_period
 from .errors import SceneError
 from .magnitudes import magnitude_findings
 from .scene import Scene
@@ -53,8 +54,6 @@ STEPS_PER_PERIOD = 10
 MIN_OUTPUT_ROWS = 10
 #: most output rows per run (≈ 0.5 GB in memory at 30 columns, ~1 GB of CSV)
 MAX_OUTPUT_ROWS = 2_000_000
-#: penetration at which the Hertz secant stiffness is taken for the contact duration [m]
-HERTZ_SECANT_DEPTH = 0.01
 
 
 class PlausibilityWarning(UserWarning):
@@ -101,7 +100,7 @@ def engine_steps(scene: Scene, engines: Iterable[str]) -> list[tuple[str, str, f
     for name in engines:
         e = get_engine(name)
         settings = e.settings_of(scene)
-        h = e.fixed_step(settings)
+        h = e.fixed_step(scene, settings)
         if h is not None:
             where = f"{e.settings_field}.{e.step_field}" if e.settings_field else e.step_field
             out.append((name, where, h, e.compliant_contact))
@@ -112,16 +111,10 @@ def contact_duration(scene: Scene) -> float:
     """Duration of the shortest corner contact, π √(m_eff / k_eff) [s].
 
     k_eff is the contact stiffness (K1 of the bilinear law); for the Hertz laws the secant
-    stiffness k·δ^(n−1) at δ = :data:`HERTZ_SECANT_DEPTH`.
+    stiffness k·δ^(n−1) at δ = :data:`~.contact_params.HERTZ_SECANT_DEPTH`: half of
+    :func:`~.contact_params.contact_period`.
     """
-    from .contact_params import effective_masses
-
-    ct = scene.contact
-    k = ct.stiffness
-    if ct.law in ("hertz", "hertz-damp", "hertzdamp"):
-        k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
-    m = float(np.min(effective_masses(scene)))
-    return float(math.pi * math.sqrt(m / k)) if k > 0 and m > 0 else math.nan
+    return 0.5 * contact_period(scene)
 
 
 #: fewest output rows per natural period of a deck mode before a warning (T/4: a quarter

@@ -7,7 +7,8 @@ engine's extras) and metadata. Its units come from the plan model's column table
 ``attrs``) and :meth:`Result.to_xarray` (named dimensions time, corner, bent, direction).
 
 Metadata every engine fills through the shared epilogue (:func:`deckpound.engine_contract.finish`):
-``status`` (``"success"`` or ``"failed"``), ``failure`` (a :class:`~deckpound.engine_contract.Status`
+``status`` (``"success"``; ``"doubtful"``: finished, but a quality check failed, see
+``doubtful``; or ``"failed"``), ``failure`` (a :class:`~deckpound.engine_contract.Status`
 name), ``message``, ``failed_step``/``failed_time`` on failure, ``steps``, ``newton_iterations``,
 ``contact_solves``, ``gap_closures`` (see :func:`gap_closures`; ``gap_closures_basis``),
 ``peaks`` (``{column: [peak, time]}`` over every step, :meth:`Result.peak`; ``peaks_basis``),
@@ -39,6 +40,7 @@ from .plan import CORNER_NAMES, RELATIVE_COLUMNS
 
 __all__ = [
     "N_CORNERS",
+    "STATUS_DOUBTFUL",
     "STATUS_FAILED",
     "STATUS_SUCCESS",
     "Result",
@@ -58,6 +60,8 @@ __all__ = [
 N_CORNERS = 4
 STATUS_SUCCESS = "success"
 STATUS_FAILED = "failed"
+#: finished, but a quality check failed (``meta["doubtful"]`` says which and where)
+STATUS_DOUBTFUL = "doubtful"
 
 #: Scene tables that do not change what an engine computes: engine settings (hashed separately,
 #: per engine), the test sequence (a driver of runs), free text.
@@ -207,7 +211,13 @@ class Result:
 
     @property
     def ok(self) -> bool:
+        """True for a run that finished and passed every quality check."""
         return self.meta.get("status") == STATUS_SUCCESS
+
+    @property
+    def doubtful(self) -> bool:
+        """True for a run that finished but failed a quality check (``meta["doubtful"]``)."""
+        return self.meta.get("status") == STATUS_DOUBTFUL
 
     @property
     def units(self) -> dict[str, str]:

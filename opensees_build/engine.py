@@ -35,6 +35,7 @@ from typing import ClassVar
 import numpy as np
 
 from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
+from deckpound.models.contact_params import contact_resolving_step
 from deckpound.models.excitation import analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.result import peak_columns
@@ -294,10 +295,11 @@ def make_plan(scene: Scene, info, duration: float) -> dict:
     s = scene.opensees
     from deckpound.models.plan import plan_of
 
+    dt = contact_resolving_step(scene, s.dt)
     return {
-        "dt": s.dt,
-        "n_steps": int(round(duration / s.dt)),
-        "stride": output_stride(s.dt, scene.run.output_dt),
+        "dt": dt,
+        "n_steps": int(round(duration / dt)),
+        "stride": output_stride(dt, scene.run.output_dt),
         "fallback": s.fallback,
         "substeps": s.substeps,
         "deck": info.deck,
@@ -327,7 +329,7 @@ def build(ops, scene: Scene, motion=None):
     if motion is None:
         motion = support_motion(scene)
     duration = analysis_duration(scene, motion)
-    dt = scene.opensees.dt
+    dt = contact_resolving_step(scene, scene.opensees.dt)
     # Path series interpolate linearly, exactly as the record is meant between samples: give
     # OpenSees the record at its own (uniform) step when that is coarser than the analysis
     # step, so memory does not grow with the number of steps (6e6 steps at dt = 1e-5).
@@ -373,7 +375,7 @@ class OpenSeesEngine(Engine):
 
     def reads(self, scene: Scene, settings) -> set[str]:
         ct = scene.contact
-        read = {"contact.law", "contact.stiffness"}
+        read = {"contact.law", "contact.stiffness", "run.steps_per_contact_period"}
         if ct.law in ("kelvin-voigt", "hertzdamp"):
             read.add("contact.restitution")
         if ct.law in ("hertz", "hertzdamp"):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from deckpound.models.errors import EngineFailure, SceneError
+from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
 
 from ._terminal import terminal_text
 
@@ -128,6 +128,12 @@ def _run(args) -> int:
         f"{m.get('gap_closures', 0)} gap closures, peak θ_d "
         f"{1e3 * result.peak('deck_theta'):.3f} mrad{scaled}; wrote {terminal_text(csv_path)}"
     )
+    if result.doubtful:
+        if scene.run.accept_doubtful:
+            return 0
+        raise DoubtfulResult(
+            f"{m['message']} (the result is written; --set run.accept_doubtful=true accepts it)"
+        )
     if not result.ok:
         raise EngineFailure(m.get("message", "run failed"))
     return 0

@@ -48,13 +48,14 @@ import warnings
 from deckpound import __version__
 from deckpound._io import command_scope
 from deckpound._terminal import terminal_text
-from deckpound.models.errors import EngineFailure, SceneError
+from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
 
 EXIT_OK, EXIT_ENGINE, EXIT_INPUT, EXIT_IO, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
 EXIT_TERMINATED = 143  # 128 + SIGTERM, what a shell reports for a process ended by SIGTERM
 EXIT_CODES_HELP = """exit status:
   0    success
-  1    engine failure (the message names the step and time)
+  1    engine failure (the message names the step and time), or a doubtful result: the
+       run finished but created energy at its contacts (run.accept_doubtful accepts it)
   2    bad input: scene, record, override or option refused (one line names the field),
        or the output folder is in use by another command (named with its PID)
   3    I/O or resource failure: read-only or full disk, no permission, stdout closed or
@@ -367,6 +368,9 @@ def _guarded_main(argv: list[str] | None) -> int:
         except (SceneError, UsageError) as err:
             _report("error", str(err))
             return EXIT_INPUT
+        except DoubtfulResult as err:  # finished, but a quality check failed (energy created)
+            _report("doubtful result", str(err))
+            return EXIT_ENGINE
         except EngineFailure as err:
             _report("engine failure", str(err))
             return EXIT_ENGINE

@@ -35,17 +35,22 @@ A new engine is one module plus one registry entry. It must:
    without it the epilogue takes the penetration from the output rows and says so
    (``meta["max_penetration_basis"]``). The epilogue turns a penetration beyond
    :data:`PENETRATION_WARN_FRACTION` of the gap into a :class:`QualityWarning`.
-9. Optionally measure, at every step, the peak of each standard column and the gap closures
-   (``RunOutput.peaks``, ``RunOutput.gap_closures_per_corner``; the analytic engines with
-   :mod:`deckpound.analytic.peaks`, OpenSees in its step loop): the epilogue puts them into
-   ``meta["peaks"]`` and ``meta["gap_closures"]`` (:meth:`deckpound.models.result.Result.peak`
-   reads them); without them it takes both from the output rows and says so
-   (``meta["peaks_basis"]``, ``meta["gap_closures_basis"]``).
+9. Report the work–energy balance as columns (``energy_input`` and the cumulative
+   dissipation columns of :data:`CONTACT_DISSIPATION_COLUMNS`, ``energy_error``): the epilogue
+   checks it (:func:`energy_quality`) and a finished run whose contacts created energy, or
+   whose balance does not close, ends ``"doubtful"``, not ``"success"``. A fixed-step penalty
+   engine takes its step from :meth:`Engine.fixed_step` (the contact-step rule).
+10. Optionally measure, at every step, the peak of each standard column and the gap closures
+    (``RunOutput.peaks``, ``RunOutput.gap_closures_per_corner``; the analytic engines with
+    :mod:`deckpound.analytic.peaks`, OpenSees in its step loop): the epilogue puts them into
+    ``meta["peaks"]`` and ``meta["gap_closures"]`` (:meth:`deckpound.models.result.Result.peak`
+    reads them); without them it takes both from the output rows and says so
+    (``meta["peaks_basis"]``, ``meta["gap_closures_basis"]``).
 
 :meth:`Engine.run` (not overridden) does the rest the same way for every engine: validation,
 support motion, timing, and the epilogue :func:`finish`, which adds the columns computed from
 the plan and the support motion (displacements relative to the supports, bent deformations),
-puts the engine's every-step peaks and gap closures into the metadata (point 9), and builds the
+puts the engine's every-step peaks and gap closures into the metadata (point 10), and builds the
 metadata (status, message, failure step/time, statistics, wall and compile time, hashes,
 settings, record provenance, warnings).
 """
@@ -63,7 +68,8 @@ import numpy as np
 
 from deckpound import __version__
 from deckpound.models._fields import to_mapping
-from deckpound.models.errors import EngineFailure, SceneError
+from deckpound.models.contact_params import contact_resolving_step
+from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
 from deckpound.models.plan import (
     CORNER_NAMES,
     DOF_COLUMNS,
@@ -72,6 +78,7 @@ from deckpound.models.plan import (
     plan_of,
 )
 from deckpound.models.result import (
+    STATUS_DOUBTFUL,
     STATUS_FAILED,
     STATUS_SUCCESS,
     Result,
@@ -81,9 +88,10 @@ from deckpound.models.result import (
     scene_hash,
     settings_hash,
 )
-from deckpound.models.scene import Contact, Deck, Scene
+from deckpound.models.scene import Contact, Deck, RunSettings, Scene
 
 __all__ = [
+    "CONTACT_DISSIPATION_COLUMNS",
     "OPTION_FIELDS",
     "PENETRATION_WARN_FRACTION",
     "Engine",
@@ -91,6 +99,7 @@ __all__ = [
     "QualityWarning",
     "RunOutput",
     "Status",
+    "energy_quality",
     "engine_columns",
     "finish",
     "ignored_options",
@@ -136,9 +145,13 @@ _STATUS_TEXT = {
 #: Scene options whose meaning depends on the engine (the "option ignored" warnings look here).
 OPTION_FIELDS = tuple(f"contact.{f.name}" for f in dataclasses.fields(Contact)) + (
     "deck.stick_modulus",
+    "run.steps_per_contact_period",
 )
-_DEFAULTS = {"contact": Contact(), "deck": None}
-_DECK_DEFAULTS = {f.name: f.default for f in dataclasses.fields(Deck)}
+_OPTION_DEFAULTS = {
+    "contact": {f.name: f.default for f in dataclasses.fields(Contact)},
+    "deck": {f.name: f.default for f in dataclasses.fields(Deck)},
+    "run": {f.name: f.default for f in dataclasses.fields(RunSettings)},
+}
 
 
 def engine_columns(plan: Plan) -> list[str]:
@@ -216,7 +229,7 @@ def ignored_options(engine: Engine, scene: Scene, settings: Any) -> list[str]:
     for path in OPTION_FIELDS:
         table, name = path.split(".")
         value = getattr(getattr(scene, table), name)
-        default = getattr(Contact(), name) if table == "contact" else _DECK_DEFAULTS[name]
+        default = _OPTION_DEFAULTS[table][name]
         if value != default and path not in read:
             out.append(path)
     return out
@@ -245,9 +258,13 @@ class Engine:
         """The engine's time step [s] in ``settings``."""
         return float(getattr(settings, self.step_field))
 
-    def fixed_step(self, settings: Any) -> float | None:
-        """The fixed time step [s] of a run with ``settings``; None for an adaptive one."""
-        return self.step_of(settings)
+    def fixed_step(self, scene: Scene, settings: Any) -> float | None:
+        """The fixed time step [s] a run of ``scene`` with ``settings`` takes; None for an
+        adaptive one. A penalty-contact engine shortens its step to resolve the contact
+        (:func:`~deckpound.models.contact_params.contact_resolving_step`, the one rule shared
+        with every other fixed-step penalty engine)."""
+        h = self.step_of(settings)
+        return contact_resolving_step(scene, h) if self.compliant_contact else h
 
     def reads(self, scene: Scene, settings: Any) -> set[str]:
         """Engine-dependent options (:data:`OPTION_FIELDS`) the run depends on (point 2)."""
@@ -397,6 +414,68 @@ def _contact_quality(engine: Engine, scene: Scene, cols: dict, out: RunOutput) -
     return q
 
 
+#: Cumulative dissipation columns [kJ] of the contacts (compliance and OpenSees:
+#: ``energy_contact_dissipated``; nonsmooth: ``energy_impact``) and of friction: their sum must
+#: not fall below zero — a contact that gives back more work than it took created energy.
+CONTACT_DISSIPATION_COLUMNS = ("energy_contact_dissipated", "energy_impact", "energy_friction")
+
+
+def _share(part: float, whole: float) -> str:
+    """``part`` against ``whole`` in words: "12.5 % of" or "132× " (for the messages)."""
+    r = part / whole
+    return f"{100 * r:.3g} % of" if r < 1.0 else f"{r:.3g}×"
+
+
+def energy_quality(scene: Scene, cols: dict[str, np.ndarray]) -> dict[str, Any]:
+    """The work–energy check of a run's output rows.
+
+    With E_ref = max |energy_input| (the work of the supports plus the initial mechanical
+    energy) and tol = ``run.energy_tolerance``, the run is doubtful when
+
+    * the contacts created energy: −min_t Σ dissipation(t) > tol · E_ref over
+      :data:`CONTACT_DISSIPATION_COLUMNS` (a penalty contact stepped too coarsely gives back
+      more work than it took on separation), or
+    * the balance does not close: max |energy_error| > tol · E_ref.
+
+    The dissipation columns are cumulative, so energy created at any step persists into
+    the rows that follow. Returns ``energy_check`` (``"passed"``, ``"failed"`` or why it
+    was not made), ``energy_created`` [kJ] and its time, and ``doubtful`` (sentences).
+    """
+    have = [c for c in CONTACT_DISSIPATION_COLUMNS if c in cols]
+    if "energy_input" not in cols or not have or not len(cols["energy_input"]):
+        return {"energy_check": "not made (the result has no energy columns)"}
+    t = cols["t"]
+    e_ref = float(np.max(np.abs(cols["energy_input"])))
+    tol = scene.run.energy_tolerance
+    dissipated = np.sum([cols[c] for c in have], axis=0)
+    created = float(max(0.0, -np.min(dissipated)))
+    q: dict[str, Any] = {"energy_reference": e_ref, "energy_created": created}
+    doubtful = []
+    if e_ref > 0.0 and created > tol * e_ref:
+        first = int(np.argmax(-dissipated > tol * e_ref))
+        q["energy_created_time"] = float(t[first])
+        doubtful.append(
+            f"the contacts created {created:.4g} kJ of energy ({_share(created, e_ref)} the "
+            f"input {e_ref:.4g} kJ; more than run.energy_tolerance = {tol:g} of it from "
+            f"t = {t[first]:.6g} s): the step does not resolve the contact — shorten it "
+            "(run.steps_per_contact_period, the engine's dt) or use the adaptive integrator "
+            "or the nonsmooth engine"
+        )
+    if "energy_error" in cols:
+        miss = float(np.max(np.abs(cols["energy_error"])))
+        q["energy_balance_error"] = miss
+        if e_ref > 0.0 and miss > tol * e_ref:
+            at = float(t[int(np.argmax(np.abs(cols["energy_error"])))])
+            doubtful.append(
+                f"the work-energy balance misses {miss:.4g} kJ ({_share(miss, e_ref)} the "
+                f"input, at t = {at:.6g} s; run.energy_tolerance = {tol:g})"
+            )
+    q["energy_check"] = "failed" if doubtful else "passed"
+    if doubtful:
+        q["doubtful"] = doubtful
+    return q
+
+
 def _step_statistics(columns: dict[str, np.ndarray], out: RunOutput) -> dict[str, Any]:
     """``peaks`` ({column: [peak, time]}, JSON-safe) and the gap closures of a run, with their
     bases (``"every step"`` or ``"output rows"``).
@@ -488,6 +567,15 @@ def finish(
     for text in meta.get("quality_warnings", []):
         meta["warnings"].append(text)
         warnings.warn(f"{engine.name} engine: {text}", QualityWarning, stacklevel=3)
+    if ok:
+        meta.update(energy_quality(scene, cols))
+    for text in meta.get("doubtful", []):
+        meta["warnings"].append(text)
+        warnings.warn(f"{engine.name} engine: {text}", QualityWarning, stacklevel=3)
+    if meta.get("doubtful"):
+        meta["status"] = STATUS_DOUBTFUL
+        meta["accepted"] = bool(scene.run.accept_doubtful)
+        meta["message"] = "; ".join(meta["doubtful"])
     if not ok:
         t_fail = out.failed_time if out.failed_time is not None else float("nan")
         meta["failed_step"] = int(out.failed_step or 0)
@@ -497,4 +585,6 @@ def finish(
     result = Result(engine=engine.name, columns=columns, meta=meta)
     if not ok and raise_on_failure:
         raise EngineFailure(f"{engine.name} engine: {meta['message']}")
+    if result.doubtful and raise_on_failure and not scene.run.accept_doubtful:
+        raise DoubtfulResult(f"{engine.name} engine: {meta['message']}")
     return result
