@@ -460,6 +460,10 @@ class OpenSeesEngine(Engine):
             rescued_steps=st["rescued"],
             loop_time=loop,
             peaks={k: (v[0], v[1]) for k, v in st["peaks"].items()},
+            # the deepest penetration over every converged step and sub-step (the gap peaks)
+            max_penetration=max(
+                [0.0] + [-v[0] for k, v in st["peaks"].items() if k.startswith("gap_")]
+            ),
             gap_closures_per_corner=st["gap_closures_per_corner"],
             extra={
                 "openseespy": openseespy_version(),
