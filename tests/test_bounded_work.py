@@ -159,7 +159,9 @@ def test_interrupt_can_return_the_rows_so_far(which, monkeypatch):
     t = np.asarray(res.columns["t"])
     # every row up to the halt is kept, and the run stopped long before its end
     assert HALT_ROW < len(t) < halted[0] // 2 and np.all(np.diff(t) > 0)
-    assert res.meta["failed_time"] >= t[-1]
+    # the time reached is a sum of steps, the rows' times are multiples of the output step: a
+    # halt just after a row may leave the first a few ulps of accumulated round-off below it
+    assert res.meta["failed_time"] >= t[-1] - 1e-9
     for k in ("deck_x_abs", "gap_c1", "bent1_fx"):
         assert np.all(np.isfinite(res.columns[k])), k
 
