@@ -45,6 +45,7 @@ from .contact_params import contact_period
 from .errors import SceneError
 from .magnitudes import magnitude_findings
 from .scene import Scene
+from .scene_settings import MAX_STEPS
 
 #: fewest steps an analysis may hold (fewer resolve no history at all)
 MIN_STEPS = 10
@@ -77,6 +78,8 @@ class Plausibility:
     duration: float = math.nan
     periods: tuple[float, ...] = ()
     contact_duration: float = math.nan
+    #: ``(step field, given [s], run [s])`` of each step the contact-step rule shortens
+    shortened: tuple[tuple[str, float, float], ...] = ()
 
     @property
     def errors(self) -> list[Finding]:
@@ -91,19 +94,23 @@ class Plausibility:
         return not self.errors
 
 
-def engine_steps(scene: Scene, engines: Iterable[str]) -> list[tuple[str, str, float, bool]]:
-    """``(engine, step field, step [s], compliant contact?)`` of each fixed-step engine, as the
-    engines declare them (:meth:`deckpound.engine_contract.Engine.fixed_step`)."""
+def engine_steps(scene: Scene, engines: Iterable[str]) -> list[tuple[str, str, float, bool, float]]:
+    """``(engine, step field, step given [s], compliant contact?, step run [s])`` of each
+    fixed-step engine: the step its settings give, and the one it runs
+    (:meth:`deckpound.engine_contract.Engine.fixed_step`: shorter where the contact-step rule
+    shortens it). The given step is checked against the record and the modes (a step the
+    rule happens to shorten is still a slip when it cannot represent T1), the run step against
+    the contact and the output."""
     from deckpound.engines import get_engine
 
     out = []
     for name in engines:
         e = get_engine(name)
         settings = e.settings_of(scene)
-        h = e.fixed_step(scene, settings)
-        if h is not None:
+        run = e.fixed_step(scene, settings)
+        if run is not None:
             where = f"{e.settings_field}.{e.step_field}" if e.settings_field else e.step_field
-            out.append((name, where, h, e.compliant_contact))
+            out.append((name, where, e.step_of(settings), e.compliant_contact, run))
     return out
 
 
@@ -185,7 +192,7 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
     D, src = report.duration, _source(scene, motion)
     steps = engine_steps(scene, engines)
 
-    for _, name, h, _ in steps:
+    for _, name, h, _, _ in steps:
         if h * MIN_STEPS > D:
             where = "run.duration" if scene.run.duration is not None else name
             add(
@@ -196,6 +203,20 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
                     f"{name} = {h:g} s (at least {MIN_STEPS} are needed to resolve a "
                     f"history); give a step <= {D / MIN_STEPS:.3g} s or a longer "
                     "analysis",
+                )
+            )
+    report.shortened = tuple((name, given, h) for _, name, given, _, h in steps if h < given)
+    for _, name, given, _, h in steps:
+        if h < given and D / h > MAX_STEPS:
+            add(
+                Finding(
+                    "error",
+                    "run.steps_per_contact_period",
+                    f"the contact-step rule shortens {name} = {given:g} s to {h:.3g} s "
+                    f"(contact.stiffness = {scene.contact.stiffness:g}): {D / h:.3g} steps "
+                    f"over {D:g} s, at most {MAX_STEPS:.0e} are allowed; lower "
+                    "run.steps_per_contact_period (0 runs the given step), soften the "
+                    "contact or shorten the analysis",
                 )
             )
     if any(f.level == "error" for f in report.findings):
@@ -219,7 +240,7 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
         )
         return report
     t1, tmin = float(np.max(periods)), float(np.min(periods))
-    for _, name, h, _ in steps:
+    for _, name, h, _, _ in steps:
         if h > t1 / 2:
             add(
                 Finding(
@@ -245,7 +266,7 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
     tc = contact_duration(scene)
     report.contact_duration = tc
     if math.isfinite(tc):
-        for _, name, h, compliant in steps:
+        for _, name, _, compliant, h in steps:
             if compliant and h > tc:
                 add(
                     Finding(
@@ -273,7 +294,7 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
         )
     else:
         # each engine stores every round(output_dt / h)-th step (engines.output_stride)
-        stored = [max(1, round(out_dt / h)) * h for _, _, h, _ in steps] or [out_dt]
+        stored = [max(1, round(out_dt / h)) * h for *_, h in steps] or [out_dt]
         most, fewest = int(D / min(stored)) + 1, int(D / max(stored)) + 1
         coarse = output_resolution(scene)
         if coarse is not None:
@@ -294,11 +315,12 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
                     "warning",
                     "run.output_dt",
                     f"run.output_dt = {out_dt:g} s over "
-                    f"{D:g} s stores only {fewest} rows (peaks between them are missed); "
+                    f"{D:g} s stores only {fewest} rows (the histories between them are lost; peaks "
+                    "and gap closures are still taken at every step); "
                     f"use <= {D / MIN_OUTPUT_ROWS:.3g} s",
                 )
             )
-        for _, name, h, _ in steps:
+        for _, name, _, _, h in steps:
             if out_dt < 0.5 * h:
                 add(
                     Finding(

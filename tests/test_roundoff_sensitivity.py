@@ -20,12 +20,13 @@ COLUMNS = ("deck_theta", "deck_x_rel", "fn_c1", "fn_c2", "fn_c3", "fn_c4")
 def _spread(dt: float) -> float:
     """Largest change of the COLUMNS, relative to each column's peak, caused by a 1e-14
     relative change of the contact stiffness (compliance engine, benchmark, 4 s)."""
-    sets = [f"compliance.dt={dt!r}", "run.duration=4.0"]
+    sets = [f"compliance.dt={dt!r}", "run.duration=4.0", "run.steps_per_contact_period=0"]
     base = load_scene("saiidi-4span", sets)
     k = base.contact.stiffness
     pert = load_scene("saiidi-4span", [*sets, f"contact.stiffness={k * (1 + 1e-14)!r}"])
     a, b = run_engine("compliance", base), run_engine("compliance", pert)
-    assert a.ok and b.ok
+    # finished; at dt = 2e-3 the contacts also create energy, so the runs are 'doubtful'
+    assert all(r.ok or r.doubtful for r in (a, b))
     worst = 0.0
     for c in COLUMNS:
         x, y = np.asarray(a.columns[c]), np.asarray(b.columns[c])

@@ -98,7 +98,7 @@ def test_variability_study_table_summary_figure_and_resume(tmp_path, capsys):
         assert s.loc[q, "p84"] == pytest.approx(np.percentile(x, 84))
     assert (out / "variability.png").stat().st_size > 5000
     printed = capsys.readouterr().out
-    assert "median" in printed and "3 cases (0 not finished)" in printed
+    assert "median" in printed and "3 cases (0 not finished, 0 doubtful" in printed
     # a second run takes every row from the cache
     _variability(tmp_path, "v", "--workers", "2")
     assert json.loads((out / "variability.json").read_text())["from_cache"] == 3

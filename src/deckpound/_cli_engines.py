@@ -123,6 +123,9 @@ def _run(args) -> int:
     m = result.meta
     scaled = scaling_summary(m.get("record"))  # any scaling of a user's record is said
     scaled = f"; {scaled}" if scaled else ""
+    given = get_engine(args.engine).step_of(get_engine(args.engine).settings_of(scene))
+    if m.get("dt") is not None and m["dt"] < given:  # the contact-step rule shortened it
+        scaled += f"; step {m['dt']:.4g} s (contact-step rule; {given:g} s given)"
     print(
         f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
         f"{m.get('gap_closures', 0)} gap closures, peak θ_d "

@@ -73,6 +73,11 @@ def _validate(args) -> int:
         f"({len(motion.channels)} supports), analysis {report.duration:g} s, "
         + (f"{rigid} rigid-body modes, " if rigid else "")
         + f"periods {', '.join(f'{T:.3f}' for T in finite[:3])} s"
+        + "".join(
+            f"; {name} {given:g} s runs as {h:.4g} s (contact-step rule, "
+            f"run.steps_per_contact_period = {scene.run.steps_per_contact_period:g})"
+            for name, given, h in report.shortened
+        )
     )
     return 0
 
