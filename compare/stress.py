@@ -118,7 +118,7 @@ def _num(value) -> float:
 def _energy_error(r) -> float:
     """Energy-balance error relative to the input, max|energy_error| / max|energy_input| from
     the columns (every engine that tracks energy has both), else the engine's own relative
-    ``energy_closure``; NaN for engines without an energy balance (OpenSees)."""
+    ``energy_closure``; NaN for a result without an energy balance."""
     if "energy_error" in r.columns and "energy_input" in r.columns and len(r.t):
         with np.errstate(all="ignore"):
             ein = float(np.max(np.abs(r["energy_input"])))
