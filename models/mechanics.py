@@ -30,12 +30,16 @@ __all__ = [
     "DECK_X",
     "DECK_Y",
     "DOF_NAMES",
+    "ENERGY_GROUPS",
     "N_DOF",
     "SEAT_THETA",
     "SEAT_X",
     "Modes",
+    "energy_shares",
     "initial_stiffness",
     "mass_matrix",
+    "mode_label",
+    "mode_labels",
     "natural_modes",
     "rayleigh_coefficients",
     "spring_matrices",
@@ -91,6 +95,57 @@ def natural_modes(scene: Scene, plan: Plan | None = None) -> Modes:
     w2, v = np.linalg.eigh(s[:, None] * plan.initial_stiffness * s[None, :])
     phi = s[:, None] * v
     return Modes(omega=np.sqrt(np.maximum(w2, 0.0)), shapes=phi)
+
+
+#: the parts a mode's kinetic energy is shared among: (key, label in a mode's name, DOFs)
+ENERGY_GROUPS = (
+    ("deck_x", "deck x", (DECK_X,)),
+    ("deck_y", "deck y", (DECK_Y,)),
+    ("deck_theta", "deck θ (torsion)", (DECK_THETA,)),
+    ("seats", "seats", (*SEAT_X, *SEAT_THETA)),
+)
+#: a share below this is left out of a mode's label (the dominant share is always named)
+LABEL_SHARE_MIN = 0.05
+
+
+def energy_shares(shapes: np.ndarray, masses: np.ndarray) -> np.ndarray:
+    """Kinetic-energy shares of each mode among :data:`ENERGY_GROUPS`, shape (4, n_modes).
+
+    A mode φ vibrating at ω carries the kinetic energy ½ ω² φᵀ M φ at its peak velocity; with
+    M diagonal its DOF i holds ½ ω² M_ii φ_i², so the share of a group G is
+    Σ_{i∈G} M_ii φ_i² / φᵀ M φ (dimensionless; each column sums to 1). This names a mode by
+    what moves, which the largest entry of φ does not: the deck's rotation θ [rad] and its
+    translations [m] are not comparable, and a seat's light mass moves far for little energy.
+
+    ``shapes``: (7, n) columns in :data:`DOF_NAMES` order (any normalisation); ``masses``: the
+    7 diagonal masses [t, t·m²] (``np.diag`` of :func:`mass_matrix`).
+    """
+    phi = np.asarray(shapes, dtype=float)
+    m = np.asarray(masses, dtype=float)
+    if phi.ndim != 2 or phi.shape[0] != N_DOF or m.shape != (N_DOF,):
+        raise ValueError(
+            f"energy_shares expects shapes (7, n) and 7 masses, got {phi.shape} and {m.shape}"
+        )
+    energy = m[:, None] * phi**2
+    total = energy.sum(axis=0)
+    if not np.all(total > 0):
+        raise ValueError("energy_shares: a mode shape has no kinetic energy (all zero)")
+    return np.array([energy[list(dofs)].sum(axis=0) for _, _, dofs in ENERGY_GROUPS]) / total
+
+
+def mode_label(shares: np.ndarray) -> str:
+    """'deck θ (torsion) 68 %, deck y 31 %': the groups by falling share, the dominant one
+    first, others from :data:`LABEL_SHARE_MIN` up (``shares``: one column of
+    :func:`energy_shares`)."""
+    order = np.argsort(-np.asarray(shares), kind="stable")
+    named = [k for k in order if k == order[0] or shares[k] >= LABEL_SHARE_MIN]
+    return ", ".join(f"{ENERGY_GROUPS[k][1]} {100 * shares[k]:.0f} %" for k in named)
+
+
+def mode_labels(shapes: np.ndarray, masses: np.ndarray) -> list[str]:
+    """:func:`mode_label` of every mode (columns of ``shapes``; see :func:`energy_shares`)."""
+    shares = energy_shares(shapes, masses)
+    return [mode_label(shares[:, k]) for k in range(shares.shape[1])]
 
 
 def rayleigh_coefficients(scene: Scene) -> tuple[float, float, tuple[float, float]]:

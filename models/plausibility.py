@@ -138,23 +138,24 @@ def output_resolution(scene: Scene) -> Finding | None:
     The stored histories then alias the deck's swing; the peaks and gap closures the engines
     report are taken at every step (:meth:`deckpound.models.result.Result.peak`) and do not
     depend on the output step."""
-    from .mechanics import natural_modes
-    from .plan import DECK_THETA, DECK_X, DECK_Y, DOF_NAMES, plan_of
+    from .mechanics import ENERGY_GROUPS, energy_shares, mode_label, natural_modes
+    from .plan import plan_of
 
     modes = natural_modes(scene)
-    mass = np.diag(plan_of(scene).mass_matrix)
-    deck = [DECK_X, DECK_Y, DECK_THETA]
+    shares = energy_shares(modes.shapes, np.diag(plan_of(scene).mass_matrix))
+    deck = [i for i, (key, _, _) in enumerate(ENERGY_GROUPS) if key.startswith("deck")]
     out_dt = scene.run.output_dt
     missed = []
     for k, T in enumerate(modes.periods):
-        share = mass * modes.shapes[:, k] ** 2
-        if math.isfinite(T) and share[deck].sum() >= 0.5 * share.sum():
+        if math.isfinite(T) and shares[deck, k].sum() >= 0.5:
             if out_dt > T / ROWS_PER_DECK_PERIOD:
-                dof = DOF_NAMES[int(np.argmax(np.abs(modes.shapes[:, k])))]  # as `deckpound modes`
-                missed.append((float(T), k + 1, dof))
+                # named by its kinetic-energy shares, as `deckpound modes` names it
+                missed.append((float(T), k + 1, mode_label(shares[:, k])))
     if not missed:
         return None
-    names = ", ".join(f"{T:.3g} s (mode {k}, {dof})" for T, k, dof in sorted(missed, reverse=True))
+    names = "; ".join(
+        f"{T:.3g} s (mode {k}: {what})" for T, k, what in sorted(missed, reverse=True)
+    )
     shortest = min(T for T, _, _ in missed)
     return Finding(
         "warning",
