@@ -86,7 +86,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import _cli_bench, _cli_compile, _cli_engines, _cli_scene, _cli_study
+    from . import _cli_bench, _cli_compile, _cli_engines, _cli_fragility, _cli_scene, _cli_study
 
     parser = _Parser(
         prog="deckpound",
@@ -100,6 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     for module in (_cli_scene, _cli_engines, _cli_study, _cli_bench, _cli_compile):
         module.register(sub)
+    _cli_fragility.register(sub)
     return parser
 
 
