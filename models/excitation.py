@@ -50,7 +50,10 @@ class SupportMotion:
         ``duration`` [s]; ``processing``; ``scaling`` (pga | factor | none); ``target_pga``
         (x, y → [g] or None); ``scale_factor`` (x, y → [-] or None); ``applied_pga`` (x, y →
         [g], max |a| over the direction's supports, measured on this motion); ``seed``
-        (synthetic); ``warnings`` (every tolerance, one sentence each); ``units``.
+        (synthetic); ``warnings`` (every tolerance, one sentence each); ``units``;
+        ``pair_scaling`` (scaling = pair-*: measure, target, unit, value before, factor,
+        period; else None); ``intensity`` (the applied pair's intensity measures at the
+        first table, :func:`motion_intensity`, filled by :func:`support_motion`).
     """
 
     t: np.ndarray
@@ -150,6 +153,8 @@ def make_provenance(
         "target_pga": {a: targets.get(a) for a in both},
         "scale_factor": {a: factors.get(a) for a in both},
         "applied_pga": None,
+        "pair_scaling": None,
+        "intensity": None,
         "seed": seed,
         "warnings": list(notes),
         "units": {
@@ -350,10 +355,53 @@ def support_motion(scene: Scene) -> SupportMotion:
                 f"{exc.scaling!r}, scale = {exc.scale:g}); {limit}",
             )
     motion.provenance["applied_pga"] = applied
+    motion.provenance["intensity"] = motion_intensity(scene, motion)
     for text in motion.provenance.get("warnings", []):
         # one location for every call: a sequence or several engines print a sentence once
         warnings.warn(text, RecordWarning, stacklevel=1)
     return motion
+
+
+def intensity_period(scene: Scene) -> float | None:
+    """Period [s] of the spectral intensity measures: ``excitation.im_period`` if given, else
+    T1 of the contact-free model (the longest finite natural period, as ``deckpound modes``
+    lists it); None when no mode has a finite period."""
+    from .mechanics import natural_modes
+
+    if scene.excitation.im_period is not None:
+        return float(scene.excitation.im_period)
+    periods = natural_modes(scene).periods
+    finite = periods[np.isfinite(periods) & (periods > 0.0)]
+    return float(np.max(finite)) if len(finite) else None
+
+
+def motion_intensity(scene: Scene, motion: SupportMotion) -> dict:
+    """Intensity measures (:func:`deckpound.models.intensity.pair_measures`) of the motion of
+    the first table (x, y; the other tables get the same record, delayed by the lag) at
+    :func:`intensity_period`. A time base that is not uniform (a CSV of displacements) is
+    interpolated linearly onto as many uniform samples first."""
+    from .intensity import pair_measures
+
+    bent = scene.bents[0].name if scene.bents else None
+    t = motion.t
+    n = len(t)
+    dt = float(t[-1] - t[0]) / (n - 1)
+    uniform = bool(np.all(np.abs(np.diff(t) - dt) <= 1e-6 * dt))
+    acc, vel, disp = {}, {}, {}
+    for axis in ("x", "y"):
+        ch = f"{bent}_{axis}" if bent else f"seat1_{axis}"
+        if ch not in motion.disp:
+            acc[axis] = vel[axis] = disp[axis] = np.zeros(n)
+            continue
+        acc[axis], vel[axis], disp[axis] = motion.acc(ch), motion.vel[ch], motion.disp[ch]
+    if not uniform:
+        grid = t[0] + np.arange(n) * dt
+        for series in (acc, vel, disp):
+            for axis in series:
+                series[axis] = np.interp(grid, t, series[axis])
+    out = pair_measures(dt, acc, vel, disp, intensity_period(scene))
+    out["where"] = f"table {bent}" if bent else "seats"
+    return out
 
 
 def analysis_duration(scene: Scene, motion: SupportMotion) -> float:

@@ -26,8 +26,12 @@ Steps, in this order, each stated in the motion's provenance
    stated in a warning (not refused: a fling step can be real);
 5. **scaling** (``scaling``): ``pga`` — each direction to its target, y to ``pga`` and x to
    ``longitudinal_ratio · pga`` [g], the factor target / max|a| measured on the processed
-   acceleration (what the engines receive); ``factor`` — both directions × ``scale``;
-   ``none`` — as read. Any factor other than exactly 1 is stated, however small
+   acceleration (what the engines receive; the record's own component ratio is replaced);
+   ``pair-pga``, ``pair-pgv``, ``pair-sa``, ``pair-rotd50`` — both directions × one factor
+   (:func:`pair_factor`: the record's component ratio is kept) that brings the pair's
+   geometric-mean PGA, geometric-mean PGV, geometric-mean Sa(T) or RotD50(T) to its target
+   (stated in the provenance under ``pair_scaling``); ``factor`` — both directions ×
+   ``scale``; ``none`` — as read. Any factor other than exactly 1 is stated, however small
    (:func:`~.record_checks.scaling_note`: a record warning, kept in the provenance with
    ``pga_before_scaling``).
 
@@ -41,7 +45,7 @@ import numpy as np
 
 from ._iir import butter_highpass_sos, sosfiltfilt
 from .errors import SceneError
-from .excitation import G, SupportMotion, _check_lag, _shift, make_provenance
+from .excitation import G, SupportMotion, _check_lag, _shift, intensity_period, make_provenance
 from .mechanics import support_channels
 from .record_checks import AXIS_NAME, check_velocity_columns, scaling_note
 from .record_csv import CsvRecord, read_csv_record
@@ -53,6 +57,7 @@ from .records import (
     uniform_step,
 )
 from .scene import ABSURD_PGA, EXTREME_PGA, Excitation, Scene
+from .scene_excitation import PAIR_SCALINGS, PAIR_TARGETS
 
 ACC_UNITS = {"g": G, "m/s^2": 1.0, "cm/s^2": 0.01}  # to m/s²
 LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}  # to m
@@ -216,8 +221,78 @@ def _drift_note(d: np.ndarray, exc: Excitation, where: str) -> str | None:
     return None
 
 
+def pair_factor(
+    exc: Excitation, acc: dict[str, np.ndarray], dt: float, period: float | None, where: str
+) -> tuple[float, dict]:
+    """One scale factor for both components (``scaling`` = pair-*), and what it scaled.
+
+    The measure of the processed, unscaled pair (accelerations [m/s²] on the model step
+    ``dt`` [s]; velocities their trapezoidal integrals): pair-pga √(PGA_x PGA_y) [g],
+    pair-pgv √(PGV_x PGV_y) [m/s], pair-sa √(Sa_x Sa_y) at ``period`` (5 %) [g], pair-rotd50
+    RotD50 at ``period`` [g]. Every one is proportional to a common factor of both
+    components, so factor = target / measure meets the target exactly and keeps the
+    components' ratio. Returns (factor, {measure, target, unit, before, factor, period}).
+    """
+    from .intensity import pair_measures
+
+    name, unit = PAIR_TARGETS[exc.scaling]
+    target = float(getattr(exc, name))
+    missing = [a for a in ("x", "y") if a not in acc]
+    if missing:
+        raise SceneError(
+            "excitation.scaling",
+            f"{exc.scaling!r} scales a pair of components by one factor; {where} has no "
+            f"{AXIS_NAME[missing[0]]} component (use scaling = 'pga' or 'factor')",
+        )
+    spectral = exc.scaling in ("pair-sa", "pair-rotd50")
+    if spectral and period is None:
+        raise SceneError(
+            "excitation.im_period",
+            f"scaling = {exc.scaling!r} needs a period and the scene has no finite natural "
+            "period to default to; give excitation.im_period",
+        )
+    vel, disp = {}, {}
+    for axis, a in acc.items():
+        vel[axis], disp[axis] = integrate(a, dt)
+    ims = pair_measures(dt, acc, vel, disp, period if spectral else None)
+    before = {
+        "pair-pga": np.sqrt(ims["x"]["pga"] * ims["y"]["pga"]),
+        "pair-pgv": np.sqrt(ims["x"]["pgv"] * ims["y"]["pgv"]),
+        "pair-sa": ims["sa_geomean"],
+        "pair-rotd50": ims["rotd50"],
+    }[exc.scaling]
+    if not before > 0.0:
+        raise SceneError(
+            "excitation.scaling",
+            f"{exc.scaling!r}: the pair's measure is zero after processing (one component "
+            f"at rest gives a zero geometric mean); it cannot be scaled to {target:g} {unit}",
+        )
+    factor = target / float(before)
+    info = {
+        "measure": exc.scaling[len("pair-") :],
+        "target": target,
+        "unit": unit,
+        "before": float(before),
+        "factor": factor,
+        "period": period if spectral else None,
+    }
+    return factor, info
+
+
+def pair_scaling_note(info: dict) -> str | None:
+    """The sentence saying how a pair was scaled by one factor (None for exactly 1)."""
+    if info["factor"] == 1.0:
+        return None
+    at = f" at T = {info['period']:.4g} s" if info["period"] is not None else ""
+    return (
+        f"excitation.scaling: the record pair is scaled by one factor × "
+        f"{info['factor']:.6g} ({info['measure']}{at} {info['before']:.6g} to "
+        f"{info['target']:g} {info['unit']}); the components' ratio is kept"
+    )
+
+
 def _factors(exc: Excitation, peaks: dict[str, float], fields: dict[str, str]) -> tuple[dict, dict]:
-    """Scale factor and target PGA [g] per direction present."""
+    """Scale factor and target PGA [g] per direction present (per-component scalings)."""
     targets = {"x": exc.pga * exc.longitudinal_ratio, "y": exc.pga}
     factors, wanted = {}, {}
     for axis, peak in peaks.items():
@@ -278,8 +353,15 @@ def acceleration_motion(scene: Scene) -> SupportMotion:
             a = highpass_filtered(a, dt_model, exc.highpass)
         acc[axis] = a
         peaks[axis] = float(np.max(np.abs(a))) / G
-    factors, targets = _factors(exc, peaks, fields)
-    scaled = scaling_note(exc, peaks, factors, targets)
+    pair_info = None
+    if exc.scaling in PAIR_SCALINGS:
+        where = "the CSV" if exc.kind == "csv" else "the record"
+        factor, pair_info = pair_factor(exc, acc, dt_model, intensity_period(scene), where)
+        factors, targets = dict.fromkeys(acc, factor), {}
+        scaled = pair_scaling_note(pair_info)
+    else:
+        factors, targets = _factors(exc, peaks, fields)
+        scaled = scaling_note(exc, peaks, factors, targets)
     for axis, a in acc.items():
         a = a * factors[axis]
         v, d = integrate(a, dt_model)
@@ -308,6 +390,7 @@ def acceleration_motion(scene: Scene) -> SupportMotion:
         notes=all_notes,
     )
     _record_peaks(prov, peaks)
+    prov["pair_scaling"] = pair_info
     return SupportMotion(t=t, disp=disp, vel=vel, acc_exact=acc_out, provenance=prov)
 
 
@@ -386,6 +469,12 @@ def displacement_motion(scene: Scene, csv: CsvRecord) -> SupportMotion:
     from .excitation import check_time_base
 
     exc, rec, field = scene.excitation, csv.file, "excitation.file"
+    if exc.scaling in PAIR_SCALINGS:
+        raise SceneError(
+            "excitation.scaling",
+            f"{exc.scaling!r} scales a ground-acceleration pair; {rec.path!r} holds support "
+            "displacements (use scaling = 'pga', 'factor' or 'none')",
+        )
     if exc.processing != "none":
         raise SceneError(
             "excitation.processing",

@@ -20,6 +20,15 @@ EXTREME_PGA = 5.0
 #: largest PGA [g] accepted even with ``allow_extreme`` (no physical value; overflow ahead)
 ABSURD_PGA = 1000.0
 RECORD_KINDS = ("csv", "at2", "text")
+#: scalings of a record pair by one factor to a target intensity measure (component ratio kept)
+PAIR_SCALINGS = ("pair-pga", "pair-pgv", "pair-sa", "pair-rotd50")
+#: the field holding each pair scaling's target, and its unit
+PAIR_TARGETS = {
+    "pair-pga": ("pga", "g"),
+    "pair-pgv": ("target_pgv", "m/s"),
+    "pair-sa": ("target_sa", "g"),
+    "pair-rotd50": ("target_sa", "g"),
+}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -106,9 +115,39 @@ class Excitation:
     )
     scaling: str = spec(
         "pga",
-        doc="records: pga = to pga (y) and longitudinal_ratio*pga (x); "
+        doc="records: pga = each component to its own target, pga (y) and "
+        "longitudinal_ratio*pga (x), replacing the record's component ratio; pair-pga, "
+        "pair-pgv, pair-sa, pair-rotd50 = both components times one factor (their ratio "
+        "kept) so that the pair's geometric-mean PGA = pga, geometric-mean PGV = target_pgv, "
+        "geometric-mean Sa(im_period, 5 %) = target_sa or RotD50(im_period) = target_sa; "
         "factor = times scale; none = as read",
-        choices=("pga", "factor", "none"),
+        choices=PAIR_SCALINGS + ("pga", "factor", "none"),
+    )
+    target_pgv: float | None = spec(
+        None,
+        unit="m/s",
+        doc="geometric-mean PGV of the pair (scaling = pair-pgv; no default: a velocity "
+        "target is the user's choice, no PGA label implies one)",
+        gt=0.0,
+        le=100.0,
+    )
+    target_sa: float | None = spec(
+        None,
+        unit="g",
+        doc="geometric-mean Sa or RotD50 at im_period (scaling = pair-sa, pair-rotd50; no "
+        "default: a spectral target depends on the site and period, not on the PGA label)",
+        gt=0.0,
+        le=100.0,
+    )
+    im_period: float | None = spec(
+        None,
+        unit="s",
+        doc="period of the spectral intensity measures (Sa, RotD) kept in the record "
+        "provenance and of scaling = pair-sa, pair-rotd50 (model time); none (the "
+        "default): T1 of the contact-free model, the longest natural period that "
+        "'deckpound modes' lists, at which the bridge responds most",
+        gt=0.0,
+        le=100.0,
     )
     scale: float = spec(1.0, unit="-", doc="factor applied to records (scaling = factor)", gt=0.0)
     time_scale: float = spec(
@@ -170,6 +209,7 @@ class Excitation:
                 f"is used only with scaling = 'factor' (scaling is "
                 f"{self.scaling!r}); must be 1.0, got {self.scale}",
             )
+        self._check_pair_scaling()
         if self.kind == "at2" and self.acc_unit != "g":
             raise SceneError(
                 "acc_unit",
@@ -177,10 +217,49 @@ class Excitation:
             )
         self.check_pga(self.pga, "pga")
 
+    def _check_pair_scaling(self) -> None:
+        """A pair scaling needs a record with two components and its target; a target given
+        for another scaling would be silently ignored, so it is refused."""
+        if self.scaling in PAIR_SCALINGS:
+            if self.kind not in ("at2", "text", "csv"):
+                return  # refused above: scaling applies to records only
+            if self.kind in ("at2", "text") and not (self.file_x and self.file_y):
+                raise SceneError(
+                    "scaling",
+                    f"{self.scaling!r} scales a pair of components by one factor; it needs "
+                    "both file_x and file_y (a single component: use scaling = 'pga' or "
+                    "'factor')",
+                )
+            name, unit = PAIR_TARGETS[self.scaling]
+            if getattr(self, name) is None:
+                raise SceneError(
+                    name,
+                    f"is required with scaling = {self.scaling!r} (the target in {unit}); "
+                    "it has no default",
+                )
+        for name in ("target_pgv", "target_sa"):
+            if getattr(self, name) is not None and (
+                self.scaling not in PAIR_SCALINGS or PAIR_TARGETS[self.scaling][0] != name
+            ):
+                users = [k for k, (f, _) in PAIR_TARGETS.items() if f == name]
+                raise SceneError(
+                    name,
+                    f"is used only with scaling = {' or '.join(map(repr, users))} (scaling is "
+                    f"{self.scaling!r}); leave it out, got {getattr(self, name)}",
+                )
+
     def check_pga(self, pga: float, field: str) -> None:
         """Refuse a label ``pga`` [g] whose transverse or longitudinal target exceeds
         EXTREME_PGA, unless allow_extreme (records scaled otherwise are checked when loaded)."""
-        if self.allow_extreme or self.scaling != "pga":
+        if self.allow_extreme or self.scaling not in ("pga", "pair-pga"):
+            return
+        if self.scaling == "pair-pga":
+            if pga > EXTREME_PGA:
+                raise SceneError(
+                    field,
+                    f"gives a geometric-mean PGA of {pga:g} g; at most {EXTREME_PGA:g} g "
+                    f"is allowed unless excitation.allow_extreme = true, got {pga}",
+                )
             return
         for what, value in (("transverse", pga), ("longitudinal", pga * self.longitudinal_ratio)):
             if value > EXTREME_PGA:

@@ -36,6 +36,8 @@ PROVENANCE_KEYS = {
     "target_pga",
     "scale_factor",
     "applied_pga",
+    "pair_scaling",
+    "intensity",
     "seed",
     "warnings",
     "units",
