@@ -236,10 +236,9 @@ def _refuse_degenerate(data: Stripes) -> None:
 
 
 def _probit_start(data: Stripes) -> tuple[float, float]:
-    """A start (ln θ, ln β) from the weighted least-squares line through the empirical probits
-    Φ⁻¹((z + 1/2)/(n + 1)) against ln x (Baker 2015, Sect. "method of moments" alternative),
-    or, where that line is not increasing, from the moments of ln x weighted by the
-    exceedance fraction's increase."""
+    """A start (ln θ, ln β): the least-squares line, weighted by n, through the empirical
+    probits Φ⁻¹((z + 1/2)/(n + 1)) against ln x (probit = (ln x − ln θ)/β); where that line does
+    not rise, the n-weighted mean and the spread of ln x."""
     ln_x = np.log(data.im)
     probit = special.ndtri((data.exceed + 0.5) / (data.n + 1.0))
     w = data.n.astype(float)
