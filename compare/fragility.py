@@ -447,6 +447,10 @@ def _ida_observed_information(ln_c, censored, mu: float, beta: float) -> np.ndar
 # limit states on a summary table
 
 
+#: the words a flag column read from text may hold
+_FLAG_WORDS = {"true": 1.0, "false": 0.0}
+
+
 @dataclass(frozen=True)
 class LimitState:
     """A limit state read from a summary table: exceeded where ``column > threshold``, or, with
@@ -466,7 +470,11 @@ class LimitState:
         if self.threshold is None:
             if values.dtype == bool:
                 return values.to_numpy()
-            numbers = pd.to_numeric(values, errors="coerce").to_numpy(dtype=float)
+            # a table read from CSV text holds the words: "true"/"false" in any case
+            words = values.map(
+                lambda v: _FLAG_WORDS.get(v.strip().lower(), v) if isinstance(v, str) else v
+            )
+            numbers = pd.to_numeric(words, errors="coerce").to_numpy(dtype=float)
             bad = ~np.isin(numbers, (0.0, 1.0))
             if bad.any():
                 i = int(np.argmax(bad))
@@ -541,6 +549,10 @@ def ida_capacities(
         raise FragilityDataError(record_column, "no such column in the summary table")
     im = _checked_im(table, im_column)
     hit = limit_state.exceeded(table)
+    missing = table[record_column].isna().to_numpy()
+    if missing.any():
+        i = int(np.argmax(missing))
+        raise FragilityDataError(f"{record_column}[{i}]", "a case must name its record, got none")
     frame = pd.DataFrame({"record": table[record_column].to_numpy(), "im": im, "hit": hit})
     rows = {}
     for record, group in frame.sort_values("im", kind="stable").groupby("record", sort=True):
@@ -651,6 +663,9 @@ def bootstrap_stripes(
     hit = limit_state.exceeded(table).astype(float)
     fit = fit_stripes(*_counts(im, np.ones_like(im), hit))
     codes, _ = pd.factorize(table[record_column])
+    if (codes < 0).any():
+        i = int(np.argmax(codes < 0))
+        raise FragilityDataError(f"{record_column}[{i}]", "a case must name its record, got none")
     rows_of = [np.flatnonzero(codes == k) for k in range(codes.max() + 1)]
 
     def refit(rng: np.random.Generator) -> FragilityFit:

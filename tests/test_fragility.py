@@ -248,11 +248,13 @@ def test_count_exceedances_by_threshold_and_flag():
     assert flag["exceed"].tolist() == expected == drift["exceed"].tolist()
     as_numbers = table.assign(unseated=table["unseated"].astype(int))
     assert fr.count_exceedances(as_numbers, fr.LimitState("unseated")).equals(flag)
+    as_words = table.assign(unseated=table["unseated"].map({True: "True", False: "false"}))
+    assert fr.count_exceedances(as_words, fr.LimitState("unseated")).equals(flag)
 
 
 def test_ida_capacities_first_exceedance_and_censoring():
     table, capacity = summary_table()
-    ida = fr.ida_capacities(table, fr.LimitState("unseated"))
+    ida = fr.ida_capacities(table.sample(frac=1, random_state=1), fr.LimitState("unseated"))
     for i, c in enumerate(capacity):
         row = ida.loc[f"rec{i:02d}"]
         if c > LEVELS[-1]:
@@ -268,6 +270,8 @@ def test_ida_capacities_first_exceedance_and_censoring():
         ({"peak_theta": "x"}, fr.LimitState("peak_theta", 0.01), "peak_theta[0]", "finite"),
         ({"unseated": 2}, fr.LimitState("unseated"), "unseated[0]", "true/false or 0/1"),
         ({"im": -1.0}, fr.LimitState("unseated"), "im[0]", "IM > 0"),
+        ({"unseated": "yes"}, fr.LimitState("unseated"), "unseated[0]", "true/false or 0/1"),
+        ({"unseated": None}, fr.LimitState("unseated"), "unseated[0]", "true/false or 0/1"),
     ],
 )
 def test_bad_summary_tables_are_refused(change, limit_state, field, text):
@@ -378,3 +382,23 @@ def test_cli_unreadable_file_exits_3(tmp_path, capsys):
     assert main(["fragility", "fit", str(tmp_path / "missing.csv")]) == 3
     out, err = capsys.readouterr()
     assert not out and len(err.splitlines()) == 1 and "missing.csv" in err
+
+
+def test_cases_without_a_record_are_refused():
+    table, _ = summary_table()
+    table.loc[3, "record"] = None
+    for call in (
+        lambda: fr.ida_capacities(table, fr.LimitState("unseated")),
+        lambda: fr.bootstrap_stripes(table, fr.LimitState("unseated"), [0.5], n_resamples=2),
+    ):
+        with pytest.raises(fr.FragilityDataError, match="name its record") as err:
+            call()
+        assert err.value.field == "record[3]"
+
+
+def test_cli_reads_a_spreadsheet_csv_with_bom(tmp_path, capsys):
+    path = tmp_path / "excel.csv"
+    path.write_bytes(b"\xef\xbb\xbfim,n,exceed\r\n0.2,10,1\r\n0.4,10,5\r\n0.8,10,9\r\n")
+    assert main(["fragility", "fit", str(path), "--json"]) == 0
+    fit = fr.fit_stripes([0.2, 0.4, 0.8], [10] * 3, [1, 5, 9])
+    assert json.loads(capsys.readouterr().out) == {"median": fit.median, "beta": fit.beta}

@@ -57,7 +57,7 @@ def read_stripes_csv(path: str) -> tuple[list[float], list[float], list[float], 
     """(im, n, exceed, line number) per stripe row of a stripes CSV; a missing column, an empty file or a value that is
     not a number is a :class:`SceneError` naming the file, the line and the column."""
     # an unreadable file raises OSError (exit status 3) here, before any parsing
-    with open(path, encoding="utf-8", newline="") as stream:
+    with open(path, encoding="utf-8-sig", newline="") as stream:  # -sig: a spreadsheet's BOM
         try:
             text = stream.read()
         except UnicodeDecodeError as err:
