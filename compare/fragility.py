@@ -291,23 +291,8 @@ def fit_stripes(im, n, exceed) -> FragilityFit:
     _refuse_degenerate(data)
     ln_x = np.log(data.im)
     n_f, z_f = data.n.astype(float), data.exceed.astype(float)
-    start = np.array(_probit_start(data))
-    best = None
-    # BFGS from the probit start; a second pass from its end point polishes the last digits
-    # (its line search stops on relative decrease, which is coarse near a flat optimum)
-    for _ in range(2):
-        res = optimize.minimize(
-            _negloglik_stripes,
-            start if best is None else best.x,
-            args=(ln_x, n_f, z_f),
-            jac=True,
-            method="BFGS",
-            options={"gtol": _GTOL, "maxiter": 1000},
-        )
-        if not np.all(np.isfinite(res.x)):
-            break
-        best = res
-    if best is None or np.max(np.abs(best.jac)) > 1e-6 * max(1.0, abs(best.fun)):
+    best = _maximise(_negloglik_stripes, np.array(_probit_start(data)), (ln_x, n_f, z_f))
+    if best is None:
         raise FragilityDataError(
             "stripes", "the likelihood maximisation did not converge for these stripes"
         )
@@ -323,6 +308,29 @@ def fit_stripes(im, n, exceed) -> FragilityFit:
         se_beta=math.sqrt(cov[1, 1]),
         method="stripes",
     )
+
+
+def _maximise(negloglik, start: np.ndarray, args: tuple):
+    """Minimise ``negloglik`` (value and gradient) by BFGS from ``start``, then once more from
+    where it stopped (its line search ends on a relative decrease, coarse near a flat optimum;
+    the second pass polishes the last digits). None unless the end point is finite with a
+    gradient below 1e-6 per unit of −ℓ (at least 1e-6)."""
+    best = None
+    for _ in range(2):
+        res = optimize.minimize(
+            negloglik,
+            start if best is None else best.x,
+            args=args,
+            jac=True,
+            method="BFGS",
+            options={"gtol": _GTOL, "maxiter": 1000},
+        )
+        if not (np.all(np.isfinite(res.x)) and np.isfinite(res.fun)):
+            return None
+        best = res
+    if np.max(np.abs(best.jac)) > 1e-6 * max(1.0, abs(best.fun)):
+        return None
+    return best
 
 
 def _inverse(info: np.ndarray) -> np.ndarray:
@@ -389,23 +397,8 @@ def fit_ida(capacity, censored=None) -> FragilityFit:
         mu, beta = float(np.mean(ln_c)), float(np.std(ln_c, ddof=0))
     else:
         start = np.array([np.mean(ln_c), math.log(np.std(ln_c[~cens], ddof=0))])
-        res = optimize.minimize(
-            _negloglik_ida,
-            start,
-            args=(ln_c, cens),
-            jac=True,
-            method="BFGS",
-            options={"gtol": _GTOL, "maxiter": 1000},
-        )
-        res = optimize.minimize(
-            _negloglik_ida,
-            res.x,
-            args=(ln_c, cens),
-            jac=True,
-            method="BFGS",
-            options={"gtol": _GTOL, "maxiter": 1000},
-        )
-        if not np.all(np.isfinite(res.x)) or np.max(np.abs(res.jac)) > 1e-6 * len(c):
+        res = _maximise(_negloglik_ida, start, (ln_c, cens))
+        if res is None:
             raise FragilityDataError(
                 "capacity", "the censored likelihood maximisation did not converge"
             )
