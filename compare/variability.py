@@ -2,10 +2,14 @@
 
 ``deckpound study variability SCENE --cases N`` runs the scene with N seeds of its synthetic
 record (``excitation.seed``, ``seed + 1``, ...); ``--records DIR`` runs it with every record
-file of a folder instead (``*.at2`` as AT2, ``*.txt``/``*.dat`` as two-column text records; the
-record is applied in both directions, scaled as the scene says — by default to ``pga``
-transverse and ``longitudinal_ratio`` · pga longitudinal; files ``NAME_x.*`` and ``NAME_y.*``
-form one biaxial pair). Per case it writes a row: peak deck rotation, peak transverse and
+pair of a folder instead (``*.at2`` as AT2, ``*.txt``/``*.dat`` as two-column text records),
+read by :func:`deckpound.models.record_suite.read_suite`: PEER names pair by station
+(``RSN753_LOMAP_CLS000`` / ``CLS090``), ``NAME_x`` / ``NAME_y`` pair as named, a
+``manifest.csv`` pairs the rest, vertical components are left out, a lone horizontal component
+is refused; each pair's components go on x (longitudinal) and y (transverse), and with
+``rotate`` (``--rotate90``) also swapped. The pairs are scaled as the scene says (by default
+each component to its own target; ``excitation.scaling = 'pair-…'`` scales a pair by one
+factor and keeps its component ratio). Per case it writes a row: peak deck rotation, peak transverse and
 longitudinal deck displacement relative to the tables, gap closures (total and per corner),
 status and times; then the summary statistics (median, 16 % and 84 % fractiles, mean, standard
 deviation, min, max of each quantity over the finished cases) and a figure (empirical
@@ -35,7 +39,6 @@ from deckpound.models.scene import Scene
 #: quantities of a row that the summary describes
 QUANTITIES = ("peak_theta", "peak_y", "peak_x", "gap_closures")
 UNITS = {"peak_theta": "rad", "peak_y": "m", "peak_x": "m", "gap_closures": "-"}
-RECORD_SUFFIXES = {".at2": "at2", ".txt": "text", ".dat": "text"}
 #: version of the row format (part of the row cache key)
 ROW_FORMAT = 1
 MAX_CASES = 1_000_000
@@ -64,31 +67,30 @@ def seed_cases(scene: Scene, cases: int) -> list[tuple[str, dict, Scene]]:
     return out
 
 
-def record_cases(scene: Scene, folder: str | Path) -> list[tuple[str, dict, Scene]]:
-    """One case per record (or ``_x``/``_y`` pair) in ``folder``."""
+def record_cases(
+    scene: Scene, folder: str | Path, rotate: bool = False
+) -> list[tuple[str, dict, Scene]]:
+    """One case per record pair of ``folder`` (:func:`deckpound.models.record_suite.read_suite`:
+    PEER component names, ``NAME_x``/``NAME_y``, or ``manifest.csv``), each pair's components
+    on x and y; with ``rotate`` also each pair with its components swapped."""
+    from deckpound.models.excitation import RecordWarning
+    from deckpound.models.record_suite import read_suite
+
     from .studies import modified
 
-    root = Path(folder)
-    if not root.is_dir():
-        raise SceneError("--records", f"{str(root)!r} is not a folder")
-    files = sorted(p for p in root.iterdir() if p.is_file() and p.suffix.lower() in RECORD_SUFFIXES)
-    if not files:
-        raise SceneError("--records", f"{str(root)!r} holds no record (*.at2, *.txt, *.dat)")
-    groups: dict[str, dict[str, Path]] = {}
-    for p in files:
-        stem = p.stem
-        axis = stem[-2:].lower() if stem[-2:].lower() in ("_x", "_y") else ""
-        name = stem[:-2] if axis else stem
-        groups.setdefault(f"{name}{p.suffix.lower()}", {})[axis[1:] or "xy"] = p
+    suite = read_suite(folder, rotate=rotate)
+    for note in suite.notes:
+        warnings.warn(f"--records: {note}", RecordWarning, stacklevel=2)
     out = []
-    for name, parts in sorted(groups.items()):
-        kind = RECORD_SUFFIXES[Path(name).suffix]
-        fx = parts.get("x", parts.get("xy"))
-        fy = parts.get("y", parts.get("xy"))
-        ov = [f"excitation.kind={kind}"]
-        ov += [f"excitation.file_x={json.dumps(str(fx.resolve()))}"] if fx else []
-        ov += [f"excitation.file_y={json.dumps(str(fy.resolve()))}"] if fy else []
-        out.append((f"record {name}", {"seed": None, "record": name}, modified(scene, *ov)))
+    for pair in suite.pairs:
+        params = {
+            "seed": None,
+            "record": pair.name,
+            "rotated": pair.rotated,
+            "file_x": pair.file_x.name,
+            "file_y": pair.file_y.name,
+        }
+        out.append((f"record {pair.label}", params, modified(scene, *pair.overrides())))
     return out
 
 
@@ -149,6 +151,7 @@ def run_variability(
     engine: str = "compliance",
     cases: int | None = None,
     records: str | Path | None = None,
+    rotate: bool = False,
     cache_dir: str | Path | None = None,
     workers: int | None = None,
     scheduler: str | None = None,
@@ -166,7 +169,11 @@ def run_variability(
         raise SceneError(
             "--cases", "give either --cases N (seeds of the synthetic record) or --records DIR"
         )
-    specs = record_cases(scene, records) if records is not None else seed_cases(scene, cases)
+    if rotate and records is None:
+        raise SceneError("--rotate90", "rotates the pairs of --records DIR; give --records")
+    specs = (
+        record_cases(scene, records, rotate) if records is not None else seed_cases(scene, cases)
+    )
     out = ensure_folder(out)
     rows_dir = ensure_folder(Path(cache_dir) if cache_dir else out / "cache", "--cache")
     rows_dir = ensure_folder(rows_dir / "variability", "--cache")
@@ -179,7 +186,7 @@ def run_variability(
             rows[i] = cached
     todo = [i for i in range(len(specs)) if i not in rows]
     bar = Progress(len(specs), "study variability", progress)
-    bar.advance(len(rows))
+    bar.skip(len(rows))  # cached rows: done, not in the rate
 
     def done(i: int, row: dict) -> None:
         rows[i] = row

@@ -53,10 +53,15 @@ class Excitation:
 
     Records (at2, text, csv) are applied at every table (x and y), the actuators follow x;
     they are time-scaled by ``time_scale``, processed by ``processing`` (default none: real
-    records are already processed) and scaled by ``scaling`` (default pga: to ``pga`` in y and
-    ``longitudinal_ratio`` · pga in x, like the synthetic record, so a sequence or study run
-    labelled 0.5 g is driven at 0.5 g). See :mod:`deckpound.models.record_motion`. Any
-    direction above ``EXTREME_PGA`` g is refused unless ``allow_extreme``.
+    records are already processed) and scaled by ``scaling`` (default pga: each component to
+    its own target, ``pga`` in y and ``longitudinal_ratio`` · pga in x, like the synthetic
+    record, so a sequence or study run labelled 0.5 g is driven at 0.5 g; the pair scalings
+    ``pair-pga``, ``pair-pgv``, ``pair-sa``, ``pair-rotd50`` multiply both components by one
+    factor to a target intensity measure and keep the record's component ratio, for suites of
+    real record pairs). See :mod:`deckpound.models.record_motion`. Any direction above
+    ``EXTREME_PGA`` g is refused unless ``allow_extreme``. The intensity measures of the
+    applied motion (:mod:`deckpound.models.intensity`, at ``im_period``) are kept in its
+    provenance.
     """
 
     kind: str = spec(

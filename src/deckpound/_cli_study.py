@@ -356,7 +356,13 @@ def _variability_args(p: argparse.ArgumentParser) -> None:
         "--records",
         default=None,
         metavar="DIR",
-        help="variability: every record file in DIR instead of seeds",
+        help="variability: every record pair in DIR instead of seeds (PEER component "
+        "names, NAME_x/NAME_y, or DIR/manifest.csv with pair,file_x,file_y)",
+    )
+    g.add_argument(
+        "--rotate90",
+        action="store_true",
+        help="variability: also run each pair of --records with its components swapped",
     )
     g.add_argument(
         "--engine",
@@ -388,6 +394,7 @@ def _variability(args) -> int:
             engine=args.engine,
             cases=cases,
             records=args.records,
+            rotate=args.rotate90,
             cache_dir=args.cache,
             workers=args.workers,
             scheduler=args.scheduler,
