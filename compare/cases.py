@@ -10,8 +10,8 @@ Warnings an engine raises in a worker travel with its result (``meta["warnings"]
 shown once each in the main process (:func:`surface_warnings`), never swallowed. Cases run in
 parallel on local processes (default: one per core; the workers die with the process that
 started them, :mod:`._workers`) or on a Dask distributed cluster (``scheduler="tcp://host:port"``;
-a malformed address is refused, an unreachable one is an OSError naming it), with a progress
-bar on stderr.
+a malformed address is refused, an unreachable one is an OSError naming it), with their
+progress on stderr (:mod:`.progress`: a bar on a terminal, a line at a steady pace in a log).
 """
 
 from __future__ import annotations
@@ -20,8 +20,6 @@ import hashlib
 import json
 import os
 import re
-import sys
-import time
 import warnings
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -33,6 +31,7 @@ from deckpound.models.result import Result, physics_hash, settings_hash
 from deckpound.models.scene import Scene
 
 from .pool import Interrupted, map_local
+from .progress import Progress
 from .result_cache import ResultCache
 
 __all__ = [
@@ -169,43 +168,6 @@ def interrupted(
     )
 
 
-class Progress:
-    """A one-line text progress bar on stderr (silent when ``enabled`` is False)."""
-
-    def __init__(self, total: int, title: str, enabled: bool = True):
-        self.total, self.done, self.title = total, 0, title
-        self.enabled = enabled and total > 0
-        self.t0 = time.perf_counter()
-        self._draw()
-
-    def advance(self, n: int = 1) -> None:
-        if n:
-            self.done += n
-            self._draw()
-
-    def _draw(self) -> None:
-        if not self.enabled:
-            return
-        if not sys.stderr.isatty() and self.done < self.total:
-            return  # in a log file, only the finished bar
-        width = 30
-        fill = int(width * self.done / max(self.total, 1))
-        elapsed = time.perf_counter() - self.t0
-        sys.stderr.write(
-            f"\r{self.title} [{'#' * fill}{'.' * (width - fill)}] "
-            f"{self.done}/{self.total} {elapsed:6.1f} s"
-        )
-        if self.done >= self.total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
-
-    def close(self) -> None:
-        """End a bar left unfinished (an interrupt) so the next message starts a line."""
-        if self.enabled and self.done < self.total and sys.stderr.isatty():
-            sys.stderr.write("\n")
-            sys.stderr.flush()
-
-
 def run_cases(
     cases: Iterable[Case],
     *,
@@ -226,7 +188,7 @@ def run_cases(
         else:
             todo.append(c)
     bar = Progress(len(cases), title, progress)
-    bar.advance(len(cases) - len(todo))
+    bar.skip(len(cases) - len(todo))  # cached: done, not in the rate
 
     def finish(case: Case, result: Result) -> None:
         if cache is not None and (result.ok or result.doubtful):  # finished answers
@@ -241,6 +203,8 @@ def run_cases(
         raise interrupted(
             err, title, len(results), len(cases), cache.folder if cache is not None else None
         ) from None
+    finally:
+        bar.close()
     surface_warnings(results.values())
     return {c.label: results[c.label] for c in cases}
 

@@ -37,6 +37,7 @@ from .cases import ResultCache
 from .mechanism import MECHANISM_UNITS, mechanism_row
 from .metrics import closure_times_per_corner, compare_pair
 from .outputs import folder, folder_size, write_csv, write_text
+from .progress import Progress
 from .report_text_friction import friction_effect
 from .sequence_run import SequenceRun, run_sequences, strongest_run
 from .studies import (
@@ -207,6 +208,11 @@ def _mech_rows(source: str, state: str, run: int | None, results, scenes) -> lis
     return rows
 
 
+#: the stages of :func:`run_paper` its log lines count (sequences, per-run figures and
+#: metrics, strongest-run figures, studies, report)
+PAPER_STAGES = 5
+
+
 def run_paper(
     scene: Scene,
     out: str | Path,
@@ -226,7 +232,48 @@ def run_paper(
 
     ``engines`` (default: every registered engine) run the sequence; the others are compared
     against ``reference``. ``formats`` adds figure formats to PNG (e.g. ``("pdf",)``).
+    Off a terminal, the paper's stages report between the runs' own progress lines (figures and
+    the report are drawn without a progress of their own): a log shows a line at least every
+    :data:`~deckpound.compare.progress.PROGRESS_INTERVAL` s.
     """
+    stages = Progress(PAPER_STAGES, "paper", progress, log_only=True, eta=False)
+    try:
+        return _paper(
+            stages,
+            scene,
+            out,
+            quick=quick,
+            workers=workers,
+            scheduler=scheduler,
+            cache_dir=cache_dir,
+            studies=studies,
+            progress=progress,
+            engines=engines,
+            reference=reference,
+            full_histories=full_histories,
+            formats=formats,
+        )
+    finally:
+        stages.close()
+
+
+def _paper(
+    stages: Progress,
+    scene: Scene,
+    out: str | Path,
+    *,
+    quick: bool,
+    workers: int | None,
+    scheduler: str | None,
+    cache_dir: str | Path | None,
+    studies: tuple[str, ...] | None,
+    progress: bool,
+    engines: tuple[str, ...] | None,
+    reference: str,
+    full_histories: bool,
+    formats: tuple[str, ...],
+) -> Path:
+    """:func:`run_paper`'s work, reporting its stages to ``stages``."""
     from .report_sections import write_report
 
     t0 = time.perf_counter()
@@ -240,6 +287,7 @@ def run_paper(
     write_text(out / "scene.toml", scene_to_toml(scene))
 
     # 1. the sequence, every engine, with both friction assumptions
+    stages.note = "the sequences"
     base = run_sequences(scene, list(names), cache_dir, workers, scheduler, progress)
     variant, tag = friction_variant(scene)
     other = run_sequences(variant, list(names), cache_dir, workers, scheduler, progress)
@@ -253,9 +301,12 @@ def run_paper(
         figures.friction_ratio(effect, scene, figs / "friction_ratio_vs_run.png", formats=formats)
 
     # 2. per run: metrics against the reference, histories, mechanism
+    stages.note = "the runs' figures and metrics"
+    stages.advance()
     metric_rows, mech_rows = [], []
     n_runs = min(len(v) for v in sequences.values())
     for i in range(n_runs):
+        stages.note = f"run {i + 1} of {n_runs}: figures and metrics"
         results = {e: base[e][i].result for e in names}
         run = base[reference][i]
         figures.histories(
@@ -287,6 +338,8 @@ def run_paper(
     metrics = pd.concat(metric_rows, ignore_index=True) if metric_rows else pd.DataFrame()
     write_csv(metrics, tables / f"metrics_vs_{reference}.csv", METRIC_UNITS)
 
+    stages.note = "the strongest run's figures"
+    stages.advance()
     k = strongest_run(scene)
     if n_runs >= k:
         strong = {e: base[e][k - 1].result for e in names}
@@ -312,6 +365,8 @@ def run_paper(
         )
 
     # 3. studies, from the stated start states
+    stages.note = "the studies"
+    stages.advance()
     states = [start_state(scene, "virgin")]
     carried_note = ""
     ref_runs = base[reference]
@@ -325,6 +380,7 @@ def run_paper(
     study_runs = []
     for name in studies if studies is not None else tuple(STUDIES):
         for st in states if STUDIES[name].carried else states[-1:]:
+            stages.note = f"study {name} ({st.label})"
             cases, results, table = study_results(
                 name,
                 st,
@@ -351,6 +407,8 @@ def run_paper(
                 mech_rows += _mech_rows(
                     "friction study", st.label, st.run, results, {c.label: c.scene for c in cases}
                 )
+    stages.note = "the report"
+    stages.advance()
     mech = pd.DataFrame(mech_rows)
     write_csv(mech, tables / "friction_mechanism.csv", MECHANISM_UNITS)
 
@@ -390,4 +448,6 @@ def run_paper(
         "cache": folder_size(cache_dir) if cache_dir.is_dir() else 0,
     }
     data.wall = time.perf_counter() - t0
-    return write_report(data)
+    report = write_report(data)
+    stages.advance()
+    return report

@@ -122,5 +122,7 @@ def run_sequences(
         raise interrupted(
             err, "sequence", len(out), len(engines), cache_folder, "engines' sequences", "run"
         ) from None
+    finally:
+        bar.close()  # its log thread ends with it, whatever ended the sequences
     surface_warnings(r.result for runs in out.values() for r in runs)
     return {e: out[e] for e in engines}
