@@ -11,12 +11,21 @@ Layout (scene text appears only in the header comments, from line 3 on):
 5. the runtime functions of :mod:`.engine` (``define_analysis``, ``run_steps``, ...) copied
    verbatim, so the script steps exactly as the in-process run does;
 6. ``main()``: build, recorders, ``record`` at t = 0, run, optional CSV, statistics.
+
+The optional CSV (``--csv``) holds every column of the in-process result, in its order: the
+engine's sampled columns plus the displacements relative to the supports and the bent
+deformations, derived in the script from the support displacement records of the data folder
+(:func:`csv_plan`, :func:`interp_record`, :func:`result_rows`) by the arithmetic of
+:func:`deckpound.engine_contract.finish` (linear interpolation of the records as ``np.interp``,
+mean of the shake tables, d = B u − S u_g).
 """
 
 from __future__ import annotations
 
 import inspect
 import textwrap
+
+from deckpound.models.plan import DOF_COLUMNS, plan_of
 
 from . import engine
 from .export_header import ExportParts, header_lines
@@ -34,6 +43,123 @@ RUNTIME = (
     engine.track_step,
     engine.run_steps,
 )
+
+
+def csv_plan(p: ExportParts) -> dict:
+    """What the script needs to derive the result's relative columns (JSON-able).
+
+    ``records``: the displacement record file of each support channel (``Plan.channels``
+    order), sampled at ``dt`` [s] from t = 0; ``means``: (engine column of an absolute deck
+    displacement, the channels it is taken relative to the mean of); ``seats``: (engine
+    column of a seat's absolute displacement, its actuator's channel); ``springs``: per bent
+    spring row of d = B u − S u_g, the (engine column, B coefficient) and (channel, S
+    coefficient) terms; ``columns``: the CSV's columns (the in-process result's), ``order``:
+    their positions in an engine row followed by the derived values.
+    """
+    plan = plan_of(p.scene)
+    engine_cols = list(p.plan["columns"])
+    # the model imposes one ground motion per support channel, in Plan.channels order
+    # (opensees_build.model.build_model); its tag name ends with the channel's name
+    disp = [r for r in p.records if r["quantity"] == "displacement"]
+    if len(disp) != len(plan.channels) or not all(
+        r["channel"].endswith(ch) for r, ch in zip(disp, plan.channels)
+    ):
+        raise AssertionError(
+            f"the displacement records {[r['channel'] for r in disp]} are not the support "
+            f"channels {list(plan.channels)}"
+        )
+    steps = {r["dt"] for r in disp}
+    if len(steps) != 1:
+        raise AssertionError(f"support records with different steps {sorted(steps)}")
+    column_of_dof = {dof: engine_cols.index(name) for name, dof in DOF_COLUMNS}
+    B, S = plan.spring_matrices
+    springs = [
+        [
+            [[column_of_dof[k], float(B[i, k])] for k in range(B.shape[1]) if B[i, k] != 0.0],
+            [[k, float(S[i, k])] for k in range(S.shape[1]) if S[i, k] != 0.0],
+        ]
+        for i in range(plan.n_bent_springs)
+    ]
+    derived = ["deck_x_rel", "deck_y_rel", "seat1_x_rel", "seat2_x_rel"]
+    derived += [f"{b}_d{axis}" for b in plan.bent_names for axis in ("x", "y")]
+    extended = engine_cols + derived
+    columns = plan.column_names
+    if sorted(columns) != sorted(extended):
+        raise AssertionError("the script's CSV columns differ from the result's")
+    return {
+        "records": [r["file"] for r in disp],
+        "dt": steps.pop(),
+        "means": [
+            [engine_cols.index("deck_x_abs"), plan.table_channels("x")],
+            [engine_cols.index("deck_y_abs"), plan.table_channels("y")],
+        ],
+        "seats": [
+            [engine_cols.index(f"seat{j}_x_abs"), plan.channels.index(f"seat{j}_x")] for j in (1, 2)
+        ],
+        "springs": springs,
+        "columns": columns,
+        "order": [extended.index(c) for c in columns],
+    }
+
+
+# -- copied into the script (plain Python: the script needs no numpy) ---------------------------
+
+
+def interp_record(values, dt, t):
+    """A support record sampled at j*dt (j = 0, 1, ...) at time t [s], linear between samples
+    and held outside the record: the arithmetic of np.interp, as the in-process result."""
+    last = len(values) - 1
+    if t >= last * dt:
+        return values[last]
+    if t <= 0.0:
+        return values[0]
+    j = int(t / dt)
+    while j > 0 and j * dt > t:
+        j -= 1
+    while (j + 1) * dt <= t:
+        j += 1
+    if j * dt == t:
+        return values[j]
+    slope = (values[j + 1] - values[j]) / ((j + 1) * dt - j * dt)
+    return slope * (t - j * dt) + values[j]
+
+
+def _total(terms):
+    """The sum of terms from the first one on (numpy's order for a short row); 0.0 if none."""
+    if not terms:
+        return 0.0
+    out = terms[0]
+    for x in terms[1:]:
+        out += x
+    return out
+
+
+def result_rows(rows, rel, read_record):
+    """Rows of the engine columns (t first) to rows of the result's columns (rel["columns"]):
+    the deck relative to the mean of its tables' displacement, each seat relative to its
+    actuator and each bent spring's deformation d = B u - S u_g, the support displacements
+    u_g read by read_record(file) and interpolated at each row's t (interp_record).
+    """
+    records = [read_record(name) for name in rel["records"]]
+    out = []
+    for row in rows:
+        ug = [interp_record(values, rel["dt"], row[0]) for values in records]
+        extra = []
+        for col, chans in rel["means"]:
+            extra.append(row[col] - (_total([ug[k] for k in chans]) / len(chans) if chans else 0.0))
+        for col, ch in rel["seats"]:
+            extra.append(row[col] - ug[ch])
+        for dofs, chans in rel["springs"]:
+            extra.append(
+                _total([row[c] * b for c, b in dofs]) - _total([ug[k] * s for k, s in chans])
+            )
+        full = list(row) + extra
+        out.append([full[i] for i in rel["order"]])
+    return out
+
+
+#: the functions of this module the script carries (its CSV's derived columns)
+CSV_RUNTIME = (interp_record, _total, result_rows)
 
 
 def py_literal(v, indent: int = 0) -> str:
@@ -76,7 +202,7 @@ def py_script(p: ExportParts) -> str:
     head = "\n".join(f"# {comment_text(x, 'py')}".rstrip() for x in header_lines(p))
     body = textwrap.indent(render_commands(p.log, "py", file_of=p.file_of), "    ")
     recorders = textwrap.indent("\n".join(render_recorders(p.recorders, "py")), "    ")
-    runtime = "\n\n".join(inspect.getsource(f) for f in RUNTIME)
+    runtime = "\n\n".join(inspect.getsource(f) for f in RUNTIME + CSV_RUNTIME)
     margin = "0.5 / PLAN['substeps']" if p.plan["fallback"] == "substep" else "0.5"
     return f'''#!/usr/bin/env python3
 # OpenSeesPy script written by deckpound; scene text appears only in comments below.
@@ -109,6 +235,9 @@ def build():
 # step plan (tags from the legend above)
 PLAN = {py_literal(p.plan)}
 
+# the CSV's columns: the engine's and those derived from the support displacement records
+CSV = {py_literal(csv_plan(p))}
+
 # -dT of the recorders = (stride - half a sub-step) * dt: one row per output step, none from
 # the sub-steps of the fallback
 REC_DT = (PLAN['stride'] - {margin}) * PLAN['dt']
@@ -116,6 +245,11 @@ REC_DT = (PLAN['stride'] - {margin}) * PLAN['dt']
 
 def _out(out_dir, name):
     return os.path.join(out_dir, name)
+
+
+def _read_record(name):
+    with open(_data(name)) as fh:
+        return [float(line) for line in fh if line.strip()]
 
 
 def add_recorders(out_dir):
@@ -141,8 +275,8 @@ def main(argv=None):
     if a.csv:
         with open(os.path.join(a.out, "opensees.csv"), "w", newline="") as fh:
             w = csv.writer(fh)
-            w.writerow(PLAN["columns"])
-            for row in out["rows"]:
+            w.writerow(CSV["columns"])
+            for row in result_rows(out["rows"], CSV, _read_record):
                 w.writerow([repr(float(v)) for v in row])
     with open(os.path.join(a.out, "opensees.stats.json"), "w") as fh:
         json.dump(out["stats"], fh, indent=2)

@@ -12,12 +12,15 @@ Layout (each part generated; scene text appears only in the header comments):
 6. the step loop: ``analyze 1 $dt`` with every return code checked and the sub-step fallback of
    :func:`deckpound.opensees_build.engine.run_steps`, the gap closures counted at every
    converged step and sub-step as the engine counts them (printed as ``gap_closures``),
-   optionally writing deckpound's CSV.
+   optionally writing deckpound's CSV: every column of the in-process result, the relative
+   displacements and bent deformations derived from the support displacement records as
+   :func:`.export_py.result_rows` derives them (``csvRow``, ``interpRecord``).
 """
 
 from __future__ import annotations
 
 from .export_header import ExportParts, header_lines
+from .export_py import csv_plan
 from .ops import render_commands
 from .quoting import comment_text, tcl_path_word, tcl_word
 from .recorders import render_recorders
@@ -29,6 +32,13 @@ def _num(v) -> str:
 
 def _tcl_list(values) -> str:
     return "{" + " ".join(_num(v) for v in values) + "}"
+
+
+def _tcl_nested(v) -> str:
+    """Nested lists of numbers as a Tcl list."""
+    if isinstance(v, (list, tuple)):
+        return "{" + " ".join(_tcl_nested(x) for x in v) + "}"
+    return _num(v)
 
 
 def _analysis_body(plan: dict) -> str:
@@ -46,7 +56,9 @@ def tcl_script(p: ExportParts) -> str:
     recorders = "\n".join(render_recorders(p.recorders, "tcl"))
     gap_eles = plan["gap_elements"] or [0, 0, 0, 0]
     margin = "0.5 / $nSub" if plan["fallback"] == "substep" else "0.5"
-    columns = " ".join(tcl_word(c) for c in plan["columns"])
+    csv = csv_plan(p)
+    columns = " ".join(tcl_word(c) for c in csv["columns"])
+    records = " ".join(tcl_word(f) for f in csv["records"])
     return f"""{head}
 
 set here [file dirname [file normalize [info script]]]
@@ -142,6 +154,80 @@ proc sampleRow {{t}} {{
     return $row
 }}
 
+# the CSV's derived columns (export_py.result_rows): support displacement records read from
+# $dataDir, interpolated as np.interp at each row's time; the deck relative to the mean of its
+# tables, each seat relative to its actuator, each bent spring's d = B u - S u_g
+set relDt {_num(csv["dt"])}
+set relRecordFiles [list {records}]
+set relMeans {_tcl_nested(csv["means"])}
+set relSeats {_tcl_nested(csv["seats"])}
+set relSprings {_tcl_nested(csv["springs"])}
+set relOrder {_tcl_list(csv["order"])}
+
+proc readRecord {{name}} {{
+    global dataDir
+    set fh [open [file join $dataDir $name] r]
+    set values {{}}
+    foreach line [split [read $fh] "\n"] {{
+        if {{[string trim $line] ne ""}} {{ lappend values [expr {{double($line)}}] }}
+    }}
+    close $fh
+    return $values
+}}
+
+proc interpRecord {{values dt t}} {{
+    set last [expr {{[llength $values] - 1}}]
+    if {{$t >= $last * $dt}} {{ return [lindex $values $last] }}
+    if {{$t <= 0.0}} {{ return [lindex $values 0] }}
+    set j [expr {{int($t / $dt)}}]
+    while {{$j > 0 && $j * $dt > $t}} {{ incr j -1 }}
+    while {{($j + 1) * $dt <= $t}} {{ incr j }}
+    set y0 [lindex $values $j]
+    if {{$j * $dt == $t}} {{ return $y0 }}
+    set y1 [lindex $values [expr {{$j + 1}}]]
+    set slope [expr {{($y1 - $y0) / (($j + 1) * $dt - $j * $dt)}}]
+    return [expr {{$slope * ($t - $j * $dt) + $y0}}]
+}}
+
+proc total {{terms}} {{
+    set out [lindex $terms 0]
+    foreach x [lrange $terms 1 end] {{ set out [expr {{$out + $x}}] }}
+    return $out
+}}
+
+proc csvRow {{row}} {{
+    global relDt relRecords relMeans relSeats relSprings relOrder
+    set t [lindex $row 0]
+    set ug {{}}
+    foreach values $relRecords {{ lappend ug [interpRecord $values $relDt $t] }}
+    set full $row
+    foreach item $relMeans {{
+        lassign $item col chans
+        set mean 0.0
+        if {{[llength $chans]}} {{
+            set terms {{}}
+            foreach k $chans {{ lappend terms [lindex $ug $k] }}
+            set mean [expr {{[total $terms] / double([llength $chans])}}]
+        }}
+        lappend full [expr {{[lindex $row $col] - $mean}}]
+    }}
+    foreach item $relSeats {{
+        lassign $item col ch
+        lappend full [expr {{[lindex $row $col] - [lindex $ug $ch]}}]
+    }}
+    foreach spring $relSprings {{
+        lassign $spring dofs chans
+        set bu {{}}
+        foreach term $dofs {{ lappend bu [expr {{[lindex $row [lindex $term 0]] * [lindex $term 1]}}] }}
+        set sg {{}}
+        foreach term $chans {{ lappend sg [expr {{[lindex $ug [lindex $term 0]] * [lindex $term 1]}}] }}
+        lappend full [expr {{[total $bu] - [total $sg]}}]
+    }}
+    set out {{}}
+    foreach i $relOrder {{ lappend out [lindex $full $i] }}
+    return [join $out ","]
+}}
+
 # gap closures at every converged step and sub-step (deckpound's one definition, the engine's
 # track_step): a corner is in contact when its gap is <= 0 or its normal force > 0; a closure
 # is a step at which a corner goes from out of contact to in contact (in contact at t = 0: one)
@@ -172,9 +258,11 @@ proc countClosures {{}} {{
 record
 countClosures
 if {{$writeCsv}} {{
+    set relRecords {{}}
+    foreach name $relRecordFiles {{ lappend relRecords [readRecord $name] }}
     set fh [open [file join $outDir opensees.csv] w]
     puts $fh [join [list {columns}] ","]
-    puts $fh [join [sampleRow 0.0] ","]
+    puts $fh [csvRow [sampleRow 0.0]]
 }}
 set failures 0
 set rescued 0
@@ -205,7 +293,7 @@ for {{set n 1}} {{$n <= $nSteps}} {{incr n}} {{
         break
     }}
     if {{$writeCsv && $n % $stride == 0}} {{
-        puts $fh [join [sampleRow [expr {{$n * $dt}}]] ","]
+        puts $fh [csvRow [sampleRow [expr {{$n * $dt}}]]]
     }}
 }}
 if {{$writeCsv}} {{ close $fh }}
