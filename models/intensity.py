@@ -114,7 +114,7 @@ def oscillator_displacements(
     :func:`load_matrices`) is evaluated in blocks of ``BLOCK`` samples so that no Python loop
     runs per sample: inside a block starting at state s, z_j = Φ(jΔt) s + Σ_{i<j}
     Φ((j − 1 − i)Δt) f_i — a lower-triangular convolution with the closed-form kernel
-    (:func:`free_transition`), evaluated for every block and oscillator at once — and the
+    (:func:`free_transition`), one matrix product over all blocks of an oscillator — and the
     blocks are chained by their end states. The same sums in another order: equal to the
     sample-by-sample recurrence to round-off.
     """
@@ -136,20 +136,26 @@ def oscillator_displacements(
     kernel = free_transition(omega, damping, dt * np.arange(BLOCK + 1))
     lag = np.arange(BLOCK + 1)[:, None] - 1 - np.arange(BLOCK)[None, :]
     conv = np.where((lag >= 0)[None, :, :, None, None], kernel[:, np.maximum(lag, 0)], 0.0)
-    # particular part of every block, one batched matrix product: (K, nb, BLOCK + 1, 2)
+    # particular part of every block, one matrix product per oscillator (2-D products: a
+    # stacked 3-D matmul runs several times slower under a threaded BLAS on a busy machine)
     conv_t = conv.transpose(0, 2, 4, 1, 3).reshape(k, 2 * BLOCK, 2 * (BLOCK + 1))
-    part = (blocks.reshape(k, nb, 2 * BLOCK) @ conv_t).reshape(k, nb, BLOCK + 1, 2)
-    starts = np.zeros((k, nb, 2))
-    step_t = kernel[:, BLOCK].transpose(0, 2, 1)
+    flat = blocks.reshape(k, nb, 2 * BLOCK)
+    part = np.stack([flat[i] @ conv_t[i] for i in range(k)]).reshape(k, nb, BLOCK + 1, 2)
+    # chain the blocks by their end states: s_{b+1} = Φ(LΔt) s_b + part_b(L)
+    step = kernel[:, BLOCK]
     ends = part[:, :, BLOCK]
-    state = np.zeros((k, 1, 2))
+    starts = np.zeros((k, nb, 2))
+    s0, s1 = np.zeros(k), np.zeros(k)
     for b in range(nb):
-        starts[:, b] = state[:, 0]
-        state = state @ step_t + ends[:, b : b + 1]
+        starts[:, b, 0], starts[:, b, 1] = s0, s1
+        s0, s1 = (
+            step[:, 0, 0] * s0 + step[:, 0, 1] * s1 + ends[:, b, 0],
+            step[:, 1, 0] * s0 + step[:, 1, 1] * s1 + ends[:, b, 1],
+        )
     free_t = kernel[:, :BLOCK].transpose(0, 3, 1, 2).reshape(k, 2, 2 * BLOCK)
-    z = (starts @ free_t).reshape(k, nb, BLOCK, 2) + part[:, :, :BLOCK]
-    z = z.reshape(k, nb * BLOCK, 2)
-    state = state[:, 0]
+    free = np.stack([starts[i] @ free_t[i] for i in range(k)])
+    z = (free.reshape(k, nb, BLOCK, 2) + part[:, :, :BLOCK]).reshape(k, nb * BLOCK, 2)
+    state = np.stack([s0, s1], axis=1)
     u = np.empty((k, n))
     u[:, : n - 1] = z[:, : n - 1, 0]
     u[:, n - 1] = state[:, 0] if (n - 1) % BLOCK == 0 else z[:, n - 1, 0]
