@@ -10,7 +10,7 @@ import warnings
 from pathlib import Path
 
 import pytest
-from _record_helpers import quake, record_scene, write_at2
+from _record_helpers import quake, record_scene, write_acc_csv, write_at2
 
 from deckpound.compare.variability import record_cases, run_variability
 from deckpound.models.errors import SceneError
@@ -200,6 +200,23 @@ def test_pair_scaling_refusals(tmp_path):
         record_scene("at2", fx, None, None, "excitation.scaling=pair-pga")
     with pytest.raises(SceneError, match="target_sa.*used only with scaling"):
         record_scene("at2", fx, fy, None, "excitation.target_sa=0.5")
+
+
+def test_pair_scaling_needs_two_acceleration_components(tmp_path):
+    """A CSV with one acceleration column, or of support displacements, is no pair."""
+    t = [0.01 * i for i in range(800)]
+    one = write_acc_csv(tmp_path / "one.csv", t, ax=list(quake(seed=1)))
+    scene = record_scene(
+        "csv", None, None, one, "excitation.scaling=pair-pga", "excitation.pga=0.3"
+    )
+    with pytest.raises(SceneError, match="the CSV has no transverse"):
+        support_motion(scene)
+    lines = ["t,bent1_disp"] + [f"{ti},0.0" for ti in t]
+    disp = tmp_path / "disp.csv"
+    disp.write_text("\n".join(lines) + "\n")
+    scene = record_scene("csv", None, None, disp, "excitation.scaling=pair-pga")
+    with pytest.raises(SceneError, match="holds support displacements"):
+        support_motion(scene)
 
 
 def test_variability_over_two_pairs_runs_two_cases_with_x_and_y(tmp_path):
