@@ -118,9 +118,19 @@ def case_row(engine: str, scene: Scene) -> dict:
         "wall_time": float(r.meta.get("wall_time", np.nan)),
         "compile_time": float(r.meta.get("compile_time", 0.0)),
         "steps": int(r.meta.get("steps", 0)),
+        "unseated": bool(r.meta.get("unseated", False)),
+        "unseated_time": float(r.meta.get("unseated_time", np.nan)),
+        "seat_margin": _smallest_margin(r.meta.get("seat_margin_min")),
     }
     row["process_time"] = time.perf_counter() - t0
     return row
+
+
+def _smallest_margin(margins) -> float:
+    """The smallest seat margin [m] over the corners (``meta["seat_margin_min"]``: {corner:
+    [margin, time]}); NaN when the scene gives no support length."""
+    values = [float(v[0]) for v in (margins or {}).values() if v is not None]
+    return min(values) if values else float("nan")
 
 
 def row_key(engine: str, scene: Scene) -> str:
@@ -132,8 +142,9 @@ def row_key(engine: str, scene: Scene) -> str:
 
 
 #: statuses of a finished case, cached and not recomputed: a doubtful case (energy created at a
-#: contact) is a deterministic answer too; its row keeps its status and the summary leaves it out
-FINISHED = ("success", "doubtful")
+#: contact) and an unseated one (a corner lost its seat; the run stops there) are deterministic
+#: answers too; their rows keep their status and the summary leaves them out
+FINISHED = ("success", "doubtful", "unseated")
 
 
 def _read_row(path: Path) -> dict | None:
@@ -142,6 +153,49 @@ def _read_row(path: Path) -> dict | None:
     except (OSError, ValueError):
         return None  # absent or damaged: recomputed
     return row if isinstance(row, dict) and row.get("status") in FINISHED else None
+
+
+def sweep_rows(
+    scenes: list[Scene],
+    engine: str,
+    rows_dir: Path,
+    title: str,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+) -> tuple[dict[int, dict], int]:
+    """Run ``engine`` on every scene for its summary row (:func:`case_row`, in the workers of
+    :mod:`.pool` or a Dask cluster: no histories travel), one cached JSON row per case in
+    ``rows_dir`` (finished cases are read back, not recomputed: Ctrl-C loses only the cases
+    running). Returns ({index: row}, number of cases computed now)."""
+    from deckpound._io import atomic_write_text
+
+    from .cases import Progress, _map_parallel, interrupted
+
+    keys = [row_key(engine, sc) for sc in scenes]
+    rows: dict[int, dict] = {}
+    for i, k in enumerate(keys):
+        cached = _read_row(rows_dir / f"{k}.json")
+        if cached is not None:
+            rows[i] = cached
+    todo = [i for i in range(len(scenes)) if i not in rows]
+    bar = Progress(len(scenes), title, progress)
+    bar.skip(len(rows))  # cached rows: done, not in the rate
+
+    def done(i: int, row: dict) -> None:
+        rows[i] = row
+        if row.get("status") in FINISHED:
+            atomic_write_text(rows_dir / f"{keys[i]}.json", json.dumps(row), field="--cache")
+        bar.advance()
+
+    try:
+        _map_parallel(todo, lambda i: (engine, scenes[i]), case_row, done, workers, scheduler)
+    except KeyboardInterrupt as err:
+        bar.close()
+        raise interrupted(err, title, len(rows), len(scenes), rows_dir) from None
+    bar.close()
+    return rows, len(todo)
 
 
 def run_variability(
@@ -163,8 +217,6 @@ def run_variability(
 
     from deckpound._io import atomic_write_text, ensure_folder, write_csv
 
-    from .cases import Progress, _map_parallel, interrupted
-
     if (cases is None) == (records is None):
         raise SceneError(
             "--cases", "give either --cases N (seeds of the synthetic record) or --records DIR"
@@ -176,29 +228,16 @@ def run_variability(
     )
     out = ensure_folder(out)
     rows_dir = ensure_folder(Path(cache_dir) if cache_dir else out / "cache", "--cache")
-    rows_dir = ensure_folder(rows_dir / "variability", "--cache")
     t0 = time.perf_counter()
-    keys = [row_key(engine, sc) for _, _, sc in specs]
-    rows: dict[int, dict] = {}
-    for i, k in enumerate(keys):
-        cached = _read_row(rows_dir / f"{k}.json")
-        if cached is not None:
-            rows[i] = cached
-    todo = [i for i in range(len(specs)) if i not in rows]
-    bar = Progress(len(specs), "study variability", progress)
-    bar.skip(len(rows))  # cached rows: done, not in the rate
-
-    def done(i: int, row: dict) -> None:
-        rows[i] = row
-        if row.get("status") in FINISHED:
-            atomic_write_text(rows_dir / f"{keys[i]}.json", json.dumps(row), field="--cache")
-        bar.advance()
-
-    try:
-        _map_parallel(todo, lambda i: (engine, specs[i][2]), case_row, done, workers, scheduler)
-    except KeyboardInterrupt as err:
-        bar.close()
-        raise interrupted(err, "study variability", len(rows), len(specs), rows_dir) from None
+    rows, computed = sweep_rows(
+        [sc for _, _, sc in specs],
+        engine,
+        ensure_folder(rows_dir / "variability", "--cache"),
+        "study variability",
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+    )
     table = pd.DataFrame(
         [
             {"case": i, "label": specs[i][0], "engine": engine, **specs[i][1], **rows[i]}
@@ -215,8 +254,8 @@ def run_variability(
         json.dumps(
             {
                 "cases": len(specs),
-                "computed": len(todo),
-                "from_cache": len(specs) - len(todo),
+                "computed": computed,
+                "from_cache": len(specs) - computed,
                 "engine": engine,
                 "wall_time": summary.attrs["wall"],
                 "workers": workers,
@@ -251,8 +290,11 @@ def summarize(table) -> object:
         rows.append(stats)
     frame = pd.DataFrame(rows)
     status = table.get("status")
-    frame.attrs["doubtful"] = int((status == "doubtful").sum()) if status is not None else 0
-    frame.attrs["failed"] = int(len(table) - len(ok)) - frame.attrs["doubtful"]
+    for name in ("doubtful", "unseated"):
+        frame.attrs[name] = int((status == name).sum()) if status is not None else 0
+    frame.attrs["failed"] = (
+        int(len(table) - len(ok)) - frame.attrs["doubtful"] - frame.attrs["unseated"]
+    )
     return frame
 
 

@@ -135,6 +135,40 @@ def register(sub: argparse._SubParsersAction) -> None:
     _parallel_args(p)
     p.set_defaults(func=_paper)
 
+    for name, levels_opt, what in (
+        ("ida", "--levels", "incremental dynamic analysis: each record pair scaled to every level"),
+        ("msa", "--stripes", "multiple-stripe analysis: the record pairs at each stripe"),
+    ):
+        p = sub.add_parser(name, help=f"{what}, with fragility curves (unseating, rotation)")
+        add_scene_args(p)
+        p.add_argument("--records", required=True, metavar="DIR", help="record pairs (AT2)")
+        p.add_argument(
+            "--im",
+            default="sa-t1",
+            choices=("sa-t1", "pga", "pgv", "rotd50"),
+            help="intensity measure of the pair (one factor per pair): geometric-mean "
+            "Sa(T1, 5 %%) [g] (default), PGA [g], PGV [m/s] or RotD50(T1) [g]",
+        )
+        p.add_argument(
+            levels_opt,
+            dest="levels",
+            required=True,
+            metavar="LEVELS",
+            help="start:stop:step (stop included) or a,b,c, in the IM's unit",
+        )
+        p.add_argument("--engine", default="compliance", metavar="NAME")
+        p.add_argument(
+            "--theta-limit",
+            type=float,
+            default=None,
+            metavar="RAD",
+            help="also fit the limit state peak deck rotation > RAD",
+        )
+        p.add_argument("--rotate90", action="store_true", help="also each pair turned by 90°")
+        p.add_argument("-o", "--output", default=None, metavar="DIR")
+        _parallel_args(p)
+        p.set_defaults(func=_ida, sweep=name)
+
     p = sub.add_parser("export-vtk", help="deck and seat outlines over time for ParaView")
     p.add_argument("result_dir", metavar="RESULT_DIR")
     p.add_argument("-o", "--output", required=True, metavar="DIR")
@@ -404,9 +438,62 @@ def _variability(args) -> int:
     print(view[["unit", "n", "median", "p16", "p84"]].to_string(float_format=lambda v: f"{v:.4g}"))
     failed = summary.attrs.get("failed", 0)
     doubtful = summary.attrs.get("doubtful", 0)
+    unseated = summary.attrs.get("unseated", 0)
     print(
         f"{len(table)} cases ({failed} not finished, {doubtful} doubtful: energy created at a "
-        f"contact; both left out of the statistics) in {summary.attrs['wall']:.1f} s; "
+        f"contact, {unseated} unseated; all left out of the statistics) in "
+        f"{summary.attrs['wall']:.1f} s; "
         f"wrote {terminal_text(out)}"
     )
     return 0 if not failed and (not doubtful or scene.run.accept_doubtful) else 1
+
+
+# -- IDA and multiple-stripe analysis (issue 30) -------------------------------------------------
+
+
+def _ida(args) -> int:
+    """``deckpound ida|msa``: the sweep's rows, the fragility table, one line per limit state."""
+    from deckpound._io import output_folder
+    from deckpound.compare.ida import IMS, parse_levels, run_ida
+
+    from ._cli_engines import check_output_folder
+    from .engines import get_engine
+
+    get_engine(args.engine)  # an unknown name is refused before any work
+    option = "--levels" if args.sweep == "ida" else "--stripes"
+    levels = parse_levels(args.levels, option)
+    if args.theta_limit is not None and not (
+        math.isfinite(args.theta_limit) and args.theta_limit > 0
+    ):
+        raise SceneError("--theta-limit", f"must be a finite angle > 0 rad, got {args.theta_limit}")
+    out = check_output_folder(args.output or args.sweep)
+    scene = _checked_scene(args, (args.engine,))
+    with output_folder(out, args.sweep) as out:
+        table, frag = run_ida(
+            scene,
+            out,
+            records=args.records,
+            im=args.im,
+            levels=levels,
+            engine=args.engine,
+            theta_limit=args.theta_limit,
+            rotate=args.rotate90,
+            cache_dir=args.cache,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            progress=not args.no_progress,
+            title=args.sweep,
+        )
+    unit = IMS[args.im][2]
+    method = args.sweep
+    for _, r in frag[frag["method"] == method].iterrows():
+        fit = (
+            f"median {r['median']:.4g} {unit}, beta {r['beta']:.3g}" if not r["note"] else r["note"]
+        )
+        print(f"{r['limit_state']}: {fit} ({r['cases']} cases fitted, {r['left_out']} left out)")
+    counts = table["status"].value_counts().to_dict()
+    print(
+        f"{len(table)} cases ({', '.join(f'{v} {k}' for k, v in sorted(counts.items()))}); "
+        f"wrote {terminal_text(out)}"
+    )
+    return 0

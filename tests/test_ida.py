@@ -1,0 +1,132 @@
+"""IDA and multiple-stripe analysis over a record suite, with fragility curves (issue 30,
+item 4): every record pair scaled by one factor per level, summary rows cached and resumed,
+statuses counted, fragility fitted from capacities (IDA) and from stripes (MSA)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from _record_helpers import quake, write_at2
+
+from deckpound import cli
+from deckpound.compare.ida import fragility_table, limit_states, parse_levels
+from deckpound.models.errors import SceneError
+
+PAIRS = 4
+#: a short seat so that the suite unseats within its levels (the benchmark's seat never does)
+SEATS = ["--set", "seats[0].support_length=0.015", "--set", "seats[1].support_length=0.015"]
+
+
+@pytest.fixture(scope="module")
+def suite(tmp_path_factory):
+    """PAIRS PEER-named station pairs of different synthetic motions (5 s at 100 Hz)."""
+    folder = tmp_path_factory.mktemp("suite")
+    for i in range(PAIRS):
+        write_at2(folder / f"RSN{100 + i}_TEST_ST{i}000.AT2", quake(n=500, seed=2 * i, f=1.5 + i))
+        write_at2(folder / f"RSN{100 + i}_TEST_ST{i}090.AT2", quake(n=500, seed=2 * i + 1))
+    return folder
+
+
+def _sweep(tmp_path, suite, command, levels, *extra):
+    out = tmp_path / command
+    args = [command, "saiidi-4span", "--records", str(suite), "--im", "pga"]
+    args += ["--levels" if command == "ida" else "--stripes", levels, *SEATS, *extra]
+    code = cli.main([*args, "--workers", "1", "--no-progress", "-o", str(out)])
+    return code, out
+
+
+def test_levels_parse_and_bad_levels_are_refused():
+    assert parse_levels("0.1:0.5:0.1", "--levels") == [0.1, 0.2, 0.3, 0.4, 0.5]
+    assert parse_levels("0.2,0.4,0.8", "--stripes") == [0.2, 0.4, 0.8]
+    for bad in ("0.5:0.1:0.1", "0.1:0.5:0", "a,b", "0.4,0.2", "0,0.1", "nan"):
+        with pytest.raises(SceneError):
+            parse_levels(bad, "--levels")
+
+
+def test_ida_runs_every_pair_at_every_level_and_fits_unseating(tmp_path, suite, capsys):
+    levels = "0.1:1.5:0.1"
+    code, out = _sweep(tmp_path, suite, "ida", levels, "--theta-limit", "0.002")
+    printed = capsys.readouterr().out
+    assert code == 0
+    table = pd.read_csv(out / "ida.csv", comment="#")
+    assert len(table) == PAIRS * 15
+    assert table["record"].nunique() == PAIRS
+    # one factor per pair: every case's geometric-mean PGA is its level (provenance)
+    assert set(np.round(table["level"], 9)) == {round(0.1 * k, 9) for k in range(1, 16)}
+    assert table["unseated"].any() and not table["unseated"].all()
+    assert set(table["status"]) <= {"success", "unseated", "doubtful", "failed"}
+    frag = pd.read_csv(out / "fragility.csv", comment="#")
+    row = frag[(frag["limit_state"] == "unseating") & (frag["method"] == "ida")].iloc[0]
+    assert 0.1 <= row["median"] <= 1.5 and row["beta"] > 0
+    assert "unseating: median" in printed and f"{PAIRS * 15} cases" in printed
+    # a repeated sweep takes every row from the cache
+    assert _sweep(tmp_path, suite, "ida", levels, "--theta-limit", "0.002")[0] == 0
+    meta = json.loads((out / "ida.json").read_text())
+    assert meta["from_cache"] == meta["cases"] == PAIRS * 15
+
+
+def test_msa_fits_stripes_and_counts_what_it_leaves_out(tmp_path, suite, capsys):
+    code, out = _sweep(tmp_path, suite, "msa", "0.2,0.4,0.6,0.8,1.0")
+    assert code == 0
+    frag = pd.read_csv(out / "fragility.csv", comment="#")
+    msa = frag[frag["method"] == "msa"].iloc[0]
+    assert msa["cases"] + msa["left_out"] == PAIRS * 5
+    assert "unseating:" in capsys.readouterr().out
+
+
+def test_fragility_of_rows_leaves_out_unfinished_cases():
+    """Failed and doubtful cases enter no fit and are counted."""
+    rows = []
+    for rec in range(6):
+        cap = 0.3 + 0.1 * rec
+        for level in (0.2, 0.4, 0.6, 0.8, 1.0):
+            rows.append(
+                {
+                    "record_key": f"r{rec}",
+                    "level": level,
+                    "status": "success",
+                    "unseated": level >= cap,
+                }
+            )
+    rows.append({"record_key": "bad", "level": 0.2, "status": "failed", "unseated": False})
+    rows.append({"record_key": "dbt", "level": 0.4, "status": "doubtful", "unseated": True})
+    frag = fragility_table(rows, [0.2, 0.4, 0.6, 0.8, 1.0], limit_states(None))
+    for _, r in frag.iterrows():
+        assert r["left_out"] == 2 and r["cases"] == 30
+        assert 0.3 < r["median"] < 1.0 and r["beta"] > 0
+
+
+def test_a_lone_component_in_the_suite_exits_2(tmp_path):
+    folder = tmp_path / "lone"
+    folder.mkdir()
+    write_at2(folder / "RSN1_X_ST000.AT2", quake(n=200))
+    code = cli.main(
+        ["ida", "saiidi-4span", "--records", str(folder), "--levels", "0.1,0.2"]
+        + ["-o", str(tmp_path / "o")]
+    )
+    assert code == 2
+
+
+def test_ida_on_a_local_dask_cluster_of_two_workers_equals_the_local_pool(tmp_path, suite):
+    distributed = pytest.importorskip("dask.distributed")
+    levels = "0.4,0.8"
+    assert _sweep(tmp_path / "local", suite, "ida", levels)[0] == 0
+    with distributed.LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        protocol="tcp",
+        host="127.0.0.1",
+        dashboard_address=None,
+    ) as cluster:
+        out = tmp_path / "dask"
+        args = ["ida", "saiidi-4span", "--records", str(suite), "--im", "pga", "--levels"]
+        args += [levels, *SEATS, "--scheduler", cluster.scheduler_address, "--no-progress"]
+        assert cli.main([*args, "-o", str(out)]) == 0
+    local = pd.read_csv(tmp_path / "local" / "ida" / "ida.csv", comment="#")
+    remote = pd.read_csv(out / "ida.csv", comment="#")
+    for q in ("peak_theta", "seat_margin", "gap_closures"):
+        np.testing.assert_array_equal(remote[q], local[q])
