@@ -46,7 +46,15 @@ from deckpound.analytic.dormand_prince_work import (
     AdaptiveOptions,
     adaptive_workspace,
 )
-from deckpound.analytic.peaks import new_peaks, peak_columns, step_closures, step_peaks
+from deckpound.analytic.peaks import (
+    corner_support_lengths,
+    new_peaks,
+    peak_columns,
+    step_closures,
+    step_openings,
+    step_peaks,
+    step_unseated,
+)
 from deckpound.analytic.system import initial_dofs
 from deckpound.engine_contract import RunOutput, Status, engine_columns
 from deckpound.models.excitation import analysis_duration
@@ -104,7 +112,9 @@ def run_adaptive(
     nout = round(duration / out_dt) + 1
     cols = engine_columns(plan) + list(ENERGY_COLUMNS)
     bd.check_output_size(nout, len(cols))
-    peaks = new_peaks(ps.channels, plan.bent_names, ps.n_bent_springs)
+    peaks = new_peaks(
+        ps.channels, plan.bent_names, ps.n_bent_springs, corner_support_lengths(scene, plan)
+    )
     output = bd.Output(
         np.zeros((nout, len(cols))),
         np.arange(len(cols), dtype=np.int64),
@@ -143,6 +153,7 @@ def run_adaptive(
     status = (
         Status.SUCCESS if ok else (bd.status_of(code) if code != bd.RUN_OK else Status.NONFINITE)
     )
+    finished = ok or status == Status.UNSEATED  # unseating is an answer, not a failure
     extra = {
         "integrator": "adaptive",
         "kv_clip": kv_clip,
@@ -169,14 +180,16 @@ def run_adaptive(
         columns=columns,
         status=status,
         message=message,
-        failed_step=None if ok else st["failed_step"],
-        failed_time=None if ok else st["time"],
+        failed_step=None if finished else st["failed_step"],
+        failed_time=None if finished else st["time"],
         steps=st["steps"],
-        failed_steps=0 if ok else 1,
+        failed_steps=0 if finished else 1,
         compile_time=compile_time,
         loop_time=loop,
         max_penetration=st["max_penetration"],
         peaks=step_peaks(peaks, peak_columns(engine_columns(plan), plan.bent_names)),
         gap_closures_per_corner=step_closures(peaks),
+        gap_openings=step_openings(peaks),
+        unseated=step_unseated(peaks),
         extra=extra,
     )

@@ -58,6 +58,7 @@ __all__ = [
     "RUN_STEP_BUDGET",
     "RUN_STEP_UNDERFLOW",
     "RUN_UNKNOWN_LAW",
+    "RUN_UNSEATED",
     "VALUE_NAMES",
     "Contact",
     "ContactWork",
@@ -164,6 +165,7 @@ RUN_STEP_BUDGET = 5  # step budget exhausted (adaptive)
 RUN_INTERRUPTED = 6  # Stats.halt set (Ctrl-C)
 RUN_STEP_UNDERFLOW = 7  # adaptive step size below 1e-14 s
 RUN_UNKNOWN_LAW = 8  # a contact law or friction code without a kernel branch
+RUN_UNSEATED = 9  # a corner's seat margin became negative: the loop stopped after that step
 
 _STATUS = {
     RUN_OK: Status.SUCCESS,
@@ -174,6 +176,7 @@ _STATUS = {
     RUN_STEP_BUDGET: Status.STEP_BUDGET,
     RUN_INTERRUPTED: Status.INTERRUPTED,
     RUN_STEP_UNDERFLOW: Status.NOT_CONVERGED,
+    RUN_UNSEATED: Status.UNSEATED,
 }
 
 #: Largest output table a run may allocate [bytes] (1 GiB; the engine's result copies it once

@@ -267,7 +267,15 @@ def _run_newmark(
         newmark_run,
         newmark_workspace,
     )
-    from deckpound.analytic.peaks import new_peaks, peak_columns, step_closures, step_peaks
+    from deckpound.analytic.peaks import (
+        corner_support_lengths,
+        new_peaks,
+        peak_columns,
+        step_closures,
+        step_openings,
+        step_peaks,
+        step_unseated,
+    )
     from deckpound.analytic.system import initial_dofs
 
     on = dict.fromkeys(SKIPS, True)
@@ -315,7 +323,9 @@ def _run_newmark(
         want_energy=any(c in ENERGY_COLUMNS for c in cols),
         flush_subnormals=settings.subnormals == "flush",
     )
-    peaks = new_peaks(ps.channels, plan.bent_names, ps.n_bent_springs)
+    peaks = new_peaks(
+        ps.channels, plan.bent_names, ps.n_bent_springs, corner_support_lengths(scene, plan)
+    )
     output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(len(full)), peaks)
     u0, v0 = initial_dofs(initial_state)
     work = newmark_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, len(ps.channels))
@@ -336,6 +346,7 @@ def _run_newmark(
         rows = out.shape[0]
     columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
     ok = status == Status.SUCCESS
+    finished = ok or status == Status.UNSEATED  # unseating is an answer, not a failure
     extra = {
         "integrator": "newmark",
         "dt": float(dt),
@@ -365,17 +376,19 @@ def _run_newmark(
             if ok
             else _STATUS_TEXT.get(st["status"], status.text)
         ),
-        failed_step=None if ok else failed_step,
-        failed_time=None if ok else failed_step * dt,
+        failed_step=None if finished else failed_step,
+        failed_time=None if finished else failed_step * dt,
         steps=st["steps"],
         newton_iterations=st["newton_iterations"],
-        failed_steps=st["rescued_steps"] + (0 if ok else 1),
+        failed_steps=st["rescued_steps"] + (0 if finished else 1),
         rescued_steps=st["rescued_steps"],
         compile_time=compile_time,
         loop_time=loop,
         max_penetration=st["max_penetration"],
         peaks=step_peaks(peaks, peak_columns(engine_cols, plan.bent_names)),
         gap_closures_per_corner=step_closures(peaks),
+        gap_openings=step_openings(peaks),
+        unseated=step_unseated(peaks),
         extra=extra,
     )
 

@@ -26,6 +26,7 @@ from deckpound.analytic.bundles import (
     RUN_OK,
     RUN_STEP_BUDGET,
     RUN_STEP_UNDERFLOW,
+    RUN_UNSEATED,
 )
 from deckpound.analytic.dormand_prince_work import H_BINS_PER_DECADE, H_LOG_MIN, H_NBINS, NT, NY
 from deckpound.analytic.fp_mode import flush_enter, flush_leave
@@ -244,7 +245,8 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
     (accepted), rejected, events, rhs calls; value[VAL_TIME] = the time reached [s],
     value[VAL_MAX_PEN] the largest penetration over the accepted steps [m]; work.hist,
     work.hstat: accepted step sizes. ``stats.halt[0]`` ≠ 0 stops the loop before the next step
-    attempt (RUN_INTERRUPTED); so does ``opt.max_steps`` attempts (RUN_STEP_BUDGET).
+    attempt (RUN_INTERRUPTED); so does ``opt.max_steps`` attempts (RUN_STEP_BUDGET), and an
+    accepted step at which a seat margin becomes negative (RUN_UNSEATED, after that step).
     """
     # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
     # deckpound.analytic.fp_mode); every return below restores the thread's mode first
@@ -381,7 +383,7 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
         calls += 1
         _events(y, sa, contact, ws, ev0)
         steps += 1
-        _adaptive_track(sa, ws, output.peaks, t)
+        unseated = _adaptive_track(sa, ws, output.peaks, t)
         if ev0[0] <= 0.0 or ev0[1] <= 0.0 or ev0[2] <= 0.0 or ev0[3] <= 0.0:
             in_contact = True
         hs = t - t_start
@@ -403,6 +405,9 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
         if not finite:
             status = RUN_NONFINITE
             break
+        if unseated:  # a seat margin became negative at this step (.peaks): the answer ends
+            status = RUN_UNSEATED
+            break
         if row < nout and abs(t - row * out_dt) <= 1e-9 * out_dt:
             _adaptive_store(sa, contact, ws, output, row, row * out_dt)
             row += 1
@@ -420,7 +425,9 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
     cnt[bd.CNT_STATUS] = status
     cnt[bd.CNT_ROWS] = row
     cnt[bd.CNT_STEPS] = steps
-    cnt[bd.CNT_FAILED_STEP] = 0 if status == RUN_OK else steps + 1
+    cnt[bd.CNT_FAILED_STEP] = (
+        0 if status == RUN_OK else (steps if status == RUN_UNSEATED else steps + 1)
+    )
     cnt[bd.CNT_REJECTED] = rejected
     cnt[bd.CNT_EVENTS] = events
     cnt[bd.CNT_RHS_CALLS] = calls
@@ -432,11 +439,11 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
 def _adaptive_track(sa, ws, pk, t):
     """Peaks and gap closures of the accepted step ending at t (:mod:`.peaks`): the engine
     columns as :func:`_adaptive_store` writes them, from the state of the last :func:`_rhs`
-    call at (t, y)."""
+    call at (t, y); True when a seat margin became negative (:func:`.peaks.track_step`)."""
     y = ws.y
     cw = ws.cw
     store_standard(pk.row, t, y[0:7], y[7:14], cw.g, cw.lam, cw.lt, ws.hstate[:, T_STRESS], sa.nbs)
-    track_step(pk, t, y[0:7], ws.ug, ws.d, sa.nbs)
+    return track_step(pk, t, y[0:7], ws.ug, ws.d, sa.nbs)
 
 
 @kernel

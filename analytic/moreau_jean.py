@@ -80,6 +80,7 @@ from deckpound.analytic.bundles import (
     RUN_NOT_CONVERGED,
     RUN_OK,
     RUN_SINGULAR,
+    RUN_UNSEATED,
 )
 from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.fp_mode import flush_enter, flush_leave
@@ -150,7 +151,10 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     ``work.final`` (2, 7) = displacement and velocity at the last accepted step;
     ``output.peaks``: peaks and gap closures over every step (:mod:`.peaks`; the forces of a
     step are its impulses divided by h).
-    ``stats.halt[0]`` ≠ 0 stops the loop at the next Newton iteration (RUN_INTERRUPTED).
+    ``stats.halt[0]`` ≠ 0 stops the loop at the next Newton iteration (RUN_INTERRUPTED). A
+    step at which a corner's seat margin becomes negative (:func:`deckpound.analytic.peaks.
+    track_step`) ends the loop with RUN_UNSEATED (failed step = steps = that step, its output
+    row not written).
     """
     # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
     # deckpound.analytic.fp_mode); every return below restores the thread's mode first
@@ -465,7 +469,11 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
             for c in range(4):
                 state[c] = 0
         store_standard(pk.row, (n + 1) * h, q, v, gapo, fn_step, ft_step, fs, nbs)
-        track_step(pk, (n + 1) * h, q, ug, d, nbs)
+        if track_step(pk, (n + 1) * h, q, ug, d, nbs):
+            # a seat margin became negative (.peaks): the answer ends with this step
+            status = RUN_UNSEATED
+            failed = n + 1
+            break
         # ---- output
         if (n + 1) % stride == 0:
             contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
@@ -493,15 +501,17 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
             for c in range(4):
                 pn_acc[c] = 0.0
                 pt_acc[c] = 0.0
-    if status == RUN_OK:
+    if status in (RUN_OK, RUN_UNSEATED):
         for j in range(7):
             uv_end[0, j] = q[j]
             uv_end[1, j] = v[j]
+    # steps completed: all, the unseating step included, or those before the failed one
+    done = nsteps if status == RUN_OK else (failed if status == RUN_UNSEATED else failed - 1)
     cnt = stats.count
     cnt[bd.CNT_STATUS] = status
     cnt[bd.CNT_ROWS] = row
     cnt[bd.CNT_FAILED_STEP] = failed
-    cnt[bd.CNT_STEPS] = nsteps if status == RUN_OK else failed - 1
+    cnt[bd.CNT_STEPS] = done
     cnt[bd.CNT_SOLVES] = solves
     cnt[bd.CNT_EVENTS] = events
     cnt[bd.CNT_CONTACT_STEPS] = csteps
@@ -511,5 +521,5 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     stats.value[bd.VAL_MAX_COMP] = max_comp
     stats.value[bd.VAL_MAX_CONE] = max_cone
     stats.value[bd.VAL_MAX_PEN] = max_pen
-    stats.value[bd.VAL_TIME] = (nsteps if status == RUN_OK else failed - 1) * h
+    stats.value[bd.VAL_TIME] = done * h
     flush_leave(saved)

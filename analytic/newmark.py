@@ -41,6 +41,7 @@ from deckpound.analytic.bundles import (
     RUN_NOT_CONVERGED,
     RUN_OK,
     RUN_SINGULAR,
+    RUN_UNSEATED,
 )
 from deckpound.analytic.compliance import ENERGY_COLUMNS
 from deckpound.analytic.dense import lu_factor, lu_solve
@@ -150,7 +151,10 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     and the gap closures over every converged (sub)step, :mod:`.peaks`) and ``stats.count``: status (RUN_OK,
     RUN_NOT_CONVERGED, RUN_SINGULAR, RUN_NONFINITE, RUN_INTERRUPTED), rows written, failed
     step, steps completed, Newton iterations, contact events, factorisations reused (same
-    matrix), max iterations of a step, steps rescued by sub-stepping. ``stats.halt[0]`` ≠ 0
+    matrix), max iterations of a step, steps rescued by sub-stepping. A step at which a
+    corner's seat margin becomes negative (:func:`deckpound.analytic.peaks.track_step`) is
+    completed (all its sub-steps) and the loop stops there with RUN_UNSEATED (failed step =
+    steps = that step, its output row not written). ``stats.halt[0]`` ≠ 0
     stops the loop at the next Newton iteration (status RUN_INTERRUPTED).
     """
     # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
@@ -270,6 +274,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     maxit_seen = 0
     rescued = 0
     status = RUN_OK
+    unseated = False
     for n in range(nsteps):
         if halt[0] != 0:
             _set_stats(
@@ -422,7 +427,8 @@ def newmark_run(system, contact, record, opt, output, work, stats):
                 # peaks of every column and gap closures at every converged (sub)step
                 t_now = (n + 1) * dt if ksub == nsub - 1 else n * dt + (ksub + 1) * h
                 fill_row(pk.row, t_now, u, v, cw, cs, fs, nbs)
-                track_step(pk, t_now, u, ug, d_new, nbs)
+                if track_step(pk, t_now, u, ug, d_new, nbs):
+                    unseated = True
                 # --- energy (trapezoidal work over the (sub)step)
                 if not want_energy:
                     continue
@@ -480,6 +486,23 @@ def newmark_run(system, contact, record, opt, output, work, stats):
         if status != RUN_OK:
             _set_stats(
                 stats, status, row, n + 1, n, total_it, events, reused, maxit_seen, rescued, dt
+            )
+            flush_leave(saved)
+            return
+        if unseated:
+            # a seat margin became negative in this step (.peaks): the answer ends here
+            _set_stats(
+                stats,
+                RUN_UNSEATED,
+                row,
+                n + 1,
+                n + 1,
+                total_it,
+                events,
+                reused,
+                maxit_seen,
+                rescued,
+                dt,
             )
             flush_leave(saved)
             return

@@ -208,7 +208,15 @@ class NonsmoothEngine(Engine):
             moreau_jean_run,
             moreau_jean_workspace,
         )
-        from deckpound.analytic.peaks import new_peaks, peak_columns, step_closures, step_peaks
+        from deckpound.analytic.peaks import (
+            corner_support_lengths,
+            new_peaks,
+            peak_columns,
+            step_closures,
+            step_openings,
+            step_peaks,
+            step_unseated,
+        )
         from deckpound.analytic.support_motion import support_record
         from deckpound.analytic.system import initial_dofs, pack_system
         from deckpound.models.damping import damping_model
@@ -235,7 +243,9 @@ class NonsmoothEngine(Engine):
         nsteps = round(duration / h)
         cols = engine_columns(plan) + list(IMPULSE_COLUMNS) + list(ENERGY_COLUMNS)
         bd.check_output_size(nsteps // stride + 1, len(cols))
-        peaks = new_peaks(ps.channels, plan.bent_names, ps.n_bent_springs)
+        peaks = new_peaks(
+            ps.channels, plan.bent_names, ps.n_bent_springs, corner_support_lengths(scene, plan)
+        )
         output = bd.Output(
             np.zeros((nsteps // stride + 1, len(cols))),
             np.arange(len(cols), dtype=np.int64),
@@ -270,6 +280,7 @@ class NonsmoothEngine(Engine):
         st = bd.stats_dict(stats)
         status = bd.status_of(st["status"])
         ok = status == Status.SUCCESS
+        finished = ok or status == Status.UNSEATED  # unseating is an answer, not a failure
         rows = st["rows"]
         columns = {k: output.table[:rows, i].copy() for i, k in enumerate(cols)}
         ein = float(np.max(np.abs(columns["energy_input"]))) if rows else 0.0
@@ -300,18 +311,20 @@ class NonsmoothEngine(Engine):
             )
             if ok
             else text_of.get(st["status"], status.text),
-            failed_step=None if ok else st["failed_step"],
-            failed_time=None if ok else st["failed_step"] * h,
+            failed_step=None if finished else st["failed_step"],
+            failed_time=None if finished else st["failed_step"] * h,
             steps=st["steps"],
             newton_iterations=st["newton_iterations"],
             contact_solves=st["contact_solves"],
-            failed_steps=0 if ok else 1,
+            failed_steps=0 if finished else 1,
             compile_time=compile_time,
             loop_time=loop,
             max_penetration=st["max_penetration"],
             max_complementarity_residual=st["max_complementarity"],
             peaks=step_peaks(peaks, peak_columns(engine_columns(plan), plan.bent_names)),
             gap_closures_per_corner=step_closures(peaks),
+            gap_openings=step_openings(peaks),
+            unseated=step_unseated(peaks),
             extra=extra,
         )
 

@@ -20,7 +20,16 @@ a rescued step, every adaptive step) and once at t = 0, with the state it commit
   signed value instead;
 * ``Peaks.closures`` counts, per corner, the steps at which the corner goes from out of
   contact to in contact (:func:`in_contact_now`, the one definition; a run that starts in
-  contact counts one: ``Peaks.inside`` starts False).
+  contact counts one: ``Peaks.inside`` starts False);
+* ``Peaks.gap_open`` / ``Peaks.gap_open_time`` keep, per corner, the **largest** gap g_c [m]
+  and its first time [s], ``Peaks.gap_start`` the gap at t = 0: the largest opening
+  g_c − g_c(0) is the seat-width demand, and with the support length N of the facing seat
+  (``seats[i].support_length``, ``Peaks.support``; +inf: not checked) the seat margin is
+  m_c = N − (g_c − g_c(0)). Its minimum over the run is at the largest gap. The first step at
+  which a margin is negative (g_c − g_c(0) > N: the deck end has moved away from the
+  backwall by more than the seat under it) is the **unseating**: :func:`track_step` returns
+  True and ``Peaks.unseat`` holds 1 + the corner's index and ``Peaks.unseat_time`` its time;
+  the loops finish that step and stop (status ``RUN_UNSEATED``).
 
 The engine fills the standard part of ``Peaks.row`` itself (its force columns differ: the
 compliance engines' λ_N, λ_T; the nonsmooth engine's impulse of the step divided by the step,
@@ -44,11 +53,14 @@ from deckpound.models.result import peak_columns
 
 __all__ = [
     "Peaks",
+    "corner_support_lengths",
     "in_contact_now",
     "new_peaks",
     "peak_columns",
     "step_closures",
+    "step_openings",
     "step_peaks",
+    "step_unseated",
     "track_step",
 ]
 
@@ -58,19 +70,53 @@ __all__ = [
 #: ``tx``, ``ty`` int64 the support channels of the shake tables in x and y (their mean is the
 #: reference of deck_x_rel, deck_y_rel), ``seat`` (2,) int64 the actuator channel of each seat;
 #: ``inside`` (4,) bool corner in contact at the last step, ``closures`` (4,) int64 closures per
-#: corner; ``force`` (2, 4) scratch for the step's normal and tangential forces.
+#: corner; ``force`` (2, 4) scratch for the step's normal and tangential forces; per corner
+#: ``gap_open`` (4,) the largest gap [m] and ``gap_open_time`` (4,) its time [s],
+#: ``gap_start`` (4,) the gap at t = 0 [m], ``support`` (4,) the support length of the facing
+#: seat [m] (+inf: not checked); ``unseat`` int64 (1,) 1 + the first unseated corner (0:
+#: none) and ``unseat_time`` (1,) when [s] (module docstring).
 Peaks = namedtuple(
-    "Peaks", ["row", "value", "time", "tx", "ty", "seat", "inside", "closures", "force"]
+    "Peaks",
+    [
+        "row",
+        "value",
+        "time",
+        "tx",
+        "ty",
+        "seat",
+        "inside",
+        "closures",
+        "force",
+        "gap_open",
+        "gap_open_time",
+        "gap_start",
+        "support",
+        "unseat",
+        "unseat_time",
+    ],
 )
 
 
-def new_peaks(channels, bent_names, n_bent_springs: int) -> Peaks:
+def corner_support_lengths(scene, plan) -> np.ndarray:
+    """The support length N [m] of the seat each corner faces (``seats[i].support_length`` of
+    ``scene`` through the ``plan``'s corner table), +inf where it is not set (not checked)."""
+    lengths = [s.support_length for s in scene.seats]
+    return np.array(
+        [np.inf if lengths[c.seat] is None else float(lengths[c.seat]) for c in plan.corners]
+    )
+
+
+def new_peaks(channels, bent_names, n_bent_springs: int, support=None) -> Peaks:
     """Zeroed :data:`Peaks` for a model with these support ``channels`` (the order of u_g) and
-    bents; the gap entries start at +inf (their statistic is the minimum)."""
+    bents; the gap entries start at +inf (their statistic is the minimum), the largest gaps at
+    −inf. ``support`` (4,) the corners' support lengths [m] (:func:`corner_support_lengths`;
+    None: none checked)."""
     n = C_BENT + 2 * n_bent_springs + len(RELATIVE_COLUMNS)
     channels = list(channels)
     value = np.zeros(n)
     value[C_GAP : C_GAP + len(CORNER_NAMES)] = np.inf
+    nc = len(CORNER_NAMES)
+    support = np.full(nc, np.inf) if support is None else np.asarray(support, dtype=float)
     return Peaks(
         row=np.zeros(n),
         value=value,
@@ -81,6 +127,12 @@ def new_peaks(channels, bent_names, n_bent_springs: int) -> Peaks:
         inside=np.zeros(len(CORNER_NAMES), dtype=np.bool_),
         closures=np.zeros(len(CORNER_NAMES), dtype=np.int64),
         force=np.zeros((2, len(CORNER_NAMES))),
+        gap_open=np.full(nc, -np.inf),
+        gap_open_time=np.zeros(nc),
+        gap_start=np.zeros(nc),
+        support=support.copy(),
+        unseat=np.zeros(1, dtype=np.int64),
+        unseat_time=np.zeros(1),
     )
 
 
@@ -103,7 +155,9 @@ def track_step(pk, t, u, ug, d, nbs):
     the relative displacements and bent deformations, then update the peaks and the closures.
 
     u (7,) displacements [m, rad] and ug (n_channels,) support displacements [m] at the step,
-    d the spring deformations d = B u − S u_g (the first ``nbs`` are the bents'), t [s]."""
+    d the spring deformations d = B u − S u_g (the first ``nbs`` are the bents'), t [s].
+    Returns True when a corner's seat margin N − (g − g(0)) became negative at this step (the
+    deck is unseated; module docstring): one comparison per corner while no gap grows."""
     row = pk.row
     base = C_BENT + nbs
     mx = 0.0
@@ -137,11 +191,26 @@ def track_step(pk, t, u, ug, d, nbs):
         if now and not pk.inside[c]:
             pk.closures[c] += 1
         pk.inside[c] = now
+    # the largest gap (seat margin): the initial gap at the first call (largest still −inf)
+    unseated = False
+    for c in range(4):
+        gk = row[C_GAP + c]
+        if gk > pk.gap_open[c]:
+            if pk.gap_open[c] == -np.inf:
+                pk.gap_start[c] = gk
+            pk.gap_open[c] = gk
+            pk.gap_open_time[c] = t
+            if gk - pk.gap_start[c] > pk.support[c]:
+                unseated = True
+                if pk.unseat[0] == 0:
+                    pk.unseat[0] = c + 1
+                    pk.unseat_time[0] = t
     for k in range(C_GAP + 4, row.shape[0]):
         a = abs(row[k])
         if a > value[k]:
             value[k] = a
             time[k] = t
+    return unseated
 
 
 def step_peaks(pk: Peaks, names: list[str]) -> dict[str, tuple[float, float]]:
@@ -153,6 +222,21 @@ def step_peaks(pk: Peaks, names: list[str]) -> dict[str, tuple[float, float]]:
         for k, n in enumerate(names)
         if n != "t" and np.isfinite(pk.value[k])
     }
+
+
+def step_openings(pk: Peaks) -> dict[str, tuple[float, float]]:
+    """``{corner: (opening, time)}``: the largest gap opening g_c − g_c(0) over every step
+    [m] (the seat-width demand; negative if the gap only closed) and when it was reached [s]."""
+    return {
+        c: (float(pk.gap_open[k] - pk.gap_start[k]), float(pk.gap_open_time[k]))
+        for k, c in enumerate(CORNER_NAMES)
+    }
+
+
+def step_unseated(pk: Peaks) -> tuple[str, float] | None:
+    """``(corner, time [s])`` of the first unseating (:func:`track_step`), or None."""
+    k = int(pk.unseat[0])
+    return None if k == 0 else (CORNER_NAMES[k - 1], float(pk.unseat_time[0]))
 
 
 def step_closures(pk: Peaks) -> dict[str, int]:

@@ -8,7 +8,8 @@ engine's extras) and metadata. Its units come from the plan model's column table
 
 Metadata every engine fills through the shared epilogue (:func:`deckpound.engine_contract.finish`):
 ``status`` (``"success"``; ``"doubtful"``: finished, but a quality check failed, see
-``doubtful``; or ``"failed"``), ``failure`` (a :class:`~deckpound.engine_contract.Status`
+``doubtful``; ``"unseated"``: a corner lost its seat and the run stopped there, see
+``unseated``; or ``"failed"``), ``failure`` (a :class:`~deckpound.engine_contract.Status`
 name), ``message``, ``failed_step``/``failed_time`` on failure, ``steps``, ``newton_iterations``,
 ``contact_solves``, ``gap_closures`` (see :func:`gap_closures`; ``gap_closures_basis``),
 ``peaks`` (``{column: [peak, time]}`` over every step, :meth:`Result.peak`; ``peaks_basis``),
@@ -43,6 +44,7 @@ __all__ = [
     "STATUS_DOUBTFUL",
     "STATUS_FAILED",
     "STATUS_SUCCESS",
+    "STATUS_UNSEATED",
     "Result",
     "closure_times",
     "column_unit",
@@ -62,6 +64,9 @@ STATUS_SUCCESS = "success"
 STATUS_FAILED = "failed"
 #: finished, but a quality check failed (``meta["doubtful"]`` says which and where)
 STATUS_DOUBTFUL = "doubtful"
+#: a deck corner lost its seat (its gap opened by more than ``seats[i].support_length``): the
+#: run stopped at that step with its answer, not a numerical failure (``meta["unseated"]``)
+STATUS_UNSEATED = "unseated"
 
 #: Scene tables that do not change what an engine computes: engine settings (hashed separately,
 #: per engine), the test sequence (a driver of runs), free text.
@@ -218,6 +223,13 @@ class Result:
     def doubtful(self) -> bool:
         """True for a run that finished but failed a quality check (``meta["doubtful"]``)."""
         return self.meta.get("status") == STATUS_DOUBTFUL
+
+    @property
+    def unseated(self) -> bool:
+        """True for a run that stopped because a deck corner lost its seat
+        (``meta["unseated_corner"]``, ``meta["unseated_time"]``; the status is
+        ``"unseated"`` unless a quality check made it ``"doubtful"``)."""
+        return bool(self.meta.get("unseated", False))
 
     @property
     def units(self) -> dict[str, str]:

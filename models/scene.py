@@ -201,6 +201,17 @@ class Seat:
     cx: float = spec(unit="kN*s/m", doc="translational dashpot", ge=0.0)
     ctheta: float = spec(unit="kN*m*s/rad", doc="rotational dashpot", ge=0.0)
     gap: float = spec(unit="m", doc="initial clear gap between deck end and seat face", ge=0.0)
+    support_length: float | None = spec(
+        None,
+        unit="m",
+        doc="seat (support) length N under the deck end, along the face normal, measured "
+        "from the deck end's initial position (AASHTO LRFD 4.7.4.4 seat width): a corner "
+        "facing this seat is unseated when its gap has opened by more than N since t = 0 "
+        "(seat margin N - (g - g0) < 0) and the run ends with status 'unseated'; none (the "
+        "default): the margin is not checked, since the seat width depends on the bridge's "
+        "spans, column heights, skew and scale and no one number fits every scene",
+        gt=0.0,
+    )
     fixed: bool = spec(
         False,
         doc="rigid abutment: the seat stays on its actuator and the "

@@ -138,7 +138,11 @@ def new_tracker(ops, plan):
     epilogue derives them from the output rows. 'value' is the largest |x| of each column so
     far (for the gaps the smallest, most negative value), 'time' its first time [s];
     'closures' counts per corner the steps at which the corner goes from out of contact to in
-    contact (gap <= 0 or fn > 0), a corner in contact at t = 0 counting one."""
+    contact (gap <= 0 or fn > 0), a corner in contact at t = 0 counting one. Per corner,
+    'gap_open' is the largest gap so far and 'gap_open_time' its first time, 'gap_start' the
+    gap at t = 0; 'unseated' = [corner, time] of the first step at which the opening
+    g - g(0) exceeded the support length plan['support_lengths'][c] of the facing seat (None:
+    not checked), else None (deckpound.analytic.peaks, the same rule)."""
     cols = plan["peak_columns"]
     g0 = cols.index("gap_c1")
     value = [0.0] * len(cols)
@@ -152,6 +156,10 @@ def new_tracker(ops, plan):
         "abs": list(range(1, g0)) + list(range(g0 + 4, len(cols))),
         "inside": [False] * 4,
         "closures": [0] * 4,
+        "gap_open": [-math.inf] * 4,
+        "gap_open_time": [0.0] * 4,
+        "gap_start": [0.0] * 4,
+        "unseated": None,
     }
     track_step(ops, plan, tr, 0.0)
     return tr
@@ -184,6 +192,16 @@ def track_step(ops, plan, tr, t):
         if now and not tr["inside"][c]:
             tr["closures"][c] += 1
         tr["inside"][c] = now
+        # the largest gap and the seat margin N - (g - g(0)) (the first call gives g(0))
+        if g > tr["gap_open"][c]:
+            if tr["gap_open"][c] == -math.inf:
+                tr["gap_start"][c] = g
+            tr["gap_open"][c] = g
+            tr["gap_open_time"][c] = t
+            support = plan["support_lengths"][c]
+            if support is not None and g - tr["gap_start"][c] > support:
+                if tr["unseated"] is None:
+                    tr["unseated"] = [f"c{c + 1}", t]
 
 
 def run_steps(ops, plan, log=None, on_step=None):
@@ -197,9 +215,12 @@ def run_steps(ops, plan, log=None, on_step=None):
     its last commit) after rebuilding the analysis objects (wipeAnalysis + define_analysis:
     the Transformation handler otherwise keeps a stale increment on constrained nodes; there
     is no revertToLastCommit command in openseespy 3.7) with plan['substeps']
-    sub-steps, each checked. A non-finite state is a failure. Returns a dict with the rows and
-    the statistics, among them 'peaks' ({column: [peak, time]}) and 'gap_closures' (total and
-    per corner) over every converged step and sub-step (:func:`new_tracker`).
+    sub-steps, each checked. A non-finite state is a failure. A step (with all its sub-steps)
+    after which a corner is unseated (:func:`track_step`) ends the loop with status
+    'unseated', its output row not written. Returns a dict with the rows and the statistics,
+    among them 'peaks' ({column: [peak, time]}), 'gap_closures' (total and per corner),
+    'gap_openings' ({corner: [largest g - g(0), time]}) and 'unseated' ([corner, time] or
+    None) over every converged step and sub-step (:func:`new_tracker`).
     """
     dt = plan["dt"]
     n_steps = plan["n_steps"]
@@ -264,6 +285,11 @@ def run_steps(ops, plan, log=None, on_step=None):
             )
             break
         stats["steps"] = n
+        if tr["unseated"] is not None:
+            corner, when = tr["unseated"]
+            stats["status"] = "unseated"
+            stats["message"] = f"corner {corner} unseated at t = {when:.6g} s (step {n})"
+            break
         if n % stride == 0:
             row = sample_row(ops, plan, n * dt)
             if not all(math.isfinite(v) for v in row):
@@ -275,6 +301,11 @@ def run_steps(ops, plan, log=None, on_step=None):
             rows.append(row)
     stats["gap_closures"] = sum(tr["closures"])
     stats["gap_closures_per_corner"] = {f"c{c + 1}": tr["closures"][c] for c in range(4)}
+    stats["gap_openings"] = {
+        f"c{c + 1}": [tr["gap_open"][c] - tr["gap_start"][c], tr["gap_open_time"][c]]
+        for c in range(4)
+    }
+    stats["unseated"] = tr["unseated"]
     stats["peaks"] = {
         name: [tr["value"][k], tr["time"][k]]
         for k, name in enumerate(plan["peak_columns"])
@@ -296,6 +327,8 @@ def make_plan(scene: Scene, info, duration: float) -> dict:
     from deckpound.models.plan import plan_of
 
     dt = contact_resolving_step(scene, s.dt)
+    # the support length of the seat each corner faces [m] (None: unseating not checked)
+    lengths = [seat.support_length for seat in scene.seats]
     return {
         "dt": dt,
         "n_steps": int(round(duration / dt)),
@@ -317,6 +350,7 @@ def make_plan(scene: Scene, info, duration: float) -> dict:
         "columns": engine_columns(plan_of(scene)),
         "bent_x": list(plan_of(scene).bent_x),
         "peak_columns": peak_columns(engine_columns(plan_of(scene)), info.bent_names),
+        "support_lengths": [lengths[c.seat] for c in plan_of(scene).corners],
     }
 
 
@@ -427,6 +461,7 @@ class OpenSeesEngine(Engine):
         columns.update(balance.columns(len(arr)))  # the energy columns [kJ], every step's work
         st = out["stats"]
         ok = st["status"] == "success"
+        unseated = st["status"] == "unseated"  # an answer, not a failure
         nonfinite = "non-finite" in st["message"]
         if st["failures"]:
             warnings.warn(
@@ -450,8 +485,12 @@ class OpenSeesEngine(Engine):
             columns=columns,
             status=Status.SUCCESS
             if ok
-            else (Status.NONFINITE if nonfinite else Status.NOT_CONVERGED),
-            message="" if ok else reason,
+            else (
+                Status.UNSEATED
+                if unseated
+                else (Status.NONFINITE if nonfinite else Status.NOT_CONVERGED)
+            ),
+            message="" if ok else (st["message"] if unseated else reason),
             failed_step=st["failed_step"],
             failed_time=st["failed_time"],
             steps=st["steps"],
@@ -465,6 +504,8 @@ class OpenSeesEngine(Engine):
                 [0.0] + [-v[0] for k, v in st["peaks"].items() if k.startswith("gap_")]
             ),
             gap_closures_per_corner=st["gap_closures_per_corner"],
+            gap_openings={k: (v[0], v[1]) for k, v in st["gap_openings"].items()},
+            unseated=None if st["unseated"] is None else tuple(st["unseated"]),
             extra={
                 "openseespy": openseespy_version(),
                 "dt": splan["dt"],

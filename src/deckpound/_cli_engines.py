@@ -133,6 +133,8 @@ def _run(args) -> int:
     given = get_engine(args.engine).step_of(get_engine(args.engine).settings_of(scene))
     if m.get("dt") is not None and m["dt"] < given:  # the contact-step rule shortened it
         scaled += f"; step {m['dt']:.4g} s (contact-step rule; {given:g} s given)"
+    if result.unseated:  # the answer of the run: which corner lost its seat, and when
+        scaled += f"; {m['message'] if m['status'] == 'unseated' else 'a corner unseated'}"
     print(
         f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
         f"{m.get('gap_closures', 0)} gap closures, peak θ_d "
@@ -144,6 +146,9 @@ def _run(args) -> int:
         raise DoubtfulResult(
             f"{m['message']} (the result is written; --set run.accept_doubtful=true accepts it)"
         )
+    if m["status"] == "unseated":
+        # unseating is an answer (the deck lost its seat), not an engine failure: exit 0
+        return 0
     if not result.ok:
         raise EngineFailure(m.get("message", "run failed"))
     return 0

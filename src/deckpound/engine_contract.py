@@ -47,6 +47,15 @@ A new engine is one module plus one registry entry. It must:
     reads them); without them it takes both from the output rows and says so
     (``meta["peaks_basis"]``, ``meta["gap_closures_basis"]``).
 
+11. Optionally measure, at every step, the largest gap opening g_c − g_c(0) of each corner
+    (``RunOutput.gap_openings``) and stop the step loop after the first step at which a
+    corner's seat margin N − (g_c − g_c(0)) is negative, N the support length of the seat it
+    faces (``seats[i].support_length``; not set: not checked), returning ``Status.UNSEATED``
+    with the output up to there and ``RunOutput.unseated`` = (corner, time). Unseating is an
+    answer, not a failure: the epilogue sets ``meta["status"] = "unseated"`` and fills
+    ``meta["seat_margin_min"]``, ``meta["unseated"]`` and friends (:func:`seat_margins`).
+    What happens after unseating (the deck falls) is outside the model.
+
 :meth:`Engine.run` (not overridden) does the rest the same way for every engine: validation,
 support motion, timing, and the epilogue :func:`finish`, which adds the columns computed from
 the plan and the support motion (displacements relative to the supports, bent deformations),
@@ -81,6 +90,7 @@ from deckpound.models.result import (
     STATUS_DOUBTFUL,
     STATUS_FAILED,
     STATUS_SUCCESS,
+    STATUS_UNSEATED,
     Result,
     gap_closures,
     physics_hash,
@@ -104,6 +114,7 @@ __all__ = [
     "finish",
     "ignored_options",
     "output_stride",
+    "seat_margins",
 ]
 
 
@@ -126,6 +137,8 @@ class Status(str, enum.Enum):  # noqa: UP042 (str() must stay "Status.X" for mes
     CONTACT_UNSOLVED = "contact_unsolved"
     STEP_BUDGET = "step_budget"
     INTERRUPTED = "interrupted"
+    #: a deck corner lost its seat: an answer, not a numerical failure (point 11)
+    UNSEATED = "unseated"
 
     @property
     def text(self) -> str:
@@ -140,6 +153,7 @@ _STATUS_TEXT = {
     Status.CONTACT_UNSOLVED: "contact problem not solved (no verified solution)",
     Status.STEP_BUDGET: "step budget exhausted",
     Status.INTERRUPTED: "interrupted",
+    Status.UNSEATED: "a deck corner lost its seat",
 }
 
 #: Scene options whose meaning depends on the engine (the "option ignored" warnings look here).
@@ -200,6 +214,10 @@ class RunOutput:
     gap_closures_per_corner : ``{"c1": n, ...}`` closures counted at every step with the one
         contact test (:func:`deckpound.models.result.in_contact`); None: counted on the
         output rows (``meta["gap_closures_basis"]``).
+    gap_openings : ``{"c1": (opening [m], time [s]), ...}`` the largest gap opening
+        g_c − g_c(0) over every step and when (point 11); None: taken from the output rows.
+    unseated : ``(corner, time [s])`` of the first step at which a seat margin was negative
+        (with ``status = Status.UNSEATED``), or None.
     extra : engine-specific metadata (documented by the engine).
     """
 
@@ -219,6 +237,8 @@ class RunOutput:
     max_complementarity_residual: float | None = None
     peaks: dict[str, tuple[float, float]] | None = None
     gap_closures_per_corner: dict[str, int] | None = None
+    gap_openings: dict[str, tuple[float, float]] | None = None
+    unseated: tuple[str, float] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
 
@@ -509,6 +529,67 @@ def _step_statistics(columns: dict[str, np.ndarray], out: RunOutput) -> dict[str
     return q
 
 
+def seat_margins(scene: Scene, plan: Plan, columns: dict[str, np.ndarray], out: RunOutput):
+    """The seat margins of a run (contract point 11), for ``meta``.
+
+    The support length N of a seat (``seats[i].support_length``, AASHTO's seat width) is the
+    length of seat under the deck end along the face normal, measured from the deck end's
+    initial position; the opening of corner c is g_c(t) − g_c(0) (> 0 when the deck end moves
+    away from the backwall) and its seat margin m_c(t) = N − (g_c(t) − g_c(0)), smallest at
+    the largest opening. Returns ``gap_opening_max`` ({corner: [opening m, time s]}, every
+    corner: the seat-width demand), ``seat_margin_min`` ({corner: [margin m, time s]}, the
+    corners whose seat has a support length), ``seat_margin_basis`` (``"every step"``,
+    ``"output rows"`` or why it was not checked) and ``unseated`` (bool), with
+    ``unseated_corner``, ``unseated_time`` [s] and ``unseated_step`` when True."""
+    if out.gap_openings is not None:
+        openings = {c: (float(o), float(t)) for c, (o, t) in out.gap_openings.items()}
+        basis = "every step"
+    else:
+        openings, basis = {}, "output rows"
+        for c in CORNER_NAMES:
+            g = columns[f"gap_{c}"]
+            if len(g):
+                k = int(np.argmax(g))
+                openings[c] = (float(g[k] - g[0]), float(columns["t"][k]))
+    margins = {}
+    for corner in plan.corners:
+        length = scene.seats[corner.seat].support_length
+        if length is not None and corner.name in openings:
+            opening, when = openings[corner.name]
+            margins[corner.name] = [float(length) - opening, when]
+    if not margins:
+        basis = "not checked (no seats[i].support_length)"
+    q: dict[str, Any] = {
+        "gap_opening_max": {c: [o, t] for c, (o, t) in openings.items()},
+        "seat_margin_min": margins,
+        "seat_margin_basis": basis,
+    }
+    first = out.unseated
+    if first is None:
+        negative = [(m, c) for c, (m, _) in margins.items() if m < 0.0]
+        if negative:  # an engine that does not stop (rows basis): the worst corner
+            c = min(negative)[1]
+            first = (c, margins[c][1])
+    q["unseated"] = first is not None
+    if first is not None:
+        q["unseated_corner"], q["unseated_time"] = first[0], float(first[1])
+        q["unseated_step"] = int(out.steps)
+    return q
+
+
+def _unseated_message(scene: Scene, plan: Plan, meta: dict[str, Any]) -> str:
+    """The status line's sentence for an unseated run."""
+    c = meta["unseated_corner"]
+    seat = next(k.seat for k in plan.corners if k.name == c)
+    margin = meta["seat_margin_min"].get(c, [float("nan")])[0]
+    return (
+        f"corner {c} unseated at t = {meta['unseated_time']:.6g} s (step "
+        f"{meta['unseated_step']}): its gap opened beyond seats[{seat}].support_length = "
+        f"{scene.seats[seat].support_length:g} m (seat margin {margin:.4g} m); the run stops "
+        "there, what follows (the deck falling) is not modelled"
+    )
+
+
 def finish(
     engine: Engine,
     scene: Scene,
@@ -533,12 +614,16 @@ def finish(
     columns = {k: cols[k] for k in order}
     columns.update({k: v for k, v in cols.items() if k not in columns})
     ok = out.status == Status.SUCCESS
+    # unseating ends a run with an answer (point 11): no failure, its rows are checked as a
+    # finished run's
+    unseated = out.status == Status.UNSEATED
+    finished = ok or unseated
     steps = max(out.steps, 1)
     run_time = max(total_time - out.compile_time, 0.0)
     meta: dict[str, Any] = {
         "engine": engine.name,
-        "status": STATUS_SUCCESS if ok else STATUS_FAILED,
-        "failure": None if ok else out.status.value,
+        "status": STATUS_SUCCESS if ok else (STATUS_UNSEATED if unseated else STATUS_FAILED),
+        "failure": None if finished else out.status.value,
         "message": out.message,
         "steps": int(out.steps),
         "newton_iterations": int(out.newton_iterations),
@@ -564,10 +649,13 @@ def finish(
     meta.update(out.extra)
     meta.update(_contact_quality(engine, scene, cols, out))
     meta.update(_step_statistics(columns, out))
+    meta.update(seat_margins(scene, plan, columns, out))
+    if unseated:
+        meta["message"] = _unseated_message(scene, plan, meta)
     for text in meta.get("quality_warnings", []):
         meta["warnings"].append(text)
         warnings.warn(f"{engine.name} engine: {text}", QualityWarning, stacklevel=3)
-    if ok:
+    if finished:
         meta.update(energy_quality(scene, cols))
     for text in meta.get("doubtful", []):
         meta["warnings"].append(text)
@@ -576,14 +664,14 @@ def finish(
         meta["status"] = STATUS_DOUBTFUL
         meta["accepted"] = bool(scene.run.accept_doubtful)
         meta["message"] = "; ".join(meta["doubtful"])
-    if not ok:
+    if not finished:
         t_fail = out.failed_time if out.failed_time is not None else float("nan")
         meta["failed_step"] = int(out.failed_step or 0)
         meta["failed_time"] = t_fail
         reason = out.message or out.status.text
         meta["message"] = f"{reason} at step {meta['failed_step']} (t = {t_fail:.6g} s)"
     result = Result(engine=engine.name, columns=columns, meta=meta)
-    if not ok and raise_on_failure:
+    if not finished and raise_on_failure:
         raise EngineFailure(f"{engine.name} engine: {meta['message']}")
     if result.doubtful and raise_on_failure and not scene.run.accept_doubtful:
         raise DoubtfulResult(f"{engine.name} engine: {meta['message']}")
