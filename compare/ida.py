@@ -29,7 +29,6 @@ import itertools
 import json
 import math
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -37,13 +36,22 @@ import numpy as np
 from deckpound.models.errors import SceneError
 from deckpound.models.scene import Scene
 
+from .fragility import (
+    LimitState,
+    count_exceedances,
+    fit_ida,
+    fit_stripes,
+    fragility_curve,
+    ida_capacities,
+)
 from .variability import sweep_rows
 
 __all__ = [
     "IMS",
-    "LimitState",
+    "fragility_figure",
     "fragility_table",
     "ida_cases",
+    "ida_figure",
     "limit_states",
     "parse_levels",
     "run_ida",
@@ -62,27 +70,12 @@ MAX_CASES = 200_000
 FITTED = ("success", "unseated")
 
 
-@dataclass(frozen=True)
-class LimitState:
-    """A limit state of the sweep's rows: ``column`` > ``threshold``, or a flag ``column``
-    (``threshold`` None) being true."""
-
-    name: str
-    column: str
-    threshold: float | None = None
-
-    def exceeded(self, row: dict) -> bool:
-        value = row.get(self.column)
-        if self.threshold is None:
-            return bool(value)
-        return value is not None and float(value) > self.threshold
-
-
-def limit_states(theta_limit: float | None) -> list[LimitState]:
-    """Unseating, and the peak deck rotation above ``theta_limit`` [rad] when given."""
-    out = [LimitState("unseating", "unseated")]
+def limit_states(theta_limit: float | None) -> list[tuple[str, LimitState]]:
+    """(name, limit state) of a sweep: unseating of any corner, and the peak deck rotation
+    above ``theta_limit`` [rad] when given."""
+    out = [("unseating", LimitState("unseated"))]
     if theta_limit is not None:
-        out.append(LimitState(f"peak θ_d > {theta_limit:g} rad", "peak_theta", theta_limit))
+        out.append((f"peak θ_d > {theta_limit:g} rad", LimitState("peak_theta", theta_limit)))
     return out
 
 
@@ -137,39 +130,35 @@ def ida_cases(
     return out
 
 
-def _fit_row(state: LimitState, method: str, rows: list[dict], levels) -> dict:
-    from . import fragility
-
-    row = {"limit_state": state.name, "method": method, "median": np.nan, "beta": np.nan}
-    ok = [r for r in rows if r.get("status") in FITTED]
-    row["cases"], row["left_out"] = len(ok), len(rows) - len(ok)
-    try:
-        if method == "msa":
-            n = [sum(1 for r in ok if r["level"] == x) for x in levels]
-            z = [sum(1 for r in ok if r["level"] == x and state.exceeded(r)) for x in levels]
-            keep = [i for i in range(len(levels)) if n[i] > 0]
-            fit = fragility.fit_stripes(
-                np.array(levels)[keep], np.array(n)[keep], np.array(z)[keep]
-            )
-        else:
-            cap, censored = [], []
-            for rec in sorted({r["record_key"] for r in ok}):
-                mine = sorted((r for r in ok if r["record_key"] == rec), key=lambda r: r["level"])
-                hit = [r["level"] for r in mine if state.exceeded(r)]
-                cap.append(hit[0] if hit else mine[-1]["level"])
-                censored.append(not hit)
-            fit = fragility.fit_ida(np.array(cap), np.array(censored, dtype=bool))
-        row.update(median=float(fit.median), beta=float(fit.beta), note="")
-    except (ValueError, SceneError) as err:
-        row["note"] = f"not fitted: {err}"
-    return row
+def _fit(state: LimitState, method: str, ok):
+    if method == "msa":
+        counts = count_exceedances(ok, state, im_column="level")
+        return fit_stripes(counts["im"], counts["n"], counts["exceed"])
+    caps = ida_capacities(ok, state, im_column="level", record_column="record_key")
+    return fit_ida(caps["capacity"], caps["censored"])
 
 
-def fragility_table(rows: list[dict], levels: list[float], states: list[LimitState]):
-    """One row per limit state and method (``ida`` from capacities, ``msa`` from stripes)."""
+def fragility_table(table, states: list[tuple[str, LimitState]]):
+    """One row per engine, limit state and method (``ida`` from each record's capacity,
+    censored at its highest level; ``msa`` from the stripes' binomial counts) over the cases
+    that finished with an answer (:data:`FITTED`); the others are counted in ``left_out``."""
     import pandas as pd
 
-    return pd.DataFrame([_fit_row(s, m, rows, levels) for s in states for m in ("ida", "msa")])
+    rows = []
+    for engine, mine in table.groupby("engine", sort=False):
+        ok = mine[mine["status"].isin(FITTED)]
+        for name, state in states:
+            for method in ("ida", "msa"):
+                row = {"engine": engine, "limit_state": name, "method": method}
+                row.update(median=np.nan, beta=np.nan, cases=len(ok))
+                row["left_out"] = len(mine) - len(ok)
+                try:
+                    fit = _fit(state, method, ok)
+                    row.update(median=float(fit.median), beta=float(fit.beta), note="")
+                except SceneError as err:
+                    row["note"] = f"not fitted: {err}"
+                rows.append(row)
+    return pd.DataFrame(rows)
 
 
 def run_ida(
@@ -179,7 +168,7 @@ def run_ida(
     records: str | Path,
     im: str,
     levels: list[float],
-    engine: str = "compliance",
+    engines: tuple[str, ...] = ("compliance",),
     theta_limit: float | None = None,
     rotate: bool = False,
     cache_dir: str | Path | None = None,
@@ -188,8 +177,9 @@ def run_ida(
     progress: bool = True,
     title: str = "ida",
 ):
-    """Run the sweep; write ``ida.csv`` (one summary row per record and level),
-    ``fragility.csv`` and ``ida.json`` into ``out``; return (table, fragility table)."""
+    """Run the sweep with every engine; write ``ida.csv`` (one summary row per engine, record
+    and level), ``fragility.csv``, ``ida.json`` and the figures ``ida.png`` and
+    ``fragility.png`` into ``out``; return (table, fragility table)."""
     import pandas as pd
 
     from deckpound._io import atomic_write_text, ensure_folder, write_csv
@@ -198,36 +188,41 @@ def run_ida(
     out = ensure_folder(out)
     rows_dir = ensure_folder(Path(cache_dir) if cache_dir else out / "cache", "--cache")
     t0 = time.perf_counter()
-    rows, computed = sweep_rows(
-        [sc for _, sc in specs],
-        engine,
-        ensure_folder(rows_dir / "rows", "--cache"),
-        title,
-        workers=workers,
-        scheduler=scheduler,
-        progress=progress,
-    )
-    records_rows = []
-    for i, (params, _) in enumerate(specs):
-        key = f"{params['record']}{' (rotated)' if params.get('rotated') else ''}"
-        records_rows.append({"case": i, "engine": engine, **params, "record_key": key, **rows[i]})
-    table = pd.DataFrame(records_rows)
-    frag = fragility_table(records_rows, levels, limit_states(theta_limit))
+    table_rows, computed = [], 0
+    for engine in engines:
+        rows, done = sweep_rows(
+            [sc for _, sc in specs],
+            engine,
+            ensure_folder(rows_dir / "rows", "--cache"),
+            f"{title} {engine}",
+            workers=workers,
+            scheduler=scheduler,
+            progress=progress,
+        )
+        computed += done
+        for i, (params, _) in enumerate(specs):
+            key = f"{params['record']}{' (rotated)' if params.get('rotated') else ''}"
+            table_rows.append({"engine": engine, "case": i, **params, "record_key": key, **rows[i]})
+    table = pd.DataFrame(table_rows)
+    states = limit_states(theta_limit)
+    frag = fragility_table(table, states)
     unit = IMS[im][2]
     write_csv(table, out / "ida.csv")
     write_csv(frag, out / "fragility.csv")
+    ida_figure(table, im, scene.name, out / "ida.png")
+    fragility_figure(table, frag, states, im, scene.name, out / "fragility.png")
     status = table["status"].value_counts().to_dict() if len(table) else {}
     atomic_write_text(
         out / "ida.json",
         json.dumps(
             {
-                "engine": engine,
+                "engines": list(engines),
                 "im": im,
                 "im_unit": unit,
                 "levels": levels,
-                "cases": len(specs),
+                "cases": len(table),
                 "computed": computed,
-                "from_cache": len(specs) - computed,
+                "from_cache": len(table) - computed,
                 "status": {str(k): int(v) for k, v in status.items()},
                 "wall_time": time.perf_counter() - t0,
                 "workers": workers,
@@ -237,3 +232,93 @@ def run_ida(
         ),
     )
     return table, frag
+
+
+def ida_figure(table, im: str, scene_name: str, path: Path) -> list[Path]:
+    """IDA curves, one panel per engine: the level against each record's seat-width demand
+    [mm] (the largest opening of a deck end from its seat) and, beside it, its peak deck
+    rotation [mrad]; an unseated case is marked × (the run stops there, so its rotation is
+    the rotation reached by then)."""
+    from .style import new_figure, save
+
+    engines = list(dict.fromkeys(table["engine"]))
+    edps = (("seat_demand", 1e3, "seat-width demand [mm]"), ("peak_theta", 1e3, "peak θ_d [mrad]"))
+    fig, axes = new_figure(1, 2 * len(engines), width=3.0 * 2 * len(engines), height=3.0)
+    for k, engine in enumerate(engines):
+        mine = table[table["engine"] == engine]
+        for j, (col, scale, label) in enumerate(edps):
+            ax = axes[0][2 * k + j]
+            for _, rec in mine.groupby("record_key", sort=True):
+                rec = rec.sort_values("level")
+                ax.plot(scale * rec[col], rec["level"], "-", color="#555555", lw=0.8)
+                hit = rec[rec["unseated"].astype(bool)]
+                ax.plot(scale * hit[col], hit["level"], "x", color="#c0392b", ms=4)
+            ax.set_title(f"{engine}: {label.split(' [')[0]}", fontsize=9)
+            ax.set_xlabel(label)
+    axes[0][0].set_ylabel(f"{im} [{IMS[im][2]}]")
+    return save(fig, path, scene_name)
+
+
+def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) -> list[Path]:
+    """Fragility curves (IDA fits) per limit state, one curve per engine with its 90 %
+    bootstrap band over records; the stripes' observed fractions as markers."""
+    from .fragility import bootstrap_ida
+    from .style import new_figure, save
+
+    levels = np.sort(table["level"].unique())
+    grid = np.geomspace(levels[0] / 2, levels[-1] * 2, 60)
+    fig, axes = new_figure(1, len(states), width=3.6 * len(states), height=3.0)
+    colors = ("#1f4e79", "#c0392b", "#2e7d32", "#7b1fa2")
+    for ax, (name, state) in zip(axes[0], states):
+        for k, engine in enumerate(dict.fromkeys(table["engine"])):
+            mine = table[(table["engine"] == engine) & table["status"].isin(FITTED)]
+            color = colors[k % len(colors)]
+            row = frag[
+                (frag["engine"] == engine)
+                & (frag["limit_state"] == name)
+                & (frag["method"] == "ida")
+            ]
+            if len(mine):
+                counts = count_exceedances(mine, state, im_column="level")
+                ax.plot(
+                    counts["im"],
+                    counts["exceed"] / counts["n"],
+                    "o",
+                    ms=3,
+                    color=color,
+                    mfc="white",
+                )
+            if not len(row) or not np.isfinite(row["median"].iloc[0]):
+                continue
+            caps = ida_capacities(mine, state, im_column="level", record_column="record_key")
+            try:
+                band = bootstrap_ida(caps["capacity"], caps["censored"], grid, 200, seed=0)
+                ax.fill_between(grid, band.lower, band.upper, color=color, alpha=0.15, lw=0)
+            except SceneError:
+                pass  # too few records to resample: the curve alone
+            m, b = row["median"].iloc[0], row["beta"].iloc[0]
+            ax.plot(
+                grid,
+                fragility_curve(grid, m, b),
+                "-",
+                color=color,
+                lw=1.2,
+                label=f"{engine}: median {m:.3g}, β {b:.2f}",
+            )
+        ax.set_xscale("log")
+        ax.set_ylim(-0.02, 1.02)
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel(f"{im} [{IMS[im][2]}]")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="upper left", frameon=False)
+        else:
+            ax.text(
+                0.5,
+                0.5,
+                "not fitted (fragility.csv says why)",
+                ha="center",
+                fontsize=7,
+                transform=ax.transAxes,
+            )
+    axes[0][0].set_ylabel("P(limit state exceeded)")
+    return save(fig, path, scene_name)

@@ -121,6 +121,9 @@ def case_row(engine: str, scene: Scene) -> dict:
         "unseated": bool(r.meta.get("unseated", False)),
         "unseated_time": float(r.meta.get("unseated_time", np.nan)),
         "seat_margin": _smallest_margin(r.meta.get("seat_margin_min")),
+        "seat_demand": -_smallest_margin(
+            {c: [-v[0], v[1]] for c, v in (r.meta.get("gap_opening_max") or {}).items()}
+        ),
     }
     row["process_time"] = time.perf_counter() - t0
     return row
@@ -128,7 +131,9 @@ def case_row(engine: str, scene: Scene) -> dict:
 
 def _smallest_margin(margins) -> float:
     """The smallest seat margin [m] over the corners (``meta["seat_margin_min"]``: {corner:
-    [margin, time]}); NaN when the scene gives no support length."""
+    [margin, time]}); NaN when the scene gives no support length. ``seat_demand`` is the
+    largest opening of a deck end from its seat over the corners (``gap_opening_max``), the
+    seat width the record asks for."""
     values = [float(v[0]) for v in (margins or {}).values() if v is not None]
     return min(values) if values else float("nan")
 

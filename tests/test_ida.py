@@ -58,10 +58,14 @@ def test_ida_runs_every_pair_at_every_level_and_fits_unseating(tmp_path, suite, 
     assert set(np.round(table["level"], 9)) == {round(0.1 * k, 9) for k in range(1, 16)}
     assert table["unseated"].any() and not table["unseated"].all()
     assert set(table["status"]) <= {"success", "unseated", "doubtful", "failed"}
+    assert (out / "ida.png").stat().st_size > 0 and (out / "fragility.png").stat().st_size > 0
+    # an unseated case stops at the seat's edge: its seat-width demand is the support length
+    hit = table[table["unseated"]]
+    np.testing.assert_allclose(hit["seat_demand"], 0.015, rtol=0.05)
     frag = pd.read_csv(out / "fragility.csv", comment="#")
     row = frag[(frag["limit_state"] == "unseating") & (frag["method"] == "ida")].iloc[0]
     assert 0.1 <= row["median"] <= 1.5 and row["beta"] > 0
-    assert "unseating: median" in printed and f"{PAIRS * 15} cases" in printed
+    assert "compliance, unseating: median" in printed and f"{PAIRS * 15} cases" in printed
     # a repeated sweep takes every row from the cache
     assert _sweep(tmp_path, suite, "ida", levels, "--theta-limit", "0.002")[0] == 0
     meta = json.loads((out / "ida.json").read_text())
@@ -85,15 +89,33 @@ def test_fragility_of_rows_leaves_out_unfinished_cases():
         for level in (0.2, 0.4, 0.6, 0.8, 1.0):
             rows.append(
                 {
+                    "engine": "compliance",
                     "record_key": f"r{rec}",
                     "level": level,
                     "status": "success",
                     "unseated": level >= cap,
                 }
             )
-    rows.append({"record_key": "bad", "level": 0.2, "status": "failed", "unseated": False})
-    rows.append({"record_key": "dbt", "level": 0.4, "status": "doubtful", "unseated": True})
-    frag = fragility_table(rows, [0.2, 0.4, 0.6, 0.8, 1.0], limit_states(None))
+    rows.append(
+        {
+            "engine": "compliance",
+            "record_key": "bad",
+            "level": 0.2,
+            "status": "failed",
+            "unseated": False,
+        }
+    )
+    rows.append(
+        {
+            "engine": "compliance",
+            "record_key": "dbt",
+            "level": 0.4,
+            "status": "doubtful",
+            "unseated": True,
+        }
+    )
+    frag = fragility_table(pd.DataFrame(rows), limit_states(None))
+    assert len(frag) == 2
     for _, r in frag.iterrows():
         assert r["left_out"] == 2 and r["cases"] == 30
         assert 0.3 < r["median"] < 1.0 and r["beta"] > 0

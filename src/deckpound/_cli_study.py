@@ -156,7 +156,12 @@ def register(sub: argparse._SubParsersAction) -> None:
             metavar="LEVELS",
             help="start:stop:step (stop included) or a,b,c, in the IM's unit",
         )
-        p.add_argument("--engine", default="compliance", metavar="NAME")
+        p.add_argument(
+            "--engines",
+            default="compliance",
+            metavar="NAMES",
+            help="comma-separated engines, each running the whole sweep (default: compliance)",
+        )
         p.add_argument(
             "--theta-limit",
             type=float,
@@ -457,9 +462,8 @@ def _ida(args) -> int:
     from deckpound.compare.ida import IMS, parse_levels, run_ida
 
     from ._cli_engines import check_output_folder
-    from .engines import get_engine
 
-    get_engine(args.engine)  # an unknown name is refused before any work
+    engines = _engines(args.engines)  # an unknown name is refused before any work
     option = "--levels" if args.sweep == "ida" else "--stripes"
     levels = parse_levels(args.levels, option)
     if args.theta_limit is not None and not (
@@ -467,7 +471,7 @@ def _ida(args) -> int:
     ):
         raise SceneError("--theta-limit", f"must be a finite angle > 0 rad, got {args.theta_limit}")
     out = check_output_folder(args.output or args.sweep)
-    scene = _checked_scene(args, (args.engine,))
+    scene = _checked_scene(args, engines)
     with output_folder(out, args.sweep) as out:
         table, frag = run_ida(
             scene,
@@ -475,7 +479,7 @@ def _ida(args) -> int:
             records=args.records,
             im=args.im,
             levels=levels,
-            engine=args.engine,
+            engines=tuple(engines),
             theta_limit=args.theta_limit,
             rotate=args.rotate90,
             cache_dir=args.cache,
@@ -490,7 +494,10 @@ def _ida(args) -> int:
         fit = (
             f"median {r['median']:.4g} {unit}, beta {r['beta']:.3g}" if not r["note"] else r["note"]
         )
-        print(f"{r['limit_state']}: {fit} ({r['cases']} cases fitted, {r['left_out']} left out)")
+        print(
+            f"{r['engine']}, {r['limit_state']}: {fit} ({r['cases']} cases fitted, "
+            f"{r['left_out']} left out)"
+        )
     counts = table["status"].value_counts().to_dict()
     print(
         f"{len(table)} cases ({', '.join(f'{v} {k}' for k, v in sorted(counts.items()))}); "
