@@ -152,3 +152,23 @@ def test_ida_on_a_local_dask_cluster_of_two_workers_equals_the_local_pool(tmp_pa
     remote = pd.read_csv(out / "ida.csv", comment="#")
     for q in ("peak_theta", "seat_margin", "gap_closures"):
         np.testing.assert_array_equal(remote[q], local[q])
+
+
+def test_a_suite_of_22_pairs_by_10_levels_in_two_engines_end_to_end(tmp_path, capsys):
+    """Issue 30's suite: 22 synthetic station pairs x 10 levels on the benchmark with the
+    compliance and nonsmooth engines; a sweep stopped early (the first 5 levels) is taken up
+    by the full one without recomputing what it finished."""
+    from _record_helpers import synthetic_suite
+
+    folder = synthetic_suite(tmp_path / "suite", 22, seed=100, duration=10.0)
+    cache = str(tmp_path / "cache")
+    base = ["ida", "saiidi-4span", "--records", str(folder), "--im", "sa-t1"]
+    base += ["--engines", "compliance,nonsmooth", *SEATS, "--cache", cache, "--no-progress"]
+    assert cli.main([*base, "--levels", "0.2:1.0:0.2", "-o", str(tmp_path / "half")]) == 0
+    assert cli.main([*base, "--levels", "0.2:2.0:0.2", "-o", str(tmp_path / "full")]) == 0
+    meta = json.loads((tmp_path / "full" / "ida.json").read_text())
+    assert meta["cases"] == 2 * 22 * 10 and meta["from_cache"] == 2 * 22 * 5
+    frag = pd.read_csv(tmp_path / "full" / "fragility.csv", comment="#")
+    assert set(frag["engine"]) == {"compliance", "nonsmooth"}
+    printed = capsys.readouterr().out
+    assert "compliance, unseating:" in printed and "nonsmooth, unseating:" in printed
