@@ -282,7 +282,7 @@ def main(argv=None):
         json.dump(out["stats"], fh, indent=2)
     st = out["stats"]
     print(st["status"], st["message"], "gap_closures:", st["gap_closures"])
-    return 0 if out["stats"]["status"] == "success" else 1
+    return 0 if out["stats"]["status"] in ("success", "unseated") else 1
 
 
 if __name__ == "__main__":
