@@ -4,6 +4,9 @@ Rule (documented in :class:`deckpound.models.scene.Sequence`):
 
 * start-of-run gap of a seat = the previous run's residual gap at that face, i.e. the mean of
   its two corner gaps over the last 2 % of the record (the record ends at rest), floored at 0;
+  the seat's support length (``seats[i].support_length``, measured from the deck end's
+  position at the start of a run) shrinks by the residual opening carried, N − (g − g₀), g₀
+  the scene's gap, so the seat margins of a later run count from the original seat;
 * bent stiffness per direction: k_next = min(k_prev, k0 · μ^(−β)), μ = max(1, peak |d| / d_y0),
   with k0 and d_y0 = F_y / k0 of the original scene — the Takeda unloading stiffness at the
   peak deformation reached so far; the yield force is kept.
@@ -62,6 +65,13 @@ def check_runs(scene: Scene) -> None:
     check_sequence_pgas(scene)
 
 
+def _remaining_support(length: float | None, gap: float, carried: float) -> float | None:
+    """The support length [m] left under a deck end whose gap is ``carried`` instead of the
+    scene's ``gap``: N − (carried − gap) (None: not checked). A run whose opening passed N
+    ended unseated, and the residual opening never exceeds the largest, so it stays > 0."""
+    return None if length is None else length - (carried - gap)
+
+
 def scene_for_run(scene: Scene, pga: float, state: SpecimenState) -> Scene:
     """The scene of one run: excitation scaled to ``pga`` [g], gaps and stiffness from ``state``.
 
@@ -70,7 +80,10 @@ def scene_for_run(scene: Scene, pga: float, state: SpecimenState) -> Scene:
     that bent and the run, not as a bad scene value.
     """
     check_runs(scene)
-    seats = tuple(dataclasses.replace(s, gap=g) for s, g in zip(scene.seats, state.gaps))
+    seats = tuple(
+        dataclasses.replace(s, gap=g, support_length=_remaining_support(s.support_length, s.gap, g))
+        for s, g in zip(scene.seats, state.gaps)
+    )
     for i, (b, ks) in enumerate(zip(scene.bents, state.stiffness)):
         for axis, k in zip(("x", "y"), ks):
             spring = getattr(b, axis)

@@ -260,3 +260,18 @@ def test_seat_margins_from_the_rows_when_an_engine_does_not_track_them():
     assert q["seat_margin_min"]["c1"] == [pytest.approx(0.14), 1.0]
     assert q["seat_margin_min"]["c2"] == [pytest.approx(0.18 - 0.29), 1.0]
     assert q["unseated"] and q["unseated_corner"] == "c2" and q["unseated_time"] == 1.0
+
+
+def test_a_sequence_run_keeps_the_seat_left_by_the_earlier_runs():
+    """A carried residual opening uses up seat: run k's support length is N − (g_k − g₀), so
+    its margins count from the original seat (and a deck pushed back gains seat)."""
+    from deckpound.models.sequence import initial_state, scene_for_run
+
+    sc = load_scene("saiidi-4span")
+    state = dataclasses.replace(initial_state(sc), gaps=(0.0227, 0.0027))
+    run = scene_for_run(sc, 0.5, state)
+    assert run.seats[0].gap == 0.0227 and run.seats[1].gap == 0.0027
+    assert run.seats[0].support_length == pytest.approx(0.18 - 0.01, abs=1e-15)
+    assert run.seats[1].support_length == pytest.approx(0.18 + 0.01, abs=1e-15)
+    bare = sc.replace(seats=tuple(dataclasses.replace(s, support_length=None) for s in sc.seats))
+    assert scene_for_run(bare, 0.5, state).seats[0].support_length is None
