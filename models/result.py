@@ -13,6 +13,10 @@ Metadata every engine fills through the shared epilogue (:func:`deckpound.engine
 name), ``message``, ``failed_step``/``failed_time`` on failure, ``steps``, ``newton_iterations``,
 ``contact_solves``, ``gap_closures`` (see :func:`gap_closures`; ``gap_closures_basis``),
 ``peaks`` (``{column: [peak, time]}`` over every step, :meth:`Result.peak`; ``peaks_basis``),
+``gap_opening_max`` (``{corner: [largest g − g(0) m, time s]}``, the seat-width demand),
+``seat_margin_min`` (``{corner: [N − opening m, time s]}`` for the seats with a
+``support_length``; ``seat_margin_basis``), ``unseated`` (with ``unseated_corner``,
+``unseated_time``, ``unseated_step``; :func:`deckpound.engine_contract.seat_margins`),
 ``failures``, ``wall_time`` (run time without compilation) and ``compile_time`` [s],
 ``scene_hash``, ``physics_hash``, ``settings``, ``settings_hash``, ``version``, ``units``.
 
