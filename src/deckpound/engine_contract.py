@@ -536,7 +536,10 @@ def seat_margins(scene: Scene, plan: Plan, columns: dict[str, np.ndarray], out: 
     length of seat under the deck end along the face normal, measured from the deck end's
     initial position; the opening of corner c is g_c(t) − g_c(0) (> 0 when the deck end moves
     away from the backwall) and its seat margin m_c(t) = N − (g_c(t) − g_c(0)), smallest at
-    the largest opening. Returns ``gap_opening_max`` ({corner: [opening m, time s]}, every
+    the largest opening. For a run from rest g_c(0) is the corner table's as-built gap g₀; a
+    deck started displaced (``initial.deck``) counts from where it starts, and a sequence run
+    from its carried gap with the seat the earlier runs left (:mod:`deckpound.models.
+    sequence`). Returns ``gap_opening_max`` ({corner: [opening m, time s]}, every
     corner: the seat-width demand), ``seat_margin_min`` ({corner: [margin m, time s]}, the
     corners whose seat has a support length), ``seat_margin_basis`` (``"every step"``,
     ``"output rows"`` or why it was not checked) and ``unseated`` (bool), with
