@@ -191,7 +191,7 @@ def run_cases(
     bar.skip(len(cases) - len(todo))  # cached: done, not in the rate
 
     def finish(case: Case, result: Result) -> None:
-        if cache is not None and (result.ok or result.doubtful):  # finished answers
+        if cache is not None and result.finished:  # finished answers
             cache.put(case.key, result)
         results[case.label] = result
         bar.advance()

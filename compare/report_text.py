@@ -181,10 +181,13 @@ def left_out_clause(table: pd.DataFrame) -> str:
     peaks are not quoted; the study table still lists it with its status."""
     status = table["status"] if "status" in table else pd.Series([], dtype=object)
     doubtful = int((status == "doubtful").sum())
-    failed = int((~status.isin(["success", "doubtful"])).sum())
+    unseated = int((status == "unseated").sum())
+    failed = int((~status.isin(["success", "doubtful", "unseated"])).sum())
     parts = []
     if doubtful:
         parts.append(f"{doubtful} case(s) doubtful (energy created at a contact)")
+    if unseated:
+        parts.append(f"{unseated} unseated (a corner lost its seat; the run stops there)")
     if failed:
         parts.append(f"{failed} failed")
     return "; " + ", ".join(parts) + ": left out" if parts else ""

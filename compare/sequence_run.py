@@ -58,7 +58,7 @@ def run_sequence(
         cached = result is not None
         if result is None:
             result = run_case(engine, run_scene)
-            if cache is not None and (result.ok or result.doubtful):
+            if cache is not None and result.finished:
                 cache.put(key, result)
         done.append(SequenceRun(i + 1, pga, state, run_scene, result, cached))
         if not result.ok:

@@ -224,6 +224,12 @@ class Result:
         return self.meta.get("status") == STATUS_SUCCESS
 
     @property
+    def finished(self) -> bool:
+        """True for a run that reached an answer: ``success``, ``doubtful`` (a quality check
+        failed) or ``unseated`` (a corner lost its seat; the run stops there)."""
+        return self.meta.get("status") in (STATUS_SUCCESS, STATUS_DOUBTFUL, STATUS_UNSEATED)
+
+    @property
     def doubtful(self) -> bool:
         """True for a run that finished but failed a quality check (``meta["doubtful"]``)."""
         return self.meta.get("status") == STATUS_DOUBTFUL
