@@ -40,7 +40,7 @@ from deckpound.models.scene import Scene
 QUANTITIES = ("peak_theta", "peak_y", "peak_x", "gap_closures")
 UNITS = {"peak_theta": "rad", "peak_y": "m", "peak_x": "m", "gap_closures": "-"}
 #: version of the row format (part of the row cache key)
-ROW_FORMAT = 1
+ROW_FORMAT = 2  # 2: seat margin and demand, unseated flag, loop time
 MAX_CASES = 1_000_000
 
 
@@ -118,6 +118,7 @@ def case_row(engine: str, scene: Scene) -> dict:
         "wall_time": float(r.meta.get("wall_time", np.nan)),
         "compile_time": float(r.meta.get("compile_time", 0.0)),
         "steps": int(r.meta.get("steps", 0)),
+        "loop_time": float(r.meta.get("loop_time", np.nan)),
         "unseated": bool(r.meta.get("unseated", False)),
         "unseated_time": float(r.meta.get("unseated_time", np.nan)),
         "seat_margin": _smallest_margin(r.meta.get("seat_margin_min")),
