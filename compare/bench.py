@@ -226,7 +226,7 @@ def run_bench(
     """Run the work–precision benchmark; write bench.csv and figures into ``out``."""
     from deckpound.warmup import ITEMS, warm
 
-    from .cases import Progress
+    from .progress import Progress
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -36,11 +36,11 @@ from .result_cache import ResultCache
 
 __all__ = [
     "Case",
-    "Progress",
     "ResultCache",
     "case_key",
     "check_scheduler_address",
     "engine_expresses",
+    "map_parallel",
     "run_case",
     "run_cases",
 ]
@@ -197,7 +197,7 @@ def run_cases(
         bar.advance()
 
     try:
-        _map_parallel(todo, lambda c: (c.engine, c.scene), run_case, finish, workers, scheduler)
+        map_parallel(todo, lambda c: (c.engine, c.scene), run_case, finish, workers, scheduler)
     except KeyboardInterrupt as err:
         bar.close()
         raise interrupted(
@@ -209,7 +209,7 @@ def run_cases(
     return {c.label: results[c.label] for c in cases}
 
 
-def _map_parallel(
+def map_parallel(
     items: list,
     args_of: Callable,
     func: Callable,

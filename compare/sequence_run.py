@@ -16,14 +16,14 @@ from deckpound.models.scene import Scene
 from deckpound.models.sequence import SpecimenState, initial_state, next_state, scene_for_run
 
 from .cases import (
-    Progress,
     ResultCache,
-    _map_parallel,
     case_key,
     interrupted,
+    map_parallel,
     run_case,
     surface_warnings,
 )
+from .progress import Progress
 
 
 @dataclass
@@ -114,7 +114,7 @@ def run_sequences(
         bar.advance()
 
     try:
-        _map_parallel(
+        map_parallel(
             engines, lambda e: (scene, e, cache_folder), run_sequence, done, workers, scheduler
         )
     except KeyboardInterrupt as err:  # each finished run is cached: say so (issue 14)

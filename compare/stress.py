@@ -147,7 +147,7 @@ def run_stress(
     success with NaN/inf in the output: an engine bug, never hidden), ``timeout``,
     ``crashed`` (exception or dead child, message kept) or ``refused`` (the scene validation
     rejected the cell)."""
-    from .cases import Progress
+    from .progress import Progress
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -177,7 +177,8 @@ def sweep_rows(
     running). Returns ({index: row}, number of cases computed now)."""
     from deckpound._io import atomic_write_text
 
-    from .cases import Progress, _map_parallel, interrupted
+    from .cases import interrupted, map_parallel
+    from .progress import Progress
 
     keys = [row_key(engine, sc) for sc in scenes]
     rows: dict[int, dict] = {}
@@ -196,7 +197,7 @@ def sweep_rows(
         bar.advance()
 
     try:
-        _map_parallel(todo, lambda i: (engine, scenes[i]), case_row, done, workers, scheduler)
+        map_parallel(todo, lambda i: (engine, scenes[i]), case_row, done, workers, scheduler)
     except KeyboardInterrupt as err:
         bar.close()
         raise interrupted(err, title, len(rows), len(scenes), rows_dir) from None

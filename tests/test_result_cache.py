@@ -150,7 +150,7 @@ def test_concurrent_puts_and_gets_never_raise(tmp_path):
 PARENT = textwrap.dedent("""
     import os, sys, time
     from deckpound.compare import _workers
-    from deckpound.compare.cases import _map_parallel
+    from deckpound.compare.cases import map_parallel
 
     if sys.argv[2] == "watchdog-only":
         _workers._set_pdeathsig = lambda: False
@@ -159,7 +159,7 @@ PARENT = textwrap.dedent("""
         open(os.path.join(folder, str(os.getpid())), "w").close()
         time.sleep(120)
 
-    _map_parallel([1, 2], lambda i: (sys.argv[1],), work, lambda *a: None, 2, None)
+    map_parallel([1, 2], lambda i: (sys.argv[1],), work, lambda *a: None, 2, None)
 """)
 
 

@@ -15,7 +15,7 @@ import pytest
 import deckpound as dp
 from deckpound import cli
 from deckpound.compare import pool
-from deckpound.compare.cases import _map_parallel
+from deckpound.compare.cases import map_parallel
 
 SHORT = ["excitation.duration=2.0"]
 
@@ -34,7 +34,7 @@ def _boom(x):
 def test_pool_scope_reuses_workers_across_maps():
     def pids(n_items):
         out = []
-        _map_parallel(
+        map_parallel(
             list(range(n_items)), lambda i: (i,), _pid, lambda it, v: out.append(v), 2, None
         )
         return set(out)
@@ -49,7 +49,7 @@ def test_pool_scope_reuses_workers_across_maps():
 def test_worker_error_propagates_and_kills_the_workers():
     with pool.pool_scope():
         with pytest.raises(ValueError, match="case 3 failed"):
-            _map_parallel(list(range(8)), lambda i: (i,), _boom, lambda *a: None, 2, None)
+            map_parallel(list(range(8)), lambda i: (i,), _boom, lambda *a: None, 2, None)
         assert pool._SCOPE.pool is None
 
 
