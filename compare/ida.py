@@ -55,6 +55,7 @@ __all__ = [
     "limit_states",
     "parse_levels",
     "run_ida",
+    "with_rotation_flag",
 ]
 
 #: intensity measures of the command line → (excitation.scaling, target field, unit)
@@ -71,12 +72,23 @@ FITTED = ("success", "unseated")
 
 
 def limit_states(theta_limit: float | None) -> list[tuple[str, LimitState]]:
-    """(name, limit state) of a sweep: unseating of any corner, and the peak deck rotation
-    above ``theta_limit`` [rad] when given."""
+    """(name, limit state) of a sweep: unseating of any corner, and, when ``theta_limit``
+    [rad] is given, the peak deck rotation above it *or* unseating (an unseated run stops
+    where the deck loses its seat, so its rotation is not its demand: it counts as exceeding
+    every limit state, the usual collapse convention of IDA), read from the flag column
+    ``theta_exceeded`` that :func:`with_rotation_flag` adds."""
     out = [("unseating", LimitState("unseated"))]
     if theta_limit is not None:
-        out.append((f"peak θ_d > {theta_limit:g} rad", LimitState("peak_theta", theta_limit)))
+        out.append((f"peak θ_d > {theta_limit:g} rad", LimitState("theta_exceeded")))
     return out
+
+
+def with_rotation_flag(table, theta_limit: float | None):
+    """``table`` with the flag ``theta_exceeded`` = peak θ_d > ``theta_limit`` or unseated."""
+    if theta_limit is None:
+        return table
+    unseated = table["unseated"].astype(bool)
+    return table.assign(theta_exceeded=(table["peak_theta"] > theta_limit) | unseated)
 
 
 def parse_levels(text: str, option: str) -> list[float]:
@@ -203,7 +215,7 @@ def run_ida(
         for i, (params, _) in enumerate(specs):
             key = f"{params['record']}{' (rotated)' if params.get('rotated') else ''}"
             table_rows.append({"engine": engine, "case": i, **params, "record_key": key, **rows[i]})
-    table = pd.DataFrame(table_rows)
+    table = with_rotation_flag(pd.DataFrame(table_rows), theta_limit)
     states = limit_states(theta_limit)
     frag = fragility_table(table, states)
     unit = IMS[im][2]

@@ -172,3 +172,11 @@ def test_a_suite_of_22_pairs_by_10_levels_in_two_engines_end_to_end(tmp_path, ca
     assert set(frag["engine"]) == {"compliance", "nonsmooth"}
     printed = capsys.readouterr().out
     assert "compliance, unseating:" in printed and "nonsmooth, unseating:" in printed
+
+
+def test_an_unseated_case_exceeds_the_rotation_limit_state():
+    """The run stops where the deck loses its seat: its rotation so far is not its demand."""
+    from deckpound.compare.ida import with_rotation_flag
+
+    table = pd.DataFrame({"peak_theta": [0.001, 0.006, 0.001], "unseated": [False, False, True]})
+    assert with_rotation_flag(table, 0.005)["theta_exceeded"].tolist() == [False, True, True]
