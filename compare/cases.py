@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deckpound import __version__
+from deckpound.models._iir import SCIPY_AFTER, load_compiled_filter
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result, physics_hash, settings_hash
 from deckpound.models.scene import Scene
@@ -225,6 +226,8 @@ def map_parallel(
         return
     n = workers if workers is not None else (os.cpu_count() or 1)
     if n <= 1 or len(items) == 1:
+        if len(items) >= SCIPY_AFTER:  # a sweep: its import now, not at its 16th record
+            load_compiled_filter()
         for it in items:
             on_done(it, func(*args_of(it)))
         return
@@ -282,4 +285,5 @@ def _map_dask(
 def _dask_worker_setup() -> bool:
     from deckpound._kernel_load import install
 
+    load_compiled_filter()  # a long-lived worker: scipy.signal now, not mid-sweep
     return install()

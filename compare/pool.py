@@ -25,6 +25,8 @@ import os
 import signal
 from collections.abc import Callable, Iterator
 
+from deckpound.models._iir import load_compiled_filter
+
 __all__ = ["Interrupted", "map_local", "pool_scope", "worker_init"]
 
 #: seconds to wait for killed workers to be reaped
@@ -79,6 +81,10 @@ def pool_scope() -> Iterator[None]:
 
 def _new_pool(n: int):
     from concurrent.futures import ProcessPoolExecutor
+
+    # the workers are forked from this process: they inherit scipy.signal instead of each
+    # importing it in the middle of their cases (deckpound.models._iir)
+    load_compiled_filter()
 
     return ProcessPoolExecutor(max_workers=n, initializer=worker_init, initargs=(os.getpid(),))
 

@@ -16,7 +16,8 @@ same to the last bit (``tests/test_iir.py`` checks it against scipy):
 The recursion runs as a Python loop over plain floats (0.3–0.7 µs per sample and section,
 ~20 ms for a 20 s synthetic component); where ``scipy.signal`` is loaded already its compiled
 recursion is used — the same bits, 6× faster — and a process that has filtered
-:data:`SCIPY_AFTER` signals (a sweep's long-lived worker) imports it for the rest.
+:data:`SCIPY_AFTER` signals outside a sweep (a loop of ``dp.run`` calls) imports it for the rest;
+a sweep imports it at its start (:func:`load_compiled_filter`).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import sys
 
 import numpy as np
 
-__all__ = ["butter_highpass_sos", "sosfilt_zi", "sosfiltfilt"]
+__all__ = ["butter_highpass_sos", "load_compiled_filter", "sosfilt_zi", "sosfiltfilt"]
 
 #: signals filtered in pure Python before this process imports scipy.signal for the rest (a
 #: sweep's worker: its 0.5–1 s import is then paid once for hundreds of records)
@@ -100,6 +101,15 @@ def _sosfilt(sos: np.ndarray, x: np.ndarray, zi: np.ndarray) -> np.ndarray:
             z1 = b2 * xc - a2 * xn
             out[i] = xn
     return np.array(out)
+
+
+def load_compiled_filter() -> None:
+    """Import ``scipy.signal`` now, so that every later :func:`sosfiltfilt` of this process
+    (and of processes forked from it) uses its compiled recursion. A sweep calls this at its
+    start (:func:`deckpound.compare.cases.map_parallel`, the worker pool and the Dask workers'
+    set-up): the import then costs its second once, before the first case, not as a stall in
+    the middle of the sweep at the :data:`SCIPY_AFTER`-th record."""
+    import scipy.signal  # noqa: F401
 
 
 def sosfiltfilt(sos: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -58,3 +58,27 @@ def test_a_long_sweep_switches_to_scipy_with_the_same_bits():
     from deckpound.models._iir import SCIPY_AFTER
 
     assert out.stdout.split() == [str(SCIPY_AFTER), "True"]
+
+
+def test_a_sweep_imports_scipy_signal_at_its_start_not_mid_sweep():
+    """Issue 33, item 4: a sweep pays scipy.signal's import before its first case (in process,
+    and in the pool's workers, forked after it), instead of stalling at its 16th record."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from deckpound.compare.cases import map_parallel\n"
+        "def loaded(i): return 'scipy.signal' in sys.modules\n"
+        "seen = {}\n"
+        "for workers in (1, 2):\n"
+        "    out = []\n"
+        "    map_parallel(list(range(20)), lambda i: (i,), loaded, lambda i, v: out.append(v),"
+        " workers, None)\n"
+        "    seen[workers] = all(out)\n"
+        "print(seen)\n"
+    )
+    cp = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True
+    )
+    assert cp.stdout.strip() == "{1: True, 2: True}", cp.stdout + cp.stderr
