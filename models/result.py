@@ -41,6 +41,7 @@ import numpy as np
 from ._fields import to_mapping
 from .columns import column_unit, standard_columns
 from .errors import SceneError
+from .html_table import html_table, short_text
 from .plan import CORNER_NAMES, RELATIVE_COLUMNS
 
 __all__ = [
@@ -250,6 +251,38 @@ class Result:
         """Total gap closures (every step when the engine counted them, else on the output
         rows: ``meta["gap_closures_basis"]``; see :func:`gap_closures`)."""
         return int(self.meta.get("gap_closures", 0))
+
+    # -- short text for consoles and notebooks ---------------------------------------
+    def summary(self) -> dict[str, str]:
+        """The run's key facts as short texts: engine, status, duration [s], rows, column
+        count, peak deck rotation θ_d [rad] (:meth:`peak`) and gap closures; what
+        :meth:`__repr__` and :meth:`_repr_html_` show."""
+        t = self.t
+        facts = {
+            "engine": self.engine,
+            "status": str(self.meta.get("status")),
+            "duration": f"{t[-1] - t[0]:g} s" if len(t) else "0 s",
+            "rows": f"{len(t)}",
+            "columns": f"{len(self.columns)}",
+        }
+        if "deck_theta" in self.columns:
+            facts["peak θ_d"] = f"{self.peak('deck_theta'):.4g} rad"
+        if "gap_closures" in self.meta:
+            facts["gap closures"] = f"{self.gap_closures}"
+        message = str(self.meta.get("message") or "")
+        if message and not self.ok:
+            facts["message"] = message
+        return facts
+
+    def __repr__(self) -> str:
+        facts = self.summary()
+        facts.pop("message", None)  # free text of any length: in the HTML table only
+        head = f"Result({short_text(facts.pop('engine'))!r}"
+        return head + "".join(f", {k} {v}" for k, v in facts.items()) + ")"
+
+    def _repr_html_(self) -> str:
+        """An HTML table of :meth:`summary` for notebooks (every text escaped)."""
+        return html_table("Result", self.summary())
 
     # -- peaks -----------------------------------------------------------------------
     def _step_peak(self, column: str):

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from ._fields import spec, validate
 from .contact_laws_table import FRICTION_CODES, LAW_CODES, contact_law
 from .errors import SceneError
+from .html_table import html_table, short_text
 from .scene_excitation import (
     ABSURD_PGA,
     EXTREME_PGA,
@@ -495,6 +496,36 @@ class Scene:
     def replace(self, **changes) -> Scene:
         """A copy with top-level fields replaced (validated again)."""
         return dataclasses.replace(self, **changes)
+
+    # -- short text for consoles and notebooks ---------------------------------------
+    def summary(self) -> dict[str, str]:
+        """The scene's key facts as short texts (name, deck, bents, gaps, contact, record):
+        what :meth:`__repr__` and :meth:`_repr_html_` show."""
+        gaps = "/".join(f"{1e3 * s.gap:g}" for s in self.seats)
+        skew = f", skew {self.deck.skew:g}°" if self.deck.skew else ""
+        # the laws whose force is K·δ^n carry K in kN/m^n (contact.stiffness)
+        uses_exponent = "contact.exponent" in contact_law(self.contact.law).params
+        k_unit = f"kN/m^{self.contact.exponent:g}" if uses_exponent else "kN/m"
+        return {
+            "name": self.name,
+            "deck": f"{self.deck.length:g} × {self.deck.width:g} m, {self.deck.mass:g} t{skew}",
+            "bents": f"{len(self.bents)}",
+            "gaps": f"{gaps} mm",
+            "contact": f"{self.contact.law}, k = {self.contact.stiffness:g} {k_unit}"
+            + (f", μ = {self.contact.friction:g}" if self.contact.has_friction else ""),
+            "record": self.excitation.kind,
+        }
+
+    def __repr__(self) -> str:
+        facts = self.summary()
+        return (
+            f"Scene({short_text(facts['name'])!r}, deck {facts['deck']}, {facts['bents']} bents, "
+            f"gaps {facts['gaps']}, contact {facts['contact']}, record {facts['record']})"
+        )
+
+    def _repr_html_(self) -> str:
+        """An HTML table of :meth:`summary` for notebooks (every text escaped)."""
+        return html_table("Scene", self.summary())
 
 
 def _check_path(scene: Scene, key: str) -> None:

@@ -7,10 +7,13 @@ scenes come from :mod:`deckpound.models.scene_io`, engines from the registry
 
 from __future__ import annotations
 
+import html
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from deckpound.models.html_table import short_text
 
 __all__ = [
     "Comparison",
@@ -158,6 +161,48 @@ class Comparison:
     metrics: Any
     reference: str
     quantities: tuple[str, ...] = field(default=DEFAULT_QUANTITIES)
+
+    # -- short text for consoles and notebooks ---------------------------------------
+    def engine_rows(self) -> list[dict[str, str]]:
+        """One row of short texts per engine: status, peak deck rotation θ_d [rad], gap
+        closures, and against the reference its θ_d peak ratio and NRMSE (from
+        :attr:`metrics`)."""
+        rows = []
+        for name, res in self.results.items():
+            row = {"engine": name, "status": str(res.meta.get("status"))}
+            row["peak θ_d [rad]"] = (
+                f"{res.peak('deck_theta'):.4g}" if "deck_theta" in res.columns else ""
+            )
+            row["gap closures"] = f"{res.gap_closures}"
+            for col, head in (("peak_ratio", "θ_d peak ratio"), ("nrmse", "θ_d NRMSE")):
+                row[head] = self._theta_metric(name, col)
+            rows.append(row)
+        return rows
+
+    def _theta_metric(self, engine: str, column: str) -> str:
+        m = self.metrics
+        if m is None or column not in getattr(m, "columns", ()):
+            return ""
+        hit = m[(m["engine"] == engine) & (m["quantity"] == "deck_theta")]
+        return f"{float(hit[column].iloc[0]):.3g}" if len(hit) else ""
+
+    def __repr__(self) -> str:
+        engines = ", ".join(short_text(n, 30) for n in self.results)
+        return (
+            f"Comparison(reference {short_text(self.reference, 30)!r}, engines [{engines}], "
+            f"{len(self.quantities)} quantities, {len(self.metrics)} metric rows)"
+        )
+
+    def _repr_html_(self) -> str:
+        """An HTML table, one row per engine (:meth:`engine_rows`), every text escaped."""
+        rows = self.engine_rows()
+        heads = list(rows[0]) if rows else []
+        head = "".join(f"<th>{html.escape(h)}</th>" for h in heads)
+        body = "".join(
+            "<tr>" + "".join(f"<td>{html.escape(r[h])}</td>" for h in heads) + "</tr>" for r in rows
+        )
+        title = html.escape(f"Comparison against {self.reference}")
+        return f"<b>{title}</b><table><tr>{head}</tr>{body}</table>"
 
 
 def compare(
