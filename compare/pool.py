@@ -23,9 +23,10 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 from collections.abc import Callable, Iterator
 
-from deckpound.models._iir import load_compiled_filter
+from deckpound.models._iir import SCIPY_AFTER, load_compiled_filter
 
 __all__ = ["Interrupted", "map_local", "pool_scope", "worker_init"]
 
@@ -57,6 +58,8 @@ class _Scope:
         self.active = 0
         self.pool = None
         self.size = 0
+        #: the scope's workers were forked with scipy.signal loaded (deckpound.models._iir)
+        self.filtered = False
 
 
 _SCOPE = _Scope()
@@ -81,10 +84,6 @@ def pool_scope() -> Iterator[None]:
 
 def _new_pool(n: int):
     from concurrent.futures import ProcessPoolExecutor
-
-    # the workers are forked from this process: they inherit scipy.signal instead of each
-    # importing it in the middle of their cases (deckpound.models._iir)
-    load_compiled_filter()
 
     return ProcessPoolExecutor(max_workers=n, initializer=worker_init, initargs=(os.getpid(),))
 
@@ -118,6 +117,7 @@ def _acquire(n: int):
             _close(kill=False)
         if _SCOPE.pool is None:
             _SCOPE.pool, _SCOPE.size = _new_pool(n), n
+            _SCOPE.filtered = "scipy.signal" in sys.modules
         return _SCOPE.pool, False
     return _new_pool(n), True
 
@@ -128,6 +128,13 @@ def map_local(items: list, args_of: Callable, func: Callable, on_done: Callable,
     ``on_done``, and Ctrl-C, kill the workers and propagate."""
     from concurrent.futures import FIRST_COMPLETED, wait
 
+    if len(items) >= SCIPY_AFTER:
+        # a sweep: scipy.signal's import now, in this process, so that the workers forked for
+        # it inherit it instead of each importing it at its 16th record (a stall mid-sweep);
+        # a scope's pool forked before the import is replaced
+        load_compiled_filter()
+        if _SCOPE.pool is not None and not _SCOPE.filtered:
+            _close(kill=False)
     pool, owned = _acquire(min(n, len(items)) if not _SCOPE.active else n)
     # the workers are forked during the first submit: SIGINT and SIGTERM blocked meanwhile, so
     # that no worker can take either before its initializer has set what it does with them

@@ -62,7 +62,8 @@ def test_a_long_sweep_switches_to_scipy_with_the_same_bits():
 
 def test_a_sweep_imports_scipy_signal_at_its_start_not_mid_sweep():
     """Issue 33, item 4: a sweep pays scipy.signal's import before its first case (in process,
-    and in the pool's workers, forked after it), instead of stalling at its 16th record."""
+    and in the pool's workers, forked after it; a scope's pool forked by a small map before is
+    replaced), instead of stalling at its 16th record."""
     import subprocess
     import sys
 
@@ -76,9 +77,16 @@ def test_a_sweep_imports_scipy_signal_at_its_start_not_mid_sweep():
         "    map_parallel(list(range(20)), lambda i: (i,), loaded, lambda i, v: out.append(v),"
         " workers, None)\n"
         "    seen[workers] = all(out)\n"
+        "from deckpound.compare.pool import pool_scope\n"
+        "with pool_scope():\n"
+        "    map_parallel([0, 1, 2], lambda i: (i,), loaded, lambda i, v: None, 2, None)\n"
+        "    out = []\n"
+        "    map_parallel(list(range(20)), lambda i: (i,), loaded, lambda i, v: out.append(v),"
+        " 2, None)\n"
+        "    seen['scope'] = all(out)\n"
         "print(seen)\n"
     )
     cp = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True
     )
-    assert cp.stdout.strip() == "{1: True, 2: True}", cp.stdout + cp.stderr
+    assert cp.stdout.strip() == "{1: True, 2: True, 'scope': True}", cp.stdout + cp.stderr
