@@ -54,7 +54,9 @@ __all__ = [
     "ida_figure",
     "limit_states",
     "parse_levels",
+    "parse_vary",
     "run_ida",
+    "synthetic_pairs",
     "with_rotation_flag",
 ]
 
@@ -69,6 +71,10 @@ IMS = {
 MAX_CASES = 200_000
 #: statuses whose rows enter the fragility fits
 FITTED = ("success", "unseated")
+#: most values of one ``--vary`` (each value runs the whole sweep once per engine)
+MAX_VARIANTS = 10
+#: ``--vary`` shorthands → the scene paths each value is written to
+VARY_SHORTHANDS = {"gap": ("seats[0].gap", "seats[1].gap")}
 
 
 def limit_states(theta_limit: float | None) -> list[tuple[str, LimitState]]:
@@ -116,6 +122,83 @@ def parse_levels(text: str, option: str) -> list[float]:
     return [float(round(v, 12)) for v in levels]
 
 
+def parse_vary(text: str, scene: Scene) -> list[tuple[str, tuple[str, ...]]]:
+    """``"PATH=V1,V2,..."`` → (label ``PATH=V``, scene overrides) per value, each checked on
+    ``scene``; the shorthand ``gap=…`` sets both seats' gap (:data:`VARY_SHORTHANDS`). At most
+    :data:`MAX_VARIANTS` distinct values."""
+    from .studies import modified
+
+    if "=" not in text:
+        raise SceneError("--vary", f"expects PATH=V1,V2,..., got {text!r}")
+    path, raw = (part.strip() for part in text.split("=", 1))
+    values = [v.strip() for v in raw.split(",")]
+    if not path or not values or any(not v for v in values):
+        raise SceneError("--vary", f"expects PATH=V1,V2,... with no empty value, got {text!r}")
+    if len(values) > MAX_VARIANTS:
+        raise SceneError("--vary", f"{len(values)} values; at most {MAX_VARIANTS} are allowed")
+    if len(set(values)) != len(values):
+        raise SceneError("--vary", f"{text!r}: the values must be distinct")
+    if path == "contact.friction" and scene.contact.friction_mode == "none":
+        raise SceneError(
+            "--vary",
+            "contact.friction does nothing while contact.friction_mode is 'none'; choose a "
+            "mode, e.g. --set contact.friction_mode=slip",
+        )
+    paths = VARY_SHORTHANDS.get(path, (path,))
+    out = []
+    for value in values:
+        overrides = tuple(f"{p}={value}" for p in paths)
+        try:
+            modified(scene, *overrides)
+        except SceneError as err:
+            raise SceneError("--vary", f"{path}={value}: {err}") from None
+        out.append((f"{path}={value}", overrides))
+    return out
+
+
+def synthetic_pairs(
+    scene: Scene, folder: str | Path, pairs: int, seed: int = 0, duration: float = 20.0
+) -> Path:
+    """Write ``pairs`` PEER-named AT2 station pairs (``RSN<i>_SYNTH_ST<i>000/090``) drawn from
+    the built-in synthetic generator of ``scene`` with seeds ``seed``, ``seed + 1``, ...: the
+    first bent's table acceleration in x and y of each seed [g] (a = ü / 9.80665 m/s²), at
+    the generator's step. Returns the folder."""
+    from deckpound._io import ensure_folder
+    from deckpound.models.excitation import support_motion
+
+    from .studies import modified
+
+    folder = ensure_folder(folder)
+    for i in range(pairs):
+        sc = modified(
+            scene, f"excitation.seed={seed + i}", f"excitation.duration={float(duration)!r}"
+        )
+        motion = support_motion(sc)
+        dt = float(motion.t[1] - motion.t[0])
+        for comp, channel in (("000", "bent1_x"), ("090", "bent1_y")):
+            _write_at2(
+                folder / f"RSN{i + 1}_SYNTH_ST{i + 1}{comp}.AT2",
+                motion.acc(channel) / 9.80665,
+                dt,
+            )
+    return folder
+
+
+def _write_at2(path: Path, acc_g, dt: float) -> None:
+    """A PEER NGA-West2 AT2 file of the acceleration ``acc_g`` [g] at step ``dt`` [s]."""
+    from deckpound._io import atomic_write_text
+
+    acc = [float(v) for v in acc_g]
+    body = ["".join(f"{v:15.7E}" for v in acc[i : i + 5]) for i in range(0, len(acc), 5)]
+    head = [
+        "PEER NGA STRONG MOTION DATABASE RECORD",
+        "deckpound synthetic station (built-in generator)",
+        "ACCELERATION TIME SERIES IN UNITS OF G",
+        f"NPTS=   {len(acc)}, DT=   {dt:.4f} SEC",
+    ]
+    atomic_write_text(path, "\n".join(head + body) + "\n")
+
+
 def ida_cases(
     scene: Scene, records: str | Path, im: str, levels: list[float], rotate: bool = False
 ) -> list[tuple[dict, Scene]]:
@@ -151,17 +234,20 @@ def _fit(state: LimitState, method: str, ok):
 
 
 def fragility_table(table, states: list[tuple[str, LimitState]]):
-    """One row per engine, limit state and method (``ida`` from each record's capacity,
+    """One row per engine (and ``variant``, when the table has that column), limit state and
+    method (``ida`` from each record's capacity,
     censored at its highest level; ``msa`` from the stripes' binomial counts) over the cases
     that finished with an answer (:data:`FITTED`); the others are counted in ``left_out``."""
     import pandas as pd
 
     rows = []
-    for engine, mine in table.groupby("engine", sort=False):
+    keys = ["engine", "variant"] if "variant" in table else ["engine"]
+    for group, mine in table.groupby(keys, sort=False):
         ok = mine[mine["status"].isin(FITTED)]
+        head = dict(zip(keys, group))
         for name, state in states:
             for method in ("ida", "msa"):
-                row = {"engine": engine, "limit_state": name, "method": method}
+                row = {**head, "limit_state": name, "method": method}
                 row.update(median=np.nan, beta=np.nan, cases=len(ok))
                 row["left_out"] = len(mine) - len(ok)
                 try:
@@ -188,33 +274,66 @@ def run_ida(
     scheduler: str | None = None,
     progress: bool = True,
     title: str = "ida",
+    variants: list[tuple[str, tuple[str, ...]]] | None = None,
 ):
-    """Run the sweep with every engine; write ``ida.csv`` (one summary row per engine, record
-    and level), ``fragility.csv``, ``ida.json`` and the figures ``ida.png`` and
-    ``fragility.png`` into ``out``; return (table, fragility table)."""
+    """Run the sweep with every engine, once per variant ((label, scene overrides), e.g. from
+    :func:`parse_vary`; none: the scene as given, label ``""``); write ``ida.csv`` (one summary
+    row per engine, variant, record and level), ``fragility.csv`` (per engine × variant ×
+    limit state × method), ``ida.json`` and the figures ``ida.png`` and ``fragility.png``
+    into ``out``; return (table, fragility table). Rows are cached by engine and scene, so a
+    variant's value is part of its cases' keys."""
     import pandas as pd
 
     from deckpound._io import atomic_write_text, ensure_folder, write_csv
 
-    specs = ida_cases(scene, records, im, levels, rotate)
+    from .studies import modified
+
+    variants = list(variants) if variants else [("", ())]
+    specs = [
+        (
+            label,
+            ida_cases(
+                modified(scene, *overrides) if overrides else scene, records, im, levels, rotate
+            ),
+        )
+        for label, overrides in variants
+    ]
+    if sum(len(cases) for _, cases in specs) > MAX_CASES:
+        raise SceneError(
+            "--vary",
+            f"{len(variants)} variants × {len(specs[0][1])} cases exceed the {MAX_CASES} "
+            "cases allowed",
+        )
     out = ensure_folder(out)
     rows_dir = ensure_folder(Path(cache_dir) if cache_dir else out / "cache", "--cache")
     t0 = time.perf_counter()
     table_rows, computed = [], 0
     for engine in engines:
-        rows, done = sweep_rows(
-            [sc for _, sc in specs],
-            engine,
-            ensure_folder(rows_dir / "rows", "--cache"),
-            f"{title} {engine}",
-            workers=workers,
-            scheduler=scheduler,
-            progress=progress,
-        )
-        computed += done
-        for i, (params, _) in enumerate(specs):
-            key = f"{params['record']}{' (rotated)' if params.get('rotated') else ''}"
-            table_rows.append({"engine": engine, "case": i, **params, "record_key": key, **rows[i]})
+        case = 0
+        for label, cases in specs:
+            rows, done = sweep_rows(
+                [sc for _, sc in cases],
+                engine,
+                ensure_folder(rows_dir / "rows", "--cache"),
+                f"{title} {engine}{' ' + label if label else ''}",
+                workers=workers,
+                scheduler=scheduler,
+                progress=progress,
+            )
+            computed += done
+            for i, (params, _) in enumerate(cases):
+                key = f"{params['record']}{' (rotated)' if params.get('rotated') else ''}"
+                table_rows.append(
+                    {
+                        "engine": engine,
+                        "variant": label,
+                        "case": case,
+                        **params,
+                        "record_key": key,
+                        **rows[i],
+                    }
+                )
+                case += 1
     table = with_rotation_flag(pd.DataFrame(table_rows), theta_limit)
     states = limit_states(theta_limit)
     frag = fragility_table(table, states)
@@ -229,6 +348,7 @@ def run_ida(
         json.dumps(
             {
                 "engines": list(engines),
+                "variants": {label: list(overrides) for label, overrides in variants},
                 "im": im,
                 "im_unit": unit,
                 "levels": levels,
@@ -260,7 +380,8 @@ def ida_figure(table, im: str, scene_name: str, path: Path) -> list[Path]:
         mine = table[table["engine"] == engine]
         for j, (col, scale, label) in enumerate(edps):
             ax = axes[0][2 * k + j]
-            for _, rec in mine.groupby("record_key", sort=True):
+            by = ["variant", "record_key"] if "variant" in mine else ["record_key"]
+            for _, rec in mine.groupby(by, sort=True):
                 rec = rec.sort_values("level")
                 ax.plot(scale * rec[col], rec["level"], "-", color="#555555", lw=0.8)
                 hit = rec[rec["unseated"].astype(bool)]
@@ -272,57 +393,75 @@ def ida_figure(table, im: str, scene_name: str, path: Path) -> list[Path]:
 
 
 def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) -> list[Path]:
-    """Fragility curves (IDA fits) per limit state, one curve per engine with its 90 %
-    bootstrap band over records; the stripes' observed fractions as markers."""
+    """Fragility curves (IDA fits) per limit state, one curve per engine (colour) and variant
+    (line style), with its 90 % bootstrap band over records when no variant is swept; the
+    stripes' observed fractions as markers; the legend beside the panels, off the data."""
     from .fragility import bootstrap_ida
     from .style import new_figure, save
 
     levels = np.sort(table["level"].unique())
     grid = np.geomspace(levels[0] / 2, levels[-1] * 2, 60)
-    fig, axes = new_figure(1, len(states), width=3.6 * len(states), height=3.0)
+    if "variant" not in table:
+        table = table.assign(variant="")
+    if "variant" not in frag:
+        frag = frag.assign(variant="")
+    variants = list(dict.fromkeys(table["variant"]))
+    fig, axes = new_figure(1, len(states), width=3.6 * len(states) + 2.4, height=3.0)
     colors = ("#1f4e79", "#c0392b", "#2e7d32", "#7b1fa2")
+    styles = ("-", "--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (8, 2)), (0, (1, 3)))
+    markers = ("o", "s", "^", "v", "D", "P", "X", "<", ">", "h")
     for ax, (name, state) in zip(axes[0], states):
         for k, engine in enumerate(dict.fromkeys(table["engine"])):
-            mine = table[(table["engine"] == engine) & table["status"].isin(FITTED)]
             color = colors[k % len(colors)]
-            row = frag[
-                (frag["engine"] == engine)
-                & (frag["limit_state"] == name)
-                & (frag["method"] == "ida")
-            ]
-            if len(mine):
-                counts = count_exceedances(mine, state, im_column="level")
+            for j, variant in enumerate(variants):
+                mine = table[
+                    (table["engine"] == engine)
+                    & (table["variant"] == variant)
+                    & table["status"].isin(FITTED)
+                ]
+                row = frag[
+                    (frag["engine"] == engine)
+                    & (frag["variant"] == variant)
+                    & (frag["limit_state"] == name)
+                    & (frag["method"] == "ida")
+                ]
+                if len(mine):
+                    counts = count_exceedances(mine, state, im_column="level")
+                    ax.plot(
+                        counts["im"],
+                        counts["exceed"] / counts["n"],
+                        markers[j % len(markers)],
+                        ms=3,
+                        color=color,
+                        mfc="white",
+                    )
+                if not len(row) or not np.isfinite(row["median"].iloc[0]):
+                    continue
+                if len(variants) == 1:
+                    caps = ida_capacities(
+                        mine, state, im_column="level", record_column="record_key"
+                    )
+                    try:
+                        band = bootstrap_ida(caps["capacity"], caps["censored"], grid, 200, seed=0)
+                        ax.fill_between(grid, band.lower, band.upper, color=color, alpha=0.15, lw=0)
+                    except SceneError:
+                        pass  # too few records to resample: the curve alone
+                m, b = row["median"].iloc[0], row["beta"].iloc[0]
+                who = f"{engine}, {variant}" if variant else engine
                 ax.plot(
-                    counts["im"],
-                    counts["exceed"] / counts["n"],
-                    "o",
-                    ms=3,
+                    grid,
+                    fragility_curve(grid, m, b),
+                    linestyle=styles[j % len(styles)],
                     color=color,
-                    mfc="white",
+                    lw=1.2,
+                    label=f"{who}: median {m:.3g}, β {b:.2f}",
                 )
-            if not len(row) or not np.isfinite(row["median"].iloc[0]):
-                continue
-            caps = ida_capacities(mine, state, im_column="level", record_column="record_key")
-            try:
-                band = bootstrap_ida(caps["capacity"], caps["censored"], grid, 200, seed=0)
-                ax.fill_between(grid, band.lower, band.upper, color=color, alpha=0.15, lw=0)
-            except SceneError:
-                pass  # too few records to resample: the curve alone
-            m, b = row["median"].iloc[0], row["beta"].iloc[0]
-            ax.plot(
-                grid,
-                fragility_curve(grid, m, b),
-                "-",
-                color=color,
-                lw=1.2,
-                label=f"{engine}: median {m:.3g}, β {b:.2f}",
-            )
         ax.set_xscale("log")
         ax.set_ylim(-0.02, 1.02)
         ax.set_title(name, fontsize=9)
         ax.set_xlabel(f"{im} [{IMS[im][2]}]")
         if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=7, loc="upper left", frameon=False)
+            ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
         else:
             ax.text(
                 0.5,

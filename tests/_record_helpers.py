@@ -94,18 +94,8 @@ def record_scene(kind: str = "at2", file_x=None, file_y=None, file=None, *overri
 
 
 def synthetic_suite(folder: Path, pairs: int, seed: int = 0, duration: float = 20.0) -> Path:
-    """``pairs`` PEER-named AT2 station pairs (``RSN<i>_SYNTH_ST<i>000/090``) drawn from the
-    built-in synthetic generator with seeds ``seed``, ``seed + 1``, ...: the first bent's
-    table acceleration in x and y of each seed [g]."""
-    from deckpound.models.excitation import support_motion
+    """``pairs`` PEER-named AT2 station pairs of the benchmark's synthetic generator
+    (:func:`deckpound.compare.ida.synthetic_pairs`)."""
+    from deckpound.compare.ida import synthetic_pairs
 
-    folder.mkdir(parents=True, exist_ok=True)
-    for i in range(pairs):
-        sc = load_scene(
-            "saiidi-4span", [f"excitation.seed={seed + i}", f"excitation.duration={duration!r}"]
-        )
-        m = support_motion(sc)
-        dt = float(m.t[1] - m.t[0])
-        for comp, ch in (("000", "bent1_x"), ("090", "bent1_y")):
-            write_at2(folder / f"RSN{i + 1}_SYNTH_ST{i + 1}{comp}.AT2", m.acc(ch) / 9.80665, dt=dt)
-    return folder
+    return synthetic_pairs(load_scene("saiidi-4span"), folder, pairs, seed, duration)

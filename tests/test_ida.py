@@ -180,3 +180,91 @@ def test_an_unseated_case_exceeds_the_rotation_limit_state():
 
     table = pd.DataFrame({"peak_theta": [0.001, 0.006, 0.001], "unseated": [False, False, True]})
     assert with_rotation_flag(table, 0.005)["theta_exceeded"].tolist() == [False, True, True]
+
+
+def test_vary_friction_runs_the_sweep_per_value_and_fits_each(tmp_path, suite, capsys):
+    """``--vary contact.friction=0,0.4``: every case once per value (its own scene, so its own
+    cached row), a ``variant`` column, fragility rows per engine × variant."""
+    vary = ["--vary", "contact.friction=0,0.4", "--set", "contact.friction_mode=slip"]
+    code, out = _sweep(tmp_path, suite, "ida", "0.2:1.0:0.2", *vary)
+    printed = capsys.readouterr().out
+    assert code == 0
+    table = pd.read_csv(out / "ida.csv", comment="#")
+    assert len(table) == 2 * PAIRS * 5
+    assert table.groupby("variant").size().to_dict() == {
+        "contact.friction=0": PAIRS * 5,
+        "contact.friction=0.4": PAIRS * 5,
+    }
+    assert table["case"].is_unique
+    meta = json.loads((out / "ida.json").read_text())
+    assert meta["computed"] == 2 * PAIRS * 5  # no case of one value is taken for the other
+    assert meta["variants"]["contact.friction=0.4"] == ["contact.friction=0.4"]
+    # friction changes the response: the two values do not give the same rows
+    a, b = (g.sort_values(["record_key", "level"]) for _, g in table.groupby("variant"))
+    assert not np.allclose(a["peak_theta"].to_numpy(), b["peak_theta"].to_numpy())
+    frag = pd.read_csv(out / "fragility.csv", comment="#")
+    assert len(frag) == 2 * 1 * 2  # variants × limit states × methods
+    assert set(frag["variant"]) == {"contact.friction=0", "contact.friction=0.4"}
+    assert "compliance (contact.friction=0.4), unseating:" in printed
+    assert (out / "fragility.png").stat().st_size > 0
+
+
+def test_vary_gap_shorthand_sets_both_seats(tmp_path):
+    from deckpound.compare.ida import parse_vary
+    from deckpound.models.scene_io import load_scene
+
+    scene = load_scene("saiidi-4span")
+    variants = parse_vary("gap=0.0127,0.025", scene)
+    assert variants == [
+        ("gap=0.0127", ("seats[0].gap=0.0127", "seats[1].gap=0.0127")),
+        ("gap=0.025", ("seats[0].gap=0.025", "seats[1].gap=0.025")),
+    ]
+
+
+@pytest.mark.parametrize(
+    "vary",
+    [
+        "contact.no_such_field=0,1",
+        "contact.friction=0,abc",
+        "contact.friction=0,-1",
+        "contact.friction",
+        "contact.friction=0,,1",
+        "contact.friction=0,0",
+        "contact.friction=" + ",".join(str(0.01 * k) for k in range(11)),
+    ],
+)
+def test_bad_vary_exits_2_naming_the_option(tmp_path, suite, capsys, vary):
+    slip = ["--set", "contact.friction_mode=slip"]
+    code, out = _sweep(tmp_path, suite, "ida", "0.2,0.4", "--vary", vary, *slip)
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "--vary" in err and "Traceback" not in err
+    assert not (out / "ida.csv").exists()
+
+
+def test_varying_friction_without_a_friction_mode_exits_2(tmp_path, suite, capsys):
+    """The default friction_mode 'none' ignores mu: every value would give the same rows."""
+    code, _ = _sweep(tmp_path, suite, "ida", "0.2,0.4", "--vary", "contact.friction=0,0.3")
+    err = capsys.readouterr().err
+    assert code == 2 and "--vary" in err and "friction_mode" in err
+
+
+def test_synthetic_pairs_are_a_readable_suite_of_distinct_motions(tmp_path):
+    """The generator's first-bent motions of seeds 7, 8 as AT2 pairs: read back as two
+    station pairs whose x components differ and match the generator to the file's 8 digits."""
+    from deckpound.compare.ida import synthetic_pairs
+    from deckpound.compare.variability import record_cases
+    from deckpound.models.excitation import support_motion
+    from deckpound.models.records import read_at2
+    from deckpound.models.scene_io import load_scene
+
+    scene = load_scene("saiidi-4span")
+    folder = synthetic_pairs(scene, tmp_path / "suite", 2, seed=7, duration=4.0)
+    assert len(record_cases(scene, folder, False)) == 2
+    first = read_at2(folder / "RSN1_SYNTH_ST1000.AT2")
+    second = read_at2(folder / "RSN2_SYNTH_ST2000.AT2")
+    motion = support_motion(
+        load_scene("saiidi-4span", ["excitation.seed=7", "excitation.duration=4.0"])
+    )
+    np.testing.assert_allclose(first.values, motion.acc("bent1_x") / 9.80665, rtol=1e-6, atol=1e-9)
+    assert not np.allclose(first.values[: len(second.values)], second.values[: len(first.values)])

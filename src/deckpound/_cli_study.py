@@ -170,6 +170,14 @@ def register(sub: argparse._SubParsersAction) -> None:
             help="also fit the limit state peak deck rotation > RAD",
         )
         p.add_argument("--rotate90", action="store_true", help="also each pair turned by 90°")
+        p.add_argument(
+            "--vary",
+            default=None,
+            metavar="PATH=V1,V2,...",
+            help="run the whole sweep once per value of a scene field (at most 10 values), "
+            "e.g. contact.friction=0,0.2,0.4 or seats[0].gap=0.0127,0.025; gap=... sets both "
+            "seats' gap",
+        )
         p.add_argument("-o", "--output", default=None, metavar="DIR")
         _parallel_args(p)
         p.set_defaults(func=_ida, sweep=name)
@@ -459,7 +467,7 @@ def _variability(args) -> int:
 def _ida(args) -> int:
     """``deckpound ida|msa``: the sweep's rows, the fragility table, one line per limit state."""
     from deckpound._io import output_folder
-    from deckpound.compare.ida import IMS, parse_levels, run_ida
+    from deckpound.compare.ida import IMS, parse_levels, parse_vary, run_ida
 
     from ._cli_engines import check_output_folder
 
@@ -472,6 +480,7 @@ def _ida(args) -> int:
         raise SceneError("--theta-limit", f"must be a finite angle > 0 rad, got {args.theta_limit}")
     out = check_output_folder(args.output or args.sweep)
     scene = _checked_scene(args, engines)
+    variants = parse_vary(args.vary, scene) if args.vary is not None else None
     with output_folder(out, args.sweep) as out:
         table, frag = run_ida(
             scene,
@@ -487,6 +496,7 @@ def _ida(args) -> int:
             scheduler=args.scheduler,
             progress=not args.no_progress,
             title=args.sweep,
+            variants=variants,
         )
     unit = IMS[args.im][2]
     method = args.sweep
@@ -494,8 +504,9 @@ def _ida(args) -> int:
         fit = (
             f"median {r['median']:.4g} {unit}, beta {r['beta']:.3g}" if not r["note"] else r["note"]
         )
+        who = f"{r['engine']} ({r['variant']})" if r["variant"] else r["engine"]
         print(
-            f"{r['engine']}, {r['limit_state']}: {fit} ({r['cases']} cases fitted, "
+            f"{who}, {r['limit_state']}: {fit} ({r['cases']} cases fitted, "
             f"{r['left_out']} left out)"
         )
     counts = table["status"].value_counts().to_dict()
