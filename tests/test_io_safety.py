@@ -395,3 +395,14 @@ def test_a_worker_left_by_a_killed_command_does_not_hold_its_folder(tmp_path):
     finally:
         os.kill(worker, signal.SIGKILL)
     assert list(out.iterdir()) == []  # the killed command's lock file went with the new claim
+
+
+def test_an_export_to_a_device_or_pipe_is_refused(tmp_path, capsys):
+    """An export writes its data folder beside the script: to /dev/null that folder would be
+    /dev/null_data. A pipe is refused the same way (the export is one file plus a folder)."""
+    fifo = tmp_path / "pipe.py"
+    os.mkfifo(fifo)
+    for target in ("/dev/null", str(fifo)):
+        assert cli_main(["export", "saiidi-4span", "--format", "py", "-o", target]) == 2
+        assert "device or a pipe" in capsys.readouterr().err
+    assert not os.path.exists("/dev/null_data") and not (tmp_path / "pipe_data").exists()

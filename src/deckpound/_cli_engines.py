@@ -162,7 +162,7 @@ def _export(args) -> int:
 
     from ._io import check_parent, check_target, claim_folder_of
 
-    out = check_target(args.output)  # a folder or a symbolic link: refused
+    out = check_target(args.output, stream=False)  # a folder, link or device: refused
     check_parent(out)
     claim_folder_of(out)
     scene = load_scene(args.scene, args.overrides)

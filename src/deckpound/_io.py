@@ -127,10 +127,17 @@ def _sweep_once(folder: Path) -> None:
         remove_stale_temporaries(folder)
 
 
-def check_target(path: str | Path, field: str = "--output") -> Path:
+def check_target(path: str | Path, field: str = "--output", *, stream: bool = True) -> Path:
     """Refuse a target file that is a symbolic link, a folder, a block device or a socket;
-    return it as a Path. (A character device or a pipe, e.g. /dev/null, is written directly.)"""
-    _kind(Path(path), field)
+    return it as a Path. A character device or a pipe, e.g. /dev/null, is written directly,
+    unless ``stream`` is False (an output that brings files beside it, such as an export's
+    data folder, which would land among the devices)."""
+    if _kind(Path(path), field) == "stream" and not stream:
+        raise SceneError(
+            field,
+            f"{str(path)!r} is a device or a pipe, and this output writes a folder beside "
+            "its file: give a file name in a folder",
+        )
     return Path(path)
 
 
