@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import re
 import types
 import typing
 from typing import Any
@@ -303,3 +304,47 @@ def _type_schema(tp: Any, meta: typing.Mapping[str, Any]) -> dict[str, Any]:
     if text:
         out["description"] = text
     return out
+
+
+#: one segment of a dotted field path: a name, then any number of ``[index]``
+_SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
+
+
+def split_path(path: str, source: str = "--set") -> list[tuple[str, list[int]]]:
+    """``"bents[1].y.beta"`` → ``[("bents", [1]), ("y", []), ("beta", [])]``; a malformed
+    path is refused (SceneError naming ``source``, the option or call that gave it)."""
+    out = []
+    for part in path.split("."):
+        m = _SEGMENT.match(part)
+        if not m:
+            raise SceneError(source, f"malformed path {path!r}")
+        out.append((m.group(1), [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]))
+    return out
+
+
+def set_path(data: dict[str, Any], path: str, value: Any, source: str = "--set") -> None:
+    """Set the field at dotted ``path`` (``contact.stiffness``, ``bents[1].y.beta``) of a
+    nested mapping (as :func:`to_mapping` gives) to ``value``, in place: the one path syntax
+    of ``--set`` overrides and :meth:`Scene.replace`. Missing tables are created (an unknown
+    name is refused when the mapping is validated, :func:`from_mapping`); an index past the
+    end of a list, or a path through a value that is not a table, is refused naming the path.
+    """
+    parts = split_path(path, source)
+    node: Any = data
+    for depth, (key, idx) in enumerate(parts):
+        last = depth == len(parts) - 1
+        if not isinstance(node, dict):
+            raise SceneError(path, "names no field of the scene")
+        if last and not idx:
+            node[key] = value
+            return
+        if key not in node:
+            node[key] = {} if not idx else []
+        node = node[key]
+        for j, i in enumerate(idx):
+            if not isinstance(node, list) or i >= len(node):
+                raise SceneError(path, f"index {i} is out of range")
+            if last and j == len(idx) - 1:
+                node[i] = value
+            else:
+                node = node[i]

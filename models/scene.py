@@ -13,9 +13,11 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
-from ._fields import spec, validate
+from ._fields import from_mapping, set_path, spec, to_mapping, validate
 from .contact_laws_table import FRICTION_CODES, LAW_CODES, contact_law
 from .errors import SceneError
 from .html_table import html_table, short_text
@@ -493,9 +495,29 @@ class Scene:
 
         return tuple((c.x, c.y) for c in plan_of(self).corners)
 
-    def replace(self, **changes) -> Scene:
-        """A copy with top-level fields replaced (validated again)."""
-        return dataclasses.replace(self, **changes)
+    def replace(self, paths: Mapping[str, Any] | None = None, /, **changes) -> Scene:
+        """A copy with fields replaced, validated again.
+
+        ``changes`` replace top-level fields (``scene.replace(name="b")``); ``paths`` maps
+        dotted field paths, the syntax of ``--set``, to values:
+        ``scene.replace({"contact.stiffness": 2e6, "bents[1].y.beta": 0.3})``. A value may be
+        a number, string, bool, list or a description record (``Contact(...)``). A path that
+        names no field, an index out of range or a value out of its range is refused with a
+        SceneError naming the path.
+        """
+        scene = dataclasses.replace(self, **changes) if changes else self
+        if not paths:
+            return scene
+        if not isinstance(paths, Mapping):
+            raise SceneError(
+                "replace",
+                "takes a mapping of dotted paths to values "
+                f"({{'contact.stiffness': 2e6}}), got {type(paths).__name__}",
+            )
+        data = to_mapping(scene)
+        for path, value in paths.items():
+            set_path(data, str(path), _plain(value), source=f"replace({path!r})")
+        return from_mapping(Scene, data)
 
     # -- short text for consoles and notebooks ---------------------------------------
     def summary(self) -> dict[str, str]:
@@ -526,6 +548,14 @@ class Scene:
     def _repr_html_(self) -> str:
         """An HTML table of :meth:`summary` for notebooks (every text escaped)."""
         return html_table("Scene", self.summary())
+
+
+def _plain(value: Any) -> Any:
+    """A value for :meth:`Scene.replace` as the nested mapping holds it: description records
+    and tuples as tables and lists, numpy scalars as Python numbers."""
+    if getattr(value, "shape", None) == () and hasattr(value, "item"):
+        return value.item()
+    return to_mapping(value)
 
 
 def _check_path(scene: Scene, key: str) -> None:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import copy
 import importlib.resources
 import json
-import re
 import tomllib
 import unicodedata
 import warnings
@@ -15,7 +14,7 @@ from typing import Any
 
 import tomli_w
 
-from ._fields import from_mapping, json_schema, to_mapping
+from ._fields import from_mapping, json_schema, set_path, split_path, to_mapping
 from .errors import SceneError
 from .records import resolve_path
 from .scene import Scene
@@ -195,9 +194,6 @@ def scene_schema_json() -> str:
     return json.dumps(scene_schema(), indent=2)
 
 
-_SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
-
-
 def _parse_value(text: str) -> Any:
     """A TOML value (number, bool, string, array), or the bare text as a string."""
     _check_dotted_depth(f"v = {text}", "--set")
@@ -276,27 +272,6 @@ def apply_overrides(data: dict[str, Any], overrides: Iterable[str]) -> dict[str,
             raise SceneError("--set", f"expects PATH=VALUE, got {item!r}")
         path, raw = item.split("=", 1)
         path = path.strip()
-        parts = path.split(".")
-        node: Any = data
-        for depth, part in enumerate(parts):
-            m = _SEGMENT.match(part)
-            if not m:
-                raise SceneError("--set", f"malformed path {path!r}")
-            key, idx = m.group(1), [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]
-            last = depth == len(parts) - 1
-            if not isinstance(node, dict):
-                raise SceneError(path, "names no field of the scene")
-            if last and not idx:
-                node[key] = _parse_value(raw.strip())
-                break
-            if key not in node:
-                node[key] = {} if not idx else []
-            node = node[key]
-            for j, i in enumerate(idx):
-                if not isinstance(node, list) or i >= len(node):
-                    raise SceneError(path, f"index {i} is out of range")
-                if last and j == len(idx) - 1:
-                    node[i] = _parse_value(raw.strip())
-                else:
-                    node = node[i]
+        split_path(path)  # a malformed path is refused before its value is parsed
+        set_path(data, path, _parse_value(raw.strip()))
     return data

@@ -7,6 +7,7 @@ from __future__ import annotations
 import pytest
 
 import deckpound as dp
+from deckpound.models.errors import SceneError
 
 HOSTILE = "<script>alert('x')</script> & co"
 
@@ -77,3 +78,58 @@ def test_comparison_repr_and_html(comparison):
     assert page.count("<tr>") == 1 + len(comparison.results)  # header + one row per engine
     ratio = comparison.metrics.query("engine == 'nonsmooth' and quantity == 'deck_theta'")
     assert f"{float(ratio['peak_ratio'].iloc[0]):.3g}" in page
+
+
+# -- nested Scene.replace -------------------------------------------------------------------
+
+
+def test_replace_sets_nested_paths_and_keeps_everything_else(scene):
+    new = scene.replace({"contact.stiffness": 2e6, "bents[1].y.beta": 0.3})
+    assert new.contact.stiffness == 2e6 and new.bents[1].y.beta == 0.3
+    assert scene.contact.stiffness != 2e6 and scene.bents[1].y.beta != 0.3  # a copy
+    assert new.bents[1].x == scene.bents[1].x and new.bents[0] == scene.bents[0]
+    assert new.replace({"contact.stiffness": scene.contact.stiffness}).contact == scene.contact
+    assert new.replace({"bents[1].y.beta": scene.bents[1].y.beta}) == scene.replace(
+        {"contact.stiffness": 2e6}
+    )
+
+
+def test_replace_paths_match_load_scene_set():
+    changes = {"contact.stiffness": 2e6, "bents[1].y.beta": 0.3, "contact.law": "hertz"}
+    base = dp.load_scene("saiidi-4span")
+    assert base.replace(changes) == dp.load_scene("saiidi-4span", set=changes)
+
+
+def test_replace_takes_records_numpy_numbers_and_keywords(scene):
+    import numpy as np
+
+    from deckpound.models.scene import Contact
+
+    new = scene.replace(
+        {"contact": Contact(stiffness=3e6), "deck.mass": np.float64(150.0)}, name="b"
+    )
+    assert new.contact.stiffness == 3e6 and new.deck.mass == 150.0 and new.name == "b"
+    assert type(new.deck.mass) is float
+    assert scene.replace(name="c").name == "c"  # the keyword form is unchanged
+
+
+@pytest.mark.parametrize(
+    ("paths", "field", "words"),
+    [
+        ({"contact.stifness": 1e6}, "contact.stifness", "did you mean 'stiffness'"),
+        ({"bents[9].y.beta": 0.3}, "bents[9].y.beta", "index 9 is out of range"),
+        ({"contact.stiffness": -1.0}, "contact.stiffness", "must be > 0"),
+        ({"bents[1].y.beta": "x"}, "bents[1].y.beta", "must be a number"),
+        ({"deck.length.x": 1.0}, "deck.length.x", "names no field"),
+        ({"a..b": 1.0}, "replace('a..b')", "malformed path"),
+    ],
+)
+def test_replace_refuses_bad_paths_naming_them(scene, paths, field, words):
+    with pytest.raises(SceneError) as info:
+        scene.replace(paths)
+    assert info.value.field == field and words in str(info.value)
+
+
+def test_replace_refuses_a_non_mapping(scene):
+    with pytest.raises(SceneError, match="mapping of dotted paths"):
+        scene.replace(["contact.stiffness=2e6"])
