@@ -9,6 +9,8 @@
    friction mechanism (:mod:`.mechanism`) of every result;
 3. the sensitivity studies of :mod:`.studies`, those marked ``carried`` from both the strongest
    run's carried state and the virgin state, the others from the virgin state;
+4. a small IDA on synthetic station pairs per simulation approach: will the deck unseat
+   (:mod:`.report_unseating`)?
 
 and writes ``report.md`` / ``report.html`` (:mod:`.report_sections`: every number and direction
 in the text generated from the tables), ``figures/*.png`` (``formats`` adds e.g. PDF) and
@@ -39,6 +41,7 @@ from .metrics import closure_times_per_corner, compare_pair
 from .outputs import folder, folder_size, write_csv, write_text
 from .progress import Progress
 from .report_text_friction import friction_effect
+from .report_unseating import UnseatingRun, run_unseating
 from .sequence_run import SequenceRun, run_sequences, strongest_run
 from .studies import (
     ROW_UNITS,
@@ -181,6 +184,7 @@ class PaperData:
     full_histories: bool = False
     wall: float = 0.0
     sizes: dict[str, int] = field(default_factory=dict)
+    unseating: UnseatingRun | None = None
 
 
 def _mech_rows(source: str, state: str, run: int | None, results, scenes) -> list[dict]:
@@ -407,6 +411,17 @@ def _paper(
                 mech_rows += _mech_rows(
                     "friction study", st.label, st.run, results, {c.label: c.scene for c in cases}
                 )
+    stages.note = "will the deck unseat? (IDA)"
+    unseating = run_unseating(
+        scene,
+        out,
+        cache_dir,
+        engines=names,
+        quick=quick,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+    )
     stages.note = "the report"
     stages.advance()
     mech = pd.DataFrame(mech_rows)
@@ -442,6 +457,7 @@ def _paper(
         cache_counts=cache_counts,
         formats=formats,
         full_histories=full_histories,
+        unseating=unseating,
     )
     data.sizes = {
         "report": folder_size(out, exclude=("cache",)),

@@ -23,6 +23,7 @@ from . import report_text as text
 from . import report_text_friction as ftext
 from .report_friction import friction
 from .report_render import MM, MRAD, Bullets, Figure, Table, render, view
+from .report_unseating import unseating_section
 from .studies import STUDIES
 
 STUDY_COLUMNS = [
@@ -377,6 +378,7 @@ def write_report(d):
         ),
     ]
     sections += study_sections(d)
+    sections.append(("Will the deck unseat?", unseating_section(d.unseating)))
     sections.append(
         (
             "Every run of the sequence",

@@ -385,3 +385,53 @@ def test_sticking_sentence_pairs_stick_with_slip():
     ]
     s2 = report_text.mode_pair_sentence(pd.DataFrame(rows + c2d))
     assert s2.startswith(s + " Against sliding only, OpenSees's zeroLengthContact2D algorithm")
+
+
+def _unseating_frag(medians: dict[str, float], beta: float = 0.3) -> pd.DataFrame:
+    rows = []
+    for engine, median in medians.items():
+        for state, factor in (("unseating", 1.0), ("peak θ_d > 0.005 rad", 0.9)):
+            for method in ("ida", "msa"):
+                rows.append(
+                    {
+                        "engine": engine,
+                        "limit_state": state,
+                        "method": method,
+                        "median": median * factor,
+                        "beta": beta,
+                        "cases": 48,
+                        "left_out": 0,
+                    }
+                )
+    return pd.DataFrame(rows)
+
+
+def test_unseating_sentence_says_same_when_the_medians_agree_within_their_error():
+    """|ln(m_a/m_b)| against sqrt(β_a² + β_b²)/sqrt(n): 2 % apart with 8 records is the same."""
+    from deckpound.compare.report_unseating import approach_sentence
+
+    s = approach_sentence(_unseating_frag({"compliance": 2.80, "nonsmooth": 2.86}), 8)
+    assert s.count("does not measurably change") == 2
+    assert "2.8 g (compliance) against 2.86 g (nonsmooth)" in s
+    assert "15 % standard error of 8 records" in s  # sqrt(0.3² + 0.3²)/sqrt(8) = 0.15
+
+
+def test_unseating_sentence_names_the_engine_that_unseats_earlier():
+    from deckpound.compare.report_unseating import approach_sentence
+
+    s = approach_sentence(_unseating_frag({"compliance": 2.0, "nonsmooth": 3.0}), 8)
+    assert "does not" not in s and s.count("the compliance engine reaches it at lower") == 2
+    assert "41 % apart, beyond the 15 %" in s  # ln(3/2) = 0.405
+    flipped = approach_sentence(_unseating_frag({"compliance": 3.0, "nonsmooth": 2.0}), 8)
+    assert "the nonsmooth engine reaches it at lower" in flipped
+    # many more records shrink the error: the same 2 % becomes a difference
+    close = _unseating_frag({"compliance": 2.80, "nonsmooth": 2.86})
+    assert "does not" not in approach_sentence(close, 2000)
+
+
+def test_unseating_sentence_without_two_fits_says_it_cannot_judge():
+    from deckpound.compare.report_unseating import approach_sentence
+
+    frag = _unseating_frag({"compliance": 2.8, "nonsmooth": 2.9})
+    frag.loc[frag["engine"] == "nonsmooth", "median"] = np.nan
+    assert "cannot be judged" in approach_sentence(frag, 8)

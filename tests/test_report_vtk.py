@@ -75,6 +75,7 @@ def test_report_and_every_figure_written(report):
         "Engines against OpenSees",
         ("Study: Contact stiffness, from the state carried into run 2"),
         "Study: Contact stiffness, from the virgin state",
+        "Will the deck unseat?",
         "Outputs",
         "The scene's notes",
     ):
@@ -96,6 +97,8 @@ def test_report_and_every_figure_written(report):
         "study_stiffness_virgin",
         "study_friction_run2",
         "study_friction_virgin",
+        "unseating_fragility",
+        "unseating_ida",
     ):
         assert (figs / f"{name}.png").stat().st_size > 1000, name
     assert not list(figs.glob("*.pdf"))  # PNG only unless asked
@@ -392,3 +395,19 @@ def test_report_of_a_real_record_names_its_files_and_applies_its_labels(tmp_path
     assert "synthetic (built-in saiidi-4span)" in notes
     seq = read_table(tmp_path / "rep" / "tables" / "sequence.csv")
     np.testing.assert_allclose(seq["applied_pga_y"], seq["pga"], rtol=0.01)
+
+
+def test_unseating_section_is_built_from_its_tables(report):
+    """Issue 30, item 6: the IDA per engine gives the section's table and its sentence."""
+    from deckpound.compare.report_unseating import QUICK, approach_sentence
+
+    out, md = report
+    body = section(md.read_text(), "Will the deck unseat?")
+    frag = pd.read_csv(out / "tables" / "unseating_fragility.csv")
+    rows = pd.read_csv(out / "tables" / "unseating_ida.csv")
+    assert set(frag["engine"]) == {"compliance", "nonsmooth"}
+    assert len(rows) == 2 * QUICK.pairs * len(QUICK.levels)
+    assert {"level [g]", "peak_theta [rad]", "unseated"} <= set(rows.columns)
+    frag = frag.rename(columns={"median [g]": "median", "beta [-]": "beta"})
+    assert approach_sentence(frag, QUICK.pairs) in body
+    assert "figures/unseating_fragility.png" in body and "<table" not in body
