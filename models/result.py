@@ -53,6 +53,7 @@ __all__ = [
     "Result",
     "closure_times",
     "column_unit",
+    "display_unit",
     "gap_closures",
     "in_contact",
     "peak_columns",
@@ -284,6 +285,44 @@ class Result:
         """An HTML table of :meth:`summary` for notebooks (every text escaped)."""
         return html_table("Result", self.summary())
 
+    # -- figures ---------------------------------------------------------------------
+    def plot(self, columns=("deck_theta",), ax=None, *, label: str | None = None, **line: Any):
+        """Time histories of ``columns`` as a matplotlib figure (returned, not shown).
+
+        Without ``ax``, one panel per column sharing the time axis; with ``ax``, every column
+        on that axes (to overlay runs: ``r2.plot(ax=r1.plot().axes[0])``). Lengths are drawn
+        in mm and angles in mrad (:func:`display_unit`), the unit in each axis label; ``label``
+        names the line (default: the engine, plus the column when several share one axes);
+        ``line`` goes to ``Axes.plot`` (color, linestyle, ...). The figure is not registered
+        with pyplot (no ``plt.show``, no figure left open in a loop); a notebook displays it.
+        """
+        from matplotlib.figure import Figure
+
+        names = (columns,) if isinstance(columns, str) else tuple(columns)
+        if not names:
+            raise ValueError("plot needs at least one column")
+        for c in names:
+            if c not in self.columns:
+                raise KeyError(
+                    f"no column {c!r} in the {self.engine} result; it has: "
+                    + ", ".join(k for k in self.columns if k != "t")
+                )
+        if ax is None:
+            fig = Figure(figsize=(7.0, 0.6 + 2.0 * len(names)), layout="constrained")
+            axes = list(fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0])
+        else:
+            fig, axes = ax.figure, [ax] * len(names)
+        shared = ax is not None and len(names) > 1
+        for a, c in zip(axes, names, strict=True):
+            scale, unit = display_unit(column_unit(c))
+            text = label if label is not None else self.engine
+            a.plot(self.t, scale * self.columns[c], label=f"{text} {c}" if shared else text, **line)
+            a.set_ylabel(f"{c} [{unit}]" if not shared else f"[{unit}]")
+            a.grid(True, alpha=0.3)
+            a.legend(loc="upper right")
+        axes[-1].set_xlabel("time [s]")
+        return fig
+
     # -- peaks -----------------------------------------------------------------------
     def _step_peak(self, column: str):
         if column not in self.columns:
@@ -471,6 +510,16 @@ class Result:
         if "t" not in cols:
             raise SceneError("result", f"{source}: {engine}.csv has no time column 't'")
         return cls(engine=engine, columns=cols, meta=meta)
+
+
+#: units drawn in figures at a readable scale: SI unit → (factor, shown unit)
+DISPLAY_UNITS = {"m": (1e3, "mm"), "rad": (1e3, "mrad"), "m/s": (1e3, "mm/s")}
+
+
+def display_unit(unit: str) -> tuple[float, str]:
+    """(factor, unit) a column in SI ``unit`` is drawn in: lengths in mm, angles in mrad (the
+    paper figures' units, :mod:`deckpound.compare.figures`); other units as they are."""
+    return DISPLAY_UNITS.get(unit, (1.0, unit))
 
 
 def _jsonable(obj: Any) -> Any:

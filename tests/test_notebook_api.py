@@ -133,3 +133,52 @@ def test_replace_refuses_bad_paths_naming_them(scene, paths, field, words):
 def test_replace_refuses_a_non_mapping(scene):
     with pytest.raises(SceneError, match="mapping of dotted paths"):
         scene.replace(["contact.stiffness=2e6"])
+
+
+# -- Result.plot and Comparison.plot ----------------------------------------------------------
+
+
+def test_result_plot_returns_a_figure_with_units_and_the_data(result):
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    fig = result.plot(("deck_theta", "gap_c1", "bent1_fx"))
+    assert isinstance(fig, Figure)
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert labels == ["deck_theta [mrad]", "gap_c1 [mm]", "bent1_fx [kN]"]
+    assert fig.axes[-1].get_xlabel() == "time [s]"
+    line = fig.axes[0].lines[0]
+    assert np.array_equal(line.get_xdata(), result.t)
+    assert np.allclose(line.get_ydata(), 1e3 * result["deck_theta"])  # rad drawn in mrad
+    assert np.allclose(fig.axes[2].lines[0].get_ydata(), result["bent1_fx"])  # kN as is
+
+
+def test_result_plot_overlays_on_a_given_axes(result):
+    first = result.plot()
+    again = result.plot(ax=first.axes[0], label="again", color="red")
+    assert again is first and len(first.axes) == 1
+    assert [ln.get_label() for ln in first.axes[0].lines] == ["compliance", "again"]
+    with pytest.raises(KeyError, match="no column 'deck_thta'"):
+        result.plot("deck_thta")
+
+
+def test_comparison_plot_histories_and_peaks(comparison):
+    from matplotlib.figure import Figure
+
+    fig = comparison.plot("histories", quantities=["deck_theta", "deck_y_rel"])
+    assert isinstance(fig, Figure)
+    assert [ax.get_ylabel() for ax in fig.axes] == ["deck_theta [mrad]", "deck_y_rel [mm]"]
+    for ax in fig.axes:
+        assert len(ax.lines) == len(comparison.results)  # one line per engine
+    styles = {ln.get_linestyle() for ln in fig.axes[0].lines}
+    assert len(styles) == len(comparison.results)  # engines told apart without colour
+    peaks = comparison.plot("peaks", quantities=["deck_theta"])
+    bars = peaks.axes[0].patches
+    assert peaks.axes[0].get_ylabel() == "peak deck_theta [mrad]"
+    assert [b.get_height() for b in bars] == pytest.approx(
+        [1e3 * r.peak("deck_theta") for r in comparison.results.values()]
+    )
+    with pytest.raises(ValueError, match="kind must be one of"):
+        comparison.plot("spectra")
+    with pytest.raises(ValueError, match="not in every result"):
+        comparison.plot(quantities=["no_such_column"])

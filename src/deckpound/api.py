@@ -162,6 +162,55 @@ class Comparison:
     reference: str
     quantities: tuple[str, ...] = field(default=DEFAULT_QUANTITIES)
 
+    # -- figures ---------------------------------------------------------------------
+    def plot(self, kind: str = "histories", quantities: Iterable[str] | None = None):
+        """A matplotlib figure of the comparison (returned, not shown; not registered with
+        pyplot).
+
+        ``kind = "histories"``: one panel per quantity, every engine's history on its own
+        output time base overlaid (:meth:`Result.plot`) in the engines' line styles (the
+        paper figures' styles, :func:`deckpound.engines.engine_style`). ``kind = "peaks"``:
+        one panel per quantity, a bar per engine: its peak (:meth:`Result.peak`, over every
+        step; for a gap its smallest value). Lengths in mm, angles in mrad (:func:`deckpound.models.result.display_unit`).
+        ``quantities`` default to :attr:`quantities`.
+        """
+        from matplotlib.figure import Figure
+
+        from deckpound.engines import engine_style
+        from deckpound.models.result import column_unit, display_unit
+
+        kinds = ("histories", "peaks")
+        if kind not in kinds:
+            raise ValueError(f"kind must be one of {', '.join(kinds)}, got {kind!r}")
+        names = tuple(self.quantities if quantities is None else quantities)
+        missing = [q for q in names if not all(q in r.columns for r in self.results.values())]
+        if not names or missing:
+            raise ValueError(
+                f"quantities {missing or '()'} are not in every result; compared: "
+                + ", ".join(self.quantities)
+            )
+        fig = Figure(figsize=(7.0, 0.6 + 2.0 * len(names)), layout="constrained")
+        axes = fig.subplots(len(names), 1, sharex=kind == "histories", squeeze=False)[:, 0]
+        engines = list(self.results)
+        for ax, q in zip(axes, names, strict=True):
+            scale, unit = display_unit(column_unit(q))
+            if kind == "histories":
+                for name, res in self.results.items():
+                    style = engine_style(name)
+                    res.plot((q,), ax=ax, label=style.pop("label"), **style)
+            else:
+                peaks = [scale * self.results[e].peak(q) for e in engines]
+                colors = [engine_style(e)["color"] for e in engines]
+                ax.bar(range(len(engines)), peaks, color=colors)
+                ax.set_xticks(range(len(engines)), engines)
+                ax.grid(True, axis="y", alpha=0.3)
+            # a gap's peak is its smallest value (the deepest penetration, Result.peak)
+            what = "smallest" if q.startswith("gap_") else "peak"
+            ax.set_ylabel(f"{q} [{unit}]" if kind == "histories" else f"{what} {q} [{unit}]")
+        if kind == "histories":
+            axes[-1].set_xlabel("time [s]")
+        return fig
+
     # -- short text for consoles and notebooks ---------------------------------------
     def engine_rows(self) -> list[dict[str, str]]:
         """One row of short texts per engine: status, peak deck rotation θ_d [rad], gap
