@@ -182,3 +182,50 @@ def test_comparison_plot_histories_and_peaks(comparison):
         comparison.plot("spectra")
     with pytest.raises(ValueError, match="not in every result"):
         comparison.plot(quantities=["no_such_column"])
+
+
+# -- warnings attributed to the caller ---------------------------------------------------------
+
+
+def test_run_warnings_point_at_the_callers_line(scene):
+    import warnings
+
+    from deckpound.engine_contract import OptionIgnored
+
+    hertz = scene.replace({"contact.law": "hertz", "run.duration": 0.2})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        dp.run(hertz, engine="nonsmooth")  # the nonsmooth engine ignores the compliant law
+    ignored = [w for w in caught if issubclass(w.category, OptionIgnored)]
+    assert ignored, [str(w.message) for w in caught]
+    assert all(w.filename == __file__ for w in caught), [(w.filename, w.lineno) for w in caught]
+
+
+def test_run_warnings_obey_the_callers_filters(scene):
+    import warnings
+
+    hertz = scene.replace({"contact.law": "hertz", "run.duration": 0.2})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the caller's filter still decides
+        with pytest.raises(Warning, match="does nothing in the nonsmooth engine"):
+            dp.run(hertz, engine="nonsmooth")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("ignore")
+        dp.run(hertz, engine="nonsmooth")
+    assert not caught
+
+
+def test_compare_warnings_point_at_the_callers_line(scene, monkeypatch):
+    """dp.compare shows each engine warning once per process (compare.cases.surface_warnings);
+    its memory of shown messages is emptied so that this test sees them whatever ran before."""
+    import warnings
+
+    from deckpound.compare import cases
+
+    monkeypatch.setattr(cases, "_SHOWN", set())
+    hertz = scene.replace({"contact.law": "hertz", "run.duration": 0.2})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        dp.compare(hertz, engines=["compliance", "nonsmooth"])
+    assert any("does nothing in the nonsmooth engine" in str(w.message) for w in caught)
+    assert all(w.filename == __file__ for w in caught), [(w.filename, w.lineno) for w in caught]

@@ -7,8 +7,12 @@ scenes come from :mod:`deckpound.models.scene_io`, engines from the registry
 
 from __future__ import annotations
 
+import functools
 import html
-from collections.abc import Iterable, Mapping
+import os
+import sys
+import warnings
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,6 +43,71 @@ DEFAULT_QUANTITIES = (
 )
 
 
+def caller_warnings(func: Callable) -> Callable:
+    """Attribute the warnings ``func`` issues (OptionIgnored, QualityWarning, RecordWarning,
+    PlausibilityWarning, ...) to the line that called it, not to deckpound's source.
+
+    The warnings are collected while ``func`` runs (all of them: the caller's filters decide
+    later) and issued again, in order, with ``stacklevel`` pointing at the caller, so the
+    caller's filters (``"error"``, ``"ignore"``, once per line) and a notebook show them at
+    the user's line. Python 3.12's ``skip_file_prefixes`` would do this too, but the package
+    supports 3.11. They are issued again also when ``func`` raises.
+    """
+
+    @functools.wraps(func)
+    def attributed(*args: Any, **kwargs: Any):
+        pending: list[warnings.WarningMessage] = []
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                try:
+                    return func(*args, **kwargs)
+                finally:
+                    pending = list(caught)
+        finally:
+            level = _caller_stacklevel(sys._getframe(1)) if pending else 2
+            for w in pending:
+                warnings.warn(w.message, w.category, stacklevel=level)
+
+    return attributed
+
+
+#: deckpound's packages: frames in their folders are not the caller's
+_PACKAGES = (
+    "deckpound",
+    "deckpound.models",
+    "deckpound.compare",
+    "deckpound.analytic",
+    "deckpound.opensees_build",
+)
+
+
+def _package_folders() -> tuple[str, ...]:
+    """The folders of deckpound's packages (found without importing the subpackages)."""
+    import importlib.util
+
+    folders = []
+    for name in _PACKAGES:
+        spec = importlib.util.find_spec(name)
+        folders += list(spec.submodule_search_locations or []) if spec else []
+    return tuple(os.path.join(os.path.realpath(f), "") for f in folders)
+
+
+def _caller_stacklevel(frame) -> int:
+    """``stacklevel`` for a ``warnings.warn`` in the function that ``frame`` called: 2 is
+    ``frame`` itself, one more for every frame inside deckpound's packages (``dp.compare``
+    reached through the callable ``deckpound.compare`` module, an API function calling
+    another), so the warning names the first line outside the package."""
+    folders = _package_folders()
+    level = 2
+    while frame is not None and frame.f_back is not None:
+        if not os.path.realpath(frame.f_code.co_filename).startswith(folders):
+            break
+        frame = frame.f_back
+        level += 1
+    return level
+
+
 def _overrides(set_: Mapping[str, Any] | Iterable[str] | None) -> list[str]:
     """``{"contact.friction": 0.2}`` or ``["contact.friction=0.2"]`` → override strings."""
     if set_ is None:
@@ -54,6 +123,7 @@ def _overrides(set_: Mapping[str, Any] | Iterable[str] | None) -> list[str]:
     return [str(s) for s in set_]
 
 
+@caller_warnings
 def load_scene(
     ref: str | Path = "saiidi-4span", set: Mapping[str, Any] | Iterable[str] | None = None
 ):
@@ -81,6 +151,7 @@ def available_engines() -> dict[str, str]:
     return {name: get_engine(name).title for name in engine_names()}
 
 
+@caller_warnings
 def run(
     scene,
     engine: str = "compliance",
@@ -102,6 +173,7 @@ def run(
     )
 
 
+@caller_warnings
 def run_batch(
     scenes: Iterable,
     engine: str = "compliance",
@@ -254,6 +326,7 @@ class Comparison:
         return f"<b>{title}</b><table><tr>{head}</tr>{body}</table>"
 
 
+@caller_warnings
 def compare(
     scene,
     engines: Iterable[str] | None = None,
