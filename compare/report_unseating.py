@@ -28,6 +28,8 @@ from .studies import modified
 ENGINES = ("compliance", "nonsmooth")
 #: limit of the rotation limit state [rad]
 THETA_LIMIT = 0.005
+#: the friction coefficient the section sets against none (compliance engine only)
+FRICTION = 0.3
 #: intensity measure of the sweep: the pair's geometric-mean Sa(T1, 5 %) [g]
 IM = "sa-t1"
 
@@ -45,7 +47,7 @@ class UnseatingPlan:
 
 
 FULL = UnseatingPlan(8, (1.0, 1.75, 2.5, 3.25, 4.0, 5.0), 20.0)
-QUICK = UnseatingPlan(4, (1.0, 2.5, 4.0), 10.0)
+QUICK = UnseatingPlan(4, (1.0, 2.0, 3.0, 4.0), 10.0)
 
 
 @dataclass
@@ -56,8 +58,10 @@ class UnseatingRun:
     table: pd.DataFrame
     frag: pd.DataFrame
     records: int
-    figures: tuple[str, str]
+    figures: tuple[str, ...]
     plan: UnseatingPlan
+    #: the compliance engine's fragility with μ = 0 and μ = :data:`FRICTION` (None: not run)
+    friction_frag: pd.DataFrame | None = None
 
 
 def run_unseating(
@@ -121,14 +125,60 @@ def run_unseating(
         },
     )
     write_csv(frag, out / "tables" / "unseating_fragility.csv", {"median": unit, "beta": "-"})
-    return UnseatingRun(table, frag, table["record_key"].nunique(), figures, plan)
+    run = UnseatingRun(table, frag, table["record_key"].nunique(), figures, plan)
+    if "compliance" in mine:
+        run.friction_frag = _friction_sweep(
+            scene, out, cache_dir, records, plan, workers, scheduler, progress
+        )
+        run.figures += ("figures/unseating_fragility_friction.png",)
+    return run
 
 
-def approach_sentence(frag: pd.DataFrame, records: int, unit: str = "g") -> str:
-    """Does the simulation approach change the fragility? Per limit state, the engines' IDA
-    medians m_i [``unit``] are compared through |ln(m_a/m_b)| against the standard error of
-    that difference, sqrt(β_a² + β_b²)/sqrt(n) for n records (the lognormal median's standard
-    error β/√n): within it the approach does not change the probability measurably."""
+def _friction_sweep(scene, out, cache_dir, records, plan, workers, scheduler, progress):
+    """The same sweep with the compliance engine, frictionless and with μ = :data:`FRICTION`
+    in the friction mode the package uses when it switches friction on; its fragility table
+    into ``tables/unseating_fragility_friction.csv``, its figure into ``figures``."""
+    from deckpound.models.contact_laws_table import DEFAULT_FRICTION
+
+    work = cache_dir / "unseating_friction"
+    variants = [
+        ("μ=0", ("contact.friction=0.0", "contact.friction_mode=none")),
+        (
+            f"μ={FRICTION:g}",
+            (f"contact.friction={FRICTION!r}", f"contact.friction_mode={DEFAULT_FRICTION}"),
+        ),
+    ]
+    _, frag = run_ida(
+        scene,
+        work,
+        records=records,
+        im=IM,
+        levels=list(plan.levels),
+        engines=("compliance",),
+        theta_limit=THETA_LIMIT,
+        cache_dir=cache_dir,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        title="unseating friction",
+        variants=variants,
+    )
+    shutil.copyfile(work / "fragility.png", out / "figures" / "unseating_fragility_friction.png")
+    write_csv(
+        frag,
+        out / "tables" / "unseating_fragility_friction.csv",
+        {"median": IMS[IM][2], "beta": "-"},
+    )
+    return frag
+
+
+def approach_sentence(frag: pd.DataFrame, records: int, unit: str = "g", by: str = "engine") -> str:
+    """Does the simulation approach (``by="engine"``) or the friction (``by="variant"``)
+    change the fragility? Per limit state, the IDA medians m_a, m_b [``unit``] of the first
+    two ``by`` groups are compared through |ln(m_a/m_b)| against the standard error of that
+    difference, sqrt(β_a² + β_b²)/sqrt(n) for n records (the lognormal median's standard
+    error β/√n): within it the probability does not change measurably."""
+    what = "simulation approach" if by == "engine" else "friction"
     ida = frag[(frag["method"] == "ida") & frag["median"].notna()]
     clauses = []
     for state, rows in ida.groupby("limit_state", sort=False):
@@ -137,9 +187,10 @@ def approach_sentence(frag: pd.DataFrame, records: int, unit: str = "g") -> str:
         a, b = rows.iloc[0], rows.iloc[1]
         diff = abs(math.log(a["median"] / b["median"]))
         se = math.hypot(a["beta"], b["beta"]) / math.sqrt(records)
-        same = diff <= se
-        medians = f"median {a['median']:.3g} {unit} ({a['engine']}) against {b['median']:.3g} {unit} ({b['engine']})"
-        if same:
+        medians = (
+            f"median {a['median']:.3g} {unit} ({a[by]}) against {b['median']:.3g} {unit} ({b[by]})"
+        )
+        if diff <= se:
             clauses.append(
                 f"for {state} it does not measurably change the probability ({medians}: "
                 f"{100 * diff:.0f} % apart, within the {100 * se:.0f} % standard error of "
@@ -147,18 +198,19 @@ def approach_sentence(frag: pd.DataFrame, records: int, unit: str = "g") -> str:
             )
         else:
             lower = a if a["median"] < b["median"] else b
+            who = f"the {lower[by]} engine" if by == "engine" else f"with {lower[by]} the deck"
             clauses.append(
-                f"for {state} it does: the {lower['engine']} engine reaches it at lower "
-                f"intensities ({medians}: {100 * diff:.0f} % apart, beyond the "
-                f"{100 * se:.0f} % standard error of {records} records)"
+                f"for {state} it does: {who} reaches it at lower intensities ({medians}: "
+                f"{100 * diff:.0f} % apart, beyond the {100 * se:.0f} % standard error of "
+                f"{records} records)"
             )
     if not clauses:
         return (
-            "The simulation approach cannot be judged here: fewer than two engines have a "
-            "fitted fragility (tables/unseating_fragility.csv says why)."
+            f"The {what} cannot be judged here: fewer than two fitted fragilities to compare "
+            "(the fragility table says why)."
         )
     text = "; ".join(clauses)
-    return f"Does the simulation approach change the probability? {text[0].upper()}{text[1:]}."
+    return f"Does the {what} change the probability? {text[0].upper()}{text[1:]}."
 
 
 def unseating_section(run: UnseatingRun | None) -> list:
@@ -197,6 +249,7 @@ def unseating_section(run: UnseatingRun | None) -> list:
             "IDA curves: Sa(T1) against each record's seat-width demand [mm] and peak θ_d "
             "[mrad]; ×: unseated.",
         ),
+        *_friction_items(run),
         Table(
             view(
                 ida,
@@ -211,5 +264,20 @@ def unseating_section(run: UnseatingRun | None) -> list:
             ),
             "tables/unseating_fragility.csv (also the MSA fits of the same rows); "
             "tables/unseating_ida.csv has every case.",
+        ),
+    ]
+
+
+def _friction_items(run: UnseatingRun) -> list:
+    if run.friction_frag is None:
+        return []
+    unit = IMS[IM][2]
+    return [
+        approach_sentence(run.friction_frag, run.records, unit, by="variant"),
+        Figure(
+            "figures/unseating_fragility_friction.png",
+            f"The same sweep with the compliance engine, frictionless (μ = 0) and with "
+            f"μ = {FRICTION:g} (tables/unseating_fragility_friction.csv): fragility of "
+            "unseating and of the rotation limit against Sa(T1) [" + unit + "].",
         ),
     ]

@@ -99,6 +99,7 @@ def test_report_and_every_figure_written(report):
         "study_friction_virgin",
         "unseating_fragility",
         "unseating_ida",
+        "unseating_fragility_friction",
     ):
         assert (figs / f"{name}.png").stat().st_size > 1000, name
     assert not list(figs.glob("*.pdf"))  # PNG only unless asked
@@ -410,4 +411,10 @@ def test_unseating_section_is_built_from_its_tables(report):
     assert {"level [g]", "peak_theta [rad]", "unseated"} <= set(rows.columns)
     frag = frag.rename(columns={"median [g]": "median", "beta [-]": "beta"})
     assert approach_sentence(frag, QUICK.pairs) in body
+    friction = pd.read_csv(out / "tables" / "unseating_fragility_friction.csv")
+    assert set(friction["variant"]) == {"μ=0", "μ=0.3"} and set(friction["engine"]) == {
+        "compliance"
+    }
+    friction = friction.rename(columns={"median [g]": "median", "beta [-]": "beta"})
+    assert approach_sentence(friction, QUICK.pairs, by="variant") in body
     assert "figures/unseating_fragility.png" in body and "<table" not in body
