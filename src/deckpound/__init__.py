@@ -11,6 +11,8 @@ The front door for scripts and notebooks::
     res.to_frame()                                    # pandas, time as index, units in attrs
     cmp = dp.compare(scene, engines=["opensees", "compliance", "nonsmooth"])
     cmp.metrics                                       # peaks, NRMSE, ... against the reference
+    fig = cmp.plot("histories")                       # a matplotlib figure; res.plot() too
+    stiff = scene.replace({"contact.stiffness": 2e6, "bents[1].y.beta": 0.3})  # --set paths
 
 Names are imported on first use, so ``import deckpound`` stays cheap (numba, OpenSees,
 matplotlib and pandas load only when something needs them).
