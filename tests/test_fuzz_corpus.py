@@ -268,7 +268,7 @@ PROCESS_SAMPLE = [  # (argv, exit status, stderr lines)
             "-o",
             "/dev/full",
         ],
-        3,
+        2,  # a device as the script: its data folder would land in /dev (refused, one line)
         1,
     ),
 ]
