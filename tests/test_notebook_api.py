@@ -1,8 +1,11 @@
 """The notebook-grade API (issue 32, item 2): short ``repr`` and escaped ``_repr_html_`` of
 scenes, results and comparisons; nested ``Scene.replace``; ``Result.plot`` and
-``Comparison.plot``; warnings attributed to the caller's line."""
+``Comparison.plot``; warnings attributed to the caller's line; ``dp.compare`` reusing the
+results it is given."""
 
 from __future__ import annotations
+
+import warnings
 
 import pytest
 
@@ -257,3 +260,16 @@ def test_example_notebook_runs_and_shows_tables_and_figures():
     assert "text/html" in shown["cmp"] and "nonsmooth" in shown["cmp"]["text/html"]
     figures = [src for src, data in shown.items() if ".plot(" in src]
     assert len(figures) >= 4 and all("image/png" in shown[src] for src in figures)
+
+
+def test_compare_reuses_the_results_it_is_given_and_refuses_another_scenes():
+    """Issue 32: dp.compare does not run again an engine whose result the caller passes."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sc = dp.load_scene("saiidi-4span", set={"run.duration": 1.0})
+        mine = {e: dp.run(sc, engine=e) for e in ("compliance", "nonsmooth")}
+        c = dp.compare(sc, engines=["compliance", "nonsmooth"], results=mine)
+        assert all(c.results[e] is mine[e] for e in mine)  # nothing was run again
+        other = dp.load_scene("saiidi-4span", set={"run.duration": 1.0, "seats[0].gap": 0.02})
+        with pytest.raises(SceneError, match=r"results\['compliance'\]"):
+            dp.compare(other, engines=["compliance"], results={"compliance": mine["compliance"]})

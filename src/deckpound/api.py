@@ -17,7 +17,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from deckpound.models.errors import SceneError
 from deckpound.models.html_table import short_text
+from deckpound.models.result import Result
 
 __all__ = [
     "Comparison",
@@ -336,26 +338,40 @@ def compare(
     dt: float | None = None,
     cache: str | Path | None = None,
     workers: int | None = 1,
+    results: Mapping[str, Result] | None = None,
 ) -> Comparison:
     """Run ``engines`` (default: every registered engine) on ``scene``, align and score them
     against ``reference`` (default :data:`deckpound.engines.DEFAULT_REFERENCE`, or the first
     engine when that one is not run). ``cache`` is a result-cache folder (finished cases are
-    never recomputed); ``workers`` local processes (1: in this process)."""
+    never recomputed); ``workers`` local processes (1: in this process). ``results``: engine →
+    :class:`Result` the caller already has (e.g. from :func:`run` of the same scene): those
+    engines are not run again; a result of another scene (its physics hash differs) is
+    refused."""
     from deckpound.compare.align import align
     from deckpound.compare.cases import Case, ResultCache, run_cases
     from deckpound.compare.metrics import metrics_against
     from deckpound.engines import DEFAULT_REFERENCE, engine_names, get_engine
+    from deckpound.models.result import physics_hash
 
+    given = dict(results or {})
     names = list(engines) if engines is not None else list(engine_names())
+    names += [n for n in given if n not in names]
     for n in names:
         get_engine(n)  # unknown names are refused with the list of valid ones
+    for n, r in given.items():
+        if r.meta.get("physics_hash") != physics_hash(scene):
+            raise SceneError(
+                f"results[{n!r}]",
+                "was run on another scene (its physics hash differs from this scene's): "
+                "run it again on this scene or leave it out",
+            )
     ref = reference or (DEFAULT_REFERENCE if DEFAULT_REFERENCE in names else names[0])
     if ref not in names:
         names.insert(0, ref)
     store = ResultCache(cache) if cache is not None else None
-    results = run_cases(
-        [Case(n, n, scene) for n in names], cache=store, workers=workers, progress=False
-    )
+    run = [n for n in names if n not in given]
+    ran = run_cases([Case(n, n, scene) for n in run], cache=store, workers=workers, progress=False)
+    results = {n: given[n] if n in given else ran[n] for n in names}
     qs = tuple(q for q in quantities if all(q in r.columns for r in results.values()))
     aligned = align(results, dt=dt, columns=list(qs))
     metrics = metrics_against(results, aligned, ref, list(qs))
