@@ -46,15 +46,7 @@ from deckpound.analytic.dormand_prince_work import (
     AdaptiveOptions,
     adaptive_workspace,
 )
-from deckpound.analytic.peaks import (
-    corner_support_lengths,
-    new_peaks,
-    peak_columns,
-    step_closures,
-    step_openings,
-    step_peaks,
-    step_unseated,
-)
+from deckpound.analytic.peaks import run_output_fields, run_peaks
 from deckpound.analytic.system import initial_dofs
 from deckpound.engine_contract import RunOutput, Status, engine_columns
 from deckpound.models.excitation import analysis_duration
@@ -112,9 +104,7 @@ def run_adaptive(
     nout = round(duration / out_dt) + 1
     cols = engine_columns(plan) + list(ENERGY_COLUMNS)
     bd.check_output_size(nout, len(cols))
-    peaks = new_peaks(
-        ps.channels, plan.bent_names, ps.n_bent_springs, corner_support_lengths(scene, plan)
-    )
+    peaks = run_peaks(scene, plan, ps)
     output = bd.Output(
         np.zeros((nout, len(cols))),
         np.arange(len(cols), dtype=np.int64),
@@ -187,9 +177,6 @@ def run_adaptive(
         compile_time=compile_time,
         loop_time=loop,
         max_penetration=st["max_penetration"],
-        peaks=step_peaks(peaks, peak_columns(engine_columns(plan), plan.bent_names)),
-        gap_closures_per_corner=step_closures(peaks),
-        gap_openings=step_openings(peaks),
-        unseated=step_unseated(peaks),
+        **run_output_fields(peaks, plan),
         extra=extra,
     )

@@ -267,15 +267,7 @@ def _run_newmark(
         newmark_run,
         newmark_workspace,
     )
-    from deckpound.analytic.peaks import (
-        corner_support_lengths,
-        new_peaks,
-        peak_columns,
-        step_closures,
-        step_openings,
-        step_peaks,
-        step_unseated,
-    )
+    from deckpound.analytic.peaks import run_output_fields, run_peaks
     from deckpound.analytic.system import initial_dofs
 
     on = dict.fromkeys(SKIPS, True)
@@ -323,9 +315,7 @@ def _run_newmark(
         want_energy=any(c in ENERGY_COLUMNS for c in cols),
         flush_subnormals=settings.subnormals == "flush",
     )
-    peaks = new_peaks(
-        ps.channels, plan.bent_names, ps.n_bent_springs, corner_support_lengths(scene, plan)
-    )
+    peaks = run_peaks(scene, plan, ps)
     output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(len(full)), peaks)
     u0, v0 = initial_dofs(initial_state)
     work = newmark_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, len(ps.channels))
@@ -385,10 +375,7 @@ def _run_newmark(
         compile_time=compile_time,
         loop_time=loop,
         max_penetration=st["max_penetration"],
-        peaks=step_peaks(peaks, peak_columns(engine_cols, plan.bent_names)),
-        gap_closures_per_corner=step_closures(peaks),
-        gap_openings=step_openings(peaks),
-        unseated=step_unseated(peaks),
+        **run_output_fields(peaks, plan),
         extra=extra,
     )
 

@@ -208,15 +208,7 @@ class NonsmoothEngine(Engine):
             moreau_jean_run,
             moreau_jean_workspace,
         )
-        from deckpound.analytic.peaks import (
-            corner_support_lengths,
-            new_peaks,
-            peak_columns,
-            step_closures,
-            step_openings,
-            step_peaks,
-            step_unseated,
-        )
+        from deckpound.analytic.peaks import run_output_fields, run_peaks
         from deckpound.analytic.support_motion import support_record
         from deckpound.analytic.system import initial_dofs, pack_system
         from deckpound.models.damping import damping_model
@@ -243,9 +235,7 @@ class NonsmoothEngine(Engine):
         nsteps = round(duration / h)
         cols = engine_columns(plan) + list(IMPULSE_COLUMNS) + list(ENERGY_COLUMNS)
         bd.check_output_size(nsteps // stride + 1, len(cols))
-        peaks = new_peaks(
-            ps.channels, plan.bent_names, ps.n_bent_springs, corner_support_lengths(scene, plan)
-        )
+        peaks = run_peaks(scene, plan, ps)
         output = bd.Output(
             np.zeros((nsteps // stride + 1, len(cols))),
             np.arange(len(cols), dtype=np.int64),
@@ -321,10 +311,7 @@ class NonsmoothEngine(Engine):
             loop_time=loop,
             max_penetration=st["max_penetration"],
             max_complementarity_residual=st["max_complementarity"],
-            peaks=step_peaks(peaks, peak_columns(engine_columns(plan), plan.bent_names)),
-            gap_closures_per_corner=step_closures(peaks),
-            gap_openings=step_openings(peaks),
-            unseated=step_unseated(peaks),
+            **run_output_fields(peaks, plan),
             extra=extra,
         )
 

@@ -48,6 +48,7 @@ import numpy as np
 
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.system import C_BENT, C_FN, C_GAP
+from deckpound.engine_contract import engine_columns
 from deckpound.models.plan import CORNER_NAMES, DECK_X, DECK_Y, RELATIVE_COLUMNS, SEAT_X
 from deckpound.models.result import peak_columns
 
@@ -56,7 +57,8 @@ __all__ = [
     "corner_support_lengths",
     "in_contact_now",
     "new_peaks",
-    "peak_columns",
+    "run_output_fields",
+    "run_peaks",
     "step_closures",
     "step_openings",
     "step_peaks",
@@ -242,3 +244,23 @@ def step_unseated(pk: Peaks) -> tuple[str, float] | None:
 def step_closures(pk: Peaks) -> dict[str, int]:
     """Gap closures per corner counted at every step (``{"c1": n, ...}``)."""
     return {c: int(pk.closures[k]) for k, c in enumerate(CORNER_NAMES)}
+
+
+def run_peaks(scene, plan, ps) -> Peaks:
+    """Zeroed :data:`Peaks` for a run of ``scene`` on ``plan`` with the packed system ``ps``
+    (its support channels and bent springs) and the seats' support lengths: what every
+    analytic engine's driver hands its step loop."""
+    return new_peaks(
+        ps.channels, plan.bent_names, ps.n_bent_springs, corner_support_lengths(scene, plan)
+    )
+
+
+def run_output_fields(pk: Peaks, plan) -> dict:
+    """The :class:`~deckpound.engine_contract.RunOutput` fields of a finished loop's every-step
+    statistics: ``peaks``, ``gap_closures_per_corner``, ``gap_openings`` and ``unseated``."""
+    return {
+        "peaks": step_peaks(pk, peak_columns(engine_columns(plan), plan.bent_names)),
+        "gap_closures_per_corner": step_closures(pk),
+        "gap_openings": step_openings(pk),
+        "unseated": step_unseated(pk),
+    }

@@ -195,7 +195,7 @@ def _synthetic_samples(exc: Excitation) -> int:
     return round(exc.duration / exc.dt) + 1
 
 
-def _shift(x: np.ndarray, steps: int) -> np.ndarray:
+def shift_record(x: np.ndarray, steps: int) -> np.ndarray:
     """Delay a record by a whole number of samples (zeros in front, same length)."""
     if steps <= 0:
         return x
@@ -203,7 +203,7 @@ def _shift(x: np.ndarray, steps: int) -> np.ndarray:
     return np.concatenate([np.zeros(steps), x[: len(x) - steps]])
 
 
-def _check_lag(scene: Scene, dt: float, n: int) -> int:
+def check_lag(scene: Scene, dt: float, n: int) -> int:
     """Lag in whole steps; refuses a lag that delays the last table beyond the record."""
     exc = scene.excitation
     steps = round(exc.lag / dt)

@@ -45,7 +45,7 @@ import numpy as np
 
 from ._iir import butter_highpass_sos, sosfiltfilt
 from .errors import SceneError
-from .excitation import G, SupportMotion, _check_lag, _shift, intensity_period, make_provenance
+from .excitation import G, SupportMotion, check_lag, intensity_period, make_provenance, shift_record
 from .mechanics import support_channels
 from .record_checks import AXIS_NAME, check_velocity_columns, scaling_note
 from .record_csv import CsvRecord, read_csv_record
@@ -404,13 +404,13 @@ def _record_peaks(prov: dict, peaks: dict) -> None:
 def _tables(scene: Scene, base: dict, dt: float, n: int) -> tuple[dict, dict, dict]:
     """The same motion at every table (delayed by k·lag at table k); seats follow the x motion
     of the nearest table."""
-    lag_steps = _check_lag(scene, dt, n)
+    lag_steps = check_lag(scene, dt, n)
     disp, vel, acc = {}, {}, {}
     for k, bent in enumerate(scene.bents):
         for axis in ("x", "y"):
             d, v, a = base[axis]
             ch = f"{bent.name}_{axis}"
-            disp[ch], vel[ch], acc[ch] = (_shift(x, k * lag_steps) for x in (d, v, a))
+            disp[ch], vel[ch], acc[ch] = (shift_record(x, k * lag_steps) for x in (d, v, a))
     for seat, bent in (("seat1_x", scene.bents[0]), ("seat2_x", scene.bents[-1])):
         src = f"{bent.name}_x"
         disp[seat], vel[seat], acc[seat] = disp[src], vel[src], acc[src]

@@ -15,10 +15,10 @@ from .errors import SceneError
 from .excitation import (
     G,
     SupportMotion,
-    _check_lag,
-    _shift,
     _synthetic_samples,
+    check_lag,
     make_provenance,
+    shift_record,
 )
 from .record_motion import highpass_padded
 from .scene import Excitation, Scene
@@ -137,7 +137,7 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
             if pgas[axis] > 0
             else (t, np.zeros(n), np.zeros(n), np.zeros(n))
         )
-    lag_steps = _check_lag(scene, exc.dt, n)
+    lag_steps = check_lag(scene, exc.dt, n)
     for k, bent in enumerate(scene.bents):
         for axis in ("x", "y"):
             if exc.incoherence > 0 and pgas[axis] > 0:
@@ -145,9 +145,9 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
                 _, d, v, a = synthetic_component(exc, pgas[axis], sub, common[axis])
             else:
                 _, d, v, a = base[axis]
-            disp[f"{bent.name}_{axis}"] = _shift(d, k * lag_steps)
-            vel[f"{bent.name}_{axis}"] = _shift(v, k * lag_steps)
-            acc[f"{bent.name}_{axis}"] = _shift(a, k * lag_steps)
+            disp[f"{bent.name}_{axis}"] = shift_record(d, k * lag_steps)
+            vel[f"{bent.name}_{axis}"] = shift_record(v, k * lag_steps)
+            acc[f"{bent.name}_{axis}"] = shift_record(a, k * lag_steps)
     first, last = scene.bents[0].name, scene.bents[-1].name
     disp["seat1_x"], vel["seat1_x"] = disp[f"{first}_x"].copy(), vel[f"{first}_x"].copy()
     disp["seat2_x"], vel["seat2_x"] = disp[f"{last}_x"].copy(), vel[f"{last}_x"].copy()
