@@ -369,10 +369,19 @@ def test_a_lock_left_by_a_killed_command_is_taken_over_with_a_warning(tmp_path):
 KILLED_WITH_A_WORKER = r"""
 import multiprocessing, os, signal, sys, time
 from deckpound._io import claim_folder, command_scope
+
+
+def work(started):
+    started.set()
+    time.sleep(120)
+
+
 with command_scope("deckpound compare x -o out"):
     claim_folder(sys.argv[1])
-    worker = multiprocessing.get_context("fork").Process(target=time.sleep, args=(120,))
+    started = multiprocessing.get_context("fork").Event()
+    worker = multiprocessing.get_context("fork").Process(target=work, args=(started,))
     worker.start()
+    started.wait()  # the fork's hooks have run in the worker (a busy machine may lag)
     print(worker.pid, flush=True)
     os.kill(os.getpid(), signal.SIGKILL)  # this child process dies; its worker runs on
 """
@@ -395,6 +404,19 @@ def test_a_worker_left_by_a_killed_command_does_not_hold_its_folder(tmp_path):
     finally:
         os.kill(worker, signal.SIGKILL)
     assert list(out.iterdir()) == []  # the killed command's lock file went with the new claim
+
+
+def test_a_held_folder_whose_lock_file_went_is_locked_afresh(tmp_path):
+    """A claim is known by the folder's (device, inode); a removed folder's inode can be given
+    to a new folder. The claim must then not be taken for the new folder's lock: a claim whose
+    lock file is no longer in the folder is dropped and the folder locked again (the removed
+    lock file stands for the removed folder, which no file system reuses on demand)."""
+    with command_scope("deckpound run x"):
+        out = claim_folder(ensure_folder(tmp_path / "out"))
+        (out / LOCK_FILE).unlink()
+        claim_folder(out)
+        assert (out / LOCK_FILE).read_text().startswith(f"pid={os.getpid()} ")
+    assert list(out.iterdir()) == []  # released: the new lock file is removed
 
 
 def test_an_export_to_a_device_or_pipe_is_refused(tmp_path, capsys):

@@ -495,6 +495,9 @@ def _acquire(path: str | Path, field: str, *, through_links: bool) -> _Claim:
     st = os.stat(path)
     key = (st.st_dev, st.st_ino)
     claim = _CLAIMS.get(key)
+    if claim is not None and not _still_holds(claim, path):
+        _forget(claim)  # its folder was removed and the inode reused by this one
+        claim = None
     if claim is None:
         try:
             fd = _lock(path, field)
@@ -505,6 +508,25 @@ def _acquire(path: str | Path, field: str, *, through_links: bool) -> _Claim:
         _SWEPT.discard(os.path.abspath(path))
         _sweep_once(path)
     return claim
+
+
+def _still_holds(claim: _Claim, path: Path) -> bool:
+    """Whether ``claim`` is on the folder now at ``path``: a removed folder's (device, inode)
+    can be given to a new folder, which must then be locked afresh."""
+    if claim.fd is None:
+        return os.path.abspath(claim.folder) == os.path.abspath(path)
+    try:
+        return os.path.samestat(os.fstat(claim.fd), os.stat(path / LOCK_FILE, follow_symlinks=False))
+    except OSError:
+        return False
+
+
+def _forget(claim: _Claim) -> None:
+    """Drop a claim whose folder is gone (its lock file went with it)."""
+    _CLAIMS.pop(claim.key, None)
+    if claim.fd is not None:
+        with contextlib.suppress(OSError):
+            os.close(claim.fd)
 
 
 def _remove_created(folders: list[Path]) -> None:
