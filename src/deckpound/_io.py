@@ -516,7 +516,9 @@ def _still_holds(claim: _Claim, path: Path) -> bool:
     if claim.fd is None:
         return os.path.abspath(claim.folder) == os.path.abspath(path)
     try:
-        return os.path.samestat(os.fstat(claim.fd), os.stat(path / LOCK_FILE, follow_symlinks=False))
+        return os.path.samestat(
+            os.fstat(claim.fd), os.stat(path / LOCK_FILE, follow_symlinks=False)
+        )
     except OSError:
         return False
 
