@@ -43,7 +43,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from deckpound.engine_contract import Status
+from deckpound.models.engine_contract import Status
 from deckpound.models.errors import SceneError
 
 __all__ = [

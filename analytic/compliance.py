@@ -1,7 +1,7 @@
 """Compliance engine: penalty (compliant) contact on the 7-DOF plan model.
 
 Engine :class:`ComplianceEngine` (registry name ``compliance``; the contract of
-:mod:`deckpound.engine_contract`); :func:`run_compliance` is the same as a function.
+:mod:`deckpound.models.engine_contract`); :func:`run_compliance` is the same as a function.
 
 Equation of motion (absolute coordinates, the model of the OpenSees engine)::
 
@@ -39,9 +39,15 @@ from typing import ClassVar
 
 import numpy as np
 
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.columns import ENERGY_COLUMNS  # the energy columns [kJ]
 from deckpound.models.contact_params import contact_resolving_step
+from deckpound.models.engine_contract import (
+    Engine,
+    RunOutput,
+    Status,
+    engine_columns,
+    output_stride,
+)
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import ComplianceSettings, Scene
@@ -384,8 +390,4 @@ def run_compliance(
     scene: Scene, motion: SupportMotion | None = None, *, raise_on_failure: bool = False, **options
 ):
     """Run the compliance engine on ``scene`` (keywords of :meth:`ComplianceEngine._run`)."""
-    from deckpound.engines import get_engine
-
-    return get_engine("compliance").run(
-        scene, None, motion, raise_on_failure=raise_on_failure, **options
-    )
+    return ComplianceEngine().run(scene, None, motion, raise_on_failure=raise_on_failure, **options)

@@ -24,7 +24,7 @@ takes the named bundles of :mod:`.bundles` (workspace from :func:`newmark_worksp
 in :data:`NewmarkOptions`); the contact laws are skipped while every corner's
 gap is open (g > 0, where every law gives zero force) and the tangent factorisation is reused
 while it is bitwise the elastic one (identical matrix → identical factors, so results do not
-change). Output every :func:`deckpound.engines.output_stride` steps.
+change). Output every :func:`deckpound.compare.engines.output_stride` steps.
 """
 
 from __future__ import annotations

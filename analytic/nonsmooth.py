@@ -1,7 +1,7 @@
 r"""Nonsmooth engine: Moreau–Jean time stepping with rigid, frictional, impacting contact.
 
 Engine :class:`NonsmoothEngine` (registry name ``nonsmooth``; the contract of
-:mod:`deckpound.engine_contract`); :func:`run_nonsmooth` is the same as a function.
+:mod:`deckpound.models.engine_contract`); :func:`run_nonsmooth` is the same as a function.
 
 Model
 -----
@@ -24,7 +24,7 @@ Time discretisation: the Moreau–Jean θ-scheme (Jean 1999, Acary & Brogliato 2
 implicit in the smooth forces, with Newton impact and set-valued Coulomb friction solved
 exactly per step; written out with its kernel in :mod:`deckpound.analytic.moreau_jean`.
 
-Output (every :func:`deckpound.engines.output_stride` steps)
+Output (every :func:`deckpound.compare.engines.output_stride` steps)
 -------------------------------------------------------------
 Standard columns (gaps at q_{k+1}; ``fn_c*``/``ft_c*`` = impulse over the output interval
 divided by its length — impulse-conserving averages; ``ft`` along +t, +y for linear
@@ -62,7 +62,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
+from deckpound.models.engine_contract import (
+    Engine,
+    RunOutput,
+    Status,
+    engine_columns,
+    output_stride,
+)
 from deckpound.models.excitation import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import NonsmoothSettings, Scene
@@ -320,8 +326,4 @@ def run_nonsmooth(
     scene: Scene, motion: SupportMotion | None = None, *, raise_on_failure: bool = False, **options
 ):
     """Run the nonsmooth engine on ``scene`` (keywords of :meth:`NonsmoothEngine._run`)."""
-    from deckpound.engines import get_engine
-
-    return get_engine("nonsmooth").run(
-        scene, None, motion, raise_on_failure=raise_on_failure, **options
-    )
+    return NonsmoothEngine().run(scene, None, motion, raise_on_failure=raise_on_failure, **options)

@@ -12,7 +12,7 @@ a rescued step, every adaptive step) and once at t = 0, with the state it commit
   displacements relative to the supports (:data:`deckpound.models.plan.RELATIVE_COLUMNS`:
   deck x, y relative to the mean shake-table motion, each seat relative to its actuator) and
   the bent deformations d = B u − S u_g of the ``nbs`` bent springs — the columns
-  :func:`deckpound.engine_contract.finish` derives from the output rows, here from the
+  :func:`deckpound.models.engine_contract.finish` derives from the output rows, here from the
   support displacement at the step (:func:`deckpound.models.result.peak_columns` names the
   layout);
 * ``Peaks.value`` / ``Peaks.time`` keep, per column, the largest |x| and the first time it
@@ -35,7 +35,7 @@ The engine fills the standard part of ``Peaks.row`` itself (its force columns di
 compliance engines' λ_N, λ_T; the nonsmooth engine's impulse of the step divided by the step,
 ``Peaks.force`` is its scratch) and then calls :func:`track_step`. The arrays are allocated by
 :func:`new_peaks` (the loops run without numba's runtime) and read back by
-:func:`step_peaks` and :func:`step_closures` into :class:`~deckpound.engine_contract.
+:func:`step_peaks` and :func:`step_closures` into :class:`~deckpound.models.engine_contract.
 RunOutput`. The tracking reads and writes only its own arrays: the result columns are those
 of a run without it, bit for bit.
 """
@@ -48,7 +48,7 @@ import numpy as np
 
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.system import C_BENT, C_FN, C_GAP
-from deckpound.engine_contract import engine_columns
+from deckpound.models.engine_contract import engine_columns
 from deckpound.models.plan import CORNER_NAMES, DECK_X, DECK_Y, RELATIVE_COLUMNS, SEAT_X
 from deckpound.models.result import peak_columns
 
@@ -256,7 +256,7 @@ def run_peaks(scene, plan, ps) -> Peaks:
 
 
 def run_output_fields(pk: Peaks, plan) -> dict:
-    """The :class:`~deckpound.engine_contract.RunOutput` fields of a finished loop's every-step
+    """The :class:`~deckpound.models.engine_contract.RunOutput` fields of a finished loop's every-step
     statistics: ``peaks``, ``gap_closures_per_corner``, ``gap_openings`` and ``unseated``."""
     return {
         "peaks": step_peaks(pk, peak_columns(engine_columns(plan), plan.bent_names)),

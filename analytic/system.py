@@ -450,7 +450,7 @@ def initial_dofs(initial_state) -> tuple[np.ndarray, np.ndarray]:
 
 
 # Output array layout of the analytic engines' compiled loops, in the order of
-# deckpound.engine_contract.engine_columns: time, the absolute displacement columns, the
+# deckpound.models.engine_contract.engine_columns: time, the absolute displacement columns, the
 # velocity columns, gaps, normal and tangential forces, then the bent forces.
 C_T = 0
 C_U = 1

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound._io import atomic_write_text
+from deckpound.models.file_io import atomic_write_text
 from deckpound.models.scene import Scene
 
 from .align import align
@@ -224,7 +224,7 @@ def run_bench(
     progress: bool = True,
 ) -> pd.DataFrame:
     """Run the work–precision benchmark; write bench.csv and figures into ``out``."""
-    from deckpound.warmup import ITEMS, warm
+    from deckpound.compare.warmup import ITEMS, warm
 
     from .progress import Progress
 

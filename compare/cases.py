@@ -25,11 +25,11 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from deckpound import __version__
-from deckpound.models._iir import SCIPY_AFTER, load_compiled_filter
 from deckpound.models.errors import SceneError
+from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 from deckpound.models.result import Result, physics_hash, settings_hash
 from deckpound.models.scene import Scene
+from deckpound.models.version import VERSION
 
 from .pool import Interrupted, map_local
 from .progress import Progress
@@ -85,7 +85,7 @@ def record_digests(scene: Scene) -> dict[str, str]:
 def case_key(engine: str, scene: Scene) -> str:
     """The cache key: SHA-256 of engine name, physics hash, the record files' digests, that
     engine's settings and the version."""
-    from deckpound.engines import get_engine
+    from deckpound.compare.engines import get_engine
 
     settings = get_engine(engine).settings_of(scene)
     text = json.dumps(
@@ -94,7 +94,7 @@ def case_key(engine: str, scene: Scene) -> str:
             "physics": physics_hash(scene),
             "records": record_digests(scene),
             "settings": settings_hash(settings),
-            "version": __version__,
+            "version": VERSION,
         },
         sort_keys=True,
         separators=(",", ":"),
@@ -107,7 +107,7 @@ def engine_expresses(engine: str, scene: Scene, study: str) -> bool:
     study is left out with a logged warning that names the reason."""
     import logging
 
-    from deckpound.engines import get_engine
+    from deckpound.compare.engines import get_engine
 
     eng = get_engine(engine)
     try:
@@ -127,7 +127,7 @@ def run_case(engine: str, scene: Scene) -> Result:
     option notes are there already) so that the main process can show it
     (:func:`surface_warnings`) — a worker's stderr is not the user's.
     """
-    from deckpound.engines import run_engine
+    from deckpound.compare.engines import run_engine
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -283,7 +283,7 @@ def _map_dask(
 
 
 def _dask_worker_setup() -> bool:
-    from deckpound._kernel_load import install
+    from deckpound.analytic.kernel_load import install
 
     load_compiled_filter()  # a long-lived worker: scipy.signal now, not mid-sweep
     return install()

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from deckpound._io import write_csv
-from deckpound.engines import DEFAULT_REFERENCE
+from deckpound.compare.engines import DEFAULT_REFERENCE
+from deckpound.models.file_io import write_csv
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 

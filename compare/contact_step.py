@@ -8,7 +8,7 @@ of it, and measures
 
 * ``step`` [s] — the default step the rule gives, and ``steps_per_period`` = T_c / step;
 * ``created`` — energy created at the contacts over the input energy
-  (:func:`deckpound.engine_contract.energy_quality`), at the default step and at the tenth;
+  (:func:`deckpound.models.engine_contract.energy_quality`), at the default step and at the tenth;
 * ``peak_theta`` [rad] — the peak deck rotation over every step at the default step, and
   ``theta_error`` — its relative difference from the run at a tenth of the step.
 
@@ -24,7 +24,7 @@ from __future__ import annotations
 import dataclasses
 import warnings
 
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
 from deckpound.models.contact_params import contact_period
 from deckpound.models.scene import Scene
 

@@ -51,7 +51,7 @@ def _choices(quick: bool) -> list[tuple[str, str, str]]:
 def damping_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """members × stiffness × mass × engine (module docstring); the other damping fields
     (ratio, method) as the scene has them."""
-    from deckpound.engines import engine_names
+    from deckpound.compare.engines import engine_names
 
     from .studies import modified
 

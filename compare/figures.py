@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound.engines import engine_names
+from deckpound.compare.engines import engine_names
 from deckpound.models.plan import plan_of
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene

@@ -163,8 +163,8 @@ def synthetic_pairs(
     the built-in synthetic generator of ``scene`` with seeds ``seed``, ``seed + 1``, ...: the
     first bent's table acceleration in x and y of each seed [g] (a = ü / 9.80665 m/s²), at
     the generator's step. Returns the folder."""
-    from deckpound._io import ensure_folder
     from deckpound.models.excitation import support_motion
+    from deckpound.models.file_io import ensure_folder
 
     from .studies import modified
 
@@ -186,7 +186,7 @@ def synthetic_pairs(
 
 def _write_at2(path: Path, acc_g, dt: float) -> None:
     """A PEER NGA-West2 AT2 file of the acceleration ``acc_g`` [g] at step ``dt`` [s]."""
-    from deckpound._io import atomic_write_text
+    from deckpound.models.file_io import atomic_write_text
 
     acc = [float(v) for v in acc_g]
     body = ["".join(f"{v:15.7E}" for v in acc[i : i + 5]) for i in range(0, len(acc), 5)]
@@ -284,7 +284,7 @@ def run_ida(
     variant's value is part of its cases' keys."""
     import pandas as pd
 
-    from deckpound._io import atomic_write_text, ensure_folder, write_csv
+    from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
 
     from .studies import modified
 

@@ -62,7 +62,7 @@ def _impact_gain(e_impact: np.ndarray) -> float:
 
 def impact_law_table(scene) -> list[dict]:
     """One row per (friction off/on, impact law) on ``scene`` (see the module docstring)."""
-    from deckpound.engines import run_engine
+    from deckpound.compare.engines import run_engine
 
     rows = []
     for label, changes in (

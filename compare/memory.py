@@ -1,6 +1,6 @@
 """Peak resident memory of an engine run, measured in a fresh subprocess.
 
-``peak_rss(engine, overrides)`` runs ``deckpound.engines.run_engine(engine, scene)`` in a new
+``peak_rss(engine, overrides)`` runs ``deckpound.compare.engines.run_engine(engine, scene)`` in a new
 Python process (so nothing from the caller counts) and returns that process's peak resident
 set size (``resource.getrusage(RUSAGE_SELF).ru_maxrss``, KiB on Linux) together with the
 baseline after the imports and one tiny warm-up run (numba compilation or cache loading,
@@ -21,7 +21,7 @@ import sys
 _CHILD = r"""
 import json, resource, sys, time, warnings
 warnings.simplefilter("ignore")
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
 from deckpound.models.scene_io import load_scene
 engine, scene_name, overrides, warm = json.loads(sys.argv[1])
 if warm:

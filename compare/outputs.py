@@ -2,7 +2,7 @@
 
 Every table, text and VTK file of ``paper``, ``study`` and ``export-vtk`` is written through
 :func:`folder`, :func:`target` and :func:`write_text`, which follow the file policy of
-:mod:`deckpound._io`: written to a temporary file and renamed into place (atomic), never
+:mod:`deckpound.models.file_io`: written to a temporary file and renamed into place (atomic), never
 through a symbolic link, with the user's umask.
 
 Tables carry their units: CSV files name them in the header (``peak_theta [rad]``), Parquet
@@ -23,7 +23,7 @@ import pandas as pd
 
 def folder(path: str | Path) -> Path:
     """Create folder ``path`` (and its parents) unless it exists; return it (a link refused)."""
-    from deckpound._io import ensure_folder
+    from deckpound.models.file_io import ensure_folder
 
     return ensure_folder(path)
 
@@ -31,8 +31,8 @@ def folder(path: str | Path) -> Path:
 @contextlib.contextmanager
 def target(path: str | Path) -> Iterator[Path]:
     """A temporary file name a library (pandas, matplotlib, meshio) writes ``path`` to; it is
-    renamed to ``path`` when the block ends without error (:func:`deckpound._io.atomic_path`)."""
-    from deckpound._io import atomic_path
+    renamed to ``path`` when the block ends without error (:func:`deckpound.models.file_io.atomic_path`)."""
+    from deckpound.models.file_io import atomic_path
 
     folder(Path(path).parent)
     with atomic_path(path) as tmp:
@@ -41,7 +41,7 @@ def target(path: str | Path) -> Iterator[Path]:
 
 def write_text(path: str | Path, text: str) -> Path:
     """Write a text file (UTF-8) atomically."""
-    from deckpound._io import atomic_write_text
+    from deckpound.models.file_io import atomic_write_text
 
     folder(Path(path).parent)
     return Path(atomic_write_text(path, text))

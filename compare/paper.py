@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound.engines import DEFAULT_REFERENCE, engine_names
+from deckpound.compare.engines import DEFAULT_REFERENCE, engine_names
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import scene_to_toml
 

@@ -10,7 +10,7 @@ scope a map starts its own pool and stops it when done.
 Workers (:func:`worker_init`) die with their parent (:mod:`._workers`), ignore SIGINT — a Ctrl-C
 in a terminal reaches the whole process group; the parent alone decides — take SIGTERM's default
 action (the CLI turns SIGTERM into a Ctrl-C in the parent only) and load cached kernels the fast
-way (:mod:`deckpound._kernel_load`).
+way (:mod:`deckpound.analytic.kernel_load`).
 
 Interrupts: on Ctrl-C (or any error) while a map runs, the parent kills every worker at once
 (SIGKILL: a worker inside a compiled loop cannot be asked), cancels what is queued and re-raises;
@@ -26,7 +26,7 @@ import signal
 import sys
 from collections.abc import Callable, Iterator
 
-from deckpound.models._iir import SCIPY_AFTER, load_compiled_filter
+from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 
 __all__ = ["Interrupted", "map_local", "pool_scope", "worker_init"]
 
@@ -48,7 +48,7 @@ def worker_init(parent_pid: int) -> None:
     # terminate does so at once
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
-    from deckpound._kernel_load import install
+    from deckpound.analytic.kernel_load import install
 
     install()
 
@@ -58,7 +58,7 @@ class _Scope:
         self.active = 0
         self.pool = None
         self.size = 0
-        #: the scope's workers were forked with scipy.signal loaded (deckpound.models._iir)
+        #: the scope's workers were forked with scipy.signal loaded (deckpound.models.iir)
         self.filtered = False
 
 

@@ -24,7 +24,7 @@ def replace_block(text: str, begin: str, end: str, block: str) -> str:
 
 def write_block(path: str | Path, begin: str, end: str, block: str) -> Path:
     """Put ``block`` into the README at ``path`` in place of the previous one (atomically)."""
-    from deckpound._io import atomic_write_text
+    from deckpound.models.file_io import atomic_write_text
 
     path = Path(path)
     text = replace_block(path.read_text(encoding="utf-8"), begin, end, block)

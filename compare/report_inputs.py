@@ -14,7 +14,7 @@ import re
 import numpy as np
 import pandas as pd
 
-from deckpound.models._fields import to_mapping
+from deckpound.models.fields import to_mapping
 from deckpound.models.scene import Scene
 
 from .report_text import join, num, short

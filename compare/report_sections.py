@@ -12,10 +12,10 @@ import platform
 import numpy as np
 import pandas as pd
 
-from deckpound import __version__
-from deckpound.engines import get_engine
-from deckpound.models._fields import to_mapping
+from deckpound.compare.engines import get_engine
+from deckpound.models.fields import to_mapping
 from deckpound.models.result import scene_hash
+from deckpound.models.version import VERSION
 
 from . import figures
 from . import report_inputs as inputs
@@ -53,7 +53,7 @@ def what_was_run(d) -> list:
     c = s.contact
     items = [
         (
-            f"Scene **{s.name}** (hash `{scene_hash(s)[:16]}`), deckpound {__version__}, on "
+            f"Scene **{s.name}** (hash `{scene_hash(s)[:16]}`), deckpound {VERSION}, on "
             f"{platform.machine()} / Python {platform.python_version()}; the whole job took "
             f"{d.wall:.1f} s of wall time."
         ),
@@ -114,7 +114,7 @@ def what_was_run(d) -> list:
 def _quality_sentence(d) -> str:
     """The results' quality warnings (issue 16: penetration beyond a stated fraction of the
     gap, measured at every step), or that there were none."""
-    from deckpound.engine_contract import PENETRATION_WARN_FRACTION
+    from deckpound.models.engine_contract import PENETRATION_WARN_FRACTION
 
     found = [
         f"{case} run {r.index}: {w}"

@@ -30,7 +30,7 @@ Table (:func:`skew_row`, one row per case), besides the common headline numbers
 Figure (:func:`skew_figure`): peak deck rotation and peak transverse displacement relative to
 the tables against φ, one line per engine × friction.
 
-:func:`verify_skew` runs :func:`deckpound.analytic.verify.verify_clone` at φ = 30° and 45° on a
+:func:`verify_skew` runs :func:`deckpound.compare.verify_clone.verify_clone` at φ = 30° and 45° on a
 scene (the straight deck's tolerances: 1e-8 of each displacement/force column's peak,
 velocities 1e-8) and returns one row per angle, ready to join a ``verify clone`` matrix.
 """
@@ -83,7 +83,7 @@ VERIFY_VELOCITY_TOLERANCE = 1e-8
 
 def skew_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """φ × friction × engine (module docstring)."""
-    from deckpound.engines import engine_names
+    from deckpound.compare.engines import engine_names
 
     from .studies import contact_step, modified
 
@@ -290,7 +290,7 @@ def skew_headlines(table: pd.DataFrame) -> list[str]:
 def verify_skew(
     scene: Scene, angles=SKEW_VERIFY_ANGLES, *, duration: float | None = 5.0, motion=None
 ) -> list[dict]:
-    """:func:`~deckpound.analytic.verify.verify_clone` of ``scene`` at each skew angle.
+    """:func:`~deckpound.compare.verify_clone.verify_clone` of ``scene`` at each skew angle.
 
     Returns one dict per angle: ``skew`` [°], ``worst`` (column, deviation / column peak),
     ``worst_velocity``, ``iterations`` and ``speed_ratio`` of verify_clone, and ``ok`` (both
@@ -299,7 +299,7 @@ def verify_skew(
     """
     import dataclasses
 
-    from deckpound.analytic.verify import verify_clone
+    from deckpound.compare.verify_clone import verify_clone
 
     from .studies import modified
 

@@ -146,7 +146,7 @@ print(json.dumps(out))
 
 def _takeda_off(scenes: dict[str, Scene], repeats: int, timeout: float) -> dict:
     """Times and results with the kernel's pow short-circuit off (child process)."""
-    from deckpound.models._fields import to_mapping
+    from deckpound.models.fields import to_mapping
 
     with tempfile.TemporaryDirectory(prefix="deckpound-skips-") as tmp:
         spec = {

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound.engines import engine_names, get_engine
+from deckpound.compare.engines import engine_names, get_engine
 from deckpound.models.scene import Scene
 
 from .guarded import run_guarded

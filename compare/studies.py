@@ -34,9 +34,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound.models._fields import to_mapping
 from deckpound.models.contact_params import contact_period
 from deckpound.models.errors import SceneError
+from deckpound.models.fields import to_mapping
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import apply_overrides, scene_from_mapping
@@ -157,7 +157,7 @@ def start_state(
     runs with ``engine`` (default: the reference engine) through the cache in
     ``cache_folder``.
     """
-    from deckpound.engines import DEFAULT_REFERENCE
+    from deckpound.compare.engines import DEFAULT_REFERENCE
 
     from .sequence_run import state_before, strongest_run
 

@@ -1,7 +1,7 @@
 """One figure style for every deckpound plot: readable in greyscale, units on every axis.
 
 Engines are told apart by line style and grey level as well as colour, so a greyscale print
-keeps them distinct. Every figure is saved atomically (:func:`deckpound._io.atomic_path`), and
+keeps them distinct. Every figure is saved atomically (:func:`deckpound.models.file_io.atomic_path`), and
 text that may carry user strings (the scene-name stamp, titles, axis labels, legends) is drawn
 literally, without mathtext: a scene named ``$\\frac{$`` must not break a figure.
 """
@@ -15,7 +15,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from deckpound._io import atomic_path
+from deckpound.models.file_io import atomic_path
 
 CYCLE = [
     {"color": c, "linestyle": s, "marker": m, "markersize": 4}
@@ -45,9 +45,9 @@ RC = {
 
 
 def engine_style(engine: str) -> dict:
-    """Line style of an engine, declared by the engine itself (:mod:`deckpound.engines`);
+    """Line style of an engine, declared by the engine itself (:mod:`deckpound.compare.engines`);
     ``measured`` and unknown labels get neutral styles."""
-    from deckpound.engines import engine_style as _registry_style
+    from deckpound.compare.engines import engine_style as _registry_style
 
     return _registry_style(engine)
 

@@ -175,7 +175,7 @@ def sweep_rows(
     :mod:`.pool` or a Dask cluster: no histories travel), one cached JSON row per case in
     ``rows_dir`` (finished cases are read back, not recomputed: Ctrl-C loses only the cases
     running). Returns ({index: row}, number of cases computed now)."""
-    from deckpound._io import atomic_write_text
+    from deckpound.models.file_io import atomic_write_text
 
     from .cases import interrupted, map_parallel
     from .progress import Progress
@@ -222,7 +222,7 @@ def run_variability(
     ``variability.png`` in ``out``; return (table, summary)."""
     import pandas as pd
 
-    from deckpound._io import atomic_write_text, ensure_folder, write_csv
+    from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
 
     if (cases is None) == (records is None):
         raise SceneError(

@@ -1,6 +1,6 @@
 """``deckpound verify clone SCENE``: the clone against OpenSees over a matrix of modelling choices.
 
-Every case runs :func:`deckpound.analytic.verify.verify_clone` (OpenSees ``rigid`` and the
+Every case runs :func:`deckpound.compare.verify_clone.verify_clone` (OpenSees ``rigid`` and the
 compliance engine's ``newmark`` clone, same step, NormDispIncr tolerance 1e-12) on the scene
 with the case's overrides, and reports the largest deviation of any displacement/force column
 relative to that column's peak over the record, the column it occurs in, the same for the
@@ -29,7 +29,7 @@ few steps where a gap reopens: see the README's known limitations).
 ``--quick`` runs :data:`QUICK_CASES` over :data:`QUICK_DURATION` s. With ``--set`` the user pins
 the options: one case, the scene as given. ``friction_mode = stick`` (the project's own law,
 which OpenSees cannot express) is verified as ``contact2d`` with a printed note
-(:func:`deckpound.analytic.verify.opensees_friction`).
+(:func:`deckpound.compare.verify_clone.opensees_friction`).
 
 ``--write-readme`` puts the table between :data:`BEGIN` and :data:`END` in the README (never
 edited by hand; ``tests/test_verify_matrix.py`` checks the block's format and tolerances).
@@ -184,8 +184,8 @@ def run_case(
     """Verify one case (``case`` None: the scene as given)."""
     import dataclasses
 
-    from deckpound.analytic.verify import verify_clone
     from deckpound.compare.studies import modified
+    from deckpound.compare.verify_clone import verify_clone
 
     sc = modified(scene, *case.overrides) if case is not None else scene
     if duration is not None:

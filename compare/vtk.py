@@ -17,7 +17,7 @@ metadata, as ``deckpound run`` and ``deckpound compare`` write them):
 The input is checked whole before anything is written (:func:`check_result_folder`): files
 that are not valid JSON or CSV, a missing or invalid scene, missing columns, non-finite values
 or a time base that does not increase are refused by name (exit status 2). Every file is
-written atomically (:mod:`.outputs`, backed by :mod:`deckpound._io`).
+written atomically (:mod:`.outputs`, backed by :mod:`deckpound.models.file_io`).
 """
 
 from __future__ import annotations

@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .contact_params import contact_period
+from .engine_contract import Engine
 from .errors import SceneError
 from .magnitudes import magnitude_findings
 from .scene import Scene
@@ -94,18 +95,18 @@ class Plausibility:
         return not self.errors
 
 
-def engine_steps(scene: Scene, engines: Iterable[str]) -> list[tuple[str, str, float, bool, float]]:
+def engine_steps(
+    scene: Scene, engines: Iterable[Engine]
+) -> list[tuple[str, str, float, bool, float]]:
     """``(engine, step field, step given [s], compliant contact?, step run [s])`` of each
     fixed-step engine: the step its settings give, and the one it runs
-    (:meth:`deckpound.engine_contract.Engine.fixed_step`: shorter where the contact-step rule
+    (:meth:`deckpound.models.engine_contract.Engine.fixed_step`: shorter where the contact-step rule
     shortens it). The given step is checked against the record and the modes (a step the
     rule happens to shorten is still a slip when it cannot represent T1), the run step against
     the contact and the output."""
-    from deckpound.engines import get_engine
-
     out = []
-    for name in engines:
-        e = get_engine(name)
+    for e in engines:
+        name = e.name
         settings = e.settings_of(scene)
         run = e.fixed_step(scene, settings)
         if run is not None:
@@ -173,15 +174,12 @@ def _source(scene: Scene, motion) -> str:
     return f"the record length {motion.duration:g} s"
 
 
-def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Plausibility:
-    """Every plausibility finding for ``scene`` run by ``engines`` (see the module table)."""
+def check(scene: Scene, motion=None, *, engines: Iterable[Engine]) -> Plausibility:
+    """Every plausibility finding for ``scene`` run by ``engines`` (the engine objects, for
+    example ``[deckpound.get_engine(n) for n in names]``; see the module table)."""
     from .excitation import analysis_duration, support_motion
     from .mechanics import natural_modes
 
-    if engines is None:
-        from deckpound.engines import engine_names
-
-        engines = engine_names()
     engines = tuple(engines)
     if motion is None:
         motion = support_motion(scene)
@@ -335,9 +333,9 @@ def check(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Pl
     return report
 
 
-def enforce(scene: Scene, motion=None, engines: Iterable[str] | None = None) -> Plausibility:
+def enforce(scene: Scene, motion=None, *, engines: Iterable[Engine]) -> Plausibility:
     """:func:`check`, then warn about each warning and raise the first error as SceneError."""
-    report = check(scene, motion, engines)
+    report = check(scene, motion, engines=engines)
     for f in report.warnings:
         warnings.warn(f"{f.field}: {f.message}", PlausibilityWarning, stacklevel=2)
     if report.errors:

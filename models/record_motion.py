@@ -43,9 +43,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._iir import butter_highpass_sos, sosfiltfilt
 from .errors import SceneError
 from .excitation import G, SupportMotion, check_lag, intensity_period, make_provenance, shift_record
+from .iir import butter_highpass_sos, sosfiltfilt
 from .mechanics import support_channels
 from .record_checks import AXIS_NAME, check_velocity_columns, scaling_note
 from .record_csv import CsvRecord, read_csv_record

@@ -6,23 +6,23 @@ engine's extras) and metadata. Its units come from the plan model's column table
 (:func:`column_unit`). Views: :meth:`Result.to_frame` (pandas, time as the index, units in
 ``attrs``) and :meth:`Result.to_xarray` (named dimensions time, corner, bent, direction).
 
-Metadata every engine fills through the shared epilogue (:func:`deckpound.engine_contract.finish`):
+Metadata every engine fills through the shared epilogue (:func:`deckpound.models.engine_contract.finish`):
 ``status`` (``"success"``; ``"doubtful"``: finished, but a quality check failed, see
 ``doubtful``; ``"unseated"``: a corner lost its seat and the run stopped there, see
-``unseated``; or ``"failed"``), ``failure`` (a :class:`~deckpound.engine_contract.Status`
+``unseated``; or ``"failed"``), ``failure`` (a :class:`~deckpound.models.engine_contract.Status`
 name), ``message``, ``failed_step``/``failed_time`` on failure, ``steps``, ``newton_iterations``,
 ``contact_solves``, ``gap_closures`` (see :func:`gap_closures`; ``gap_closures_basis``),
 ``peaks`` (``{column: [peak, time]}`` over every step, :meth:`Result.peak`; ``peaks_basis``),
 ``gap_opening_max`` (``{corner: [largest g − g(0) m, time s]}``, the seat-width demand),
 ``seat_margin_min`` (``{corner: [N − opening m, time s]}`` for the seats with a
 ``support_length``; ``seat_margin_basis``), ``unseated`` (with ``unseated_corner``,
-``unseated_time``, ``unseated_step``; :func:`deckpound.engine_contract.seat_margins`),
+``unseated_time``, ``unseated_step``; :func:`deckpound.models.engine_contract.seat_margins`),
 ``failures``, ``wall_time`` (run time without compilation) and ``compile_time`` [s],
 ``scene_hash``, ``physics_hash``, ``settings``, ``settings_hash``, ``version``, ``units``.
 
 Files: ``DIR/<engine>.csv`` (the columns; units in a ``# units:`` comment line) and
 ``DIR/<engine>.json`` (the metadata), written as a pair all or nothing (temporary files renamed
-into place, :mod:`deckpound._io`), so an interruption or a full disk leaves no partial file; a
+into place, :mod:`deckpound.models.file_io`), so an interruption or a full disk leaves no partial file; a
 symbolic link in their place is refused.
 """
 
@@ -38,9 +38,9 @@ from typing import Any
 
 import numpy as np
 
-from ._fields import to_mapping
 from .columns import column_unit, standard_columns
 from .errors import SceneError
+from .fields import to_mapping
 from .html_table import html_table, short_text
 from .plan import CORNER_NAMES, RELATIVE_COLUMNS
 
@@ -155,7 +155,7 @@ def gap_closures(columns: dict[str, np.ndarray]) -> dict[str, int]:
 
 def peak_columns(engine_columns, bent_names) -> list[str]:
     """The columns whose peaks the engines track at every step, in their order: the engine
-    columns (``t`` first, :func:`deckpound.engine_contract.engine_columns`), the relative
+    columns (``t`` first, :func:`deckpound.models.engine_contract.engine_columns`), the relative
     displacements (:data:`deckpound.models.plan.RELATIVE_COLUMNS`), then the bent deformations
     ``<bent>_dx``, ``<bent>_dy`` (the columns the epilogue derives from the output rows)."""
     out = list(engine_columns) + list(RELATIVE_COLUMNS)
@@ -433,7 +433,7 @@ class Result:
     # -- files -----------------------------------------------------------------------
     def write(self, folder: str | Path) -> tuple[Path, Path]:
         """Write ``<engine>.csv`` and ``<engine>.json`` into ``folder``, both or neither."""
-        from deckpound._io import atomic_write_files, ensure_folder
+        from deckpound.models.file_io import atomic_write_files, ensure_folder
 
         folder = ensure_folder(folder, "result folder")
         csv_path, json_path = folder / f"{self.engine}.csv", folder / f"{self.engine}.json"

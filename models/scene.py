@@ -17,9 +17,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from ._fields import from_mapping, set_path, spec, to_mapping, validate
 from .contact_laws_table import FRICTION_CODES, LAW_CODES, contact_law
 from .errors import SceneError
+from .fields import from_mapping, set_path, spec, to_mapping, validate
 from .html_table import html_table, short_text
 from .scene_excitation import (
     ABSURD_PGA,

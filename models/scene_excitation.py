@@ -8,8 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from ._fields import spec, validate
 from .errors import SceneError
+from .fields import spec, validate
 
 if TYPE_CHECKING:
     from .scene import Scene

@@ -14,8 +14,8 @@ from typing import Any
 
 import tomli_w
 
-from ._fields import from_mapping, json_schema, set_path, split_path, to_mapping
 from .errors import SceneError
+from .fields import from_mapping, json_schema, set_path, split_path, to_mapping
 from .records import resolve_path
 from .scene import Scene
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ._fields import spec, validate
+from .fields import spec, validate
 
 #: largest number of time steps one run may take (a 60 s record at 1e-5 s is 6e6)
 MAX_STEPS = 50_000_000

@@ -1,6 +1,6 @@
 """The OpenSees engine: :class:`OpenSeesEngine` (registry name ``opensees``).
 
-Follows the engine contract of :mod:`deckpound.engine_contract`; :func:`run_opensees` is the
+Follows the engine contract of :mod:`deckpound.models.engine_contract`; :func:`run_opensees` is the
 same as a function. openseespy is imported only when a model is built. The step loop (:func:`run_steps`) and
 the state sampling (:func:`sample_row`) are plain functions of an ``ops`` object (the
 openseespy module or anything with its functions) and a ``plan`` dict of tags and constants;
@@ -34,8 +34,14 @@ from typing import ClassVar
 
 import numpy as np
 
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
 from deckpound.models.contact_params import contact_resolving_step
+from deckpound.models.engine_contract import (
+    Engine,
+    RunOutput,
+    Status,
+    engine_columns,
+    output_stride,
+)
 from deckpound.models.excitation import analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.result import peak_columns
@@ -518,8 +524,4 @@ class OpenSeesEngine(Engine):
 
 def run_opensees(scene: Scene, motion=None, *, raise_on_failure: bool = False, **options):
     """Run the scene in OpenSees (keywords of :meth:`OpenSeesEngine._run`)."""
-    from deckpound.engines import get_engine
-
-    return get_engine("opensees").run(
-        scene, None, motion, raise_on_failure=raise_on_failure, **options
-    )
+    return OpenSeesEngine().run(scene, None, motion, raise_on_failure=raise_on_failure, **options)

@@ -24,9 +24,9 @@ import hashlib
 import json
 from pathlib import Path
 
-from deckpound import __version__
 from deckpound.models.errors import SceneError
 from deckpound.models.result import scene_hash
+from deckpound.models.version import VERSION
 
 from . import engine
 from .export_header import UNITS, ExportParts
@@ -148,7 +148,7 @@ def manifest(p: ExportParts) -> dict:
     """The data folder's manifest (JSON-able)."""
     return {
         "format": MANIFEST_FORMAT,
-        "generator": f"deckpound {__version__}",
+        "generator": f"deckpound {VERSION}",
         "scene": {"name": p.scene.name, "sha256": p.scene_hash},
         "units": {
             "force": "kN",
@@ -202,7 +202,7 @@ def _check_output(path: Path, fmt: str) -> None:
 def export_script(scene, fmt: str, path, motion=None) -> Path:
     """Write a complete, runnable ``fmt`` ("tcl" | "py") script for the scene to ``path`` and
     its data folder ``<stem>_data/`` beside it. Returns the script path."""
-    from deckpound._io import atomic_write_files
+    from deckpound.models.file_io import atomic_write_files
 
     path = Path(path)
     _check_output(path, fmt)
@@ -210,7 +210,7 @@ def export_script(scene, fmt: str, path, motion=None) -> Path:
     data = path.parent / f"{path.stem}_data"
     made = not data.exists()
     try:
-        # all files or none (deckpound._io): a full disk leaves no record cut short and no
+        # all files or none (deckpound.models.file_io): a full disk leaves no record cut short and no
         # script without its records; a symbolic link or device in their place is handled there
         atomic_write_files({**{data / n: c for n, c in files.items()}, path: text})
     except BaseException:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-from deckpound import __version__
+from deckpound.models.version import VERSION
 
 from .ops import ArrayArg, Command
 from .quoting import wrap_comment
@@ -379,7 +379,7 @@ def header_lines(p: ExportParts) -> list[str]:
     lang = "Tcl" if p.fmt == "tcl" else "OpenSeesPy"
     friction = f", friction {sc.contact.friction_mode}" if p.plan["friction"] else ""
     out = [
-        f"deckpound {__version__} export ({lang}) of scene '{sc.name}'",
+        f"deckpound {VERSION} export ({lang}) of scene '{sc.name}'",
         f"scene sha256: {p.scene_hash}",
         (
             f"model: {sc.opensees.mode} deck, {len(sc.bents)} bents, contact law "

@@ -16,7 +16,7 @@ The optional CSV (``--csv``) holds every column of the in-process result, in its
 engine's sampled columns plus the displacements relative to the supports and the bent
 deformations, derived in the script from the support displacement records of the data folder
 (:func:`csv_plan`, :func:`interp_record`, :func:`result_rows`) by the arithmetic of
-:func:`deckpound.engine_contract.finish` (linear interpolation of the records as ``np.interp``,
+:func:`deckpound.models.engine_contract.finish` (linear interpolation of the records as ``np.interp``,
 mean of the shake tables, d = B u − S u_g).
 """
 

@@ -1,5 +1,5 @@
 """Standard OpenSees recorders of the exported scripts, and the map from their files to
-deckpound's result columns (:func:`deckpound.engine_contract.engine_columns`).
+deckpound's result columns (:func:`deckpound.models.engine_contract.engine_columns`).
 
 One recorder file per result column the engine writes, named after it (``deck_x_abs.out``,
 ``deck_vx_abs.out``, ``gap_c1.out``, ``bent1_fx.out``, ...; the columns deckpound derives from

@@ -14,10 +14,16 @@ from typing import ClassVar
 
 import numpy as np
 
-from deckpound.engine_contract import Engine, RunOutput, Status, engine_columns, output_stride
-from deckpound.models._fields import spec, validate
 from deckpound.models.damping import damping_model
+from deckpound.models.engine_contract import (
+    Engine,
+    RunOutput,
+    Status,
+    engine_columns,
+    output_stride,
+)
 from deckpound.models.excitation import analysis_duration
+from deckpound.models.fields import spec, validate
 
 
 @dataclass(frozen=True, kw_only=True)

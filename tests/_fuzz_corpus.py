@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 
 import tomli_w
 
-from deckpound.models._fields import to_mapping
+from deckpound.models.fields import to_mapping
 from deckpound.models.scene_io import load_scene, scene_to_toml
 
 SHORT = ("--set", "excitation.duration=0.3")

@@ -15,7 +15,7 @@ Outcomes: ``refused`` (exit 2), ``engine failure`` (1), ``I/O error`` (3), ``int
   non-finite values or fewer than 2 rows.
 
 Faults are injected by patching (``os.fsync``, ``os.replace``, the write loop of
-:mod:`deckpound._io`, ``os.mkdir``/``os.open``/``open`` for a read-only folder, matplotlib's
+:mod:`deckpound.models.file_io`, ``os.mkdir``/``os.open``/``open`` for a read-only folder, matplotlib's
 ``savefig``, the engine entry point, stdout; stdout or stderr closed: None in ``sys``, as
 Python sets them when the shell closed them) only for the duration of one case.
 """
@@ -39,8 +39,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound._io import INCOMPLETE, is_temporary
 from deckpound.cli import main
+from deckpound.models.file_io import INCOMPLETE, is_temporary
 
 OK_OUTCOMES = ("refused", "engine failure", "I/O error", "interrupted", "success")
 BAD_OUTCOMES = ("TRACEBACK", "UNCLEAN", "PARTIAL OUTPUT", "SILENT NONSENSE")
@@ -88,8 +88,8 @@ class _FullStdout(io.StringIO):
 
 def _inject(fault: str, root: Path, stack: contextlib.ExitStack) -> None:
     """Install ``fault`` (see tests._fuzz_outputs.FAULTS) until ``stack`` closes."""
-    import deckpound._io as dio
-    from deckpound import engines
+    import deckpound.models.file_io as dio
+    from deckpound.compare import engines
 
     kind, _, arg = fault.partition(":")
     if kind in ("enospc-write", "interrupt-write", "memory-write"):

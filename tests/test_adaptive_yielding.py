@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from deckpound.analytic.hysteretic import HystereticMaterial
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
 from deckpound.models.excitation import support_motion
 from deckpound.models.plan import takeda_hysteretic_args
 from deckpound.models.scene_io import load_scene

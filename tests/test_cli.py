@@ -19,7 +19,7 @@ from _cli_cases import BAD_SETS
 
 from deckpound import __version__
 from deckpound.cli import build_parser, main
-from deckpound.engines import ENGINES
+from deckpound.compare.engines import ENGINES
 from deckpound.models.scene_io import builtin_scene_names, load_scene, scene_from_toml
 
 SHORT = ["--set", "excitation.duration=2"]

@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 
 import deckpound._cli_scene as cli_scene
-import deckpound._io as dio
-from deckpound import engines
-from deckpound._io import INCOMPLETE
+import deckpound.models.file_io as dio
 from deckpound.cli import EXIT_CODES_HELP, main
+from deckpound.compare import engines
+from deckpound.models.file_io import INCOMPLETE
 
 TINY = ["--set", "excitation.duration=0.3", "--set", "run.output_dt=0.01"]
 

@@ -29,7 +29,7 @@ def _scene(duration=None):
 
 
 def test_clone_agrees_with_opensees_first_5_s():
-    from deckpound.analytic.verify import verify_clone
+    from deckpound.compare.verify_clone import verify_clone
 
     rep = verify_clone(_scene(5.0))
     print(
@@ -50,7 +50,7 @@ def test_clone_agrees_with_opensees_first_5_s():
 
 @pytest.mark.slow
 def test_clone_agrees_with_opensees_whole_record():
-    from deckpound.analytic.verify import verify_clone
+    from deckpound.compare.verify_clone import verify_clone
 
     rep = verify_clone(_scene())
     print(

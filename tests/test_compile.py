@@ -2,8 +2,9 @@
 
 import warnings
 
-from deckpound import cli, warmup
-from deckpound.engines import run_engine
+from deckpound import cli
+from deckpound.compare import warmup
+from deckpound.compare.engines import run_engine
 from deckpound.models.scene_io import load_scene
 
 

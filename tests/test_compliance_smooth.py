@@ -138,8 +138,8 @@ def test_non_finite_initial_state_is_refused():
 
 def test_failure_time_of_an_adaptive_run_is_its_own():
     """Adaptive steps vary: the failure is reported at the time given, not step × dt."""
-    from deckpound.engine_contract import RunOutput, Status, finish
-    from deckpound.engines import get_engine
+    from deckpound.compare.engines import get_engine
+    from deckpound.models.engine_contract import RunOutput, Status, finish
     from deckpound.models.excitation import support_motion
 
     sc = with_run(base_scene(), duration=0.5)

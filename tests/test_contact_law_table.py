@@ -12,7 +12,7 @@ from _compliance_helpers import base_scene, with_contact, with_run
 
 from deckpound.analytic import contact_law_checks as clc
 from deckpound.analytic import contact_laws as cl
-from deckpound.engines import get_engine, run_engine
+from deckpound.compare.engines import get_engine, run_engine
 from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_MODEL_TABLE, contact_law
 from deckpound.models.errors import SceneError
 from deckpound.models.scene import CONTACT_LAWS, FRICTION_MODES

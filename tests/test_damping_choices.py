@@ -40,7 +40,7 @@ def _scene(*ov, duration=3.0):
 @pytest.mark.skipif(importlib.util.find_spec("openseespy") is None, reason="no openseespy")
 @pytest.mark.parametrize("ov", CHOICES, ids=lambda ov: "+".join(ov) or "default")
 def test_clone_agrees_with_opensees_for_each_damping_choice(ov):
-    from deckpound.analytic.verify import verify_clone
+    from deckpound.compare.verify_clone import verify_clone
 
     rep = verify_clone(_scene(*ov))
     print(ov, "largest deviation:", rep["worst"], rep["worst_velocity"], rep["iterations"])
@@ -103,7 +103,7 @@ def test_relative_mass_damping_is_the_same_matrix_in_clone_and_nonsmooth():
 
 
 def test_engines_refuse_what_they_cannot_express():
-    from deckpound.engines import get_engine
+    from deckpound.compare.engines import get_engine
 
     for name, ov in (("nonsmooth", ()), ("compliance", ("compliance.integrator=adaptive",))):
         eng = get_engine(name)
@@ -123,7 +123,7 @@ def test_nonsmooth_engine_applies_the_same_damping(ov):
     energy balance closes, and its peak transverse deck displacement (set by the bents and the
     damping, hardly by the contact law) follows the clone's to 1e-3 — and moves with the
     choice as the clone's does."""
-    from deckpound.engines import run_engine
+    from deckpound.compare.engines import run_engine
 
     base = {e: run_engine(e, _scene(duration=4.0)) for e in ("compliance", "nonsmooth")}
     got = {e: run_engine(e, _scene(*ov, duration=4.0)) for e in ("compliance", "nonsmooth")}

@@ -18,8 +18,8 @@ import pytest
 
 import deckpound as dp
 from deckpound import cli
-from deckpound.engine_contract import QualityWarning, energy_quality
 from deckpound.models.contact_params import contact_period, contact_resolving_step
+from deckpound.models.engine_contract import QualityWarning, energy_quality
 from deckpound.models.errors import DoubtfulResult
 from deckpound.models.scene_io import load_scene
 

@@ -33,10 +33,10 @@ from _compliance_helpers import (
 )
 from scipy.integrate import solve_ivp
 
-from deckpound.engine_contract import OptionIgnored
-from deckpound.engines import engine_names, get_engine, register, run_engine, unregister
+from deckpound.compare.engines import engine_names, get_engine, register, run_engine, unregister
 from deckpound.models.columns import standard_columns
 from deckpound.models.damping import damping_model
+from deckpound.models.engine_contract import OptionIgnored
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import plan_of
 
@@ -279,7 +279,7 @@ def test_penetration_quality_warning():
     the engines' default settings does not."""
     import warnings
 
-    from deckpound.engine_contract import PENETRATION_WARN_FRACTION, QualityWarning
+    from deckpound.models.engine_contract import PENETRATION_WARN_FRACTION, QualityWarning
     from deckpound.models.scene_io import load_scene
 
     quiet = [("nonsmooth", []), ("compliance", [])]

@@ -1,7 +1,7 @@
 """The exported scripts' CSV holds every column of the in-process result (issue 32, item 5):
 the displacements relative to the supports (``deck_x_rel``, ``seat1_x_rel``, ...) and the bent
 deformations (``bent1_dx``, ...), derived in the script from the support displacement records
-of its data folder, as :func:`deckpound.engine_contract.finish` derives them."""
+of its data folder, as :func:`deckpound.models.engine_contract.finish` derives them."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 from tests_helpers_scene import short_benchmark
 
-from deckpound.engine_contract import engine_columns
+from deckpound.models.engine_contract import engine_columns
 from deckpound.models.excitation import support_motion
 from deckpound.models.plan import DOF_COLUMNS, plan_of
 from deckpound.opensees_build.export_py import interp_record

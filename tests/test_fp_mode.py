@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from deckpound.analytic import fp_mode
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
 from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene
 

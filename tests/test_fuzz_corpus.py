@@ -117,7 +117,7 @@ def test_classifier_catches_what_it_must(tmp_path, result_dir, monkeypatch):
     """The classifier is not blind: a traceback, a partial folder and nonsense are found."""
     from _fuzz_corpus import Case
 
-    import deckpound._io as dio
+    import deckpound.models.file_io as dio
 
     bug = Case(
         "probe:bug",

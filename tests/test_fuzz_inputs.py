@@ -26,7 +26,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from deckpound.cli import main
-from deckpound.models._fields import to_mapping
+from deckpound.models.fields import to_mapping
 from deckpound.models.mechanics import support_channels
 from deckpound.models.scene_io import load_scene
 

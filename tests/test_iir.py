@@ -1,4 +1,4 @@
-"""The numpy Butterworth high-pass (models/_iir.py) gives scipy.signal's numbers bit for bit,
+"""The numpy Butterworth high-pass (models/iir.py) gives scipy.signal's numbers bit for bit,
 so the synthetic record and filtered records do not need scipy.signal (1 s of imports)."""
 
 import subprocess
@@ -8,29 +8,29 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from deckpound.models import _iir
+from deckpound.models import iir
 
 
 @pytest.mark.parametrize("wn", [1e-6, 5e-3, 0.05, 0.5, 0.95])
 @pytest.mark.parametrize("order", [2, 4, 8])
 def test_design_and_filter_equal_scipy_bitwise(wn, order, monkeypatch):
-    sos = _iir.butter_highpass_sos(order, wn)
+    sos = iir.butter_highpass_sos(order, wn)
     assert np.array_equal(sos, scipy.signal.butter(order, wn, btype="highpass", output="sos"))
     x = np.random.default_rng(order).standard_normal(2000)
     monkeypatch.delitem(sys.modules, "scipy.signal")  # the pure numpy path
-    monkeypatch.setattr(_iir, "_CALLS", [-(10**9)])  # and no switch to scipy on the way
-    mine = _iir.sosfiltfilt(sos, x)
+    monkeypatch.setattr(iir, "_CALLS", [-(10**9)])  # and no switch to scipy on the way
+    mine = iir.sosfiltfilt(sos, x)
     monkeypatch.undo()
     assert np.array_equal(mine, scipy.signal.sosfiltfilt(sos, x))
-    assert np.array_equal(_iir.sosfilt_zi(sos), scipy.signal.sosfilt_zi(sos))
+    assert np.array_equal(iir.sosfilt_zi(sos), scipy.signal.sosfilt_zi(sos))
 
 
 def test_refuses_what_it_cannot_design():
     for order, wn in ((3, 0.1), (4, 0.0), (4, 1.0)):
         with pytest.raises(ValueError):
-            _iir.butter_highpass_sos(order, wn)
+            iir.butter_highpass_sos(order, wn)
     with pytest.raises(ValueError):
-        _iir.sosfiltfilt(_iir.butter_highpass_sos(4, 0.1), np.zeros(10))
+        iir.sosfiltfilt(iir.butter_highpass_sos(4, 0.1), np.zeros(10))
 
 
 def test_synthetic_record_needs_no_scipy_signal():
@@ -46,16 +46,16 @@ def test_synthetic_record_needs_no_scipy_signal():
 
 def test_a_long_sweep_switches_to_scipy_with_the_same_bits():
     code = (
-        "import sys, numpy as np; from deckpound.models import _iir\n"
-        "sos = _iir.butter_highpass_sos(4, 0.01)\n"
+        "import sys, numpy as np; from deckpound.models import iir\n"
+        "sos = iir.butter_highpass_sos(4, 0.01)\n"
         "x = np.random.default_rng(1).standard_normal(500)\n"
         "outs, seen = [], []\n"
-        "for _ in range(_iir.SCIPY_AFTER + 2):\n"
-        "    seen.append('scipy.signal' in sys.modules); outs.append(_iir.sosfiltfilt(sos, x))\n"
+        "for _ in range(iir.SCIPY_AFTER + 2):\n"
+        "    seen.append('scipy.signal' in sys.modules); outs.append(iir.sosfiltfilt(sos, x))\n"
         "print(seen.index(True), all(np.array_equal(o, outs[0]) for o in outs))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    from deckpound.models._iir import SCIPY_AFTER
+    from deckpound.models.iir import SCIPY_AFTER
 
     assert out.stdout.split() == [str(SCIPY_AFTER), "True"]
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from deckpound.compare.impact_law import FRICTION_LABEL, format_table, impact_law_table
-from deckpound.engine_contract import PENETRATION_WARN_FRACTION
+from deckpound.models.engine_contract import PENETRATION_WARN_FRACTION
 from deckpound.models.scene import NonsmoothSettings
 from deckpound.models.scene_io import load_scene
 

@@ -1,5 +1,5 @@
 """Safe outputs (issue 16): atomic files, no writing through links, umask modes, devices kept,
-and the INCOMPLETE marker of output folders (deckpound._io); temporaries of killed writes
+and the INCOMPLETE marker of output folders (deckpound.models.file_io); temporaries of killed writes
 removed and one command per output folder (issue 28)."""
 
 from __future__ import annotations
@@ -15,8 +15,10 @@ import sys
 import numpy as np
 import pytest
 
-import deckpound._io as dio
-from deckpound._io import (
+import deckpound.models.file_io as dio
+from deckpound.cli import main as cli_main
+from deckpound.models.errors import SceneError
+from deckpound.models.file_io import (
     INCOMPLETE,
     LOCK_FILE,
     atomic_path,
@@ -28,8 +30,6 @@ from deckpound._io import (
     is_temporary,
     output_folder,
 )
-from deckpound.cli import main as cli_main
-from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 
 
@@ -224,12 +224,12 @@ def test_result_read_refuses_damaged_files(tmp_path):
 
 # -- temporaries of killed writes, one command per folder (issue 28) ------------------------
 
-# a child process that writes a file through deckpound._io and stops inside the write:
+# a child process that writes a file through deckpound.models.file_io and stops inside the write:
 # "kill" dies there (SIGKILL to itself: the child, never the test runner), "wait" waits for a
 # line on stdin and then finishes the write
 WRITER = r"""
 import os, signal, sys
-from deckpound._io import atomic_path
+from deckpound.models.file_io import atomic_path
 with atomic_path(sys.argv[1]) as tmp:
     tmp.write_bytes(b"t,x\n" * 1000)
     print(tmp.name, flush=True)
@@ -283,7 +283,7 @@ def test_temporaries_of_killed_writes_are_removed_by_the_next_write(tmp_path):
 
 HOLDER = r"""
 import sys
-from deckpound._io import claim_folder, command_scope
+from deckpound.models.file_io import claim_folder, command_scope
 with command_scope("deckpound run saiidi-4span --set deck.mass=99 -o " + sys.argv[1]):
     claim_folder(sys.argv[1])
     print("held", flush=True)
@@ -368,7 +368,7 @@ def test_a_lock_left_by_a_killed_command_is_taken_over_with_a_warning(tmp_path):
 
 KILLED_WITH_A_WORKER = r"""
 import multiprocessing, os, signal, sys, time
-from deckpound._io import claim_folder, command_scope
+from deckpound.models.file_io import claim_folder, command_scope
 
 
 def work(started):

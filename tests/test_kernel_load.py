@@ -17,7 +17,7 @@ out = {}
 for engine in ("compliance", "nonsmooth"):
     r = dp.run(scene, engine=engine)
     out[engine] = {k: np.asarray(v).tolist() for k, v in r.columns.items()}
-from deckpound._kernel_load import installed
+from deckpound.analytic.kernel_load import installed
 from numba.core.runtime import rtsys
 print(json.dumps({"installed": installed(), "refreshed": "numba.np.linalg" in sys.modules,
                   "runtime": rtsys._init, "columns": out}))
@@ -52,7 +52,7 @@ def test_a_cached_kernel_that_allocates_gets_the_runtime():
     """A cached kernel whose code calls numba's runtime (an allocating one) initialises it
     before its code is linked: unresolved, its NRT symbols would stop the process in LLVM."""
     code = (
-        "from deckpound._kernel_load import install; install()\n"
+        "from deckpound.analytic.kernel_load import install; install()\n"
         "import numpy as np\n"
         "from numba.core.runtime import rtsys\n"
         "from deckpound.analytic.dense import solve_dense_cp\n"
@@ -66,7 +66,7 @@ def test_a_cached_kernel_that_allocates_gets_the_runtime():
 
 
 def test_uses_runtime_is_conservative():
-    from deckpound._kernel_load import uses_runtime
+    from deckpound.analytic.kernel_load import uses_runtime
 
     assert not uses_runtime(("lib", "object", (b"\x7fELF...numba_gil_ensure", b"bc")))
     assert uses_runtime(("lib", "object", (b"\x7fELF...NRT_decref", b"bc")))
@@ -78,7 +78,7 @@ def test_uses_runtime_is_conservative():
 def test_compiling_after_a_fast_load_still_works():
     """A kernel missing from the cache after fast loads: numba's compiler refreshes itself."""
     code = (
-        "from deckpound._kernel_load import install; install()\n"
+        "from deckpound.analytic.kernel_load import install; install()\n"
         "import numba\n"
         "@numba.njit\n"
         "def f(x):\n    return x.sum() + 1.0\n"

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from deckpound.cli import main
+from deckpound.compare.engines import engine_names, get_engine
 from deckpound.compare.studies import STUDIES
 from deckpound.models import plausibility
 from deckpound.models.errors import SceneError
@@ -20,8 +21,11 @@ from deckpound.models.scene_io import builtin_scene_names, load_scene
 DATA = Path(__file__).parent / "data"
 
 
+ALL_ENGINES = [get_engine(name) for name in engine_names()]
+
+
 def _findings(*overrides):
-    return plausibility.check(load_scene("saiidi-4span", list(overrides)), engines=("nonsmooth",))
+    return plausibility.check(load_scene("saiidi-4span", list(overrides)), engines=[get_engine("nonsmooth")])
 
 
 def _only(report, level):
@@ -35,14 +39,14 @@ def _only(report, level):
 def test_built_in_scenes_have_sound_magnitudes(name):
     scene = load_scene(name)
     assert magnitude_findings(scene) == []
-    assert plausibility.check(scene).ok
+    assert plausibility.check(scene, engines=ALL_ENGINES).ok
 
 
 @pytest.mark.parametrize("path", sorted(DATA.glob("*.toml")), ids=lambda p: p.name)
 def test_test_scenes_have_sound_magnitudes(path):
     scene = load_scene(path)
     assert magnitude_findings(scene) == []
-    assert plausibility.check(scene).ok
+    assert plausibility.check(scene, engines=ALL_ENGINES).ok
 
 
 @pytest.mark.parametrize("study", sorted(STUDIES))
@@ -176,9 +180,11 @@ def test_allow_extreme_is_a_scene_option_with_its_reason():
 
 def test_enforce_raises_the_slip_and_warns_odd_values():
     with pytest.raises(SceneError, match=r"^seats\[0\]\.gap: 12\.7 m is wider"):
-        plausibility.enforce(load_scene("saiidi-4span", ["seats[0].gap=12.7"]))
+        plausibility.enforce(load_scene("saiidi-4span", ["seats[0].gap=12.7"]), engines=ALL_ENGINES)
     with pytest.warns(plausibility.PlausibilityWarning, match="contact.friction: μ = 1.5"):
-        plausibility.enforce(load_scene("saiidi-4span", ["contact.friction=1.5"]))
+        plausibility.enforce(
+            load_scene("saiidi-4span", ["contact.friction=1.5"]), engines=ALL_ENGINES
+        )
 
 
 @pytest.mark.parametrize(

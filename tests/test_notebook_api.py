@@ -193,7 +193,7 @@ def test_comparison_plot_histories_and_peaks(comparison):
 def test_run_warnings_point_at_the_callers_line(scene):
     import warnings
 
-    from deckpound.engine_contract import OptionIgnored
+    from deckpound.models.engine_contract import OptionIgnored
 
     hertz = scene.replace({"contact.law": "hertz", "run.duration": 0.2})
     with warnings.catch_warnings(record=True) as caught:

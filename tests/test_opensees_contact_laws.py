@@ -42,7 +42,7 @@ def _bench(law: str, duration: float = 5.0, **extra):
 
 @pytest.mark.parametrize("law", ["kelvin-voigt", "hertz", "hertzdamp"])
 def test_clone_agrees_with_opensees_for_the_law(law):
-    from deckpound.analytic.verify import verify_clone
+    from deckpound.compare.verify_clone import verify_clone
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -124,7 +124,7 @@ def test_bilinear_runs_with_fine_substeps_close_to_the_continuous_law():
     kN, +34 %) — documented, not cloned."""
     import numpy as np
 
-    from deckpound.engines import run_engine
+    from deckpound.compare.engines import run_engine
 
     sc = load_scene(
         "saiidi-4span", ["contact.law=bilinear", "opensees.substeps=1000", "run.duration=3.0"]

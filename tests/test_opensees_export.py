@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from deckpound.engine_contract import engine_columns
+from deckpound.models.engine_contract import engine_columns
 from deckpound.models.plan import plan_of
 
 pytest.importorskip("openseespy.opensees")
@@ -268,7 +268,7 @@ def test_opsvis_plots_the_exported_model(exported):
 
 def test_export_replaces_files_and_never_writes_through_a_symlink(bench, tmp_path):
     """Re-exporting replaces the script and the whole data folder; a symlink at the script path
-    is refused (deckpound never writes through links, deckpound._io), its target untouched;
+    is refused (deckpound never writes through links, deckpound.models.file_io), its target untouched;
     files get the usual permissions (not mkstemp's 0600)."""
     import os
     import stat

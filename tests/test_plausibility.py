@@ -9,11 +9,14 @@ import numpy as np
 import pytest
 
 from deckpound.cli import main
+from deckpound.compare.engines import engine_names, get_engine
 from deckpound.models import plausibility
 from deckpound.models.contact_params import effective_masses
 from deckpound.models.errors import SceneError
 from deckpound.models.mechanics import natural_modes
 from deckpound.models.scene_io import load_scene
+
+ALL_ENGINES = [get_engine(name) for name in engine_names()]
 
 
 def _scene(*overrides):
@@ -31,7 +34,7 @@ def _only(report, level):
 
 
 def test_the_benchmark_is_plausible_for_every_engine(bench_scene):
-    report = plausibility.check(bench_scene)
+    report = plausibility.check(bench_scene, engines=ALL_ENGINES)
     assert report.findings == [] and report.ok
     assert report.duration == 20.0
     np.testing.assert_allclose(report.periods, natural_modes(bench_scene).periods)
@@ -40,14 +43,14 @@ def test_the_benchmark_is_plausible_for_every_engine(bench_scene):
 
 
 def test_a_step_longer_than_the_record_is_refused_naming_both():
-    report = plausibility.check(_as_given("opensees.dt=30"))
+    report = plausibility.check(_as_given("opensees.dt=30"), engines=ALL_ENGINES)
     ((field, message),) = _only(report, "error")
     assert field == "opensees.dt"
     assert "opensees.dt = 30 s" in message and "record length 20 s" in message
 
 
 def test_a_run_shorter_than_one_step_names_run_duration():
-    report = plausibility.check(_scene("run.duration=1e-4"), engines=("opensees",))
+    report = plausibility.check(_scene("run.duration=1e-4"), engines=[get_engine("opensees")])
     ((field, message),) = _only(report, "error")
     assert field == "run.duration" and "run.duration = 0.0001 s" in message
     assert "opensees.dt = 0.0005 s" in message
@@ -55,18 +58,18 @@ def test_a_run_shorter_than_one_step_names_run_duration():
 
 def test_fewer_than_ten_steps_are_refused():
     s = _scene("excitation.duration=0.3", "nonsmooth.h=0.05")
-    ((field, message),) = _only(plausibility.check(s, engines=("nonsmooth",)), "error")
+    ((field, message),) = _only(plausibility.check(s, engines=[get_engine("nonsmooth")]), "error")
     assert field == "nonsmooth.h" and "6 steps" in message and "<= 0.03 s" in message
 
 
 def test_a_step_beyond_half_the_fundamental_period_is_refused():
-    report = plausibility.check(_as_given("opensees.dt=0.4"), engines=("opensees",))
+    report = plausibility.check(_as_given("opensees.dt=0.4"), engines=[get_engine("opensees")])
     ((field, message),) = _only(report, "error")
     assert field == "opensees.dt" and "T1 = 0.611" in message and "<= 0.3055" in message
 
 
 def test_few_steps_per_shortest_period_warn():
-    report = plausibility.check(_scene("nonsmooth.h=0.003"), engines=("nonsmooth",))
+    report = plausibility.check(_scene("nonsmooth.h=0.003"), engines=[get_engine("nonsmooth")])
     assert report.ok
     ((field, message),) = _only(report, "warning")
     assert field == "nonsmooth.h" and "T = 0.01566 s" in message and "5.22 steps" in message
@@ -74,12 +77,12 @@ def test_few_steps_per_shortest_period_warn():
 
 def test_contacts_shorter_than_a_step_warn_for_compliant_engines_only():
     s = _as_given("contact.stiffness=1e10")
-    warned = {f for f, _ in _only(plausibility.check(s), "warning")}
+    warned = {f for f, _ in _only(plausibility.check(s, engines=ALL_ENGINES), "warning")}
     assert warned == {"opensees.dt", "compliance.dt"}  # nonsmooth contact is rigid
-    message = _only(plausibility.check(s, engines=("opensees",)), "warning")[0][1]
+    message = _only(plausibility.check(s, engines=[get_engine("opensees")]), "warning")[0][1]
     assert "contacts last about 8.93e-06 s" in message and "adaptive" in message
     adaptive = s.replace(compliance=s.compliance.__class__(integrator="adaptive"))
-    assert _only(plausibility.check(adaptive, engines=("compliance",)), "warning") == []
+    assert _only(plausibility.check(adaptive, engines=[get_engine("compliance")]), "warning") == []
 
 
 @pytest.mark.parametrize(
@@ -92,27 +95,29 @@ def test_contacts_shorter_than_a_step_warn_for_compliant_engines_only():
     ],
 )
 def test_output_step(output_dt, level, text):
-    report = plausibility.check(_scene(f"run.output_dt={output_dt}"), engines=("opensees",))
+    report = plausibility.check(
+        _scene(f"run.output_dt={output_dt}"), engines=[get_engine("opensees")]
+    )
     found = [message for field, message in _only(report, level) if field == "run.output_dt"]
     assert any(text in message for message in found)
 
 
 def test_output_rows_bounded_before_allocating():
     s = _scene("excitation.duration=600", "opensees.dt=1e-4", "run.output_dt=1e-4")
-    ((field, message),) = _only(plausibility.check(s, engines=("opensees",)), "error")
+    ((field, message),) = _only(plausibility.check(s, engines=[get_engine("opensees")]), "error")
     assert field == "run.output_dt" and "6e+06 rows" in message and ">= 0.0003 s" in message
 
 
 def test_only_the_engines_run_are_checked():
     s = _as_given("opensees.dt=30")
-    assert plausibility.check(s, engines=("nonsmooth",)).ok
+    assert plausibility.check(s, engines=[get_engine("nonsmooth")]).ok
     with pytest.raises(SceneError, match="opensees.dt"):
-        plausibility.enforce(s)
+        plausibility.enforce(s, engines=ALL_ENGINES)
 
 
 def test_enforce_warns_then_raises():
     with pytest.warns(UserWarning, match="nonsmooth.h"):
-        plausibility.enforce(_scene("nonsmooth.h=0.003"), engines=("nonsmooth",))
+        plausibility.enforce(_scene("nonsmooth.h=0.003"), engines=[get_engine("nonsmooth")])
 
 
 def test_cli_validate_and_run_use_the_checks(capsys, tmp_path):

@@ -95,7 +95,7 @@ def test_an_entry_without_manifest_is_a_silent_miss_and_replaced(tmp_path):
 
 
 def test_a_put_that_cannot_write_warns_and_leaves_nothing(tmp_path, monkeypatch):
-    import deckpound._io as dio
+    import deckpound.models.file_io as dio
 
     def full(fd, data):
         raise OSError(28, "No space left on device")

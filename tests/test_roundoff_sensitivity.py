@@ -11,7 +11,7 @@ this stops holding, the README's explanation of the dt = 2e-3 row is wrong.
 import numpy as np
 import pytest
 
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
 from deckpound.models.scene_io import load_scene
 
 COLUMNS = ("deck_theta", "deck_x_rel", "fn_c1", "fn_c2", "fn_c3", "fn_c4")

@@ -56,7 +56,7 @@ def test_orjson_writes_repr_text_for_every_kind_of_double():
 
 def test_orjson_writes_repr_text_for_engine_results():
     pytest.importorskip("orjson")
-    from deckpound.engines import run_engine
+    from deckpound.compare.engines import run_engine
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene("saiidi-4span", ["run.duration=2.0"])

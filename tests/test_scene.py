@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from deckpound.models._fields import to_mapping
 from deckpound.models.errors import SceneError
+from deckpound.models.fields import to_mapping
 from deckpound.models.scene_io import (
     apply_overrides,
     builtin_scene_names,

@@ -58,7 +58,7 @@ import pytest
 from scipy.linalg import eigh
 from scipy.optimize import brentq
 
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
 from deckpound.models.scene_io import load_scene
 
 L, W, M_D, I_D = 33.5, 2.4, 140.5, 13090.0

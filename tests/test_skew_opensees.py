@@ -30,7 +30,7 @@ from _compliance_helpers import motion_from
 from test_tcl_export_runs import HAS_TCL, deviation, recorded, run_tcl
 from tests_helpers_scene import short_benchmark
 
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
 from deckpound.models.columns import column_unit
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build import engine
@@ -184,7 +184,7 @@ def test_skew_exports_match_the_in_process_run(variant, tmp_path):
     print(f"{variant}: Tcl recorders vs in-process, worst {dev[worst]:.2e} ({worst})")
     # another OpenSees build (xara): round-off, within the clone check's tolerances (1e-9 of
     # each column's peak; velocities 1e-8, Newmark's update amplifies round-off by 2/dt, see
-    # deckpound.analytic.verify). Measured: 8.7e-13 without friction; with friction 1.1e-10 on
+    # deckpound.compare.verify_clone). Measured: 8.7e-13 without friction; with friction 1.1e-10 on
     # ft (the 1e6 kN/m stick spring on a difference of node displacements), 2.0e-10 on the
     # seat rotation velocity.
     for c, d in dev.items():

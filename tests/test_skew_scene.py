@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from deckpound.cli import main
-from deckpound.engines import engine_names
+from deckpound.compare.engines import engine_names
 from deckpound.models.scene_io import builtin_scene_names, load_scene
 
 

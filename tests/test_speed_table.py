@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from deckpound.compare import speed
-from deckpound.engines import engine_names
+from deckpound.compare.engines import engine_names
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 

@@ -26,8 +26,8 @@ import numpy as np
 import pytest
 from tests_helpers_scene import short_benchmark
 
-from deckpound.engine_contract import engine_columns
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
+from deckpound.models.engine_contract import engine_columns
 from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import scene_from_mapping
 from deckpound.opensees_build.export import export_script

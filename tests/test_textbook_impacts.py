@@ -48,7 +48,7 @@ import numpy as np
 import pytest
 from test_nonsmooth_impact import closed_form_face, closed_form_single, left_rows
 
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
 from deckpound.models.scene_io import load_scene
 
 SCENE = Path(__file__).parent / "data" / "corner_impact.toml"
@@ -221,7 +221,7 @@ def test_opensees_runs_the_scene_file_and_agrees_with_the_clone():
 
     if importlib.util.find_spec("openseespy") is None:
         pytest.skip("openseespy not installed")
-    from deckpound.analytic.verify import verify_clone
+    from deckpound.compare.verify_clone import verify_clone
 
     sc = load_scene(
         SCENE,
@@ -272,7 +272,7 @@ def test_opensees_starts_displaced_like_the_clone():
 
     if importlib.util.find_spec("openseespy") is None:
         pytest.skip("openseespy not installed")
-    from deckpound.analytic.verify import column_deviations
+    from deckpound.compare.verify_clone import column_deviations
     from deckpound.models.columns import standard_columns
 
     cases = [
@@ -314,7 +314,7 @@ def test_opensees_starts_displaced_like_the_clone():
 
 
 def test_opensees_refuses_displaced_starts_it_cannot_make_exact():
-    from deckpound.engines import get_engine
+    from deckpound.compare.engines import get_engine
     from deckpound.models.errors import SceneError
 
     eng = get_engine("opensees")

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from deckpound.engines import run_engine
+from deckpound.compare.engines import run_engine
 from deckpound.models.errors import SceneError
 from deckpound.models.result import STATUS_UNSEATED, Result
 from deckpound.models.scene_io import load_scene
@@ -249,7 +249,7 @@ def test_exported_python_script_unseats_as_the_engine(tmp_path):
 def test_seat_margins_from_the_rows_when_an_engine_does_not_track_them():
     """Contract point 11 is optional: without every-step openings the epilogue takes them from
     the output rows (basis said) and flags the unseating it sees there."""
-    from deckpound.engine_contract import RunOutput, seat_margins
+    from deckpound.models.engine_contract import RunOutput, seat_margins
     from deckpound.models.plan import plan_of
 
     sc = load_scene("saiidi-4span")  # N = 0.18 m at both seats

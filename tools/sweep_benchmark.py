@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from deckpound.compare.engines import run_engine
 from deckpound.compare.pool import pool_scope
 from deckpound.compare.variability import seed_cases, sweep_rows
-from deckpound.engines import run_engine
 from deckpound.models.scene_io import load_scene
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "sweeps.md"

@@ -20,7 +20,10 @@ matplotlib and pandas load only when something needs them).
 
 from __future__ import annotations
 
-__version__ = "0.2.0"
+import importlib
+import types
+
+from deckpound.models.version import VERSION as __version__
 
 __all__ = [
     "Comparison",
@@ -45,23 +48,35 @@ _LAZY = {
     "Scene": ("deckpound.models.scene", "Scene"),
     "plan_of": ("deckpound.models.plan", "plan_of"),
     "support_motion": ("deckpound.models.excitation", "support_motion"),
-    "get_engine": ("deckpound.engines", "get_engine"),
-    "register_engine": ("deckpound.engines", "register"),
+    "get_engine": ("deckpound.compare.engines", "get_engine"),
+    "register_engine": ("deckpound.compare.engines", "register"),
     "Comparison": ("deckpound.api", "Comparison"),
     "load_scene": ("deckpound.api", "load_scene"),
     "run": ("deckpound.api", "run"),
     "run_batch": ("deckpound.api", "run_batch"),
     "run_many": ("deckpound.api", "run_many"),
-    "compare": ("deckpound.api", "compare"),
     "available_engines": ("deckpound.api", "available_engines"),
     "builtin_scenes": ("deckpound.api", "builtin_scenes"),
 }
 
 
+class _CallableModule(types.ModuleType):
+    """``deckpound.compare`` is both the package :mod:`deckpound.compare` and the function
+    :func:`deckpound.api.compare`: importing a submodule binds the package to the name, so the
+    package itself forwards a call to the function (both spellings mean the same thing,
+    whatever was imported first)."""
+
+    def __call__(self, *args, **kwargs):
+        from deckpound.api import compare
+
+        return compare(*args, **kwargs)
+
+
+importlib.import_module("deckpound.compare").__class__ = _CallableModule
+
+
 def __getattr__(name: str):
     if name in _LAZY:
-        import importlib
-
         module, attr = _LAZY[name]
         value = getattr(importlib.import_module(module), attr)
         globals()[name] = value

@@ -49,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _bench(args) -> int:
-    from deckpound._io import output_folder
+    from deckpound.models.file_io import output_folder
     from deckpound.models.scene_io import load_scene
 
     from ._cli_engines import check_output_folder
@@ -137,8 +137,8 @@ def _bench_body(args, scene) -> int:
 
 
 def _stress(args) -> int:
-    from deckpound._io import output_folder
     from deckpound.compare.stress import run_stress
+    from deckpound.models.file_io import output_folder
     from deckpound.models.scene_io import load_scene
 
     from ._cli_engines import check_output_folder
@@ -189,8 +189,8 @@ def _speed_args(p: argparse.ArgumentParser) -> None:
 def _speed_table(args) -> None:
     import sys
 
-    from deckpound._io import atomic_write_text
     from deckpound.compare import speed
+    from deckpound.models.file_io import atomic_write_text
 
     if args.write_readme is not None and not Path(args.write_readme).is_file():
         raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")

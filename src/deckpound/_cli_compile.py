@@ -31,10 +31,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _compile(args) -> int:
+    from deckpound.compare import warmup
+    from deckpound.compare.engines import engine_names
     from deckpound.models.errors import SceneError
-
-    from . import warmup
-    from .engines import engine_names
 
     engines = None
     if args.engines:
@@ -83,7 +82,7 @@ def _compile(args) -> int:
             )
         return 1
     if args.stamp:
-        from ._io import atomic_write_text
+        from deckpound.models.file_io import atomic_write_text
 
         atomic_write_text(args.stamp, f"{args.key}\n{where}\n")
     return 0

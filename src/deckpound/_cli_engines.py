@@ -11,8 +11,9 @@ from ._terminal import terminal_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from deckpound.compare.engines import ENGINES
+
     from .cli import add_scene_args, int_in
-    from .engines import ENGINES
 
     p = sub.add_parser("run", help="run one engine on a scene and write DIR/<engine>.csv/.json")
     add_scene_args(p)
@@ -93,8 +94,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def check_output_folder(path: str) -> Path:
     """Refuse, before any work, an output folder that can never be written: a symbolic link,
     a file in its place, a file among its parents, or one in use by another running command
-    (exit status 2); lock it for the rest of the command (:func:`deckpound._io.claim_folder`)."""
-    from ._io import check_parent, claim_folder
+    (exit status 2); lock it for the rest of the command (:func:`deckpound.models.file_io.claim_folder`)."""
+    from deckpound.models.file_io import check_parent, claim_folder
 
     out = Path(path)
     if out.is_symlink():
@@ -111,19 +112,18 @@ def check_output_folder(path: str) -> Path:
 
 
 def _run(args) -> int:
+    from deckpound.compare.engines import get_engine, run_engine
     from deckpound.models import plausibility
     from deckpound.models.excitation import support_motion
+    from deckpound.models.file_io import output_folder
     from deckpound.models.record_checks import scaling_summary
     from deckpound.models.scene_io import load_scene
-
-    from ._io import output_folder
-    from .engines import get_engine, run_engine
 
     get_engine(args.engine)  # refuse an unknown name before any work
     check_output_folder(args.output)
     scene = load_scene(args.scene, args.overrides)
     motion = support_motion(scene)
-    plausibility.enforce(scene, motion, engines=(args.engine,))
+    plausibility.enforce(scene, motion, engines=(get_engine(args.engine),))
     result = run_engine(args.engine, scene, motion)
     with output_folder(args.output, f"run {args.engine}") as out:
         csv_path, _ = result.write(out)
@@ -157,17 +157,17 @@ def _run(args) -> int:
 def _export(args) -> int:
     from deckpound.models import plausibility
     from deckpound.models.excitation import support_motion
+    from deckpound.models.file_io import check_parent, check_target, claim_folder_of
     from deckpound.models.scene_io import load_scene
+    from deckpound.opensees_build.engine import OpenSeesEngine
     from deckpound.opensees_build.export import export_script
-
-    from ._io import check_parent, check_target, claim_folder_of
 
     out = check_target(args.output, stream=False)  # a folder, link or device: refused
     check_parent(out)
     claim_folder_of(out)
     scene = load_scene(args.scene, args.overrides)
     motion = support_motion(scene)
-    plausibility.enforce(scene, motion, engines=("opensees",))
+    plausibility.enforce(scene, motion, engines=(OpenSeesEngine(),))
     written = export_script(scene, args.format, out, motion)  # all files or none
     print(
         f"wrote {terminal_text(written)} and "
@@ -201,7 +201,7 @@ def _modes(args) -> int:
 
 
 def _verify_takeda(args) -> int:
-    from deckpound.opensees_build.verify import verify_takeda
+    from deckpound.compare.verify_takeda import verify_takeda
 
     report = verify_takeda(n_states=args.states, seed=args.seed)
     print(
@@ -241,7 +241,7 @@ def _verify_clone(args) -> int:
 
 
 def _verify_single(scene, verify_matrix) -> int:
-    from deckpound.analytic.verify import verify_clone
+    from deckpound.compare.verify_clone import verify_clone
 
     report = verify_clone(scene)
     for note in report["notes"]:

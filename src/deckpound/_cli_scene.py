@@ -55,6 +55,7 @@ def _show(args) -> int:
 
 
 def _validate(args) -> int:
+    from deckpound.compare.engines import engine_names, get_engine
     from deckpound.models import plausibility
     from deckpound.models.excitation import support_motion
     from deckpound.models.mechanics import rayleigh_coefficients
@@ -62,7 +63,10 @@ def _validate(args) -> int:
 
     scene = load_scene(args.scene, args.overrides)
     motion = support_motion(scene)
-    report = plausibility.enforce(scene, motion)  # steps vs record, periods, contact, output
+    every_engine = [get_engine(name) for name in engine_names()]
+    report = plausibility.enforce(
+        scene, motion, engines=every_engine
+    )  # steps vs record, periods, contact, output
     rayleigh_coefficients(scene)  # refuses damping.modes beyond the number of modes
     # a free deck (bents = []) has three rigid-body modes (infinite periods): name them
     finite = [T for T in report.periods if float("inf") != T]
@@ -90,8 +94,8 @@ def _schema(args) -> int:
 
 
 def _plot(args) -> int:
-    from deckpound._io import check_parent, check_target
     from deckpound.models.excitation import support_motion
+    from deckpound.models.file_io import check_parent, check_target
     from deckpound.models.scene_io import load_scene
 
     out = Path(args.output)

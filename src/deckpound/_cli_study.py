@@ -6,7 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
-from deckpound.engines import engine_names
+from deckpound.compare.engines import engine_names, get_engine
 from deckpound.models.errors import SceneError
 
 from ._terminal import terminal_text
@@ -200,7 +200,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _engines(text: str | None) -> list[str]:
-    from .engines import ENGINES
+    from deckpound.compare.engines import ENGINES
 
     if text is None:
         return list(ENGINES)
@@ -222,15 +222,16 @@ def _checked_scene(args, engines) -> object:
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene(args.scene, args.overrides)
-    plausibility.enforce(scene, support_motion(scene), engines=engines)
+    checked = [get_engine(name) for name in engines]
+    plausibility.enforce(scene, support_motion(scene), engines=checked)
     return scene
 
 
 def _compare(args) -> int:
     from deckpound.compare.compare_run import run_compare
+    from deckpound.models.file_io import output_folder
 
     from ._cli_engines import check_output_folder
-    from ._io import output_folder
 
     engines = _engines(args.engines)
     if args.reference is not None:
@@ -259,9 +260,9 @@ def _compare(args) -> int:
 
 
 def _study(args) -> int:
-    from deckpound._io import output_folder, write_csv
     from deckpound.compare.cases import ResultCache
     from deckpound.compare.studies import STUDY_NAMES, run_study
+    from deckpound.models.file_io import output_folder, write_csv
 
     from ._cli_engines import check_output_folder
 
@@ -338,9 +339,9 @@ def _study(args) -> int:
 
 
 def _paper(args) -> int:
-    from deckpound._io import output_folder
     from deckpound.compare.paper import run_paper
     from deckpound.compare.studies import STUDIES
+    from deckpound.models.file_io import output_folder
 
     from ._cli_engines import check_output_folder
 
@@ -372,8 +373,8 @@ def _paper(args) -> int:
 
 
 def _export_vtk(args) -> int:
-    from deckpound._io import output_folder
     from deckpound.compare.vtk import check_result_folder, export_vtk
+    from deckpound.models.file_io import output_folder
 
     from ._cli_engines import check_output_folder
 
@@ -420,11 +421,11 @@ def _variability_args(p: argparse.ArgumentParser) -> None:
 
 
 def _variability(args) -> int:
-    from deckpound._io import output_folder
+    from deckpound.compare.engines import get_engine
     from deckpound.compare.variability import QUANTITIES, run_variability
+    from deckpound.models.file_io import output_folder
 
     from ._cli_engines import check_output_folder
-    from .engines import get_engine
 
     get_engine(args.engine)  # an unknown name is refused before any work
     if args.cases is not None and args.records is not None:
@@ -466,8 +467,8 @@ def _variability(args) -> int:
 
 def _ida(args) -> int:
     """``deckpound ida|msa``: the sweep's rows, the fragility table, one line per limit state."""
-    from deckpound._io import output_folder
     from deckpound.compare.ida import IMS, parse_levels, parse_vary, run_ida
+    from deckpound.models.file_io import output_folder
 
     from ._cli_engines import check_output_folder
 

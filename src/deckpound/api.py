@@ -2,7 +2,7 @@
 
 Four verbs: :func:`load_scene`, :func:`run`, :func:`compare`, :func:`available_engines`. They are thin:
 scenes come from :mod:`deckpound.models.scene_io`, engines from the registry
-(:mod:`deckpound.engines`), alignment and metrics from :mod:`deckpound.compare`.
+(:mod:`deckpound.compare.engines`), alignment and metrics from :mod:`deckpound.compare`.
 """
 
 from __future__ import annotations
@@ -148,7 +148,7 @@ def builtin_scenes() -> list[str]:
 
 def available_engines() -> dict[str, str]:
     """Registered engines: name → one-line title."""
-    from deckpound.engines import engine_names, get_engine
+    from deckpound.compare.engines import engine_names, get_engine
 
     return {name: get_engine(name).title for name in engine_names()}
 
@@ -168,7 +168,7 @@ def run(
     ``settings`` replaces the engine's settings table of the scene (an instance of the engine's
     ``Settings`` class); ``options`` are the engine's extra keywords (e.g. ``initial_state``).
     """
-    from deckpound.engines import run_engine
+    from deckpound.compare.engines import run_engine
 
     return run_engine(
         engine, scene, motion, settings=settings, raise_on_failure=raise_on_failure, **options
@@ -194,8 +194,8 @@ def run_batch(
     returned as failed results (``result.ok`` is False), not raised.
     """
     from deckpound.compare.cases import Case, ResultCache, run_cases
+    from deckpound.compare.engines import get_engine
     from deckpound.compare.pool import pool_scope
-    from deckpound.engines import get_engine
 
     get_engine(engine)  # an unknown name is refused with the list of valid ones
     scenes = list(scenes)
@@ -243,14 +243,14 @@ class Comparison:
 
         ``kind = "histories"``: one panel per quantity, every engine's history on its own
         output time base overlaid (:meth:`Result.plot`) in the engines' line styles (the
-        paper figures' styles, :func:`deckpound.engines.engine_style`). ``kind = "peaks"``:
+        paper figures' styles, :func:`deckpound.compare.engines.engine_style`). ``kind = "peaks"``:
         one panel per quantity, a bar per engine: its peak (:meth:`Result.peak`, over every
         step; for a gap its smallest value). Lengths in mm, angles in mrad (:func:`deckpound.models.result.display_unit`).
         ``quantities`` default to :attr:`quantities`.
         """
         from matplotlib.figure import Figure
 
-        from deckpound.engines import engine_style
+        from deckpound.compare.engines import engine_style
         from deckpound.models.result import column_unit, display_unit
 
         kinds = ("histories", "peaks")
@@ -341,7 +341,7 @@ def compare(
     results: Mapping[str, Result] | None = None,
 ) -> Comparison:
     """Run ``engines`` (default: every registered engine) on ``scene``, align and score them
-    against ``reference`` (default :data:`deckpound.engines.DEFAULT_REFERENCE`, or the first
+    against ``reference`` (default :data:`deckpound.compare.engines.DEFAULT_REFERENCE`, or the first
     engine when that one is not run). ``cache`` is a result-cache folder (finished cases are
     never recomputed); ``workers`` local processes (1: in this process). ``results``: engine →
     :class:`Result` the caller already has (e.g. from :func:`run` of the same scene): those
@@ -349,8 +349,8 @@ def compare(
     refused."""
     from deckpound.compare.align import align
     from deckpound.compare.cases import Case, ResultCache, run_cases
+    from deckpound.compare.engines import DEFAULT_REFERENCE, engine_names, get_engine
     from deckpound.compare.metrics import metrics_against
-    from deckpound.engines import DEFAULT_REFERENCE, engine_names, get_engine
     from deckpound.models.result import physics_hash
 
     given = dict(results or {})

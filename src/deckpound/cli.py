@@ -25,7 +25,7 @@ Every command ends in exactly one of these exit statuses, with at most one line 
 
 An output folder of a command that failed or was interrupted is either removed (if the command
 created it and wrote nothing) or holds a file ``INCOMPLETE`` naming the command; re-running
-the command resumes and removes it (:mod:`deckpound._io`, which also locks output folders and
+the command resumes and removes it (:mod:`deckpound.models.file_io`, which also locks output folders and
 removes temporary files left by killed writes). A closed stdout or stderr (``>&-``) changes no
 exit status except that output which cannot be written to stdout is an I/O failure (3); the
 closed descriptor is pointed at ``/dev/null`` first, so no output file can take its number and
@@ -46,9 +46,9 @@ import sys
 import warnings
 
 from deckpound import __version__
-from deckpound._io import command_scope
 from deckpound._terminal import terminal_text
 from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
+from deckpound.models.file_io import command_scope
 
 EXIT_OK, EXIT_ENGINE, EXIT_INPUT, EXIT_IO, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
 EXIT_TERMINATED = 143  # 128 + SIGTERM, what a shell reports for a process ended by SIGTERM

@@ -1,10 +1,10 @@
 """The engine contract: what an engine declares and implements, and the shared epilogue.
 
-An engine is a subclass of :class:`Engine` registered by name in :mod:`deckpound.engines`.
+An engine is a subclass of :class:`Engine` registered by name in :mod:`deckpound.compare.engines`.
 A new engine is one module plus one registry entry. It must:
 
 1. Declare ``name`` (its registry key), ``title`` (one line), ``Settings`` (a frozen,
-   self-validating settings dataclass, see :mod:`deckpound.models._fields`), ``settings_field``
+   self-validating settings dataclass, see :mod:`deckpound.models.fields`), ``settings_field``
    (the scene table holding its settings, or ``None``: then the defaults unless the caller passes
    ``settings=``), ``step_field`` (the settings field that is its time step) and ``style``
    (matplotlib line style and legend label for figures).
@@ -75,10 +75,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from deckpound import __version__
-from deckpound.models._fields import to_mapping
 from deckpound.models.contact_params import contact_resolving_step
 from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
+from deckpound.models.fields import to_mapping
 from deckpound.models.plan import (
     CORNER_NAMES,
     DOF_COLUMNS,
@@ -99,6 +98,7 @@ from deckpound.models.result import (
     settings_hash,
 )
 from deckpound.models.scene import Contact, Deck, RunSettings, Scene
+from deckpound.models.version import VERSION
 
 __all__ = [
     "CONTACT_DISSIPATION_COLUMNS",
@@ -642,9 +642,12 @@ def finish(
         "physics_hash": physics_hash(scene),
         "settings": to_mapping(settings) if dataclasses.is_dataclass(settings) else settings,
         "settings_hash": settings_hash(settings),
-        "version": __version__,
+        "version": VERSION,
         "bent_names": list(plan.bent_names),
         "warnings": list(notes),
+        # the whole scene: a result folder is self-describing, whichever way the engine was
+        # called (a VTK export or a re-run needs nothing else)
+        "scene": to_mapping(scene),
     }
     provenance = getattr(motion, "provenance", None)
     if provenance:

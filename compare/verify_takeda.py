@@ -13,8 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from deckpound.analytic.hysteretic import HystereticMaterial
-
-from .ops import OpsSession
+from deckpound.opensees_build.ops import OpsSession
 
 #: (backbone and Hysteretic arguments after the tag) used by the check
 PARAMETER_SETS = (

@@ -22,7 +22,7 @@ every compilation refreshes the contexts itself (numba's compiler does so before
 process that compiles later is unaffected.
 
 ``DECKPOUND_NUMBA_FASTLOAD=0`` turns it off. It is installed by the engine registry before an
-engine module is imported (:func:`deckpound.engines.get_engine`), by ``deckpound compile`` and
+engine module is imported (:func:`deckpound.compare.engines.get_engine`), by ``deckpound compile`` and
 by the sweep workers. The test-suite runs every engine through it.
 """
 

@@ -2,8 +2,8 @@
 
 :data:`ENGINES` maps a name to ``"module:Class"``; the module is imported on first use, so
 OpenSees or numba load only when their engine runs. The contract every engine fulfils is in
-:mod:`deckpound.engine_contract`. Adding an engine: write its module (a subclass of
-:class:`~deckpound.engine_contract.Engine`) and add one line here — or, from outside the
+:mod:`deckpound.models.engine_contract`. Adding an engine: write its module (a subclass of
+:class:`~deckpound.models.engine_contract.Engine`) and add one line here — or, from outside the
 package, call :func:`register`.
 
 Everything that lists engines (CLI choices, the comparison layer, studies, figures, bench,
@@ -16,7 +16,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from deckpound.engine_contract import Engine, output_stride
+from deckpound.models.engine_contract import Engine, output_stride
 from deckpound.models.errors import SceneError
 
 __all__ = [
@@ -69,7 +69,7 @@ def get_engine(name: str) -> Engine:
     if name not in ENGINES:
         raise SceneError("engine", f"unknown engine {name!r}; valid engines: {', '.join(ENGINES)}")
     if name not in _INSTANCES:
-        from deckpound._kernel_load import install
+        from deckpound.analytic.kernel_load import install
 
         install()  # cached numba kernels load without numba's full set-up (_kernel_load)
         module, cls = ENGINES[name].split(":")
@@ -87,9 +87,6 @@ def engine_style(name: str) -> dict[str, Any]:
 
 
 def run_engine(name: str, scene, motion=None, *, settings=None, **kwargs):
-    """Run engine ``name`` on ``scene`` and attach the full scene to the result's metadata
-    (so a result folder is self-describing: VTK export and re-runs need nothing else)."""
-    from deckpound.models._fields import to_mapping
-
-    result = get_engine(name).run(scene, settings, motion, **kwargs)
-    return result.with_meta(scene=to_mapping(scene))
+    """Run engine ``name`` on ``scene``: :meth:`~deckpound.models.engine_contract.Engine.run`
+    of the registered engine (its result carries the full scene in its metadata)."""
+    return get_engine(name).run(scene, settings, motion, **kwargs)

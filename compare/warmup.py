@@ -213,7 +213,7 @@ def _scene(overrides: Iterable[str]):
 
 def _warm_takeda() -> None:
     from deckpound.analytic.hysteretic import HystereticMaterial
-    from deckpound.opensees_build.verify import PARAMETER_SETS
+    from deckpound.compare.verify_takeda import PARAMETER_SETS
 
     for args in PARAMETER_SETS:
         m = HystereticMaterial(*args, element_copy=False)
@@ -230,7 +230,7 @@ def warm_item(item: Item) -> WarmResult:
     kernel could not be cached (an unwritable cache folder) are kept in ``notes``."""
     import warnings
 
-    from deckpound._kernel_load import install
+    from deckpound.analytic.kernel_load import install
 
     install()
     with _CompileCounter() as counter, warnings.catch_warnings(record=True) as caught:
@@ -240,7 +240,7 @@ def warm_item(item: Item) -> WarmResult:
             _warm_takeda()
             status, compile_time = "success", 0.0
         else:
-            from deckpound.engines import run_engine
+            from deckpound.compare.engines import run_engine
 
             result = run_engine(item.engine, _scene(item.overrides))
             status = str(result.meta.get("status"))
