@@ -48,7 +48,7 @@ fi
 
 # 3b. Python's bytecode of the package, kept up to date after any edit (about 30 ms when nothing
 #     changed): Python reads it even where PYTHONDONTWRITEBYTECODE is set, which otherwise makes
-#     every process compile deckpound's modules from source again (deckpound.warmup.byte_compile)
+#     every process compile deckpound's modules from source again (deckpound.compare.warmup.byte_compile)
 "$venv/bin/python" -m compileall -q src/deckpound models opensees_build analytic compare >/dev/null \
   || echo "run.sh: warning: could not write Python's bytecode cache; processes start slower" >&2
 

@@ -25,7 +25,9 @@ ALL_ENGINES = [get_engine(name) for name in engine_names()]
 
 
 def _findings(*overrides):
-    return plausibility.check(load_scene("saiidi-4span", list(overrides)), engines=[get_engine("nonsmooth")])
+    return plausibility.check(
+        load_scene("saiidi-4span", list(overrides)), engines=[get_engine("nonsmooth")]
+    )
 
 
 def _only(report, level):
