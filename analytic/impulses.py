@@ -7,8 +7,8 @@ frictional impact problem of :mod:`deckpound.analytic.frictional_contact` (Newto
 set-valued Coulomb friction) and update the velocity v = v_free + Ŵ⁻¹ Wᵀ P.
 
 The LCP sizes depend on the number of active corners; every array the solve needs is a view
-of the :data:`ImpulseWork` allocated once per run (:func:`impulse_work`, sized for the 4
-corners), so the step loop's contact solve allocates nothing and runs without numba's runtime
+of the :data:`ImpulseWork` allocated once per run (:func:`impulse_work`, sized for every
+corner of the model), so the step loop's contact solve allocates nothing and runs without numba's runtime
 (:mod:`deckpound.analytic._jit`): before, its ~40 small allocations per solve and their
 reference counting were about a sixth of the nonsmooth engine's loop time on the benchmark.
 """
@@ -25,11 +25,11 @@ from deckpound.analytic.frictional_contact import contact_solve_work, solve_cont
 
 __all__ = ["ImpulseWork", "impulse_work", "solve_active_impulses"]
 
-#: Scratch of :func:`solve_active_impulses` for up to 4 active corners: X, Wr (8, 7) rows
-#: Ŵ⁻¹ w and w of W = [W_N; W_T]; col (7,); G (8, 8) Delassus matrix; per corner (4,) uNf, uTf
-#: free contact velocities, uNm pre-impact normal velocity, ea, ma restitution and friction,
-#: pN, pT impulses, uNp, uTp post-impact velocities, st (4,) int64 states; ``contact`` the
-#: frictional solve's scratch (:data:`.frictional_contact.ContactSolveWork`).
+#: Scratch of :func:`solve_active_impulses` for up to nc active corners and n_dof DOFs: X, Wr
+#: (2nc, n_dof) rows Ŵ⁻¹ w and w of W = [W_N; W_T]; col (n_dof,); G (2nc, 2nc) Delassus matrix;
+#: per corner (nc,) uNf, uTf free contact velocities, uNm pre-impact normal velocity, ea, ma
+#: restitution and friction, pN, pT impulses, uNp, uTp post-impact velocities, st int64 states;
+#: ``contact`` the frictional solve's scratch (:data:`.frictional_contact.ContactSolveWork`).
 ImpulseWork = namedtuple(
     "ImpulseWork",
     [
@@ -52,16 +52,18 @@ ImpulseWork = namedtuple(
 )
 
 
-def impulse_work(n_corners: int = 4) -> ImpulseWork:
-    """The scratch of :func:`solve_active_impulses` for up to ``n_corners`` active corners."""
+def impulse_work(n_corners: int, n_dof: int) -> ImpulseWork:
+    """The scratch of :func:`solve_active_impulses` for up to ``n_corners`` active corners of
+    a model with ``n_dof`` DOFs."""
     nc = int(n_corners)
+    nd = int(n_dof)
     per_corner = {
         k: np.zeros(nc) for k in ("uNf", "uTf", "uNm", "ea", "ma", "pN", "pT", "uNp", "uTp")
     }
     return ImpulseWork(
-        X=np.zeros((2 * nc, 7)),
-        Wr=np.zeros((2 * nc, 7)),
-        col=np.zeros(7),
+        X=np.zeros((2 * nc, nd)),
+        Wr=np.zeros((2 * nc, nd)),
+        col=np.zeros(nd),
         G=np.zeros((2 * nc, 2 * nc)),
         st=np.zeros(nc, dtype=np.int64),
         contact=contact_solve_work(nc),
@@ -77,30 +79,32 @@ def solve_active_impulses(
 
     G = W Ŵ⁻¹ Wᵀ, u_free = W v_free, U_N⁻ = W_N v0; vnew = v_free + Ŵ⁻¹ Wᵀ P. Restitution
     ``ecoef`` for approaching corners (U_N⁻ ≤ 0), ``esep`` for separating ones.
-    P_N, P_T, state (4,) are written per corner (zero / open for inactive corners).
+    P_N, P_T, state (n_corners,) are written per corner (zero / open for inactive corners);
+    the sizes are those of the arrays (DOFs: vfree).
     ``work``: the :data:`ImpulseWork` (:func:`impulse_work`). Returns (status, comp_res,
     cone_res).
     """
     nc = nact
+    n_dof = vfree.shape[0]
     X = work.X[: 2 * nc]  # rows: Ŵ⁻¹ w for each column w of W
     Wr = work.Wr[: 2 * nc]
     col = work.col
     for a in range(nc):
         c = act[a]
-        for j in range(7):
+        for j in range(n_dof):
             Wr[a, j] = WN[c, j]
             Wr[nc + a, j] = WT[c, j]
     for r in range(2 * nc):
-        for j in range(7):
+        for j in range(n_dof):
             col[j] = Wr[r, j]
         lu_solve(LU, piv, col, col)
-        for j in range(7):
+        for j in range(n_dof):
             X[r, j] = col[j]
     G = work.G[: 2 * nc, : 2 * nc]
     for r in range(2 * nc):
         for s in range(r, 2 * nc):
             acc = 0.0
-            for j in range(7):
+            for j in range(n_dof):
                 acc += Wr[r, j] * X[s, j]
             G[r, s] = acc
             G[s, r] = acc
@@ -113,7 +117,7 @@ def solve_active_impulses(
         sN = 0.0
         sT = 0.0
         sm = 0.0
-        for j in range(7):
+        for j in range(n_dof):
             sN += Wr[a, j] * vfree[j]
             sT += Wr[nc + a, j] * vfree[j]
             sm += Wr[a, j] * v0[j]
@@ -130,17 +134,17 @@ def solve_active_impulses(
     status, comp, cone = solve_contact_impulses_with(
         G, uNf, uTf, uNm, ea, ma, pN, pT, uNp, uTp, st, mode, rtol, work.contact
     )
-    for c in range(4):
+    for c in range(P_N.shape[0]):
         P_N[c] = 0.0
         P_T[c] = 0.0
         state[c] = 0
-    for j in range(7):
+    for j in range(n_dof):
         vnew[j] = vfree[j]
     for a in range(nc):
         c = act[a]
         P_N[c] = pN[a]
         P_T[c] = pT[a]
         state[c] = st[a]
-        for j in range(7):
+        for j in range(n_dof):
             vnew[j] += X[a, j] * pN[a] + X[nc + a, j] * pT[a]
     return status, comp, cone

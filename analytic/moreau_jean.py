@@ -88,17 +88,24 @@ from deckpound.analytic.frictional_contact import STATUS_FAILED
 from deckpound.analytic.impulses import solve_active_impulses
 from deckpound.analytic.kinematics import contact_kinematics, linear_gap
 from deckpound.analytic.moreau_jean_work import (
+    ENERGY_COLUMNS,
     N_ENERGY,
+    W_FRICTION,
+    W_IMPACT,
+    W_INPUT,
+    W_NUMERICAL,
+    W_SPRING,
+    W_VISCOUS,
     MoreauJeanOptions,
     MoreauJeanWork,
     moreau_jean_workspace,
     output_energies,
     store_row,
 )
-from deckpound.analytic.nonsmooth import ENERGY_COLUMNS
 from deckpound.analytic.peaks import track_step
 from deckpound.analytic.support_motion import record_at
 from deckpound.analytic.system import (
+    KIND_HYSTERETIC,
     spring_assemble,
     spring_commit,
     spring_deformations,
@@ -117,18 +124,410 @@ __all__ = [
     "moreau_jean_workspace",
 ]
 
+# The loop is a short driver (:func:`moreau_jean_run`) over stages that take the bundles:
+# start, predict (support motion, active set), solve (Newton on v_{k+1} with the contact
+# problem), commit (springs, work totals, impulses), store (peaks, output rows), finish. The
+# per-step stages are inlined into the driver (numba IR inlining, ``inline="always"``), so the
+# loop compiles to one function as before. Array sizes come from the arrays: DOFs from the
+# mass vector, corners from the corner table, springs from the spring arrays.
 
-@kernel
+
+@kernel(inline="always")
 def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
     """LU of Ŵ = M + θhC + θ²h² Bᵀ diag(kt) B (K scratch). Returns False if singular."""
     spring_tangent(sa, kt, K)
     c1 = theta * h
     c2 = c1 * c1
-    for i in range(7):
-        for j in range(7):
+    n_dof = LU.shape[0]
+    for i in range(n_dof):
+        for j in range(n_dof):
             LU[i, j] = c1 * Cmat[i, j] + c2 * K[i, j]
         LU[i, i] += sa.mass[i]
     return lu_factor(LU, piv)
+
+
+@kernel(inline="always")
+def _copy_state(final, q, v):
+    """final[0] = q, final[1] = v (the state a run reports as its last)."""
+    for j in range(q.shape[0]):
+        final[0, j] = q[j]
+        final[1, j] = v[j]
+
+
+@kernel(inline="always")
+def _corner_gaps(contact, q, gap, WN, WT):
+    """Gaps at q; rows WN, WT too for nonlinear kinematics (constant for linear kinematics,
+    filled before the loop, so only the gaps change)."""
+    if contact.nonlinear:
+        contact_kinematics(q, contact.corners, contact.nonlinear, gap, WN, WT)
+    else:
+        for c in range(gap.shape[0]):
+            gap[c] = linear_gap(contact.corners[c], q)
+
+
+@kernel
+def _start(system, contact, record, output, work):
+    """Initial state: springs at (u0, v0, t = 0) committed, work totals, contact rows, output
+    row 0, peaks of step 0. Returns the record hint."""
+    sa = system
+    dof, spr, cor = work.dof, work.spring, work.corner
+    q, v, W = dof.q, dof.v, work.W
+    jrec = record_at(
+        record.t, record.disp, record.vel, record.dslope, record.vslope, 0.0, 0, work.ug, work.vg
+    )
+    for j in range(q.shape[0]):
+        q[j] = work.u0[j]
+        v[j] = work.v0[j]
+    spring_deformations(sa, q, v, work.ug, work.vg, spr.d_k, spr.dd_k)
+    spring_update_materials(sa.hparams, work.hstate, sa.kind, spr.d_k)
+    spring_assemble(sa, work.hstate, spr.d_k, spr.dd_k, v, dof.Fk, spr.fs_k, spr.kt_k)
+    spring_commit(sa, work.hstate)
+    es0 = spring_stored_energy(sa, work.hstate, q, work.ug)
+    ke0 = 0.0
+    for j in range(q.shape[0]):
+        ke0 += 0.5 * sa.mass[j] * v[j] * v[j]
+    W[W_INPUT] = ke0 + es0
+    W[W_SPRING] = es0
+    contact_kinematics(q, contact.corners, contact.nonlinear, cor.gapo, cor.WNo, cor.WTo)
+    contact_kinematics(q, contact.corners, contact.nonlinear, cor.gap, cor.WN, cor.WT)
+    output_energies(sa, work.hstate, q, v, work.ug, W, work.energy)
+    store_row(
+        output,
+        0,
+        0.0,
+        q,
+        v,
+        cor.gapo,
+        cor.fn_out,
+        cor.ft_out,
+        spr.fs_k,
+        sa.nbs,
+        cor.pn_acc,
+        cor.pt_acc,
+        cor.state,
+        work.energy,
+    )
+    # peaks and gap closures of every step (.peaks): the step's forces are its impulses / h
+    pk = output.peaks
+    store_standard(pk.row, 0.0, q, v, cor.gapo, pk.force[0], pk.force[1], spr.fs_k, sa.nbs)
+    track_step(pk, 0.0, q, work.ug, spr.d_k, sa.nbs)
+    return jrec
+
+
+@kernel(inline="always")
+def _predict(system, contact, record, work, h, t1, jrec, count):
+    """Support motion at t_{n+1} and its increment per spring (S Δu_g, S Δu̇_g), start of
+    step q_k, v_k, mid-step prediction q_M = q_k + h/2 v_k and the active set at q_M (a corner
+    is active when its gap is ≤ 0; activations counted). Returns (record hint, active
+    corners)."""
+    sa = system
+    dof, spr, cor = work.dof, work.spring, work.corner
+    ug, vg, ugo, vgo = work.ug, work.vg, work.ugo, work.vgo
+    for k in range(ug.shape[0]):
+        ugo[k] = ug[k]
+        vgo[k] = vg[k]
+    jrec = record_at(
+        record.t, record.disp, record.vel, record.dslope, record.vslope, t1, jrec, ug, vg
+    )
+    for i in range(spr.sdu.shape[0]):
+        ch = sa.schan[i]
+        if ch >= 0:
+            spr.sdu[i] = sa.sval[i] * (ug[ch] - ugo[ch])
+            spr.sdv[i] = sa.sval[i] * (vg[ch] - vgo[ch])
+        else:
+            spr.sdu[i] = 0.0
+            spr.sdv[i] = 0.0
+    q, v = dof.q, dof.v
+    for j in range(q.shape[0]):
+        dof.qk[j] = q[j]
+        dof.vk[j] = v[j]
+        dof.qM[j] = q[j] + 0.5 * h * v[j]
+    _corner_gaps(contact, dof.qM, cor.gap, cor.WN, cor.WT)
+    nact = 0
+    for c in range(cor.gap.shape[0]):
+        if cor.gap[c] <= 0.0:
+            cor.act[nact] = c
+            nact += 1
+            if not cor.was_active[c]:
+                count[bd.CNT_EVENTS] += 1
+            cor.was_active[c] = True
+        else:
+            cor.was_active[c] = False
+    if nact > 0:
+        count[bd.CNT_CONTACT_STEPS] += 1
+    return jrec, nact
+
+
+@kernel(inline="always")
+def _linearise(system, work, h, th):
+    """Iteration 0: the residual of the linearisation about the committed state,
+    R = h F_k + θh Bᵀ[k_t ∘ (h B v_k − SΔu_g) − crate ∘ SΔu̇_g], linearisation point = the
+    committed springs, iterate v = v_k."""
+    sa = system
+    dof, spr = work.dof, work.spring
+    R, vk = dof.R, dof.vk
+    for j in range(R.shape[0]):
+        R[j] = h * dof.Fk[j]
+    for i in range(spr.d_k.shape[0]):
+        bv = 0.0
+        for r in range(sa.bnnz[i]):
+            bv += sa.bval[i, r] * vk[sa.bidx[i, r]]
+        t_i = th * h * (spr.kt_k[i] * (h * bv - spr.sdu[i]) - sa.crate[i] * spr.sdv[i])
+        for r in range(sa.bnnz[i]):
+            R[sa.bidx[i, r]] += sa.bval[i, r] * t_i
+        spr.d_lin[i] = spr.d_k[i]
+        spr.fs_lin[i] = spr.fs_k[i]
+        spr.kt_lin[i] = spr.kt_k[i]
+    for j in range(R.shape[0]):
+        dof.v[j] = vk[j]
+
+
+@kernel(inline="always")
+def _factor(system, work, h, theta, count):
+    """Iteration matrix Ŵ for the tangents of the linearisation point, refactored only when a
+    tangent changed. Returns False if it is singular."""
+    dof, spr = work.dof, work.spring
+    kt_lin, kt_fact = spr.kt_lin, spr.kt_fact
+    for i in range(kt_lin.shape[0]):
+        if kt_lin[i] != kt_fact[i]:
+            if not _iteration_matrix(system, system.C, kt_lin, h, theta, dof.K, dof.LU, dof.piv):
+                return False
+            count[bd.CNT_FACTORISATIONS] += 1
+            for k in range(kt_lin.shape[0]):
+                kt_fact[k] = kt_lin[k]
+            return True
+    return True
+
+
+@kernel(inline="always")
+def _velocity(work, opt, nact, stats):
+    """Free velocity v_free = v − Ŵ⁻¹ R, then the contact impulses of the active corners and
+    v = v_free + Ŵ⁻¹ Wᵀ P (:func:`.impulses.solve_active_impulses`). Returns RUN_OK or
+    RUN_CONTACT_UNSOLVED."""
+    dof, cor = work.dof, work.corner
+    v, vfree = dof.v, dof.vfree
+    lu_solve(dof.LU, dof.piv, dof.R, dof.dv)
+    for j in range(v.shape[0]):
+        vfree[j] = v[j] - dof.dv[j]
+    if nact == 0:
+        for j in range(v.shape[0]):
+            v[j] = vfree[j]
+        return RUN_OK
+    cst, comp, cone = solve_active_impulses(
+        dof.LU,
+        dof.piv,
+        cor.WN,
+        cor.WT,
+        cor.act,
+        nact,
+        dof.vk,
+        vfree,
+        opt.ecoef,
+        opt.esep,
+        opt.mu,
+        opt.mode,
+        opt.rtol,
+        cor.P_N,
+        cor.P_T,
+        cor.state,
+        dof.vnew,
+        work.impulse,
+    )
+    stats.count[bd.CNT_SOLVES] += 1
+    if cst == STATUS_FAILED:
+        return RUN_CONTACT_UNSOLVED
+    value = stats.value
+    value[bd.VAL_MAX_COMP] = max(value[bd.VAL_MAX_COMP], comp)
+    value[bd.VAL_MAX_CONE] = max(value[bd.VAL_MAX_CONE], cone)
+    for j in range(v.shape[0]):
+        v[j] = dof.vnew[j]
+    return RUN_OK
+
+
+@kernel(inline="always")
+def _springs_at_iterate(system, work, h, th, th1):
+    """q = q_k + h[(1 − θ) v_k + θ v], the springs at (q, v, t_{n+1}) (Takeda trial state from
+    the committed history). Returns the largest Takeda linearisation mismatch
+    max|f_s(d) − f_s(d_lin) − k_t,lin (d − d_lin)| [kN]."""
+    sa = system
+    dof, spr = work.dof, work.spring
+    q, v = dof.q, dof.v
+    for j in range(q.shape[0]):
+        q[j] = dof.qk[j] + h * (th1 * dof.vk[j] + th * v[j])
+    spring_deformations(sa, q, v, work.ug, work.vg, spr.d, spr.dd)
+    spring_update_materials(sa.hparams, work.hstate, sa.kind, spr.d)
+    spring_assemble(sa, work.hstate, spr.d, spr.dd, v, dof.f, spr.fs, spr.kt)
+    rmax = 0.0
+    for i in range(spr.d.shape[0]):
+        if sa.kind[i] == KIND_HYSTERETIC:
+            r_i = abs(spr.fs[i] - spr.fs_lin[i] - spr.kt_lin[i] * (spr.d[i] - spr.d_lin[i]))
+            rmax = max(rmax, r_i)
+    return rmax
+
+
+@kernel(inline="always")
+def _newton_residual(system, work, h, th, th1):
+    """Newton: the residual of the θ-equation at the iterate (contact impulse excluded),
+    R = M (v − v_k) + h[(1 − θ) F_k + θ f], and the iterate as the new linearisation point."""
+    dof, spr = work.dof, work.spring
+    for j in range(dof.R.shape[0]):
+        dof.R[j] = system.mass[j] * (dof.v[j] - dof.vk[j]) + h * (th1 * dof.Fk[j] + th * dof.f[j])
+    for i in range(spr.d.shape[0]):
+        spr.d_lin[i] = spr.d[i]
+        spr.fs_lin[i] = spr.fs[i]
+        spr.kt_lin[i] = spr.kt[i]
+
+
+@kernel(inline="always")
+def _solve(system, work, opt, nact, stats):
+    """The step's equation: linearised θ-step, then Newton iterations (tangent, free velocity
+    and contact problem at the current iterate, active set kept) until the Takeda mismatch is
+    ≤ opt.ftol. Returns RUN_OK or the failure (RUN_SINGULAR, RUN_CONTACT_UNSOLVED,
+    RUN_NONFINITE, RUN_NOT_CONVERGED, RUN_INTERRUPTED)."""
+    h, th = opt.h, opt.theta
+    th1 = 1.0 - th
+    count = stats.count
+    _linearise(system, work, h, th)
+    it = 0
+    status = RUN_OK
+    while True:
+        if not _factor(system, work, h, th, count):
+            status = RUN_SINGULAR
+            break
+        status = _velocity(work, opt, nact, stats)
+        if status != RUN_OK:
+            break
+        rmax = _springs_at_iterate(system, work, h, th, th1)
+        it += 1
+        if not np.isfinite(rmax):
+            status = RUN_NONFINITE
+            break
+        if rmax <= opt.ftol:
+            break
+        if it >= opt.maxit:
+            status = RUN_NOT_CONVERGED
+            break
+        if stats.halt[0] != 0:
+            status = RUN_INTERRUPTED
+            break
+        _newton_residual(system, work, h, th, th1)
+    count[bd.CNT_NEWTON] += it
+    count[bd.CNT_MAX_IT] = max(count[bd.CNT_MAX_IT], it)
+    if status == RUN_OK:
+        q, v = work.dof.q, work.dof.v
+        for j in range(q.shape[0]):
+            if not np.isfinite(v[j]) or not np.isfinite(q[j]):
+                status = RUN_NONFINITE
+    return status
+
+
+@kernel(inline="always")
+def _commit(system, work, h, th):
+    """Commit the accepted step: Takeda history, the exact work of the θ-scheme over the step
+    (support input, spring, viscous, numerical), the spring and force state of step k+1."""
+    sa = system
+    dof, spr, W = work.dof, work.spring, work.W
+    th1 = 1.0 - th
+    spring_commit(sa, work.hstate)
+    for i in range(spr.d.shape[0]):
+        fth = th * spr.fs[i] + th1 * spr.fs_k[i]
+        cth = sa.crate[i] * (th * spr.dd[i] + th1 * spr.dd_k[i])
+        dlt = spr.d[i] - spr.d_k[i]
+        W[W_INPUT] -= spr.sdu[i] * (fth + cth)
+        W[W_SPRING] += dlt * fth
+        W[W_VISCOUS] += dlt * cth
+        spr.d_k[i] = spr.d[i]
+        spr.dd_k[i] = spr.dd[i]
+        spr.fs_k[i] = spr.fs[i]
+        spr.kt_k[i] = spr.kt[i]
+    a0 = sa.scal[0]
+    num = 0.0
+    q, v, qk, vk = dof.q, dof.v, dof.qk, dof.vk
+    for j in range(q.shape[0]):
+        vm = th1 * vk[j] + th * v[j]
+        W[W_VISCOUS] += a0 * sa.mass[j] * (q[j] - qk[j]) * vm
+        dvj = v[j] - vk[j]
+        num += sa.mass[j] * dvj * dvj
+        dof.Fk[j] = dof.f[j]
+    W[W_NUMERICAL] += (th - 0.5) * num
+
+
+@kernel(inline="always")
+def _commit_contact(contact, work, peaks, nact, th, inv_h, value):
+    """Penetration at q_{k+1} (every step: the output rows see one step in `stride`), the
+    impulses' work on v_m = (1 − θ)v_k + θv_{k+1}, the impulses accumulated for the output
+    and the step's forces P / h for the peaks."""
+    dof, cor, W = work.dof, work.corner, work.W
+    _corner_gaps(contact, dof.q, cor.gapo, cor.WNo, cor.WTo)
+    fn_step, ft_step = peaks.force[0], peaks.force[1]
+    for c in range(cor.gapo.shape[0]):
+        value[bd.VAL_MAX_PEN] = max(value[bd.VAL_MAX_PEN], -cor.gapo[c])
+        fn_step[c] = 0.0
+        ft_step[c] = 0.0
+    if nact == 0:
+        for c in range(cor.state.shape[0]):
+            cor.state[c] = 0
+        return
+    th1 = 1.0 - th
+    for a in range(nact):
+        c = cor.act[a]
+        uN = 0.0
+        uT = 0.0
+        for j in range(dof.v.shape[0]):
+            vm = th1 * dof.vk[j] + th * dof.v[j]
+            uN += cor.WN[c, j] * vm
+            uT += cor.WT[c, j] * vm
+        W[W_IMPACT] -= cor.P_N[c] * uN
+        W[W_FRICTION] -= cor.P_T[c] * uT
+        cor.pn_acc[c] += cor.P_N[c]
+        cor.pt_acc[c] += cor.P_T[c]
+        fn_step[c] = cor.P_N[c] * inv_h
+        ft_step[c] = cor.P_T[c] * inv_h
+
+
+@kernel(inline="always")
+def _store(system, contact, output, work, row, t1, inv_out):
+    """Output row ``row`` at t_{n+1}: contact kinematics at q, forces = impulses accumulated
+    over the output interval × inv_out, energies; the accumulators restart."""
+    sa = system
+    dof, cor = work.dof, work.corner
+    contact_kinematics(dof.q, contact.corners, contact.nonlinear, cor.gapo, cor.WNo, cor.WTo)
+    for c in range(cor.pn_acc.shape[0]):
+        cor.fn_out[c] = cor.pn_acc[c] * inv_out
+        cor.ft_out[c] = cor.pt_acc[c] * inv_out
+    output_energies(sa, work.hstate, dof.q, dof.v, work.ug, work.W, work.energy)
+    store_row(
+        output,
+        row,
+        t1,
+        dof.q,
+        dof.v,
+        cor.gapo,
+        cor.fn_out,
+        cor.ft_out,
+        work.spring.fs,
+        sa.nbs,
+        cor.pn_acc,
+        cor.pt_acc,
+        cor.state,
+        work.energy,
+    )
+    for c in range(cor.pn_acc.shape[0]):
+        cor.pn_acc[c] = 0.0
+        cor.pt_acc[c] = 0.0
+
+
+@kernel
+def _finish(stats, status, row, failed, nsteps, h):
+    """The run's status, rows, failed step and steps completed (all, the unseating step
+    included, or those before the failed one) and the time reached."""
+    done = nsteps if status == RUN_OK else (failed if status == RUN_UNSEATED else failed - 1)
+    cnt = stats.count
+    cnt[bd.CNT_STATUS] = status
+    cnt[bd.CNT_ROWS] = row
+    cnt[bd.CNT_FAILED_STEP] = failed
+    cnt[bd.CNT_STEPS] = done
+    stats.value[bd.VAL_TIME] = done * h
 
 
 @kernel(nogil=True)
@@ -148,7 +547,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     contact steps, Newton iterations, max iterations of a step, iteration-matrix
     factorisations; ``stats.value``: max complementarity and cone residuals, max penetration
     over every accepted step [m];
-    ``work.final`` (2, 7) = displacement and velocity at the last accepted step;
+    ``work.final`` (2, n_dof) = displacement and velocity at the last accepted step;
     ``output.peaks``: peaks and gap closures over every step (:mod:`.peaks`; the forces of a
     step are its impulses divided by h).
     ``stats.halt[0]`` ≠ 0 stops the loop at the next Newton iteration (RUN_INTERRUPTED). A
@@ -157,369 +556,53 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     row not written).
     """
     # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
-    # deckpound.analytic.fp_mode); every return below restores the thread's mode first
+    # deckpound.analytic.fp_mode); restored before the return
     saved = flush_enter(opt.flush_subnormals)
-    sa = system
-    Cmat = sa.C
-    nbs = sa.nbs
-    geom = contact.corners
-    nonlinear = contact.nonlinear
-    tb, DG, VGR, SDG, SVG = record.t, record.disp, record.vel, record.dslope, record.vslope
-    nsteps, h, theta, ecoef, esep, mu = opt.nsteps, opt.h, opt.theta, opt.ecoef, opt.esep, opt.mu
-    mode, rtol, ftol, maxit, stride = opt.mode, opt.rtol, opt.ftol, opt.maxit, opt.stride
-    halt = stats.halt
-    ns = sa.k0.shape[0]
-    nch = DG.shape[1]
-    mass = sa.mass
-    hp = sa.hparams
-    kind = sa.kind
-    a0 = sa.scal[0]
-    wk = work
-    hstate, uv_end, u0, v0 = wk.hstate, wk.final, wk.u0, wk.v0
-    dof, spr, cor = wk.dof, wk.spring, wk.corner
-    q, v, qk, vk, qM, vfree, vnew, R, dv, Fk, f = (
-        dof.q,
-        dof.v,
-        dof.qk,
-        dof.vk,
-        dof.qM,
-        dof.vfree,
-        dof.vnew,
-        dof.R,
-        dof.dv,
-        dof.Fk,
-        dof.f,
-    )
-    K, LU, piv = dof.K, dof.LU, dof.piv
-    # spring quantities: committed start of step (k), linearisation point (lin), new iterate;
-    # kt_fact: tangents of the factors held in LU (NaN: none); sdu, sdv: S Δu_g, S Δu̇_g
-    (kt_fact, d_k, dd_k, fs_k, kt_k, d_lin, fs_lin, kt_lin, d, dd, fs, kt, sdu, sdv) = (
-        spr.kt_fact,
-        spr.d_k,
-        spr.dd_k,
-        spr.fs_k,
-        spr.kt_k,
-        spr.d_lin,
-        spr.fs_lin,
-        spr.kt_lin,
-        spr.d,
-        spr.dd,
-        spr.fs,
-        spr.kt,
-        spr.sdu,
-        spr.sdv,
-    )
-    gap, gapo, P_N, P_T, pn_acc, pt_acc, fn_out, ft_out = (
-        cor.gap,
-        cor.gapo,
-        cor.P_N,
-        cor.P_T,
-        cor.pn_acc,
-        cor.pt_acc,
-        cor.fn_out,
-        cor.ft_out,
-    )
-    WN, WT, WNo, WTo = cor.WN, cor.WT, cor.WNo, cor.WTo
-    act, state, was_active = cor.act, cor.state, cor.was_active
-    ug, vg, ugo, vgo = wk.ug, wk.vg, wk.ugo, wk.vgo
-    W, energy = wk.W, wk.energy
-    th = theta
-    th1 = 1.0 - theta
-    # ---- initial state
-    jrec = record_at(tb, DG, VGR, SDG, SVG, 0.0, 0, ug, vg)
-    for j in range(7):
-        q[j] = u0[j]
-        v[j] = v0[j]
-    spring_deformations(sa, q, v, ug, vg, d_k, dd_k)
-    spring_update_materials(hp, hstate, kind, d_k)
-    spring_assemble(sa, hstate, d_k, dd_k, v, Fk, fs_k, kt_k)
-    spring_commit(sa, hstate)
-    es0 = spring_stored_energy(sa, hstate, q, ug)
-    ke0 = 0.0
-    for j in range(7):
-        ke0 += 0.5 * mass[j] * v[j] * v[j]
-    W[0] = ke0 + es0
-    W[1] = es0
-    contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
-    contact_kinematics(q, geom, nonlinear, gap, WN, WT)
-    output_energies(sa, hstate, q, v, ug, W, energy)
-    store_row(output, 0, 0.0, q, v, gapo, fn_out, ft_out, fs_k, nbs, pn_acc, pt_acc, state, energy)
-    # peaks and gap closures of every step (.peaks): the step's forces are its impulses / h
-    pk = output.peaks
-    fn_step, ft_step = pk.force[0], pk.force[1]
+    stats.count[:] = 0
+    stats.value[:] = 0.0
+    h = opt.h
     inv_h = 1.0 / h
-    store_standard(pk.row, 0.0, q, v, gapo, fn_step, ft_step, fs_k, nbs)
-    track_step(pk, 0.0, q, ug, d_k, nbs)
-    row = 1
-    solves = 0
-    events = 0
-    csteps = 0
-    newton = 0
-    maxit_seen = 0
-    nfact = 0
-    max_comp = 0.0
-    max_cone = 0.0
-    max_pen = 0.0
+    inv_out = 1.0 / (opt.stride * h)
+    jrec = _start(system, contact, record, output, work)
+    dof = work.dof
     status = RUN_OK
     failed = 0
-    inv_out = 1.0 / (stride * h)
-    for n in range(nsteps):
-        if halt[0] != 0:
+    row = 1
+    for n in range(opt.nsteps):
+        if stats.halt[0] != 0:
             status = RUN_INTERRUPTED
             failed = n + 1
-            for j in range(7):
-                uv_end[0, j] = q[j]
-                uv_end[1, j] = v[j]
+            _copy_state(work.final, dof.q, dof.v)
             break
-        # ---- support motion at t_{n+1} and its increment (per spring)
-        for k in range(nch):
-            ugo[k] = ug[k]
-            vgo[k] = vg[k]
-        jrec = record_at(tb, DG, VGR, SDG, SVG, (n + 1) * h, jrec, ug, vg)
-        for i in range(ns):
-            ch = sa.schan[i]
-            if ch >= 0:
-                sdu[i] = sa.sval[i] * (ug[ch] - ugo[ch])
-                sdv[i] = sa.sval[i] * (vg[ch] - vgo[ch])
-            else:
-                sdu[i] = 0.0
-                sdv[i] = 0.0
-        for j in range(7):
-            qk[j] = q[j]
-            vk[j] = v[j]
-            qM[j] = q[j] + 0.5 * h * v[j]
-        # ---- active set at the predicted mid-step position (linear kinematics: W_N, W_T are
-        # constant, filled before the loop, so only the gaps change)
-        if nonlinear:
-            contact_kinematics(qM, geom, nonlinear, gap, WN, WT)
-        else:
-            for c in range(4):
-                gap[c] = linear_gap(geom[c], qM)
-        nact = 0
-        for c in range(4):
-            if gap[c] <= 0.0:
-                act[nact] = c
-                nact += 1
-                if not was_active[c]:
-                    events += 1
-                was_active[c] = True
-            else:
-                was_active[c] = False
-        if nact > 0:
-            csteps += 1
-        # ---- iteration 0: residual of the linearisation about the committed state
-        # R = h F_k + θh Bᵀ[k_t ∘ (h B v_k − SΔu_g) − crate ∘ SΔu̇_g]
-        for j in range(7):
-            R[j] = h * Fk[j]
-        for i in range(ns):
-            bv = 0.0
-            for r in range(sa.bnnz[i]):
-                bv += sa.bval[i, r] * vk[sa.bidx[i, r]]
-            t_i = th * h * (kt_k[i] * (h * bv - sdu[i]) - sa.crate[i] * sdv[i])
-            for r in range(sa.bnnz[i]):
-                R[sa.bidx[i, r]] += sa.bval[i, r] * t_i
-            d_lin[i] = d_k[i]
-            fs_lin[i] = fs_k[i]
-            kt_lin[i] = kt_k[i]
-        for j in range(7):
-            v[j] = vk[j]
-        it = 0
-        converged = False
-        while True:
-            # ---- iteration matrix (refactored only when a tangent changed)
-            same = True
-            for i in range(ns):
-                if kt_lin[i] != kt_fact[i]:
-                    same = False
-                    break
-            if not same:
-                if not _iteration_matrix(sa, Cmat, kt_lin, h, theta, K, LU, piv):
-                    status = RUN_SINGULAR
-                    break
-                nfact += 1
-                for i in range(ns):
-                    kt_fact[i] = kt_lin[i]
-            # ---- free velocity v_free = v − Ŵ⁻¹ R
-            lu_solve(LU, piv, R, dv)
-            for j in range(7):
-                vfree[j] = v[j] - dv[j]
-            # ---- contact
-            if nact > 0:
-                cst, comp, cone = solve_active_impulses(
-                    LU,
-                    piv,
-                    WN,
-                    WT,
-                    act,
-                    nact,
-                    vk,
-                    vfree,
-                    ecoef,
-                    esep,
-                    mu,
-                    mode,
-                    rtol,
-                    P_N,
-                    P_T,
-                    state,
-                    vnew,
-                    wk.impulse,
-                )
-                solves += 1
-                if cst == STATUS_FAILED:
-                    status = RUN_CONTACT_UNSOLVED
-                    break
-                max_comp = max(max_comp, comp)
-                max_cone = max(max_cone, cone)
-                for j in range(7):
-                    v[j] = vnew[j]
-            else:
-                for j in range(7):
-                    v[j] = vfree[j]
-            for j in range(7):
-                q[j] = qk[j] + h * (th1 * vk[j] + th * v[j])
-            # ---- springs at the new iterate
-            spring_deformations(sa, q, v, ug, vg, d, dd)
-            spring_update_materials(hp, hstate, kind, d)
-            spring_assemble(sa, hstate, d, dd, v, f, fs, kt)
-            it += 1
-            rmax = 0.0
-            for i in range(ns):
-                if kind[i] == 1:
-                    r_i = abs(fs[i] - fs_lin[i] - kt_lin[i] * (d[i] - d_lin[i]))
-                    rmax = max(rmax, r_i)
-            if not np.isfinite(rmax):
-                status = RUN_NONFINITE
-                break
-            if rmax <= ftol:
-                converged = True
-                break
-            if it >= maxit:
-                status = RUN_NOT_CONVERGED
-                break
-            if halt[0] != 0:
-                status = RUN_INTERRUPTED
-                break
-            # ---- Newton: residual of the θ-equation at the iterate (contact impulse excluded)
-            for j in range(7):
-                R[j] = mass[j] * (v[j] - vk[j]) + h * (th1 * Fk[j] + th * f[j])
-            for i in range(ns):
-                d_lin[i] = d[i]
-                fs_lin[i] = fs[i]
-                kt_lin[i] = kt[i]
-        newton += it
-        maxit_seen = max(maxit_seen, it)
-        if converged:
-            for j in range(7):
-                if not np.isfinite(v[j]) or not np.isfinite(q[j]):
-                    status = RUN_NONFINITE
+        t1 = (n + 1) * h
+        jrec, nact = _predict(system, contact, record, work, h, t1, jrec, stats.count)
+        status = _solve(system, work, opt, nact, stats)
         if status != RUN_OK:
-            for j in range(7):
-                uv_end[0, j] = qk[j]
-                uv_end[1, j] = vk[j]
+            _copy_state(work.final, dof.qk, dof.vk)
             failed = n + 1
             break
-        spring_commit(sa, hstate)
-        # ---- energy (exact work of the θ-scheme over the step)
-        for i in range(ns):
-            fth = th * fs[i] + th1 * fs_k[i]
-            cth = sa.crate[i] * (th * dd[i] + th1 * dd_k[i])
-            dlt = d[i] - d_k[i]
-            W[0] -= sdu[i] * (fth + cth)
-            W[1] += dlt * fth
-            W[2] += dlt * cth
-            d_k[i] = d[i]
-            dd_k[i] = dd[i]
-            fs_k[i] = fs[i]
-            kt_k[i] = kt[i]
-        num = 0.0
-        for j in range(7):
-            vm = th1 * vk[j] + th * v[j]
-            W[2] += a0 * mass[j] * (q[j] - qk[j]) * vm
-            dvj = v[j] - vk[j]
-            num += mass[j] * dvj * dvj
-            Fk[j] = f[j]
-        W[5] += (th - 0.5) * num
-        # ---- penetration at q_{k+1}, every step (the output rows see one step in `stride`)
-        if nonlinear:
-            contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
-        else:
-            for c in range(4):
-                gapo[c] = linear_gap(geom[c], q)
-        for c in range(4):
-            max_pen = max(max_pen, -gapo[c])
-            fn_step[c] = 0.0
-            ft_step[c] = 0.0
-        if nact > 0:
-            for a in range(nact):
-                c = act[a]
-                uN = 0.0
-                uT = 0.0
-                for j in range(7):
-                    vm = th1 * vk[j] + th * v[j]
-                    uN += WN[c, j] * vm
-                    uT += WT[c, j] * vm
-                W[3] -= P_N[c] * uN
-                W[4] -= P_T[c] * uT
-                pn_acc[c] += P_N[c]
-                pt_acc[c] += P_T[c]
-                fn_step[c] = P_N[c] * inv_h
-                ft_step[c] = P_T[c] * inv_h
-        else:
-            for c in range(4):
-                state[c] = 0
-        store_standard(pk.row, (n + 1) * h, q, v, gapo, fn_step, ft_step, fs, nbs)
-        if track_step(pk, (n + 1) * h, q, ug, d, nbs):
+        _commit(system, work, h, opt.theta)
+        _commit_contact(contact, work, output.peaks, nact, opt.theta, inv_h, stats.value)
+        store_standard(
+            output.peaks.row,
+            t1,
+            dof.q,
+            dof.v,
+            work.corner.gapo,
+            output.peaks.force[0],
+            output.peaks.force[1],
+            work.spring.fs,
+            system.nbs,
+        )
+        if track_step(output.peaks, t1, dof.q, work.ug, work.spring.d, system.nbs):
             # a seat margin became negative (.peaks): the answer ends with this step
             status = RUN_UNSEATED
             failed = n + 1
             break
-        # ---- output
-        if (n + 1) % stride == 0:
-            contact_kinematics(q, geom, nonlinear, gapo, WNo, WTo)
-            for c in range(4):
-                fn_out[c] = pn_acc[c] * inv_out
-                ft_out[c] = pt_acc[c] * inv_out
-            output_energies(sa, hstate, q, v, ug, W, energy)
-            store_row(
-                output,
-                row,
-                (n + 1) * h,
-                q,
-                v,
-                gapo,
-                fn_out,
-                ft_out,
-                fs,
-                nbs,
-                pn_acc,
-                pt_acc,
-                state,
-                energy,
-            )
+        if (n + 1) % opt.stride == 0:
+            _store(system, contact, output, work, row, t1, inv_out)
             row += 1
-            for c in range(4):
-                pn_acc[c] = 0.0
-                pt_acc[c] = 0.0
     if status in (RUN_OK, RUN_UNSEATED):
-        for j in range(7):
-            uv_end[0, j] = q[j]
-            uv_end[1, j] = v[j]
-    # steps completed: all, the unseating step included, or those before the failed one
-    done = nsteps if status == RUN_OK else (failed if status == RUN_UNSEATED else failed - 1)
-    cnt = stats.count
-    cnt[bd.CNT_STATUS] = status
-    cnt[bd.CNT_ROWS] = row
-    cnt[bd.CNT_FAILED_STEP] = failed
-    cnt[bd.CNT_STEPS] = done
-    cnt[bd.CNT_SOLVES] = solves
-    cnt[bd.CNT_EVENTS] = events
-    cnt[bd.CNT_CONTACT_STEPS] = csteps
-    cnt[bd.CNT_NEWTON] = newton
-    cnt[bd.CNT_MAX_IT] = maxit_seen
-    cnt[bd.CNT_FACTORISATIONS] = nfact
-    stats.value[bd.VAL_MAX_COMP] = max_comp
-    stats.value[bd.VAL_MAX_CONE] = max_cone
-    stats.value[bd.VAL_MAX_PEN] = max_pen
-    stats.value[bd.VAL_TIME] = done * h
+        _copy_state(work.final, dof.q, dof.v)
+    _finish(stats, status, row, failed, opt.nsteps, h)
     flush_leave(saved)

@@ -62,6 +62,26 @@ from typing import ClassVar
 
 import numpy as np
 
+from deckpound.analytic import bundles as bd
+from deckpound.analytic._hysteretic_kernel import P_S1P
+from deckpound.analytic._jit import ensure_compiled
+from deckpound.analytic.contact_laws import pack_contact
+from deckpound.analytic.fp_mode import flush_note
+from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM
+from deckpound.analytic.kinematics import pack_corners
+from deckpound.analytic.moreau_jean import (
+    ENERGY_COLUMNS,
+    MoreauJeanOptions,
+    moreau_jean_run,
+    moreau_jean_workspace,
+)
+from deckpound.analytic.moreau_jean_work import IMPULSE_COLUMNS
+from deckpound.analytic.peaks import run_output_fields, run_peaks
+from deckpound.analytic.support_motion import support_record
+from deckpound.analytic.system import initial_dofs, pack_system
+from deckpound.models.columns import standard_columns
+from deckpound.models.contact_laws_table import RIGID_CONTACT, contact_law, friction_model
+from deckpound.models.damping import damping_model, refuse_tangent_damping
 from deckpound.models.engine_contract import (
     Engine,
     RunOutput,
@@ -69,36 +89,15 @@ from deckpound.models.engine_contract import (
     engine_columns,
     output_stride,
 )
-from deckpound.models.excitation import SupportMotion, analysis_duration
+from deckpound.models.motion import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import NonsmoothSettings, Scene
 
 __all__ = ["ENERGY_COLUMNS", "NonsmoothEngine", "output_columns", "run_nonsmooth"]
 
-#: Energy columns of the nonsmooth result, in the order the kernel writes them [kJ].
-ENERGY_COLUMNS = (
-    "energy_input",
-    "energy_kinetic",
-    "energy_strain",
-    "energy_viscous",
-    "energy_hysteretic",
-    "energy_impact",
-    "energy_friction",
-    "energy_numerical",
-    "energy_error",
-)
-#: Per-corner extras of the nonsmooth result, in kernel order.
-IMPULSE_COLUMNS = (
-    tuple(f"pn_c{c}" for c in range(1, 5))
-    + tuple(f"pt_c{c}" for c in range(1, 5))
-    + tuple(f"state_c{c}" for c in range(1, 5))
-)
-
 
 def output_columns(scene: Scene) -> list[str]:
     """Column names of the nonsmooth result (standard, impulses, contact states, energies)."""
-    from deckpound.models.columns import standard_columns
-
     return (
         standard_columns([b.name for b in scene.bents])
         + list(IMPULSE_COLUMNS)
@@ -123,8 +122,6 @@ def separating_restitution(e: float, theta: float, impact_law: str = "energy-saf
 
 def _force_tolerance(ps, tol: float) -> float:
     """Newton acceptance of the spring-force linearisation mismatch [kN]."""
-    from deckpound.analytic._hysteretic_kernel import P_S1P
-
     hyst = ps.arrays.kind == 1
     scale = float(np.max(np.abs(ps.arrays.hparams[hyst, P_S1P]))) if np.any(hyst) else 1.0
     return tol * max(scale, 1.0)
@@ -149,8 +146,6 @@ class NonsmoothEngine(Engine):
     def refuse(self, scene: Scene, settings) -> None:
         """Damping on the committed or current tangent is not implemented in the Moreau–Jean
         smooth-force step (its θ-linearisation uses the constant damping matrix)."""
-        from deckpound.models.damping import refuse_tangent_damping
-
         refuse_tangent_damping(
             scene,
             "nonsmooth",
@@ -162,8 +157,6 @@ class NonsmoothEngine(Engine):
         parameters only where the law's row of :mod:`deckpound.models.contact_laws_table` says
         the engine expresses it (``ContactLaw.nonsmooth``; no compliant law: rigid contact
         replaces them, so a non-default law is warned about)."""
-        from deckpound.models.contact_laws_table import contact_law
-
         ct = scene.contact
         read = {"contact.restitution", "contact.geometry"}
         law = contact_law(ct.law)
@@ -176,9 +169,6 @@ class NonsmoothEngine(Engine):
         return read
 
     def notes(self, scene: Scene, settings) -> list[str]:
-        from deckpound.analytic.fp_mode import flush_note
-        from deckpound.models.contact_laws_table import RIGID_CONTACT, friction_model
-
         ct = scene.contact
         how = friction_model(ct.friction_mode).nonsmooth
         notes = flush_note("nonsmooth.subnormals", settings.subnormals)
@@ -204,21 +194,6 @@ class NonsmoothEngine(Engine):
         ``on_interrupt``: Ctrl-C during the step loop stops it within one Newton iteration
         (:mod:`deckpound.analytic.bundles`) and then re-raises KeyboardInterrupt (``"raise"``,
         default) or returns ``Status.INTERRUPTED`` with the rows so far (``"return"``)."""
-        from deckpound.analytic import bundles as bd
-        from deckpound.analytic._jit import ensure_compiled
-        from deckpound.analytic.contact_laws import pack_contact
-        from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM
-        from deckpound.analytic.kinematics import pack_corners
-        from deckpound.analytic.moreau_jean import (
-            MoreauJeanOptions,
-            moreau_jean_run,
-            moreau_jean_workspace,
-        )
-        from deckpound.analytic.peaks import run_output_fields, run_peaks
-        from deckpound.analytic.support_motion import support_record
-        from deckpound.analytic.system import initial_dofs, pack_system
-        from deckpound.models.damping import damping_model
-
         text_of = {
             bd.RUN_NOT_CONVERGED: "Newton iteration of the Takeda springs did not converge",
             bd.RUN_CONTACT_UNSOLVED: "contact problem not solved (no verified solution)",
@@ -249,7 +224,10 @@ class NonsmoothEngine(Engine):
             peaks,
         )
         u0, v0 = initial_dofs(initial_state)
-        work = moreau_jean_workspace(u0, v0, ps.new_state(), ps.n_springs, len(ps.channels))
+        contact = bd.Contact(pack_corners(plan), pack_contact(scene), ct.geometry == "nonlinear")
+        work = moreau_jean_workspace(
+            u0, v0, ps.new_state(), ps.n_springs, len(ps.channels), contact.corners.shape[0]
+        )
         opts = MoreauJeanOptions(
             nsteps=nsteps,
             h=float(h),
@@ -264,7 +242,6 @@ class NonsmoothEngine(Engine):
             stride=int(stride),
             flush_subnormals=ns_set.subnormals == "flush",
         )
-        contact = bd.Contact(pack_corners(plan), pack_contact(scene), ct.geometry == "nonlinear")
         stats = bd.new_stats()
         args = (ps.arrays, contact, record, opts, output, work, stats)
         compile_time = ensure_compiled(moreau_jean_run, *args)

@@ -42,7 +42,7 @@ from deckpound.models.engine_contract import (
     engine_columns,
     output_stride,
 )
-from deckpound.models.excitation import analysis_duration
+from deckpound.models.motion import analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.result import peak_columns
 from deckpound.models.scene import OpenSeesSettings, Scene
