@@ -49,7 +49,7 @@ from deckpound.analytic.dormand_prince_work import (
 from deckpound.analytic.peaks import run_output_fields, run_peaks
 from deckpound.analytic.system import initial_dofs
 from deckpound.models.engine_contract import RunOutput, Status, engine_columns
-from deckpound.models.excitation import analysis_duration
+from deckpound.models.motion import analysis_duration
 
 __all__ = ["run_adaptive"]
 

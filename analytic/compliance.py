@@ -48,7 +48,7 @@ from deckpound.models.engine_contract import (
     engine_columns,
     output_stride,
 )
-from deckpound.models.excitation import SupportMotion, analysis_duration
+from deckpound.models.motion import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
 from deckpound.models.scene import ComplianceSettings, Scene
 

@@ -1,7 +1,7 @@
 """Support motion at the engine's step, interpolated inside the compiled loop (bounded memory).
 
 Engines used to resample the whole record onto their own step
-(:meth:`deckpound.models.excitation.SupportMotion.resample`), i.e. arrays of
+(:meth:`deckpound.models.motion.SupportMotion.resample`), i.e. arrays of
 ``n_steps × n_channels`` for displacement and velocity: 6 million steps × 8 channels × 2 ×
 8 bytes ≈ 0.8 GB for a 60 s record at dt = 1e-5 s. Instead, keep the record at its own samples
 (a few thousand rows) and interpolate at t_n = n·dt inside the step loop:

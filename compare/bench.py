@@ -34,12 +34,12 @@ import pandas as pd
 
 from deckpound.models.file_io import atomic_write_text
 from deckpound.models.scene import Scene
+from deckpound.models.scene_io import modified
 
 from .align import align
 from .guarded import run_guarded
 from .metrics import nrmse, peak
 from .speed import reference_loop_ns
-from .studies import modified
 
 
 @dataclass(frozen=True)

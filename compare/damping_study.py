@@ -52,8 +52,7 @@ def damping_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """members × stiffness × mass × engine (module docstring); the other damping fields
     (ratio, method) as the scene has them."""
     from deckpound.compare.engines import engine_names
-
-    from .studies import modified
+    from deckpound.models.scene_io import modified
 
     cases = []
     for members, stiffness, mass in _choices(quick):
@@ -84,7 +83,7 @@ def damping_cases(scene: Scene, quick: bool = False) -> list[Case]:
 
 def damping_row(case: Case, result: Result) -> dict:
     """The common headline numbers (peak rotation, peak gap force ``peak_fn``, gap closures)."""
-    from .studies import case_row
+    from .case_rows import case_row
 
     return case_row(case, result)
 

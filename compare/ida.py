@@ -126,7 +126,7 @@ def parse_vary(text: str, scene: Scene) -> list[tuple[str, tuple[str, ...]]]:
     """``"PATH=V1,V2,..."`` → (label ``PATH=V``, scene overrides) per value, each checked on
     ``scene``; the shorthand ``gap=…`` sets both seats' gap (:data:`VARY_SHORTHANDS`). At most
     :data:`MAX_VARIANTS` distinct values."""
-    from .studies import modified
+    from deckpound.models.scene_io import modified
 
     if "=" not in text:
         raise SceneError("--vary", f"expects PATH=V1,V2,..., got {text!r}")
@@ -165,8 +165,7 @@ def synthetic_pairs(
     the generator's step. Returns the folder."""
     from deckpound.models.excitation import support_motion
     from deckpound.models.file_io import ensure_folder
-
-    from .studies import modified
+    from deckpound.models.scene_io import modified
 
     folder = ensure_folder(folder)
     for i in range(pairs):
@@ -204,7 +203,8 @@ def ida_cases(
 ) -> list[tuple[dict, Scene]]:
     """(params, scene) per record pair and level: the pair on x and y, scaled by one factor
     so that its ``im`` equals the level."""
-    from .studies import modified
+    from deckpound.models.scene_io import modified
+
     from .variability import record_cases
 
     if im not in IMS:
@@ -285,8 +285,7 @@ def run_ida(
     import pandas as pd
 
     from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
-
-    from .studies import modified
+    from deckpound.models.scene_io import modified
 
     variants = list(variants) if variants else [("", ())]
     specs = [

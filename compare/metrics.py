@@ -136,7 +136,7 @@ def metrics_against(
 def measured_result(path, t_column: str = "t") -> Result:
     """Measured data a user supplies as CSV (columns named as result columns) as a Result."""
     from deckpound.models.errors import SceneError
-    from deckpound.models.excitation import check_time_base
+    from deckpound.models.motion import check_time_base
 
     try:
         frame = pd.read_csv(path)

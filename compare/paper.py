@@ -35,6 +35,7 @@ from deckpound.models.scene_io import scene_to_toml
 
 from . import figures
 from .align import align, write_tables
+from .case_rows import ROW_UNITS
 from .cases import ResultCache
 from .mechanism import MECHANISM_UNITS, mechanism_row
 from .metrics import closure_times_per_corner, compare_pair
@@ -43,15 +44,7 @@ from .progress import Progress
 from .report_text_friction import friction_effect
 from .report_unseating import UnseatingRun, run_unseating
 from .sequence_run import SequenceRun, run_sequences, strongest_run
-from .studies import (
-    ROW_UNITS,
-    STUDIES,
-    StartState,
-    start_state,
-    state_caption,
-    study_results,
-    study_units,
-)
+from .studies import STUDIES, StartState, start_state, state_caption, study_results, study_units
 
 QUANTITIES = ["deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel"]
 EFFECT_UNITS = {"pga": "g", "mu": "-", "peak_theta_0": "rad", "peak_theta_mu": "rad", "ratio": "-"}
@@ -82,7 +75,7 @@ def friction_variant(scene: Scene) -> tuple[Scene, str]:
     """The scene with the other friction assumption: μ = 0.2 with OpenSees's zeroLengthContact2D
     friction (:data:`~deckpound.models.contact_laws_table.DEFAULT_FRICTION`) if it has none,
     frictionless otherwise; and a short label for it."""
-    from .studies import modified
+    from deckpound.models.scene_io import modified
 
     if scene.contact.has_friction:
         return modified(scene, "contact.friction=0.0", "contact.friction_mode=none"), "μ=0"

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from deckpound.models.excitation import G, SupportMotion
+from deckpound.models.motion import G, SupportMotion
 from deckpound.models.scene import Scene
 
 from .style import CYCLE, new_figure, save

@@ -1,7 +1,7 @@
 """The report's account of its inputs: the excitation actually applied, and the scene's notes.
 
 Everything here is read from what was run: the record provenance each result carries
-(``result.meta["record"]``, see :class:`deckpound.models.excitation.SupportMotion`) and the
+(``result.meta["record"]``, see :class:`deckpound.models.motion.SupportMotion`) and the
 scene itself. The scene's ``notes`` are the user's own words about the values; they are listed
 as such, next to the value actually run, and a note on a field whose value differs from the
 built-in scene of the same name is marked as written for that other value.

@@ -19,10 +19,11 @@ from pathlib import Path
 
 import pandas as pd
 
+from deckpound.models.scene_io import modified
+
 from .ida import IMS, run_ida, synthetic_pairs
 from .outputs import write_csv
 from .report_render import Figure, Table, view
-from .studies import modified
 
 #: the engines the section compares (the sweep needs summary rows, which these give quickly)
 ENGINES = ("compliance", "nonsmooth")

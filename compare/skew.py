@@ -84,8 +84,9 @@ VERIFY_VELOCITY_TOLERANCE = 1e-8
 def skew_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """φ × friction × engine (module docstring)."""
     from deckpound.compare.engines import engine_names
+    from deckpound.models.scene_io import modified
 
-    from .studies import contact_step, modified
+    from .case_rows import contact_step
 
     cases = []
     for phi in SKEWS_QUICK if quick else SKEWS:
@@ -181,7 +182,7 @@ def stick_slip_shares(result: Result, mu: float) -> tuple[float, float, str]:
 
 def skew_row(case: Case, result: Result) -> dict:
     """One table row: the common headline numbers plus the mechanism (module docstring)."""
-    from .studies import case_row
+    from .case_rows import case_row
 
     row = case_row(case, result)
     corner, when = first_strike(result)
@@ -300,8 +301,7 @@ def verify_skew(
     import dataclasses
 
     from deckpound.compare.verify_clone import verify_clone
-
-    from .studies import modified
+    from deckpound.models.scene_io import modified
 
     rows = []
     for phi in angles:

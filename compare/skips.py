@@ -46,8 +46,7 @@ import numpy as np
 import pandas as pd
 
 from deckpound.models.scene import Scene
-
-from .studies import modified
+from deckpound.models.scene_io import modified
 
 #: (row, the alternative's override, columns of max_abs_diff (None: every column), note): the
 #: rows that time a modelling or floating-point choice against its default

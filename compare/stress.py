@@ -22,9 +22,9 @@ import pandas as pd
 
 from deckpound.compare.engines import engine_names, get_engine
 from deckpound.models.scene import Scene
+from deckpound.models.scene_io import modified
 
 from .guarded import run_guarded
-from .studies import modified
 
 
 def step_field(engine: str) -> str:

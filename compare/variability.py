@@ -73,10 +73,9 @@ def record_cases(
     """One case per record pair of ``folder`` (:func:`deckpound.models.record_suite.read_suite`:
     PEER component names, ``NAME_x``/``NAME_y``, or ``manifest.csv``), each pair's components
     on x and y; with ``rotate`` also each pair with its components swapped."""
-    from deckpound.models.excitation import RecordWarning
+    from deckpound.models.motion import RecordWarning
     from deckpound.models.record_suite import read_suite
-
-    from .studies import modified
+    from deckpound.models.scene_io import modified
 
     suite = read_suite(folder, rotate=rotate)
     for note in suite.notes:

@@ -184,7 +184,7 @@ def run_case(
     """Verify one case (``case`` None: the scene as given)."""
     import dataclasses
 
-    from deckpound.compare.studies import modified
+    from deckpound.models.scene_io import modified
     from deckpound.compare.verify_clone import verify_clone
 
     sc = modified(scene, *case.overrides) if case is not None else scene

@@ -10,9 +10,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .plan import CORNER_NAMES, DOF_COLUMNS, RELATIVE_COLUMNS, VELOCITY_COLUMNS
+from .plan import CORNER_NAMES, DOF_COLUMNS, RELATIVE_COLUMNS, VELOCITY_COLUMNS, Plan
 
-__all__ = ["ENERGY_COLUMNS", "Column", "column_unit", "result_columns", "standard_columns"]
+__all__ = [
+    "ENERGY_COLUMNS",
+    "Column",
+    "column_names",
+    "column_unit",
+    "result_columns",
+    "standard_columns",
+]
 
 #: The work–energy balance columns of the penalty engines (compliance, OpenSees) [kJ], in
 #: order: ``energy_input`` (work of the support reactions −∫ f_springᵀ S du_g plus the initial
@@ -154,3 +161,9 @@ def result_columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
                 )
             )
     return tuple(cols)
+
+
+def column_names(plan: Plan) -> list[str]:
+    """Names of the standard result columns of ``plan`` (every engine writes them), in
+    output order: :func:`result_columns` of its bents."""
+    return [c.name for c in result_columns(plan.bent_names)]

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import SceneError
+from .mechanics import natural_modes
 from .plan import DECK_THETA, DECK_X, DECK_Y, SEAT_THETA, SEAT_X, Plan
 from .scene import Scene
 
@@ -138,8 +139,6 @@ def rayleigh_coefficients(
     if d.method == "none":
         return 0.0, 0.0, (float("nan"), float("nan"))
     if d.method == "modes":
-        from .mechanics import natural_modes
-
         omega = natural_modes(scene, plan).omega
         i, j = d.modes
         if max(i, j) > len(omega):

@@ -18,7 +18,7 @@ A new engine is one module plus one registry entry. It must:
 4. Optionally implement :meth:`Engine.notes`: sentences on how the engine interprets options it
    does read differently from the others (warned as :class:`OptionIgnored` too).
 5. Implement :meth:`Engine._run` ``(plan, scene, settings, motion, **options) -> RunOutput``: run
-   for :func:`deckpound.models.excitation.analysis_duration` seconds, store output every
+   for :func:`deckpound.models.motion.analysis_duration` seconds, store output every
    :func:`output_stride` steps starting at t = 0, and return the engine columns
    (:data:`ENGINE_COLUMNS` of the plan: time, absolute displacements, absolute velocities, gaps,
    normal and tangential contact forces, bent spring forces — ``fn`` ≥ 0 is compression, ``ft``
@@ -75,6 +75,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from deckpound.models.columns import column_names
 from deckpound.models.contact_params import contact_resolving_step
 from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
 from deckpound.models.fields import to_mapping
@@ -613,7 +614,7 @@ def finish(
             f"engine {engine.name!r} returned no column {missing[0]!r} (engine contract, point 5)"
         )
     cols.update(_relative_columns(plan, motion, cols))
-    order = plan.column_names
+    order = column_names(plan)
     columns = {k: cols[k] for k in order}
     columns.update({k: v for k, v in cols.items() if k not in columns})
     ok = out.status == Status.SUCCESS

@@ -39,6 +39,7 @@ import math
 
 import numpy as np
 
+from .plan import plan_of
 from .scene import Scene
 
 #: warning above [m]: deck-abutment gaps (expansion joints, seismic gaps) are 5-300 mm; a
@@ -245,7 +246,7 @@ def _inertia_and_periods(scene: Scene, flagged: set[str]) -> list[tuple[str, str
 
     found = _bent_springs(scene)
     deck = scene.deck
-    r2 = max(x * x + y * y for x, y in scene.corners)
+    r2 = max(c.x * c.x + c.y * c.y for c in plan_of(scene).corners)
     if deck.inertia > deck.mass * r2:
         found.append(
             (

@@ -41,7 +41,6 @@ __all__ = [
     "mode_label",
     "mode_labels",
     "natural_modes",
-    "rayleigh_coefficients",
     "spring_matrices",
     "support_channels",
 ]
@@ -146,10 +145,3 @@ def mode_labels(shapes: np.ndarray, masses: np.ndarray) -> list[str]:
     """:func:`mode_label` of every mode (columns of ``shapes``; see :func:`energy_shares`)."""
     shares = energy_shares(shapes, masses)
     return [mode_label(shares[:, k]) for k in range(shares.shape[1])]
-
-
-def rayleigh_coefficients(scene: Scene) -> tuple[float, float, tuple[float, float]]:
-    """Rayleigh a0 [1/s], a1 [s] and the matched frequencies (see :mod:`.damping`)."""
-    from .damping import rayleigh_coefficients as _rc
-
-    return _rc(scene)

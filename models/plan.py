@@ -40,14 +40,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .scene import Scene, TakedaSpring
-
-if TYPE_CHECKING:
-    from .columns import Column
 
 __all__ = [
     "CORNER_NAMES",
@@ -305,18 +301,6 @@ class Plan:
         """Mass each corner contact sees at rest [t]: 1 / (w_N M⁻¹ w_Nᵀ)."""
         W = self.normal_rows()
         return 1.0 / np.einsum("ci,ij,cj->c", W, np.diag(1.0 / self.mass), W)
-
-    # -- columns ---------------------------------------------------------------------------
-    @cached_property
-    def columns(self) -> tuple[Column, ...]:
-        """The standard result columns (every engine), in order (:mod:`.columns`)."""
-        from .columns import result_columns
-
-        return result_columns(self.bent_names)
-
-    @property
-    def column_names(self) -> list[str]:
-        return [c.name for c in self.columns]
 
     def deformations(self, U: np.ndarray, UG: np.ndarray) -> np.ndarray:
         """Spring deformations d = B u − S u_g for rows of U (n, 7) and UG (n, n_channels)."""

@@ -177,8 +177,9 @@ def _source(scene: Scene, motion) -> str:
 def check(scene: Scene, motion=None, *, engines: Iterable[Engine]) -> Plausibility:
     """Every plausibility finding for ``scene`` run by ``engines`` (the engine objects, for
     example ``[deckpound.get_engine(n) for n in names]``; see the module table)."""
-    from .excitation import analysis_duration, support_motion
+    from .excitation import support_motion
     from .mechanics import natural_modes
+    from .motion import analysis_duration
 
     engines = tuple(engines)
     if motion is None:

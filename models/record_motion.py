@@ -1,7 +1,7 @@
 """Support motion from a user's record: components, time scaling, processing, scaling.
 
 Steps, in this order, each stated in the motion's provenance
-(:attr:`deckpound.models.excitation.SupportMotion.provenance`):
+(:attr:`deckpound.models.motion.SupportMotion.provenance`):
 
 1. **read** (:mod:`deckpound.models.records`): AT2 in g, text and CSV in ``acc_unit``;
 2. **components**: the x (longitudinal) and y (transverse) accelerations. A direction without
@@ -44,9 +44,18 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import SceneError
-from .excitation import G, SupportMotion, check_lag, intensity_period, make_provenance, shift_record
 from .iir import butter_highpass_sos, sosfiltfilt
+from .intensity import pair_measures
 from .mechanics import support_channels
+from .motion import (
+    G,
+    SupportMotion,
+    check_lag,
+    check_time_base,
+    intensity_period,
+    make_provenance,
+    shift_record,
+)
 from .record_checks import AXIS_NAME, check_velocity_columns, scaling_note
 from .record_csv import CsvRecord, read_csv_record
 from .records import (
@@ -233,7 +242,6 @@ def pair_factor(
     components, so factor = target / measure meets the target exactly and keeps the
     components' ratio. Returns (factor, {measure, target, unit, before, factor, period}).
     """
-    from .intensity import pair_measures
 
     name, unit = PAIR_TARGETS[exc.scaling]
     target = float(getattr(exc, name))
@@ -466,7 +474,6 @@ def displacement_motion(scene: Scene, csv: CsvRecord) -> SupportMotion:
     acceleration the engines see, dv/dt by second-order differences. Processing must be
     ``none``: displacement histories (actuator commands) are used as given.
     """
-    from .excitation import check_time_base
 
     exc, rec, field = scene.excitation, csv.file, "excitation.file"
     if exc.scaling in PAIR_SCALINGS:

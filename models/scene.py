@@ -480,21 +480,6 @@ class Scene:
                     f"{duration / MAX_STEPS:.3g} s, got {step}",
                 )
 
-    # -- derived geometry (the plan model is the one definition) ------------------------
-    @property
-    def bent_x(self) -> tuple[float, ...]:
-        """Bent positions in deck coordinates, x = station − L/2 [m] (see the plan model)."""
-        from .plan import plan_of
-
-        return plan_of(self).bent_x
-
-    @property
-    def corners(self) -> tuple[tuple[float, float], ...]:
-        """Corner coordinates (x_c, y_c) [m] of c1 … c4 (see the plan model's corner table)."""
-        from .plan import plan_of
-
-        return tuple((c.x, c.y) for c in plan_of(self).corners)
-
     def replace(self, paths: Mapping[str, Any] | None = None, /, **changes) -> Scene:
         """A copy with fields replaced, validated again.
 

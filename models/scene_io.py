@@ -275,3 +275,8 @@ def apply_overrides(data: dict[str, Any], overrides: Iterable[str]) -> dict[str,
         split_path(path)  # a malformed path is refused before its value is parsed
         set_path(data, path, _parse_value(raw.strip()))
     return data
+
+
+def modified(scene: Scene, *overrides: str) -> Scene:
+    """A copy of the scene with ``path=value`` overrides applied and validated."""
+    return scene_from_mapping(apply_overrides(to_mapping(scene), overrides))

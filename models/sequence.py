@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import SceneError
-from .excitation import SupportMotion
+from .motion import SupportMotion
 from .result import Result
 from .scene import RECORD_KINDS, Scene, check_sequence_pgas
 

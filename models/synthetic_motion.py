@@ -12,13 +12,13 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import SceneError
-from .excitation import (
+from .motion import (
     G,
     SupportMotion,
-    _synthetic_samples,
     check_lag,
     make_provenance,
     shift_record,
+    synthetic_samples,
 )
 from .record_motion import highpass_padded
 from .scene import Excitation, Scene
@@ -121,7 +121,7 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     delayed by k·lag). The actuators follow the x motion of the nearest table.
     """
     exc = scene.excitation
-    n = _synthetic_samples(exc)
+    n = synthetic_samples(exc)
     rng = np.random.default_rng(exc.seed)
     common = {"x": rng.standard_normal(n), "y": rng.standard_normal(n)}
     pgas = {"x": exc.pga * exc.longitudinal_ratio, "y": exc.pga}

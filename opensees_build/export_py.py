@@ -25,6 +25,7 @@ from __future__ import annotations
 import inspect
 import textwrap
 
+from deckpound.models.columns import column_names
 from deckpound.models.plan import DOF_COLUMNS, plan_of
 
 from . import engine
@@ -83,7 +84,7 @@ def csv_plan(p: ExportParts) -> dict:
     derived = ["deck_x_rel", "deck_y_rel", "seat1_x_rel", "seat2_x_rel"]
     derived += [f"{b}_d{axis}" for b in plan.bent_names for axis in ("x", "y")]
     extended = engine_cols + derived
-    columns = plan.column_names
+    columns = column_names(plan)
     if sorted(columns) != sorted(extended):
         raise AssertionError("the script's CSV columns differ from the result's")
     return {

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 from deckpound.models import mechanics
-from deckpound.models.excitation import SupportMotion
+from deckpound.models.motion import SupportMotion
 from deckpound.models.scene import TakedaSpring
 from deckpound.models.scene_io import load_scene
 

@@ -22,8 +22,8 @@ from deckpound.models.engine_contract import (
     engine_columns,
     output_stride,
 )
-from deckpound.models.excitation import analysis_duration
 from deckpound.models.fields import spec, validate
+from deckpound.models.motion import analysis_duration
 
 
 @dataclass(frozen=True, kw_only=True)

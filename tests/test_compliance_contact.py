@@ -17,6 +17,7 @@ from _compliance_helpers import (
 
 from deckpound.analytic.compliance import run_compliance
 from deckpound.models.contact_params import kelvin_voigt_ratio
+from deckpound.models.plan import plan_of
 
 V_IMPACT = 0.5
 THETA0 = 0.01
@@ -169,7 +170,7 @@ def test_stick_holds_a_load_below_mu_n_and_slip_mode_creeps():
         assert np.all(np.abs(ft[late]) < MU * fn[late])  # load below the Coulomb limit
         i2 = np.searchsorted(r.t, 2.0)
         # tangential displacement of corner c1 (the deck may rotate about the held end)
-        yc1 = r["deck_y_abs"] + sc.corners[0][0] * r["deck_theta"]
+        yc1 = r["deck_y_abs"] + plan_of(sc).corners[0].x * r["deck_theta"]
         moved[mode] = abs(yc1[-1] - yc1[i2])
     print("corner c1 tangential movement after the load is applied:", moved)
     assert moved["stick"] < 1e-5  # elastic stick spring only (F/k_t ~ 1e-6 m): no slip

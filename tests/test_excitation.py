@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from deckpound.models.errors import SceneError
-from deckpound.models.excitation import G, SupportMotion, support_motion
+from deckpound.models.excitation import support_motion
 from deckpound.models.mechanics import support_channels
+from deckpound.models.motion import G, SupportMotion
 from deckpound.models.scene_io import load_scene
 
 

@@ -11,8 +11,9 @@ import pytest
 from _record_helpers import record_scene, write_text
 
 from deckpound.models import intensity as im
-from deckpound.models.excitation import intensity_period, support_motion
+from deckpound.models.excitation import support_motion
 from deckpound.models.mechanics import natural_modes
+from deckpound.models.motion import intensity_period
 from deckpound.models.record_motion import integrate
 
 G = 9.80665

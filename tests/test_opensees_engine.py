@@ -11,11 +11,12 @@ import scipy.linalg
 
 pytest.importorskip("openseespy.opensees")
 
-from deckpound.models import mechanics
+from deckpound.models import damping, mechanics
 from deckpound.models.columns import ENERGY_COLUMNS
 from deckpound.models.contact_laws_table import BILINEAR_MIN_SUBSTEPS
 from deckpound.models.errors import EngineFailure
-from deckpound.models.excitation import SupportMotion, support_motion
+from deckpound.models.excitation import support_motion
+from deckpound.models.motion import SupportMotion
 from deckpound.models.plan import plan_of
 from deckpound.models.result import standard_columns
 from deckpound.models.scene import RunSettings, TakedaSpring
@@ -117,7 +118,7 @@ def reference_response(scene, motion, t_out, a0=None, a1=None, relative_mass_dam
     k = plan_of(scene).k0 * (damping_model(scene, plan_of(scene)).beta > 0)
     kk = plan_of(scene).k0
     c = plan_of(scene).dashpots
-    ra0, ra1, _ = mechanics.rayleigh_coefficients(scene)
+    ra0, ra1, _ = damping.rayleigh_coefficients(scene)
     a0 = ra0 if a0 is None else a0
     a1 = ra1 if a1 is None else a1
     chans = mechanics.support_channels(scene)
@@ -290,7 +291,7 @@ def test_damping_force_definition(bench):
     motion = support_motion(sc)
     r = engine.run_opensees(sc, motion)
     got = np.column_stack([r["deck_x_abs"], r["deck_y_abs"], r["deck_theta"]])
-    _a0, _a1, _ = mechanics.rayleigh_coefficients(sc)
+    _a0, _a1, _ = damping.rayleigh_coefficients(sc)
 
     def err(**kw):
         ref = reference_response(sc, motion, r.t, **kw)[:, 4:]
@@ -354,7 +355,7 @@ class FailAt:
 
 
 def _rigid_gap_mismatch(r, sc):
-    (_, y1) = sc.corners[0]
+    y1 = plan_of(sc).corners[0].y
     pred = (
         sc.seats[0].gap
         + (r["deck_x_abs"] - y1 * r["deck_theta"])

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from deckpound.models.columns import column_names
 from deckpound.models.engine_contract import engine_columns
 from deckpound.models.plan import plan_of
 
@@ -82,7 +83,7 @@ def test_exported_python_csv_reproduces_in_process_run(exported, tmp_path):
     df = pd.read_csv(tmp_path / "opensees.csv", dtype=float)
     # the result's columns; the derived ones (relative, bent deformations) are compared to
     # round-off in tests/test_export_columns.py
-    assert list(df.columns) == plan_of(sc).column_names
+    assert list(df.columns) == column_names(plan_of(sc))
     assert len(df) == len(r.t)
     for c in engine_columns(plan_of(sc)):
         assert np.array_equal(df[c].to_numpy(), r[c]), c
@@ -305,13 +306,13 @@ def test_readme_shows_the_current_export_head():
 
 
 def test_gap_mapping_signs(bench):
-    for c in range(4):
-        spec = gap_mapping(bench, c, deck_node=100, seat_node=200, mat_tag=7)
+    for c, corner in enumerate(plan_of(bench).corners):
+        spec = gap_mapping(bench, corner, deck_node=100, seat_node=200, mat_tag=7)
         assert spec.material == "ElasticPPGap"
         assert spec.args[2] < 0 and spec.args[3] == -bench.seats[0].gap
         assert (spec.i_node, spec.j_node) == ((200, 100) if c < 2 else (100, 200))
     sc = bench.replace(contact=dc.replace(bench.contact, law="bilinear"))
-    spec = gap_mapping(sc, 0, 1, 2, 3)
+    spec = gap_mapping(sc, plan_of(sc).corners[0], 1, 2, 3)
     assert spec.material == "ImpactMaterial" and spec.args[3] < 0 and spec.args[4] < 0
 
 

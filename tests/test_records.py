@@ -18,7 +18,8 @@ import pytest
 from _record_helpers import DT, STATION, quake, record_scene, write_acc_csv, write_at2, write_text
 
 from deckpound.models.errors import SceneError
-from deckpound.models.excitation import G, RecordWarning, support_motion
+from deckpound.models.excitation import support_motion
+from deckpound.models.motion import G, RecordWarning
 from deckpound.models.records import MAX_SAMPLES, read_at2, read_text
 from deckpound.models.scene_io import RecordPathWarning, load_scene, scene_to_toml
 

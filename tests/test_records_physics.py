@@ -14,7 +14,8 @@ from _record_helpers import quake, record_scene, write_at2, write_text
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from deckpound.models.excitation import G, RecordWarning, support_motion
+from deckpound.models.excitation import support_motion
+from deckpound.models.motion import G, RecordWarning
 from deckpound.models.record_motion import DRIFT_FRACTION, integrate, remove_baseline
 
 

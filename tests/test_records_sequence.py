@@ -15,7 +15,8 @@ import pytest
 from _record_helpers import quake, record_scene, write_at2
 
 from deckpound.models.errors import SceneError
-from deckpound.models.excitation import G, support_motion
+from deckpound.models.excitation import support_motion
+from deckpound.models.motion import G
 from deckpound.models.scene_io import load_scene
 from deckpound.models.sequence import check_runs, initial_state, scene_for_run
 

@@ -11,16 +11,9 @@ from deckpound.cli import main
 from deckpound.compare import cases as cases_mod
 from deckpound.compare.cases import Case, ResultCache, run_cases
 from deckpound.compare.sequence_run import run_sequence
-from deckpound.compare.studies import (
-    STUDIES,
-    Study,
-    friction_cases,
-    modified,
-    run_study,
-    start_state,
-)
+from deckpound.compare.studies import STUDIES, Study, friction_cases, run_study, start_state
 from deckpound.models.errors import SceneError
-from deckpound.models.scene_io import load_scene
+from deckpound.models.scene_io import load_scene, modified
 
 TINY = [
     "excitation.duration=1.0",

@@ -27,6 +27,7 @@ import pytest
 from tests_helpers_scene import short_benchmark
 
 from deckpound.compare.engines import run_engine
+from deckpound.models.columns import column_names
 from deckpound.models.engine_contract import engine_columns
 from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import scene_from_mapping
@@ -158,7 +159,7 @@ def test_tcl_csv_block_reproduces_deckpound_csv(trip, tmp_path):
     )
     assert cp.returncode == 0, (cp.stdout + cp.stderr)[-2000:]
     df = pd.read_csv(out / "opensees.csv")
-    assert list(df.columns) == plan_of(scene).column_names  # derived ones: test_export_columns
+    assert list(df.columns) == column_names(plan_of(scene))  # derived ones: test_export_columns
     dev = deviation({c: df[c].to_numpy() for c in engine_columns(plan_of(scene))}, ref)
     assert max(dev.values()) <= 1e-10, dev
     assert (out / "deck_x_abs.out").exists()  # outDir set before source is honoured

@@ -57,8 +57,8 @@ def _show(args) -> int:
 def _validate(args) -> int:
     from deckpound.compare.engines import engine_names, get_engine
     from deckpound.models import plausibility
+    from deckpound.models.damping import rayleigh_coefficients
     from deckpound.models.excitation import support_motion
-    from deckpound.models.mechanics import rayleigh_coefficients
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene(args.scene, args.overrides)
