@@ -49,7 +49,7 @@ returned.  Returned residuals, both in velocity units:
 
 * comp_res = max_i |min(xi_N,i , G_NN,ii P_N,i)|  (Signorini-Newton
   complementarity; also measures P_N < 0 and xi_N < 0);
-* cone_res = max_i |g P_T,i - proj_[-g mu P_N,i , g mu P_N,i](g P_T,i - U_T+,i)|
+* ``cone_res = max_i |g P_T,i - proj_[-g mu P_N,i , g mu P_N,i](g P_T,i - U_T+,i)|``
   with g = G_TT,ii: the natural-map residual of the Coulomb law, zero iff
   |P_T| <= mu P_N and -U_T+ is in the normal cone of the friction interval.
 
@@ -365,25 +365,47 @@ def solve_contact_impulses_with(
         keep_if_better(
             G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT, bN, bT, best, STATUS_ENUM, tolv
         )
+    best_comp, best_cone = _canonical_split(
+        G, uN_free, uT_free, uN_minus, e, mu, nf, tolv, work, cN, cT, vN, vT, bN, bT
+    )
+    _contact_outputs(
+        G, uN_free, uT_free, bN, bT, P_N, P_T, uN_plus, uT_plus, state, rtol, s, vscale, tolv
+    )
+    return int(best[3]), best_comp, best_cone
+
+
+@kernel(inline="always")
+def _canonical_split(G, uN_free, uT_free, uN_minus, e, mu, nf, tolv, work, cN, cT, vN, vT, bN, bT):
+    """Canonical split of the tangential impulses among contacts with identical tangent
+    columns (two corners of one face), kept when it verifies at least as well as the best
+    candidate (bN, bT; residuals in ``work.best``). Returns the (comp, cone) residuals of the
+    result."""
+    best = work.best
     best_comp = best[1]
     best_cone = best[2]
-    best_status = int(best[3])
+    if nf <= 1:
+        return best_comp, best_cone
+    nc = uN_free.shape[0]
+    for i in range(nc):
+        cN[i] = bN[i]
+        cT[i] = bT[i]
+    if split_shared_tangents(G, mu, cN, cT, work.group):
+        comp, cone = evaluate_candidate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT)
+        if max(comp, cone) <= max(best[0], tolv):
+            for i in range(nc):
+                bT[i] = cT[i]
+            best_comp = comp
+            best_cone = cone
+    return best_comp, best_cone
 
-    # canonical split of tangential impulses among contacts with identical
-    # tangent columns (two corners of one face)
-    if nf > 1:
-        for i in range(nc):
-            cN[i] = bN[i]
-            cT[i] = bT[i]
-        if split_shared_tangents(G, mu, cN, cT, work.group):
-            comp, cone = evaluate_candidate(G, uN_free, uT_free, uN_minus, e, mu, cN, cT, vN, vT)
-            if max(comp, cone) <= max(best[0], tolv):
-                for i in range(nc):
-                    bT[i] = cT[i]
-                best_comp = comp
-                best_cone = cone
 
-    # outputs
+@kernel(inline="always")
+def _contact_outputs(
+    G, uN_free, uT_free, bN, bT, P_N, P_T, uN_plus, uT_plus, state, rtol, s, vscale, tolv
+):
+    """The impulses bN, bT into P_N, P_T, the post-impact contact velocities and the contact
+    states (open when P_N ≤ rtol·s·vscale, stick when |U_T+| ≤ tolv, else slip)."""
+    nc = uN_free.shape[0]
     for i in range(nc):
         P_N[i] = bN[i]
         P_T[i] = bT[i]
@@ -396,7 +418,6 @@ def solve_contact_impulses_with(
             state[i] = CONTACT_STICK
         else:
             state[i] = CONTACT_SLIP
-    return best_status, best_comp, best_cone
 
 
 def solve_contact_impulses(G, uN_free, uT_free, uN_minus, e, mu, mode=0, rtol=1e-9):

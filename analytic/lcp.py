@@ -234,10 +234,141 @@ def lcp_lemke(M, q, max_pivots=0, tol=1e-12):
     return z, w, status, npiv
 
 
+@kernel(inline="always")
+def _lemke_tableau(M, q, T, basis, qscale):
+    """The initial tableau T (n, 2n + 2) of Lemke's method for w − M z − d z0 = q / qscale
+    with d = 1; columns [w_0..w_{n-1}, z_0..z_{n-1}, z0, rhs] (variable ids 0..n−1 → w_i,
+    n..2n−1 → z_i, 2n → z0); the basis is w (basis[i] = variable id basic in row i)."""
+    n = q.shape[0]
+    for i in range(n):
+        for j in range(T.shape[1]):
+            T[i, j] = 0.0
+    for i in range(n):
+        T[i, i] = 1.0
+        for j in range(n):
+            T[i, n + j] = -M[i, j]
+        T[i, 2 * n] = -1.0
+        T[i, 2 * n + 1] = q[i] / qscale
+    for i in range(n):
+        basis[i] = i
+
+
+@kernel(inline="always")
+def _lemke_first_row(T, rows, cand, n, qm, tol):
+    """The row z0 enters in: argmin of the scaled q (minimum ``qm``), ties broken
+    lexicographically. In the initial tableau the z0 column is −d = −1 in every row and the
+    basis inverse is I, so the lexicographic minimum of (q_i, e_iᵀ) over the tied rows is the
+    row whose entries T[i, 0:n] stay smallest, i.e. the largest index."""
+    nt = 0
+    for i in range(n):
+        if T[i, 2 * n + 1] <= qm + tol:
+            rows[nt] = i
+            nt += 1
+    if nt == 1:
+        return rows[0]
+    for k in range(nt):
+        cand[k] = rows[k]
+    ncand = nt
+    for j in range(n):
+        if ncand <= 1:
+            break
+        vmin = np.inf
+        for k in range(ncand):
+            vmin = min(vmin, T[cand[k], j])
+        nn = 0
+        for k in range(ncand):
+            if T[cand[k], j] <= vmin + tol:
+                cand[nn] = cand[k]
+                nn += 1
+        ncand = nn
+    return cand[0]
+
+
+@kernel(inline="always")
+def _lemke_blocking_row(T, basis, rows, cand, c, n, ptol, tol):
+    """Minimum-ratio test for the entering column ``c``: the blocking row (z0's row when it
+    is among the tied rows, so that it leaves and the method terminates; otherwise the
+    lexicographic minimum, :func:`_lex_select`). Returns −1 when no row blocks (a ray)."""
+    rhs = 2 * n + 1
+    rmin = np.inf
+    for i in range(n):
+        a = T[i, c]
+        if a > ptol:
+            rmin = min(rmin, T[i, rhs] / a)
+    if rmin == np.inf:
+        return -1
+    rtie = tol * max(1.0, abs(rmin)) * 10.0
+    nt = 0
+    z0row = -1
+    for i in range(n):
+        a = T[i, c]
+        if a > ptol and T[i, rhs] / a <= rmin + rtie:
+            rows[nt] = i
+            nt += 1
+            if basis[i] == 2 * n:
+                z0row = i
+    if z0row >= 0:
+        return z0row
+    if nt == 1:
+        return rows[0]
+    return _lex_select(T, rows, nt, c, n, tol, cand)
+
+
+@kernel(inline="always")
+def _lemke_solution(M, q, T, basis, z, w, qscale):
+    """z from the tableau (the basic z_i, clipped at 0, unscaled), w = M z + q."""
+    n = q.shape[0]
+    for i in range(n):
+        v = basis[i]
+        val = T[i, 2 * n + 1] * qscale
+        if v >= n and v < 2 * n:
+            z[v - n] = max(0.0, val)
+    _lcp_w(M, q, z, w)
+
+
+@kernel(inline="always")
+def _lcp_w(M, q, z, w):
+    """w = M z + q."""
+    n = q.shape[0]
+    for i in range(n):
+        s = q[i]
+        for j in range(n):
+            s += M[i, j] * z[j]
+        w[i] = s
+
+
+@kernel(inline="always")
+def _lemke_polish(M, q, basis, z, w, ws):
+    """Polish on the final complementary basis (:func:`_polish`, clipped at 0); keeps the
+    polished (z, w) when its natural residual is not larger."""
+    n = q.shape[0]
+    mask = ws.mask
+    for i in range(n):
+        mask[i] = False
+    for i in range(n):
+        v = basis[i]
+        if v >= n and v < 2 * n:
+            mask[v - n] = True
+    zp = ws.zp[:n]
+    if not _polish(M, q, mask, zp, ws):
+        return
+    for i in range(n):
+        zp[i] = max(zp[i], 0.0)
+    wp = ws.wp[:n]
+    _lcp_w(M, q, zp, wp)
+    r0, _ = lcp_residual(z, w)
+    r1, _ = lcp_residual(zp, wp)
+    if r1 <= r0:
+        for i in range(n):
+            z[i] = zp[i]
+            w[i] = wp[i]
+
+
 @kernel
 def lcp_lemke_into(M, q, z, w, ws, max_pivots, tol):
     """:func:`lcp_lemke` writing z, w (n,) with the scratch ``ws`` (:func:`lcp_work` of size
-    ≥ n); returns (status, n_pivots)."""
+    ≥ n); returns (status, n_pivots). The stages (tableau, first pivot row, blocking row,
+    solution, polish) are inlined."""
     n = q.shape[0]
     for i in range(n):
         z[i] = 0.0
@@ -256,138 +387,34 @@ def lcp_lemke_into(M, q, z, w, ws, max_pivots, tol):
     for i in range(n):
         for j in range(n):
             mscale = max(mscale, abs(M[i, j]))
-    # columns: [w_0..w_{n-1}, z_0..z_{n-1}, z0, rhs]
-    # variable ids: 0..n-1 -> w_i, n..2n-1 -> z_i, 2n -> z0
-    ncol = 2 * n + 2
-    T = ws.T[:n, :ncol]
-    for i in range(n):
-        for j in range(ncol):
-            T[i, j] = 0.0
-    for i in range(n):
-        T[i, i] = 1.0
-        for j in range(n):
-            T[i, n + j] = -M[i, j]
-        T[i, 2 * n] = -1.0
-        T[i, 2 * n + 1] = q[i] / qscale
-    basis = ws.basis  # basis[i] = variable id basic in row i
-    for i in range(n):
-        basis[i] = i
-    rows = ws.rows
-    cand = ws.cand
-    # initial pivot: z0 enters, leaving row = argmin q_i (lexicographic ties)
-    nt = 0
-    qm = qmin / qscale
-    for i in range(n):
-        if T[i, 2 * n + 1] <= qm + tol:
-            rows[nt] = i
-            nt += 1
-    if nt > 1:
-        # lexicographic minimum of (q_i, e_i^T) over the tied rows (the z0
-        # column is -d = -1 in every row): the row of B^-1 = I that is
-        # lexicographically smallest, i.e. the largest index.
-        for k in range(nt):
-            cand[k] = rows[k]
-        ncand = nt
-        for j in range(n):
-            if ncand <= 1:
-                break
-            vmin = np.inf
-            for k in range(ncand):
-                v = T[cand[k], j]
-                vmin = min(vmin, v)
-            nn = 0
-            for k in range(ncand):
-                if T[cand[k], j] <= vmin + tol:
-                    cand[nn] = cand[k]
-                    nn += 1
-            ncand = nn
-        r = cand[0]
-    else:
-        r = rows[0]
+    T = ws.T[:n, : 2 * n + 2]
+    basis = ws.basis
+    _lemke_tableau(M, q, T, basis, qscale)
+    z0 = 2 * n  # z0 enters first
+    r = _lemke_first_row(T, ws.rows, ws.cand, n, qmin / qscale, tol)
     leaving = basis[r]
-    _pivot(T, r, 2 * n)
-    basis[r] = 2 * n
+    _pivot(T, r, z0)
+    basis[r] = z0
     npiv = 1
     status = LEMKE_MAX_PIVOTS
     ptol = tol * max(1.0, mscale)
     while npiv < max_pivots:
-        # entering = complement of leaving
-        if leaving < n:
-            c = leaving + n
-        else:
-            c = leaving - n
-        # ratio test
-        rmin = np.inf
-        for i in range(n):
-            a = T[i, c]
-            if a > ptol:
-                ratio = T[i, 2 * n + 1] / a
-                rmin = min(rmin, ratio)
-        if rmin == np.inf:
+        # the complement of the leaving variable enters
+        c = leaving + n if leaving < n else leaving - n
+        r = _lemke_blocking_row(T, basis, ws.rows, ws.cand, c, n, ptol, tol)
+        if r < 0:
             status = LEMKE_RAY
             break
-        rtie = tol * max(1.0, abs(rmin)) * 10.0
-        nt = 0
-        z0row = -1
-        for i in range(n):
-            a = T[i, c]
-            if a > ptol:
-                ratio = T[i, 2 * n + 1] / a
-                if ratio <= rmin + rtie:
-                    rows[nt] = i
-                    nt += 1
-                    if basis[i] == 2 * n:
-                        z0row = i
-        if z0row >= 0:
-            r = z0row
-        elif nt == 1:
-            r = rows[0]
-        else:
-            r = _lex_select(T, rows, nt, c, n, tol, cand)
         leaving = basis[r]
         _pivot(T, r, c)
         basis[r] = c
         npiv += 1
-        if leaving == 2 * n:
+        if leaving == z0:
             status = LEMKE_SOLVED
             break
-    # read the tableau solution
-    for i in range(n):
-        v = basis[i]
-        val = T[i, 2 * n + 1] * qscale
-        if v >= n and v < 2 * n:
-            z[v - n] = max(0.0, val)
-    for i in range(n):
-        s = q[i]
-        for j in range(n):
-            s += M[i, j] * z[j]
-        w[i] = s
+    _lemke_solution(M, q, T, basis, z, w, qscale)
     if status == LEMKE_SOLVED:
-        # polish on the final complementary basis
-        mask = ws.mask
-        for i in range(n):
-            mask[i] = False
-        for i in range(n):
-            v = basis[i]
-            if v >= n and v < 2 * n:
-                mask[v - n] = True
-        zp = ws.zp[:n]
-        ok = _polish(M, q, mask, zp, ws)
-        if ok:
-            for i in range(n):
-                zp[i] = max(zp[i], 0.0)
-            wp = ws.wp[:n]
-            for i in range(n):
-                s = q[i]
-                for j in range(n):
-                    s += M[i, j] * zp[j]
-                wp[i] = s
-            r0, _ = lcp_residual(z, w)
-            r1, _ = lcp_residual(zp, wp)
-            if r1 <= r0:
-                for i in range(n):
-                    z[i] = zp[i]
-                    w[i] = wp[i]
+        _lemke_polish(M, q, basis, z, w, ws)
     return status, npiv
 
 
