@@ -89,6 +89,8 @@ from deckpound.analytic.impulses import solve_active_impulses
 from deckpound.analytic.kinematics import contact_kinematics, linear_gap
 from deckpound.analytic.moreau_jean_work import (
     ENERGY_COLUMNS,
+    FINAL_U,
+    FINAL_V,
     N_ENERGY,
     W_FRICTION,
     W_IMPACT,
@@ -148,10 +150,11 @@ def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
 
 @kernel(inline="always")
 def _copy_state(final, q, v):
-    """final[0] = q, final[1] = v (the state a run reports as its last)."""
+    """The state a run reports as its last: displacement q and velocity v into the rows
+    FINAL_U, FINAL_V of ``final``."""
     for j in range(q.shape[0]):
-        final[0, j] = q[j]
-        final[1, j] = v[j]
+        final[FINAL_U, j] = q[j]
+        final[FINAL_V, j] = v[j]
 
 
 @kernel(inline="always")
@@ -440,7 +443,7 @@ def _commit(system, work, h, th):
         spr.dd_k[i] = spr.dd[i]
         spr.fs_k[i] = spr.fs[i]
         spr.kt_k[i] = spr.kt[i]
-    a0 = sa.scal[0]
+    a0 = sa.scal[0]  # mass-proportional Rayleigh coefficient (SystemArrays.scal)
     num = 0.0
     q, v, qk, vk = dof.q, dof.v, dof.qk, dof.vk
     for j in range(q.shape[0]):

@@ -23,6 +23,8 @@ from deckpound.analytic.system import C_BENT, spring_stored_energy, store_standa
 
 __all__ = [
     "ENERGY_COLUMNS",
+    "FINAL_U",
+    "FINAL_V",
     "IMPULSE_COLUMNS",
     "N_ENERGY",
     "N_WORK",
@@ -60,6 +62,8 @@ IMPULSE_COLUMNS = (
 W_NAMES = ("input", "spring", "viscous", "impact", "friction", "numerical")
 N_WORK = len(W_NAMES)
 W_INPUT, W_SPRING, W_VISCOUS, W_IMPACT, W_FRICTION, W_NUMERICAL = range(N_WORK)
+#: Rows of ``work.final``: displacement and velocity at the last accepted step.
+FINAL_U, FINAL_V = 0, 1
 
 #: The scalars of :func:`moreau_jean_run`: ``nsteps`` steps of length ``h`` [s], ``theta``;
 #: restitution ``ecoef`` of approaching corners and ``esep`` of separating ones
@@ -198,7 +202,7 @@ def moreau_jean_workspace(u0, v0, hstate, ns: int, nch: int, n_corners: int) -> 
         u0=u0,
         v0=v0,
         hstate=hstate,
-        final=np.zeros((2, n_dof)),
+        final=np.zeros((2, n_dof)),  # rows FINAL_U, FINAL_V
         dof=dof,
         spring=MoreauJeanSprings(**springs),
         corner=corner,

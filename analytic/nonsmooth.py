@@ -75,7 +75,7 @@ from deckpound.analytic.moreau_jean import (
     moreau_jean_run,
     moreau_jean_workspace,
 )
-from deckpound.analytic.moreau_jean_work import IMPULSE_COLUMNS
+from deckpound.analytic.moreau_jean_work import FINAL_U, FINAL_V, IMPULSE_COLUMNS
 from deckpound.analytic.peaks import run_output_fields, run_peaks
 from deckpound.analytic.support_motion import support_record
 from deckpound.analytic.system import initial_dofs, pack_system
@@ -269,8 +269,8 @@ class NonsmoothEngine(Engine):
             "impact_law": ns_set.impact_law,
             "energy_error": eerr,
             "energy_closure": eerr / ein if ein > 0 else 0.0,
-            "final_u": work.final[0].tolist(),
-            "final_v": work.final[1].tolist(),
+            "final_u": work.final[FINAL_U].tolist(),
+            "final_v": work.final[FINAL_V].tolist(),
             "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
             "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "
             "impact + friction + numerical) [kJ]",
