@@ -47,6 +47,7 @@ import pandas as pd
 
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified
+from deckpound.models.scene_settings import SUBNORMALS_UNCHANGED_ABOVE
 
 #: (row, the alternative's override, columns of max_abs_diff (None: every column), note): the
 #: rows that time a modelling or floating-point choice against its default
@@ -117,6 +118,20 @@ def max_diff(a, b, columns=None) -> float:
         if len(x):
             out = max(out, float(np.max(np.abs(x - y))))
     return out
+
+
+#: rows of skips.csv that are choices with (slightly) different results, not skips
+NOT_SKIPS = ("geometry", "subnormals")
+
+
+def skip_failures(skips: pd.DataFrame) -> pd.DataFrame:
+    """The rows of ``skips.csv`` whose claim fails: a skip that changed a result, or flushed
+    subnormals that changed one by more than ``SUBNORMALS_UNCHANGED_ABOVE`` (1e-250;
+    ``geometry`` is a model choice: any difference is information)."""
+    changed = ~skips["identical"].astype(bool)
+    skip = ~skips["skip"].isin(NOT_SKIPS)
+    flush = (skips["skip"] == "subnormals") & (skips["max_abs_diff"] > SUBNORMALS_UNCHANGED_ABOVE)
+    return skips[(skip & changed) | flush]
 
 
 _TAKEDA_CHILD = r"""

@@ -66,7 +66,7 @@ def define_analysis(ops, plan):
 
 def corner_gaps(ops, plan):
     """Physical gaps g = g0 + n.(u_deck corner - u_seat point) of the four corners [m], n the
-    gap-opening normal plan['normals'][c] (a straight deck has n_y = 0: x displacements only)."""
+    gap-opening normal ``plan['normals'][c]`` (a straight deck has n_y = 0: x displacements only)."""
     out = []
     for c in range(4):
         nx, ny = plan["normals"][c]
@@ -80,7 +80,7 @@ def corner_gaps(ops, plan):
 
 def contact_forces(ops, plan):
     """(fn, ft) of the four corners [kN]: fn >= 0 compression, ft the force on the deck along
-    the face tangent plan['tangents'][c] (+y for a straight deck)."""
+    the face tangent ``plan['tangents'][c]`` (+y for a straight deck)."""
     fn, ft = [], []
     for c in range(4):
         e = plan["gap_elements"][c] if plan["gap_elements"] else 0
@@ -147,7 +147,7 @@ def new_tracker(ops, plan):
     contact (gap <= 0 or fn > 0), a corner in contact at t = 0 counting one. Per corner,
     'gap_open' is the largest gap so far and 'gap_open_time' its first time, 'gap_start' the
     gap at t = 0; 'unseated' = [corner, time] of the first step at which the opening
-    g - g(0) exceeded the support length plan['support_lengths'][c] of the facing seat (None:
+    g - g(0) exceeded the support length ``plan['support_lengths'][c]`` of the facing seat (None:
     not checked), else None (deckpound.analytic.peaks, the same rule)."""
     cols = plan["peak_columns"]
     g0 = cols.index("gap_c1")

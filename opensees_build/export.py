@@ -11,10 +11,10 @@ in-process run, standard OpenSees recorders named after deckpound's result colum
 :mod:`.export_py`). Scene text is quoted or escaped for the script's language
 (:mod:`.quoting`). Files are written to a temporary name and renamed into place.
 
-Golden command log: :func:`regen_golden` (or ``python -m deckpound.opensees_build.export
---regen-golden``) rewrites ``data/golden/saiidi-4span.opensees.log``; floats are printed with
-12 significant digits and support records abbreviated to their length and a SHA-256.
-The README's "Exports" snippet: ``--regen-readme`` (a test compares it with :func:`readme_snippet`).
+Golden command log: :func:`golden_text` renders a scene's command log with floats printed to
+12 significant digits and support records abbreviated to their length and a SHA-256; the
+repository keeps the benchmark's as ``data/golden/saiidi-4span.opensees.log`` (written by
+``python tools/golden_files.py``, repository tooling, not installed).
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ from pathlib import Path
 
 from deckpound.models.errors import SceneError
 from deckpound.models.result import scene_hash
+from deckpound.models.scene_io import load_scene
 from deckpound.models.version import VERSION
 
 from . import engine
@@ -36,35 +37,13 @@ from .ops import ArrayArg, Command, OpsSession, render_commands
 from .quoting import safe_file_name, tcl_word
 from .recorders import PRECISION, manifest_entries, recorder_step, standard_recorders
 
-ROOT = Path(__file__).resolve().parents[1]
-GOLDEN_DIR = ROOT / "data" / "golden"
-GOLDEN_SCENE = "saiidi-4span"
-README = ROOT / "README.md"
-README_BEGIN = "<!-- export-snippet: python -m deckpound.opensees_build.export --regen-readme -->"
-README_END = "<!-- end export-snippet -->"
-#: lines of the exported Tcl script shown in the README
-README_LINES = 16
 MANIFEST_FORMAT = "deckpound-opensees-export-data/1"
-
-
-def golden_path(name: str = GOLDEN_SCENE) -> Path:
-    return GOLDEN_DIR / f"{name}.opensees.log"
 
 
 def golden_text(scene, motion=None) -> str:
     """The golden rendering of the scene's command log."""
     log = engine.command_log(scene, motion)
     return render_commands(log, "log", golden=True)
-
-
-def regen_golden(name: str = GOLDEN_SCENE) -> Path:
-    """Rewrite the golden command log of built-in scene ``name``."""
-    from deckpound.models.scene_io import load_scene
-
-    path = golden_path(name)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(golden_text(load_scene(name)))
-    return path
 
 
 # -- the parts of an export ------------------------------------------------------------------
@@ -223,59 +202,14 @@ def export_script(scene, fmt: str, path, motion=None) -> Path:
     return path
 
 
-# -- README snippet ----------------------------------------------------------------------------
-
-
-def readme_snippet() -> str:
-    """The README block: the first lines of the benchmark's Tcl export."""
-    from deckpound.models.scene_io import load_scene
-
-    text, _ = script_text(load_scene(GOLDEN_SCENE), "tcl", GOLDEN_SCENE)
-    head = "\n".join(text.splitlines()[:README_LINES])
-    return f"{README_BEGIN}\n```tcl\n{head}\n...\n```\n{README_END}"
-
-
-def readme_block(text: str) -> str | None:
-    """The snippet block of a README text (None when the markers are missing)."""
-    if README_BEGIN not in text or README_END not in text:
-        return None
-    start = text.index(README_BEGIN)
-    return text[start : text.index(README_END, start) + len(README_END)]
-
-
-def regen_readme(path: Path = README) -> Path:
-    text = path.read_text(encoding="utf-8")
-    old = readme_block(text)
-    if old is None:
-        raise SystemExit(f"{path}: no '{README_BEGIN}' ... '{README_END}' block")
-    path.write_text(text.replace(old, readme_snippet()), encoding="utf-8")
-    return path
-
-
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(
         prog="python -m deckpound.opensees_build.export", description=__doc__.splitlines()[0]
     )
-    p.add_argument("--regen-golden", action="store_true", help="rewrite the golden command log")
-    p.add_argument(
-        "--regen-readme",
-        action="store_true",
-        help="rewrite the exported-script snippet in README.md",
-    )
-    p.add_argument("--scene", default=GOLDEN_SCENE, help="built-in scene name or TOML file")
+    p.add_argument("--scene", default="saiidi-4span", help="built-in scene name or TOML file")
     p.add_argument("--format", choices=("tcl", "py"), default="py")
-    p.add_argument("--out", help="script path to write")
+    p.add_argument("--out", required=True, help="script path to write")
     a = p.parse_args(argv)
-    if a.regen_golden or a.regen_readme:
-        if a.regen_golden:
-            print(regen_golden())
-        if a.regen_readme:
-            print(regen_readme())
-        return 0
-    if not a.out:
-        p.error("--out is required unless --regen-golden / --regen-readme")
-    from deckpound.models.scene_io import load_scene
-
     print(export_script(load_scene(a.scene), a.format, a.out))
     return 0
 

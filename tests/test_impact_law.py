@@ -1,9 +1,10 @@
 """The nonsmooth engine's impact law as a named option, measured (issue 12).
 
-``deckpound verify impact-law saiidi-4span`` prints the table the README quotes between the
-``impact-law-table`` markers; this test re-runs the measurement
-(:func:`deckpound.compare.impact_law.impact_law_table`) and checks that the README's block is
-exactly what it prints, and that the measurement supports the default
+``deckpound verify impact-law saiidi-4span`` prints the table docs/verification.md quotes
+between the ``impact-law-table`` markers (``python tools/verify_tables.py impact-law``); this
+test re-runs the measurement (:func:`deckpound.compare.impact_law.impact_law_table`) and checks
+that the page's block is exactly what it prints (here, not under tests/docs: the measurement
+is shared with the physics checks), and that the measurement supports the default
 (``nonsmooth.impact_law = "newton"``): smaller penetration and closer agreement with the
 compliance clone (OpenSees to round-off) with and without friction, the discrete energy balance
 closed for both laws, and the energy-safe variant the only one whose impulses give no energy
@@ -23,7 +24,7 @@ from deckpound.models.engine_contract import PENETRATION_WARN_FRACTION
 from deckpound.models.scene import NonsmoothSettings
 from deckpound.models.scene_io import load_scene
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+PAGE = Path(__file__).resolve().parents[1] / "docs" / "verification.md"
 
 
 @pytest.fixture(scope="module")
@@ -33,15 +34,15 @@ def rows():
         return impact_law_table(load_scene("saiidi-4span"))
 
 
-def test_readme_quotes_the_measurement(rows):
-    text = README.read_text(encoding="utf-8")
+def test_verification_page_quotes_the_measurement(rows):
+    text = PAGE.read_text(encoding="utf-8")
     m = re.search(r"<!-- impact-law-table[^>]*-->\n(.*?)\n<!-- /impact-law-table -->", text, re.S)
-    assert m, "README has no impact-law-table block"
+    assert m, "docs/verification.md has no impact-law-table block"
     assert m.group(1).strip() == format_table(rows).strip()
 
 
 def test_measurement_supports_the_default(rows):
-    """The rule the README states: the default is the law that follows the clone (OpenSees to
+    """The rule docs/verification.md states: the default is the law that follows the clone (OpenSees to
     round-off) at least as closely, with and without friction, provided its energy balance
     closes and its penetration stays below the nonsmooth quality threshold. Newton's law is
     also the standard Moreau–Jean law; the energy-safe one is the only one whose impulses give

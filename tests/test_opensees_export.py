@@ -9,6 +9,7 @@ import shlex
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -28,6 +29,9 @@ from deckpound.opensees_build import engine, export, recorders
 from deckpound.opensees_build.gaps import gap_mapping
 from deckpound.opensees_build.ops import ArrayArg, OpsSession, render_commands
 
+#: the benchmark's golden command log (written by tools/golden_files.py)
+GOLDEN = Path(__file__).resolve().parents[1] / "data" / "golden" / "saiidi-4span.opensees.log"
+
 
 @pytest.fixture(scope="module")
 def bench():
@@ -35,11 +39,11 @@ def bench():
 
 
 def test_golden_command_log(bench):
-    """The benchmark's command log is frozen; regenerate with
-    ``python -m deckpound.opensees_build.export --regen-golden`` after a deliberate change."""
-    expected = export.golden_path().read_text()
+    """The benchmark's command log is frozen; regenerate with ``python tools/golden_files.py
+    golden`` after a deliberate change."""
+    expected = GOLDEN.read_text()
     got = export.golden_text(bench)
-    assert got == expected, "command log changed: review and run --regen-golden"
+    assert got == expected, "command log changed: review and run tools/golden_files.py golden"
 
 
 def test_ops_session_wipes_and_tags():
@@ -292,14 +296,6 @@ def test_export_replaces_files_and_never_writes_through_a_symlink(bench, tmp_pat
     assert stat.S_IMODE(py.stat().st_mode) == 0o666 & ~mask
     assert stat.S_IMODE((tmp_path / "m_data").stat().st_mode) == 0o777 & ~mask
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.py", "m_data", "target.txt"]
-
-
-def test_readme_shows_the_current_export_head():
-    """README's export snippet is the head of the benchmark's Tcl export; regenerate with
-    ``python -m deckpound.opensees_build.export --regen-readme``."""
-    block = export.readme_block(export.README.read_text(encoding="utf-8"))
-    assert block is not None, "README lacks the export snippet markers"
-    assert block == export.readme_snippet(), "README export snippet is stale: --regen-readme"
 
 
 # -- sign convention and refusals ---------------------------------------------------------------

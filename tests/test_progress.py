@@ -163,10 +163,3 @@ def test_run_cases_reports_to_a_log(monkeypatch, capsys):
     assert progress[0].startswith("deckpound study quick: 0/1 done")
     assert re.match(r"deckpound study quick: 1/1 done in \d", progress[-1])
     assert "\r" not in log.getvalue()
-
-
-def test_readme_states_the_default_interval():
-    from pathlib import Path
-
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    assert f"`DECKPOUND_PROGRESS_INTERVAL` seconds (default {PROGRESS_INTERVAL:g};" in readme

@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from deckpound.models.errors import SceneError
-
 from ._cli_study import _benchmark_scene_args, _engines, _seconds
 from ._terminal import terminal_text
 
@@ -36,15 +34,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="comma-separated engine names (default: every registered engine)",
     )
     p.add_argument("--timeout", type=_seconds, default=300.0, help="seconds per cell")
-    p.add_argument(
-        "--write-readme",
-        nargs="?",
-        const="README.md",
-        default=None,
-        metavar="PATH",
-        help="put the stability paragraph into the README (default ./README.md), its "
-        "stress.csv and heat maps copied into docs/results beside it (not with --quick)",
-    )
     p.set_defaults(func=_stress)
 
 
@@ -61,9 +50,8 @@ def _bench(args) -> int:
 
 def _bench_body(args, scene) -> int:
     from deckpound.compare.bench import run_bench
+    from deckpound.compare.skips import skip_failures
 
-    if args.write_readme is not None and not Path(args.write_readme).is_file():
-        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
     if args.skips:
         from deckpound.compare.skips import run_skips
 
@@ -84,8 +72,6 @@ def _bench_body(args, scene) -> int:
                 ["scene", "commit_cap", "where", "steps", "median", "min", "max", "time"]
             ].to_string(index=False, float_format=lambda v: f"{v:.3g}")
         )
-        from deckpound.compare.readme_results import skip_failures
-
         bad = skip_failures(table)
         print(
             f"wrote {args.output}; "
@@ -95,11 +81,6 @@ def _bench_body(args, scene) -> int:
                 else f"{len(bad)} skip(s) changed a result"
             )
         )
-        if args.write_readme is not None and not args.quick:
-            from deckpound.compare import readme_results
-
-            path = readme_results.write_skips(args.write_readme, args.output)
-            print(f"wrote the skips paragraph into {terminal_text(path)}")
         return 0 if not len(bad) else 1
     if not args.speed_only:
         table = run_bench(scene, args.output, quick=args.quick, repeats=args.repeats)
@@ -122,15 +103,6 @@ def _bench_body(args, scene) -> int:
             if c in table
         ]
         print(table[cols].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-        if args.write_readme is not None and not args.quick:
-            # the shortened records of --quick are not the README's work-precision table
-            from deckpound.compare import bench_readme
-
-            path = bench_readme.write_readme(args.write_readme, args.output)
-            print(
-                f"wrote the work-precision table into {terminal_text(path)} "
-                f"(sources in {bench_readme.RESULTS})"
-            )
     _speed_table(args)
     print(f"wrote {terminal_text(args.output)}")
     return 0
@@ -145,8 +117,6 @@ def _stress(args) -> int:
 
     engines = tuple(_engines(args.engines))
     out = check_output_folder(args.output)
-    if args.write_readme is not None and not Path(args.write_readme).is_file():
-        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
     scene = load_scene(args.scene, args.overrides)
     with output_folder(out, "stress"):
         table = run_stress(scene, out, quick=args.quick, engines=engines, timeout=args.timeout)
@@ -156,15 +126,10 @@ def _stress(args) -> int:
         f"{len(table)} cells, {len(bad)} not finished with finite output; "
         f"wrote {terminal_text(args.output)}"
     )
-    if args.write_readme is not None and not args.quick:
-        from deckpound.compare import readme_results
-
-        path = readme_results.write_stress(args.write_readme, out)
-        print(f"wrote the stability paragraph into {terminal_text(path)}")
     return 0
 
 
-# -- the README's speed table (issue 14: speed owner) ----------------------------------------
+# -- the speed table (whole commands, every engine) -------------------------------------------
 
 
 def _speed_args(p: argparse.ArgumentParser) -> None:
@@ -174,16 +139,6 @@ def _speed_args(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="only the speed table (processes and in-process runs of every engine)",
     )
-    g.add_argument(
-        "--write-readme",
-        nargs="?",
-        const="README.md",
-        default=None,
-        metavar="PATH",
-        help="put the speed table into the README (default ./README.md) in place "
-        "of the previous one; without --quick also the work-precision table (its bench.csv, "
-        "bench_context.json and figure copied into docs/results beside the README)",
-    )
 
 
 def _speed_table(args) -> None:
@@ -192,8 +147,6 @@ def _speed_table(args) -> None:
     from deckpound.compare import speed
     from deckpound.models.file_io import atomic_write_text
 
-    if args.write_readme is not None and not Path(args.write_readme).is_file():
-        raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
     repeats = args.repeats if args.repeats is not None else 3
     rows, context = speed.measure(
         args.scene,
@@ -204,6 +157,3 @@ def _speed_table(args) -> None:
     block = speed.markdown(rows, context)
     print(block)
     atomic_write_text(Path(args.output) / "speed.md", block + "\n")
-    if args.write_readme is not None:
-        written = speed.write_readme(args.write_readme, block)
-        print(f"wrote the speed table into {terminal_text(written)}")

@@ -57,15 +57,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     q.add_argument(
         "--quick", action="store_true", help="a small subset of the matrix over the first 5 s"
     )
-    q.add_argument(
-        "--write-readme",
-        nargs="?",
-        const="README.md",
-        default=None,
-        metavar="PATH",
-        help="put the matrix table into the README (default ./README.md) in place "
-        "of the previous one",
-    )
     q.set_defaults(func=_verify_clone)
     q = vsub.add_parser(
         "impact-law",
@@ -73,14 +64,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         "energy-safe variant on a scene, without and with friction",
     )
     add_scene_args(q)
-    q.add_argument(
-        "--write-readme",
-        nargs="?",
-        const="README.md",
-        default=None,
-        metavar="PATH",
-        help="put the table into the README (default ./README.md) in place of the previous one",
-    )
     q.set_defaults(func=_verify_impact_law)
     q = vsub.add_parser(
         "contact-step",
@@ -215,28 +198,14 @@ def _verify_takeda(args) -> int:
 def _verify_clone(args) -> int:
     """One line per case (compare/verify_matrix.py); exit 1 when a case exceeds its tolerance.
     With --set: one case, the scene as given, with its column-by-column deviations."""
-    from pathlib import Path
-
     from deckpound.compare import verify_matrix
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene(args.scene, args.overrides)
-    pinned = bool(args.overrides)
-    target = None
-    if args.write_readme is not None:
-        target = Path(args.write_readme)
-        if pinned:
-            raise SceneError("--write-readme", "writes the whole matrix: not with --set")
-        if not target.is_file():
-            raise SceneError("--write-readme", f"{args.write_readme!r} is not a file")
-    if pinned:
+    if args.overrides:
         return _verify_single(scene, verify_matrix)
     return verify_matrix.main(
-        scene,
-        pinned=False,
-        quick=args.quick,
-        write_readme_to=target,
-        log=lambda t: print(t, flush=True),
+        scene, pinned=False, quick=args.quick, log=lambda t: print(t, flush=True)
     )
 
 
@@ -287,7 +256,7 @@ def _verify_contact_step(args) -> int:
 
 
 def _verify_impact_law(args) -> int:
-    from deckpound.compare.impact_law import format_table, impact_law_table, write_readme
+    from deckpound.compare.impact_law import format_table, impact_law_table
     from deckpound.models.scene_io import load_scene
 
     rows = impact_law_table(load_scene(args.scene, args.overrides))
@@ -297,10 +266,4 @@ def _verify_impact_law(args) -> int:
             "a run failed: "
             + ", ".join(f"{r['friction']}/{r['impact_law']}: {r['status']}" for r in rows)
         )
-    if args.write_readme is not None:
-        if args.overrides:
-            raise SceneError(
-                "--write-readme", "the README quotes the built-in scene: not with --set"
-            )
-        print(f"wrote the table into {terminal_text(write_readme(args.write_readme, rows))}")
     return 0

@@ -1,40 +1,36 @@
-"""The README's skips and stability paragraphs are the renderings of the committed
-``docs/results`` CSVs (compare/readme_results.py, written by ``deckpound bench --skips
---write-readme`` and ``deckpound stress --write-readme``): re-rendered here, each must be the
-README's block character for character. The sentences are checked on small tables."""
-
-from pathlib import Path
+"""docs/performance.md's skips and stability paragraphs are the renderings of the committed
+``docs/results`` CSVs (tools/skips_stress.py, published by ``python tools/bench_tables.py skips``
+and ``... stress``): re-rendered here, each must be the page's block character for character.
+The sentences are checked on small tables."""
 
 import numpy as np
 import pandas as pd
 import pytest
+import skips_stress as rr
+from docs_blocks import RESULTS, block_of
 
 from deckpound.cli import main
-from deckpound.compare import readme_results as rr
-
-ROOT = Path(__file__).resolve().parents[1]
-README = ROOT / "README.md"
+from deckpound.compare.skips import skip_failures
 
 
 def _block(begin: str, end: str) -> str:
-    text = README.read_text(encoding="utf-8")
-    head = begin.split(":")[0]
-    assert head in text, f"README has no {head} block"
-    start = text.index(head)
-    return text[start : text.index(end, start) + len(end)]
+    block = block_of(rr.PAGE.read_text(encoding="utf-8"), begin, end)
+    assert block is not None, f"{rr.PAGE.name} has no {begin.split(':')[0]} block"
+    return block
 
 
 def test_skips_block_is_the_rendering_of_the_committed_csvs():
-    expected = rr.render_skips(*rr.load_skips(ROOT / rr.RESULTS))
+    expected = rr.render_skips(*rr.load_skips(RESULTS))
     assert _block(rr.SKIPS_BEGIN, rr.SKIPS_END) == expected, (
-        "README skips paragraph is stale: run `deckpound bench --skips --write-readme`"
+        "the skips paragraph of docs/performance.md is stale: run `python tools/bench_tables.py`"
     )
 
 
 def test_stress_block_is_the_rendering_of_the_committed_csv():
-    expected = rr.render_stress(rr.load_stress(ROOT / rr.RESULTS))
+    expected = rr.render_stress(rr.load_stress(RESULTS))
     assert _block(rr.STRESS_BEGIN, rr.STRESS_END) == expected, (
-        "README stability paragraph is stale: run `deckpound stress --write-readme`"
+        "the stability paragraph of docs/performance.md is stale: run "
+        "`python tools/bench_tables.py`"
     )
 
 
@@ -86,11 +82,11 @@ def test_flushed_subnormals_are_a_choice_whose_difference_must_stay_below_1e_250
     assert "subnormal numbers flushed to zero 1.3× (a floating-point choice, not a skip: " in text
     assert "largest result difference 1.8e-304)" in text
     assert "Every skip gives results identical to the last bit." in text
-    assert not len(rr.skip_failures(small))
+    assert not len(skip_failures(small))
     big = pd.concat([skips, pd.DataFrame([dict(row, max_abs_diff=1e-12)])])
     assert "largest result difference 1.0e-12, **above 1e-250**)" in rr.render_skips(big, steps)
-    assert list(rr.skip_failures(big)["skip"]) == ["subnormals"]
-    assert list(rr.skip_failures(_skips(identical=False)[0])["skip"]) == ["decimate", "decimate"]
+    assert list(skip_failures(big)["skip"]) == ["subnormals"]
+    assert list(skip_failures(_skips(identical=False)[0])["skip"]) == ["decimate", "decimate"]
 
 
 def _stress(extra=()):
@@ -126,8 +122,20 @@ def test_tables_that_are_not_the_commands_csv_are_refused():
         rr.render_stress(_stress().iloc[:0])
 
 
-def test_stress_cli_refuses_a_missing_readme_before_running(capsys, tmp_path):
-    code = main(["stress", "--write-readme", str(tmp_path / "no.md"), "-o", str(tmp_path / "o")])
-    err = capsys.readouterr().err
-    assert code == 2 and "--write-readme" in err and "is not a file" in err
-    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+def test_publish_copies_the_measurement_and_writes_only_its_block(tmp_path):
+    src = tmp_path / "run"
+    src.mkdir()
+    skips, steps = _skips()
+    skips.to_csv(src / "skips.csv", index=False)
+    steps.to_csv(src / "adaptive_steps.csv", index=False)
+    page = tmp_path / "performance.md"
+    page.write_text(f"intro\n{rr.SKIPS_BEGIN}\nold\n{rr.SKIPS_END}\noutro\n")
+    rr.publish_skips(src, page, tmp_path / "results")
+    assert page.read_text() == f"intro\n{rr.render_skips(skips, steps)}\noutro\n"
+    assert (tmp_path / "results" / "skips.csv").is_file()
+
+
+def test_stress_cli_has_no_docs_writer(capsys, tmp_path):
+    code = main(["stress", "--write-readme", "README.md", "-o", str(tmp_path / "o")])
+    assert code == 2 and "--write-readme" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

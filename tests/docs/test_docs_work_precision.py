@@ -1,35 +1,28 @@
-"""The README's work–precision block is ``deckpound bench --write-readme``'s rendering of the
-committed ``docs/results/bench.csv`` (compare/bench_readme.py): re-rendered here, it must be the
-README's block character for character, so no number of it (table or sentence) can be edited by
-hand or outlive the measurement it quotes. The sentences are checked on small tables whose
-answers are known."""
+"""docs/performance.md's work–precision block is the rendering of the committed
+``docs/results/bench.csv`` (tools/work_precision.py, published by ``python tools/bench_tables.py
+work-precision``): re-rendered here, it must be the page's block character for character, so no
+number of it (table or sentence) can be edited by hand or outlive the measurement it quotes. The
+sentences are checked on small tables whose answers are known."""
 
-from pathlib import Path
+import json
 
 import numpy as np
 import pandas as pd
 import pytest
+import work_precision as wp
+from docs_blocks import RESULTS, block_of
 
 from deckpound.cli import main
-from deckpound.compare import bench_readme
-
-ROOT = Path(__file__).resolve().parents[1]
-README = ROOT / "README.md"
 
 
-def _readme_block() -> str:
-    text = README.read_text(encoding="utf-8")
-    assert bench_readme.BEGIN in text, "README has no work-precision block"
-    start = text.index(bench_readme.BEGIN)
-    return text[start : text.index(bench_readme.END, start) + len(bench_readme.END)]
-
-
-def test_readme_block_is_the_rendering_of_the_committed_results():
-    table, context = bench_readme.load(ROOT / bench_readme.RESULTS)
-    assert not context.get("quick"), "the README's work-precision table must be a full run"
-    assert _readme_block() == bench_readme.render(table, context), (
-        "the README's work-precision block is not the rendering of docs/results/bench.csv: "
-        "run `deckpound bench --write-readme`"
+def test_page_block_is_the_rendering_of_the_committed_results():
+    table, context = wp.load(RESULTS)
+    assert not context.get("quick"), "the work-precision table must be a full run"
+    block = block_of(wp.PAGE.read_text(encoding="utf-8"), wp.BEGIN, wp.END)
+    assert block is not None, f"{wp.PAGE.name} has no work-precision block"
+    assert block == wp.render(table, context), (
+        "the work-precision block of docs/performance.md is not the rendering of "
+        "docs/results/bench.csv: run `python tools/bench_tables.py`"
     )
 
 
@@ -75,9 +68,9 @@ def _table(**over):
 
 
 def test_table_lines_join_each_family_and_mark_defaults_and_bounds():
-    block = bench_readme.render(_table(), CONTEXT)
+    block = wp.render(_table(), CONTEXT)
     lines = block.splitlines()
-    assert lines[0] == bench_readme.BEGIN and lines[-1] == bench_readme.END
+    assert lines[0] == wp.BEGIN and lines[-1] == wp.END
     rows = [ln for ln in lines if ln.startswith("| bench |")]
     assert len(rows) == 4  # opensees, newmark, adaptive, nonsmooth
     assert rows[0].startswith("| bench | opensees dt = 2e-3 / 5e-4 (default) | 0.6 / 2 | 60 / 50 |")
@@ -90,7 +83,7 @@ def test_table_lines_join_each_family_and_mark_defaults_and_bounds():
 
 
 def test_headline_takes_the_fastest_configuration_within_one_percent():
-    block = bench_readme.render(_table(), CONTEXT)
+    block = wp.render(_table(), CONTEXT)
     # nonsmooth h=0.004 (2 %) and adaptive (2 %) do not qualify; the fastest that do:
     # opensees dt=0.002 0.6 s, newmark dt=0.002 0.02 s (30x), nonsmooth h=0.001 0.03 s (20x)
     assert (
@@ -100,15 +93,13 @@ def test_headline_takes_the_fastest_configuration_within_one_percent():
 
 
 def test_clone_agreement_is_the_largest_error_difference_at_common_steps():
-    block = bench_readme.render(_table(), CONTEXT)
+    block = wp.render(_table(), CONTEXT)
     line = next(ln for ln in block.splitlines() if ln.startswith("- `bench`"))
     assert "the primary errors agree to ≤ 1e-09 (of the peak) at dt = 2e-3, 5e-4" in line
     assert "costs 30–40× less" in line
     apart = _table()
     apart.loc[apart["config"] == "compliance newmark dt=0.002", "err_primary"] = 9.0e-5 + 2e-6
-    line = next(
-        ln for ln in bench_readme.render(apart, CONTEXT).splitlines() if ln.startswith("- `bench`")
-    )
+    line = next(ln for ln in wp.render(apart, CONTEXT).splitlines() if ln.startswith("- `bench`"))
     assert "agree to ≤ 1e-09 (of the peak) at dt = 5e-4; at dt = 2e-3 they differ by 2e-6" in line
 
 
@@ -118,43 +109,42 @@ def test_a_friction_model_difference_is_said_not_hidden():
              overrides="opensees.dt=0.002 contact.friction_mode=contact2d"),
         _row("stick", "compliance newmark dt=0.002", "compliance", 0.01, 5_000, 4e-3, 30, "="),
     ]  # fmt: skip
-    block = bench_readme.render(_table(extra=extra), CONTEXT)
+    block = wp.render(_table(extra=extra), CONTEXT)
     line = next(ln for ln in block.splitlines() if ln.startswith("- `stick`"))
     assert "zeroLengthContact2D" in line and "differ by the model" in line
 
 
 def test_failed_configurations_are_listed():
     extra = [_row("bench", "nonsmooth h=0.0005", "nonsmooth", np.nan, 1, np.nan, status="timeout")]
-    block = bench_readme.render(_table(extra=extra), CONTEXT)
+    block = wp.render(_table(extra=extra), CONTEXT)
     assert "Failed configurations: bench `nonsmooth h=0.0005` (timeout)." in block
 
 
 def test_a_table_that_is_not_bench_csv_is_refused():
     with pytest.raises(ValueError, match="no column 'err_primary'"):
-        bench_readme.render(_table().drop(columns=["err_primary"]), CONTEXT)
+        wp.render(_table().drop(columns=["err_primary"]), CONTEXT)
     with pytest.raises(ValueError, match="empty"):
-        bench_readme.render(_table().iloc[:0], CONTEXT)
+        wp.render(_table().iloc[:0], CONTEXT)
 
 
-def test_write_readme_replaces_only_its_block_and_copies_the_sources(tmp_path):
+def test_publish_replaces_only_its_block_and_copies_the_sources(tmp_path):
     src = tmp_path / "run"
     src.mkdir()
     _table().to_csv(src / "bench.csv", index=False)
-    import json
-
     (src / "bench_context.json").write_text(json.dumps(CONTEXT))
     (src / "work_precision.png").write_bytes(b"png")
-    readme = tmp_path / "README.md"
-    readme.write_text(f"intro\n\n{bench_readme.BEGIN}\nold\n{bench_readme.END}\n\noutro\n")
-    bench_readme.write_readme(readme, src)
-    text = readme.read_text()
+    page = tmp_path / "performance.md"
+    page.write_text(f"intro\n\n{wp.BEGIN}\nold\n{wp.END}\n\noutro\n")
+    wp.publish(src, page, tmp_path / "results")
+    text = page.read_text()
     assert text.startswith("intro\n\n") and text.endswith("\n\noutro\n") and "old" not in text
-    table, context = bench_readme.load(tmp_path / bench_readme.RESULTS)
-    assert bench_readme.render(table, context) in text
+    table, context = wp.load(tmp_path / "results")
+    assert wp.render(table, context) in text
+    assert (tmp_path / "results" / "work_precision.png").read_bytes() == b"png"
 
 
-def test_cli_refuses_a_missing_readme_before_measuring(capsys, tmp_path):
-    code = main(["bench", "--write-readme", str(tmp_path / "nope.md"), "-o", str(tmp_path / "o")])
-    err = capsys.readouterr().err
-    assert code == 2 and "--write-readme" in err and "is not a file" in err
+def test_the_cli_has_no_docs_writer(capsys, tmp_path):
+    """Publishing the docs is the repository's tooling, not a user's option."""
+    code = main(["bench", "--write-readme", "README.md", "-o", str(tmp_path / "o")])
+    assert code == 2 and "--write-readme" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
