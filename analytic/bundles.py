@@ -212,11 +212,14 @@ def status_of(code: int) -> Status:
     return _STATUS.get(code, Status.NONFINITE)
 
 
-def new_contact_work() -> ContactWork:
-    """Zeroed :data:`ContactWork` (views of two blocks)."""
-    v4 = row_views(("g", "gd", "lam", "lt"), 4)
-    w47 = row_views(("WN", "WT", "der"), 4, 7)
-    return ContactWork(fc=np.zeros(7), evaluated=np.zeros(4, dtype=np.bool_), **v4, **w47)
+def new_contact_work(n_corners: int = 4, n_dof: int = 7) -> ContactWork:
+    """Zeroed :data:`ContactWork` of ``n_corners`` corners on ``n_dof`` DOF (views of two
+    blocks)."""
+    v4 = row_views(("g", "gd", "lam", "lt"), n_corners)
+    w47 = row_views(("WN", "WT", "der"), n_corners, n_dof)
+    return ContactWork(
+        fc=np.zeros(n_dof), evaluated=np.zeros(n_corners, dtype=np.bool_), **v4, **w47
+    )
 
 
 def row_views(names, *shape, dtype=np.float64) -> dict:

@@ -16,10 +16,13 @@ import numpy as np
 from deckpound.analytic import bundles as bd
 from deckpound.analytic import contact_laws as cl
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.compliance import ENERGY_COLUMNS
-from deckpound.analytic.system import C_BENT as _C_BENT
-from deckpound.analytic.system import C_FT as _C_FT
-from deckpound.analytic.system import spring_stored_energy, store_standard
+from deckpound.analytic.system import C_BENT, C_FT, spring_stored_energy, store_standard
+from deckpound.analytic.work_energy import (
+    N_ENERGY,
+    N_WORK,
+    energy_columns,
+    stick_spring_energy,
+)
 
 __all__ = [
     "N_ENERGY",
@@ -30,8 +33,6 @@ __all__ = [
     "output_energies",
     "store_row",
 ]
-
-N_ENERGY = len(ENERGY_COLUMNS)
 
 #: The scalars of :func:`newmark_run`: ``nsteps`` steps of ``dt`` [s]; Newton ``tol`` [m]
 #: (NormDispIncr) and ``maxit``; output every ``stride`` steps; ``substeps`` of the fallback
@@ -59,19 +60,19 @@ NewmarkOptions = namedtuple(
         "flush_subnormals",
     ],
 )
-# workspace rows by shape: (7,) DOF vectors, (7, 7) matrices, (7,) pivots, (ns,) per spring,
-# (4,) per corner, (n_channels,) supports
+# workspace rows by shape: (n_dof,) DOF vectors, (n_dof, n_dof) matrices, (n_dof,) pivots, (ns,)
+# per spring, (n_corners,) per corner, (n_channels,) supports
 _V7 = ("u", "v", "a", "un", "vn", "an", "us", "vs", "as_", "du", "R", "f")
 _M77 = ("K", "Keff", "LU", "H", "Kel", "LUel")
 _PIV = ("piv", "pivel")
 _NS = ("fs", "kt", "kt_fact", "d_prev", "dd_prev", "fs_prev", "d_new", "dd_new", "cv_prev")
 _V4 = ("lam_prev", "lt_prev", "g_prev")
 _CH = ("ug", "vg", "ugo", "ug0", "vg0", "ug1", "vg1")
-#: DOF vectors (7,): u, v, a trial state, un, vn, an start of the (sub)step, us, vs, as_ start
+#: DOF vectors (n_dof,): u, v, a trial state, un, vn, an start of the (sub)step, us, vs, as_ start
 #: of the step, du Newton increment, R residual, f internal force.
 NewmarkDofs = namedtuple("NewmarkDofs", _V7)
-#: (7, 7) matrices: K, Keff, LU (tangent, effective tangent, its factors), H gap Hessian, Kel,
-#: LUel (elastic effective tangent and factors); pivots piv, pivel (7,) int64.
+#: (n_dof, n_dof) matrices: K, Keff, LU (tangent, effective tangent, its factors), H gap Hessian, Kel,
+#: LUel (elastic effective tangent and factors); pivots piv, pivel (n_dof,) int64.
 NewmarkMatrices = namedtuple("NewmarkMatrices", _M77 + _PIV)
 #: Per spring (ns,): fs, kt forces and tangents, kt_fact tangents of the factors held in LU,
 #: d/dd/fs_prev last committed, d/dd_new trial deformations and rates, cv_prev the last committed
@@ -82,10 +83,11 @@ NewmarkSprings = namedtuple("NewmarkSprings", _NS)
 NewmarkSupports = namedtuple("NewmarkSupports", _CH)
 #: The workspace of :func:`newmark_run` (:func:`newmark_workspace`), one named field per array,
 #: grouped by shape (a group is loaded as one value in the compiled code: small groups keep
-#: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states, cstate (4, N_CS)
-#: corner states; cw the ContactWork; dof, mat, spring, support the groups above;
-#: lam/lt/g_prev last committed contact forces and gaps (4,); W (5,) running work [input,
-#: springs, viscous, contact, friction] [kJ]; energy (N_ENERGY,) the output energies.
+#: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states, cstate
+#: (n_corners, N_CS) corner states; cw the ContactWork; dof, mat, spring, support the groups
+#: above; lam/lt/g_prev last committed contact forces and gaps (n_corners,); W (N_WORK,) running
+#: work totals [kJ] (offsets ``W_*`` of :mod:`.work_energy`); energy (N_ENERGY,) the output
+#: energies.
 NewmarkWork = namedtuple(
     "NewmarkWork",
     ("u0", "v0", "hstate", "cstate", "cw", "dof", "mat", "spring", "support")
@@ -96,20 +98,22 @@ NewmarkWork = namedtuple(
 
 def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
     """The workspace of :func:`newmark_run` (zeroed; ns springs, nch support channels) around
-    the initial state u0, v0 (7,) and the virgin material and corner states. Allocated here
-    because the kernel runs without numba's runtime."""
+    the initial state u0, v0 (n_dof,) and the virgin material and corner states (cstate: one
+    row per corner). Allocated here because the kernel runs without numba's runtime."""
+    nd = u0.shape[0]
+    nc = cstate.shape[0]
     return NewmarkWork(
         u0=u0,
         v0=v0,
         hstate=hstate,
         cstate=cstate,
-        cw=bd.new_contact_work(),
-        dof=NewmarkDofs(**bd.row_views(_V7, 7)),
-        mat=NewmarkMatrices(**bd.row_views(_M77, 7, 7), **bd.row_views(_PIV, 7, dtype=np.int64)),
+        cw=bd.new_contact_work(nc, nd),
+        dof=NewmarkDofs(**bd.row_views(_V7, nd)),
+        mat=NewmarkMatrices(**bd.row_views(_M77, nd, nd), **bd.row_views(_PIV, nd, dtype=np.int64)),
         spring=NewmarkSprings(**bd.row_views(_NS, ns)),
         support=NewmarkSupports(**bd.row_views(_CH, nch)),
-        **bd.row_views(_V4, 4),
-        W=np.zeros(5),
+        **bd.row_views(_V4, nc),
+        W=np.zeros(N_WORK),
         energy=np.zeros(N_ENERGY),
     )
 
@@ -122,8 +126,8 @@ def fill_row(buf, t, u, v, cw, cs, fs, nbs):
     store_standard(buf, t, u, v, cw.g, cw.lam, cw.lt, fs, nbs)
     # ft: the committed tangential force (the trial one for every model but contact2d, whose
     # element reports 0 after a sliding commit, as OpenSees's recorders see it)
-    for c in range(4):
-        buf[_C_FT + c] = cs[c, cl.S_CFT]
+    for c in range(cs.shape[0]):
+        buf[C_FT + c] = cs[c, cl.S_CFT]
 
 
 @kernel
@@ -132,7 +136,7 @@ def store_row(output, row, t, u, v, cw, cs, fs, nbs, energy):
     ``output.table``."""
     buf = output.row
     fill_row(buf, t, u, v, cw, cs, fs, nbs)
-    base = _C_BENT + nbs
+    base = C_BENT + nbs
     for k in range(energy.shape[0]):
         buf[base + k] = energy[k]
     sel = output.select
@@ -143,23 +147,11 @@ def store_row(output, row, t, u, v, cw, cs, fs, nbs, energy):
 
 @kernel
 def output_energies(sa, hstate, cp, cs, u, v, ug, W, energy):
-    """Output energies from the running work totals W = [input, springs, viscous, contact,
-    friction]."""
+    """Output energies (:func:`.work_energy.energy_columns`) from the running work totals W
+    at the committed state (u, u̇, supports ug)."""
     ke = 0.0
-    for j in range(7):
+    for j in range(sa.mass.shape[0]):
         ke += 0.5 * sa.mass[j] * v[j] * v[j]
     es = spring_stored_energy(sa, hstate, u, ug)
     ec = cl.contact_stored_energy(cp, cs)
-    efs = 0.0  # stick-spring part of ec
-    for c in range(4):
-        if cl.has_stick_spring(cp[c, cl.P_FMODE]) and cs[c, cl.S_CFT] != 0.0:
-            efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
-    energy[0] = W[0]
-    energy[1] = ke
-    energy[2] = es
-    energy[3] = W[2]
-    energy[4] = W[1] - es
-    energy[5] = ec
-    energy[6] = W[3] - (ec - efs)
-    energy[7] = W[4] - efs
-    energy[8] = W[0] - (ke + W[1] + W[2] + W[3] + W[4])
+    energy_columns(energy, 0, W, ke, es, ec, stick_spring_energy(cp, cs))

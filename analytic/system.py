@@ -72,12 +72,14 @@ from deckpound.analytic._hysteretic_kernel import (
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.hysteretic import pack_hysteretic
 from deckpound.models.damping import DampingModel
-from deckpound.models.plan import DOF_COLUMNS, N_CORNERS, VELOCITY_COLUMNS, Plan
+from deckpound.models.plan import DOF_COLUMNS, DOF_NAMES, N_CORNERS, N_DOF, VELOCITY_COLUMNS, Plan
 
 __all__ = [
     "KIND_HYSTERETIC",
     "KIND_LINEAR",
-    "N_DOF",
+    "SCAL_A0",
+    "SCAL_A1",
+    "SCAL_TANGENT_DAMPING",
     "PackedSystem",
     "SystemArrays",
     "pack_system",
@@ -91,23 +93,28 @@ __all__ = [
     "spring_update_materials",
 ]
 
-N_DOF = 7
 KIND_LINEAR = 0
 KIND_HYSTERETIC = 1
+#: Offsets of ``SystemArrays.scal``: the mass-proportional Rayleigh coefficient on absolute
+#: velocities a0_abs [1/s], the stiffness-proportional one on the initial stiffness a1 [s], and
+#: 1.0 when the damping depends on the current or committed tangent (βK or βKc ≠ 0), else 0.0.
+SCAL_A0, SCAL_A1, SCAL_TANGENT_DAMPING = range(3)
 
 #: The flat arrays the numba kernels take (a numba-compatible namedtuple).
 #:
-#: mass (7,) diagonal of M; B (ns, 7), S (ns, nch) dense kinematic matrices; bidx (ns, 2) uint64,
-#: bval (ns, 2), bnnz (ns,) int: the ≤ 2 non-zeros of each row of B; schan (ns,) int (−1: none),
-#: sval (ns,): the ≤ 1 non-zero of each row of S; k0 (ns,) initial stiffness; cdash (ns,) explicit
-#: dashpot; crate (ns,) = a1·k0 + cdash, the total rate coefficient of each spring; kind (ns,)
-#: int (0 linear, 1 Hysteretic); hparams (ns, 26) Hysteretic params (zero rows for linear
-#: springs); scal (3,) = [a0_abs, a1, tangent-dependent flag]; C (7, 7) the constant damping
-#: matrix a0_abs M + Bᵀ diag(crate) B [kN·s/m]; nbs (int) the number of bent springs (the first
-#: rows of B); bk, bkc (ns,) the coefficients of the current and the committed tangent [s];
-#: kc (ns,) the committed tangent k_c (state: written by :func:`spring_commit`), cvar (ns,)
-#: βK k_t + βKc k_c at the last trial (state: written by :func:`spring_assemble`). The
-#: ``system`` bundle of the step loops (:mod:`deckpound.analytic.bundles`).
+#: Sizes come from the arrays: n_dof = mass.shape[0], ns = k0.shape[0] springs.
+#: mass (n_dof,) diagonal of M; B (ns, n_dof), S (ns, nch) dense kinematic matrices; bidx
+#: (ns, 2) uint64, bval (ns, 2), bnnz (ns,) int: the ≤ 2 non-zeros of each row of B; schan
+#: (ns,) int (−1: none), sval (ns,): the ≤ 1 non-zero of each row of S; k0 (ns,) initial
+#: stiffness; cdash (ns,) explicit dashpot; crate (ns,) = a1·k0 + cdash, the total rate
+#: coefficient of each spring; kind (ns,) int (0 linear, 1 Hysteretic); hparams (ns, 26)
+#: Hysteretic params (zero rows for linear springs); scal (3,) = [a0_abs, a1, tangent-dependent
+#: flag] (offsets ``SCAL_*``); C (n_dof, n_dof) the constant damping matrix a0_abs M + Bᵀ
+#: diag(crate) B [kN·s/m]; nbs (int) the number of bent springs (the first rows of B); bk, bkc
+#: (ns,) the coefficients of the current and the committed tangent [s]; kc (ns,) the committed
+#: tangent k_c (state: written by :func:`spring_commit`), cvar (ns,) βK k_t + βKc k_c at the
+#: last trial (state: written by :func:`spring_assemble`). The ``system`` bundle of the step
+#: loops (:mod:`deckpound.analytic.bundles`).
 SystemArrays = namedtuple(
     "SystemArrays",
     [
@@ -301,13 +308,13 @@ def spring_update_materials(hparams, hstate, kind, d):
 def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
     """Spring forces from deformations d, rates dd and the materials' trial state.
 
-    f (7,) out = Bᵀ[f_s + (crate + βK k_t + βKc k_c)·ḋ] + a0 M u̇; fs, kt (ns,) out: restoring
-    force and tangent; sa.cvar (ns,) out: βK k_t + βKc k_c (tangent-dependent damping only).
-    Returns the number of springs whose tangent differs from k0.
+    f (n_dof,) out = Bᵀ[f_s + (crate + βK k_t + βKc k_c)·ḋ] + a0 M u̇; fs, kt (ns,) out:
+    restoring force and tangent; sa.cvar (ns,) out: βK k_t + βKc k_c (tangent-dependent damping
+    only). Returns the number of springs whose tangent differs from k0.
     """
-    a0 = sa.scal[0]
-    var = sa.scal[2] != 0.0
-    for j in range(7):
+    a0 = sa.scal[SCAL_A0]
+    var = sa.scal[SCAL_TANGENT_DAMPING] != 0.0
+    for j in range(sa.mass.shape[0]):
         f[j] = a0 * sa.mass[j] * v[j]
     nonel = 0
     for i in range(sa.k0.shape[0]):
@@ -333,9 +340,9 @@ def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
 
 @kernel(inline="always")
 def spring_tangent(sa, kt, K):
-    """K = Bᵀ diag(kt) B (7×7, overwritten)."""
-    for j in range(7):
-        for k in range(7):
+    """K = Bᵀ diag(kt) B (n_dof × n_dof, overwritten)."""
+    for j in range(K.shape[0]):
+        for k in range(K.shape[1]):
             K[j, k] = 0.0
     for i in range(sa.k0.shape[0]):
         nnz = sa.bnnz[i]
@@ -350,7 +357,7 @@ def spring_tangent(sa, kt, K):
 def spring_damping_tangent(sa, c2, Keff):
     """Keff += c2 · Bᵀ diag(βK k_t + βKc k_c) B at the last trial (OpenSees's getDamp with the
     current and the committed tangent; nothing when the damping is tangent-independent)."""
-    if sa.scal[2] == 0.0:
+    if sa.scal[SCAL_TANGENT_DAMPING] == 0.0:
         return
     for i in range(sa.k0.shape[0]):
         cv = c2 * sa.cvar[i]
@@ -369,7 +376,7 @@ def spring_commit(sa, hstate):
     """Commit the trial state of every Hysteretic spring (OpenSees commitState); with
     committed-tangent damping, k_c := the trial tangent first (``Element::commitState`` runs
     before the materials commit)."""
-    if sa.scal[2] != 0.0:
+    if sa.scal[SCAL_TANGENT_DAMPING] != 0.0:
         for i in range(sa.k0.shape[0]):
             if sa.kind[i] == 1:
                 sa.kc[i] = hstate[i, T_TANGENT]
@@ -430,20 +437,21 @@ def spring_stored_energy(sa, hstate, u, ug):
 _ = C_STRAIN  # (index kept importable for callers reading the committed deformation)
 
 
-def initial_dofs(initial_state) -> tuple[np.ndarray, np.ndarray]:
-    """(u0, v0) of the 7 DOF from an engine's ``initial_state = (u0, v0)`` keyword (None: rest).
+def initial_dofs(initial_state, n_dof: int = N_DOF) -> tuple[np.ndarray, np.ndarray]:
+    """(u0, v0) of the ``n_dof`` DOF (``SystemArrays.mass.shape[0]``) from an engine's
+    ``initial_state = (u0, v0)`` keyword (None: rest).
 
-    Raises ValueError unless both are 7 finite numbers [m, rad; m/s, rad/s].
+    Raises ValueError unless both are ``n_dof`` finite numbers [m, rad; m/s, rad/s].
     """
-    u0 = np.zeros(7)
-    v0 = np.zeros(7)
+    u0 = np.zeros(n_dof)
+    v0 = np.zeros(n_dof)
     if initial_state is not None:
         for name, dst, src in (("u0", u0, initial_state[0]), ("v0", v0, initial_state[1])):
             arr = np.asarray(src, dtype=float)
-            if arr.shape != (7,) or not np.all(np.isfinite(arr)):
+            if arr.shape != (n_dof,) or not np.all(np.isfinite(arr)):
                 raise ValueError(
-                    f"initial_state {name} must be 7 finite numbers (DOF order "
-                    f"x1, th1, x2, th2, x_d, y_d, th_d); got {arr.tolist()!r}"
+                    f"initial_state {name} must be {n_dof} finite numbers (DOF order "
+                    f"{', '.join(DOF_NAMES)}); got {arr.tolist()!r}"
                 )
             dst[:] = arr
     return u0, v0
@@ -472,7 +480,7 @@ def store_standard(row, t, u, v, g, fn, ft, fs, nbs):
         j = DOF_OF_COLUMN[k]
         row[C_U + k] = u[j]
         row[C_V + k] = v[j]
-    for c in range(4):
+    for c in range(g.shape[0]):
         row[C_GAP + c] = g[c]
         row[C_FN + c] = fn[c]
         row[C_FT + c] = ft[c]
