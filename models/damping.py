@@ -85,6 +85,8 @@ class DampingModel:
     dashpots : (n_springs,) explicit dashpots [kN·s/m, kN·m·s/rad].
     mass : ``"absolute"`` or ``"relative"``; mass_dampers : the relative part's dashpots.
     members, stiffness : the scene's choices (for messages and logs).
+    damped : (n_springs,) True for the springs the scene's ``members`` name: those that
+        carry the stiffness-proportional part (whatever a1 is; OpenSees ``-doRayleigh 1``).
     """
 
     a0: float
@@ -98,6 +100,7 @@ class DampingModel:
     mass_dampers: tuple[MassDamper, ...] = ()
     members: str = "bents+seats"
     stiffness: str = "initial"
+    damped: np.ndarray | None = None
 
     @property
     def a0_absolute(self) -> float:
@@ -231,4 +234,5 @@ def damping_model(scene: Scene, plan: Plan) -> DampingModel:
         mass_dampers=dampers,
         members=d.members,
         stiffness=d.stiffness,
+        damped=on,
     )

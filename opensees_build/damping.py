@@ -1,31 +1,43 @@
-"""Damping of the OpenSees model: the ``rayleigh`` factors and the members that take them, and
-the mass-proportional dashpots on relative velocities (the scene's ``[damping]``, as
-:mod:`deckpound.models.damping` defines it for every engine). Used by
-:func:`deckpound.opensees_build.model.build_model`.
+"""Damping of the OpenSees model, read from the damping model every engine applies
+(:class:`deckpound.models.damping.DampingModel`, the scene's ``[damping]``): the ``rayleigh``
+factors, the spring elements that take them, and the mass-proportional dashpots on relative
+velocities. Used by :func:`deckpound.opensees_build.model.build_model` and
+:class:`deckpound.opensees_build.energy.EnergyBalance`.
 """
 
 from __future__ import annotations
 
-from deckpound.models.plan import plan_of
-from deckpound.models.scene import Scene
+from deckpound.models.damping import DampingModel
+from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, SEAT_THETA, SEAT_X, Plan
 
 from .ops import OpsSession
 
-__all__ = ["mass_dampers", "rayleigh_factors", "rayleigh_members"]
+__all__ = ["MEMBERS_TEXT", "mass_dampers", "rayleigh_factors", "rayleigh_members"]
+
+#: the springs of each ``damping.members`` choice, in words (the command log's comment)
+MEMBERS_TEXT = {
+    "bents": "bent springs",
+    "bents+seats": "bent and seat springs",
+    "none": "no springs",
+}
 
 
-def rayleigh_members(scene: Scene) -> tuple[bool, bool]:
-    """(bents, seat springs) take the stiffness-proportional part (``-doRayleigh 1``)."""
-    d = scene.damping
-    return d.members in ("bents", "bents+seats"), d.members == "bents+seats"
+def rayleigh_members(plan: Plan, damping: DampingModel) -> tuple[list[bool], list[bool]]:
+    """(per bent, per seat) whether its spring element takes the stiffness-proportional part
+    (``-doRayleigh 1``): one of its plan springs is damped (``damping.damped``). The plan's
+    springs come in pairs, (x, y) per bent, then (x, θ) per seat (:class:`Plan`)."""
+    on = damping.damped
+    pairs = [bool(on[k] or on[k + 1]) for k in range(0, plan.n_springs, 2)]
+    n_bents = len(plan.bent_names)
+    return pairs[:n_bents], pairs[n_bents:]
 
 
-def rayleigh_factors(scene: Scene, damping) -> tuple[float, float, float, float]:
+def rayleigh_factors(damping: DampingModel) -> tuple[float, float, float, float]:
     """``rayleigh αM βK βKinit βKc``: αM = a0 on absolute velocities (0 when the mass part is
-    relative: dashpots then carry it, :func:`mass_dampers`), a1 on the tangent the scene names
-    (current → βK, initial → βKinit, committed → βKc)."""
+    relative: dashpots then carry it, :func:`mass_dampers`), a1 on the tangent the damping
+    model names (current → βK, initial → βKinit, committed → βKc)."""
     a1 = damping.a1
-    st = scene.damping.stiffness
+    st = damping.stiffness
     return (
         damping.a0_absolute,
         a1 if st == "current" else 0.0,
@@ -35,45 +47,49 @@ def rayleigh_factors(scene: Scene, damping) -> tuple[float, float, float, float]
 
 
 def mass_dampers(
-    ops: OpsSession, scene: Scene, damping, deck: int, seats, acts, supports: str
+    ops: OpsSession, plan: Plan, damping: DampingModel, deck: int, seats, acts, supports: str
 ) -> list[int]:
-    """The mass-proportional part on relative velocities (``damping.mass = relative``): a
-    zeroLength with Viscous(a0 m / n, α = 1) materials in x, y, θ from a reference node per bent
-    table — at the deck centre, imposed x and y motion of that table, θ fixed — to the deck
-    centre, and one from each seat's actuator to the seat (x, θ); the same dashpots as
-    :func:`deckpound.models.damping.relative_mass_dampers`. No Rayleigh on them. Returns the
-    reference nodes (one per bent, in bent order; their motion is imposed with the tables')."""
+    """The mass-proportional part on relative velocities (``damping.mass = relative``): the
+    damping model's dashpots (:attr:`DampingModel.mass_dampers`, in DOF order: deck x, y, θ
+    once per bent table, then seat x, θ per seat) as zeroLength elements with Viscous(c,
+    α = 1) materials — one per bent table in x, y, θ from a reference node at the deck centre
+    (imposed x and y motion of that table, θ fixed; a fixed node without bents) to the deck
+    centre, and one from each seat's actuator to the seat (x, θ). No Rayleigh on them. Returns
+    the reference nodes (one per bent, in bent order; their motion is imposed with the
+    tables')."""
     if not damping.mass_dampers:
         return []
     T = ops.tag
-    plan_mass = plan_of(scene).mass
-    nb = len(scene.bents)
-    a0 = damping.a0
+    deck_c = {
+        dof: [m.c for m in damping.mass_dampers if m.dof == dof]
+        for dof in (DECK_X, DECK_Y, DECK_THETA)
+    }
     ops.comment(
         "mass-proportional damping on relative velocities: Viscous dashpots to the supports"
     )
     refs = []
-    for _k, b in enumerate(scene.bents or [None]):
-        name = b.name if b is not None else "fixed"
+    for k, c_theta in enumerate(deck_c[DECK_THETA]):
+        bent = plan.bent_names[k] if plan.bent_names else None
+        name = bent if bent is not None else "fixed"
         rn = T("node", f"deck ref {name}")
         ops.node(rn, 0.0, 0.0)
-        moving = b is not None and supports == "motion"
+        moving = bent is not None and supports == "motion"
         ops.fix(rn, 0 if moving else 1, 0 if moving else 1, 1)
-        if b is not None:
+        if bent is not None:
             refs.append(rn)
-        n = max(nb, 1)
         mats = []
-        for dirn, dof in (("x", 4), ("y", 5), ("theta", 6)):
+        for dirn, c in (("x", deck_c[DECK_X][k]), ("y", deck_c[DECK_Y][k]), ("theta", c_theta)):
             m = T("material", f"deck mass damper {name} {dirn}")
-            ops.uniaxialMaterial("Viscous", m, a0 * plan_mass[dof] / n, 1.0)
+            ops.uniaxialMaterial("Viscous", m, c, 1.0)
             mats.append(m)
         e = T("element", f"deck mass damper {name}")
         ops.element("zeroLength", e, rn, deck, "-mat", *mats, "-dir", 1, 2, 3)
     for j in range(2):
         mats = []
-        for dirn, dof in (("x", 2 * j), ("theta", 2 * j + 1)):
+        for dirn, dof in (("x", SEAT_X[j]), ("theta", SEAT_THETA[j])):
+            (c,) = [m.c for m in damping.mass_dampers if m.dof == dof]
             m = T("material", f"seat{j + 1} mass damper {dirn}")
-            ops.uniaxialMaterial("Viscous", m, a0 * plan_mass[dof], 1.0)
+            ops.uniaxialMaterial("Viscous", m, c, 1.0)
             mats.append(m)
         e = T("element", f"seat{j + 1} mass damper")
         ops.element("zeroLength", e, acts[j], seats[j], "-mat", *mats, "-dir", 1, 3)

@@ -62,16 +62,7 @@ import math
 import numpy as np
 
 from deckpound.models.columns import ENERGY_COLUMNS
-from deckpound.models.damping import damping_model
-from deckpound.models.plan import (
-    DECK_THETA,
-    DECK_X,
-    DECK_Y,
-    SEAT_THETA,
-    SEAT_X,
-    plan_of,
-    takeda_hysteretic_args,
-)
+from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, SEAT_THETA, SEAT_X, Plan
 from deckpound.models.scene import Scene
 
 from .damping import rayleigh_factors, rayleigh_members
@@ -178,8 +169,9 @@ class EnergyBalance:
     """Work–energy balance of the OpenSees model over every step (module docstring).
 
     Build it in the open session after the model, the analysis and the initial state
-    (``ops``: openseespy or anything with its functions; ``info``: the model's
-    :class:`.model.ModelInfo`; ``plan``: the step plan of :func:`.engine.make_plan`;
+    (``ops``: openseespy or anything with its functions; ``plan``: the plan model it was
+    built on; ``info``: the model's :class:`.model.ModelInfo`, with its damping model;
+    ``steps``: the step plan of :func:`.engine.step_plan`;
     ``elements``: the session's element name → tag registry,
     :meth:`deckpound.opensees_build.ops.OpsSession.tags`), then pass it as ``on_step`` to
     :func:`.engine.run_steps`; :meth:`columns` gives the energy columns of the output rows
@@ -191,44 +183,17 @@ class EnergyBalance:
     queries openseespy has (``eleResponse`` builds a response object per call).
     """
 
-    def __init__(self, ops, scene: Scene, info, plan: dict, elements: dict):
-        self.stride = int(plan["stride"])
-        pm = plan_of(scene)
-        dm = damping_model(scene, pm)
-        alpha_m, beta_k, beta_k0, beta_kc = rayleigh_factors(scene, dm)
-        ray_bents, ray_seats = rayleigh_members(scene)
+    def __init__(self, ops, scene: Scene, plan: Plan, info, steps: dict, elements: dict):
+        self.stride = int(steps["stride"])
+        dm = info.damping
+        alpha_m, beta_k, beta_k0, beta_kc = rayleigh_factors(dm)
+        ray_bents, ray_seats = rayleigh_members(plan, dm)
         self.alpha_m = alpha_m
         self.beta_kc = beta_kc
         has_beta = beta_k != 0.0 or beta_k0 != 0.0 or beta_kc != 0.0
-        links: list[_Link] = []
-        for k, b in enumerate(scene.bents):
-            takeda = tuple(takeda_constants(takeda_hysteretic_args(s)) for s in (b.x, b.y))
-            rayleigh = ray_bents and has_beta
-            links.append(_Link(info.bent_elements[k], (0, 1), rayleigh=rayleigh, takeda=takeda))
-            dash = [(dof, c) for dof, c in ((0, b.cx), (1, b.cy)) if c > 0.0]
-            if dash:
-                tag = elements[f"bent {b.name} dashpot"]
-                dofs, c = [d for d, _ in dash], [c for _, c in dash]
-                links.append(_Link(tag, dofs, dashpot=True, c=c))
-        for j, seat in enumerate(scene.seats):
-            links.append(
-                _Link(elements[f"seat{j + 1} spring"], (0, 2), rayleigh=ray_seats and has_beta)
-            )
-            c = (seat.cx, seat.ctheta)
-            links.append(_Link(elements[f"seat{j + 1} dashpot"], (0, 2), dashpot=True, c=c))
-        # the relative mass damping's dashpots (opensees_build.damping.mass_dampers)
-        n_tables = max(len(scene.bents), 1)
-        for name in [b.name for b in scene.bents] or ["fixed"]:
-            tag = elements.get(f"deck mass damper {name}")
-            if tag is not None:
-                c = [dm.a0 * pm.mass[dof] / n_tables for dof in (DECK_X, DECK_Y, DECK_THETA)]
-                links.append(_Link(tag, (0, 1, 2), dashpot=True, c=c))
-        for j in range(2):
-            tag = elements.get(f"seat{j + 1} mass damper")
-            if tag is not None:
-                c = [dm.a0 * pm.mass[SEAT_X[j]], dm.a0 * pm.mass[SEAT_THETA[j]]]
-                links.append(_Link(tag, (0, 2), dashpot=True, c=c))
-        self.links = links
+        self.links = self._spring_links(plan, info, elements, ray_bents, ray_seats, has_beta)
+        self.links += self._mass_damper_links(plan, dm, elements)
+        links = self.links
         # linear elements read at output steps only: (tag, basic stiffnesses, or None for a
         # beam, whose stored energy is ½ q·v)
         self.linear = [
@@ -243,17 +208,17 @@ class EnergyBalance:
         # contact
         self.friction = bool(info.friction)
         self.gaps = list(info.gap_elements)
-        self.g0 = [float(g) for g in info.g0]
-        self.normals = [tuple(n) for n in info.normals]
-        self.tangents = [tuple(t) for t in info.tangents]
+        self.g0 = [float(c.gap) for c in plan.corners]
+        self.normals = [tuple(c.normal) for c in plan.corners]
+        self.tangents = [tuple(c.tangent) for c in plan.corners]
         ct = scene.contact
         self.kn, self.kt, self.mu = ct.stiffness, ct.tangential_stiffness, ct.friction
         self.gap_laws = []
         if self.gaps and not self.friction:
             orient = gap_orientation(scene)
             axis = (1.0, 0.0) if orient is None else (orient[0], orient[1])
-            for c in range(4):
-                spec = gap_mapping(scene, c, 0, 0, 0)
+            for corner in plan.corners:
+                spec = gap_mapping(scene, corner, 0, 0, 0)
                 # (material, its arguments, local x axis, the node order of the element)
                 self.gap_laws.append((spec.material, spec.args, axis))
         # every node read per step, once: link ends, nodes with mass, the corners' nodes
@@ -290,6 +255,50 @@ class EnergyBalance:
         self.rows: list[list[float]] = []
         self.row_steps: list[int] = []
         self._start(ops)
+
+    @staticmethod
+    def _spring_links(plan: Plan, info, elements: dict, ray_bents, ray_seats, has_beta: bool):
+        """The bents' and seats' spring and dashpot elements (:func:`.model.define_bents`,
+        :func:`.model.define_seat_springs`), from the plan's springs."""
+        links: list[_Link] = []
+        for k, name in enumerate(plan.bent_names):
+            springs = plan.springs[2 * k : 2 * k + 2]  # (x, y)
+            takeda = tuple(takeda_constants(s.takeda) for s in springs)
+            rayleigh = ray_bents[k] and has_beta
+            links.append(_Link(info.bent_elements[k], (0, 1), rayleigh=rayleigh, takeda=takeda))
+            dash = [(dof, s.dashpot) for dof, s in enumerate(springs) if s.dashpot > 0.0]
+            if dash:
+                tag = elements[f"bent {name} dashpot"]
+                dofs, c = [d for d, _ in dash], [c for _, c in dash]
+                links.append(_Link(tag, dofs, dashpot=True, c=c))
+        n_bent = plan.n_bent_springs
+        for j in range(2):
+            kx, kt = plan.springs[n_bent + 2 * j : n_bent + 2 * j + 2]  # (x, θ)
+            rayleigh = ray_seats[j] and has_beta
+            links.append(_Link(elements[f"seat{j + 1} spring"], (0, 2), rayleigh=rayleigh))
+            c = (kx.dashpot, kt.dashpot)
+            links.append(_Link(elements[f"seat{j + 1} dashpot"], (0, 2), dashpot=True, c=c))
+        return links
+
+    @staticmethod
+    def _mass_damper_links(plan: Plan, dm, elements: dict) -> list[_Link]:
+        """The relative mass damping's dashpots (:func:`.damping.mass_dampers`), with the
+        damping model's coefficients."""
+        links: list[_Link] = []
+        by_dof = {
+            dof: [m.c for m in dm.mass_dampers if m.dof == dof] for dof in range(len(plan.mass))
+        }
+        for k, name in enumerate(plan.bent_names or ("fixed",)):
+            tag = elements.get(f"deck mass damper {name}")
+            if tag is not None:
+                c = [by_dof[dof][k] for dof in (DECK_X, DECK_Y, DECK_THETA)]
+                links.append(_Link(tag, (0, 1, 2), dashpot=True, c=c))
+        for j in range(2):
+            tag = elements.get(f"seat{j + 1} mass damper")
+            if tag is not None:
+                c = [by_dof[SEAT_X[j]][0], by_dof[SEAT_THETA[j]][0]]
+                links.append(_Link(tag, (0, 2), dashpot=True, c=c))
+        return links
 
     # -- the state ---------------------------------------------------------------------------
 

@@ -34,7 +34,9 @@ from typing import ClassVar
 
 import numpy as np
 
+from deckpound.models.contact_laws_table import contact_law, friction_model
 from deckpound.models.contact_params import contact_resolving_step
+from deckpound.models.damping import damping_model
 from deckpound.models.engine_contract import (
     Engine,
     RunOutput,
@@ -42,13 +44,16 @@ from deckpound.models.engine_contract import (
     engine_columns,
     output_stride,
 )
+from deckpound.models.excitation import support_motion
 from deckpound.models.motion import analysis_duration
-from deckpound.models.plan import Plan
+from deckpound.models.plan import Plan, plan_of
 from deckpound.models.result import peak_columns
 from deckpound.models.scene import OpenSeesSettings, Scene
 
 from . import initial_state
 from .energy import EnergyBalance, energy_closure
+from .model import ModelInfo, analysis_commands, build_model, refuse_scene
+from .ops import OpsSession, openseespy_version
 
 ENGINE = "opensees"
 
@@ -325,47 +330,46 @@ def run_steps(ops, plan, log=None, on_step=None):
 # ------------------------------------------------------------------------------------------
 
 
-def make_plan(scene: Scene, info, duration: float) -> dict:
-    """Tags and constants of the step loop (JSON-able: also written into exported scripts)."""
-    from .model import analysis_commands
-
-    s = scene.opensees
-    from deckpound.models.plan import plan_of
-
-    dt = contact_resolving_step(scene, s.dt)
+def step_plan(scene: Scene, plan: Plan, info: ModelInfo, duration: float) -> dict:
+    """The step plan: tags and constants of the step loop, JSON-able (the exported scripts
+    hold it as ``PLAN``; the runtime functions above take it as ``plan``). It is not the plan
+    model: the corners' gaps, sides, normals and tangents, the bent stations, the columns and
+    the seat each corner faces are copied from ``plan`` (:class:`Plan`), the tags from the
+    built model ``info``."""
+    dt = contact_resolving_step(scene, scene.opensees.dt)
     # the support length of the seat each corner faces [m] (None: unseating not checked)
     lengths = [seat.support_length for seat in scene.seats]
+    columns = engine_columns(plan)
     return {
         "dt": dt,
         "n_steps": int(round(duration / dt)),
         "stride": output_stride(dt, scene.run.output_dt),
-        "fallback": s.fallback,
-        "substeps": s.substeps,
+        "fallback": scene.opensees.fallback,
+        "substeps": scene.opensees.substeps,
         "deck": info.deck,
         "seats": list(info.seats),
         "deck_corners": list(info.deck_corners),
         "seat_corners": list(info.seat_corners),
         "gap_elements": list(info.gap_elements),
-        "g0": list(info.g0),
-        "sides": list(info.sides),
-        "normals": [list(n) for n in info.normals],
-        "tangents": [list(t) for t in info.tangents],
+        "g0": [c.gap for c in plan.corners],
+        "sides": [c.side for c in plan.corners],
+        "normals": [list(c.normal) for c in plan.corners],
+        "tangents": [list(c.tangent) for c in plan.corners],
         "bent_elements": list(info.bent_elements),
         "friction": info.friction,
         "analysis": [list(c) for c in analysis_commands(scene)],
-        "columns": engine_columns(plan_of(scene)),
-        "bent_x": list(plan_of(scene).bent_x),
-        "peak_columns": peak_columns(engine_columns(plan_of(scene)), info.bent_names),
-        "support_lengths": [lengths[c.seat] for c in plan_of(scene).corners],
+        "columns": columns,
+        "bent_x": list(plan.bent_x),
+        "peak_columns": peak_columns(columns, plan.bent_names),
+        "support_lengths": [lengths[c.seat] for c in plan.corners],
     }
 
 
-def build(ops, scene: Scene, motion=None):
-    """Build model + analysis in an open session; returns (info, plan)."""
-    from deckpound.models.excitation import support_motion
-
-    from .model import build_model
-
+def build(ops, scene: Scene, motion=None, plan: Plan | None = None):
+    """Build model + analysis in an open session on the plan model ``plan`` (default: the
+    scene's); returns (info, the step plan of :func:`step_plan`)."""
+    if plan is None:
+        plan = plan_of(scene)
     if motion is None:
         motion = support_motion(scene)
     duration = analysis_duration(scene, motion)
@@ -377,30 +381,47 @@ def build(ops, scene: Scene, motion=None):
     uniform = len(rec) > 0 and np.allclose(rec, rec[0], rtol=1e-9, atol=0.0)
     step = float(rec[0]) if uniform and dt < rec[0] <= duration else dt
     res = motion.resample(step, duration)
-    info = build_model(ops, scene, res)
-    plan = make_plan(scene, info, duration)
+    damping = damping_model(scene, plan)
+    info = build_model(ops, scene, res, plan=plan, damping=damping)
+    steps = step_plan(scene, plan, info, duration)
     # the support nodes whose displacements the step loop reads (relative columns)
     nodes = ops.tags("node")
-    plan["tables"] = [nodes[f"table {b}"] for b in info.bent_names]
-    plan["actuators"] = [nodes["actuator1"], nodes["actuator2"]]
+    steps["tables"] = [nodes[f"table {b}"] for b in info.bent_names]
+    steps["actuators"] = [nodes["actuator1"], nodes["actuator2"]]
     ops.comment("analysis")
-    for cmd in plan["analysis"]:
+    for cmd in steps["analysis"]:
         ops.call(*cmd)
     # part of the build (not of the run) so that the exported scripts start from the same
     # initial state as the in-process run (issue 12: textbook scenes)
     initial_state.set_initial_displacement(ops, scene)
     initial_state.set_initial_velocity(ops, scene)
-    initial_state.set_initial_acceleration(ops, scene, res)
-    return info, plan
+    initial_state.set_initial_acceleration(ops, scene, res, plan, damping)
+    return info, steps
 
 
 def command_log(scene: Scene, motion=None):
     """The benchmark-style command log of the scene (model + analysis, no stepping)."""
-    from .ops import OpsSession
-
     with OpsSession() as ops:
         build(ops, scene, motion)
         return list(ops.log)
+
+
+def run_status(stats: dict, state_finite: bool) -> Status:
+    """How the step loop ended, from the statistics of :func:`run_steps` and the numbers of
+    the last state: a failed run whose last state holds a non-finite number is
+    :attr:`Status.NONFINITE`, else :attr:`Status.NOT_CONVERGED` (a failed ``analyze``
+    reverts the domain to its last commit, which the loop found finite)."""
+    if stats["status"] == "success":
+        return Status.SUCCESS
+    if stats["status"] == "unseated":
+        return Status.UNSEATED
+    return Status.NOT_CONVERGED if state_finite else Status.NONFINITE
+
+
+def state_is_finite(ops, plan: dict, t: float) -> bool:
+    """True when every number of the output row of the current state (:func:`sample_row`)
+    is finite."""
+    return all(math.isfinite(v) for v in sample_row(ops, plan, t))
 
 
 class OpenSeesEngine(Engine):
@@ -414,28 +435,22 @@ class OpenSeesEngine(Engine):
     style: ClassVar[dict] = dict(color="#000000", linestyle="-", linewidth=1.4, label="OpenSees")
 
     def reads(self, scene: Scene, settings) -> set[str]:
+        """The law's and the friction model's parameters, from their rows of
+        :mod:`deckpound.models.contact_laws_table` (a model OpenSees refuses is refused before
+        this matters, :func:`.model.refuse_scene`)."""
         ct = scene.contact
         read = {"contact.law", "contact.stiffness", "run.steps_per_contact_period"}
-        if ct.law in ("kelvin-voigt", "hertzdamp"):
-            read.add("contact.restitution")
-        if ct.law in ("hertz", "hertzdamp"):
-            read.add("contact.exponent")
-        if ct.law == "bilinear":
-            read |= {"contact.bilinear_ratio", "contact.bilinear_yield"}
+        read |= set(contact_law(ct.law).params)
         if ct.friction_mode != "none":
             read.add("contact.friction")
         if ct.friction > 0.0:
             read.add("contact.friction_mode")
-            if ct.friction_mode == "contact2d":
-                read.add("contact.tangential_stiffness")
+            read |= set(friction_model(ct.friction_mode).params)
         if settings.mode == "stick":
             read.add("deck.stick_modulus")
         return read
 
     def refuse(self, scene: Scene, settings) -> None:
-
-        from .model import refuse_scene
-
         refuse_scene(scene)
         if any(scene.initial.deck):
             initial_state.refuse_initial_displacement(scene, settings)
@@ -443,60 +458,40 @@ class OpenSeesEngine(Engine):
     def _run(
         self, plan: Plan, scene: Scene, settings, motion, *, _before_run=None, _ops_wrapper=None
     ) -> RunOutput:
-        """``_before_run(ops_raw, info, plan)`` and ``_ops_wrapper(ops_raw) -> ops`` are test
+        """``_before_run(ops_raw, info, steps)`` and ``_ops_wrapper(ops_raw) -> ops`` are test
         hooks (set initial velocities; inject a failing step)."""
-        from .ops import OpsSession, openseespy_version
-
         if settings is not scene.opensees:
             scene = scene.replace(opensees=settings)
         messages: list[str] = []
         t0 = time.perf_counter()
         with OpsSession() as ops:
-            info, splan = build(ops, scene, motion)
+            info, steps = build(ops, scene, motion, plan)
             raw = ops.raw
             if _before_run is not None:
-                _before_run(raw, info, splan)
+                _before_run(raw, info, steps)
             runner_ops = _ops_wrapper(raw) if _ops_wrapper is not None else raw
-            balance = EnergyBalance(raw, scene, info, splan, ops.tags("element"))
+            balance = EnergyBalance(raw, scene, plan, info, steps, ops.tags("element"))
             t1 = time.perf_counter()
-            out = run_steps(runner_ops, splan, log=messages.append, on_step=balance)
+            out = run_steps(runner_ops, steps, log=messages.append, on_step=balance)
             loop = time.perf_counter() - t1
-        cols = splan["columns"]
+            st = out["stats"]
+            end = st["failed_time"] if st["failed_time"] is not None else 0.0
+            finite = st["status"] != "failed" or state_is_finite(runner_ops, steps, end)
+            status = run_status(st, finite)
+        cols = steps["columns"]
         arr = np.array(out["rows"], dtype=float).reshape(-1, len(cols))
         columns = {c: arr[:, k].copy() for k, c in enumerate(cols)}
         columns.update(balance.columns(len(arr)))  # the energy columns [kJ], every step's work
-        st = out["stats"]
-        ok = st["status"] == "success"
-        unseated = st["status"] == "unseated"  # an answer, not a failure
-        nonfinite = "non-finite" in st["message"]
         if st["failures"]:
             warnings.warn(
                 f"OpenSees: {st['failures']} failed step(s), {st['rescued']} rescued "
                 "by sub-stepping",
                 stacklevel=4,
             )
-        reason = (
-            "non-finite state"
-            if nonfinite
-            else (
-                "Newton did not converge"
-                + (
-                    f" even with {settings.substeps} sub-steps"
-                    if settings.fallback == "substep"
-                    else ""
-                )
-            )
-        )
         return RunOutput(
             columns=columns,
-            status=Status.SUCCESS
-            if ok
-            else (
-                Status.UNSEATED
-                if unseated
-                else (Status.NONFINITE if nonfinite else Status.NOT_CONVERGED)
-            ),
-            message="" if ok else (st["message"] if unseated else reason),
+            status=status,
+            message=run_message(status, st, settings),
             failed_step=st["failed_step"],
             failed_time=st["failed_time"],
             steps=st["steps"],
@@ -514,12 +509,24 @@ class OpenSeesEngine(Engine):
             unseated=None if st["unseated"] is None else tuple(st["unseated"]),
             extra={
                 "openseespy": openseespy_version(),
-                "dt": splan["dt"],
+                "dt": steps["dt"],
                 "build_time": t1 - t0,
                 "step_log": messages[:100],
                 "energy_closure": energy_closure(columns),
             },
         )
+
+
+def run_message(status: Status, stats: dict, settings: OpenSeesSettings) -> str:
+    """The run's message: empty on success, the loop's own for unseating (which corner,
+    when), else the status text of :class:`Status` (with the sub-steps the fallback tried)."""
+    if status is Status.SUCCESS:
+        return ""
+    if status is Status.UNSEATED:
+        return stats["message"]
+    if status is Status.NOT_CONVERGED and settings.fallback == "substep":
+        return f"{status.text} even with {settings.substeps} sub-steps"
+    return status.text
 
 
 def run_opensees(scene: Scene, motion=None, *, raise_on_failure: bool = False, **options):

@@ -49,16 +49,21 @@ def _analysis_body(plan: dict) -> str:
 
 
 def tcl_script(p: ExportParts) -> str:
-    """The complete Tcl script of ``p``."""
-    plan = p.plan
+    """The complete Tcl script of ``p``: its parts, in order."""
+    csv = csv_plan(p)
+    return (
+        tcl_prologue(p)
+        + tcl_step_plan(p)
+        + tcl_sampling()
+        + tcl_csv_columns(csv)
+        + tcl_step_loop(csv)
+    )
+
+
+def tcl_prologue(p: ExportParts) -> str:
+    """The header comments, the folders, and the model and analysis commands."""
     head = "\n".join(f"# {comment_text(x, 'tcl')}".rstrip() for x in header_lines(p))
     body = render_commands(p.log, "tcl", file_of=p.file_of)
-    recorders = "\n".join(render_recorders(p.recorders, "tcl"))
-    gap_eles = plan["gap_elements"] or [0, 0, 0, 0]
-    margin = "0.5 / $nSub" if plan["fallback"] == "substep" else "0.5"
-    csv = csv_plan(p)
-    columns = " ".join(tcl_word(c) for c in csv["columns"])
-    records = " ".join(tcl_word(f) for f in csv["records"])
     return f"""{head}
 
 set here [file dirname [file normalize [info script]]]
@@ -70,7 +75,16 @@ file mkdir $outDir
 # --- model and analysis ---
 {body}# --- end model ---
 
-# step plan (tags from the legend above)
+"""
+
+
+def tcl_step_plan(p: ExportParts) -> str:
+    """The step plan as Tcl variables, ``defineAnalysis`` and the recorders."""
+    plan = p.plan
+    recorders = "\n".join(render_recorders(p.recorders, "tcl"))
+    gap_eles = plan["gap_elements"] or [0, 0, 0, 0]
+    margin = "0.5 / $nSub" if plan["fallback"] == "substep" else "0.5"
+    return f"""# step plan (tags from the legend above)
 set dt {_num(plan["dt"])}
 set nSteps {plan["n_steps"]}
 set stride {plan["stride"]}
@@ -101,23 +115,28 @@ set recDT [expr {{($stride - {margin}) * $dt}}]
 {recorders}
 # --- end recorders ---
 
-# deckpound's CSV (writeCsv 1): the engine's sample_row, in Tcl
-proc cornerGaps {{}} {{
+"""
+
+
+def tcl_sampling() -> str:
+    """``cornerGaps`` and ``sampleRow``: the engine's :func:`~.engine.sample_row` in Tcl."""
+    return """# deckpound's CSV (writeCsv 1): the engine's sample_row, in Tcl
+proc cornerGaps {} {
     global deckCorners seatCorners g0 nX nY
-    set out {{}}
-    for {{set c 0}} {{$c < 4}} {{incr c}} {{
+    set out {}
+    for {set c 0} {$c < 4} {incr c} {
         set dk [lindex $deckCorners $c]
         set st [lindex $seatCorners $c]
-        set g [expr {{[lindex $g0 $c] + [lindex $nX $c] * ([nodeDisp $dk 1] - [nodeDisp $st 1])}}]
-        if {{[lindex $nY $c] != 0.0}} {{
-            set g [expr {{$g + [lindex $nY $c] * ([nodeDisp $dk 2] - [nodeDisp $st 2])}}]
-        }}
+        set g [expr {[lindex $g0 $c] + [lindex $nX $c] * ([nodeDisp $dk 1] - [nodeDisp $st 1])}]
+        if {[lindex $nY $c] != 0.0} {
+            set g [expr {$g + [lindex $nY $c] * ([nodeDisp $dk 2] - [nodeDisp $st 2])}]
+        }
         lappend out $g
-    }}
+    }
     return $out
-}}
+}
 
-proc sampleRow {{t}} {{
+proc sampleRow {t} {
     global deck seats gapEles hasGaps friction nX nY tX tY bentEles
     set dk [nodeDisp $deck]
     set s1 [nodeDisp [lindex $seats 0]]
@@ -129,32 +148,39 @@ proc sampleRow {{t}} {{
              [lindex $s2 0] [lindex $s2 2] [lindex $vk 0] [lindex $vk 1] [lindex $vk 2] \\
              [lindex $v1 0] [lindex $v1 2] [lindex $v2 0] [lindex $v2 2]]
     set row [concat $row [cornerGaps]]
-    set fn {{}}
-    set ft {{}}
-    for {{set c 0}} {{$c < 4}} {{incr c}} {{
+    set fn {}
+    set ft {}
+    for {set c 0} {$c < 4} {incr c} {
         set e [lindex $gapEles $c]
-        if {{!$hasGaps}} {{
+        if {!$hasGaps} {
             lappend fn 0.0; lappend ft 0.0
-        }} elseif {{$friction}} {{
+        } elseif {$friction} {
             set f [eleResponse $e force]
             set fx [lindex $f 3]
             set fy [lindex $f 4]
-            lappend fn [expr {{-([lindex $nX $c] * $fx + [lindex $nY $c] * $fy) + 0.0}}]
-            lappend ft [expr {{-([lindex $tX $c] * $fx + [lindex $tY $c] * $fy) + 0.0}}]
-        }} else {{
-            lappend fn [expr {{-[lindex [eleResponse $e basicForce] 0]}}]
+            lappend fn [expr {-([lindex $nX $c] * $fx + [lindex $nY $c] * $fy) + 0.0}]
+            lappend ft [expr {-([lindex $tX $c] * $fx + [lindex $tY $c] * $fy) + 0.0}]
+        } else {
+            lappend fn [expr {-[lindex [eleResponse $e basicForce] 0]}]
             lappend ft 0.0
-        }}
-    }}
+        }
+    }
     set row [concat $row $fn $ft]
-    foreach e $bentEles {{
+    foreach e $bentEles {
         set f [eleResponse $e basicForce]
         lappend row [lindex $f 0] [lindex $f 1]
-    }}
+    }
     return $row
-}}
+}
 
-# the CSV's derived columns (export_py.result_rows): support displacement records read from
+"""
+
+
+def tcl_csv_columns(csv: dict) -> str:
+    """The CSV's derived columns (:func:`.export_py.csv_plan` ``csv``): the support
+    records, ``interpRecord`` and ``csvRow``."""
+    records = " ".join(tcl_word(f) for f in csv["records"])
+    return f"""# the CSV's derived columns (export_py.result_rows): support displacement records read from
 # $dataDir, interpolated as np.interp at each row's time; the deck relative to the mean of its
 # tables, each seat relative to its actuator, each bent spring's d = B u - S u_g
 set relDt {_num(csv["dt"])}
@@ -228,7 +254,14 @@ proc csvRow {{row}} {{
     return [join $out ","]
 }}
 
-# gap closures at every converged step and sub-step (deckpound's one definition, the engine's
+"""
+
+
+def tcl_step_loop(csv: dict) -> str:
+    """The gap-closure count and the step loop with the sub-step fallback of
+    :func:`deckpound.opensees_build.engine.run_steps`, writing the CSV's rows."""
+    columns = " ".join(tcl_word(c) for c in csv["columns"])
+    return f"""# gap closures at every converged step and sub-step (deckpound's one definition, the engine's
 # track_step): a corner is in contact when its gap is <= 0 or its normal force > 0; a closure
 # is a step at which a corner goes from out of contact to in contact (in contact at t = 0: one)
 set inside {{0 0 0 0}}

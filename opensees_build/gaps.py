@@ -13,14 +13,13 @@ from dataclasses import dataclass
 from deckpound.models.contact_laws_table import contact_law
 from deckpound.models.contact_params import kelvin_voigt_damping
 from deckpound.models.errors import SceneError
+from deckpound.models.plan import Corner
 from deckpound.models.scene import Scene
 
-__all__ = ["HUGE_FORCE", "SIDES", "GapSpec", "contact_normal", "gap_mapping", "gap_orientation"]
+__all__ = ["HUGE_FORCE", "GapSpec", "contact_normal", "gap_mapping", "gap_orientation"]
 
 #: "infinite" yield force of the linear gap (ElasticPPGap) [kN]
 HUGE_FORCE = 1.0e20
-#: side of each corner c1..c4: +1 on seat 1 (left), −1 on seat 2
-SIDES = (1.0, 1.0, -1.0, -1.0)
 
 
 @dataclass(frozen=True)
@@ -50,43 +49,42 @@ def gap_orientation(scene: Scene) -> tuple[float, ...] | None:
     return (cs, -sn, 0.0, sn, cs, 0.0)
 
 
-def gap_mapping(scene: Scene, corner: int, deck_node: int, seat_node: int, mat_tag: int) -> GapSpec:
-    """Node order, orientation and OpenSees material of corner ``corner`` (0..3).
+def gap_mapping(
+    scene: Scene, corner: Corner, deck_node: int, seat_node: int, mat_tag: int
+) -> GapSpec:
+    """Node order, orientation and OpenSees material of the plan's corner ``corner``.
 
     Physical gap (positive when open), measured along the corner's gap-opening normal n of the
     plan's corner table: g = g₀ + n·(u_deck − u_seat); n = side·a with a = (cos φ, −sin φ),
-    side = +1 for c1, c2 (seat 1, left) and −1 for c3, c4 (a = X for a straight deck). The
+    side = +1 for c1, c2 (seat 1, left) and −1 for c3, c4 (``Corner.side``; a = X for a
+    straight deck), g₀ = ``Corner.gap``. The
     zeroLength element's direction-1 strain is a·(u_j − u_i) with a its local x axis
     (:func:`gap_orientation`; checked against openseespy in ``tests/test_skew_opensees.py``),
     so the nodes are ordered (seat, deck) for side +1 and (deck, seat) for side −1:
     strain = side·a·(u_deck − u_seat) = g − g₀, and closing is negative (compression). The
     materials take a negative gap −g₀ (and negative yield values), so their stress is ≤ 0 and
-    the contact force fn = −stress ≥ 0 acts on the deck along n.
+    the contact force fn = −stress ≥ 0 acts on the deck along n. The material is the law's
+    OpenSees counterpart in the contact-law table (:mod:`deckpound.models.contact_laws_table`).
     """
-    side = SIDES[corner]
-    g0 = scene.seats[0].gap if corner < 2 else scene.seats[1].gap
-    i, j = (seat_node, deck_node) if side > 0 else (deck_node, seat_node)
+    g0 = corner.gap
+    i, j = (seat_node, deck_node) if corner.side > 0 else (deck_node, seat_node)
     orient = gap_orientation(scene)
     c = scene.contact
-    if c.law == "linear":
-        return GapSpec(i, j, "ElasticPPGap", (mat_tag, c.stiffness, -HUGE_FORCE, -g0), orient)
-    if c.law == "bilinear":
-        return GapSpec(
-            i,
-            j,
-            "ImpactMaterial",
-            (mat_tag, c.stiffness, c.bilinear_ratio * c.stiffness, -c.bilinear_yield, -g0),
-            orient,
-        )
-    if c.law == "kelvin-voigt":
-        damp = float(kelvin_voigt_damping(scene)[corner])
-        return GapSpec(i, j, "ViscoelasticGap", (mat_tag, c.stiffness, damp, -g0), orient)
-    if c.law in ("hertz", "hertzdamp"):
+    law = contact_law(c.law)
+    material = law.opensees
+    if material == "ElasticPPGap":
+        return GapSpec(i, j, material, (mat_tag, c.stiffness, -HUGE_FORCE, -g0), orient)
+    if material == "ImpactMaterial":
+        k2 = c.bilinear_ratio * c.stiffness
+        return GapSpec(i, j, material, (mat_tag, c.stiffness, k2, -c.bilinear_yield, -g0), orient)
+    if material == "ViscoelasticGap":
+        damp = float(kelvin_voigt_damping(scene)[corner.index])
+        return GapSpec(i, j, material, (mat_tag, c.stiffness, damp, -g0), orient)
+    if material == "Hertzdamp":
         # Hertzdamp(Kh, ξ_n, gap, n): ξ_n = 0 is the undamped Hertz law k δ^n exactly; the
         # clone's 'hertzdamp' law is this material's arithmetic (contact_laws.py)
-        law = contact_law(c.law)
         xi_n = law.hysteresis(c.restitution) if law.hysteresis is not None else 0.0
-        return GapSpec(i, j, "Hertzdamp", (mat_tag, c.stiffness, xi_n, -g0, c.exponent), orient)
+        return GapSpec(i, j, material, (mat_tag, c.stiffness, xi_n, -g0, c.exponent), orient)
     raise SceneError("contact.law", f"OpenSees cannot express the {c.law!r} law")
 
 

@@ -6,7 +6,7 @@ The deck sticks' section (stick mode), the stations of their nodes, and where ea
 
 from __future__ import annotations
 
-from deckpound.models.plan import plan_of
+from deckpound.models.plan import Plan
 from deckpound.models.scene import Scene
 
 
@@ -16,13 +16,14 @@ def stick_section(scene: Scene) -> tuple[float, float]:
     return w * w / 8.0, w**4 / 96.0
 
 
-def stick_stations(scene: Scene) -> list[float]:
-    """x of the stick nodes: ``stick_elements`` equal elements per half plus the bent stations."""
+def stick_stations(scene: Scene, plan: Plan) -> list[float]:
+    """x of the stick nodes: ``stick_elements`` equal elements per half plus the bent stations
+    of the plan model."""
     hl = 0.5 * scene.deck.length
     n = scene.opensees.stick_elements
     xs = [-hl + k * hl / n for k in range(n + 1)] + [k * hl / n for k in range(1, n + 1)]
     tol = 1e-9 * scene.deck.length
-    for xb in plan_of(scene).bent_x:
+    for xb in plan.bent_x:
         if all(abs(xb - x) > tol for x in xs):
             xs.append(xb)
     xs = sorted(xs)

@@ -13,6 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from deckpound.models.damping import DampingModel
+from deckpound.models.errors import SceneError
+from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, Plan, plan_of
 from deckpound.models.scene import Scene
 
 
@@ -41,26 +44,22 @@ def set_initial_displacement(ops, scene: Scene) -> None:
     _rigid_body_field(ops, ops.setNodeDisp, ("deck ",), dx, dy, th)
 
 
-def set_initial_acceleration(ops, scene: Scene, motion) -> None:
+def set_initial_acceleration(ops, scene: Scene, motion, plan: Plan, damping: DampingModel) -> None:
     """Start Newmark from the equilibrium acceleration of the initial state, as the clone does
     (a₀ = M⁻¹(−Bᵀ[k0∘d₀ + crate∘ḋ₀] − a0·M u̇₀), d₀ = B u₀ − S u_g(0)); OpenSees otherwise
     starts from ü = 0, right only from rest. Springs are elastic at the start and every gap
     open (the engine refuses other initial states), so these forces are exact. Deck nodes get
     the rigid-body acceleration (a_x − α y, a_y + α x, α) of the rigidLink map; the seats
-    start at rest with their actuators, unloaded."""
+    start at rest with their actuators, unloaded. ``plan``, ``damping``: the model built."""
     if scene.initial.at_rest:
         return
-    from deckpound.models.damping import damping_model
-    from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, plan_of
-
-    plan = plan_of(scene)
     u0, v0 = plan.initial_state(scene.initial)
     B, S = plan.spring_matrices
     ug = np.array([motion.disp[ch][0] for ch in plan.channels])
     vg = np.array([motion.vel[ch][0] for ch in plan.channels])
-    dm = damping_model(scene, plan)
-    f = B.T @ (plan.k0 * (B @ u0 - S @ ug) + dm.rate_coefficients(plan) * (B @ v0 - S @ vg))
-    acc = -(f + dm.a0 * plan.mass * v0) / plan.mass
+    rate = damping.rate_coefficients(plan)
+    f = B.T @ (plan.k0 * (B @ u0 - S @ ug) + rate * (B @ v0 - S @ vg))
+    acc = -(f + damping.a0 * plan.mass * v0) / plan.mass
     ax, ay, al = acc[DECK_X], acc[DECK_Y], acc[DECK_THETA]
     if not (ax or ay or al):
         return
@@ -87,9 +86,6 @@ def refuse_initial_displacement(scene: Scene, settings) -> None:
     mode (every deck node is set by the rigid-body map; a stick deck would start with
     unbalanced sticks), every gap open and every bent elastic at the start (the equilibrium
     acceleration is then exact, :func:`set_initial_acceleration`)."""
-    from deckpound.models.errors import SceneError
-    from deckpound.models.plan import plan_of
-
     where = f"the OpenSees engine starts the deck displaced (got {list(scene.initial.deck)}) "
     if settings.mode != "rigid":
         raise SceneError(

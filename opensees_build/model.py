@@ -48,18 +48,24 @@ seat guide spring then carries the normal force's y component n_y·f_N, so its s
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from deckpound.models.contact_laws_table import contact_law
-from deckpound.models.damping import damping_model
+from deckpound.models.contact_laws_table import (
+    BILINEAR_MIN_SUBSTEPS,
+    BILINEAR_OPENSEES_REASON,
+    contact_law,
+    friction_model,
+)
+from deckpound.models.damping import DampingModel, damping_model
 from deckpound.models.errors import SceneError
-from deckpound.models.plan import plan_of, takeda_hysteretic_args
+from deckpound.models.plan import Plan, plan_of
 from deckpound.models.scene import Scene
 
-from .damping import mass_dampers, rayleigh_factors, rayleigh_members
-from .gaps import SIDES, contact_normal, gap_mapping
+from .damping import MEMBERS_TEXT, mass_dampers, rayleigh_factors, rayleigh_members
+from .gaps import contact_normal, gap_mapping
 from .geometry import seat_pivot, stick_section, stick_stations
 from .ops import ArrayArg, OpsSession
 
@@ -78,15 +84,14 @@ SKEW_GUIDE_STIFFNESS = 1.0e16
 #: samples of the last value appended to every support record (a Path series returns 0 at and
 #: after its last sample; time advances by repeated addition of dt and may overshoot)
 RECORD_PAD = 16
-CORNER_NAMES = ("c1", "c2", "c3", "c4")
 
 
 @dataclass
 class ModelInfo:
-    """Tags and constants the runner needs to read the model's state.
+    """Tags the runner needs to read the model's state, and the damping it was built with.
 
-    ``normals``/``tangents``: per corner the gap-opening normal n and the face tangent t of the
-    plan's corner table (gap g = g₀ + n·(u_deck corner − u_seat point); ft along t on the deck).
+    The geometry (gaps g₀, sides, normals n, tangents t of the corners) is the plan model's
+    corner table (:class:`deckpound.models.plan.Corner`), not repeated here.
     """
 
     mode: str
@@ -95,15 +100,33 @@ class ModelInfo:
     deck_corners: tuple[int, ...]
     seat_corners: tuple[int, ...]
     gap_elements: tuple[int, ...]
-    g0: tuple[float, ...]
-    sides: tuple[float, ...]
     bent_names: tuple[str, ...]
     bent_elements: tuple[int, ...]
     friction: bool
-    normals: tuple[tuple[float, float], ...] = ()
-    tangents: tuple[tuple[float, float], ...] = ()
+    damping: DampingModel
     stick_elements: tuple[int, ...] = ()
     notes: list[str] = field(default_factory=list)
+
+
+@dataclass
+class DeckNodes:
+    """The deck's tags: centre node, corner nodes (c1..c4), the deck node above each bent
+    (plan order) and the stick elements (stick mode; empty in rigid mode)."""
+
+    centre: int
+    corners: list[int]
+    bents: list[int]
+    sticks: list[int]
+
+
+@dataclass
+class SeatNodes:
+    """The seats' tags: pivot node and actuator node per seat, the seat point facing each
+    corner (c1..c4)."""
+
+    pivots: list[int]
+    actuators: list[int]
+    points: list[int]
 
 
 # -- checks -------------------------------------------------------------------------------
@@ -115,12 +138,6 @@ def refuse_scene(scene: Scene) -> None:
     The "option does nothing" warnings are derived by the engine contract from
     :meth:`deckpound.opensees_build.engine.OpenSeesEngine.reads`.
     """
-    from deckpound.models.contact_laws_table import (
-        BILINEAR_MIN_SUBSTEPS,
-        BILINEAR_OPENSEES_REASON,
-        friction_model,
-    )
-
     c = scene.contact
     law = contact_law(c.law)
     if law.opensees is None:
@@ -157,10 +174,18 @@ def padded(values: np.ndarray) -> np.ndarray:
 
 
 def build_model(
-    ops: OpsSession, scene: Scene, motion=None, *, gaps: bool = True, supports: str = "motion"
+    ops: OpsSession,
+    scene: Scene,
+    motion=None,
+    *,
+    gaps: bool = True,
+    supports: str = "motion",
+    plan: Plan | None = None,
+    damping: DampingModel | None = None,
 ) -> ModelInfo:
     """Define nodes, masses, constraints, materials, elements, damping and (optionally) the
-    multiple-support excitation.
+    multiple-support excitation, stage by stage (the functions below, in this order: their
+    commands and tags make the command log).
 
     Parameters
     ----------
@@ -168,298 +193,320 @@ def build_model(
         ``supports = "motion"``).
     gaps : False leaves the gap elements out (contact-free model, e.g. for eigen).
     supports : ``"motion"`` — MultipleSupport imposed motion; ``"fixed"`` — supports fixed.
+    plan, damping : the plan model and its damping model (default: the scene's).
     """
     refuse_scene(scene)
-    s = scene.opensees
-    d = scene.deck
-    plan = plan_of(scene)
+    if plan is None:
+        plan = plan_of(scene)
+    if damping is None:
+        damping = damping_model(scene, plan)
     friction = gaps and scene.contact.has_friction
-    damping = damping_model(scene, plan)
-    ray_bents, ray_seats = rayleigh_members(scene)
-    T = ops.tag
+    damped_bents, damped_seats = rayleigh_members(plan, damping)
     ops.model("basic", "-ndm", 2, "-ndf", 3)
+    deck = define_deck(ops, scene, plan)
+    seats = define_seats(ops, scene, plan, friction, supports)
+    bent_eles, tables = define_bents(ops, plan, deck.bents, damped_bents, supports)
+    define_seat_springs(ops, plan, seats, damped_seats)
+    # with friction the guide also carries the tangential force: 1e10 would add a series
+    # compliance 1/k_guide behind the 1e6 stick spring (a 1e-4 relative difference from the
+    # plan model, whose seats do not move in y); the skew guide makes it round-off
+    define_seat_guides(ops, seats, scene.deck.skew != 0.0 or friction)
+    gap_eles = define_contacts(ops, scene, plan, deck, seats, friction) if gaps else []
+    ref_nodes = define_damping(ops, plan, damping, deck, seats, supports)
+    if supports == "motion":
+        if motion is None:
+            raise ValueError("build_model needs the resampled motion for supports='motion'")
+        define_excitation(ops, plan, motion, tables + seats.actuators, ref_nodes)
+    return ModelInfo(
+        mode=scene.opensees.mode,
+        deck=deck.centre,
+        seats=tuple(seats.pivots),
+        deck_corners=tuple(deck.corners),
+        seat_corners=tuple(seats.points),
+        gap_elements=tuple(gap_eles),
+        bent_names=plan.bent_names,
+        bent_elements=tuple(bent_eles),
+        friction=friction,
+        damping=damping,
+        stick_elements=tuple(deck.sticks),
+    )
 
-    # --- deck ------------------------------------------------------------------------------
+
+def define_deck(ops: OpsSession, scene: Scene, plan: Plan) -> DeckNodes:
+    """The deck centre node with all the deck mass, its corner nodes (the plan's corner
+    table), and the rigid links (``rigid``) or the sticks (``stick``) that join them."""
+    d = scene.deck
     ops.comment("deck: centre node with all the deck mass")
-    deck = T("node", "deck")
-    ops.node(deck, 0.0, 0.0)
-    ops.mass(deck, d.mass, d.mass, d.inertia)
-    dcorners = []
-    for name, corner in zip(CORNER_NAMES, plan.corners):
-        n = T("node", f"deck {name}")
+    centre = ops.tag("node", "deck")
+    ops.node(centre, 0.0, 0.0)
+    ops.mass(centre, d.mass, d.mass, d.inertia)
+    corners = []
+    for corner in plan.corners:
+        n = ops.tag("node", f"deck {corner.name}")
         ops.node(n, corner.x, corner.y)
-        dcorners.append(n)
-    tol = 1e-9 * d.length
-    bent_nodes: list[int] = []
-    sticks: list[int] = []
-    if s.mode == "rigid":
-        for b, xb in zip(scene.bents, plan.bent_x):
-            if abs(xb) <= tol:
-                bent_nodes.append(deck)
-            else:
-                n = T("node", f"deck {b.name}")
-                ops.node(n, xb, 0.0)
-                bent_nodes.append(n)
-        ops.comment("rigid deck: rigidLink beams from the centre")
-        for n in dcorners + [n for n in bent_nodes if n != deck]:
-            ops.rigidLink("beam", deck, n)
+        corners.append(n)
+    deck = DeckNodes(centre, corners, [], [])
+    if scene.opensees.mode == "rigid":
+        define_rigid_deck(ops, scene, plan, deck)
     else:
-        area, inertia = stick_section(scene)
-        ops.comment(
-            f"stick deck: E = {d.stick_modulus:g} kN/m2, A = W^2/8, I = W^4/96 (near-rigid)"
-        )
-        transf = T("transf", "deck")
-        ops.geomTransf("Linear", transf)
-        xs = stick_stations(scene)
-        axis = []
-        for k, x in enumerate(xs):
-            if x == 0.0:
-                axis.append(deck)
-                continue
-            n = T("node", f"stick {k}")
-            ops.node(n, x, 0.0)
-            axis.append(n)
-        for k in range(len(axis) - 1):
-            e = T("element", f"stick {k}")
-            ops.element(
-                "elasticBeamColumn", e, axis[k], axis[k + 1], area, d.stick_modulus, inertia, transf
-            )
-            sticks.append(e)
-        for c, n in enumerate(dcorners):
-            end = axis[0] if c < 2 else axis[-1]
-            e = T("element", f"stick {CORNER_NAMES[c]}")
-            ops.element("elasticBeamColumn", e, end, n, area, d.stick_modulus, inertia, transf)
-            sticks.append(e)
-        for xb in plan.bent_x:
-            k = min(range(len(xs)), key=lambda k: abs(xs[k] - xb))
-            bent_nodes.append(axis[k])
+        define_stick_deck(ops, scene, plan, deck)
+    return deck
 
-    # --- seats ----------------------------------------------------------------------------
-    seats, scorners, acts = [], [], []
+
+def define_rigid_deck(ops: OpsSession, scene: Scene, plan: Plan, deck: DeckNodes) -> None:
+    """Rigid mode: a deck node above each bent (the centre node for a bent at x = 0) and
+    rigidLink beams from the centre to the corners and those nodes."""
+    tol = 1e-9 * scene.deck.length
+    for name, xb in zip(plan.bent_names, plan.bent_x):
+        if abs(xb) <= tol:
+            deck.bents.append(deck.centre)
+        else:
+            n = ops.tag("node", f"deck {name}")
+            ops.node(n, xb, 0.0)
+            deck.bents.append(n)
+    ops.comment("rigid deck: rigidLink beams from the centre")
+    for n in deck.corners + [n for n in deck.bents if n != deck.centre]:
+        ops.rigidLink("beam", deck.centre, n)
+
+
+def define_stick_deck(ops: OpsSession, scene: Scene, plan: Plan, deck: DeckNodes) -> None:
+    """Stick mode: elasticBeamColumn sticks along the axis (nodes at :func:`stick_stations`)
+    and from the deck ends to the corners; each bent acts on the nearest axis node."""
+    d = scene.deck
+    area, inertia = stick_section(scene)
+    ops.comment(f"stick deck: E = {d.stick_modulus:g} kN/m2, A = W^2/8, I = W^4/96 (near-rigid)")
+    transf = ops.tag("transf", "deck")
+    ops.geomTransf("Linear", transf)
+    xs = stick_stations(scene, plan)
+    axis = []
+    for k, x in enumerate(xs):
+        if x == 0.0:
+            axis.append(deck.centre)
+            continue
+        n = ops.tag("node", f"stick {k}")
+        ops.node(n, x, 0.0)
+        axis.append(n)
+    for k in range(len(axis) - 1):
+        e = ops.tag("element", f"stick {k}")
+        ops.element(
+            "elasticBeamColumn", e, axis[k], axis[k + 1], area, d.stick_modulus, inertia, transf
+        )
+        deck.sticks.append(e)
+    for corner, n in zip(plan.corners, deck.corners):
+        end = axis[0] if corner.seat == 0 else axis[-1]
+        e = ops.tag("element", f"stick {corner.name}")
+        ops.element("elasticBeamColumn", e, end, n, area, d.stick_modulus, inertia, transf)
+        deck.sticks.append(e)
+    for xb in plan.bent_x:
+        k = min(range(len(xs)), key=lambda k: abs(xs[k] - xb))
+        deck.bents.append(axis[k])
+
+
+def define_seats(
+    ops: OpsSession, scene: Scene, plan: Plan, friction: bool, supports: str
+) -> SeatNodes:
+    """Per seat: its pivot node with the seat mass, its actuator node (x imposed or fixed, y
+    and θ fixed), and the seat points facing its corners at pivot + lever, rigidLinked to the
+    pivot — or fixed, for a rigid abutment (``Corner.seat_fixed``)."""
+    seats = SeatNodes([], [], [])
     for j, seat in enumerate(scene.seats):
         xf, yf = seat_pivot(plan, j, friction)
         ops.comment(f"seat {j + 1}: contact-face mid-point, guided in y by a stiff spring")
-        n = T("node", f"seat{j + 1}")
+        n = ops.tag("node", f"seat{j + 1}")
         ops.node(n, xf, yf)
         ops.mass(n, seat.mass, 0.0, seat.inertia)
-        seats.append(n)
-        a = T("node", f"actuator{j + 1}")
+        seats.pivots.append(n)
+        a = ops.tag("node", f"actuator{j + 1}")
         ops.node(a, xf, yf)
         ops.fix(a, 1 if supports == "fixed" else 0, 1, 1)
-        acts.append(a)
-        for c in (0, 1) if j == 0 else (2, 3):
-            sc = T("node", f"seat{j + 1} {CORNER_NAMES[c]}")
-            rx, ry = plan.corners[c].lever
+        seats.actuators.append(a)
+        for corner in (c for c in plan.corners if c.seat == j):
+            sc = ops.tag("node", f"seat{j + 1} {corner.name}")
+            rx, ry = corner.lever
             ops.node(sc, xf + rx, yf + ry)
-            if seat.fixed:
+            if corner.seat_fixed:
                 # rigid abutment (actuator at rest, checked by the scene): the seat point is
                 # fixed, not linked to the seat node, so the contact force never reaches the
                 # seat — the plan model's zero seat columns of W_N, W_T, exactly
                 ops.fix(sc, 1, 1, 1)
             else:
                 ops.rigidLink("beam", n, sc)
-            scorners.append(sc)
+            seats.points.append(sc)
+    return seats
 
-    # --- materials and springs ----------------------------------------------------------------
-    bent_eles = []
-    tables = []
-    for b, xb, dn in zip(scene.bents, plan.bent_x, bent_nodes):
-        tn = T("node", f"table {b.name}")
+
+def define_bents(
+    ops: OpsSession, plan: Plan, deck_nodes: list[int], damped: list[bool], supports: str
+) -> tuple[list[int], list[int]]:
+    """Per bent: its shake-table node, a zeroLength table → deck node with the Hysteretic
+    materials of its x and y plan springs (``-doRayleigh 1`` when ``damped``), and its
+    explicit dashpots (the springs' ``dashpot``) in an element of their own. Returns (bent
+    elements, table nodes)."""
+    elements, tables = [], []
+    for k, (name, xb, dn) in enumerate(zip(plan.bent_names, plan.bent_x, deck_nodes)):
+        springs = plan.springs[2 * k : 2 * k + 2]  # (x, y), Plan.springs order
+        tn = ops.tag("node", f"table {name}")
         ops.node(tn, xb, 0.0)
         ops.fix(tn, *((1, 1, 1) if supports == "fixed" else (0, 0, 1)))
         tables.append(tn)
         mats = []
-        for dirn, spring in (("x", b.x), ("y", b.y)):
-            m = T("material", f"{b.name} {dirn}")
-            ops.uniaxialMaterial("Hysteretic", m, *takeda_hysteretic_args(spring))
+        for spring in springs:
+            m = ops.tag("material", f"{name} {spring.direction}")
+            ops.uniaxialMaterial("Hysteretic", m, *spring.takeda)
             mats.append(m)
-        e = T("element", f"bent {b.name}")
-        ops.element(
-            "zeroLength",
-            e,
-            tn,
-            dn,
-            "-mat",
-            *mats,
-            "-dir",
-            1,
-            2,
-            *(("-doRayleigh", 1) if ray_bents else ()),
-        )
-        bent_eles.append(e)
+        e = ops.tag("element", f"bent {name}")
+        rayleigh = ("-doRayleigh", 1) if damped[k] else ()
+        ops.element("zeroLength", e, tn, dn, "-mat", *mats, "-dir", 1, 2, *rayleigh)
+        elements.append(e)
         # explicit bent dashpots (bents[i].cx, cy), in their own element like the seats'
-        dash = [(dirn, c) for dirn, c in ((1, b.cx), (2, b.cy)) if c > 0.0]
+        dash = [(dirn, s) for dirn, s in zip((1, 2), springs) if s.dashpot > 0.0]
         if dash:
             dmats = []
-            for dirn, c in dash:
-                m = T("material", f"{b.name} c{'xy'[dirn - 1]}")
-                ops.uniaxialMaterial("Viscous", m, c, 1.0)
+            for _dirn, spring in dash:
+                m = ops.tag("material", f"{name} c{spring.direction}")
+                ops.uniaxialMaterial("Viscous", m, spring.dashpot, 1.0)
                 dmats.append(m)
-            ops.element(
-                "zeroLength",
-                T("element", f"bent {b.name} dashpot"),
-                tn,
-                dn,
-                "-mat",
-                *dmats,
-                "-dir",
-                *(dirn for dirn, _ in dash),
-            )
-    for j, seat in enumerate(scene.seats):
-        mx = T("material", f"seat{j + 1} kx")
-        ops.uniaxialMaterial("Elastic", mx, seat.kx)
-        mt = T("material", f"seat{j + 1} ktheta")
-        ops.uniaxialMaterial("Elastic", mt, seat.ktheta)
-        e = T("element", f"seat{j + 1} spring")
-        ops.element(
-            "zeroLength",
-            e,
-            acts[j],
-            seats[j],
-            "-mat",
-            mx,
-            mt,
-            "-dir",
-            1,
-            3,
-            *(("-doRayleigh", 1) if ray_seats else ()),
-        )
-        # dashpots in their own element: with -doRayleigh 1 a zeroLength (3.7) drops its
-        # materials' damping tangent from the damping matrix (Newton then converges linearly)
-        cx = T("material", f"seat{j + 1} cx")
-        ops.uniaxialMaterial("Viscous", cx, seat.cx, 1.0)
-        ct = T("material", f"seat{j + 1} ctheta")
-        ops.uniaxialMaterial("Viscous", ct, seat.ctheta, 1.0)
-        e = T("element", f"seat{j + 1} dashpot")
-        ops.element("zeroLength", e, acts[j], seats[j], "-mat", cx, ct, "-dir", 1, 3)
-    mg = T("material", "seat guide")
-    # with friction the guide also carries the tangential force: 1e10 would add a series
-    # compliance 1/k_guide behind the 1e6 stick spring (a 1e-4 relative difference from the
-    # plan model, whose seats do not move in y); the skew guide makes it round-off
-    stiff_guide = d.skew != 0.0 or friction
-    ops.uniaxialMaterial("Elastic", mg, SKEW_GUIDE_STIFFNESS if stiff_guide else GUIDE_STIFFNESS)
-    for j in range(2):
-        e = T("element", f"seat{j + 1} guide")
-        ops.element("zeroLength", e, acts[j], seats[j], "-mat", mg, "-dir", 2)
+            e = ops.tag("element", f"bent {name} dashpot")
+            ops.element("zeroLength", e, tn, dn, "-mat", *dmats, "-dir", *(d for d, _ in dash))
+    return elements, tables
 
-    # --- gaps -----------------------------------------------------------------------------
-    gap_eles = []
-    g0 = tuple(scene.seats[0].gap if c < 2 else scene.seats[1].gap for c in range(4))
-    if gaps:
-        ops.comment(
-            f"contact at the corners: law {scene.contact.law}"
-            + (", zeroLengthContact2D with friction" if friction else "")
-        )
-        for c in range(4):
-            e = T("element", f"gap {CORNER_NAMES[c]}")
-            if friction:
-                # i = seat point, j = deck corner; zeroLengthContact2D (3.7) measures the gap
-                # as n_c·(x_i + u_i − x_j − u_j) (verified), so n_c = −n points from the deck to
-                # the seat: −x at seat 1, +x at seat 2 for a straight deck. Its nodes are g₀
-                # apart along n (it warns that L > tolerance: harmless, the gap is the
-                # geometric one).
-                nx, ny = contact_normal(plan.corners[c])
-                ct = scene.contact
-                ops.element(
-                    "zeroLengthContact2D",
-                    e,
-                    scorners[c],
-                    dcorners[c],
-                    ct.stiffness,
-                    ct.tangential_stiffness,
-                    ct.friction,
-                    "-normal",
-                    nx,
-                    ny,
-                )
-            else:
-                spec = gap_mapping(
-                    scene, c, dcorners[c], scorners[c], T("material", f"gap {CORNER_NAMES[c]}")
-                )
-                ops.uniaxialMaterial(spec.material, *spec.args)
-                orient = ("-orient", *spec.orient) if spec.orient is not None else ()
-                ops.element(
-                    "zeroLength",
-                    e,
-                    spec.i_node,
-                    spec.j_node,
-                    "-mat",
-                    spec.args[0],
-                    "-dir",
-                    1,
-                    *orient,
-                )
-            gap_eles.append(e)
 
-    # --- damping --------------------------------------------------------------------------
-    _a1, (wi, wj) = damping.a1, damping.omega
-    dsc = scene.damping
-    members = {
-        "bents": "bent springs",
-        "bents+seats": "bent and seat springs",
-        "none": "no springs",
-    }[dsc.members]
-    factors = rayleigh_factors(scene, damping)
+def define_seat_springs(ops: OpsSession, plan: Plan, seats: SeatNodes, damped: list[bool]) -> None:
+    """Per seat: a zeroLength actuator → seat with Elastic materials of its x and θ plan
+    springs (``-doRayleigh 1`` when ``damped``) and a second one with their dashpots: with
+    ``-doRayleigh 1`` a zeroLength (3.7) drops its materials' damping tangent from the damping
+    matrix (Newton then converges linearly)."""
+    n_bent = plan.n_bent_springs
+    for j, (act, pivot) in enumerate(zip(seats.actuators, seats.pivots)):
+        kx, kt = plan.springs[n_bent + 2 * j : n_bent + 2 * j + 2]  # (x, θ), Plan.springs order
+        mx = ops.tag("material", f"seat{j + 1} kx")
+        ops.uniaxialMaterial("Elastic", mx, kx.k0)
+        mt = ops.tag("material", f"seat{j + 1} ktheta")
+        ops.uniaxialMaterial("Elastic", mt, kt.k0)
+        e = ops.tag("element", f"seat{j + 1} spring")
+        rayleigh = ("-doRayleigh", 1) if damped[j] else ()
+        ops.element("zeroLength", e, act, pivot, "-mat", mx, mt, "-dir", 1, 3, *rayleigh)
+        cx = ops.tag("material", f"seat{j + 1} cx")
+        ops.uniaxialMaterial("Viscous", cx, kx.dashpot, 1.0)
+        ct = ops.tag("material", f"seat{j + 1} ctheta")
+        ops.uniaxialMaterial("Viscous", ct, kt.dashpot, 1.0)
+        e = ops.tag("element", f"seat{j + 1} dashpot")
+        ops.element("zeroLength", e, act, pivot, "-mat", cx, ct, "-dir", 1, 3)
+
+
+def define_seat_guides(ops: OpsSession, seats: SeatNodes, stiff: bool) -> None:
+    """The seats' y guides: zeroLength actuator → seat in y, Elastic :data:`GUIDE_STIFFNESS`
+    or, ``stiff`` (skew or friction), :data:`SKEW_GUIDE_STIFFNESS`."""
+    mg = ops.tag("material", "seat guide")
+    ops.uniaxialMaterial("Elastic", mg, SKEW_GUIDE_STIFFNESS if stiff else GUIDE_STIFFNESS)
+    for j, (act, pivot) in enumerate(zip(seats.actuators, seats.pivots)):
+        e = ops.tag("element", f"seat{j + 1} guide")
+        ops.element("zeroLength", e, act, pivot, "-mat", mg, "-dir", 2)
+
+
+def define_contacts(
+    ops: OpsSession, scene: Scene, plan: Plan, deck: DeckNodes, seats: SeatNodes, friction: bool
+) -> list[int]:
+    """The gap element of every corner: zeroLengthContact2D with friction, else a zeroLength
+    with the law's gap material (:func:`.gaps.gap_mapping`). Returns the element tags."""
+    ct = scene.contact
     ops.comment(
-        f"Rayleigh: a0 M ({dsc.mass} velocities) + a1 K ({dsc.stiffness} stiffness of "
-        f"the {members}, -doRayleigh 1); "
+        f"contact at the corners: law {ct.law}"
+        + (", zeroLengthContact2D with friction" if friction else "")
+    )
+    elements = []
+    for corner, dk, st in zip(plan.corners, deck.corners, seats.points):
+        e = ops.tag("element", f"gap {corner.name}")
+        if friction:
+            # i = seat point, j = deck corner; zeroLengthContact2D (3.7) measures the gap
+            # as n_c·(x_i + u_i − x_j − u_j) (verified), so n_c = −n points from the deck to
+            # the seat: −x at seat 1, +x at seat 2 for a straight deck. Its nodes are g₀
+            # apart along n (it warns that L > tolerance: harmless, the gap is the
+            # geometric one).
+            nx, ny = contact_normal(corner)
+            ops.element(
+                "zeroLengthContact2D",
+                e,
+                st,
+                dk,
+                ct.stiffness,
+                ct.tangential_stiffness,
+                ct.friction,
+                "-normal",
+                nx,
+                ny,
+            )
+        else:
+            spec = gap_mapping(scene, corner, dk, st, ops.tag("material", f"gap {corner.name}"))
+            ops.uniaxialMaterial(spec.material, *spec.args)
+            orient = ("-orient", *spec.orient) if spec.orient is not None else ()
+            ops.element(
+                "zeroLength", e, spec.i_node, spec.j_node, "-mat", spec.args[0], "-dir", 1, *orient
+            )
+        elements.append(e)
+    return elements
+
+
+def define_damping(
+    ops: OpsSession,
+    plan: Plan,
+    damping: DampingModel,
+    deck: DeckNodes,
+    seats: SeatNodes,
+    supports: str,
+) -> list[int]:
+    """``rayleigh`` with the damping model's factors (:func:`.damping.rayleigh_factors`), the
+    relative mass dampers (:func:`.damping.mass_dampers`) and the sticks' region without
+    Rayleigh damping. Returns the mass dampers' reference nodes."""
+    wi, wj = damping.omega
+    ops.comment(
+        f"Rayleigh: a0 M ({damping.mass} velocities) + a1 K ({damping.stiffness} stiffness of "
+        f"the {MEMBERS_TEXT[damping.members]}, -doRayleigh 1); "
         + (
             f"matched at {wi:.6g} and {wj:.6g} rad/s"
-            if dsc.method != "none"
+            if not math.isnan(wi)  # method none: (nan, nan)
             else "method none: no Rayleigh damping"
         )
     )
-    ops.rayleigh(*factors)
-    ref_nodes = mass_dampers(ops, scene, damping, deck, seats, acts, supports)
-    if sticks:
-        ops.region(T("region", "sticks"), "-eleOnly", *sticks, "-rayleigh", 0.0, 0.0, 0.0, 0.0)
+    ops.rayleigh(*rayleigh_factors(damping))
+    refs = mass_dampers(ops, plan, damping, deck.centre, seats.pivots, seats.actuators, supports)
+    if deck.sticks:
+        ops.region(
+            ops.tag("region", "sticks"), "-eleOnly", *deck.sticks, "-rayleigh", 0.0, 0.0, 0.0, 0.0
+        )
+    return refs
 
-    # --- excitation -----------------------------------------------------------------------
-    if supports == "motion":
-        if motion is None:
-            raise ValueError("build_model needs the resampled motion for supports='motion'")
-        dt = float(motion.t[1] - motion.t[0])
-        ops.comment("multiple-support excitation: imposed displacement and velocity")
-        pat = T("pattern", "supports")
-        ops.pattern("MultipleSupport", pat)
-        channels = plan.channels
-        D, V = motion.matrices(channels)
-        where = []
-        for tn in tables:
-            where += [(tn, 1), (tn, 2)]
-        where += [(acts[0], 1), (acts[1], 1)]
-        # reference nodes of the relative mass damping follow their table's motion
-        also: dict[int, list[tuple[int, int]]] = {}
-        for k, rn in enumerate(ref_nodes):
-            also.setdefault(2 * k, []).append((rn, 1))
-            also.setdefault(2 * k + 1, []).append((rn, 2))
-        for k, (ch, (node, dof)) in enumerate(zip(channels, where)):
-            ts_d = T("timeSeries", f"{ch} disp")
-            ops.timeSeries("Path", ts_d, "-dt", dt, ArrayArg(f"{ch}_disp", padded(D[:, k])))
-            ts_v = T("timeSeries", f"{ch} vel")
-            ops.timeSeries("Path", ts_v, "-dt", dt, ArrayArg(f"{ch}_vel", padded(V[:, k])))
-            gm = T("groundMotion", ch)
-            ops.groundMotion(gm, "Plain", "-disp", ts_d, "-vel", ts_v)
-            ops.imposedMotion(node, dof, gm)
-            for rn, rdof in also.get(k, ()):
-                ops.imposedMotion(rn, rdof, gm)
 
-    return ModelInfo(
-        mode=s.mode,
-        deck=deck,
-        seats=tuple(seats),
-        deck_corners=tuple(dcorners),
-        seat_corners=tuple(scorners),
-        gap_elements=tuple(gap_eles),
-        g0=g0,
-        sides=SIDES,
-        bent_names=tuple(b.name for b in scene.bents),
-        bent_elements=tuple(bent_eles),
-        friction=friction,
-        normals=tuple(c.normal for c in plan.corners),
-        tangents=tuple(c.tangent for c in plan.corners),
-        stick_elements=tuple(sticks),
-    )
+def define_excitation(
+    ops: OpsSession, plan: Plan, motion, support_nodes: list[int], ref_nodes: list[int]
+) -> None:
+    """MultipleSupport excitation: per support channel (``plan.channels``: the tables' x and
+    y, then the actuators' x) a Path displacement and velocity series of the resampled record
+    (padded, :func:`padded`), a groundMotion and its imposedMotion on the support node (and on
+    the relative mass dampers' reference node of that table). ``support_nodes``: the table
+    nodes in bent order, then the two actuators."""
+    n_tables = len(plan.bent_names)
+    where = [(tn, dof) for tn in support_nodes[:n_tables] for dof in (1, 2)]
+    where += [(act, 1) for act in support_nodes[n_tables:]]
+    # reference nodes of the relative mass damping follow their table's motion
+    also: dict[int, list[tuple[int, int]]] = {}
+    for k, rn in enumerate(ref_nodes):
+        also.setdefault(2 * k, []).append((rn, 1))
+        also.setdefault(2 * k + 1, []).append((rn, 2))
+    dt = float(motion.t[1] - motion.t[0])
+    ops.comment("multiple-support excitation: imposed displacement and velocity")
+    ops.pattern("MultipleSupport", ops.tag("pattern", "supports"))
+    D, V = motion.matrices(plan.channels)
+    for k, (ch, (node, dof)) in enumerate(zip(plan.channels, where)):
+        ts_d = ops.tag("timeSeries", f"{ch} disp")
+        ops.timeSeries("Path", ts_d, "-dt", dt, ArrayArg(f"{ch}_disp", padded(D[:, k])))
+        ts_v = ops.tag("timeSeries", f"{ch} vel")
+        ops.timeSeries("Path", ts_v, "-dt", dt, ArrayArg(f"{ch}_vel", padded(V[:, k])))
+        gm = ops.tag("groundMotion", ch)
+        ops.groundMotion(gm, "Plain", "-disp", ts_d, "-vel", ts_v)
+        ops.imposedMotion(node, dof, gm)
+        for rn, rdof in also.get(k, ()):
+            ops.imposedMotion(rn, rdof, gm)
 
 
 def analysis_commands(scene: Scene) -> list[tuple]:

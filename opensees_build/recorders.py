@@ -144,40 +144,57 @@ def recorder_step(plan: dict) -> float:
 
 
 def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[ColumnMap]]:
-    """The recorders and column maps for the model described by ``plan``
-    (:func:`deckpound.opensees_build.engine.make_plan`)."""
+    """The recorders and column maps for the model described by the step plan ``plan``
+    (:func:`deckpound.opensees_build.engine.step_plan`): the nodes' displacements and
+    velocities, each corner's gap and contact forces, the bents' spring forces; the maps in
+    the order of the result columns."""
     recs: list[Recorder] = []
-    maps: list[ColumnMap] = []
+    maps: list[ColumnMap] = [ColumnMap("t", f"{DOF_COLUMNS[0][0]}.out", a=0)]
+    node_recorders(plan, recs, maps)
+    for c in range(4):
+        if plan["gap_elements"]:
+            gap_recorder(plan, c, recs, maps)
+            force_recorders(plan, c, recs, maps)
+        else:
+            k = c + 1
+            maps += [
+                ColumnMap(f"gap_c{k}", None, offset=plan["g0"][c]),
+                ColumnMap(f"fn_c{k}", None),
+                ColumnMap(f"ft_c{k}", None),
+            ]
+    bent_recorders(plan, bent_names, recs, maps)
+    for r in recs:
+        if safe_file_name(r.file) != r.file:  # bent names are validated words; keep it so
+            raise SceneError("bents", f"recorder file name {r.file!r} is not a plain file name")
+    order = {c: k for k, c in enumerate(plan["columns"])}
+    if sorted(order) != sorted(m.column for m in maps):
+        raise AssertionError("recorder maps do not cover the result columns")
+    maps.sort(key=lambda m: order[m.column])
+    return recs, maps
+
+
+def node_recorders(plan: dict, recs: list[Recorder], maps: list[ColumnMap]) -> None:
+    """Append the displacement and velocity recorders of the deck centre (x, y, θ) and the
+    seats (x, θ) and their maps."""
 
     def node(col: str, vcol: str, tag: int, dof: int, what: str, unit: str) -> None:
-        recs.append(
-            Recorder(
-                f"{col}.out",
-                "Node",
-                (tag,),
-                ("disp",),
-                (col,),
-                f"{what}, absolute displacement [{unit}]",
-                dofs=(dof,),
+        for c, response, kind in ((col, "disp", ""), (vcol, "vel", "/s")):
+            quantity = "displacement" if response == "disp" else "velocity"
+            recs.append(
+                Recorder(
+                    f"{c}.out",
+                    "Node",
+                    (tag,),
+                    (response,),
+                    (c,),
+                    f"{what}, absolute {quantity} [{unit}{kind}]",
+                    dofs=(dof,),
+                )
             )
-        )
-        maps.append(ColumnMap(col, f"{col}.out"))
-        recs.append(
-            Recorder(
-                f"{vcol}.out",
-                "Node",
-                (tag,),
-                ("vel",),
-                (vcol,),
-                f"{what}, absolute velocity [{unit}/s]",
-                dofs=(dof,),
-            )
-        )
-        maps.append(ColumnMap(vcol, f"{vcol}.out"))
+            maps.append(ColumnMap(c, f"{c}.out"))
 
     # the plan model's column names, in DOF order: deck x, y, θ, then seat x, θ per seat
     names = [(d, v) for (d, _), (v, _) in zip(DOF_COLUMNS, VELOCITY_COLUMNS)]
-    maps.append(ColumnMap("t", f"{names[0][0]}.out", a=0))
     for dof, (col, vcol) in enumerate(names[:3], start=1):
         unit = "rad" if dof == 3 else "m"
         node(col, vcol, plan["deck"], dof, f"deck centre node {plan['deck']} dof {dof}", unit)
@@ -186,108 +203,108 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
             unit = "rad" if dof == 3 else "m"
             node(col, vcol, seat, dof, f"seat {j} node {seat} dof {dof}", unit)
 
-    gaps = plan["gap_elements"]
-    for c in range(4):
-        k = c + 1
-        side, g0 = plan["sides"][c], plan["g0"][c]
-        if not gaps:
-            maps += [
-                ColumnMap(f"gap_c{k}", None, offset=g0),
-                ColumnMap(f"fn_c{k}", None),
-                ColumnMap(f"ft_c{k}", None),
-            ]
-            continue
-        e = gaps[c]
-        dn, sn = plan["deck_corners"][c], plan["seat_corners"][c]
-        (nx, ny), (tx, ty) = plan["normals"][c], plan["tangents"][c]
-        if ny != 0.0:
-            # skewed deck, any element: the gap is the engine's own projection of the node
-            # displacements on n (the zeroLength's deformation a.(u_j - u_i) is the same gap
-            # but in other arithmetic: its last bits would differ from the engine's column)
-            recs.append(
-                Recorder(
-                    f"gap_c{k}.out",
-                    "Node",
-                    (dn, sn),
-                    ("disp",),
-                    ("ux_deck corner", "uy_deck corner", "ux_seat point", "uy_seat point"),
-                    f"x and y displacements of deck corner node {dn} and seat point node {sn} [m]",
-                    dofs=(1, 2),
-                )
-            )
-            maps.append(
-                ColumnMap(
-                    f"gap_c{k}",
-                    f"gap_c{k}.out",
-                    a=1,
-                    b=3,
-                    offset=g0,
-                    scale=nx,
-                    a2=2,
-                    b2=4,
-                    scale2=ny,
-                )
-            )
-        elif plan["friction"]:  # straight deck: x displacements only, n = (side, 0)
-            recs.append(
-                Recorder(
-                    f"gap_c{k}.out",
-                    "Node",
-                    (dn, sn),
-                    ("disp",),
-                    ("u_deck corner", "u_seat corner"),
-                    f"x displacement of deck corner node {dn} and seat corner node {sn} [m]",
-                    dofs=(1,),
-                )
-            )
-            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0, scale=side))
-        else:
-            recs.append(
-                Recorder(
-                    f"gap_c{k}.out",
-                    "Element",
-                    (e,),
-                    ("deformation",),
-                    ("deformation",),
-                    f"deformation u_j - u_i of gap element {e} [m]",
-                )
-            )
-            maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", offset=g0))
-        if plan["friction"]:
-            # fn = -n.(Fx_j, Fy_j), ft = -t.(Fx_j, Fy_j) (j = deck corner); straight: -side*Fx_j,
-            # -Fy_j
-            terms = (
-                ((f"fn_c{k}", 4, -side, None, 0.0), (f"ft_c{k}", 5, -1.0, None, 0.0))
-                if ny == 0.0
-                else ((f"fn_c{k}", 4, -nx, 5, -ny), (f"ft_c{k}", 4, -tx, 5, -ty))
-            )
-            for col, a, scale, a2, scale2 in terms:
-                recs.append(
-                    Recorder(
-                        f"{col}.out",
-                        "Element",
-                        (e,),
-                        ("force",),
-                        ("Fx_i", "Fy_i", "M_i", "Fx_j", "Fy_j", "M_j"),
-                        f"resisting forces of contact element {e} (i = seat, "
-                        "j = deck corner) [kN, kN*m]",
-                    )
-                )
-                maps.append(ColumnMap(col, f"{col}.out", a=a, scale=scale, a2=a2, scale2=scale2))
-        else:
-            recs.append(
-                Recorder(
-                    f"fn_c{k}.out",
-                    "Element",
-                    (e,),
-                    ("basicForce",),
-                    ("stress",),
-                    f"material stress of gap element {e}, <= 0 in compression [kN]",
-                )
-            )
-            maps.append(ColumnMap(f"fn_c{k}", f"fn_c{k}.out", scale=-1.0))
-            maps.append(ColumnMap(f"ft_c{k}", None))
 
+def gap_recorder(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnMap]) -> None:
+    """Append corner ``c``'s gap recorder and map: a skewed deck (any element) records the
+    corner nodes' x and y displacements and projects them on n; a straight deck with
+    friction their x displacements (n = (side, 0)); else the gap element's deformation."""
+    k = c + 1
+    side, g0 = plan["sides"][c], plan["g0"][c]
+    e = plan["gap_elements"][c]
+    dn, sn = plan["deck_corners"][c], plan["seat_corners"][c]
+    nx, ny = plan["normals"][c]
+    if ny != 0.0:
+        # skewed deck, any element: the gap is the engine's own projection of the node
+        # displacements on n (the zeroLength's deformation a.(u_j - u_i) is the same gap
+        # but in other arithmetic: its last bits would differ from the engine's column)
+        recs.append(
+            Recorder(
+                f"gap_c{k}.out",
+                "Node",
+                (dn, sn),
+                ("disp",),
+                ("ux_deck corner", "uy_deck corner", "ux_seat point", "uy_seat point"),
+                f"x and y displacements of deck corner node {dn} and seat point node {sn} [m]",
+                dofs=(1, 2),
+            )
+        )
+        maps.append(
+            ColumnMap(
+                f"gap_c{k}", f"gap_c{k}.out", a=1, b=3, offset=g0, scale=nx, a2=2, b2=4, scale2=ny
+            )
+        )
+    elif plan["friction"]:  # straight deck: x displacements only, n = (side, 0)
+        recs.append(
+            Recorder(
+                f"gap_c{k}.out",
+                "Node",
+                (dn, sn),
+                ("disp",),
+                ("u_deck corner", "u_seat corner"),
+                f"x displacement of deck corner node {dn} and seat corner node {sn} [m]",
+                dofs=(1,),
+            )
+        )
+        maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0, scale=side))
+    else:
+        recs.append(
+            Recorder(
+                f"gap_c{k}.out",
+                "Element",
+                (e,),
+                ("deformation",),
+                ("deformation",),
+                f"deformation u_j - u_i of gap element {e} [m]",
+            )
+        )
+        maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", offset=g0))
+
+
+def force_recorders(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnMap]) -> None:
+    """Append corner ``c``'s contact force recorders and the fn, ft maps: with friction the
+    element's resisting forces projected on −n and −t, else the gap material's stress."""
+    k = c + 1
+    e = plan["gap_elements"][c]
+    if plan["friction"]:
+        side = plan["sides"][c]
+        (nx, ny), (tx, ty) = plan["normals"][c], plan["tangents"][c]
+        # fn = -n.(Fx_j, Fy_j), ft = -t.(Fx_j, Fy_j) (j = deck corner); straight: -side*Fx_j,
+        # -Fy_j
+        terms = (
+            ((f"fn_c{k}", 4, -side, None, 0.0), (f"ft_c{k}", 5, -1.0, None, 0.0))
+            if ny == 0.0
+            else ((f"fn_c{k}", 4, -nx, 5, -ny), (f"ft_c{k}", 4, -tx, 5, -ty))
+        )
+        for col, a, scale, a2, scale2 in terms:
+            recs.append(
+                Recorder(
+                    f"{col}.out",
+                    "Element",
+                    (e,),
+                    ("force",),
+                    ("Fx_i", "Fy_i", "M_i", "Fx_j", "Fy_j", "M_j"),
+                    f"resisting forces of contact element {e} (i = seat, "
+                    "j = deck corner) [kN, kN*m]",
+                )
+            )
+            maps.append(ColumnMap(col, f"{col}.out", a=a, scale=scale, a2=a2, scale2=scale2))
+    else:
+        recs.append(
+            Recorder(
+                f"fn_c{k}.out",
+                "Element",
+                (e,),
+                ("basicForce",),
+                ("stress",),
+                f"material stress of gap element {e}, <= 0 in compression [kN]",
+            )
+        )
+        maps.append(ColumnMap(f"fn_c{k}", f"fn_c{k}.out", scale=-1.0))
+        maps.append(ColumnMap(f"ft_c{k}", None))
+
+
+def bent_recorders(plan: dict, bent_names, recs: list[Recorder], maps: list[ColumnMap]) -> None:
+    """Append the stress recorders of each bent's Hysteretic materials (x, y) and maps."""
     for name, e in zip(bent_names, plan["bent_elements"]):
         for mat, d in ((1, "x"), (2, "y")):
             col = f"{name}_f{d}"
@@ -303,14 +320,6 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
                 )
             )
             maps.append(ColumnMap(col, f"{col}.out"))
-    for r in recs:
-        if safe_file_name(r.file) != r.file:  # bent names are validated words; keep it so
-            raise SceneError("bents", f"recorder file name {r.file!r} is not a plain file name")
-    order = {c: k for k, c in enumerate(plan["columns"])}
-    if sorted(order) != sorted(m.column for m in maps):
-        raise AssertionError("recorder maps do not cover the result columns")
-    maps.sort(key=lambda m: order[m.column])
-    return recs, maps
 
 
 def render_recorders(recs: list[Recorder], lang: str) -> list[str]:

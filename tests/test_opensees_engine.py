@@ -13,7 +13,12 @@ pytest.importorskip("openseespy.opensees")
 
 from deckpound.models import damping, mechanics
 from deckpound.models.columns import ENERGY_COLUMNS
-from deckpound.models.contact_laws_table import BILINEAR_MIN_SUBSTEPS
+from deckpound.models.contact_laws_table import (
+    BILINEAR_MIN_SUBSTEPS,
+    CONTACT_LAW_TABLE,
+    contact_law,
+)
+from deckpound.models.engine_contract import Status
 from deckpound.models.errors import EngineFailure
 from deckpound.models.excitation import support_motion
 from deckpound.models.motion import SupportMotion
@@ -390,6 +395,59 @@ def test_failure_reported_without_nan(bench):
         engine.run_opensees(sc, raise_on_failure=True)
     r2 = engine.run_opensees(sc.replace(opensees=dc.replace(sc.opensees, fallback="none")))
     assert r2.meta["status"] == "failed" and r2.meta["failed_step"] == 1
+
+
+class NaNAfter:
+    """ops wrapper on which the deck centre's displacement reads NaN from analyze call
+    number ``at`` on (a state gone non-finite without a failed analyze)."""
+
+    def __init__(self, raw, at, deck):
+        self.raw, self.at, self.deck, self.calls = raw, at, deck, 0
+
+    def __getattr__(self, name):
+        return getattr(self.raw, name)
+
+    def analyze(self, n, dt):
+        self.calls += 1
+        return self.raw.analyze(n, dt)
+
+    def nodeDisp(self, tag, *dof):
+        value = self.raw.nodeDisp(tag, *dof)
+        if tag != self.deck or self.calls < self.at:
+            return value
+        return float("nan") if dof else [float("nan")] * len(value)
+
+
+def test_non_finite_state_is_told_from_the_numbers(bench):
+    sc = short(bench, 0.5)
+    deck = {}
+    r = engine.run_opensees(
+        sc,
+        _before_run=lambda raw, info, steps: deck.setdefault("tag", info.deck),
+        _ops_wrapper=lambda raw: NaNAfter(raw, 200, deck["tag"]),
+    )
+    assert r.meta["status"] == "failed" and r.meta["failure"] == Status.NONFINITE.value
+    assert r.meta["failed_step"] == 200
+    assert r.meta["message"].startswith(Status.NONFINITE.text)
+    assert all(np.all(np.isfinite(v)) for v in r.columns.values())
+
+
+def test_run_status_reads_the_state_not_the_message():
+    failed = {"status": "failed", "message": "non-finite state at step 3 (t = 0.0015 s)"}
+    assert engine.run_status(failed, state_finite=True) is Status.NOT_CONVERGED
+    assert engine.run_status({**failed, "message": ""}, state_finite=False) is Status.NONFINITE
+    assert engine.run_status({"status": "unseated"}, state_finite=True) is Status.UNSEATED
+    assert engine.run_status({"status": "success"}, state_finite=True) is Status.SUCCESS
+
+
+@pytest.mark.parametrize("law", [law.name for law in CONTACT_LAW_TABLE if law.opensees])
+def test_reads_the_law_table_parameters(bench, law):
+    extra = [f"opensees.substeps={BILINEAR_MIN_SUBSTEPS}"] if law == "bilinear" else []
+    sc = load_scene("saiidi-4span", [f"contact.law={law}", *extra])
+    reads = engine.OpenSeesEngine().reads(sc, sc.opensees)
+    assert set(contact_law(law).params) <= reads
+    other = {p for row in CONTACT_LAW_TABLE for p in row.params} - set(contact_law(law).params)
+    assert not other & reads
 
 
 # -- benchmark runs ------------------------------------------------------------------------------

@@ -32,6 +32,7 @@ from tests_helpers_scene import short_benchmark
 
 from deckpound.compare.engines import run_engine
 from deckpound.models.columns import column_unit
+from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build import engine
 from deckpound.opensees_build.export import export_script
@@ -82,8 +83,8 @@ def test_zero_length_orientation_convention(phi_deg):
     np.testing.assert_allclose(f[3:5], 100.0 * e * a, rtol=1e-12, atol=1e-14)
     ops.wipe()
     # and the mapping orders the nodes so that e = side·a·(u_deck − u_seat) = n·(u_deck − u_seat)
-    for c in range(4):
-        spec = gap_mapping(sc, c, deck_node=100, seat_node=200, mat_tag=7)
+    for c, corner in enumerate(plan_of(sc).corners):
+        spec = gap_mapping(sc, corner, deck_node=100, seat_node=200, mat_tag=7)
         assert spec.orient == orient
         assert (spec.i_node, spec.j_node) == ((200, 100) if c < 2 else (100, 200))
 
