@@ -3,9 +3,11 @@
 Follows the engine contract of :mod:`deckpound.models.engine_contract`; :func:`run_opensees` is the
 same as a function. openseespy is imported only when a model is built. The step loop (:func:`run_steps`) and
 the state sampling (:func:`sample_row`) are plain functions of an ``ops`` object (the
-openseespy module or anything with its functions) and a ``plan`` dict of tags and constants;
-:mod:`.export` copies their source verbatim into the exported Python script, so the script
-and the in-process run execute the same code.
+openseespy module or anything with its functions) and the step plan, a dict of tags and
+constants (:func:`step_plan`; their argument ``plan``, ``PLAN`` in the script — the plan model
+:class:`~deckpound.models.plan.Plan` it is made from is another thing); :mod:`.export` copies
+their source verbatim into the exported Python script, so the script and the in-process run
+execute the same code.
 
 Result columns (sign conventions):
 

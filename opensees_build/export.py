@@ -25,6 +25,7 @@ import json
 from pathlib import Path
 
 from deckpound.models.errors import SceneError
+from deckpound.models.file_io import atomic_write_files
 from deckpound.models.result import scene_hash
 from deckpound.models.scene_io import load_scene
 from deckpound.models.version import VERSION
@@ -181,8 +182,6 @@ def _check_output(path: Path, fmt: str) -> None:
 def export_script(scene, fmt: str, path, motion=None) -> Path:
     """Write a complete, runnable ``fmt`` ("tcl" | "py") script for the scene to ``path`` and
     its data folder ``<stem>_data/`` beside it. Returns the script path."""
-    from deckpound.models.file_io import atomic_write_files
-
     path = Path(path)
     _check_output(path, fmt)
     text, files = script_text(scene, fmt, path.stem, motion)

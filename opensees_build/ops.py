@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
+from importlib.metadata import version
 from typing import Any
 
 import numpy as np
@@ -83,8 +84,6 @@ QUERIES = frozenset(
 
 def openseespy_version() -> str:
     try:
-        from importlib.metadata import version
-
         return version("openseespy")
     except Exception:  # pragma: no cover - metadata missing
         return "unknown"
