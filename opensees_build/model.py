@@ -28,15 +28,22 @@ Seat guide: a rigidLink retained node must not be ``fix``ed (it breaks the Trans
 handler in 3.7), so each seat's y DOF is held by a stiff zeroLength spring (:data:`GUIDE_STIFFNESS`)
 from its actuator, without Rayleigh damping; the seat has no y mass.
 
-Springs: bents — zeroLength table → deck bent node, Hysteretic (Takeda stand-in) in x and y;
-seats — zeroLength actuator → seat, Elastic k in x and θ, and a second zeroLength with
-Viscous(c, α = 1) dashpots (no Rayleigh on it: see the comment in :func:`build_model`).
-Damping (:mod:`deckpound.models.damping`, the scene's ``[damping]``): ``rayleigh αM βK βKinit
-βKc`` (:func:`.damping.rayleigh_factors`: a1 on the stiffness the scene names), ``-doRayleigh 1`` on the
-members the scene names (:func:`.damping.rayleigh_members`: the bents by default, the seat springs too
-with ``bents+seats``); αM = a0 on the absolute velocities of the deck and seat nodes, or, with
-``mass = relative``, Viscous dashpots from support reference nodes (:func:`.damping.mass_dampers`). Gap
-elements, guides and sticks take no Rayleigh damping.
+Springs (the plan model's :class:`~deckpound.models.plan.Spring` rows): bents — zeroLength
+table → deck bent node, Hysteretic (Takeda stand-in) in x and y; seats — zeroLength actuator →
+seat, Elastic k in x and θ, and a second zeroLength with Viscous(c, α = 1) dashpots (no
+Rayleigh on it: see :func:`define_seat_springs`). Damping (the damping model
+:class:`deckpound.models.damping.DampingModel` of the scene's ``[damping]``): ``rayleigh αM βK
+βKinit βKc`` (:func:`.damping.rayleigh_factors`: a1 on the stiffness the model names),
+``-doRayleigh 1`` on the elements of its damped springs (:func:`.damping.rayleigh_members`:
+the bents by default, the seat springs too with ``bents+seats``); αM = a0 on the absolute
+velocities of the deck and seat nodes, or, with ``mass = relative``, its Viscous dashpots from
+support reference nodes (:func:`.damping.mass_dampers`). Gap elements, guides and sticks take
+no Rayleigh damping.
+
+:func:`build_model` defines the model stage by stage, in the order of the command log:
+:func:`define_deck`, :func:`define_seats`, :func:`define_bents`, :func:`define_seat_springs`,
+:func:`define_seat_guides`, :func:`define_contacts`, :func:`define_damping`,
+:func:`define_excitation`.
 
 Gaps: see :func:`.gaps.gap_mapping` — the ONE place where the positive physical gap g₀ and the
 closing direction are mapped to OpenSees' node order, element orientation and negative
