@@ -55,7 +55,7 @@ Active but separating corners. A corner can be active (g(q_M) ≤ 0) while it al
 (U_N⁻ > 0, typically the step after an impact or in persistent contact with the seat springs
 pushing). Newton's law there (U_N⁺ ≥ −e U_N⁻; ``nonsmooth.impact_law = "newton"``, the
 default, as Siconos) lets a positive P_N do positive work ½ P_N (1 − e) U_N⁻ on v_m for θ = ½,
-i.e. gain energy (0.2 % of the impact dissipation on the benchmark, see the README). With
+i.e. gain energy (0.2 % of the impact dissipation on the benchmark, see docs/verification.md). With
 ``impact_law = "energy-safe"`` such corners use the restitution max(e, (1 − θ)/θ) instead
 (``esep``, :func:`deckpound.analytic.nonsmooth.separating_restitution`;
 = 1 for θ = ½, = e for θ = 1): then P_N > 0 implies θU_N⁺ + (1−θ)U_N⁻ ≤ 0 (= 0 for θ = ½) and

@@ -16,7 +16,8 @@ at the configuration's primary error (peak rotation; peak deck x for the rotatio
 single pulse, see :data:`PRIMARY`), or gives a bound outside OpenSees's measured range
 (column ``speedup_bound``). Output: ``bench.csv``, ``bench_context.json`` (date, machine,
 repeats, the machine-speed reference before and after, the scene's default steps) and
-``work_precision.png``; :mod:`.bench_readme` renders them into the README.
+``work_precision.png``; ``python tools/bench_tables.py work-precision`` (repository tooling)
+renders them into docs/performance.md.
 Timings are measurements, not pass/fail tests.
 """
 

@@ -12,7 +12,7 @@ of it, and measures
 * ``peak_theta`` [rad] — the peak deck rotation over every step at the default step, and
   ``theta_error`` — its relative difference from the run at a tenth of the step.
 
-The rule's stated error (README, "Is the answer right?"): at the default step no energy is
+The rule's stated error (docs/user-guide.md, "Is the answer right?"): at the default step no energy is
 created beyond ``run.energy_tolerance`` and the peak rotation is within :data:`PEAK_TOLERANCE`
 of the tenth-step run. ``deckpound verify contact-step SCENE`` prints the table and exits 1
 when a row misses it; ``docs/contact_step.md`` holds the benchmark's table, written by

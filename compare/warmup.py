@@ -15,7 +15,7 @@ runs load.
 The numba compile events are counted per item (``compiled``: kernels numba had to compile,
 0 when everything came from the cache). ``./run.sh`` runs the command once after installing
 (its stamp file holds a hash of the kernels' sources; a change re-runs it), ``pip install``
-users run ``deckpound compile`` once (README).
+users run ``deckpound compile`` once (README, docs/user-guide.md).
 """
 
 from __future__ import annotations

@@ -132,3 +132,11 @@ def test_readme_real_record_example_runs(tmp_path, capsys):
 def test_performance_page_states_the_progress_interval():
     text = (ROOT / "docs" / "performance.md").read_text(encoding="utf-8")
     assert f"`DECKPOUND_PROGRESS_INTERVAL` seconds (default {PROGRESS_INTERVAL:g};" in text
+
+
+def test_user_guide_python_example_is_the_tested_one():
+    """The user guide repeats the README's Python example, which tests/test_api.py runs."""
+    pattern = re.compile(r"<!-- api-example[^>]*-->\s*```python\n(.*?)```", re.S)
+    guide = pattern.search((ROOT / "docs" / "user-guide.md").read_text(encoding="utf-8"))
+    readme = pattern.search(README.read_text(encoding="utf-8"))
+    assert guide and readme and guide.group(1) == readme.group(1)
