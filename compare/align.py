@@ -126,7 +126,7 @@ def write_tables(
     in each of ``formats`` (``parquet``: units in the schema metadata; ``csv``: units in the
     header, ``deck_theta [rad]``; the long table's ``value`` column has the unit of its row's
     quantity, listed in a ``unit`` column)."""
-    from deckpound.models.result import column_unit
+    from deckpound.models.columns import column_unit
 
     from .outputs import folder as make_folder
     from .outputs import write_csv, write_parquet

@@ -37,7 +37,6 @@ from .result_cache import ResultCache
 
 __all__ = [
     "Case",
-    "ResultCache",
     "case_key",
     "check_scheduler_address",
     "engine_expresses",

@@ -6,14 +6,15 @@ from pathlib import Path
 
 import pandas as pd
 
+from deckpound.compare.cases import Case, run_cases
 from deckpound.compare.engines import DEFAULT_REFERENCE
+from deckpound.compare.result_cache import ResultCache
 from deckpound.models.file_io import write_csv
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
 from . import figures
 from .align import align, write_tables
-from .cases import Case, ResultCache, run_cases
 from .metrics import metrics_against, summary
 
 QUANTITIES = [

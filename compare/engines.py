@@ -16,7 +16,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from deckpound.models.engine_contract import Engine, output_stride
+from deckpound.models.engine_contract import Engine
 from deckpound.models.errors import SceneError
 
 __all__ = [
@@ -25,7 +25,6 @@ __all__ = [
     "engine_names",
     "engine_style",
     "get_engine",
-    "output_stride",
     "register",
     "run_engine",
 ]

@@ -30,13 +30,13 @@ import numpy as np
 import pandas as pd
 
 from deckpound.compare.engines import DEFAULT_REFERENCE, engine_names
+from deckpound.compare.result_cache import ResultCache
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import scene_to_toml
 
 from . import figures
 from .align import align, write_tables
 from .case_rows import ROW_UNITS
-from .cases import ResultCache
 from .mechanism import MECHANISM_UNITS, mechanism_row
 from .metrics import closure_times_per_corner, compare_pair
 from .outputs import folder, folder_size, write_csv, write_text

@@ -10,19 +10,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from deckpound.compare.cases import case_key, interrupted, map_parallel, run_case, surface_warnings
+from deckpound.compare.result_cache import ResultCache
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 from deckpound.models.sequence import SpecimenState, initial_state, next_state, scene_for_run
 
-from .cases import (
-    ResultCache,
-    case_key,
-    interrupted,
-    map_parallel,
-    run_case,
-    surface_warnings,
-)
 from .progress import Progress
 
 

@@ -34,13 +34,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from deckpound.compare.cases import Case, run_cases
+from deckpound.compare.result_cache import ResultCache
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified
 
 from .case_rows import ROW_UNITS, case_row, contact_step
-from .cases import Case, ResultCache, run_cases
 from .damping_study import damping_cases, damping_figure, damping_headlines, damping_row
 from .skew import skew_cases, skew_figure, skew_headlines, skew_row
 

@@ -98,7 +98,8 @@ from deckpound.models.result import (
     scene_hash,
     settings_hash,
 )
-from deckpound.models.scene import Contact, Deck, RunSettings, Scene
+from deckpound.models.scene import Contact, Deck, Scene
+from deckpound.models.scene_settings import RunSettings
 from deckpound.models.version import VERSION
 
 __all__ = [

@@ -18,9 +18,12 @@ import warnings
 
 import numpy as np
 
+from deckpound.models.plan import support_channels
+from deckpound.models.scene import Scene
+from deckpound.models.scene_excitation import ABSURD_PGA, EXTREME_PGA
+
 from .errors import SceneError
 from .intensity import pair_measures
-from .mechanics import support_channels
 from .motion import (
     G,
     RecordWarning,
@@ -30,7 +33,6 @@ from .motion import (
     synthetic_samples,
 )
 from .record_motion import acceleration_motion
-from .scene import ABSURD_PGA, EXTREME_PGA, Scene
 from .synthetic_motion import synthetic_motion
 
 # -- shared by the generated records and the record loaders -----------------------------

@@ -242,7 +242,8 @@ def _bent_springs(scene: Scene) -> list[tuple[str, str, str]]:
 def _inertia_and_periods(scene: Scene, flagged: set[str]) -> list[tuple[str, str, str]]:
     """Warnings on the deck's polar inertia and the fundamental period (sound values only;
     ``flagged``: the fields already warned about)."""
-    from .mechanics import DOF_NAMES, mass_matrix, natural_modes
+    from deckpound.models.mechanics import mass_matrix, natural_modes
+    from deckpound.models.plan import DOF_NAMES
 
     found = _bent_springs(scene)
     deck = scene.deck

@@ -15,25 +15,16 @@ from .plan import (
     DECK_THETA,
     DECK_X,
     DECK_Y,
-    DOF_NAMES,
     N_DOF,
     SEAT_THETA,
     SEAT_X,
     Plan,
     plan_of,
-    support_channels,
 )
 from .scene import Scene
 
 __all__ = [
-    "DECK_THETA",
-    "DECK_X",
-    "DECK_Y",
-    "DOF_NAMES",
     "ENERGY_GROUPS",
-    "N_DOF",
-    "SEAT_THETA",
-    "SEAT_X",
     "Modes",
     "energy_shares",
     "initial_stiffness",
@@ -42,7 +33,6 @@ __all__ = [
     "mode_labels",
     "natural_modes",
     "spring_matrices",
-    "support_channels",
 ]
 
 

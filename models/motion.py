@@ -14,10 +14,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from deckpound.models.scene import Scene
+from deckpound.models.scene_excitation import Excitation
+
 from .errors import SceneError
 from .mechanics import natural_modes
 from .records import MAX_SAMPLES, MIN_SAMPLES
-from .scene import Excitation, Scene
 
 G = 9.80665  # standard gravity [m/s²]
 
@@ -82,7 +84,7 @@ class SupportMotion:
         if not dt > 0:
             raise SceneError("dt", f"must be > 0 s, got {dt}")
         total = self.duration if duration is None else duration
-        from .scene import MAX_STEPS
+        from deckpound.models.scene_settings import MAX_STEPS
 
         if total / dt > MAX_STEPS:
             raise SceneError(

@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from deckpound.models.scene_excitation import RECORD_KINDS, Excitation
+
 from .errors import SceneError
 from .record_csv import CsvRecord
-from .scene import RECORD_KINDS, Excitation
 
 AXIS_NAME = {"x": "longitudinal (x)", "y": "transverse (y)"}
 #: share of a channel's peak velocity by which a CSV velocity column may differ from the

@@ -43,10 +43,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from deckpound.models.plan import support_channels
+from deckpound.models.scene import Scene
+from deckpound.models.scene_excitation import ABSURD_PGA, EXTREME_PGA, Excitation
+
 from .errors import SceneError
 from .iir import butter_highpass_sos, sosfiltfilt
 from .intensity import pair_measures
-from .mechanics import support_channels
 from .motion import (
     G,
     SupportMotion,
@@ -65,7 +68,6 @@ from .records import (
     read_text,
     uniform_step,
 )
-from .scene import ABSURD_PGA, EXTREME_PGA, Excitation, Scene
 from .scene_excitation import PAIR_SCALINGS, PAIR_TARGETS
 
 ACC_UNITS = {"g": G, "m/s^2": 1.0, "cm/s^2": 0.01}  # to m/s²

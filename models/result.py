@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from .columns import column_unit, standard_columns
+from .columns import column_unit
 from .errors import SceneError
 from .fields import to_mapping
 from .html_table import html_table, short_text
@@ -52,7 +52,6 @@ __all__ = [
     "STATUS_UNSEATED",
     "Result",
     "closure_times",
-    "column_unit",
     "display_unit",
     "gap_closures",
     "in_contact",
@@ -62,7 +61,6 @@ __all__ = [
     "row_peak",
     "scene_hash",
     "settings_hash",
-    "standard_columns",
 ]
 
 N_CORNERS = 4

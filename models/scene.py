@@ -22,16 +22,11 @@ from .errors import SceneError
 from .fields import from_mapping, set_path, spec, to_mapping, validate
 from .html_table import html_table, short_text
 from .scene_excitation import (
-    ABSURD_PGA,
-    EXTREME_PGA,
-    RECORD_KINDS,
     Excitation,
     Sequence,
     check_sequence_pgas,
 )
-from .scene_settings import (  # engine sections and limits, re-exported (see __all__)
-    IMPACT_LAWS,
-    MAX_ITERATIONS,
+from .scene_settings import (
     MAX_STEPS,
     ComplianceSettings,
     NonsmoothSettings,
@@ -40,35 +35,22 @@ from .scene_settings import (  # engine sections and limits, re-exported (see __
 )
 
 __all__ = [
-    "ABSURD_PGA",
     "CONTACT_LAWS",
     "DAMPING_MASS",
     "DAMPING_MEMBERS",
     "DAMPING_STIFFNESS",
-    "EXTREME_PGA",
     "FRICTION_MODES",
     "GEOMETRIES",
-    "IMPACT_LAWS",
-    "MAX_ITERATIONS",
     "MAX_SKEW",
-    "MAX_STEPS",
-    "RECORD_KINDS",
     "SUPPORTS_PER_BENT",
     "Bent",
-    "ComplianceSettings",
     "Contact",
     "Damping",
     "Deck",
-    "Excitation",
     "Initial",
-    "NonsmoothSettings",
-    "OpenSeesSettings",
-    "RunSettings",
     "Scene",
     "Seat",
-    "Sequence",
     "TakedaSpring",
-    "check_sequence_pgas",
 ]
 
 CONTACT_LAWS = tuple(LAW_CODES)  # the rows of contact_laws_table, in code order

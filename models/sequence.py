@@ -22,10 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from deckpound.models.scene import Scene
+from deckpound.models.scene_excitation import RECORD_KINDS, check_sequence_pgas
+
 from .errors import SceneError
 from .motion import SupportMotion
 from .result import Result
-from .scene import RECORD_KINDS, Scene, check_sequence_pgas
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from deckpound.models.scene import Scene
+from deckpound.models.scene_excitation import Excitation
+
 from .errors import SceneError
 from .motion import (
     G,
@@ -21,7 +24,6 @@ from .motion import (
     synthetic_samples,
 )
 from .record_motion import highpass_padded
-from .scene import Excitation, Scene
 
 # -- signal processing ---------------------------------------------------------------------
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from deckpound.models.mechanics import DOF_NAMES, N_DOF
+from deckpound.models.plan import DOF_NAMES, N_DOF
 from deckpound.models.scene import Scene
 
 from .model import build_model

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from deckpound.models.mechanics import support_channels
+from deckpound.models.plan import support_channels
 from deckpound.models.scene import CONTACT_LAWS
 from deckpound.models.scene_io import load_scene
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from _fuzz_corpus import OUT, SHORT, Case
 
-from deckpound.models.mechanics import support_channels
+from deckpound.models.plan import support_channels
 from deckpound.models.scene_io import load_scene
 
 SLIPS = (

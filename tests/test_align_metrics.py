@@ -6,16 +6,8 @@ import numpy as np
 import pytest
 
 from deckpound.compare.align import align, bin_average, bin_sum, common_time_base, long_table
-from deckpound.compare.metrics import (
-    closure_times,
-    compare_pair,
-    correlation,
-    nrmse,
-    peak,
-    residual,
-    time_of_peak,
-)
-from deckpound.models.result import Result
+from deckpound.compare.metrics import compare_pair, correlation, nrmse, peak, residual, time_of_peak
+from deckpound.models.result import Result, closure_times
 
 
 def _res(engine, t, **cols):

@@ -172,7 +172,7 @@ def test_scenes_that_validated_and_then_crashed_are_refused(
 
 def test_a_record_shorter_than_one_step_names_both(tmp_path):
     """A CSV record of 0.3 ms (16 samples) against the 0.5 ms OpenSees step."""
-    from deckpound.models.mechanics import support_channels
+    from deckpound.models.plan import support_channels
     from deckpound.models.scene_io import load_scene
 
     t = np.arange(16) * 2e-5

@@ -8,8 +8,8 @@ import pytest
 
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import support_motion
-from deckpound.models.mechanics import support_channels
 from deckpound.models.motion import G, SupportMotion
+from deckpound.models.plan import support_channels
 from deckpound.models.scene_io import load_scene
 
 

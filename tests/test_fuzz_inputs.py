@@ -27,7 +27,7 @@ from hypothesis import strategies as st
 
 from deckpound.cli import main
 from deckpound.models.fields import to_mapping
-from deckpound.models.mechanics import support_channels
+from deckpound.models.plan import support_channels
 from deckpound.models.scene_io import load_scene
 
 # DECKPOUND_FUZZ_EXAMPLES=3000 for a long hunt; 100 per property by default

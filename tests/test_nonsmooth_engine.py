@@ -20,9 +20,9 @@ from _compliance_helpers import (
 from deckpound.analytic.compliance import run_compliance
 from deckpound.analytic.nonsmooth import ENERGY_COLUMNS, output_columns, run_nonsmooth
 from deckpound.compare.engines import run_engine
+from deckpound.models.columns import standard_columns
 from deckpound.models.contact_params import effective_masses
 from deckpound.models.errors import EngineFailure
-from deckpound.models.result import standard_columns
 from deckpound.models.scene_io import load_scene
 
 

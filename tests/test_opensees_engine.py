@@ -12,18 +12,18 @@ import scipy.linalg
 pytest.importorskip("openseespy.opensees")
 
 from deckpound.models import damping, mechanics
-from deckpound.models.columns import ENERGY_COLUMNS
+from deckpound.models.columns import ENERGY_COLUMNS, standard_columns
 from deckpound.models.contact_laws_table import (
     BILINEAR_MIN_SUBSTEPS,
     CONTACT_LAW_TABLE,
     contact_law,
 )
+from deckpound.models.damping import damping_model
 from deckpound.models.engine_contract import Status
 from deckpound.models.errors import EngineFailure
 from deckpound.models.excitation import support_motion
 from deckpound.models.motion import SupportMotion
 from deckpound.models.plan import plan_of
-from deckpound.models.result import standard_columns
 from deckpound.models.scene import RunSettings, TakedaSpring
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build import engine
@@ -116,7 +116,6 @@ def reference_response(scene, motion, t_out, a0=None, a1=None, relative_mass_dam
     ``relative_mass_damping``: the variant a0 M (u̇ − u̇_support): the deck x, y measured from
     the first bent table's velocity (all tables move alike here), the seats' x from their
     actuators'."""
-    from deckpound.models.damping import damping_model
 
     M = mechanics.mass_matrix(scene)
     B, S = mechanics.spring_matrices(scene)

@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from test_fuzz_inputs import AT2_HEADER, FUZZ, assert_contract, run_cli
 
 from deckpound.models.excitation import support_motion
-from deckpound.models.mechanics import support_channels
+from deckpound.models.plan import support_channels
 from deckpound.models.scene_io import load_scene
 
 

@@ -21,8 +21,8 @@ from _record_helpers import quake, record_scene, write_at2
 from deckpound.cli import main
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import support_motion
-from deckpound.models.mechanics import support_channels
 from deckpound.models.motion import RecordWarning
+from deckpound.models.plan import support_channels
 from deckpound.models.record_checks import velocity_tolerance
 from deckpound.models.scene_io import load_scene
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from deckpound.models.result import Result, column_unit, scene_hash, standard_columns
+from deckpound.models.columns import column_unit, standard_columns
+from deckpound.models.result import Result, scene_hash
 
 
 def _result():

@@ -17,8 +17,8 @@ import warnings
 import numpy as np
 import pytest
 
-from deckpound.compare.cases import ResultCache as ReExported
 from deckpound.compare.result_cache import MANIFEST, ResultCache
+from deckpound.compare.result_cache import ResultCache as ReExported
 from deckpound.models.result import Result
 
 KEYS = [f"{i:064x}" for i in range(1, 5)]

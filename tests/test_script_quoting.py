@@ -45,8 +45,8 @@ from hypothesis import strategies as st
 from deckpound.cli import main
 from deckpound.models.errors import SceneError
 from deckpound.models.result import scene_hash
-from deckpound.models.scene import RunSettings
 from deckpound.models.scene_io import load_scene
+from deckpound.models.scene_settings import RunSettings
 from deckpound.opensees_build import engine, export
 from deckpound.opensees_build.ops import ArrayArg, OpsSession
 from deckpound.opensees_build.recorders import PRECISION

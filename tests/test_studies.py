@@ -9,7 +9,8 @@ import pytest
 
 from deckpound.cli import main
 from deckpound.compare import cases as cases_mod
-from deckpound.compare.cases import Case, ResultCache, run_cases
+from deckpound.compare.cases import Case, run_cases
+from deckpound.compare.result_cache import ResultCache
 from deckpound.compare.sequence_run import run_sequence
 from deckpound.compare.studies import STUDIES, Study, friction_cases, run_study, start_state
 from deckpound.models.errors import SceneError

@@ -43,7 +43,7 @@ def test_record_at_is_np_interp_bit_for_bit():
 def test_scene_motion_matches_resample():
     sc = load_scene("saiidi-4span", ["excitation.duration=2.0"])
     m = support_motion(sc)
-    from deckpound.models.mechanics import support_channels
+    from deckpound.models.plan import support_channels
 
     ch = support_channels(sc)
     tb, D, V = support_record(m, ch)

@@ -5,15 +5,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._cli_study import _benchmark_scene_args, _engines, _seconds
+from ._cli_args import benchmark_scene_args, check_output_folder, engine_list, int_in, seconds
 from ._terminal import terminal_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from .cli import int_in
-
     p = sub.add_parser("bench", help="work-precision benchmark: wall time vs error, every engine")
-    _benchmark_scene_args(p, "deckpound-bench", "fewer configurations, shorter records")
+    benchmark_scene_args(p, "deckpound-bench", "fewer configurations, shorter records")
     p.add_argument(
         "--repeats", type=int_in(1, 1000), default=None, help="runs per configuration (median)"
     )
@@ -27,21 +25,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_bench)
 
     p = sub.add_parser("stress", help="stability stress test over hard settings, every engine")
-    _benchmark_scene_args(p, "deckpound-stress", "a small subset of the grid")
+    benchmark_scene_args(p, "deckpound-stress", "a small subset of the grid")
     p.add_argument(
         "--engines",
         default=None,
         help="comma-separated engine names (default: every registered engine)",
     )
-    p.add_argument("--timeout", type=_seconds, default=300.0, help="seconds per cell")
+    p.add_argument("--timeout", type=seconds, default=300.0, help="seconds per cell")
     p.set_defaults(func=_stress)
 
 
 def _bench(args) -> int:
     from deckpound.models.file_io import output_folder
     from deckpound.models.scene_io import load_scene
-
-    from ._cli_engines import check_output_folder
 
     scene = load_scene(args.scene, args.overrides)
     with output_folder(check_output_folder(args.output), "bench"):
@@ -113,9 +109,7 @@ def _stress(args) -> int:
     from deckpound.models.file_io import output_folder
     from deckpound.models.scene_io import load_scene
 
-    from ._cli_engines import check_output_folder
-
-    engines = tuple(_engines(args.engines))
+    engines = tuple(engine_list(args.engines))
     out = check_output_folder(args.output)
     scene = load_scene(args.scene, args.overrides)
     with output_folder(out, "stress"):

@@ -3,17 +3,15 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
+from deckpound.models.errors import DoubtfulResult, EngineFailure
 
+from ._cli_args import add_scene_args, check_output_folder, int_in
 from ._terminal import terminal_text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     from deckpound.compare.engines import ENGINES
-
-    from .cli import add_scene_args, int_in
 
     p = sub.add_parser("run", help="run one engine on a scene and write DIR/<engine>.csv/.json")
     add_scene_args(p)
@@ -72,26 +70,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_scene_args(q)
     q.set_defaults(func=_verify_contact_step)
-
-
-def check_output_folder(path: str) -> Path:
-    """Refuse, before any work, an output folder that can never be written: a symbolic link,
-    a file in its place, a file among its parents, or one in use by another running command
-    (exit status 2); lock it for the rest of the command (:func:`deckpound.models.file_io.claim_folder`)."""
-    from deckpound.models.file_io import check_parent, claim_folder
-
-    out = Path(path)
-    if out.is_symlink():
-        raise SceneError(
-            "--output",
-            f"{str(out)!r} is a symbolic link; deckpound never writes "
-            "through links: give the real folder",
-        )
-    if out.exists() and not out.is_dir():
-        raise SceneError("--output", f"{str(out)!r} exists and is not a folder")
-    check_parent(out)
-    claim_folder(out)
-    return out
 
 
 def _run(args) -> int:
@@ -198,6 +176,7 @@ def _verify_takeda(args) -> int:
 def _verify_clone(args) -> int:
     """One line per case (compare/verify_matrix.py); exit 1 when a case exceeds its tolerance.
     With --set: one case, the scene as given, with its column-by-column deviations."""
+
     from deckpound.compare import verify_matrix
     from deckpound.models.scene_io import load_scene
 

@@ -10,6 +10,7 @@ import re
 
 from deckpound.models.errors import SceneError
 
+from ._cli_args import int_in
 from ._terminal import terminal_text
 
 #: the columns a stripes CSV must have (others are ignored)
@@ -17,8 +18,6 @@ STRIPE_COLUMNS = ("im", "n", "exceed")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from .cli import int_in
-
     p = sub.add_parser("fragility", help="lognormal fragility functions from analysis results")
     fsub = p.add_subparsers(dest="fragility_command", metavar="ACTION")
     fsub.required = True

@@ -8,12 +8,11 @@ from pathlib import Path
 
 from deckpound.models.errors import SceneError
 
+from ._cli_args import add_scene_args
 from ._terminal import terminal_text, terminal_toml
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from .cli import add_scene_args
-
     scene = sub.add_parser("scene", help="list, show, validate scenes; print the schema")
     ssub = scene.add_subparsers(dest="scene_command", metavar="ACTION")
     ssub.required = True

@@ -9,18 +9,14 @@ from pathlib import Path
 from deckpound.compare.engines import engine_names, get_engine
 from deckpound.models.errors import SceneError
 
+from ._cli_args import (
+    add_scene_args,
+    benchmark_scene_args,
+    check_output_folder,
+    engine_list,
+    int_in,
+)
 from ._terminal import terminal_text
-
-
-def _seconds(text: str) -> float:
-    """A positive, finite number of seconds (refuses nan, inf, 0 and negatives)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number of seconds, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"must be a finite number of seconds > 0, got {text!r}")
-    return value
 
 
 def _scheduler(text: str) -> str:
@@ -33,8 +29,6 @@ def _scheduler(text: str) -> str:
 
 
 def _parallel_args(p: argparse.ArgumentParser) -> None:
-    from .cli import int_in
-
     p.add_argument(
         "--workers",
         type=int_in(1, 1024),
@@ -57,17 +51,7 @@ def _parallel_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def _benchmark_scene_args(p: argparse.ArgumentParser, out_default: str, quick_help: str) -> None:
-    """--scene (default: the benchmark), --set, -o and --quick of the whole-study commands."""
-    p.add_argument("--scene", default="saiidi-4span", help="scene (default: the benchmark)")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE")
-    p.add_argument("-o", "--output", default=out_default, metavar="DIR")
-    p.add_argument("--quick", action="store_true", help=quick_help)
-
-
 def register(sub: argparse._SubParsersAction) -> None:
-    from .cli import add_scene_args, int_in
-
     p = sub.add_parser("compare", help="run engines on one scene, align, compare, plot")
     add_scene_args(p)
     p.add_argument(
@@ -122,7 +106,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_study)
 
     p = sub.add_parser("paper", help="the main job: sequence x 3 engines + studies + report")
-    _benchmark_scene_args(p, "deckpound-report", "fewer study cases")
+    benchmark_scene_args(p, "deckpound-report", "fewer study cases")
     p.add_argument(
         "--studies", default=None, help="comma-separated subset of studies (default: all)"
     )
@@ -199,22 +183,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_export_vtk)
 
 
-def _engines(text: str | None) -> list[str]:
-    from deckpound.compare.engines import ENGINES
-
-    if text is None:
-        return list(ENGINES)
-    names = [e.strip() for e in text.split(",") if e.strip()]
-    for e in names:
-        if e not in ENGINES:
-            raise SceneError(
-                "--engines", f"unknown engine {e!r}; valid engines: {', '.join(ENGINES)}"
-            )
-    if not names:
-        raise SceneError("--engines", "names no engine")
-    return names
-
-
 def _checked_scene(args, engines) -> object:
     """The scene of a whole-study command, with the plausibility checks of its engines."""
     from deckpound.models import plausibility
@@ -231,11 +199,9 @@ def _compare(args) -> int:
     from deckpound.compare.compare_run import run_compare
     from deckpound.models.file_io import output_folder
 
-    from ._cli_engines import check_output_folder
-
-    engines = _engines(args.engines)
+    engines = engine_list(args.engines)
     if args.reference is not None:
-        _engines(args.reference)  # an unknown name is refused with the valid ones
+        engine_list(args.reference)  # an unknown name is refused with the valid ones
     check_output_folder(args.output)
     scene = _checked_scene(args, engines)
     measured = None
@@ -260,11 +226,9 @@ def _compare(args) -> int:
 
 
 def _study(args) -> int:
-    from deckpound.compare.cases import ResultCache
+    from deckpound.compare.result_cache import ResultCache
     from deckpound.compare.studies import STUDY_NAMES, run_study
     from deckpound.models.file_io import output_folder, write_csv
-
-    from ._cli_engines import check_output_folder
 
     if args.name == "variability":
         return _variability(args)
@@ -343,8 +307,6 @@ def _paper(args) -> int:
     from deckpound.compare.studies import STUDIES
     from deckpound.models.file_io import output_folder
 
-    from ._cli_engines import check_output_folder
-
     studies = None
     if args.studies:
         studies = tuple(s.strip() for s in args.studies.split(",") if s.strip())
@@ -376,8 +338,6 @@ def _export_vtk(args) -> int:
     from deckpound.compare.vtk import check_result_folder, export_vtk
     from deckpound.models.file_io import output_folder
 
-    from ._cli_engines import check_output_folder
-
     check_output_folder(args.output)
     results = check_result_folder(args.result_dir, args.every)  # damaged input: exit 2
     with output_folder(args.output, "export-vtk") as out:
@@ -391,8 +351,6 @@ def _export_vtk(args) -> int:
 
 
 def _variability_args(p: argparse.ArgumentParser) -> None:
-    from .cli import int_in
-
     g = p.add_argument_group("variability study")
     g.add_argument(
         "--cases",
@@ -424,8 +382,6 @@ def _variability(args) -> int:
     from deckpound.compare.engines import get_engine
     from deckpound.compare.variability import QUANTITIES, run_variability
     from deckpound.models.file_io import output_folder
-
-    from ._cli_engines import check_output_folder
 
     get_engine(args.engine)  # an unknown name is refused before any work
     if args.cases is not None and args.records is not None:
@@ -470,9 +426,7 @@ def _ida(args) -> int:
     from deckpound.compare.ida import IMS, parse_levels, parse_vary, run_ida
     from deckpound.models.file_io import output_folder
 
-    from ._cli_engines import check_output_folder
-
-    engines = _engines(args.engines)  # an unknown name is refused before any work
+    engines = engine_list(args.engines)  # an unknown name is refused before any work
     option = "--levels" if args.sweep == "ida" else "--stripes"
     levels = parse_levels(args.levels, option)
     if args.theta_limit is not None and not (

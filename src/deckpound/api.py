@@ -193,9 +193,10 @@ def run_batch(
     finished cases are never recomputed, so an interrupted batch resumes. Failed runs are
     returned as failed results (``result.ok`` is False), not raised.
     """
-    from deckpound.compare.cases import Case, ResultCache, run_cases
+    from deckpound.compare.cases import Case, run_cases
     from deckpound.compare.engines import get_engine
     from deckpound.compare.pool import pool_scope
+    from deckpound.compare.result_cache import ResultCache
 
     get_engine(engine)  # an unknown name is refused with the list of valid ones
     scenes = list(scenes)
@@ -251,7 +252,8 @@ class Comparison:
         from matplotlib.figure import Figure
 
         from deckpound.compare.engines import engine_style
-        from deckpound.models.result import column_unit, display_unit
+        from deckpound.models.columns import column_unit
+        from deckpound.models.result import display_unit
 
         kinds = ("histories", "peaks")
         if kind not in kinds:
@@ -348,9 +350,10 @@ def compare(
     engines are not run again; a result of another scene (its physics hash differs) is
     refused."""
     from deckpound.compare.align import align
-    from deckpound.compare.cases import Case, ResultCache, run_cases
+    from deckpound.compare.cases import Case, run_cases
     from deckpound.compare.engines import DEFAULT_REFERENCE, engine_names, get_engine
     from deckpound.compare.metrics import metrics_against
+    from deckpound.compare.result_cache import ResultCache
     from deckpound.models.result import physics_hash
 
     given = dict(results or {})

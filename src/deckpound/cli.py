@@ -470,34 +470,5 @@ def _library_failure(library: str, err: ImportError) -> str:
     )
 
 
-def int_in(lo: int, hi: int):
-    """An argparse type: a whole number in [lo, hi] (a negative count never runs silently)."""
-
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-        if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be in [{lo}, {hi}], got {value}")
-        return value
-
-    parse.__name__ = "whole number"
-    return parse
-
-
-def add_scene_args(p: argparse.ArgumentParser) -> None:
-    """SCENE positional and repeatable --set PATH=VALUE."""
-    p.add_argument("scene", metavar="SCENE", help="built-in scene name or TOML file")
-    p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="PATH=VALUE",
-        help="override a scene field, e.g. --set contact.stiffness=2e6 (repeatable)",
-    )
-
-
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
