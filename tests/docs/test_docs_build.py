@@ -100,6 +100,32 @@ def test_every_link_resolves(page):
     assert not broken, f"{page.name}: links to nothing: {broken}"
 
 
+#: the repository's folders: a path in backticks that starts with one of them names a file of
+#: the repository (``DIR/report.md``, ``cmp/metrics.csv`` are a command's outputs, not files)
+FOLDERS = (
+    "src",
+    "models",
+    "analytic",
+    "opensees_build",
+    "compare",
+    "tests",
+    "tools",
+    "data",
+    "docs",
+)
+
+
+@pytest.mark.parametrize("page", [README, *_pages()], ids=lambda p: p.name)
+def test_every_repository_path_named_exists(page):
+    """A module or file the docs name in backticks (``analytic/kernel_load.py``) exists: a
+    moved or renamed file leaves no stale pointer."""
+    text = page.read_text(encoding="utf-8")
+    folders = "|".join(FOLDERS)
+    named = re.findall(rf"`((?:{folders})/[A-Za-z0-9_./-]+)`", text)
+    missing = sorted({p for p in named if not (ROOT / p).exists() and "*" not in p})
+    assert not missing, f"{page.name} names files that do not exist: {missing}"
+
+
 def _commands(parser: argparse.ArgumentParser) -> dict[str, set[str] | None]:
     """Every ``deckpound`` command → its subcommands (None when it has none)."""
     out = {}
