@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import importlib
 import re
 import subprocess
 import sys
@@ -124,6 +125,33 @@ def test_every_repository_path_named_exists(page):
     named = re.findall(rf"`((?:{folders})/[A-Za-z0-9_./-]+)`", text)
     missing = sorted({p for p in named if not (ROOT / p).exists() and "*" not in p})
     assert not missing, f"{page.name} names files that do not exist: {missing}"
+
+
+def _resolves(name: str) -> bool:
+    """True when ``name`` (``deckpound.compare.warmup.byte_compile``) is a module or an
+    attribute reached from the longest importable module prefix."""
+    parts = name.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        for attr in parts[i:]:
+            if not hasattr(obj, attr):
+                return False
+            obj = getattr(obj, attr)
+        return True
+    return False
+
+
+@pytest.mark.parametrize("page", [README, *_pages()], ids=lambda p: p.name)
+def test_every_python_name_named_exists(page):
+    """A module, class or function the docs name in backticks (``deckpound.models.plan``)
+    exists under that name."""
+    text = page.read_text(encoding="utf-8")
+    named = set(re.findall(r"`(deckpound(?:\.[A-Za-z_][A-Za-z0-9_]*)+)", text))
+    missing = sorted(n for n in named if not _resolves(n))
+    assert not missing, f"{page.name} names what does not exist: {missing}"
 
 
 def _commands(parser: argparse.ArgumentParser) -> dict[str, set[str] | None]:
