@@ -15,6 +15,7 @@ from pathlib import Path
 
 import bench_tables
 import golden_files
+import pytest
 import verify_tables
 from _record_helpers import quake, write_at2
 from docs_blocks import block_of, replace_block
@@ -140,3 +141,18 @@ def test_user_guide_python_example_is_the_tested_one():
     guide = pattern.search((ROOT / "docs" / "user-guide.md").read_text(encoding="utf-8"))
     readme = pattern.search(README.read_text(encoding="utf-8"))
     assert guide and readme and guide.group(1) == readme.group(1)
+
+
+def test_publish_speed_stores_the_commands_table_and_refuses_another_file(tmp_path):
+    block = bench_tables.stored_speed_block()
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "speed.md").write_text(block + "\n")
+    page = tmp_path / "performance.md"
+    page.write_text(f"intro\n{speed.BEGIN}\nold\n{speed.END}\noutro\n")
+    bench_tables.publish_speed(run, page, tmp_path)
+    assert page.read_text() == f"intro\n{block}\noutro\n"
+    assert bench_tables.stored_speed_block(tmp_path) == block
+    (run / "speed.md").write_text("| not | a speed table |\n")
+    with pytest.raises(SystemExit, match="not a speed table"):
+        bench_tables.publish_speed(run, page, tmp_path)
