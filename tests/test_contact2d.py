@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 
 from deckpound.analytic import contact_laws as cl
+from deckpound.compare.engines import get_engine
+from deckpound.compare.verify_clone import verify_clone
 from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene
 
@@ -85,7 +87,6 @@ def test_stick_point_survives_opening_unlike_the_stick_law():
 
 
 def test_engines_say_which_friction_models_they_express():
-    from deckpound.compare.engines import get_engine
 
     stick = load_scene("saiidi-4span", ["contact.friction=0.2", "contact.friction_mode=stick"])
     eng = get_engine("opensees")
@@ -110,7 +111,6 @@ def test_clone_agrees_with_opensees_with_friction():
     """μ = 0.2, pounding with sticking and sliding over the first 5 s: every column to
     round-off (measured 4.5e-10 of its peak), identical Newton iteration counts. The project's
     own stick law differs from OpenSees by 5 % in rotation and 115 % in friction force."""
-    from deckpound.compare.verify_clone import verify_clone
 
     sc = load_scene(
         "saiidi-4span",

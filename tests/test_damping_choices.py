@@ -14,7 +14,13 @@ import importlib.util
 import numpy as np
 import pytest
 
+from deckpound.analytic.compliance import run_compliance
+from deckpound.analytic.system import pack_system
+from deckpound.compare.engines import get_engine, run_engine
+from deckpound.compare.verify_clone import verify_clone
+from deckpound.models.damping import damping_model
 from deckpound.models.errors import SceneError
+from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import load_scene
 
 CHOICES = [
@@ -40,7 +46,6 @@ def _scene(*ov, duration=3.0):
 @pytest.mark.skipif(importlib.util.find_spec("openseespy") is None, reason="no openseespy")
 @pytest.mark.parametrize("ov", CHOICES, ids=lambda ov: "+".join(ov) or "default")
 def test_clone_agrees_with_opensees_for_each_damping_choice(ov):
-    from deckpound.compare.verify_clone import verify_clone
 
     rep = verify_clone(_scene(*ov))
     print(ov, "largest deviation:", rep["worst"], rep["worst_velocity"], rep["iterations"])
@@ -53,7 +58,6 @@ def test_clone_agrees_with_opensees_for_each_damping_choice(ov):
 def test_damping_choices_change_the_answer():
     """The choices are not silently equivalent: each moves the deck response (checked on the
     clone, which agrees with OpenSees above)."""
-    from deckpound.analytic.compliance import run_compliance
 
     peak = {}
     for ov in CHOICES[:7] + CHOICES[8:]:
@@ -68,7 +72,6 @@ def test_damping_choices_change_the_answer():
 
 @pytest.mark.parametrize("ov", CHOICES, ids=lambda ov: "+".join(ov) or "default")
 def test_energy_balance_closes_for_each_damping_choice(ov):
-    from deckpound.analytic.compliance import run_compliance
 
     r = run_compliance(_scene(*ov, duration=4.0))
     assert r.ok
@@ -84,9 +87,6 @@ def test_relative_mass_damping_is_the_same_matrix_in_clone_and_nonsmooth():
     """Both engines pack the damping through :func:`deckpound.analytic.system.pack_system`:
     the relative mass part appears as dashpots against the supports, and the total damping
     matrix equals the model's (a0 M on the diagonal either way)."""
-    from deckpound.analytic.system import pack_system
-    from deckpound.models.damping import damping_model
-    from deckpound.models.plan import plan_of
 
     for mass in ("absolute", "relative"):
         sc = _scene(f"damping.mass={mass}")
@@ -103,7 +103,6 @@ def test_relative_mass_damping_is_the_same_matrix_in_clone_and_nonsmooth():
 
 
 def test_engines_refuse_what_they_cannot_express():
-    from deckpound.compare.engines import get_engine
 
     for name, ov in (("nonsmooth", ()), ("compliance", ("compliance.integrator=adaptive",))):
         eng = get_engine(name)
@@ -123,7 +122,6 @@ def test_nonsmooth_engine_applies_the_same_damping(ov):
     energy balance closes, and its peak transverse deck displacement (set by the bents and the
     damping, hardly by the contact law) follows the clone's to 1e-3 — and moves with the
     choice as the clone's does."""
-    from deckpound.compare.engines import run_engine
 
     base = {e: run_engine(e, _scene(duration=4.0)) for e in ("compliance", "nonsmooth")}
     got = {e: run_engine(e, _scene(*ov, duration=4.0)) for e in ("compliance", "nonsmooth")}

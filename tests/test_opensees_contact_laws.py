@@ -19,9 +19,14 @@ from __future__ import annotations
 import importlib.util
 import warnings
 
+import numpy as np
 import pytest
 
+from deckpound.analytic import contact_laws as cl
+from deckpound.compare.engines import run_engine
+from deckpound.compare.verify_clone import verify_clone
 from deckpound.models.scene_io import load_scene
+from deckpound.opensees_build.ops import OpsSession
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("openseespy") is None, reason="openseespy not installed"
@@ -42,7 +47,6 @@ def _bench(law: str, duration: float = 5.0, **extra):
 
 @pytest.mark.parametrize("law", ["kelvin-voigt", "hertz", "hertzdamp"])
 def test_clone_agrees_with_opensees_for_the_law(law):
-    from deckpound.compare.verify_clone import verify_clone
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -79,10 +83,6 @@ def test_hertzdamp_material_arithmetic_is_the_clones():
     each: stress and tangent agree, the tangent's sign included (OpenSees reports
     +n(k + ξδ̇)δ^(n−1) as −dσ/dε); ξ = ξ_n k/δ̇ is set when an approaching state follows an
     open one, kept while closed, reset when the gap opens."""
-    import numpy as np
-
-    from deckpound.analytic import contact_laws as cl
-    from deckpound.opensees_build.ops import OpsSession
 
     sc = _bench("hertzdamp", **{"contact.restitution": 0.4})
     cp = cl.pack_contact(sc, opensees_tangent=True)[0]
@@ -122,9 +122,6 @@ def test_bilinear_runs_with_fine_substeps_close_to_the_continuous_law():
     deck x 2.1e-4; with Rayleigh on the seats too it was 7.2e-5), but the gap force is not: the jump K1·(committed strain − gap) of the closing
     sub-step adds a spike (first 3 s: peak gap force 236 kN against the continuous law's 176
     kN, +34 %) — documented, not cloned."""
-    import numpy as np
-
-    from deckpound.compare.engines import run_engine
 
     sc = load_scene(
         "saiidi-4span", ["contact.law=bilinear", "opensees.substeps=1000", "run.duration=3.0"]

@@ -19,7 +19,10 @@ import pytest
 
 pytest.importorskip("openseespy.opensees")
 
+from deckpound.analytic.compliance import run_compliance
+from deckpound.analytic.hysteretic import HystereticMaterial
 from deckpound.models.columns import ENERGY_COLUMNS
+from deckpound.models.plan import takeda_hysteretic_args
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build.energy import takeda_constants, takeda_unloading_stiffness
 from deckpound.opensees_build.engine import run_opensees
@@ -91,7 +94,6 @@ CASES = {
 
 @pytest.mark.parametrize("case", list(CASES))
 def test_energy_columns_equal_the_clones(case):
-    from deckpound.analytic.compliance import run_compliance
 
     name, overrides = CASES[case]
     sc = load_scene(name, [*TIGHT, "run.duration=3", *overrides])
@@ -179,7 +181,6 @@ def test_free_vibration_without_contact_keeps_its_energy():
 def test_damped_start_from_a_displaced_moving_deck_equals_the_clone():
     # the forces at t = 0 (elastic springs at the initial displacement, dashpots at the
     # initial velocity: a bent dashpot moves with the deck) start the trapezoidal work
-    from deckpound.analytic.compliance import run_compliance
 
     sc = load_scene(
         "saiidi-4span",
@@ -227,8 +228,6 @@ def test_unresolved_contact_shows_as_negative_contact_dissipation():
 def test_takeda_unloading_stiffness_is_the_materials():
     # the stiffness the stored energy f²/(2 k_u) of a bent uses is the one the Hysteretic
     # material (its bit-for-bit clone) unloads along: elastic, and after an excursion to 4 e1
-    from deckpound.analytic.hysteretic import HystereticMaterial
-    from deckpound.models.plan import takeda_hysteretic_args
 
     sc = load_scene("saiidi-4span")
     for b in sc.bents:

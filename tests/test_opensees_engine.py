@@ -23,9 +23,10 @@ from deckpound.models.engine_contract import Status
 from deckpound.models.errors import EngineFailure
 from deckpound.models.excitation import support_motion
 from deckpound.models.motion import SupportMotion
-from deckpound.models.plan import plan_of
-from deckpound.models.scene import RunSettings, TakedaSpring
+from deckpound.models.plan import plan_of, support_channels
+from deckpound.models.scene import TakedaSpring
 from deckpound.models.scene_io import load_scene
+from deckpound.models.scene_settings import RunSettings
 from deckpound.opensees_build import engine
 from deckpound.opensees_build.ops import OpsSession
 
@@ -57,7 +58,7 @@ def elastic_scene(scene, gap=5.0):
 
 def zero_motion(scene, duration):
     t = np.array([0.0, duration])
-    z = {c: np.zeros(2) for c in mechanics.support_channels(scene)}
+    z = {c: np.zeros(2) for c in support_channels(scene)}
     return SupportMotion(t=t, disp=z, vel=dict(z))
 
 
@@ -68,7 +69,7 @@ def ramp_motion(scene, duration, amp, ramp=2.0, channels=None):
     ds = np.where(t < ramp, 0.5 * np.pi / ramp * np.sin(np.pi * t / ramp), 0.0)
     disp, vel = {}, {}
     chans = channels or [f"{b.name}_x" for b in scene.bents]
-    for c in mechanics.support_channels(scene):
+    for c in support_channels(scene):
         on = c in chans
         disp[c] = amp * s if on else np.zeros_like(t)
         vel[c] = amp * ds if on else np.zeros_like(t)
@@ -125,7 +126,7 @@ def reference_response(scene, motion, t_out, a0=None, a1=None, relative_mass_dam
     ra0, ra1, _ = damping.rayleigh_coefficients(scene)
     a0 = ra0 if a0 is None else a0
     a1 = ra1 if a1 is None else a1
-    chans = mechanics.support_channels(scene)
+    chans = support_channels(scene)
     D, V = motion.matrices(chans)
     tr = motion.t
     h = tr[1] - tr[0]

@@ -21,10 +21,14 @@ from deckpound.models.plan import plan_of
 
 pytest.importorskip("openseespy.opensees")
 
+import importlib.util
+import os
+import stat
+
 from deckpound.models.errors import SceneError
 from deckpound.models.result import scene_hash
-from deckpound.models.scene import RunSettings
 from deckpound.models.scene_io import load_scene
+from deckpound.models.scene_settings import RunSettings
 from deckpound.opensees_build import engine, export, recorders
 from deckpound.opensees_build.gaps import gap_mapping
 from deckpound.opensees_build.ops import ArrayArg, OpsSession, render_commands
@@ -250,7 +254,6 @@ def test_opsvis_plots_the_exported_model(exported):
     are not drawn: opsvis 1.3.7 only knows the fixity lists [1, 2, 3], [1, 2], [1], [2] in 2-D
     and fails on these nodes, whose imposed motions are constraints too ([2, 3, 1])."""
     opsvis = pytest.importorskip("opsvis")
-    import importlib.util
 
     import matplotlib
 
@@ -275,8 +278,6 @@ def test_export_replaces_files_and_never_writes_through_a_symlink(bench, tmp_pat
     """Re-exporting replaces the script and the whole data folder; a symlink at the script path
     is refused (deckpound never writes through links, deckpound.models.file_io), its target untouched;
     files get the usual permissions (not mkstemp's 0600)."""
-    import os
-    import stat
 
     sc = bench.replace(run=RunSettings(duration=0.02))
     target = tmp_path / "target.txt"

@@ -31,6 +31,7 @@ from test_tcl_export_runs import HAS_TCL, deviation, recorded, run_tcl
 from tests_helpers_scene import short_benchmark
 
 from deckpound.compare.engines import run_engine
+from deckpound.compare.skew import verify_skew
 from deckpound.models.columns import column_unit
 from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import load_scene
@@ -208,7 +209,6 @@ def test_straight_friction_command_log_keeps_its_seat_nodes():
 
 @pytest.mark.parametrize("phi_deg", [30.0, 45.0])
 def test_clone_agrees_with_opensees_on_a_skewed_benchmark(phi_deg):
-    from deckpound.compare.skew import verify_skew
 
     sc = load_scene(
         "saiidi-4span",
