@@ -22,6 +22,9 @@ from deckpound.models.damping import damping_model
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import load_scene
+from deckpound.opensees_build.damping import rayleigh_members
+from deckpound.opensees_build.engine import build
+from deckpound.opensees_build.ops import OpsSession
 
 CHOICES = [
     (),  # the default: bents, initial, absolute
@@ -135,3 +138,26 @@ def test_nonsmooth_engine_applies_the_same_damping(ov):
         assert abs(shift["nonsmooth"] - shift["compliance"]) < 0.1 * abs(shift["compliance"])
     else:  # (Rayleigh on the seats hardly moves the deck)
         assert abs(shift["nonsmooth"]) < 1e-3, shift
+
+
+@pytest.mark.skipif(importlib.util.find_spec("openseespy") is None, reason="no openseespy")
+@pytest.mark.parametrize(
+    "members,bents,seats",
+    [("bents", True, False), ("bents+seats", True, True), ("none", False, False)],
+)
+@pytest.mark.parametrize("method", ["modes", "none"])
+def test_opensees_damps_the_elements_of_the_damping_models_springs(members, bents, seats, method):
+    """OpenSees puts ``-doRayleigh 1`` on the spring elements of the damping model's damped
+    springs (``DampingModel.damped``), also when a1 = 0 (method none)."""
+    sc = _scene(f"damping.members={members}", f"damping.method={method}")
+    plan = plan_of(sc)
+    dm = damping_model(sc, plan)
+    assert list(dm.damped) == [bents] * plan.n_bent_springs + [seats] * 4
+    assert rayleigh_members(plan, dm) == ([bents] * len(plan.bent_names), [seats] * 2)
+    with OpsSession() as ops:
+        build(ops, sc)
+        tags = ops.tags("element")
+        damped = {c.args[1] for c in ops.log if c.name == "element" and "-doRayleigh" in c.args}
+    expected = {tags[f"bent {b}"] for b in plan.bent_names if bents}
+    expected |= {tags[f"seat{j} spring"] for j in (1, 2) if seats}
+    assert damped == expected
