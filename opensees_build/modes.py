@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from deckpound.models.plan import DOF_NAMES, N_DOF
+from deckpound.models.plan import DOF_NAMES, N_DOF, plan_of
 from deckpound.models.scene import Scene
 
 from .model import build_model
@@ -58,17 +58,7 @@ def opensees_modes(scene: Scene, n: int = N_DOF) -> OpenSeesModes:
             [[raw.nodeEigenvector(node, m + 1, dof) for m in range(n)] for node, dof in where]
         )
         raw.wipeAnalysis()
-    masses = np.array(
-        [
-            scene.seats[0].mass,
-            scene.seats[0].inertia,
-            scene.seats[1].mass,
-            scene.seats[1].inertia,
-            scene.deck.mass,
-            scene.deck.mass,
-            scene.deck.inertia,
-        ]
-    )
+    masses = plan_of(scene).mass  # the plan model's diagonal mass, in DOF_NAMES order
     norm = np.sqrt(np.einsum("im,i,im->m", phi, masses, phi))
     phi = phi / norm
     sign = np.sign(phi[np.abs(phi).argmax(axis=0), np.arange(n)])
