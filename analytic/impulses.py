@@ -23,13 +23,14 @@ from deckpound.analytic._jit import kernel
 from deckpound.analytic.dense import lu_solve
 from deckpound.analytic.frictional_contact import contact_solve_work, solve_contact_impulses_with
 
-__all__ = ["ImpulseWork", "impulse_work", "solve_active_impulses"]
+__all__ = ["ImpulseWork", "impulse_work", "size_tag", "solve_active_impulses"]
 
 #: Scratch of :func:`solve_active_impulses` for up to nc active corners and n_dof DOFs: X, Wr
 #: (2nc, n_dof) rows Ŵ⁻¹ w and w of W = [W_N; W_T]; col (n_dof,); G (2nc, 2nc) Delassus matrix;
 #: per corner (nc,) uNf, uTf free contact velocities, uNm pre-impact normal velocity, ea, ma
 #: restitution and friction, pN, pT impulses, uNp, uTp post-impact velocities, st int64 states;
-#: ``contact`` the frictional solve's scratch (:data:`.frictional_contact.ContactSolveWork`).
+#: ``contact`` the frictional solve's scratch (:data:`.frictional_contact.ContactSolveWork`);
+#: ``dof_slots`` the size tag of n_dof (:func:`size_tag`).
 ImpulseWork = namedtuple(
     "ImpulseWork",
     [
@@ -48,8 +49,18 @@ ImpulseWork = namedtuple(
         "uTp",
         "st",
         "contact",
+        "dof_slots",
     ],
 )
+
+
+def size_tag(n: int) -> tuple:
+    """A size as a compile-time constant of the kernels: a tuple of ``n`` zeros, whose length
+    is part of its numba type (``UniTuple(int64, n)``), so ``len(tag)`` in a kernel is a
+    constant. A kernel given the tag is compiled once per size; its loops over that size then
+    have a fixed trip count that LLVM unrolls, as it did for the former module constants
+    (N_DOF, N_CORNERS), instead of a count read from an array's shape at run time."""
+    return (0,) * int(n)
 
 
 def impulse_work(n_corners: int, n_dof: int) -> ImpulseWork:
@@ -67,6 +78,7 @@ def impulse_work(n_corners: int, n_dof: int) -> ImpulseWork:
         G=np.zeros((2 * nc, 2 * nc)),
         st=np.zeros(nc, dtype=np.int64),
         contact=contact_solve_work(nc),
+        dof_slots=size_tag(nd),
         **per_corner,
     )
 
@@ -80,12 +92,12 @@ def solve_active_impulses(
     G = W Ŵ⁻¹ Wᵀ, u_free = W v_free, U_N⁻ = W_N v0; vnew = v_free + Ŵ⁻¹ Wᵀ P. Restitution
     ``ecoef`` for approaching corners (U_N⁻ ≤ 0), ``esep`` for separating ones.
     P_N, P_T, state (n_corners,) are written per corner (zero / open for inactive corners);
-    the sizes are those of the arrays (DOFs: vfree).
+    the DOF count is the size tag ``work.dof_slots``, the corner count P_N's length.
     ``work``: the :data:`ImpulseWork` (:func:`impulse_work`). Returns (status, comp_res,
     cone_res).
     """
     nc = nact
-    n_dof = vfree.shape[0]
+    n_dof = len(work.dof_slots)
     X = work.X[: 2 * nc]  # rows: Ŵ⁻¹ w for each column w of W
     Wr = work.Wr[: 2 * nc]
     col = work.col

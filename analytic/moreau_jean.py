@@ -130,17 +130,18 @@ __all__ = [
 # start, predict (support motion, active set), solve (Newton on v_{k+1} with the contact
 # problem), commit (springs, work totals, impulses), store (peaks, output rows), finish. The
 # per-step stages are inlined into the driver (numba IR inlining, ``inline="always"``), so the
-# loop compiles to one function as before. Array sizes come from the arrays: DOFs from the
-# mass vector, corners from the corner table, springs from the spring arrays.
+# loop compiles to one function as before. Sizes come from the bundles: springs and support
+# channels from their arrays, DOFs and corners from the workspace's size tags
+# (``work.dof_slots``, ``work.corner_slots``: compile-time constants, so the loop is compiled
+# per model size and its short DOF and corner loops unroll).
 
 
 @kernel(inline="always")
-def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
+def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv, n_dof):
     """LU of Ŵ = M + θhC + θ²h² Bᵀ diag(kt) B (K scratch). Returns False if singular."""
     spring_tangent(sa, kt, K)
     c1 = theta * h
     c2 = c1 * c1
-    n_dof = LU.shape[0]
     for i in range(n_dof):
         for j in range(n_dof):
             LU[i, j] = c1 * Cmat[i, j] + c2 * K[i, j]
@@ -149,22 +150,22 @@ def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv):
 
 
 @kernel(inline="always")
-def _copy_state(final, q, v):
+def _copy_state(final, q, v, n_dof):
     """The state a run reports as its last: displacement q and velocity v into the rows
     FINAL_U, FINAL_V of ``final``."""
-    for j in range(q.shape[0]):
+    for j in range(n_dof):
         final[FINAL_U, j] = q[j]
         final[FINAL_V, j] = v[j]
 
 
 @kernel(inline="always")
-def _corner_gaps(contact, q, gap, WN, WT):
+def _corner_gaps(contact, q, gap, WN, WT, n_corners):
     """Gaps at q; rows WN, WT too for nonlinear kinematics (constant for linear kinematics,
     filled before the loop, so only the gaps change)."""
     if contact.nonlinear:
         contact_kinematics(q, contact.corners, contact.nonlinear, gap, WN, WT)
     else:
-        for c in range(gap.shape[0]):
+        for c in range(n_corners):
             gap[c] = linear_gap(contact.corners[c], q)
 
 
@@ -241,13 +242,14 @@ def _predict(system, contact, record, work, h, t1, jrec, count):
             spr.sdu[i] = 0.0
             spr.sdv[i] = 0.0
     q, v = dof.q, dof.v
-    for j in range(q.shape[0]):
+    n_corners = len(work.corner_slots)
+    for j in range(len(work.dof_slots)):
         dof.qk[j] = q[j]
         dof.vk[j] = v[j]
         dof.qM[j] = q[j] + 0.5 * h * v[j]
-    _corner_gaps(contact, dof.qM, cor.gap, cor.WN, cor.WT)
+    _corner_gaps(contact, dof.qM, cor.gap, cor.WN, cor.WT, n_corners)
     nact = 0
-    for c in range(cor.gap.shape[0]):
+    for c in range(n_corners):
         if cor.gap[c] <= 0.0:
             cor.act[nact] = c
             nact += 1
@@ -269,7 +271,8 @@ def _linearise(system, work, h, th):
     sa = system
     dof, spr = work.dof, work.spring
     R, vk = dof.R, dof.vk
-    for j in range(R.shape[0]):
+    n_dof = len(work.dof_slots)
+    for j in range(n_dof):
         R[j] = h * dof.Fk[j]
     for i in range(spr.d_k.shape[0]):
         bv = 0.0
@@ -281,7 +284,7 @@ def _linearise(system, work, h, th):
         spr.d_lin[i] = spr.d_k[i]
         spr.fs_lin[i] = spr.fs_k[i]
         spr.kt_lin[i] = spr.kt_k[i]
-    for j in range(R.shape[0]):
+    for j in range(n_dof):
         dof.v[j] = vk[j]
 
 
@@ -293,7 +296,10 @@ def _factor(system, work, h, theta, count):
     kt_lin, kt_fact = spr.kt_lin, spr.kt_fact
     for i in range(kt_lin.shape[0]):
         if kt_lin[i] != kt_fact[i]:
-            if not _iteration_matrix(system, system.C, kt_lin, h, theta, dof.K, dof.LU, dof.piv):
+            n_dof = len(work.dof_slots)
+            if not _iteration_matrix(
+                system, system.C, kt_lin, h, theta, dof.K, dof.LU, dof.piv, n_dof
+            ):
                 return False
             count[bd.CNT_FACTORISATIONS] += 1
             for k in range(kt_lin.shape[0]):
@@ -309,11 +315,12 @@ def _velocity(work, opt, nact, stats):
     RUN_CONTACT_UNSOLVED."""
     dof, cor = work.dof, work.corner
     v, vfree = dof.v, dof.vfree
+    n_dof = len(work.dof_slots)
     lu_solve(dof.LU, dof.piv, dof.R, dof.dv)
-    for j in range(v.shape[0]):
+    for j in range(n_dof):
         vfree[j] = v[j] - dof.dv[j]
     if nact == 0:
-        for j in range(v.shape[0]):
+        for j in range(n_dof):
             v[j] = vfree[j]
         return RUN_OK
     cst, comp, cone = solve_active_impulses(
@@ -342,7 +349,7 @@ def _velocity(work, opt, nact, stats):
     value = stats.value
     value[bd.VAL_MAX_COMP] = max(value[bd.VAL_MAX_COMP], comp)
     value[bd.VAL_MAX_CONE] = max(value[bd.VAL_MAX_CONE], cone)
-    for j in range(v.shape[0]):
+    for j in range(n_dof):
         v[j] = dof.vnew[j]
     return RUN_OK
 
@@ -355,7 +362,7 @@ def _springs_at_iterate(system, work, h, th, th1):
     sa = system
     dof, spr = work.dof, work.spring
     q, v = dof.q, dof.v
-    for j in range(q.shape[0]):
+    for j in range(len(work.dof_slots)):
         q[j] = dof.qk[j] + h * (th1 * dof.vk[j] + th * v[j])
     spring_deformations(sa, q, v, work.ug, work.vg, spr.d, spr.dd)
     spring_update_materials(sa.hparams, work.hstate, sa.kind, spr.d)
@@ -373,7 +380,7 @@ def _newton_residual(system, work, h, th, th1):
     """Newton: the residual of the θ-equation at the iterate (contact impulse excluded),
     R = M (v − v_k) + h[(1 − θ) F_k + θ f], and the iterate as the new linearisation point."""
     dof, spr = work.dof, work.spring
-    for j in range(dof.R.shape[0]):
+    for j in range(len(work.dof_slots)):
         dof.R[j] = system.mass[j] * (dof.v[j] - dof.vk[j]) + h * (th1 * dof.Fk[j] + th * dof.f[j])
     for i in range(spr.d.shape[0]):
         spr.d_lin[i] = spr.d[i]
@@ -418,7 +425,7 @@ def _solve(system, work, opt, nact, stats):
     count[bd.CNT_MAX_IT] = max(count[bd.CNT_MAX_IT], it)
     if status == RUN_OK:
         q, v = work.dof.q, work.dof.v
-        for j in range(q.shape[0]):
+        for j in range(len(work.dof_slots)):
             if not np.isfinite(v[j]) or not np.isfinite(q[j]):
                 status = RUN_NONFINITE
     return status
@@ -446,7 +453,7 @@ def _commit(system, work, h, th):
     a0 = sa.scal[0]  # mass-proportional Rayleigh coefficient (SystemArrays.scal)
     num = 0.0
     q, v, qk, vk = dof.q, dof.v, dof.qk, dof.vk
-    for j in range(q.shape[0]):
+    for j in range(len(work.dof_slots)):
         vm = th1 * vk[j] + th * v[j]
         W[W_VISCOUS] += a0 * sa.mass[j] * (q[j] - qk[j]) * vm
         dvj = v[j] - vk[j]
@@ -461,14 +468,15 @@ def _commit_contact(contact, work, peaks, nact, th, inv_h, value):
     impulses' work on v_m = (1 − θ)v_k + θv_{k+1}, the impulses accumulated for the output
     and the step's forces P / h for the peaks."""
     dof, cor, W = work.dof, work.corner, work.W
-    _corner_gaps(contact, dof.q, cor.gapo, cor.WNo, cor.WTo)
+    n_corners = len(work.corner_slots)
+    _corner_gaps(contact, dof.q, cor.gapo, cor.WNo, cor.WTo, n_corners)
     fn_step, ft_step = peaks.force[0], peaks.force[1]
-    for c in range(cor.gapo.shape[0]):
+    for c in range(n_corners):
         value[bd.VAL_MAX_PEN] = max(value[bd.VAL_MAX_PEN], -cor.gapo[c])
         fn_step[c] = 0.0
         ft_step[c] = 0.0
     if nact == 0:
-        for c in range(cor.state.shape[0]):
+        for c in range(n_corners):
             cor.state[c] = 0
         return
     th1 = 1.0 - th
@@ -476,7 +484,7 @@ def _commit_contact(contact, work, peaks, nact, th, inv_h, value):
         c = cor.act[a]
         uN = 0.0
         uT = 0.0
-        for j in range(dof.v.shape[0]):
+        for j in range(len(work.dof_slots)):
             vm = th1 * dof.vk[j] + th * dof.v[j]
             uN += cor.WN[c, j] * vm
             uT += cor.WT[c, j] * vm
@@ -495,7 +503,7 @@ def _store(system, contact, output, work, row, t1, inv_out):
     sa = system
     dof, cor = work.dof, work.corner
     contact_kinematics(dof.q, contact.corners, contact.nonlinear, cor.gapo, cor.WNo, cor.WTo)
-    for c in range(cor.pn_acc.shape[0]):
+    for c in range(len(work.corner_slots)):
         cor.fn_out[c] = cor.pn_acc[c] * inv_out
         cor.ft_out[c] = cor.pt_acc[c] * inv_out
     output_energies(sa, work.hstate, dof.q, dof.v, work.ug, work.W, work.energy)
@@ -515,7 +523,7 @@ def _store(system, contact, output, work, row, t1, inv_out):
         cor.state,
         work.energy,
     )
-    for c in range(cor.pn_acc.shape[0]):
+    for c in range(len(work.corner_slots)):
         cor.pn_acc[c] = 0.0
         cor.pt_acc[c] = 0.0
 
@@ -568,6 +576,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     inv_out = 1.0 / (opt.stride * h)
     jrec = _start(system, contact, record, output, work)
     dof = work.dof
+    n_dof = len(work.dof_slots)
     status = RUN_OK
     failed = 0
     row = 1
@@ -575,13 +584,13 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
         if stats.halt[0] != 0:
             status = RUN_INTERRUPTED
             failed = n + 1
-            _copy_state(work.final, dof.q, dof.v)
+            _copy_state(work.final, dof.q, dof.v, n_dof)
             break
         t1 = (n + 1) * h
         jrec, nact = _predict(system, contact, record, work, h, t1, jrec, stats.count)
         status = _solve(system, work, opt, nact, stats)
         if status != RUN_OK:
-            _copy_state(work.final, dof.qk, dof.vk)
+            _copy_state(work.final, dof.qk, dof.vk, n_dof)
             failed = n + 1
             break
         _commit(system, work, h, opt.theta)
@@ -606,6 +615,6 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
             _store(system, contact, output, work, row, t1, inv_out)
             row += 1
     if status in (RUN_OK, RUN_UNSEATED):
-        _copy_state(work.final, dof.q, dof.v)
+        _copy_state(work.final, dof.q, dof.v, n_dof)
     _finish(stats, status, row, failed, opt.nsteps, h)
     flush_leave(saved)

@@ -85,3 +85,5 @@ def test_workspace_is_sized_by_its_arguments():
     assert work.ug.shape == (nch,) and work.final.shape == (2, n_dof)
     assert work.impulse.X.shape == (2 * n_corners, n_dof)
     assert work.impulse.G.shape == (2 * n_corners, 2 * n_corners)
+    assert len(work.dof_slots) == len(work.impulse.dof_slots) == n_dof
+    assert len(work.corner_slots) == n_corners
