@@ -38,7 +38,7 @@ import numpy as np
 
 from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import ensure_compiled
-from deckpound.analytic.compliance import _STATUS_TEXT, ENERGY_COLUMNS, pack_run
+from deckpound.analytic.compliance_pack import pack_run
 from deckpound.analytic.dormand_prince import adaptive_run
 from deckpound.analytic.dormand_prince_work import (
     H_BINS_PER_DECADE,
@@ -48,6 +48,7 @@ from deckpound.analytic.dormand_prince_work import (
 )
 from deckpound.analytic.peaks import run_output_fields, run_peaks
 from deckpound.analytic.system import initial_dofs
+from deckpound.models.columns import ENERGY_COLUMNS
 from deckpound.models.engine_contract import RunOutput, Status, engine_columns
 from deckpound.models.motion import analysis_duration
 
@@ -111,7 +112,7 @@ def run_adaptive(
         np.zeros(len(cols)),
         peaks,
     )
-    u0, v0 = initial_dofs(initial_state)
+    u0, v0 = initial_dofs(initial_state, ps.arrays.mass.shape[0])
     work = adaptive_workspace(
         u0, v0, ps.new_state(), cs, ps.n_springs, UG.shape[1], ps.n_bent_springs
     )
@@ -164,8 +165,10 @@ def run_adaptive(
             f"step budget exhausted: compliance.max_steps = {cset.max_steps} steps tried "
             f"reached t = {st['time']:.6g} s of {opts.t_end:g} s"
         )
+    elif code == bd.RUN_STEP_UNDERFLOW:
+        message = f"{status.text}: step size underflow (below 1e-14 s)"
     else:
-        message = _STATUS_TEXT.get(code, "non-finite state")
+        message = status.text
     return RunOutput(
         columns=columns,
         status=status,

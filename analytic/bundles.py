@@ -43,6 +43,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from deckpound.analytic.support_motion import record_slopes
 from deckpound.models.engine_contract import Status
 from deckpound.models.errors import SceneError
 
@@ -93,8 +94,6 @@ Record = namedtuple("Record", ["t", "disp", "vel", "dslope", "vslope"])
 
 def record(tb, D, V) -> Record:
     """The :data:`Record` bundle of a support record at its own samples (slopes computed)."""
-    from deckpound.analytic.support_motion import record_slopes
-
     return Record(tb, D, V, *record_slopes(tb, D, V))
 
 

@@ -39,8 +39,20 @@ from typing import ClassVar
 
 import numpy as np
 
-from deckpound.models.columns import ENERGY_COLUMNS  # the energy columns [kJ]
+from deckpound.analytic import bundles as bd
+from deckpound.analytic import contact_laws as cl
+from deckpound.analytic._jit import ensure_compiled
+from deckpound.analytic.adaptive import run_adaptive
+from deckpound.analytic.compliance_pack import pack_run
+from deckpound.analytic.fp_mode import flush_note
+from deckpound.analytic.newmark import BETA, GAMMA, newmark_run
+from deckpound.analytic.newmark_work import NewmarkOptions, newmark_workspace
+from deckpound.analytic.peaks import run_output_fields, run_peaks
+from deckpound.analytic.system import initial_dofs
+from deckpound.models.columns import ENERGY_COLUMNS, standard_columns  # energies [kJ]
+from deckpound.models.contact_laws_table import contact_law, friction_model
 from deckpound.models.contact_params import contact_resolving_step
+from deckpound.models.damping import refuse_tangent_damping
 from deckpound.models.engine_contract import (
     Engine,
     RunOutput,
@@ -48,11 +60,18 @@ from deckpound.models.engine_contract import (
     engine_columns,
     output_stride,
 )
+from deckpound.models.errors import SceneError
 from deckpound.models.motion import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
-from deckpound.models.scene import ComplianceSettings, Scene
+from deckpound.models.scene import Scene
+from deckpound.models.scene_settings import ComplianceSettings
 
-__all__ = ["ENERGY_COLUMNS", "SKIPS", "ComplianceEngine", "output_columns", "run_compliance"]
+__all__ = [
+    "SKIPS",
+    "ComplianceEngine",
+    "output_columns",
+    "run_compliance",
+]
 
 SUBSTEPS = 10  # sub-steps of the fallback for a failed step (OpenSees engine default)
 #: The skips the engine can turn off for measurement (``_skips={name: False}``);
@@ -80,44 +99,10 @@ SUBSTEPS = 10  # sub-steps of the fallback for a failed step (OpenSees engine de
 #:   result decimated afterwards.
 SKIPS = ("contact", "friction", "factor_reuse", "unmoved_iterate", "decimate")
 
-#: failure messages by loop status code (:mod:`deckpound.analytic.bundles` ``RUN_*``)
-_STATUS_TEXT = {
-    1: "Newton did not converge (NormDispIncr)",
-    2: "singular tangent",
-    3: "non-finite state",
-    5: "step budget exhausted (compliance.max_steps)",
-    6: "interrupted",
-    7: "step size underflow",
-}
-
 
 def output_columns(scene: Scene) -> list[str]:
     """Column names of the compliance result (standard columns, then the energies)."""
-    from deckpound.models.columns import standard_columns
-
     return standard_columns([b.name for b in scene.bents]) + list(ENERGY_COLUMNS)
-
-
-def pack_run(plan: Plan, scene: Scene, motion: SupportMotion, *, kv_clip: bool = False):
-    """Everything a compliance run needs, packed once: (ps, (tb, D, V), cp, cs, corners).
-
-    The support record stays at its own samples (tb, D, V): memory independent of the number
-    of steps (the kernels interpolate it, see :mod:`deckpound.analytic.support_motion`).
-    """
-    from deckpound.analytic import contact_laws as cl
-    from deckpound.analytic.contact_law_checks import check_kernel_branches
-    from deckpound.analytic.kinematics import K_G0, pack_corners
-    from deckpound.analytic.support_motion import support_record
-    from deckpound.analytic.system import pack_system
-    from deckpound.models.damping import damping_model
-
-    ps = pack_system(plan, damping_model(scene, plan))
-    record = support_record(motion, ps.channels)
-    cp = cl.pack_contact(scene, kv_clip=kv_clip)
-    check_kernel_branches(cp)
-    corners = pack_corners(plan)
-    cs = cl.new_contact_state(corners[:, K_G0])
-    return ps, record, cp, cs, corners
 
 
 class ComplianceEngine(Engine):
@@ -141,8 +126,6 @@ class ComplianceEngine(Engine):
     def reads(self, scene: Scene, settings) -> set[str]:
         """The law's and the friction model's parameters, from their rows of
         :mod:`deckpound.models.contact_laws_table`."""
-        from deckpound.models.contact_laws_table import contact_law, friction_model
-
         ct = scene.contact
         read = {"contact.law", "contact.stiffness", "contact.geometry"}
         if settings.integrator == "newmark":
@@ -156,8 +139,6 @@ class ComplianceEngine(Engine):
         return read
 
     def notes(self, scene: Scene, settings) -> list[str]:
-        from deckpound.analytic.fp_mode import flush_note
-
         return flush_note("compliance.subnormals", settings.subnormals)
 
     def refuse(self, scene: Scene, settings) -> None:
@@ -165,9 +146,6 @@ class ComplianceEngine(Engine):
         every sliding commit, so the answer depends on where the steps fall) on the element's
         fixed normal and tangent: it needs the fixed-step ``newmark`` integrator and the linear
         contact kinematics."""
-        from deckpound.models.damping import refuse_tangent_damping
-        from deckpound.models.errors import SceneError
-
         if settings.integrator != "newmark":
             refuse_tangent_damping(
                 scene,
@@ -225,8 +203,6 @@ class ComplianceEngine(Engine):
         if initial_state is None:
             initial_state = plan.initial_state(scene.initial)
         if settings.integrator == "adaptive":
-            from deckpound.analytic.adaptive import run_adaptive
-
             return run_adaptive(
                 plan,
                 scene,
@@ -250,6 +226,45 @@ class ComplianceEngine(Engine):
         )
 
 
+def _skip_switches(skips: dict | None) -> dict[str, bool]:
+    """Every skip of :data:`SKIPS` on, except those ``skips`` turns off (``{name: False}``)."""
+    on = dict.fromkeys(SKIPS, True)
+    for k, v in (skips or {}).items():
+        if k not in on:
+            raise ValueError(f"unknown skip {k!r}; valid: {', '.join(SKIPS)}")
+        on[k] = bool(v)
+    return on
+
+
+def _stored_columns(plan: Plan, scene: Scene, channels) -> tuple[list[str], np.ndarray]:
+    """The columns a Newmark run stores (the engine columns and the energies, or the engine
+    columns plus ``channels``) and their indices into the loop's full row."""
+    all_cols = output_columns(scene)
+    engine_cols = engine_columns(plan)
+    if channels is None:
+        cols = [c for c in all_cols if c in engine_cols or c in ENERGY_COLUMNS]
+    else:
+        unknown = [c for c in channels if c not in all_cols]
+        if unknown:
+            raise ValueError(f"unknown result column {unknown[0]!r}; valid: {', '.join(all_cols)}")
+        want = set(channels) | set(engine_cols)
+        cols = [c for c in all_cols if c in want and (c in engine_cols or c in ENERGY_COLUMNS)]
+    full = engine_cols + list(ENERGY_COLUMNS)
+    return cols, np.array([full.index(c) for c in cols], dtype=np.int64)
+
+
+def _set_newton_contact(settings, cp: np.ndarray, friction_skip: bool) -> None:
+    """Newton's contact-tangent switch into ``cp``; with the friction skip off, the slip law
+    with μ = 0 where friction is off."""
+    # Newton's contact tangent: the laws' derivatives, or what OpenSees's materials report
+    cp[:, cl.P_OTAN] = 1.0 if settings.contact_tangent == "opensees" else 0.0
+    if not friction_skip:
+        # the slip law with μ = 0 wherever friction was switched off: same (zero) forces
+        off = cp[:, cl.P_FMODE] == cl.FRICTION_NONE
+        cp[off, cl.P_FMODE] = cl.FRICTION_CODES["slip"]
+        cp[off, cl.P_MU] = 0.0
+
+
 def _run_newmark(
     plan,
     scene,
@@ -263,49 +278,16 @@ def _run_newmark(
     skips,
     on_interrupt,
 ) -> RunOutput:
-    from deckpound.analytic import bundles as bd
-    from deckpound.analytic import contact_laws as cl
-    from deckpound.analytic._jit import ensure_compiled
-    from deckpound.analytic.newmark import (
-        BETA,
-        GAMMA,
-        NewmarkOptions,
-        newmark_run,
-        newmark_workspace,
-    )
-    from deckpound.analytic.peaks import run_output_fields, run_peaks
-    from deckpound.analytic.system import initial_dofs
-
-    on = dict.fromkeys(SKIPS, True)
-    for k, v in (skips or {}).items():
-        if k not in on:
-            raise ValueError(f"unknown skip {k!r}; valid: {', '.join(SKIPS)}")
-        on[k] = bool(v)
+    """The Newmark integrator of :meth:`ComplianceEngine._run` (same keywords)."""
+    on = _skip_switches(skips)
     dt = contact_resolving_step(scene, settings.dt)
     duration = analysis_duration(scene, motion)
     ps, record, cp, cs, corners = pack_run(plan, scene, motion, kv_clip=kv_clip)
-    # Newton's contact tangent: the laws' derivatives, or what OpenSees's materials report
-    cp[:, cl.P_OTAN] = 1.0 if settings.contact_tangent == "opensees" else 0.0
-    if not on["friction"]:
-        # the slip law with μ = 0 wherever friction was switched off: same (zero) forces
-        off = cp[:, cl.P_FMODE] == cl.FRICTION_NONE
-        cp[off, cl.P_FMODE] = cl.FRICTION_CODES["slip"]
-        cp[off, cl.P_MU] = 0.0
+    _set_newton_contact(settings, cp, on["friction"])
     stride = output_stride(dt, scene.run.output_dt)
     kstride = stride if on["decimate"] else 1
     nsteps = round(duration / dt)
-    all_cols = output_columns(scene)
-    engine_cols = engine_columns(plan)
-    if channels is None:
-        cols = [c for c in all_cols if c in engine_cols or c in ENERGY_COLUMNS]
-    else:
-        unknown = [c for c in channels if c not in all_cols]
-        if unknown:
-            raise ValueError(f"unknown result column {unknown[0]!r}; valid: {', '.join(all_cols)}")
-        want = set(channels) | set(engine_cols)
-        cols = [c for c in all_cols if c in want and (c in engine_cols or c in ENERGY_COLUMNS)]
-    full = engine_cols + list(ENERGY_COLUMNS)
-    colsel = np.array([full.index(c) for c in cols], dtype=np.int64)
+    cols, colsel = _stored_columns(plan, scene, channels)
     rows_max = nsteps // kstride + 1
     bd.check_output_size(rows_max, len(cols))
     opts = NewmarkOptions(
@@ -322,8 +304,9 @@ def _run_newmark(
         flush_subnormals=settings.subnormals == "flush",
     )
     peaks = run_peaks(scene, plan, ps)
-    output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(len(full)), peaks)
-    u0, v0 = initial_dofs(initial_state)
+    n_full = len(engine_columns(plan)) + len(ENERGY_COLUMNS)
+    output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(n_full), peaks)
+    u0, v0 = initial_dofs(initial_state, ps.arrays.mass.shape[0])
     work = newmark_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, len(ps.channels))
     contact = bd.Contact(corners, cp, scene.contact.geometry == "nonlinear")
     stats = bd.new_stats()
@@ -370,7 +353,7 @@ def _run_newmark(
         message=(
             f"{nsteps} steps, {st['newton_iterations']} Newton iterations"
             if ok
-            else _STATUS_TEXT.get(st["status"], status.text)
+            else _failure_text(status)
         ),
         failed_step=None if finished else failed_step,
         failed_time=None if finished else failed_step * dt,
@@ -384,6 +367,13 @@ def _run_newmark(
         **run_output_fields(peaks, plan),
         extra=extra,
     )
+
+
+def _failure_text(status: Status) -> str:
+    """The status text (:attr:`Status.text`), with the test that failed for the Newton loop."""
+    if status == Status.NOT_CONVERGED:
+        return f"{status.text} (Newton, NormDispIncr test)"
+    return status.text
 
 
 def run_compliance(

@@ -9,6 +9,16 @@ in the workspace of
 :mod:`deckpound.analytic.bundles`; its scalars are
 :data:`deckpound.analytic.dormand_prince_work.AdaptiveOptions`. The tableau is a
 module constant (numba freezes global arrays into the compiled code).
+
+:func:`adaptive_run` is a short driver over stages inlined into it (``inline="always"``):
+:func:`_start`, then per step attempt :func:`_next_break` (the step limit), :func:`_rk_step`,
+:func:`_locate_event` (the first event in the step, the step redone to it), :func:`_accept`
+(commit at the step's end), :func:`_count_step_size`, :func:`_adaptive_store` on output times
+and :func:`_next_step_size`.
+
+State vector y = [u (n_dof), u̇ (n_dof), work totals (N_WORK)]: n_dof from the system bundle
+(``mass.shape[0]``), the work totals at ``y[2 n_dof + W_*]`` (offsets of
+:mod:`deckpound.analytic.work_energy`).
 """
 
 from __future__ import annotations
@@ -18,7 +28,7 @@ import numpy as np
 from deckpound.analytic import bundles as bd
 from deckpound.analytic import contact_assembly as ca
 from deckpound.analytic import contact_laws as cl
-from deckpound.analytic._hysteretic_kernel import C_ROTMAX, C_ROTMIN, T_STRESS
+from deckpound.analytic._hysteretic_layout import C_ROTMAX, C_ROTMIN, P_E1N, P_E1P, T_STRESS
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.bundles import (
     RUN_INTERRUPTED,
@@ -28,17 +38,28 @@ from deckpound.analytic.bundles import (
     RUN_STEP_UNDERFLOW,
     RUN_UNSEATED,
 )
-from deckpound.analytic.dormand_prince_work import H_BINS_PER_DECADE, H_LOG_MIN, H_NBINS, NT, NY
+from deckpound.analytic.dormand_prince_work import H_BINS_PER_DECADE, H_LOG_MIN, H_NBINS
 from deckpound.analytic.fp_mode import flush_enter, flush_leave
 from deckpound.analytic.peaks import track_step
 from deckpound.analytic.system import (
     C_BENT,
+    KIND_HYSTERETIC,
+    SCAL_A0,
     spring_assemble,
     spring_commit,
     spring_deformations,
     spring_stored_energy,
     spring_update_materials,
     store_standard,
+)
+from deckpound.analytic.work_energy import (
+    W_CONTACT,
+    W_FRICTION,
+    W_INPUT,
+    W_SPRINGS,
+    W_VISCOUS,
+    energy_columns,
+    stick_spring_energy,
 )
 
 __all__ = ["TABLEAU", "adaptive_run"]
@@ -56,6 +77,8 @@ _B5 = _A[6].copy()
 _E = _B5 - np.array(
     [5179 / 57600, 0.0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40]
 )
+#: relative tolerance of time comparisons (breakpoints, the end time) [-]
+_TINY = 1e-13
 
 
 @kernel
@@ -87,10 +110,11 @@ def _support(t, tb, D, V, ug, vg):
 @kernel
 def _rhs(t, y, sa, contact, record, ws, dy):
     """dy = [u̇, ü, powers] at (t, y); trial material/contact states relative to committed."""
-    ns = sa.k0.shape[0]
+    nd = sa.mass.shape[0]
+    ny = 2 * nd
     cw = ws.cw
-    u = y[0:7]
-    v = y[7:14]
+    u = y[0:nd]
+    v = y[nd:ny]
     ug = ws.ug
     vg = ws.vg
     _support(t, record.t, record.disp, record.vel, ug, vg)
@@ -100,61 +124,64 @@ def _rhs(t, y, sa, contact, record, ws, dy):
     n = ca.eval_contacts(contact, ws.cstate, cw, u, v, ws.uc)
     if n < 0:
         ca.eval_closed(contact, ws.cstate, cw, u, v, ws.uc)
-    for j in range(7):
+    for j in range(nd):
         dy[j] = v[j]
-        dy[7 + j] = (cw.fc[j] - ws.f[j]) / sa.mass[j]
+        dy[nd + j] = (cw.fc[j] - ws.f[j]) / sa.mass[j]
     # powers: input (supports), springs (f_s ḋ), viscous, contact (λ_N δ̇), friction (−λ_T U_T)
     pin = 0.0
     psp = 0.0
     pvi = 0.0
-    for i in range(ns):
+    for i in range(ws.d.shape[0]):
         ftot = ws.fs[i] + sa.crate[i] * ws.dd[i]
         ch = sa.schan[i]
         if ch >= 0:
             pin -= sa.sval[i] * vg[ch] * ftot
         psp += ws.fs[i] * ws.dd[i]
         pvi += sa.crate[i] * ws.dd[i] * ws.dd[i]
-    a0 = sa.scal[0]
-    for j in range(7):
+    a0 = sa.scal[SCAL_A0]
+    for j in range(nd):
         pvi += a0 * sa.mass[j] * v[j] * v[j]
     pco = 0.0
     pfr = 0.0
-    for c in range(4):
+    for c in range(cw.g.shape[0]):
         pco -= cw.lam[c] * cw.gd[c]
         if cw.lt[c] != 0.0:
             ut = 0.0
-            for j in range(7):
+            for j in range(nd):
                 ut += cw.WT[c, j] * v[j]
             pfr -= cw.lt[c] * ut
-    dy[14] = pin
-    dy[15] = psp
-    dy[16] = pvi
-    dy[17] = pco
-    dy[18] = pfr
+    dy[ny + W_INPUT] = pin
+    dy[ny + W_SPRINGS] = psp
+    dy[ny + W_VISCOUS] = pvi
+    dy[ny + W_CONTACT] = pco
+    dy[ny + W_FRICTION] = pfr
 
 
 @kernel
 def _events(y, sa, contact, ws, ev):
-    """Event function values at a state: gaps (4), Takeda ḋ (nbs), ġ (4, bilinear), U_T (4,
-    stick friction); unused entries 0. ws.dd: the spring rates of the last :func:`_rhs` call."""
+    """Event function values at a state: gaps (n_corners), Takeda ḋ (nbs), ġ (n_corners,
+    bilinear), U_T (n_corners, stick friction); unused entries 0. ws.dd: the spring rates of
+    the last :func:`_rhs` call."""
     cp = contact.params
     cw = ws.cw
     nbs = sa.nbs
-    u = y[0:7]
-    v = y[7:14]
+    nd = sa.mass.shape[0]
+    nc = cw.g.shape[0]
+    u = y[0:nd]
+    v = y[nd : 2 * nd]
     ca.gaps_and_rates(contact, u, v, cw)
-    for c in range(4):
+    for c in range(nc):
         ev[c] = cw.g[c]
     for i in range(nbs):
-        ev[4 + i] = ws.dd[i]
-    k = 4 + nbs
-    for c in range(4):
+        ev[nc + i] = ws.dd[i]
+    k = nc + nbs
+    for c in range(nc):
         ev[k + c] = cw.gd[c] if (cp[c, cl.P_EVENT] != 0.0 and cw.g[c] < 0.0) else 0.0
         ut = 0.0
         if cp[c, cl.P_FMODE] == cl.FRICTION_STICK and cw.g[c] < 0.0:
-            for j in range(7):
+            for j in range(nd):
                 ut += cw.WT[c, j] * v[j]
-        ev[k + 4 + c] = ut
+        ev[k + nc + c] = ut
 
 
 @kernel
@@ -168,13 +195,16 @@ def _hermite(y0, f0, y1, f1, h, th):
 
 @kernel
 def _event_value(kind_idx, y, sa, contact, record, t, ws):
-    """Value of event kind_idx at an interpolated state y (t for the supports)."""
+    """Value of event kind_idx (layout of :func:`_events`) at an interpolated state y (t for
+    the supports)."""
     cw = ws.cw
-    u = y[0:7]
-    v = y[7:14]
+    nd = sa.mass.shape[0]
+    nc = cw.g.shape[0]
+    u = y[0:nd]
+    v = y[nd : 2 * nd]
     ca.gaps_and_rates(contact, u, v, cw)
-    nbs2 = kind_idx - 4
-    if kind_idx < 4:
+    nbs2 = kind_idx - nc
+    if kind_idx < nc:
         return cw.g[kind_idx]
     ns_ev = sa.nbs
     if nbs2 < ns_ev:
@@ -182,40 +212,42 @@ def _event_value(kind_idx, y, sa, contact, record, t, ws):
         spring_deformations(sa, u, v, ws.ug, ws.vg, ws.d, ws.dd)
         return ws.dd[nbs2]
     c = nbs2 - ns_ev
-    if c < 4:
+    if c < nc:
         return cw.gd[c]
-    c -= 4
+    c -= nc
     ut = 0.0
-    for j in range(7):
+    for j in range(nd):
         ut += cw.WT[c, j] * v[j]
     return ut
 
 
 @kernel
 def _rk_step(t, y, h, sa, contact, record, ws, atol, rtol):
-    """One DP5(4) step from (t, y) with slope ws.k1; returns the scaled error norm (ws.ynew
-    filled, ws.K[6] = f(t+h, ynew))."""
+    """One DP5(4) step from (t, y) with slope ws.k1; returns the scaled error norm over u, u̇
+    (ws.ynew filled, ws.K[6] = f(t+h, ynew))."""
     K, k1, ytmp, ynew = ws.K, ws.k1, ws.ytmp, ws.ynew
-    for j in range(NT):
+    nt = y.shape[0]
+    ny = 2 * sa.mass.shape[0]
+    for j in range(nt):
         K[0, j] = k1[j]
     for s in range(1, 7):
-        for j in range(NT):
+        for j in range(nt):
             acc = y[j]
             for r in range(s):
                 acc += h * _A[s, r] * K[r, j]
             ytmp[j] = acc
         if s == 6:
-            for j in range(NT):
+            for j in range(nt):
                 ynew[j] = ytmp[j]
         _rhs(t + _C[s] * h, ytmp, sa, contact, record, ws, K[s])
     err = 0.0
-    for j in range(NY):
+    for j in range(ny):
         e = 0.0
         for s in range(7):
             e += h * _E[s] * K[s, j]
         sc = atol + rtol * max(abs(y[j]), abs(ynew[j]))
         err += (e / sc) ** 2
-    return np.sqrt(err / NY)
+    return np.sqrt(err / ny)
 
 
 @kernel
@@ -226,11 +258,241 @@ def _any_yielded(sa, hstate):
     paths (OpenSees Hysteretic arithmetic), so the loop caps its steps at ``commit_step``.
     """
     for i in range(hstate.shape[0]):
-        if sa.kind[i] == 1 and (
-            hstate[i, C_ROTMAX] > sa.hparams[i, 1] or hstate[i, C_ROTMIN] < sa.hparams[i, 7]
+        if sa.kind[i] == KIND_HYSTERETIC and (
+            hstate[i, C_ROTMAX] > sa.hparams[i, P_E1P] or hstate[i, C_ROTMIN] < sa.hparams[i, P_E1N]
         ):
             return True
     return False
+
+
+@kernel(inline="always")
+def _kinetic_energy(sa, y):
+    """½ u̇ᵀ M u̇ of the state y [kJ]."""
+    nd = sa.mass.shape[0]
+    ke = 0.0
+    for j in range(nd):
+        ke += 0.5 * sa.mass[j] * y[nd + j] ** 2
+    return ke
+
+
+@kernel(inline="always")
+def _start(sa, contact, record, output, ws, stats):
+    """The state at t = 0 from ws.u0, ws.v0: slope, materials and corners committed, the
+    initial mechanical energy counted as input, output row 0, the peaks and the events."""
+    y = ws.y
+    nd = sa.mass.shape[0]
+    ny = 2 * nd
+    for j in range(nd):
+        y[j] = ws.u0[j]
+        y[nd + j] = ws.v0[j]
+    for j in range(nd):
+        ws.uc[j] = y[j]
+    _rhs(0.0, y, sa, contact, record, ws, ws.k1)
+    stats.count[bd.CNT_RHS_CALLS] += 1
+    spring_commit(sa, ws.hstate)
+    cl.contact_commit(ws.cstate, ws.cw.g, ws.cw.gd, ws.cw.evaluated)
+    ke = _kinetic_energy(sa, y)
+    es0 = spring_stored_energy(sa, ws.hstate, y[0:nd], ws.ug)
+    ec0 = cl.contact_stored_energy(contact.params, ws.cstate)
+    y[ny + W_INPUT] = ke + es0 + ec0
+    y[ny + W_SPRINGS] = es0
+    y[ny + W_CONTACT] = ec0
+    _adaptive_store(sa, contact, ws, output, 0, 0.0)
+    _adaptive_track(sa, ws, output.peaks, 0.0)
+    _events(y, sa, contact, ws, ws.ev0)
+
+
+@kernel(inline="always")
+def _next_break(tb, t, kseg, t_end, tout):
+    """The next breakpoint after t: the next record sample (index hint kseg), the output time
+    tout or t_end, whichever comes first. Returns (breakpoint [s], kseg)."""
+    ntb = tb.shape[0]
+    while kseg < ntb and tb[kseg] <= t + _TINY * max(1.0, t):
+        kseg += 1
+    tbreak = t_end
+    if kseg < ntb and tb[kseg] < tbreak:
+        tbreak = tb[kseg]
+    return min(tbreak, tout), kseg
+
+
+@kernel(inline="always")
+def _bisect_event(q, flo, sa, contact, record, ws, t, h):
+    """Where event q changes sign in (t, t + h] on the cubic Hermite interpolant of the step
+    (flo: its value at t), as a fraction of h (the end of the last bracket)."""
+    y, k1, ynew, ytmp, yev = ws.y, ws.k1, ws.ynew, ws.ytmp, ws.yev
+    ny = 2 * sa.mass.shape[0]
+    lo = 0.0
+    hi = 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        for j in range(ny):
+            yev[j] = _hermite(y[j], k1[j], ynew[j], ytmp[j], h, mid)
+        fm = _event_value(q, yev, sa, contact, record, t + mid * h, ws)
+        if (fm < 0.0) == (flo < 0.0) and fm != 0.0:
+            lo = mid
+            flo = fm
+        else:
+            hi = mid
+        if (hi - lo) * h < 1e-13:
+            break
+    return hi
+
+
+@kernel(inline="always")
+def _locate_event(sa, contact, record, ws, stats, t, h, atol, rtol):
+    """Events in (t, t + h] of an accepted trial step (sign changes between ws.ev0 and the
+    values at its end; a zero at t + h counts): the step is redone from t to the first one.
+    Returns (accepted step [s], whether an event ended it)."""
+    ev0, ev1 = ws.ev0, ws.ev1
+    cnt = stats.count
+    _rhs(t + h, ws.ynew, sa, contact, record, ws, ws.ytmp)
+    cnt[bd.CNT_RHS_CALLS] += 1
+    _events(ws.ynew, sa, contact, ws, ev1)
+    th_ev = 2.0
+    for q in range(ev0.shape[0]):
+        a_, b_ = ev0[q], ev1[q]
+        if (a_ == 0.0 or (a_ < 0.0) == (b_ < 0.0)) and not (b_ == 0.0 and a_ != 0.0):
+            continue  # no sign change in (t, t+h] (a zero at t+h counts)
+        th_ev = min(th_ev, _bisect_event(q, a_, sa, contact, record, ws, t, h))
+    if th_ev < 1.0 and th_ev * h > 1e-12:
+        he = th_ev * h
+        _rk_step(t, ws.y, he, sa, contact, record, ws, atol, rtol)
+        cnt[bd.CNT_RHS_CALLS] += 6
+        cnt[bd.CNT_EVENTS] += 1
+        return he, True
+    return h, False
+
+
+@kernel(inline="always")
+def _accept(sa, contact, record, ws, stats, output, t, yielded):
+    """Accept the step ending at t (state ws.ynew): materials and corners committed there,
+    the largest penetration, the yield flag, the slope and events at the new state, the step
+    counted and its peaks tracked. Returns (a seat margin became negative, yielded)."""
+    y, cw = ws.y, ws.cw
+    cnt = stats.count
+    nd = sa.mass.shape[0]
+    for j in range(y.shape[0]):
+        y[j] = ws.ynew[j]
+    _rhs(t, y, sa, contact, record, ws, ws.k1)
+    cnt[bd.CNT_RHS_CALLS] += 1
+    spring_commit(sa, ws.hstate)
+    cl.contact_commit(ws.cstate, cw.g, cw.gd, cw.evaluated)
+    for c in range(cw.g.shape[0]):  # penetration at every accepted step
+        if -cw.g[c] > stats.value[bd.VAL_MAX_PEN]:
+            stats.value[bd.VAL_MAX_PEN] = -cw.g[c]
+    if not yielded:
+        yielded = _any_yielded(sa, ws.hstate)
+    for j in range(nd):
+        ws.uc[j] = y[j]
+    _rhs(t, y, sa, contact, record, ws, ws.k1)
+    cnt[bd.CNT_RHS_CALLS] += 1
+    _events(y, sa, contact, ws, ws.ev0)
+    cnt[bd.CNT_STEPS] += 1
+    return _adaptive_track(sa, ws, output.peaks, t), yielded
+
+
+@kernel(inline="always")
+def _in_contact(ws):
+    """True when a corner's gap is ≤ 0 in the event values ws.ev0 (the gaps come first)."""
+    closed = False
+    for c in range(ws.cw.g.shape[0]):
+        closed = closed or ws.ev0[c] <= 0.0
+    return closed
+
+
+@kernel(inline="always")
+def _count_step_size(ws, hs, in_contact):
+    """Accepted step size hs [s] into the histogram and [min, max, sum] of its row (0 out of
+    contact, 1 in contact)."""
+    if hs <= 0.0:
+        return
+    ic = 1 if in_contact else 0
+    b = int((np.log10(hs) - H_LOG_MIN) * H_BINS_PER_DECADE)
+    b = max(b, 0)
+    if b >= H_NBINS:
+        b = H_NBINS - 1
+    ws.hist[ic, b] += 1
+    hstat = ws.hstat
+    if hstat[ic, 0] == 0.0 or hs < hstat[ic, 0]:
+        hstat[ic, 0] = hs
+    hstat[ic, 1] = max(hstat[ic, 1], hs)
+    hstat[ic, 2] += hs
+
+
+@kernel(inline="always")
+def _all_finite(y):
+    """True when every entry of y is finite."""
+    finite = True
+    for j in range(y.shape[0]):
+        if not np.isfinite(y[j]):
+            finite = False
+    return finite
+
+
+@kernel(inline="always")
+def _next_step_size(h, err, h_acc):
+    """Error control: h · 0.9 err^(−1/5), the factor within [0.2, 5]; not above h after a step
+    shortened to an event."""
+    if err > 0.0:
+        fac = 0.9 * err**-0.2
+        fac = min(fac, 5.0)
+        fac = max(fac, 0.2)
+        hn = h * fac
+    else:
+        hn = h * 5.0
+    if h_acc < h and hn > h:
+        hn = h
+    return hn
+
+
+@kernel(inline="always")
+def _integrate(sa, contact, record, opt, output, ws, stats):
+    """The steps over [0, opt.t_end]. Returns (status, time reached [s], rows written)."""
+    t_end, out_dt = opt.t_end, opt.out_dt
+    cnt = stats.count
+    nout = output.table.shape[0]
+    t = 0.0
+    _start(sa, contact, record, output, ws, stats)
+    row = 1
+    h = min(opt.max_step, out_dt, 1e-4)
+    yielded = _any_yielded(sa, ws.hstate)
+    kseg = 0
+    while t < t_end - _TINY * max(1.0, t_end):
+        if stats.halt[0] != 0:
+            return RUN_INTERRUPTED, t, row
+        if cnt[bd.CNT_STEPS] + cnt[bd.CNT_REJECTED] >= opt.max_steps:
+            return RUN_STEP_BUDGET, t, row
+        tbreak, kseg = _next_break(record.t, t, kseg, t_end, row * out_dt)
+        hmax = min(opt.max_step, tbreak - t)
+        if yielded and hmax > opt.commit_step:
+            hmax = opt.commit_step
+        h = min(h, hmax)
+        hit_break = abs((t + h) - tbreak) <= _TINY * max(1.0, tbreak)
+        if h <= 1e-14:
+            return RUN_STEP_UNDERFLOW, t, row
+        err = _rk_step(t, ws.y, h, sa, contact, record, ws, opt.atol, opt.rtol)
+        cnt[bd.CNT_RHS_CALLS] += 6
+        if not np.isfinite(err):
+            err = 1e10
+        if err > 1.0:
+            cnt[bd.CNT_REJECTED] += 1
+            h *= max(0.2, 0.9 * err**-0.2)
+            continue
+        h_acc, at_event = _locate_event(sa, contact, record, ws, stats, t, h, opt.atol, opt.rtol)
+        t_start = t
+        in_contact = _in_contact(ws)
+        t = tbreak if hit_break and not at_event else t + h_acc
+        unseated, yielded = _accept(sa, contact, record, ws, stats, output, t, yielded)
+        _count_step_size(ws, t - t_start, in_contact or _in_contact(ws))
+        if not _all_finite(ws.y):
+            return RUN_NONFINITE, t, row
+        if unseated:  # a seat margin became negative at this step (.peaks): the answer ends
+            return RUN_UNSEATED, t, row
+        if row < nout and abs(t - row * out_dt) <= 1e-9 * out_dt:
+            _adaptive_store(sa, contact, ws, output, row, row * out_dt)
+            row += 1
+        h = _next_step_size(h, err, h_acc)
+    return RUN_OK, t, row
 
 
 @kernel(nogil=True)
@@ -249,188 +511,16 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
     accepted step at which a seat margin becomes negative (RUN_UNSEATED, after that step).
     """
     # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
-    # deckpound.analytic.fp_mode); every return below restores the thread's mode first
+    # deckpound.analytic.fp_mode); the thread's mode is restored on the way out
     saved = flush_enter(opt.flush_subnormals)
-    sa = system
-    ws = work
-    hstate, cs, cw = ws.hstate, ws.cstate, ws.cw
-    y, k1, ytmp, ynew, yev, uc = ws.y, ws.k1, ws.ytmp, ws.ynew, ws.yev, ws.uc
-    ev0, ev1, hist, hstat = ws.ev0, ws.ev1, ws.hist, ws.hstat
-    t_end, out_dt, rtol, atol = opt.t_end, opt.out_dt, opt.rtol, opt.atol
-    max_step, commit_step = opt.max_step, opt.commit_step
-    tb = record.t
-    halt = stats.halt
-    for j in range(7):
-        y[j] = ws.u0[j]
-        y[7 + j] = ws.v0[j]
-    for j in range(7):
-        uc[j] = y[j]
-    nev = ev0.shape[0]
-    tiny = 1e-13
-    t = 0.0
-    _rhs(t, y, sa, contact, record, ws, k1)
-    spring_commit(sa, hstate)
-    cl.contact_commit(cs, cw.g, cw.gd, cw.evaluated)
-    # initial energy
-    ke = 0.0
-    for j in range(7):
-        ke += 0.5 * sa.mass[j] * y[7 + j] ** 2
-    es0 = spring_stored_energy(sa, hstate, y[0:7], ws.ug)
-    ec0 = cl.contact_stored_energy(contact.params, cs)
-    y[14] = ke + es0 + ec0
-    y[15] = es0
-    y[17] = ec0
-    _adaptive_store(sa, contact, ws, output, 0, 0.0)
-    _adaptive_track(sa, ws, output.peaks, 0.0)
-    row = 1
-    nout = output.table.shape[0]
-    h = min(max_step, out_dt, 1e-4)
-    yielded = _any_yielded(sa, hstate)
-    status = RUN_OK
-    steps = 0
-    rejected = 0
-    events = 0
-    calls = 1
-    kseg = 0
-    ntb = tb.shape[0]
-    _events(y, sa, contact, ws, ev0)
-    while t < t_end - tiny * max(1.0, t_end):
-        if halt[0] != 0:
-            status = RUN_INTERRUPTED
-            break
-        if steps + rejected >= opt.max_steps:
-            status = RUN_STEP_BUDGET
-            break
-        # next breakpoint: record sample or output time
-        while kseg < ntb and tb[kseg] <= t + tiny * max(1.0, t):
-            kseg += 1
-        tbreak = t_end
-        if kseg < ntb and tb[kseg] < tbreak:
-            tbreak = tb[kseg]
-        tout = row * out_dt
-        tbreak = min(tbreak, tout)
-        hmax = min(max_step, tbreak - t)
-        if yielded and hmax > commit_step:
-            hmax = commit_step
-        h = min(h, hmax)
-        hit_break = abs((t + h) - tbreak) <= tiny * max(1.0, tbreak)
-        if h <= 1e-14:
-            status = RUN_STEP_UNDERFLOW
-            break
-        err = _rk_step(t, y, h, sa, contact, record, ws, atol, rtol)
-        calls += 6
-        if not np.isfinite(err):
-            err = 1e10
-        if err > 1.0:
-            rejected += 1
-            h *= max(0.2, 0.9 * err**-0.2)
-            continue
-        # events inside (t, t+h]
-        _rhs(t + h, ynew, sa, contact, record, ws, ytmp)
-        calls += 1
-        _events(ynew, sa, contact, ws, ev1)
-        th_ev = 2.0
-        for q in range(nev):
-            a_, b_ = ev0[q], ev1[q]
-            if (a_ == 0.0 or (a_ < 0.0) == (b_ < 0.0)) and not (b_ == 0.0 and a_ != 0.0):
-                continue  # no sign change in (t, t+h] (a zero at t+h counts)
-            # bisection on the Hermite interpolant
-            lo = 0.0
-            hi = 1.0
-            flo = a_
-            for _ in range(60):
-                mid = 0.5 * (lo + hi)
-                for j in range(NY):
-                    yev[j] = _hermite(y[j], k1[j], ynew[j], ytmp[j], h, mid)
-                fm = _event_value(q, yev, sa, contact, record, t + mid * h, ws)
-                if (fm < 0.0) == (flo < 0.0) and fm != 0.0:
-                    lo = mid
-                    flo = fm
-                else:
-                    hi = mid
-                if (hi - lo) * h < 1e-13:
-                    break
-            th_ev = min(th_ev, hi)
-        if th_ev < 1.0 and th_ev * h > 1e-12:
-            he = th_ev * h
-            _rk_step(t, y, he, sa, contact, record, ws, atol, rtol)
-            calls += 6
-            events += 1
-            h_acc = he
-            hit_break = False
-        else:
-            h_acc = h
-        # accept: state at t + h_acc, commit materials and contacts there
-        t_start = t
-        in_contact = ev0[0] <= 0.0 or ev0[1] <= 0.0 or ev0[2] <= 0.0 or ev0[3] <= 0.0
-        t = t + h_acc
-        if hit_break:
-            t = tbreak
-        for j in range(NT):
-            y[j] = ynew[j]
-        _rhs(t, y, sa, contact, record, ws, k1)
-        calls += 1
-        spring_commit(sa, hstate)
-        cl.contact_commit(cs, cw.g, cw.gd, cw.evaluated)
-        for c in range(4):  # penetration at every accepted step
-            if -cw.g[c] > stats.value[bd.VAL_MAX_PEN]:
-                stats.value[bd.VAL_MAX_PEN] = -cw.g[c]
-        if not yielded:
-            yielded = _any_yielded(sa, hstate)
-        for j in range(7):
-            uc[j] = y[j]
-        _rhs(t, y, sa, contact, record, ws, k1)
-        calls += 1
-        _events(y, sa, contact, ws, ev0)
-        steps += 1
-        unseated = _adaptive_track(sa, ws, output.peaks, t)
-        if ev0[0] <= 0.0 or ev0[1] <= 0.0 or ev0[2] <= 0.0 or ev0[3] <= 0.0:
-            in_contact = True
-        hs = t - t_start
-        ic = 1 if in_contact else 0
-        if hs > 0.0:
-            b = int((np.log10(hs) - H_LOG_MIN) * H_BINS_PER_DECADE)
-            b = max(b, 0)
-            if b >= H_NBINS:
-                b = H_NBINS - 1
-            hist[ic, b] += 1
-            if hstat[ic, 0] == 0.0 or hs < hstat[ic, 0]:
-                hstat[ic, 0] = hs
-            hstat[ic, 1] = max(hstat[ic, 1], hs)
-            hstat[ic, 2] += hs
-        finite = True
-        for j in range(NT):
-            if not np.isfinite(y[j]):
-                finite = False
-        if not finite:
-            status = RUN_NONFINITE
-            break
-        if unseated:  # a seat margin became negative at this step (.peaks): the answer ends
-            status = RUN_UNSEATED
-            break
-        if row < nout and abs(t - row * out_dt) <= 1e-9 * out_dt:
-            _adaptive_store(sa, contact, ws, output, row, row * out_dt)
-            row += 1
-        if err > 0.0:
-            fac = 0.9 * err**-0.2
-            fac = min(fac, 5.0)
-            fac = max(fac, 0.2)
-            hn = h * fac
-        else:
-            hn = h * 5.0
-        if h_acc < h and hn > h:
-            hn = h
-        h = hn
+    status, t, row = _integrate(system, contact, record, opt, output, work, stats)
     cnt = stats.count
+    steps = cnt[bd.CNT_STEPS]
     cnt[bd.CNT_STATUS] = status
     cnt[bd.CNT_ROWS] = row
-    cnt[bd.CNT_STEPS] = steps
     cnt[bd.CNT_FAILED_STEP] = (
         0 if status == RUN_OK else (steps if status == RUN_UNSEATED else steps + 1)
     )
-    cnt[bd.CNT_REJECTED] = rejected
-    cnt[bd.CNT_EVENTS] = events
-    cnt[bd.CNT_RHS_CALLS] = calls
     stats.value[bd.VAL_TIME] = t
     flush_leave(saved)
 
@@ -442,14 +532,19 @@ def _adaptive_track(sa, ws, pk, t):
     call at (t, y); True when a seat margin became negative (:func:`.peaks.track_step`)."""
     y = ws.y
     cw = ws.cw
-    store_standard(pk.row, t, y[0:7], y[7:14], cw.g, cw.lam, cw.lt, ws.hstate[:, T_STRESS], sa.nbs)
-    return track_step(pk, t, y[0:7], ws.ug, ws.d, sa.nbs)
+    nd = sa.mass.shape[0]
+    u = y[0:nd]
+    store_standard(
+        pk.row, t, u, y[nd : 2 * nd], cw.g, cw.lam, cw.lt, ws.hstate[:, T_STRESS], sa.nbs
+    )
+    return track_step(pk, t, u, ws.ug, ws.d, sa.nbs)
 
 
 @kernel
 def _adaptive_store(sa, contact, ws, output, row, t):
     """Output row ``row`` at time t: the full row into ``output.row`` (standard columns, then
-    the energies from the integrals y[14:19]), the selected columns into ``output.table``."""
+    the energies from the work totals y[2 n_dof:], :func:`.work_energy.energy_columns`), the
+    selected columns into ``output.table``."""
     cp = contact.params
     cs = ws.cstate
     cw = ws.cw
@@ -457,27 +552,12 @@ def _adaptive_store(sa, contact, ws, output, row, t):
     y = ws.y
     buf = output.row
     nbs = sa.nbs
-    store_standard(buf, t, y[0:7], y[7:14], cw.g, cw.lam, cw.lt, hstate[:, T_STRESS], nbs)
-    base = C_BENT + nbs
-    ke = 0.0
-    for j in range(7):
-        ke += 0.5 * sa.mass[j] * y[7 + j] ** 2
-    es = spring_stored_energy(sa, hstate, y[0:7], ws.ug)
+    nd = sa.mass.shape[0]
+    store_standard(buf, t, y[0:nd], y[nd : 2 * nd], cw.g, cw.lam, cw.lt, hstate[:, T_STRESS], nbs)
+    ke = _kinetic_energy(sa, y)
+    es = spring_stored_energy(sa, hstate, y[0:nd], ws.ug)
     ec = cl.contact_stored_energy(cp, cs)
-    efs = 0.0
-    for c in range(4):
-        if cl.has_stick_spring(cp[c, cl.P_FMODE]) and cs[c, cl.S_CFT] != 0.0:
-            efs += 0.5 * cs[c, cl.S_CFT] ** 2 / cp[c, cl.P_KT]
-    W0, W1, W2, W3, W4 = y[14], y[15], y[16], y[17], y[18]
-    buf[base + 0] = W0
-    buf[base + 1] = ke
-    buf[base + 2] = es
-    buf[base + 3] = W2
-    buf[base + 4] = W1 - es
-    buf[base + 5] = ec
-    buf[base + 6] = W3 - (ec - efs)
-    buf[base + 7] = W4 - efs
-    buf[base + 8] = W0 - (ke + W1 + W2 + W3 + W4)
+    energy_columns(buf, C_BENT + nbs, y[2 * nd :], ke, es, ec, stick_spring_energy(cp, cs))
     sel = output.select
     table = output.table
     for q in range(sel.shape[0]):

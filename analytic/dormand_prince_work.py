@@ -1,6 +1,6 @@
 """The scalars and the workspace of the Dormand–Prince loop (:func:`.dormand_prince.adaptive_run`).
 
-Sizes of its state vector (u, u̇ and the energy integrals), the accepted-step-size histogram,
+The accepted-step-size histogram,
 :data:`AdaptiveOptions` and :func:`adaptive_workspace` (every array the loop uses, allocated
 once per run: the loop itself cannot allocate, see :mod:`deckpound.analytic._jit`).
 """
@@ -12,22 +12,17 @@ from collections import namedtuple
 import numpy as np
 
 from deckpound.analytic import bundles as bd
+from deckpound.analytic.work_energy import N_WORK
 
 __all__ = [
     "H_BINS_PER_DECADE",
     "H_LOG_MIN",
     "H_NBINS",
-    "NE",
-    "NT",
-    "NY",
     "AdaptiveOptions",
     "AdaptiveWork",
     "adaptive_workspace",
 ]
 
-NY = 14  # u, v
-NE = 5  # energy integrals: input, springs, viscous, contact, friction
-NT = NY + NE
 # accepted-step-size statistics: log10(h) histogram, H_BINS_PER_DECADE bins per decade from
 # 10**H_LOG_MIN to 1 s, row 0 = out of contact, row 1 = in contact (a gap ≤ 0 at either end)
 H_LOG_MIN = -14.0
@@ -58,9 +53,10 @@ _NT = ("y", "k1", "ytmp", "ynew", "yev")
 #: The workspace of :func:`adaptive_run` (:func:`adaptive_workspace`): u0, v0 initial state;
 #: hstate, cstate material and corner states; cw the ContactWork; uc (7,) displacement at the
 #: last commit; ug, vg supports; d, dd, fs, kt (ns,) spring deformations, rates, forces,
-#: tangents; f (7,) internal force; y, k1, ytmp, ynew, yev (NT,) state [u, u̇, energy
-#: integrals], its rate, stage / new / interpolated states; K (7, NT) stage rates; ev0, ev1 event
-#: values at the step's ends; hist (2, H_NBINS) int64 and hstat (2, 3) accepted-step-size
+#: tangents; f (n_dof,) internal force; y, k1, ytmp, ynew, yev (2 n_dof + N_WORK,) state [u,
+#: u̇, work totals (:mod:`.work_energy`)], its rate, stage / new / interpolated states; K (7,
+#: 2 n_dof + N_WORK) the rates of the seven stages; ev0, ev1 event values at the step's ends
+#: (n_corners + nbs + 2 n_corners, :func:`.dormand_prince._events`); hist (2, H_NBINS) int64 and hstat (2, 3) accepted-step-size
 #: statistics (row 0 out of contact, row 1 in contact; hstat = [min, max, sum]).
 AdaptiveWork = namedtuple(
     "AdaptiveWork",
@@ -72,22 +68,26 @@ AdaptiveWork = namedtuple(
 
 
 def adaptive_workspace(u0, v0, hstate, cstate, ns: int, nch: int, nbs: int) -> AdaptiveWork:
-    """The workspace of :func:`adaptive_run` (zeroed) around the initial state u0, v0 (7,) and
-    the virgin material and corner states; ns springs, nch channels, nbs bent springs."""
-    nev = 4 + nbs + 8
+    """The workspace of :func:`adaptive_run` (zeroed) around the initial state u0, v0 (n_dof,)
+    and the virgin material and corner states (cstate: one row per corner); ns springs, nch
+    channels, nbs bent springs."""
+    nd = u0.shape[0]
+    nc = cstate.shape[0]
+    nt = 2 * nd + N_WORK
+    nev = nc + nbs + 2 * nc
     return AdaptiveWork(
         u0=u0,
         v0=v0,
         hstate=hstate,
         cstate=cstate,
-        cw=bd.new_contact_work(),
-        uc=np.zeros(7),
+        cw=bd.new_contact_work(nc, nd),
+        uc=np.zeros(nd),
         ug=np.zeros(nch),
         vg=np.zeros(nch),
-        f=np.zeros(7),
+        f=np.zeros(nd),
         **bd.row_views(_NS, ns),
-        **bd.row_views(_NT, NT),
-        K=np.zeros((7, NT)),
+        **bd.row_views(_NT, nt),
+        K=np.zeros((7, nt)),
         ev0=np.zeros(nev),
         ev1=np.zeros(nev),
         hist=np.zeros((2, H_NBINS), dtype=np.int64),

@@ -20,8 +20,9 @@ The OpenSees transient algorithm, step for step: Newmark γ = ½, β = ¼
   engine's ``fallback = "substep"``); counted in ``failures`` / ``rescued_by_substeps``.
 
 The whole step loop is one numba kernel compiled without numba's runtime (:mod:`._jit`) that
-takes the named bundles of :mod:`.bundles` (workspace from :func:`newmark_workspace`, scalars
-in :data:`NewmarkOptions`); the contact laws are skipped while every corner's
+takes the named bundles of :mod:`.bundles` (workspace from
+:func:`.newmark_work.newmark_workspace`, scalars
+in :data:`.newmark_work.NewmarkOptions`); the contact laws are skipped while every corner's
 gap is open (g > 0, where every law gives zero force) and the tangent factorisation is reused
 while it is bitwise the elastic one (identical matrix → identical factors, so results do not
 change). Output every :func:`deckpound.compare.engines.output_stride` steps.
@@ -53,15 +54,7 @@ from deckpound.analytic.bundles import (
 )
 from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.fp_mode import flush_enter, flush_leave
-from deckpound.analytic.newmark_work import (
-    N_ENERGY,
-    NewmarkOptions,
-    NewmarkWork,
-    fill_row,
-    newmark_workspace,
-    output_energies,
-    store_row,
-)
+from deckpound.analytic.newmark_work import fill_row, output_energies, store_row
 from deckpound.analytic.peaks import track_step
 from deckpound.analytic.support_motion import record_at
 from deckpound.analytic.system import (
@@ -83,18 +76,8 @@ from deckpound.analytic.work_energy import (
     W_SPRINGS,
     W_VISCOUS,
 )
-from deckpound.models.columns import ENERGY_COLUMNS
 
-__all__ = [
-    "BETA",
-    "ENERGY_COLUMNS",
-    "GAMMA",
-    "N_ENERGY",
-    "NewmarkOptions",
-    "NewmarkWork",
-    "newmark_run",
-    "newmark_workspace",
-]
+__all__ = ["BETA", "GAMMA", "newmark_run"]
 
 GAMMA, BETA = 0.5, 0.25
 
@@ -571,9 +554,9 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     """Run the OpenSees-clone Newmark–Newton loop over ``opt.nsteps`` steps of size opt.dt.
 
     Bundles of :mod:`deckpound.analytic.bundles`: ``system`` (SystemArrays), ``contact``
-    (Contact), ``record`` (Record), ``opt`` (:data:`NewmarkOptions`), ``output`` (Output: the
+    (Contact), ``record`` (Record), ``opt`` (:data:`.newmark_work.NewmarkOptions`), ``output`` (Output: the
     selected columns of the full row of :func:`deckpound.analytic.compliance.output_columns`),
-    ``work`` (:data:`NewmarkWork`), ``stats`` (Stats).
+    ``work`` (:data:`.newmark_work.NewmarkWork`), ``stats`` (Stats).
 
     Support motion: the record's own samples, interpolated at t_n = n·dt in the loop exactly as
     ``np.interp`` (memory independent of the number of steps).

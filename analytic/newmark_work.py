@@ -25,7 +25,6 @@ from deckpound.analytic.work_energy import (
 )
 
 __all__ = [
-    "N_ENERGY",
     "NewmarkOptions",
     "NewmarkWork",
     "fill_row",

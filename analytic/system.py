@@ -51,6 +51,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from deckpound.analytic._hysteretic_kernel import (
+    hyst_commit,
+    hyst_init_state,
+    hyst_revert,
+    hyst_set_trial,
+)
+from deckpound.analytic._hysteretic_layout import (
     C_ROTMAX,
     C_ROTMIN,
     C_STRAIN,
@@ -64,10 +70,6 @@ from deckpound.analytic._hysteretic_kernel import (
     P_EUP,
     T_STRESS,
     T_TANGENT,
-    hyst_commit,
-    hyst_init_state,
-    hyst_revert,
-    hyst_set_trial,
 )
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.hysteretic import pack_hysteretic

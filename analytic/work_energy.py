@@ -2,7 +2,7 @@
 
 Both compliance loops keep five running work totals [kJ] (the Newmark loop in its workspace
 array ``W``, trapezoidal over each step; the adaptive loop as extra ODE components, the slice
-``y[NY:NT]`` of its state, integrated from the powers): the offsets ``W_*`` name them. The
+``y[2 n_dof:]`` of its state, integrated from the powers): the offsets ``W_*`` name them. The
 output columns :data:`deckpound.models.columns.ENERGY_COLUMNS` follow from them and from the
 energies stored at the committed state (:func:`energy_columns`); the offsets ``E_*`` name
 those columns in their order.
