@@ -3,12 +3,15 @@
 The next capability (several deck segments, all active contacts of all joints in one LCP) needs
 more than the four corners of one deck: the impulse solve of a Moreau–Jean step and the loop's
 workspace are sized by their arguments, not by a module constant. Checked here on six corners,
-three of them active, against the contact laws and the momentum balance of the step.
+three of them active, against the contact laws and the momentum balance of the step. (The DOF
+count is still the N_DOF of the dense LU, deckpound.analytic.dense; the workspace refuses
+another.)
 """
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from deckpound.analytic.dense import lu_factor
 from deckpound.analytic.frictional_contact import MODE_AUTO, STATUS_FAILED
@@ -75,7 +78,7 @@ def test_impulses_of_three_active_corners_out_of_six():
 
 
 def test_workspace_is_sized_by_its_arguments():
-    n_dof, ns, nch, n_corners = 9, 5, 3, 6
+    n_dof, ns, nch, n_corners = N_DOF, 5, 3, 6
     u0 = np.zeros(n_dof)
     work = moreau_jean_workspace(u0, u0.copy(), np.zeros((ns, 17)), ns, nch, n_corners)
     assert work.dof.q.shape == (n_dof,) and work.dof.LU.shape == (n_dof, n_dof)
@@ -87,3 +90,11 @@ def test_workspace_is_sized_by_its_arguments():
     assert work.impulse.G.shape == (2 * n_corners, 2 * n_corners)
     assert len(work.dof_slots) == len(work.impulse.dof_slots) == n_dof
     assert len(work.corner_slots) == n_corners
+
+
+def test_workspace_refuses_a_dof_count_the_dense_lu_is_not_compiled_for():
+    """The dense LU (deckpound.analytic.dense) is compiled for N_DOF: another count would
+    factor only part of the iteration matrix, so the workspace refuses it."""
+    u0 = np.zeros(N_DOF + 2)
+    with pytest.raises(ValueError, match="N_DOF"):
+        moreau_jean_workspace(u0, u0.copy(), np.zeros((5, 17)), 5, 3, 4)
