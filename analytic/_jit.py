@@ -31,11 +31,17 @@ from __future__ import annotations
 
 import hashlib
 import os
+import time
+from importlib.util import find_spec
 from pathlib import Path
 
 import numba
 from numba import njit, types
-from numba._dispatcher import compute_fingerprint
+
+try:  # numba's private C fingerprint of an argument's type: a fast path, not a requirement
+    from numba._dispatcher import compute_fingerprint
+except ImportError:  # pragma: no cover - another numba: numba.typeof below does the work
+    compute_fingerprint = None
 
 __all__ = [
     "compiled",
@@ -130,8 +136,6 @@ FROZEN_MODULES = ("deckpound.models.plan", "deckpound.models.contact_laws_table"
 
 
 def _frozen_sources() -> list[Path]:
-    from importlib.util import find_spec
-
     out = []
     for name in FROZEN_MODULES:
         spec = find_spec(name)
@@ -148,8 +152,6 @@ def ensure_compiled(dispatcher, *args) -> float:
     reported apart from run time (engine contract, point 7) and the loop's first call never
     compiles.
     """
-    import time
-
     t0 = time.perf_counter()
     # numba.typeof of the bundles (nested named tuples of ~100 arrays) takes ~10 ms in Python,
     # every run; numba's own C fingerprint of the arguments (what its dispatcher uses to pick a
@@ -157,7 +159,7 @@ def ensure_compiled(dispatcher, *args) -> float:
     # compiled or loaded the kernel for these types returns at once
     try:
         key = (id(dispatcher), tuple(compute_fingerprint(a) for a in args))
-    except Exception:  # a type numba cannot fingerprint: the full path
+    except Exception:  # no fingerprint (a type numba cannot fingerprint, or another numba)
         key = None
     if key is None or key not in _READY:
         dispatcher.compile(tuple(numba.typeof(a) for a in args))

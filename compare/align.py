@@ -24,7 +24,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from deckpound.models.columns import column_unit
 from deckpound.models.result import Result
+
+from .outputs import folder as make_folder
+from .outputs import write_csv, write_parquet
 
 FORCE_PREFIXES = ("fn_", "ft_")
 IMPULSE_PREFIXES = ("pn_", "pt_")
@@ -126,10 +130,6 @@ def write_tables(
     in each of ``formats`` (``parquet``: units in the schema metadata; ``csv``: units in the
     header, ``deck_theta [rad]``; the long table's ``value`` column has the unit of its row's
     quantity, listed in a ``unit`` column)."""
-    from deckpound.models.columns import column_unit
-
-    from .outputs import folder as make_folder
-    from .outputs import write_csv, write_parquet
 
     out = make_folder(folder)
     unknown = set(formats) - {"parquet", "csv"}

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
 import re
 import warnings
@@ -25,6 +26,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from deckpound.compare.engines import get_engine, run_engine
 from deckpound.models.errors import SceneError
 from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 from deckpound.models.result import Result, physics_hash, settings_hash
@@ -84,7 +86,6 @@ def record_digests(scene: Scene) -> dict[str, str]:
 def case_key(engine: str, scene: Scene) -> str:
     """The cache key: SHA-256 of engine name, physics hash, the record files' digests, that
     engine's settings and the version."""
-    from deckpound.compare.engines import get_engine
 
     settings = get_engine(engine).settings_of(scene)
     text = json.dumps(
@@ -104,9 +105,6 @@ def case_key(engine: str, scene: Scene) -> str:
 def engine_expresses(engine: str, scene: Scene, study: str) -> bool:
     """Whether ``engine`` runs ``scene`` (its validation-time refusals); a refused case of a
     study is left out with a logged warning that names the reason."""
-    import logging
-
-    from deckpound.compare.engines import get_engine
 
     eng = get_engine(engine)
     try:
@@ -126,7 +124,6 @@ def run_case(engine: str, scene: Scene) -> Result:
     option notes are there already) so that the main process can show it
     (:func:`surface_warnings`) — a worker's stderr is not the user's.
     """
-    from deckpound.compare.engines import run_engine
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -17,9 +17,12 @@ from pathlib import Path
 
 import pandas as pd
 
+from deckpound.compare.engines import engine_names
 from deckpound.models.result import Result
 from deckpound.models.scene import DAMPING_MASS, DAMPING_MEMBERS, DAMPING_STIFFNESS, Scene
+from deckpound.models.scene_io import modified
 
+from .case_rows import case_row
 from .cases import Case, engine_expresses
 
 __all__ = ["damping_cases", "damping_figure", "damping_headlines", "damping_row"]
@@ -51,8 +54,6 @@ def _choices(quick: bool) -> list[tuple[str, str, str]]:
 def damping_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """members × stiffness × mass × engine (module docstring); the other damping fields
     (ratio, method) as the scene has them."""
-    from deckpound.compare.engines import engine_names
-    from deckpound.models.scene_io import modified
 
     cases = []
     for members, stiffness, mass in _choices(quick):
@@ -83,7 +84,6 @@ def damping_cases(scene: Scene, quick: bool = False) -> list[Case]:
 
 def damping_row(case: Case, result: Result) -> dict:
     """The common headline numbers (peak rotation, peak gap force ``peak_fn``, gap closures)."""
-    from .case_rows import case_row
 
     return case_row(case, result)
 

@@ -18,6 +18,8 @@ from deckpound.models.plan import plan_of
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
+from .mechanism import contact_moments, mechanism_row
+from .report_text import TOL
 from .style import CYCLE, engine_style, new_figure, save
 
 LABELS = {
@@ -126,7 +128,6 @@ def friction_ratio(
 ) -> list[Path]:
     """Peak rotation with friction / without, per run and engine (1 = no effect; the band is
     the ±tol within which the report calls the change negligible)."""
-    from .report_text import TOL
 
     tol = TOL if tol is None else tol
     fig, axes = new_figure(1, 1, width=5.5, height=3.0)
@@ -153,7 +154,6 @@ def friction_mechanism(
     (SequenceRun μ = 0, SequenceRun μ > 0), either order): deck rotation of both (top) and
     the moment of the tangential contact forces about the deck centre with friction
     (bottom), the excursion that reaches the frictional peak shaded."""
-    from .mechanism import contact_moments, mechanism_row
 
     fig, axes = new_figure(2, 1, width=7.5, height=2.3, sharex=True)
     shaded = False

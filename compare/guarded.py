@@ -7,11 +7,14 @@ never an uncaught exception in the caller.
 
 from __future__ import annotations
 
+import dataclasses
 import multiprocessing as mp
+import signal
 import time
 import traceback
 from dataclasses import dataclass
 
+from deckpound.compare.cases import run_case
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
@@ -27,14 +30,10 @@ class GuardedOutcome:
 
 
 def _child(conn, engine: str, scene: Scene, warm: bool = False) -> None:
-    import signal
-
     # the CLI's SIGTERM handler is forked with the parent's memory; a child told to terminate
     # (multiprocessing ends daemonic children so at exit) does so at once
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
-        from deckpound.compare.cases import run_case
-
         if warm:
             run_case(engine, warm_scene(scene))
         r = run_case(engine, scene)
@@ -47,7 +46,6 @@ def _child(conn, engine: str, scene: Scene, warm: bool = False) -> None:
 
 def warm_scene(scene: Scene) -> Scene:
     """A very short run of the scene (a few output steps): loads or compiles every kernel."""
-    import dataclasses
 
     short = min(scene.run.duration or scene.excitation.duration, 4 * scene.run.output_dt, 0.05)
     return scene.replace(run=dataclasses.replace(scene.run, duration=short))

@@ -32,19 +32,24 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from deckpound.models.errors import SceneError
+from deckpound.models.excitation import support_motion
+from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
 from deckpound.models.scene import Scene
+from deckpound.models.scene_io import modified
 
 from .fragility import (
     LimitState,
+    bootstrap_ida,
     count_exceedances,
     fit_ida,
     fit_stripes,
     fragility_curve,
     ida_capacities,
 )
-from .variability import sweep_rows
+from .variability import record_cases, sweep_rows
 
 __all__ = [
     "IMS",
@@ -126,7 +131,6 @@ def parse_vary(text: str, scene: Scene) -> list[tuple[str, tuple[str, ...]]]:
     """``"PATH=V1,V2,..."`` → (label ``PATH=V``, scene overrides) per value, each checked on
     ``scene``; the shorthand ``gap=…`` sets both seats' gap (:data:`VARY_SHORTHANDS`). At most
     :data:`MAX_VARIANTS` distinct values."""
-    from deckpound.models.scene_io import modified
 
     if "=" not in text:
         raise SceneError("--vary", f"expects PATH=V1,V2,..., got {text!r}")
@@ -163,9 +167,6 @@ def synthetic_pairs(
     the built-in synthetic generator of ``scene`` with seeds ``seed``, ``seed + 1``, ...: the
     first bent's table acceleration in x and y of each seed [g] (a = ü / 9.80665 m/s²), at
     the generator's step. Returns the folder."""
-    from deckpound.models.excitation import support_motion
-    from deckpound.models.file_io import ensure_folder
-    from deckpound.models.scene_io import modified
 
     folder = ensure_folder(folder)
     for i in range(pairs):
@@ -185,7 +186,6 @@ def synthetic_pairs(
 
 def _write_at2(path: Path, acc_g, dt: float) -> None:
     """A PEER NGA-West2 AT2 file of the acceleration ``acc_g`` [g] at step ``dt`` [s]."""
-    from deckpound.models.file_io import atomic_write_text
 
     acc = [float(v) for v in acc_g]
     body = ["".join(f"{v:15.7E}" for v in acc[i : i + 5]) for i in range(0, len(acc), 5)]
@@ -203,9 +203,6 @@ def ida_cases(
 ) -> list[tuple[dict, Scene]]:
     """(params, scene) per record pair and level: the pair on x and y, scaled by one factor
     so that its ``im`` equals the level."""
-    from deckpound.models.scene_io import modified
-
-    from .variability import record_cases
 
     if im not in IMS:
         raise SceneError("--im", f"unknown intensity measure {im!r}; valid: {', '.join(IMS)}")
@@ -238,7 +235,6 @@ def fragility_table(table, states: list[tuple[str, LimitState]]):
     method (``ida`` from each record's capacity,
     censored at its highest level; ``msa`` from the stripes' binomial counts) over the cases
     that finished with an answer (:data:`FITTED`); the others are counted in ``left_out``."""
-    import pandas as pd
 
     rows = []
     keys = ["engine", "variant"] if "variant" in table else ["engine"]
@@ -282,10 +278,6 @@ def run_ida(
     limit state × method), ``ida.json`` and the figures ``ida.png`` and ``fragility.png``
     into ``out``; return (table, fragility table). Rows are cached by engine and scene, so a
     variant's value is part of its cases' keys."""
-    import pandas as pd
-
-    from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
-    from deckpound.models.scene_io import modified
 
     variants = list(variants) if variants else [("", ())]
     specs = [
@@ -395,7 +387,6 @@ def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) 
     """Fragility curves (IDA fits) per limit state, one curve per engine (colour) and variant
     (line style), with its 90 % bootstrap band over records when no variant is swept; the
     stripes' observed fractions as markers; the legend beside the panels, off the data."""
-    from .fragility import bootstrap_ida
     from .style import new_figure, save
 
     levels = np.sort(table["level"].unique())

@@ -14,6 +14,7 @@ is interpolated from the record's own samples inside the compiled loop
 
 from __future__ import annotations
 
+import argparse
 import json
 import subprocess
 import sys
@@ -62,7 +63,6 @@ LONG_RUN = ("excitation.duration=60.0", "compliance.dt=1e-05", "run.output_dt=0.
 
 
 def main() -> int:  # pragma: no cover - manual measurement
-    import argparse
 
     p = argparse.ArgumentParser(description="peak RSS of the 6M-step compliance run")
     p.add_argument("--engine", default="compliance")

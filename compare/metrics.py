@@ -23,6 +23,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from deckpound.models.errors import SceneError
+from deckpound.models.motion import check_time_base
 from deckpound.models.result import Result, closure_times
 
 
@@ -135,8 +137,6 @@ def metrics_against(
 
 def measured_result(path, t_column: str = "t") -> Result:
     """Measured data a user supplies as CSV (columns named as result columns) as a Result."""
-    from deckpound.models.errors import SceneError
-    from deckpound.models.motion import check_time_base
 
     try:
         frame = pd.read_csv(path)

@@ -20,10 +20,11 @@ from pathlib import Path
 
 import pandas as pd
 
+from deckpound.models.file_io import atomic_path, atomic_write_text, ensure_folder
+
 
 def folder(path: str | Path) -> Path:
     """Create folder ``path`` (and its parents) unless it exists; return it (a link refused)."""
-    from deckpound.models.file_io import ensure_folder
 
     return ensure_folder(path)
 
@@ -32,7 +33,6 @@ def folder(path: str | Path) -> Path:
 def target(path: str | Path) -> Iterator[Path]:
     """A temporary file name a library (pandas, matplotlib, meshio) writes ``path`` to; it is
     renamed to ``path`` when the block ends without error (:func:`deckpound.models.file_io.atomic_path`)."""
-    from deckpound.models.file_io import atomic_path
 
     folder(Path(path).parent)
     with atomic_path(path) as tmp:
@@ -41,7 +41,6 @@ def target(path: str | Path) -> Iterator[Path]:
 
 def write_text(path: str | Path, text: str) -> Path:
     """Write a text file (UTF-8) atomically."""
-    from deckpound.models.file_io import atomic_write_text
 
     folder(Path(path).parent)
     return Path(atomic_write_text(path, text))

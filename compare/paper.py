@@ -31,8 +31,9 @@ import pandas as pd
 
 from deckpound.compare.engines import DEFAULT_REFERENCE, engine_names
 from deckpound.compare.result_cache import ResultCache
+from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 from deckpound.models.scene import Scene
-from deckpound.models.scene_io import scene_to_toml
+from deckpound.models.scene_io import modified, scene_to_toml
 
 from . import figures
 from .align import align, write_tables
@@ -75,11 +76,9 @@ def friction_variant(scene: Scene) -> tuple[Scene, str]:
     """The scene with the other friction assumption: μ = 0.2 with OpenSees's zeroLengthContact2D
     friction (:data:`~deckpound.models.contact_laws_table.DEFAULT_FRICTION`) if it has none,
     frictionless otherwise; and a short label for it."""
-    from deckpound.models.scene_io import modified
 
     if scene.contact.has_friction:
         return modified(scene, "contact.friction=0.0", "contact.friction_mode=none"), "μ=0"
-    from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 
     return (
         modified(scene, "contact.friction=0.2", f"contact.friction_mode={DEFAULT_FRICTION}"),

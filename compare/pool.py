@@ -25,8 +25,11 @@ import os
 import signal
 import sys
 from collections.abc import Callable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
+
+from ._workers import die_with_parent
 
 __all__ = ["Interrupted", "map_local", "pool_scope", "worker_init"]
 
@@ -40,7 +43,6 @@ class Interrupted(KeyboardInterrupt):
 
 def worker_init(parent_pid: int) -> None:
     """Pool initializer: die with the parent, leave SIGINT to it, load kernels fast."""
-    from ._workers import die_with_parent
 
     die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -83,8 +85,6 @@ def pool_scope() -> Iterator[None]:
 
 
 def _new_pool(n: int):
-    from concurrent.futures import ProcessPoolExecutor
-
     return ProcessPoolExecutor(max_workers=n, initializer=worker_init, initargs=(os.getpid(),))
 
 
@@ -126,7 +126,6 @@ def map_local(items: list, args_of: Callable, func: Callable, on_done: Callable,
     """Apply ``func(*args_of(item))`` on ``n`` local worker processes; ``on_done(item, value)``
     in this process as each finishes (in completion order). An exception of ``func`` or of
     ``on_done``, and Ctrl-C, kill the workers and propagate."""
-    from concurrent.futures import FIRST_COMPLETED, wait
 
     if len(items) >= SCIPY_AFTER:
         # a sweep: scipy.signal's import now, in this process, so that the workers forked for

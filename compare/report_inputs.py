@@ -16,6 +16,7 @@ import pandas as pd
 
 from deckpound.models.fields import to_mapping
 from deckpound.models.scene import Scene
+from deckpound.models.scene_io import builtin_scene_names, load_scene
 
 from .report_text import join, num, short
 
@@ -227,7 +228,6 @@ def _show(value) -> str:
 
 def builtin_twin(scene: Scene) -> Scene | None:
     """The built-in scene with this scene's name, if there is one."""
-    from deckpound.models.scene_io import builtin_scene_names, load_scene
 
     if scene.name not in builtin_scene_names():
         return None

@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from deckpound.compare.engines import get_engine
+from deckpound.models.engine_contract import PENETRATION_WARN_FRACTION
 from deckpound.models.fields import to_mapping
 from deckpound.models.result import scene_hash
 from deckpound.models.version import VERSION
@@ -114,7 +115,6 @@ def what_was_run(d) -> list:
 def _quality_sentence(d) -> str:
     """The results' quality warnings (issue 16: penetration beyond a stated fraction of the
     gap, measured at every step), or that there were none."""
-    from deckpound.models.engine_contract import PENETRATION_WARN_FRACTION
 
     found = [
         f"{case} run {r.index}: {w}"

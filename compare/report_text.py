@@ -13,12 +13,13 @@ import math
 import numpy as np
 import pandas as pd
 
+from deckpound.compare.engines import engine_names, engine_style
+
 TOL = 0.02
 
 
 def engine_label(engine: str) -> str:
     """An engine's name in prose (its registry label; the name itself if unregistered)."""
-    from deckpound.compare.engines import engine_names, engine_style
 
     return engine_style(engine)["label"] if engine in engine_names() else engine
 

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 from deckpound.models.scene_io import modified
 
 from .ida import IMS, run_ida, synthetic_pairs
@@ -139,7 +140,6 @@ def _friction_sweep(scene, out, cache_dir, records, plan, workers, scheduler, pr
     """The same sweep with the compliance engine, frictionless and with μ = :data:`FRICTION`
     in the friction mode the package uses when it switches friction on; its fragility table
     into ``tables/unseating_fragility_friction.csv``, its figure into ``figures``."""
-    from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 
     work = cache_dir / "unseating_friction"
     variants = [

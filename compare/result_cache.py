@@ -28,7 +28,7 @@ import warnings
 from pathlib import Path
 
 from deckpound.models.errors import SceneError
-from deckpound.models.file_io import ensure_folder, is_temporary
+from deckpound.models.file_io import atomic_write_bytes, ensure_folder, is_temporary
 from deckpound.models.result import Result
 
 MANIFEST = "manifest.json"
@@ -197,7 +197,6 @@ def _verify(files: dict[str, bytes], engine: str) -> None:
 
 def _write_entry(folder: Path, result: Result) -> None:
     """A complete entry in a new folder: both files, then the manifest (mode per umask)."""
-    from deckpound.models.file_io import atomic_write_bytes
 
     os.mkdir(folder)
     data = {

@@ -37,16 +37,21 @@ velocities 1e-8) and returns one row per angle, ready to join a ``verify clone``
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from deckpound.compare.engines import engine_names
+from deckpound.compare.verify_clone import verify_clone
 from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 from deckpound.models.plan import CORNER_NAMES
 from deckpound.models.result import Result, in_contact
 from deckpound.models.scene import Scene
+from deckpound.models.scene_io import modified
 
+from .case_rows import case_row, contact_step
 from .cases import Case, engine_expresses
 
 __all__ = [
@@ -83,10 +88,6 @@ VERIFY_VELOCITY_TOLERANCE = 1e-8
 
 def skew_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """φ × friction × engine (module docstring)."""
-    from deckpound.compare.engines import engine_names
-    from deckpound.models.scene_io import modified
-
-    from .case_rows import contact_step
 
     cases = []
     for phi in SKEWS_QUICK if quick else SKEWS:
@@ -182,7 +183,6 @@ def stick_slip_shares(result: Result, mu: float) -> tuple[float, float, str]:
 
 def skew_row(case: Case, result: Result) -> dict:
     """One table row: the common headline numbers plus the mechanism (module docstring)."""
-    from .case_rows import case_row
 
     row = case_row(case, result)
     corner, when = first_strike(result)
@@ -298,10 +298,6 @@ def verify_skew(
     engines succeeded and the deviations are within :data:`VERIFY_TOLERANCE` /
     :data:`VERIFY_VELOCITY_TOLERANCE`).
     """
-    import dataclasses
-
-    from deckpound.compare.verify_clone import verify_clone
-    from deckpound.models.scene_io import modified
 
     rows = []
     for phi in angles:

@@ -21,10 +21,12 @@ import numpy as np
 import pandas as pd
 
 from deckpound.compare.engines import engine_names, get_engine
+from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified
 
-from .guarded import run_guarded
+from .guarded import GuardedOutcome, run_guarded
+from .progress import Progress
 
 
 def step_field(engine: str) -> str:
@@ -69,7 +71,6 @@ def cell_scene(base: Scene, engine: str, cell: dict, duration: float) -> Scene:
         ov += [f"seats[0].gap={cell['gap']!r}", f"seats[1].gap={cell['gap']!r}"]
     if "friction" in cell:
         mu = cell["friction"]
-        from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 
         mode = DEFAULT_FRICTION if mu > 0 else "none"
         ov += [f"contact.friction={mu!r}", f"contact.friction_mode={mode}"]
@@ -147,7 +148,6 @@ def run_stress(
     success with NaN/inf in the output: an engine bug, never hidden), ``timeout``,
     ``crashed`` (exception or dead child, message kept) or ``refused`` (the scene validation
     rejected the cell)."""
-    from .progress import Progress
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -162,8 +162,6 @@ def run_stress(
             try:
                 scene = cell_scene(base, engine, cell, duration)
             except Exception as err:  # a cell the scene itself refuses is a result, too
-                from .guarded import GuardedOutcome
-
                 outcome = GuardedOutcome("refused", None, str(err), 0.0)
             else:
                 outcome = run_guarded(engine, scene, timeout)

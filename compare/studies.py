@@ -35,7 +35,9 @@ import numpy as np
 import pandas as pd
 
 from deckpound.compare.cases import Case, run_cases
+from deckpound.compare.engines import DEFAULT_REFERENCE
 from deckpound.compare.result_cache import ResultCache
+from deckpound.models.contact_laws_table import DEFAULT_FRICTION, LAW_CODES
 from deckpound.models.errors import SceneError
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
@@ -43,6 +45,8 @@ from deckpound.models.scene_io import modified
 
 from .case_rows import ROW_UNITS, case_row, contact_step
 from .damping_study import damping_cases, damping_figure, damping_headlines, damping_row
+from .outputs import folder, write_csv
+from .sequence_run import state_before, strongest_run
 from .skew import skew_cases, skew_figure, skew_headlines, skew_row
 
 ENGINES_ALL = ("opensees", "compliance", "nonsmooth")
@@ -104,9 +108,6 @@ def start_state(
     runs with ``engine`` (default: the reference engine) through the cache in
     ``cache_folder``.
     """
-    from deckpound.compare.engines import DEFAULT_REFERENCE
-
-    from .sequence_run import state_before, strongest_run
 
     if spec == "virgin":
         return StartState("virgin", scene, scene)
@@ -146,8 +147,6 @@ def stiffness_cases(scene: Scene, quick: bool = False) -> list[Case]:
 
 
 def friction_cases(scene: Scene, quick: bool = False) -> list[Case]:
-    from deckpound.models.contact_laws_table import DEFAULT_FRICTION
-
     mus = [0.0, 0.2] if quick else [0.0, 0.1, 0.2, 0.3, 0.5]
     cases = []
     for mu in mus:
@@ -192,7 +191,6 @@ def law_cases(scene: Scene, quick: bool = False) -> list[Case]:
     """Every law with the error-controlled ``adaptive`` integrator (events at closure, opening
     and the bilinear law's load/unload switches): differences are then the laws', not the
     discretisation's — and Newton on the bilinear law's kinks can stall at a fixed step."""
-    from deckpound.models.contact_laws_table import LAW_CODES
 
     laws = tuple(LAW_CODES)  # every row of the contact-law table
     return [
@@ -361,7 +359,6 @@ def run_study(
     ``<name>.png`` (``<name>_<state>.*`` for a carried state; ``formats`` adds e.g. PDF) in
     ``out``; return the table and the results."""
     from .figures import study_figure
-    from .outputs import folder, write_csv
 
     if not isinstance(state, StartState):
         cache_folder = cache.folder if cache is not None else None

@@ -15,6 +15,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+from deckpound.compare.engines import engine_style as _registry_style
 from deckpound.models.file_io import atomic_path
 
 CYCLE = [
@@ -47,7 +48,6 @@ RC = {
 def engine_style(engine: str) -> dict:
     """Line style of an engine, declared by the engine itself (:mod:`deckpound.compare.engines`);
     ``measured`` and unknown labels get neutral styles."""
-    from deckpound.compare.engines import engine_style as _registry_style
 
     return _registry_style(engine)
 

@@ -24,6 +24,7 @@ returns at once.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -32,9 +33,18 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
+from deckpound.compare.cases import run_case
 from deckpound.models.errors import SceneError
+from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
+from deckpound.models.motion import RecordWarning
+from deckpound.models.record_suite import read_suite
 from deckpound.models.scene import Scene
+from deckpound.models.scene_io import modified
+
+from .cases import case_key, interrupted, map_parallel
+from .progress import Progress
 
 #: quantities of a row that the summary describes
 QUANTITIES = ("peak_theta", "peak_y", "peak_x", "gap_closures")
@@ -47,7 +57,6 @@ MAX_CASES = 1_000_000
 def seed_cases(scene: Scene, cases: int) -> list[tuple[str, dict, Scene]]:
     """``cases`` copies of the scene with seeds ``excitation.seed + i`` of its synthetic
     record: (label, params, scene)."""
-    import dataclasses
 
     if scene.excitation.kind != "synthetic":
         raise SceneError(
@@ -73,9 +82,6 @@ def record_cases(
     """One case per record pair of ``folder`` (:func:`deckpound.models.record_suite.read_suite`:
     PEER component names, ``NAME_x``/``NAME_y``, or ``manifest.csv``), each pair's components
     on x and y; with ``rotate`` also each pair with its components swapped."""
-    from deckpound.models.motion import RecordWarning
-    from deckpound.models.record_suite import read_suite
-    from deckpound.models.scene_io import modified
 
     suite = read_suite(folder, rotate=rotate)
     for note in suite.notes:
@@ -96,7 +102,6 @@ def record_cases(
 def case_row(engine: str, scene: Scene) -> dict:
     """Run one case (in a worker) and return its row; a refused or failed case gives a row
     with its status and message, never an exception."""
-    from deckpound.compare.cases import run_case
 
     t0 = time.perf_counter()
     try:
@@ -140,7 +145,6 @@ def _smallest_margin(margins) -> float:
 
 def row_key(engine: str, scene: Scene) -> str:
     """Cache key of a case's row: the result cache's key, the row format."""
-    from .cases import case_key
 
     text = f"{case_key(engine, scene)}:variability-row:{ROW_FORMAT}"
     return hashlib.sha256(text.encode()).hexdigest()
@@ -174,10 +178,6 @@ def sweep_rows(
     :mod:`.pool` or a Dask cluster: no histories travel), one cached JSON row per case in
     ``rows_dir`` (finished cases are read back, not recomputed: Ctrl-C loses only the cases
     running). Returns ({index: row}, number of cases computed now)."""
-    from deckpound.models.file_io import atomic_write_text
-
-    from .cases import interrupted, map_parallel
-    from .progress import Progress
 
     keys = [row_key(engine, sc) for sc in scenes]
     rows: dict[int, dict] = {}
@@ -219,9 +219,6 @@ def run_variability(
 ):
     """Run the study, write ``variability.csv``, ``variability_summary.csv`` and
     ``variability.png`` in ``out``; return (table, summary)."""
-    import pandas as pd
-
-    from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
 
     if (cases is None) == (records is None):
         raise SceneError(
@@ -276,7 +273,6 @@ def run_variability(
 
 def summarize(table) -> object:
     """Median, 16 % / 84 % fractiles, mean, std, min, max per quantity (finished cases)."""
-    import pandas as pd
 
     ok = table[table["status"] == "success"] if "status" in table else table
     rows = []

@@ -17,7 +17,9 @@ import dataclasses
 import numpy as np
 
 from deckpound.models.columns import column_unit, standard_columns
+from deckpound.models.excitation import support_motion
 from deckpound.models.scene import Scene
+from deckpound.opensees_build.engine import run_opensees
 
 __all__ = ["column_deviations", "opensees_friction", "verify_clone"]
 
@@ -65,7 +67,6 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
     "us_per_step": {...}, "iterations": {...}, "status": {...}}``.
     """
     from deckpound.analytic.compliance import run_compliance
-    from deckpound.opensees_build.engine import run_opensees
 
     scene, notes = opensees_friction(scene)
     os_set = scene.opensees
@@ -82,8 +83,6 @@ def verify_clone(scene: Scene, motion=None, *, tolerance: float | None = 1e-12) 
     )
     sc = scene.replace(opensees=os_set, compliance=cp_set)
     if motion is None:
-        from deckpound.models.excitation import support_motion
-
         motion = support_motion(sc)
     # numba compiles (or loads) the clone's kernels on first use: a short run first keeps that
     # one-off cost out of the timed comparison

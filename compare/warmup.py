@@ -20,9 +20,18 @@ users run ``deckpound compile`` once (README, docs/user-guide.md).
 
 from __future__ import annotations
 
+import compileall
+import importlib
+import importlib.util
+import struct
 import time
+import warnings
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from pathlib import Path
+
+from deckpound.compare.engines import run_engine
+from deckpound.models.scene_io import load_scene
 
 __all__ = [
     "ITEMS",
@@ -137,7 +146,6 @@ def byte_compile() -> int:
     has changed since. Returns the number of modules; raises OSError when a file cannot be
     written.
     """
-    import compileall
 
     folders = _package_folders()
     for folder in folders:
@@ -150,8 +158,6 @@ def stale_bytecode() -> list[str]:
     """The deckpound modules whose bytecode cache is missing or does not match the source
     (Python then compiles them from source on import, and under ``PYTHONDONTWRITEBYTECODE``
     in every process). Empty after :func:`byte_compile`."""
-    import importlib.util
-    import struct
 
     stale = []
     for folder in _package_folders():
@@ -171,9 +177,6 @@ def stale_bytecode() -> list[str]:
 
 
 def _package_folders():
-    import importlib
-    from pathlib import Path
-
     return [Path(f) for name in PACKAGES for f in importlib.import_module(name).__path__]
 
 
@@ -206,8 +209,6 @@ class _CompileCounter:
 
 
 def _scene(overrides: Iterable[str]):
-    from deckpound.models.scene_io import load_scene
-
     return load_scene("saiidi-4span", [f"run.duration={WARM_DURATION!r}", *overrides])
 
 
@@ -228,7 +229,6 @@ def _warm_takeda() -> None:
 def warm_item(item: Item) -> WarmResult:
     """Run one item in this process; compile or load what it needs. numba's warnings that a
     kernel could not be cached (an unwritable cache folder) are kept in ``notes``."""
-    import warnings
 
     from deckpound.analytic.kernel_load import install
 
@@ -240,8 +240,6 @@ def warm_item(item: Item) -> WarmResult:
             _warm_takeda()
             status, compile_time = "success", 0.0
         else:
-            from deckpound.compare.engines import run_engine
-
             result = run_engine(item.engine, _scene(item.overrides))
             status = str(result.meta.get("status"))
             compile_time = float(result.meta.get("compile_time", 0.0))

@@ -20,6 +20,11 @@ from __future__ import annotations
 
 import numpy as np
 
+try:  # a dependency; the Python formatter stands in where it is missing
+    import orjson
+except ImportError:  # pragma: no cover
+    orjson = None
+
 __all__ = ["format_array", "format_rows"]
 
 #: ``orjson`` and ``repr`` write a finite double's text differently only for magnitudes in
@@ -38,10 +43,6 @@ def format_array(table: np.ndarray) -> str:
     """The rows of a 2-D float array as CSV lines, each value as ``repr(float)`` would write it
     (module docstring). Uses ``orjson`` when it is installed, else :func:`format_rows`."""
     table = np.asarray(table, dtype=float)
-    try:
-        import orjson
-    except ImportError:
-        orjson = None
     if orjson is None or table.ndim != 2 or table.size == 0:
         return format_rows(table.tolist())
     rows = table.tolist()

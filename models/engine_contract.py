@@ -78,6 +78,7 @@ import numpy as np
 from deckpound.models.columns import column_names
 from deckpound.models.contact_params import contact_resolving_step
 from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
+from deckpound.models.excitation import support_motion
 from deckpound.models.fields import to_mapping
 from deckpound.models.plan import (
     CORNER_NAMES,
@@ -331,7 +332,6 @@ class Engine:
         **options: Any,
     ) -> Result:
         """Run the engine on ``scene`` and return its Result (the shared template)."""
-        from deckpound.models.excitation import support_motion
 
         t0 = time.perf_counter()
         settings = self.settings_of(scene) if settings is None else settings

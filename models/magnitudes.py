@@ -39,6 +39,9 @@ import math
 
 import numpy as np
 
+from deckpound.models.mechanics import mass_matrix, natural_modes
+from deckpound.models.plan import DOF_NAMES
+
 from .plan import plan_of
 from .scene import Scene
 
@@ -242,8 +245,6 @@ def _bent_springs(scene: Scene) -> list[tuple[str, str, str]]:
 def _inertia_and_periods(scene: Scene, flagged: set[str]) -> list[tuple[str, str, str]]:
     """Warnings on the deck's polar inertia and the fundamental period (sound values only;
     ``flagged``: the fields already warned about)."""
-    from deckpound.models.mechanics import mass_matrix, natural_modes
-    from deckpound.models.plan import DOF_NAMES
 
     found = _bent_springs(scene)
     deck = scene.deck

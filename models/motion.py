@@ -16,6 +16,7 @@ import numpy as np
 
 from deckpound.models.scene import Scene
 from deckpound.models.scene_excitation import Excitation
+from deckpound.models.scene_settings import MAX_STEPS
 
 from .errors import SceneError
 from .mechanics import natural_modes
@@ -84,7 +85,6 @@ class SupportMotion:
         if not dt > 0:
             raise SceneError("dt", f"must be > 0 s, got {dt}")
         total = self.duration if duration is None else duration
-        from deckpound.models.scene_settings import MAX_STEPS
 
         if total / dt > MAX_STEPS:
             raise SceneError(

@@ -44,7 +44,11 @@ import numpy as np
 from .contact_params import contact_period
 from .engine_contract import Engine
 from .errors import SceneError
+from .excitation import support_motion
 from .magnitudes import magnitude_findings
+from .mechanics import ENERGY_GROUPS, energy_shares, mode_label, natural_modes
+from .motion import analysis_duration
+from .plan import plan_of
 from .scene import Scene
 from .scene_settings import MAX_STEPS
 
@@ -139,8 +143,6 @@ def output_resolution(scene: Scene) -> Finding | None:
     The stored histories then alias the deck's swing; the peaks and gap closures the engines
     report are taken at every step (:meth:`deckpound.models.result.Result.peak`) and do not
     depend on the output step."""
-    from .mechanics import ENERGY_GROUPS, energy_shares, mode_label, natural_modes
-    from .plan import plan_of
 
     modes = natural_modes(scene)
     shares = energy_shares(modes.shapes, np.diag(plan_of(scene).mass_matrix))
@@ -177,9 +179,6 @@ def _source(scene: Scene, motion) -> str:
 def check(scene: Scene, motion=None, *, engines: Iterable[Engine]) -> Plausibility:
     """Every plausibility finding for ``scene`` run by ``engines`` (the engine objects, for
     example ``[deckpound.get_engine(n) for n in names]``; see the module table)."""
-    from .excitation import support_motion
-    from .mechanics import natural_modes
-    from .motion import analysis_duration
 
     engines = tuple(engines)
     if motion is None:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pandas as pd  # only CSV records need it (0.3-0.6 s to import)
 
 from .errors import SceneError
 from .records import MAX_SAMPLES, RecordFile, check_count, excerpt, read_capped
@@ -61,7 +62,6 @@ def read_csv_record(
             f"{rec.path!r} holds {rows:,} rows of {len(names)} columns; "
             f"at most {MAX_CSV_CELLS:,} values are read",
         )
-    import pandas as pd  # only CSV records need it (0.3-0.6 s to import)
 
     try:
         frame = pd.read_csv(

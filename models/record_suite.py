@@ -31,6 +31,7 @@ fix), so that a suite covers both orientations of each station on the bridge.
 from __future__ import annotations
 
 import csv
+import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -75,7 +76,6 @@ class RecordPair:
 
     def overrides(self) -> list[str]:
         """``path=value`` overrides that apply this pair to a scene."""
-        import json
 
         return [
             f"excitation.kind={self.kind}",

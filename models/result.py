@@ -37,7 +37,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
+import xarray as xr
 
+from deckpound.models.file_io import atomic_write_files, ensure_folder
+
+from ._rows_text import format_array
 from .columns import column_unit
 from .errors import SceneError
 from .fields import to_mapping
@@ -358,7 +363,6 @@ class Result:
 
     def to_frame(self):
         """pandas DataFrame with time [s] as the index; ``attrs`` holds units, engine, status."""
-        import pandas as pd
 
         frame = pd.DataFrame(
             {k: v for k, v in self.columns.items() if k != "t"}, index=pd.Index(self.t, name="t")
@@ -380,7 +384,6 @@ class Result:
         variable each over (time, bent, direction); everything else a variable over time.
         Units are in each variable's ``attrs["units"]``.
         """
-        import xarray as xr
 
         t = self.t
         units = self.meta["units"]
@@ -431,7 +434,6 @@ class Result:
     # -- files -----------------------------------------------------------------------
     def write(self, folder: str | Path) -> tuple[Path, Path]:
         """Write ``<engine>.csv`` and ``<engine>.json`` into ``folder``, both or neither."""
-        from deckpound.models.file_io import atomic_write_files, ensure_folder
 
         folder = ensure_folder(folder, "result folder")
         csv_path, json_path = folder / f"{self.engine}.csv", folder / f"{self.engine}.json"
@@ -445,7 +447,6 @@ class Result:
         """The columns as CSV: a ``# units:`` comment line, the header, then the rows (the
         shortest text of each double that reads back as the same double: ``repr``'s text, written
         by ``orjson``, see :mod:`._rows_text`)."""
-        from ._rows_text import format_array
 
         names = list(self.columns)
         head = ["# units: " + ",".join(column_unit(n) for n in names), ",".join(names)]
@@ -478,7 +479,6 @@ class Result:
         cls, engine: str, csv_data: bytes, json_data: bytes, source: str = "result"
     ) -> Result:
         """A result from the contents of its two files; SceneError names what is damaged."""
-        import pandas as pd
 
         try:
             meta = json.loads(json_data.decode("utf-8"))

@@ -50,7 +50,8 @@ from deckpound.models.excitation import support_motion
 from deckpound.models.motion import analysis_duration
 from deckpound.models.plan import Plan, plan_of
 from deckpound.models.result import peak_columns
-from deckpound.models.scene import OpenSeesSettings, Scene
+from deckpound.models.scene import Scene
+from deckpound.models.scene_settings import OpenSeesSettings
 
 from . import initial_state
 from .energy import EnergyBalance, energy_closure

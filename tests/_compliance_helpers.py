@@ -6,7 +6,7 @@ import dataclasses
 
 import numpy as np
 
-from deckpound.models import mechanics
+from deckpound.models import plan
 from deckpound.models.motion import SupportMotion
 from deckpound.models.scene import TakedaSpring
 from deckpound.models.scene_io import load_scene
@@ -21,7 +21,7 @@ def elastic_spring(k: float) -> TakedaSpring:
 def motion_from(scene, t, disp: dict, vel: dict) -> SupportMotion:
     """Motion with the given channel histories (missing channels at rest)."""
     z = np.zeros_like(t)
-    chans = mechanics.support_channels(scene)
+    chans = plan.support_channels(scene)
     return SupportMotion(
         t=t, disp={c: disp.get(c, z) for c in chans}, vel={c: vel.get(c, z) for c in chans}
     )

@@ -21,8 +21,8 @@ import pytest
 
 from deckpound.compare.impact_law import FRICTION_LABEL, format_table, impact_law_table
 from deckpound.models.engine_contract import PENETRATION_WARN_FRACTION
-from deckpound.models.scene import NonsmoothSettings
 from deckpound.models.scene_io import load_scene
+from deckpound.models.scene_settings import NonsmoothSettings
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "verification.md"
 

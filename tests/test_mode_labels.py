@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from deckpound.cli import main
-from deckpound.models import mechanics
+from deckpound.models import mechanics, plan
 from deckpound.models.scene_io import load_scene
 
 GROUP = {key: i for i, (key, _, _) in enumerate(mechanics.ENERGY_GROUPS)}
@@ -28,7 +28,7 @@ def test_benchmark_mode_1_is_torsional(bench):
     assert np.all(shares >= 0)
     # mode 1 (0.611 s): its largest shape entry is deck y [m], but most of its energy is θ
     assert abs(modes.periods[0] - 0.611) < 1e-3
-    assert int(np.argmax(np.abs(modes.shapes[:, 0]))) == mechanics.DECK_Y
+    assert int(np.argmax(np.abs(modes.shapes[:, 0]))) == plan.DECK_Y
     assert 0.6 < shares[GROUP["deck_theta"], 0] < 0.75
     assert 0.25 < shares[GROUP["deck_y"], 0] < 0.4
     label = mechanics.mode_label(shares[:, 0])
@@ -57,14 +57,14 @@ def test_shares_by_hand():
     """Σ M_ii φ_i² per part over φᵀMφ, with the inertia making a small rotation dominant."""
     masses = np.array([2.0, 0.5, 2.0, 0.5, 100.0, 100.0, 10_000.0])
     phi = np.zeros((7, 1))
-    phi[mechanics.DECK_Y, 0] = 0.1  # m: energy 100 · 0.01 = 1
-    phi[mechanics.DECK_THETA, 0] = 0.02  # rad: energy 10 000 · 4e-4 = 4
-    phi[mechanics.SEAT_X[0], 0] = 0.0  # seats at rest
+    phi[plan.DECK_Y, 0] = 0.1  # m: energy 100 · 0.01 = 1
+    phi[plan.DECK_THETA, 0] = 0.02  # rad: energy 10 000 · 4e-4 = 4
+    phi[plan.SEAT_X[0], 0] = 0.0  # seats at rest
     shares = mechanics.energy_shares(phi, masses)[:, 0]
     np.testing.assert_allclose(shares, [0.0, 0.2, 0.8, 0.0], rtol=1e-14)
     assert mechanics.mode_label(shares) == "deck θ (torsion) 80 %, deck y 20 %"
     # a share below 5 % is left out of the name; the dominant one never is
-    phi[mechanics.DECK_Y, 0] = 0.01
+    phi[plan.DECK_Y, 0] = 0.01
     assert mechanics.mode_labels(phi, masses) == ["deck θ (torsion) 100 %"]
 
 

@@ -22,8 +22,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from deckpound.models.errors import SceneError
-from deckpound.models.scene import RunSettings
 from deckpound.models.scene_io import load_scene
+from deckpound.models.scene_settings import RunSettings
 from deckpound.opensees_build import export
 from deckpound.opensees_build.quoting import comment_text, py_str, safe_file_name, tcl_word
 
