@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from deckpound.compare.warmup import ITEMS, warm
 from deckpound.models.file_io import atomic_write_text
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified
@@ -40,6 +41,7 @@ from deckpound.models.scene_io import modified
 from .align import align
 from .guarded import run_guarded
 from .metrics import nrmse, peak
+from .progress import Progress
 from .speed import reference_loop_ns
 
 
@@ -225,9 +227,6 @@ def run_bench(
     progress: bool = True,
 ) -> pd.DataFrame:
     """Run the work–precision benchmark; write bench.csv and figures into ``out``."""
-    from deckpound.compare.warmup import ITEMS, warm
-
-    from .progress import Progress
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -29,6 +29,7 @@ import dataclasses
 
 import numpy as np
 
+from deckpound.compare.engines import run_engine
 from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 
 __all__ = ["BEGIN", "END", "FRICTION_CASE", "format_table", "impact_law_table"]
@@ -62,7 +63,6 @@ def _impact_gain(e_impact: np.ndarray) -> float:
 
 def impact_law_table(scene) -> list[dict]:
     """One row per (friction off/on, impact law) on ``scene`` (see the module docstring)."""
-    from deckpound.compare.engines import run_engine
 
     rows = []
     for label, changes in (

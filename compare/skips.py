@@ -45,6 +45,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from deckpound.models.excitation import support_motion
+from deckpound.models.fields import to_mapping
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified
 from deckpound.models.scene_settings import SUBNORMALS_UNCHANGED_ABOVE
@@ -160,7 +162,6 @@ print(json.dumps(out))
 
 def _takeda_off(scenes: dict[str, Scene], repeats: int, timeout: float) -> dict:
     """Times and results with the kernel's pow short-circuit off (child process)."""
-    from deckpound.models.fields import to_mapping
 
     with tempfile.TemporaryDirectory(prefix="deckpound-skips-") as tmp:
         spec = {
@@ -199,7 +200,6 @@ def run_skips(
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Measure every skip (see the module docstring); write skips.csv, adaptive_steps.csv."""
     from deckpound.analytic.compliance import SKIPS, run_compliance
-    from deckpound.models.excitation import support_motion
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
