@@ -42,7 +42,7 @@ from .mechanism import MECHANISM_UNITS, mechanism_row
 from .metrics import closure_times_per_corner, compare_pair
 from .outputs import folder, folder_size, write_csv, write_text
 from .progress import Progress
-from .report_text_friction import friction_effect
+from .report_text import friction_effect
 from .report_unseating import UnseatingRun, run_unseating
 from .sequence_run import SequenceRun, run_sequences, strongest_run
 from .studies import STUDIES, StartState, start_state, state_caption, study_results, study_units

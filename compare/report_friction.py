@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 
 from . import report_text as text
-from . import report_text_friction as ftext
 from .report_render import MRAD, Bullets, Figure, Table, view
 
 __all__ = ["MECHANISM_COLUMNS", "friction"]
@@ -46,7 +45,7 @@ def friction(d) -> list:
             "its own previous runs."
         )
     ]
-    items.append(Bullets(tuple(ftext.sequence_friction_sentences(eff))))
+    items.append(Bullets(tuple(text.sequence_friction_sentences(eff))))
     if len(eff):
         items.append(
             Figure(
@@ -81,7 +80,7 @@ def friction(d) -> list:
                 + text.state_sentence(r.state)
             )
             items.append(
-                Bullets(tuple(ftext.study_friction_sentences(ftext.study_friction_effect(r.table))))
+                Bullets(tuple(text.study_friction_sentences(text.study_friction_effect(r.table))))
             )
     items.append(
         "**Mechanism.** The numbers below come from tables/friction_mechanism.csv: the "
@@ -97,7 +96,7 @@ def friction(d) -> list:
         items.append(Bullets(tuple(contrast)))
     seq_mech = d.mech[d.mech["source"] == "sequence"] if len(d.mech) else d.mech
     if len(seq_mech):
-        items.append(Bullets(tuple(ftext.impulse_agreement_sentences(eff, seq_mech))))
+        items.append(Bullets(tuple(text.impulse_agreement_sentences(eff, seq_mech))))
         shown = d.mech[
             (d.mech["mu"] > 0) & ((d.mech["source"] != "sequence") | (d.mech["run"] == d.strongest))
         ]
@@ -130,7 +129,7 @@ def _mechanism_sentences(d) -> list[str]:
         return out
     strong = m[(m["source"] == "sequence") & (m["run"] == d.strongest) & (m["mu"] > 0)]
     for _, row in strong.iterrows():
-        out.append(ftext.mechanism_sentence(row, f"run {d.strongest} of the sequence"))
+        out.append(text.mechanism_sentence(row, f"run {d.strongest} of the sequence"))
     mu = strong["mu"].iloc[0] if len(strong) else None
     for r in d.studies:
         if r.name != "friction":
@@ -140,7 +139,7 @@ def _mechanism_sentences(d) -> list[str]:
             rows = rows[np.isclose(rows["mu"], mu)]
         for _, row in rows.iterrows():
             out.append(
-                ftext.mechanism_sentence(
+                text.mechanism_sentence(
                     row, f"friction study from {text.state_name(r.state.label)}"
                 )
             )
@@ -158,7 +157,7 @@ def _state_contrasts(d) -> list[str]:
     for engine in runs[0].table["engine"].unique():
         parts = []
         for r in runs:
-            eff = ftext.study_friction_effect(r.table)
+            eff = text.study_friction_effect(r.table)
             e = eff[(eff["engine"] == engine) & np.isclose(eff["mu"], mu)]
             m = d.mech[
                 (d.mech["source"] == "friction study")

@@ -21,7 +21,6 @@ from deckpound.models.version import VERSION
 from . import figures
 from . import report_inputs as inputs
 from . import report_text as text
-from . import report_text_friction as ftext
 from .report_friction import friction
 from .report_render import MM, MRAD, Bullets, Figure, Table, render, view
 from .report_unseating import unseating_section
@@ -202,7 +201,7 @@ def headline(d) -> list:
 def _study_effect(d, state: str) -> pd.DataFrame | None:
     for r in d.studies:
         if r.name == "friction" and r.state.label == state:
-            return ftext.study_friction_effect(r.table)
+            return text.study_friction_effect(r.table)
     return None
 
 

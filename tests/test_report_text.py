@@ -11,11 +11,13 @@ import pandas as pd
 import pytest
 from _report_helpers import check_clauses, claims, expand_runs, mu_values
 
-from deckpound.compare import report_inputs, report_text, report_text_friction
+from deckpound.compare import report_inputs, report_text
 from deckpound.compare.mechanism import mechanism_row, stick_states, tangential_output
-from deckpound.compare.report_text import direction, headline_sentences, runs_text
-from deckpound.compare.report_text_friction import (
+from deckpound.compare.report_text import (
+    direction,
     friction_effect,
+    headline_sentences,
+    runs_text,
     sequence_friction_sentences,
     study_friction_effect,
     study_friction_sentences,
@@ -308,7 +310,7 @@ def test_state_columns_win_and_zero_tangential_output_is_not_read():
     assert tangential_output(silent, 0.2) == (False, 1.0)
     row = mechanism_row(silent, scene)
     assert np.isnan(row["friction_impulse"]) and row["stick_source"] == "n/a"
-    assert "zero in 100 %" in report_text_friction.mechanism_sentence(
+    assert "zero in 100 %" in report_text.mechanism_sentence(
         pd.Series({**row, "engine": "opensees"}), "run 1"
     )
 
@@ -346,7 +348,7 @@ def test_impulse_agreement_reads_the_right_excursion():
             },
         ]
     )
-    (s,) = report_text_friction.impulse_agreement_sentences(effect, mech)
+    (s,) = report_text.impulse_agreement_sentences(effect, mech)
     assert "of the 3 run(s)" in s and "explains the change in 2" in s
     assert "(runs 5 and 7)" in s and "it does not in run 6" in s
 
