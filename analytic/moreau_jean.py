@@ -82,25 +82,20 @@ from deckpound.analytic.bundles import (
     RUN_SINGULAR,
     RUN_UNSEATED,
 )
+from deckpound.analytic.contact_checks import STATUS_FAILED
 from deckpound.analytic.dense import lu_factor, lu_solve
 from deckpound.analytic.fp_mode import flush_enter, flush_leave
-from deckpound.analytic.frictional_contact import STATUS_FAILED
 from deckpound.analytic.impulses import solve_active_impulses
 from deckpound.analytic.kinematics import contact_kinematics, linear_gap
 from deckpound.analytic.moreau_jean_work import (
-    ENERGY_COLUMNS,
     FINAL_U,
     FINAL_V,
-    N_ENERGY,
     W_FRICTION,
     W_IMPACT,
     W_INPUT,
     W_NUMERICAL,
     W_SPRING,
     W_VISCOUS,
-    MoreauJeanOptions,
-    MoreauJeanWork,
-    moreau_jean_workspace,
     output_energies,
     store_row,
 )
@@ -117,14 +112,7 @@ from deckpound.analytic.system import (
     store_standard,
 )
 
-__all__ = [
-    "ENERGY_COLUMNS",
-    "N_ENERGY",
-    "MoreauJeanOptions",
-    "MoreauJeanWork",
-    "moreau_jean_run",
-    "moreau_jean_workspace",
-]
+__all__ = ["moreau_jean_run"]
 
 # The loop is a short driver (:func:`moreau_jean_run`) over stages that take the bundles:
 # start, predict (support motion, active set), solve (Newton on v_{k+1} with the contact

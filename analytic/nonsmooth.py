@@ -63,19 +63,21 @@ from typing import ClassVar
 import numpy as np
 
 from deckpound.analytic import bundles as bd
-from deckpound.analytic._hysteretic_kernel import P_S1P
+from deckpound.analytic._hysteretic_layout import P_S1P
 from deckpound.analytic._jit import ensure_compiled
 from deckpound.analytic.contact_laws import pack_contact
 from deckpound.analytic.fp_mode import flush_note
 from deckpound.analytic.frictional_contact import MODE_AUTO, MODE_ENUM
 from deckpound.analytic.kinematics import pack_corners
-from deckpound.analytic.moreau_jean import (
+from deckpound.analytic.moreau_jean import moreau_jean_run
+from deckpound.analytic.moreau_jean_work import (
     ENERGY_COLUMNS,
+    FINAL_U,
+    FINAL_V,
+    IMPULSE_COLUMNS,
     MoreauJeanOptions,
-    moreau_jean_run,
     moreau_jean_workspace,
 )
-from deckpound.analytic.moreau_jean_work import FINAL_U, FINAL_V, IMPULSE_COLUMNS
 from deckpound.analytic.peaks import run_output_fields, run_peaks
 from deckpound.analytic.support_motion import support_record
 from deckpound.analytic.system import initial_dofs, pack_system
@@ -91,9 +93,10 @@ from deckpound.models.engine_contract import (
 )
 from deckpound.models.motion import SupportMotion, analysis_duration
 from deckpound.models.plan import Plan
-from deckpound.models.scene import NonsmoothSettings, Scene
+from deckpound.models.scene import Scene
+from deckpound.models.scene_settings import NonsmoothSettings
 
-__all__ = ["ENERGY_COLUMNS", "NonsmoothEngine", "output_columns", "run_nonsmooth"]
+__all__ = ["NonsmoothEngine", "output_columns", "run_nonsmooth", "separating_restitution"]
 
 
 def output_columns(scene: Scene) -> list[str]:

@@ -17,16 +17,18 @@ from _contact_helpers import (
     solve_for,
 )
 
+from deckpound.analytic.contact_checks import (
+    STATUS_ENUM,
+    STATUS_FAILED,
+    STATUS_LEMKE,
+    STATUS_LEMKE_ST,
+)
 from deckpound.analytic.frictional_contact import (
     CONTACT_OPEN,
     CONTACT_SLIP,
     CONTACT_STICK,
     MODE_ENUM,
     MODE_LEMKE_ST,
-    STATUS_ENUM,
-    STATUS_FAILED,
-    STATUS_LEMKE,
-    STATUS_LEMKE_ST,
     delassus,
     solve_contact_impulses,
     solve_contact_impulses_into,

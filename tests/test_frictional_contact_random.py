@@ -6,13 +6,8 @@ from _contact_helpers import B_DECK, I_DECK, L_DECK, M_DECK, build, check_laws, 
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from deckpound.analytic.frictional_contact import (
-    MODE_ENUM,
-    MODE_LEMKE_ST,
-    STATUS_ENUM,
-    STATUS_LEMKE,
-    STATUS_LEMKE_ST,
-)
+from deckpound.analytic.contact_checks import STATUS_ENUM, STATUS_LEMKE, STATUS_LEMKE_ST
+from deckpound.analytic.frictional_contact import MODE_ENUM, MODE_LEMKE_ST
 
 # ------------------------------------------------------ (d) random properties
 

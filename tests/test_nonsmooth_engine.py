@@ -18,7 +18,8 @@ from _compliance_helpers import (
 )
 
 from deckpound.analytic.compliance import run_compliance
-from deckpound.analytic.nonsmooth import ENERGY_COLUMNS, output_columns, run_nonsmooth
+from deckpound.analytic.moreau_jean_work import ENERGY_COLUMNS
+from deckpound.analytic.nonsmooth import output_columns, run_nonsmooth
 from deckpound.compare.engines import run_engine
 from deckpound.models.columns import standard_columns
 from deckpound.models.contact_params import effective_masses

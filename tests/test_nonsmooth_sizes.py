@@ -13,11 +13,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from deckpound.analytic.contact_checks import STATUS_FAILED
 from deckpound.analytic.dense import lu_factor
-from deckpound.analytic.frictional_contact import MODE_AUTO, STATUS_FAILED
+from deckpound.analytic.frictional_contact import MODE_AUTO
 from deckpound.analytic.impulses import impulse_work, solve_active_impulses
 from deckpound.analytic.moreau_jean_work import moreau_jean_workspace
-from deckpound.analytic.system import N_DOF
+from deckpound.models.plan import N_DOF
 
 
 def test_impulses_of_three_active_corners_out_of_six():
