@@ -1,0 +1,81 @@
+"""Ctrl-C during ``deckpound ida`` (issue 30, item 4): every worker stops, one line says what
+was kept, the folder is marked incomplete, and the same command resumes with only the missing
+cases."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from _record_helpers import quake, write_at2
+
+PAIRS = 12
+LEVELS = "0.1:3.0:0.1"  # 30 levels: 360 cases of 30 s records, minutes of work
+CASES = PAIRS * 30
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        with open(f"/proc/{pid}/task/{pid}/children") as fh:
+            return [int(p) for p in fh.read().split()]
+    except OSError:
+        return []
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
+    except FileNotFoundError:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc needed")
+def test_ctrl_c_stops_an_ida_cleanly_and_it_resumes(tmp_path):
+    suite = tmp_path / "suite"
+    suite.mkdir()
+    for i in range(PAIRS):
+        write_at2(suite / f"RSN{200 + i}_TEST_ST{i}000.AT2", quake(n=3000, seed=7 * i, f=1.0 + i))
+        write_at2(suite / f"RSN{200 + i}_TEST_ST{i}090.AT2", quake(n=3000, seed=7 * i + 1))
+    argv = [sys.executable, "-m", "deckpound", "ida", "saiidi-4span", "--records", str(suite)]
+    argv += ["--im", "pga", "--levels", LEVELS, "--engines", "compliance"]
+    argv += ["--workers", "2", "--no-progress", "-o", "out"]
+    # a terminal's Ctrl-C reaches the whole process group: the command in a group of its own
+    proc = subprocess.Popen(
+        argv,
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    rows = tmp_path / "out" / "cache" / "rows"
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and proc.poll() is None:
+        if rows.is_dir() and len(list(rows.rglob("*.json"))) >= 3:
+            break
+        time.sleep(0.2)
+    workers = _children(proc.pid)
+    assert proc.poll() is None and len(workers) >= 2, "the sweep ended before the interrupt"
+    assert not (tmp_path / "out" / "ida.json").exists()  # interrupted inside the sweep
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and "Traceback" not in err + out, err
+    assert lines[0].startswith("deckpound: interrupted: ")
+    assert "run the same command again to resume" in lines[0]
+    time.sleep(0.5)
+    assert not [p for p in workers if _alive(p)]  # every worker is gone
+    assert (tmp_path / "out" / "INCOMPLETE").is_file()
+    cached = len(list(rows.rglob("*.json")))
+    done = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr
+    report = json.loads((tmp_path / "out" / "ida.json").read_text())
+    assert report["from_cache"] == cached and report["computed"] == CASES - cached
+    assert not (tmp_path / "out" / "INCOMPLETE").exists()
