@@ -105,10 +105,14 @@ Output = namedtuple("Output", ["table", "select", "row", "peaks"])
 #: (:data:`VALUE_NAMES`, indices ``VAL_*``), ``halt`` int64 (1,) — set to 1 to stop the loop.
 Stats = namedtuple("Stats", ["count", "value", "halt"])
 #: Per-corner contact arrays of the compliance loops (:mod:`.contact_laws`): gaps ``g`` [m],
-#: rates ``gd`` [m/s], rows ``WN``, ``WT`` (4, 7), generalised contact force ``fc`` (7,),
-#: forces ``lam``, ``lt`` (4,) [kN], law derivatives ``der`` (4, 7) and ``evaluated`` (4,) bool.
+#: rates ``gd`` [m/s], rows ``WN``, ``WT`` (n_corners, n_dof), generalised contact force ``fc``
+#: (n_dof,), forces ``lam``, ``lt`` (n_corners,) [kN], law derivatives ``der`` (n_corners,
+#: n_dof), ``evaluated`` (n_corners,) bool, and ``corners`` the tuple (0, …, n_corners − 1):
+#: numba types a tuple by its length, so ``len(cw.corners)`` is a compile-time constant of the
+#: kernels (loops over the corners unroll as over a literal) while the count still comes from
+#: the bundle.
 ContactWork = namedtuple(
-    "ContactWork", ["g", "gd", "WN", "WT", "fc", "lam", "lt", "der", "evaluated"]
+    "ContactWork", ["g", "gd", "WN", "WT", "fc", "lam", "lt", "der", "evaluated", "corners"]
 )
 
 #: Names of ``Stats.count`` entries, in index order.
@@ -217,7 +221,11 @@ def new_contact_work(n_corners: int = 4, n_dof: int = 7) -> ContactWork:
     v4 = row_views(("g", "gd", "lam", "lt"), n_corners)
     w47 = row_views(("WN", "WT", "der"), n_corners, n_dof)
     return ContactWork(
-        fc=np.zeros(n_dof), evaluated=np.zeros(n_corners, dtype=np.bool_), **v4, **w47
+        fc=np.zeros(n_dof),
+        evaluated=np.zeros(n_corners, dtype=np.bool_),
+        corners=tuple(range(n_corners)),
+        **v4,
+        **w47,
     )
 
 

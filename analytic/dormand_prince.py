@@ -17,7 +17,7 @@ module constant (numba freezes global arrays into the compiled code).
 and :func:`_next_step_size`.
 
 State vector y = [u (n_dof), u̇ (n_dof), work totals (N_WORK)]: n_dof from the system bundle
-(``mass.shape[0]``), the work totals at ``y[2 n_dof + W_*]`` (offsets of
+(``len(dofs)``, a compile-time constant), the work totals at ``y[2 n_dof + W_*]`` (offsets of
 :mod:`deckpound.analytic.work_energy`).
 """
 
@@ -53,6 +53,7 @@ from deckpound.analytic.system import (
     store_standard,
 )
 from deckpound.analytic.work_energy import (
+    N_WORK,
     W_CONTACT,
     W_FRICTION,
     W_INPUT,
@@ -110,7 +111,7 @@ def _support(t, tb, D, V, ug, vg):
 @kernel
 def _rhs(t, y, sa, contact, record, ws, dy):
     """dy = [u̇, ü, powers] at (t, y); trial material/contact states relative to committed."""
-    nd = sa.mass.shape[0]
+    nd = len(sa.dofs)
     ny = 2 * nd
     cw = ws.cw
     u = y[0:nd]
@@ -143,7 +144,7 @@ def _rhs(t, y, sa, contact, record, ws, dy):
         pvi += a0 * sa.mass[j] * v[j] * v[j]
     pco = 0.0
     pfr = 0.0
-    for c in range(cw.g.shape[0]):
+    for c in range(len(cw.corners)):
         pco -= cw.lam[c] * cw.gd[c]
         if cw.lt[c] != 0.0:
             ut = 0.0
@@ -165,8 +166,8 @@ def _events(y, sa, contact, ws, ev):
     cp = contact.params
     cw = ws.cw
     nbs = sa.nbs
-    nd = sa.mass.shape[0]
-    nc = cw.g.shape[0]
+    nd = len(sa.dofs)
+    nc = len(cw.corners)
     u = y[0:nd]
     v = y[nd : 2 * nd]
     ca.gaps_and_rates(contact, u, v, cw)
@@ -198,8 +199,8 @@ def _event_value(kind_idx, y, sa, contact, record, t, ws):
     """Value of event kind_idx (layout of :func:`_events`) at an interpolated state y (t for
     the supports)."""
     cw = ws.cw
-    nd = sa.mass.shape[0]
-    nc = cw.g.shape[0]
+    nd = len(sa.dofs)
+    nc = len(cw.corners)
     u = y[0:nd]
     v = y[nd : 2 * nd]
     ca.gaps_and_rates(contact, u, v, cw)
@@ -226,8 +227,8 @@ def _rk_step(t, y, h, sa, contact, record, ws, atol, rtol):
     """One DP5(4) step from (t, y) with slope ws.k1; returns the scaled error norm over u, u̇
     (ws.ynew filled, ws.K[6] = f(t+h, ynew))."""
     K, k1, ytmp, ynew = ws.K, ws.k1, ws.ytmp, ws.ynew
-    nt = y.shape[0]
-    ny = 2 * sa.mass.shape[0]
+    ny = 2 * len(sa.dofs)
+    nt = ny + N_WORK
     for j in range(nt):
         K[0, j] = k1[j]
     for s in range(1, 7):
@@ -268,7 +269,7 @@ def _any_yielded(sa, hstate):
 @kernel(inline="always")
 def _kinetic_energy(sa, y):
     """½ u̇ᵀ M u̇ of the state y [kJ]."""
-    nd = sa.mass.shape[0]
+    nd = len(sa.dofs)
     ke = 0.0
     for j in range(nd):
         ke += 0.5 * sa.mass[j] * y[nd + j] ** 2
@@ -280,7 +281,7 @@ def _start(sa, contact, record, output, ws, stats):
     """The state at t = 0 from ws.u0, ws.v0: slope, materials and corners committed, the
     initial mechanical energy counted as input, output row 0, the peaks and the events."""
     y = ws.y
-    nd = sa.mass.shape[0]
+    nd = len(sa.dofs)
     ny = 2 * nd
     for j in range(nd):
         y[j] = ws.u0[j]
@@ -320,7 +321,7 @@ def _bisect_event(q, flo, sa, contact, record, ws, t, h):
     """Where event q changes sign in (t, t + h] on the cubic Hermite interpolant of the step
     (flo: its value at t), as a fraction of h (the end of the last bracket)."""
     y, k1, ynew, ytmp, yev = ws.y, ws.k1, ws.ynew, ws.ytmp, ws.yev
-    ny = 2 * sa.mass.shape[0]
+    ny = 2 * len(sa.dofs)
     lo = 0.0
     hi = 1.0
     for _ in range(60):
@@ -370,14 +371,14 @@ def _accept(sa, contact, record, ws, stats, output, t, yielded):
     counted and its peaks tracked. Returns (a seat margin became negative, yielded)."""
     y, cw = ws.y, ws.cw
     cnt = stats.count
-    nd = sa.mass.shape[0]
-    for j in range(y.shape[0]):
+    nd = len(sa.dofs)
+    for j in range(2 * nd + N_WORK):
         y[j] = ws.ynew[j]
     _rhs(t, y, sa, contact, record, ws, ws.k1)
     cnt[bd.CNT_RHS_CALLS] += 1
     spring_commit(sa, ws.hstate)
     cl.contact_commit(ws.cstate, cw.g, cw.gd, cw.evaluated)
-    for c in range(cw.g.shape[0]):  # penetration at every accepted step
+    for c in range(len(cw.corners)):  # penetration at every accepted step
         if -cw.g[c] > stats.value[bd.VAL_MAX_PEN]:
             stats.value[bd.VAL_MAX_PEN] = -cw.g[c]
     if not yielded:
@@ -395,7 +396,7 @@ def _accept(sa, contact, record, ws, stats, output, t, yielded):
 def _in_contact(ws):
     """True when a corner's gap is ≤ 0 in the event values ws.ev0 (the gaps come first)."""
     closed = False
-    for c in range(ws.cw.g.shape[0]):
+    for c in range(len(ws.cw.corners)):
         closed = closed or ws.ev0[c] <= 0.0
     return closed
 
@@ -532,7 +533,7 @@ def _adaptive_track(sa, ws, pk, t):
     call at (t, y); True when a seat margin became negative (:func:`.peaks.track_step`)."""
     y = ws.y
     cw = ws.cw
-    nd = sa.mass.shape[0]
+    nd = len(sa.dofs)
     u = y[0:nd]
     store_standard(
         pk.row, t, u, y[nd : 2 * nd], cw.g, cw.lam, cw.lt, ws.hstate[:, T_STRESS], sa.nbs
@@ -552,7 +553,7 @@ def _adaptive_store(sa, contact, ws, output, row, t):
     y = ws.y
     buf = output.row
     nbs = sa.nbs
-    nd = sa.mass.shape[0]
+    nd = len(sa.dofs)
     store_standard(buf, t, y[0:nd], y[nd : 2 * nd], cw.g, cw.lam, cw.lt, hstate[:, T_STRESS], nbs)
     ke = _kinetic_energy(sa, y)
     es = spring_stored_energy(sa, hstate, y[0:nd], ws.ug)

@@ -101,16 +101,16 @@ def _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact):
     ncl = ca.eval_contacts(contact, cs, cw, u, v, dof.un)
     evaluated = cw.evaluated
     if not skip_contact and not contact.nonlinear:
-        for c in range(evaluated.shape[0]):
+        for c in range(len(cw.corners)):
             evaluated[c] = True
         ncl = -1
     if ncl < 0:
         ca.eval_closed(contact, cs, cw, u, v, dof.un)
     R, f, a = dof.R, dof.f, dof.a
-    for j in range(R.shape[0]):
+    for j in range(len(sa.dofs)):
         R[j] = cw.fc[j] - f[j] - sa.mass[j] * a[j]
     any_evaluated = False
-    for c in range(evaluated.shape[0]):
+    for c in range(len(cw.corners)):
         any_evaluated = any_evaluated or evaluated[c]
     return nonel, any_evaluated
 
@@ -130,7 +130,7 @@ def _set_stats(stats, status, rows, failed, steps, dt):
 @kernel(inline="always")
 def _effective_tangent(sa, K, c2, c3, Keff):
     """Keff = K + c2 C + c3 M (Newmark's effective tangent, c2 = γ/(βh), c3 = 1/(βh²))."""
-    n = Keff.shape[0]
+    n = len(sa.dofs)
     for i in range(n):
         for j in range(n):
             Keff[i, j] = K[i, j] + c2 * sa.C[i, j]
@@ -138,17 +138,17 @@ def _effective_tangent(sa, K, c2, c3, Keff):
 
 
 @kernel(inline="always")
-def _copy(src, dst):
-    """dst[:] = src for vectors (no allocation)."""
-    for i in range(src.shape[0]):
+def _copy(src, dst, n):
+    """dst[:n] = src[:n] (no allocation; n a compile-time constant where it can be)."""
+    for i in range(n):
         dst[i] = src[i]
 
 
 @kernel(inline="always")
-def _copy_matrix(src, dst):
-    """dst[:, :] = src (no allocation)."""
-    for i in range(src.shape[0]):
-        for j in range(src.shape[1]):
+def _copy_matrix(src, dst, n):
+    """dst[:n, :n] = src[:n, :n] (no allocation)."""
+    for i in range(n):
+        for j in range(n):
             dst[i, j] = src[i, j]
 
 
@@ -158,7 +158,7 @@ def _elastic_factors(sa, mat, dt):
     (LUel, pivel); False if singular."""
     spring_tangent(sa, sa.k0, mat.K)
     _effective_tangent(sa, mat.K, GAMMA / (BETA * dt), 1.0 / (BETA * dt * dt), mat.Kel)
-    _copy_matrix(mat.Kel, mat.LUel)
+    _copy_matrix(mat.Kel, mat.LUel, len(sa.dofs))
     return lu_factor(mat.LUel, mat.pivel)
 
 
@@ -167,13 +167,14 @@ def _remember_committed(sa, work):
     """The committed contact forces and gaps, spring forces, deformations, rates and
     tangent-dependent damping coefficients, for the next step's trapezoidal work."""
     cw, spr = work.cw, work.spring
-    _copy(cw.lam, work.lam_prev)
-    _copy(cw.lt, work.lt_prev)
-    _copy(cw.g, work.g_prev)
-    _copy(spr.fs, spr.fs_prev)
-    _copy(spr.d_new, spr.d_prev)
-    _copy(spr.dd_new, spr.dd_prev)
-    _copy(sa.cvar, spr.cv_prev)
+    nc, ns = len(cw.corners), spr.fs.shape[0]
+    _copy(cw.lam, work.lam_prev, nc)
+    _copy(cw.lt, work.lt_prev, nc)
+    _copy(cw.g, work.g_prev, nc)
+    _copy(spr.fs, spr.fs_prev, ns)
+    _copy(spr.d_new, spr.d_prev, ns)
+    _copy(spr.dd_new, spr.dd_prev, ns)
+    _copy(sa.cvar, spr.cv_prev, ns)
 
 
 @kernel(inline="always")
@@ -186,13 +187,14 @@ def _start(sa, contact, record, opt, output, work):
     jrec = record_at(
         record.t, record.disp, record.vel, record.dslope, record.vslope, 0.0, 0, sup.ug1, sup.vg1
     )
-    _copy(sup.ug1, sup.ug)
-    _copy(sup.vg1, sup.vg)
-    _copy(work.u0, dof.u)
-    _copy(work.v0, dof.v)
-    _copy(work.u0, dof.un)
+    nd, nch = len(sa.dofs), sup.ug.shape[0]
+    _copy(sup.ug1, sup.ug, nch)
+    _copy(sup.vg1, sup.vg, nch)
+    _copy(work.u0, dof.u, nd)
+    _copy(work.v0, dof.v, nd)
+    _copy(work.u0, dof.un, nd)
     _form_unbalance(sa, contact, hstate, cs, cw, dof, work.spring, sup, opt.skip_contact)
-    for j in range(dof.a.shape[0]):
+    for j in range(nd):
         dof.a[j] = (cw.fc[j] - dof.f[j]) / sa.mass[j]
     spring_commit(sa, hstate)
     cl.contact_commit(cs, cw.g, cw.gd, cw.evaluated)
@@ -200,7 +202,7 @@ def _start(sa, contact, record, opt, output, work):
     es0 = spring_stored_energy(sa, hstate, dof.u, sup.ug)
     ec0 = cl.contact_stored_energy(contact.params, cs)
     ke0 = 0.0
-    for j in range(dof.v.shape[0]):
+    for j in range(nd):
         ke0 += 0.5 * sa.mass[j] * dof.v[j] * dof.v[j]
     W[W_INPUT] = ke0 + es0 + ec0
     W[W_SPRINGS] = es0
@@ -234,15 +236,16 @@ def _store_output(sa, contact, work, output, row, t, energy):
 
 
 @kernel(inline="always")
-def _begin_step(record, work, t1, jrec):
+def _begin_step(nd, record, work, t1, jrec):
     """Keep the state at the step start (for a sub-stepped redo) and move the end-of-step
     supports to t1 [s]. Returns the record hint."""
     dof, sup = work.dof, work.support
-    _copy(dof.u, dof.us)
-    _copy(dof.v, dof.vs)
-    _copy(dof.a, dof.as_)
-    _copy(sup.ug1, sup.ug0)
-    _copy(sup.vg1, sup.vg0)
+    nch = sup.ug.shape[0]
+    _copy(dof.u, dof.us, nd)
+    _copy(dof.v, dof.vs, nd)
+    _copy(dof.a, dof.as_, nd)
+    _copy(sup.ug1, sup.ug0, nch)
+    _copy(sup.vg1, sup.vg0, nch)
     return record_at(
         record.t, record.disp, record.vel, record.dslope, record.vslope, t1, jrec, sup.ug1, sup.vg1
     )
@@ -253,17 +256,18 @@ def _revert_step(sa, work):
     """Back to the start of the step: trial materials and corners reverted, state and
     supports restored."""
     dof, sup = work.dof, work.support
+    nd, nch = len(sa.dofs), sup.ug.shape[0]
     spring_revert(sa, work.hstate)
     cl.contact_revert(work.cstate)
-    _copy(dof.us, dof.u)
-    _copy(dof.vs, dof.v)
-    _copy(dof.as_, dof.a)
-    _copy(sup.ug0, sup.ug)
-    _copy(sup.vg0, sup.vg)
+    _copy(dof.us, dof.u, nd)
+    _copy(dof.vs, dof.v, nd)
+    _copy(dof.as_, dof.a, nd)
+    _copy(sup.ug0, sup.ug, nch)
+    _copy(sup.vg0, sup.vg, nch)
 
 
 @kernel(inline="always")
-def _predict(work, nsub, ksub, h):
+def _predict(nd, work, nsub, ksub, h):
     """``Newmark::newStep`` of sub-step ksub of nsub (step h [s]): supports at its end
     (linearly interpolated between the step's ends when sub-stepping), start state kept in
     un, vn, an, constant-displacement predictor of u̇ and ü."""
@@ -278,15 +282,15 @@ def _predict(work, nsub, ksub, h):
             w = (ksub + 1.0) / nsub
             ug[k] = sup.ug0[k] + w * (sup.ug1[k] - sup.ug0[k])
             vg[k] = sup.vg0[k] + w * (sup.vg1[k] - sup.vg0[k])
-    _copy(dof.u, dof.un)
-    _copy(dof.v, dof.vn)
-    _copy(dof.a, dof.an)
+    _copy(dof.u, dof.un, nd)
+    _copy(dof.v, dof.vn, nd)
+    _copy(dof.a, dof.an, nd)
     a1p = 1.0 - GAMMA / BETA
     a2p = h * (1.0 - 0.5 * GAMMA / BETA)
     a3p = -1.0 / (BETA * h)
     a4p = 1.0 - 0.5 / BETA
     v, a, vn, an = dof.v, dof.a, dof.vn, dof.an
-    for j in range(v.shape[0]):
+    for j in range(nd):
         v[j] = a1p * vn[j] + a2p * an[j]
         a[j] = a4p * an[j] + a3p * vn[j]
 
@@ -328,8 +332,8 @@ def _solve(sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_on
     spring_damping_tangent(sa, c2, mat.Keff)
     if anyev:
         ca.contact_tangent(contact, work.cw, dof.u, c2, mat.Keff, mat.H)
-    _copy_matrix(mat.Keff, mat.LU)
-    _copy(spr.kt, spr.kt_fact)
+    _copy_matrix(mat.Keff, mat.LU, len(sa.dofs))
+    _copy(spr.kt, spr.kt_fact, spr.kt.shape[0])
     if not lu_factor(mat.LU, mat.piv):
         return False, False, h
     lu_solve(mat.LU, mat.piv, dof.R, dof.du)
@@ -337,7 +341,7 @@ def _solve(sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_on
 
 
 @kernel(inline="always")
-def _update(dof, h):
+def _update(nd, dof, h):
     """``Newmark::update``: u += Δu, u̇ += γ/(βh) Δu, ü += Δu/(βh²). Returns (‖Δu‖₂, whether
     any displacement changed bitwise)."""
     c2 = GAMMA / (BETA * h)
@@ -345,7 +349,7 @@ def _update(dof, h):
     u, v, a, du = dof.u, dof.v, dof.a, dof.du
     nrm = 0.0
     moved = False
-    for j in range(u.shape[0]):
+    for j in range(nd):
         uj = u[j] + du[j]
         moved = moved or uj != u[j]
         u[j] = uj
@@ -369,7 +373,7 @@ def _newton(sa, contact, opt, work, stats, h, nsub, nonel, anyev, reuse, lu_spri
         )
         if not ok:
             return RUN_SINGULAR, it, anyev, lu_springs_only, lu_h
-        nrm, moved = _update(dof, h)
+        nrm, moved = _update(len(sa.dofs), dof, h)
         if opt.skip_unmoved and not moved and not anyev and nrm <= opt.tol:
             # converged, and the increment (round-off of a step that stayed on its branches)
             # left u bitwise as it was: the materials, spring forces and gaps are those just
@@ -400,13 +404,13 @@ def _commit(sa, contact, work, output, stats, anyev, t_now):
     Returns True when a seat margin became negative (:func:`.peaks.track_step`)."""
     cs, cw, dof = work.cstate, work.cw, work.dof
     spring_commit(sa, work.hstate)
-    for c in range(cs.shape[0]):
+    for c in range(len(cw.corners)):
         if cs[c, cl.S_CCLOSED] == 0.0 and cs[c, cl.S_TCLOSED] != 0.0 and cw.evaluated[c]:
             stats.count[bd.CNT_EVENTS] += 1
     if contact.nonlinear and not anyev:
         ca.gaps_and_rates(contact, dof.u, dof.v, cw)
     cl.contact_commit(cs, cw.g, cw.gd, cw.evaluated)
-    for c in range(cw.g.shape[0]):
+    for c in range(len(cw.corners)):
         if -cw.g[c] > stats.value[bd.VAL_MAX_PEN]:
             stats.value[bd.VAL_MAX_PEN] = -cw.g[c]
     pk = output.peaks
@@ -443,15 +447,16 @@ def _accumulate_work(sa, work):
         dd_prev[i] = vi
         fs_prev[i] = fs[i]
     a0 = sa.scal[SCAL_A0]
+    nd = len(sa.dofs)
     u, un, v, vn = dof.u, dof.un, dof.v, dof.vn
-    for j in range(u.shape[0]):
+    for j in range(nd):
         W[W_VISCOUS] += (u[j] - un[j]) * a0 * sa.mass[j] * 0.5 * (vn[j] + v[j])
     lam, lt, g = cw.lam, cw.lt, cw.g
-    for c in range(g.shape[0]):
+    for c in range(len(cw.corners)):
         W[W_CONTACT] -= 0.5 * (work.lam_prev[c] + lam[c]) * (g[c] - work.g_prev[c])
         if lt[c] != 0.0 or work.lt_prev[c] != 0.0:
             ds = 0.0
-            for j in range(u.shape[0]):
+            for j in range(nd):
                 ds += cw.WT[c, j] * (u[j] - un[j])
             W[W_FRICTION] -= 0.5 * (work.lt_prev[c] + lt[c]) * ds
         work.lam_prev[c] = lam[c]
@@ -469,7 +474,7 @@ def _attempt(sa, contact, opt, output, work, stats, n, nsub, reuse, lu_springs_o
     cnt = stats.count
     unseated = False
     for ksub in range(nsub):
-        _predict(work, nsub, ksub, h)
+        _predict(len(sa.dofs), work, nsub, ksub, h)
         nonel, anyev = _form_unbalance(
             sa,
             contact,
@@ -532,7 +537,7 @@ def _run_steps(sa, contact, record, opt, output, work, stats):
         if stats.halt[0] != 0:
             _set_stats(stats, RUN_INTERRUPTED, row, n + 1, n, dt)
             return
-        jrec = _begin_step(record, work, (n + 1) * dt, jrec)
+        jrec = _begin_step(len(sa.dofs), record, work, (n + 1) * dt, jrec)
         status, unseated, lu_springs_only, lu_h = _step(
             sa, contact, opt, output, work, stats, n, reuse, lu_springs_only, lu_h
         )

@@ -125,7 +125,7 @@ def fill_row(buf, t, u, v, cw, cs, fs, nbs):
     store_standard(buf, t, u, v, cw.g, cw.lam, cw.lt, fs, nbs)
     # ft: the committed tangential force (the trial one for every model but contact2d, whose
     # element reports 0 after a sliding commit, as OpenSees's recorders see it)
-    for c in range(cs.shape[0]):
+    for c in range(len(cw.corners)):
         buf[C_FT + c] = cs[c, cl.S_CFT]
 
 
@@ -149,7 +149,7 @@ def output_energies(sa, hstate, cp, cs, u, v, ug, W, energy):
     """Output energies (:func:`.work_energy.energy_columns`) from the running work totals W
     at the committed state (u, u̇, supports ug)."""
     ke = 0.0
-    for j in range(sa.mass.shape[0]):
+    for j in range(len(sa.dofs)):
         ke += 0.5 * sa.mass[j] * v[j] * v[j]
     es = spring_stored_energy(sa, hstate, u, ug)
     ec = cl.contact_stored_energy(cp, cs)

@@ -116,7 +116,9 @@ SCAL_A0, SCAL_A1, SCAL_TANGENT_DAMPING = range(3)
 #: (ns,) the coefficients of the current and the committed tangent [s]; kc (ns,) the committed
 #: tangent k_c (state: written by :func:`spring_commit`), cvar (ns,) βK k_t + βKc k_c at the
 #: last trial (state: written by :func:`spring_assemble`). The ``system`` bundle of the step
-#: loops (:mod:`deckpound.analytic.bundles`).
+#: loops (:mod:`deckpound.analytic.bundles`). dofs: the tuple (0, …, n_dof − 1); numba types a
+#: tuple by its length, so ``len(sa.dofs)`` is a compile-time constant of the kernels (loops
+#: over the DOF unroll as over a literal) while the count still comes from the bundle.
 SystemArrays = namedtuple(
     "SystemArrays",
     [
@@ -140,6 +142,7 @@ SystemArrays = namedtuple(
         "bkc",
         "kc",
         "cvar",
+        "dofs",
     ],
 )
 
@@ -255,6 +258,7 @@ def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
         bkc=bkc,
         kc=k0.astype(float).copy(),
         cvar=np.zeros(ns),
+        dofs=tuple(range(mass.shape[0])),
     )
     K0 = B.T @ (k0[:, None] * B)
     return PackedSystem(
@@ -316,7 +320,7 @@ def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
     """
     a0 = sa.scal[SCAL_A0]
     var = sa.scal[SCAL_TANGENT_DAMPING] != 0.0
-    for j in range(sa.mass.shape[0]):
+    for j in range(len(sa.dofs)):
         f[j] = a0 * sa.mass[j] * v[j]
     nonel = 0
     for i in range(sa.k0.shape[0]):
@@ -343,8 +347,9 @@ def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
 @kernel(inline="always")
 def spring_tangent(sa, kt, K):
     """K = Bᵀ diag(kt) B (n_dof × n_dof, overwritten)."""
-    for j in range(K.shape[0]):
-        for k in range(K.shape[1]):
+    nd = len(sa.dofs)
+    for j in range(nd):
+        for k in range(nd):
             K[j, k] = 0.0
     for i in range(sa.k0.shape[0]):
         nnz = sa.bnnz[i]
