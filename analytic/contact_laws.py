@@ -80,8 +80,6 @@ from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_CODE
 from deckpound.models.scene import Scene
 
 __all__ = [
-    "FRICTION_CODES",
-    "LAW_CODES",
     "N_CP",
     "N_CS",
     "V_IMPACT_MIN",

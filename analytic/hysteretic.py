@@ -58,21 +58,21 @@ from numbers import Real
 import numpy as np
 
 from deckpound.analytic._hysteretic_kernel import (
-    N_PARAMS,
-    N_STATE,
-    P_E1P_SLOPE,
-    T_STRAIN,
-    T_STRESS,
-    T_TANGENT,
     hyst_commit,
     hyst_init_state,
     hyst_revert,
     hyst_revert_to_start,
     hyst_set_trial,
+)
+from deckpound.analytic._hysteretic_layout import (
+    P_E1P_SLOPE,
+    T_STRAIN,
+    T_STRESS,
+    T_TANGENT,
     pack_hysteretic_params,
 )
 
-__all__ = ["N_PARAMS", "N_STATE", "HystereticMaterial", "pack_hysteretic"]
+__all__ = ["HystereticMaterial", "pack_hysteretic"]
 
 _NAMES_3PT = (
     "s1p",
