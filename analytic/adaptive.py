@@ -43,6 +43,11 @@ from deckpound.analytic.dormand_prince import adaptive_run
 from deckpound.analytic.dormand_prince_work import (
     H_BINS_PER_DECADE,
     H_LOG_MIN,
+    HSTAT_MAX,
+    HSTAT_MIN,
+    HSTAT_SUM,
+    ROW_CONTACT,
+    ROW_FREE,
     AdaptiveOptions,
     adaptive_workspace,
 )
@@ -68,15 +73,15 @@ def step_size_summary(hist: np.ndarray, hstat: np.ndarray) -> dict:
     """Accepted step sizes out of / in contact: count, median (from a log histogram with
     H_BINS_PER_DECADE bins per decade, ±6 %), min, max, mean, and the time covered [s]."""
     out = {}
-    for ic, name in ((0, "free"), (1, "contact")):
+    for ic, name in ((ROW_FREE, "free"), (ROW_CONTACT, "contact")):
         n = int(hist[ic].sum())
         out[name] = {
             "steps": n,
             "median": _hist_median(hist[ic]),
-            "min": float(hstat[ic, 0]) if n else float("nan"),
-            "max": float(hstat[ic, 1]) if n else float("nan"),
-            "mean": float(hstat[ic, 2] / n) if n else float("nan"),
-            "time": float(hstat[ic, 2]),
+            "min": float(hstat[ic, HSTAT_MIN]) if n else float("nan"),
+            "max": float(hstat[ic, HSTAT_MAX]) if n else float("nan"),
+            "mean": float(hstat[ic, HSTAT_SUM] / n) if n else float("nan"),
+            "time": float(hstat[ic, HSTAT_SUM]),
         }
     return out
 

@@ -38,7 +38,16 @@ from deckpound.analytic.bundles import (
     RUN_STEP_UNDERFLOW,
     RUN_UNSEATED,
 )
-from deckpound.analytic.dormand_prince_work import H_BINS_PER_DECADE, H_LOG_MIN, H_NBINS
+from deckpound.analytic.dormand_prince_work import (
+    H_BINS_PER_DECADE,
+    H_LOG_MIN,
+    H_NBINS,
+    HSTAT_MAX,
+    HSTAT_MIN,
+    HSTAT_SUM,
+    ROW_CONTACT,
+    ROW_FREE,
+)
 from deckpound.analytic.fp_mode import flush_enter, flush_leave
 from deckpound.analytic.peaks import track_step
 from deckpound.analytic.system import (
@@ -407,17 +416,17 @@ def _count_step_size(ws, hs, in_contact):
     contact, 1 in contact)."""
     if hs <= 0.0:
         return
-    ic = 1 if in_contact else 0
+    ic = ROW_CONTACT if in_contact else ROW_FREE
     b = int((np.log10(hs) - H_LOG_MIN) * H_BINS_PER_DECADE)
     b = max(b, 0)
     if b >= H_NBINS:
         b = H_NBINS - 1
     ws.hist[ic, b] += 1
     hstat = ws.hstat
-    if hstat[ic, 0] == 0.0 or hs < hstat[ic, 0]:
-        hstat[ic, 0] = hs
-    hstat[ic, 1] = max(hstat[ic, 1], hs)
-    hstat[ic, 2] += hs
+    if hstat[ic, HSTAT_MIN] == 0.0 or hs < hstat[ic, HSTAT_MIN]:
+        hstat[ic, HSTAT_MIN] = hs
+    hstat[ic, HSTAT_MAX] = max(hstat[ic, HSTAT_MAX], hs)
+    hstat[ic, HSTAT_SUM] += hs
 
 
 @kernel(inline="always")

@@ -15,9 +15,14 @@ from deckpound.analytic import bundles as bd
 from deckpound.analytic.work_energy import N_WORK
 
 __all__ = [
+    "HSTAT_MAX",
+    "HSTAT_MIN",
+    "HSTAT_SUM",
     "H_BINS_PER_DECADE",
     "H_LOG_MIN",
     "H_NBINS",
+    "ROW_CONTACT",
+    "ROW_FREE",
     "AdaptiveOptions",
     "AdaptiveWork",
     "adaptive_workspace",
@@ -28,6 +33,10 @@ __all__ = [
 H_LOG_MIN = -14.0
 H_BINS_PER_DECADE = 20
 H_NBINS = int(-H_LOG_MIN) * H_BINS_PER_DECADE
+#: rows of the step-size statistics (hist, hstat): steps out of contact, in contact
+ROW_FREE, ROW_CONTACT = 0, 1
+#: columns of hstat: smallest, largest and summed accepted step [s]
+HSTAT_MIN, HSTAT_MAX, HSTAT_SUM = range(3)
 
 
 #: The scalars of :func:`adaptive_run`: end time ``t_end`` and output interval ``out_dt`` [s];
@@ -51,13 +60,14 @@ AdaptiveOptions = namedtuple(
 _NS = ("d", "dd", "fs", "kt")
 _NT = ("y", "k1", "ytmp", "ynew", "yev")
 #: The workspace of :func:`adaptive_run` (:func:`adaptive_workspace`): u0, v0 initial state;
-#: hstate, cstate material and corner states; cw the ContactWork; uc (7,) displacement at the
+#: hstate, cstate material and corner states; cw the ContactWork; uc (n_dof,) displacement at the
 #: last commit; ug, vg supports; d, dd, fs, kt (ns,) spring deformations, rates, forces,
 #: tangents; f (n_dof,) internal force; y, k1, ytmp, ynew, yev (2 n_dof + N_WORK,) state [u,
 #: u̇, work totals (:mod:`.work_energy`)], its rate, stage / new / interpolated states; K (7,
 #: 2 n_dof + N_WORK) the rates of the seven stages; ev0, ev1 event values at the step's ends
-#: (n_corners + nbs + 2 n_corners, :func:`.dormand_prince._events`); hist (2, H_NBINS) int64 and hstat (2, 3) accepted-step-size
-#: statistics (row 0 out of contact, row 1 in contact; hstat = [min, max, sum]).
+#: (n_corners + nbs + 2 n_corners, :func:`.dormand_prince._events`); hist (2, H_NBINS) int64
+#: and hstat (2, 3) accepted-step-size statistics (rows ``ROW_FREE``, ``ROW_CONTACT``; hstat
+#: columns ``HSTAT_MIN``, ``HSTAT_MAX``, ``HSTAT_SUM``).
 AdaptiveWork = namedtuple(
     "AdaptiveWork",
     ("u0", "v0", "hstate", "cstate", "cw", "uc", "ug", "vg", "f")
