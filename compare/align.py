@@ -3,7 +3,9 @@
 Rules
 -----
 * Common base: t_k = k·dt from 0 to the earliest end time among the results; dt defaults to
-  the finest output step among them.
+  the finest output step among them; a decimal dt is taken as such (``0.005``) and t_k are
+  rounded to the step's resolution (12 significant digits of dt,
+  :func:`deckpound.models.result.rounded_time`), so the base has no round-off digits.
 * Kinematic columns (displacements, rotations, gaps, spring forces): linear interpolation
   when the base is at least as fine as the source. When the base is coarser, each base sample
   takes the source sample of largest magnitude in its bin [t_k − dt/2, t_k + dt/2): the series
@@ -25,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from deckpound.models.columns import column_unit
-from deckpound.models.result import Result
+from deckpound.models.result import Result, decimal_step, rounded_time
 
 from .outputs import folder as make_folder
 from .outputs import write_csv, write_parquet
@@ -35,14 +37,20 @@ IMPULSE_PREFIXES = ("pn_", "pt_")
 
 
 def common_time_base(results: dict[str, Result], dt: float | None = None) -> np.ndarray:
-    """t_k = k·dt, k = 0.., up to the earliest end time of the results [s]."""
+    """t_k = k·dt, k = 0.., up to the earliest end time of the results [s].
+
+    The default dt is the finest median output step, taken as the decimal it stands for
+    (:func:`~deckpound.models.result.decimal_step`: ``0.005``, not the ``0.004999999999999893``
+    a median of differences of k·Δt gives), and each t_k is rounded to the step's resolution
+    (:func:`~deckpound.models.result.rounded_time`), so the base holds the grid's decimal times."""
     if not results:
         raise ValueError("no results to align")
     steps = [float(np.median(np.diff(r.t))) for r in results.values() if len(r.t) > 1]
-    dt = dt if dt is not None else min(steps)
+    if dt is None:
+        dt = decimal_step(min(steps)) or min(steps)
     end = min(r.t[-1] for r in results.values())
     n = int(np.floor(end / dt + 1e-9))
-    return np.arange(n + 1) * dt
+    return rounded_time(np.arange(n + 1) * dt, dt)
 
 
 def _cumulative_integral(t: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -104,8 +112,11 @@ def align(
     out = {}
     for label, r in results.items():
         data = {"t": t}
+        # the source times at the base's resolution: a source on the base's grid is sampled
+        # at its own rows, not blended with a neighbour over k·Δt's round-off
+        t_src = rounded_time(r.t)
         for c in columns:
-            data[c] = align_column(c, r.t, r[c], t)
+            data[c] = align_column(c, t_src, r[c], t)
         out[label] = pd.DataFrame(data)
     return out
 

@@ -9,13 +9,13 @@ import pandas as pd
 from deckpound.compare.cases import Case, run_cases
 from deckpound.compare.engines import DEFAULT_REFERENCE
 from deckpound.compare.result_cache import ResultCache
-from deckpound.models.file_io import write_csv
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
 from . import figures
 from .align import align, write_tables
-from .metrics import metrics_against, summary
+from .metrics import METRIC_UNITS, metrics_against, summary
+from .outputs import write_csv
 
 QUANTITIES = [
     "deck_theta",
@@ -70,7 +70,7 @@ def run_compare(
         if any(len(p) for p in parts)
         else pd.DataFrame()
     )
-    write_csv(metrics, out / "metrics.csv")
+    write_csv(metrics, out / "metrics.csv", METRIC_UNITS)
     figs = out / "figures"
     figures.histories(everything, scene, figs / "histories.png")
     figures.contact_forces(results, scene, figs / "contact_forces.png")

@@ -49,12 +49,13 @@ from .fragility import (
     fragility_curve,
     ida_capacities,
 )
-from .variability import record_cases, sweep_rows
+from .variability import record_cases, sweep_rows, table_units
 
 __all__ = [
     "IMS",
     "fragility_figure",
     "fragility_table",
+    "fragility_units",
     "ida_cases",
     "ida_figure",
     "limit_states",
@@ -255,6 +256,11 @@ def fragility_table(table, states: list[tuple[str, LimitState]]):
     return pd.DataFrame(rows)
 
 
+def fragility_units(im_unit: str) -> dict[str, str]:
+    """Units of :func:`fragility_table`'s columns: the median in the IM's unit."""
+    return {"median": im_unit, "beta": "-", "cases": "-", "left_out": "-"}
+
+
 def run_ida(
     scene: Scene,
     out: str | Path,
@@ -329,8 +335,8 @@ def run_ida(
     states = limit_states(theta_limit)
     frag = fragility_table(table, states)
     unit = IMS[im][2]
-    write_csv(table, out / "ida.csv")
-    write_csv(frag, out / "fragility.csv")
+    write_csv(table, out / "ida.csv", {**table_units(table), "level": unit})
+    write_csv(frag, out / "fragility.csv", fragility_units(unit))
     ida_figure(table, im, scene.name, out / "ida.png")
     fragility_figure(table, frag, states, im, scene.name, out / "fragility.png")
     status = table["status"].value_counts().to_dict() if len(table) else {}

@@ -14,6 +14,9 @@ For a quantity x (test) and r (reference) on one time base t:
   every step by the engines (``meta["gap_closures"]``, the one definition:
   :func:`deckpound.models.result.gap_closures`); their times on the output rows
 
+Table columns: ``peak``, ``peak_ref``, ``residual`` and ``residual_ref`` are in the unit of the
+row's quantity, named in its ``unit`` column; the others have one unit each (:data:`METRIC_UNITS`).
+
 Peaks and times are each engine's own, over every step, so neither alignment nor the output rate
 can blunt them; NRMSE and correlation compare the aligned rows.
 """
@@ -23,9 +26,19 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from deckpound.models.columns import column_unit
 from deckpound.models.errors import SceneError
 from deckpound.models.motion import check_time_base
 from deckpound.models.result import Result, closure_times
+
+#: units of the metric table's columns that have one unit for every row
+METRIC_UNITS = {
+    "t_peak": "s",
+    "t_peak_ref": "s",
+    "nrmse": "-",
+    "correlation": "-",
+    "peak_ratio": "-",
+}
 
 
 def peak(x: np.ndarray) -> float:
@@ -84,8 +97,8 @@ def compare_pair(
     quantities: list[str],
 ) -> pd.DataFrame:
     """One row per quantity: peaks and peak times (over every step, :meth:`Result.peak`), peak
-    ratio, NRMSE and correlation (aligned rows), residuals; ``peak_basis`` says what the two
-    peaks were taken over."""
+    ratio, NRMSE and correlation (aligned rows), residuals; ``unit`` is the quantity's unit (of
+    the peaks and residuals); ``peak_basis`` says what the two peaks were taken over."""
     rows = []
     for q in quantities:
         x, r = aligned_test[q].to_numpy(), aligned_ref[q].to_numpy()
@@ -94,6 +107,7 @@ def compare_pair(
         rows.append(
             {
                 "quantity": q,
+                "unit": column_unit(q),
                 "peak": px,
                 "peak_ref": pr,
                 "peak_ratio": px / pr if pr != 0 else float("nan"),

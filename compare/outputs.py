@@ -5,7 +5,11 @@ Every table, text and VTK file of ``paper``, ``study`` and ``export-vtk`` is wri
 :mod:`deckpound.models.file_io`: written to a temporary file and renamed into place (atomic), never
 through a symbolic link, with the user's umask.
 
-Tables carry their units: CSV files name them in the header (``peak_theta [rad]``), Parquet
+Tables carry their units: CSV files name them in the header (``peak_theta [rad]``; a
+dimensionless number ``[-]``; a text or flag column such as ``engine`` has none), so a plain
+``pandas.read_csv(path)`` reads them (:func:`deckpound.models.result.read_table` gives the plain
+names and the units in ``attrs``). A long table whose value column holds quantities of different
+units (``aligned_long``, ``variability_summary``) says each row's unit in its ``unit`` column. Parquet
 files in the schema metadata (``units``: JSON column → unit, and each field's own ``unit``
 entry), so ``pandas.read_parquet`` gives the plain column names and
 ``pyarrow.parquet.read_schema(path).metadata`` the units.
@@ -20,7 +24,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from deckpound.models.file_io import atomic_path, atomic_write_text, ensure_folder
+from deckpound.models.file_io import atomic_path, atomic_write_text, ensure_folder, unit_label
+from deckpound.models.file_io import write_csv as file_io_write_csv
 
 
 def folder(path: str | Path) -> Path:
@@ -48,16 +53,14 @@ def write_text(path: str | Path, text: str) -> Path:
 
 def unit_header(frame: pd.DataFrame, units: dict[str, str]) -> pd.DataFrame:
     """The frame with ``name [unit]`` headers for the columns that have a unit."""
-    return frame.rename(
-        columns={c: f"{c} [{units[c]}]" for c in frame.columns if units.get(c) not in (None, "")}
-    )
+    return frame.rename(columns={c: unit_label(c, units.get(c)) for c in frame.columns})
 
 
 def write_csv(frame: pd.DataFrame, path: str | Path, units: dict[str, str]) -> Path:
-    """A CSV table whose header states each column's unit (``peak_theta [rad]``)."""
-    with target(path) as p:
-        unit_header(frame, units).to_csv(p, index=False)
-    return Path(path)
+    """A CSV table whose header states each column's unit (``peak_theta [rad]``;
+    :func:`deckpound.models.file_io.write_csv`)."""
+    folder(Path(path).parent)
+    return file_io_write_csv(frame, path, units)
 
 
 def write_parquet(

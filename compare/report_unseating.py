@@ -22,9 +22,10 @@ import pandas as pd
 from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 from deckpound.models.scene_io import modified
 
-from .ida import IMS, run_ida, synthetic_pairs
+from .ida import IMS, fragility_units, run_ida, synthetic_pairs
 from .outputs import write_csv
 from .report_render import Figure, Table, view
+from .variability import table_units
 
 #: the engines the section compares (the sweep needs summary rows, which these give quickly)
 ENGINES = ("compliance", "nonsmooth")
@@ -114,19 +115,9 @@ def run_unseating(
     write_csv(
         table.drop(columns=["file_x", "file_y"], errors="ignore"),
         out / "tables" / "unseating_ida.csv",
-        {
-            "level": unit,
-            "peak_theta": "rad",
-            "peak_x": "m",
-            "peak_y": "m",
-            "seat_demand": "m",
-            "seat_margin": "m",
-            "wall_time": "s",
-            "loop_time": "s",
-            "unseated_time": "s",
-        },
+        {**table_units(table), "level": unit},
     )
-    write_csv(frag, out / "tables" / "unseating_fragility.csv", {"median": unit, "beta": "-"})
+    write_csv(frag, out / "tables" / "unseating_fragility.csv", fragility_units(unit))
     run = UnseatingRun(table, frag, table["record_key"].nunique(), figures, plan)
     if "compliance" in mine:
         run.friction_frag = _friction_sweep(
@@ -166,9 +157,7 @@ def _friction_sweep(scene, out, cache_dir, records, plan, workers, scheduler, pr
     )
     shutil.copyfile(work / "fragility.png", out / "figures" / "unseating_fragility_friction.png")
     write_csv(
-        frag,
-        out / "tables" / "unseating_fragility_friction.csv",
-        {"median": IMS[IM][2], "beta": "-"},
+        frag, out / "tables" / "unseating_fragility_friction.csv", fragility_units(IMS[IM][2])
     )
     return frag
 

@@ -13,6 +13,10 @@ finds a valid entry already in place discards its own copy (same key, same physi
 that finds a damaged entry moves it aside first. No ``get`` or ``put`` raises for any of these
 races; a ``put`` that cannot write (full or read-only disk) warns and leaves the cache as it
 was: the computed result is still returned to the caller.
+
+Files: the result's own format (:meth:`Result.csv_bytes`, units in the header) with the time
+column written exactly, so a cached result is bit-identical to the fresh one; entries written by
+earlier versions (a ``# units:`` comment line above a plain header) are read as they are.
 """
 
 from __future__ import annotations
@@ -200,7 +204,8 @@ def _write_entry(folder: Path, result: Result) -> None:
 
     os.mkdir(folder)
     data = {
-        f"{result.engine}.csv": result.csv_bytes(),
+        # the time column as computed, so that a cached result is bit-identical to a fresh one
+        f"{result.engine}.csv": result.csv_bytes(exact_time=True),
         f"{result.engine}.json": result.json_bytes(),
     }
     for name, content in data.items():

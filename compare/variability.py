@@ -49,6 +49,24 @@ from .progress import Progress
 #: quantities of a row that the summary describes
 QUANTITIES = ("peak_theta", "peak_y", "peak_x", "gap_closures")
 UNITS = {"peak_theta": "rad", "peak_y": "m", "peak_x": "m", "gap_closures": "-"}
+#: units of the numeric columns of a case table (the case columns and :func:`case_row`'s row;
+#: ``closures_c1``… are ``-`` too, :func:`table_units`); text and flag columns have none
+CASE_UNITS = {
+    **UNITS,
+    "case": "-",
+    "seed": "-",
+    "wall_time": "s",
+    "compile_time": "s",
+    "steps": "-",
+    "loop_time": "s",
+    "unseated_time": "s",
+    "seat_margin": "m",
+    "seat_demand": "m",
+    "process_time": "s",
+}
+#: units of the summary's columns that have one unit for every row (the statistics are in the
+#: unit of the row's quantity, named in its ``unit`` column)
+SUMMARY_UNITS = {"n": "-"}
 #: version of the row format (part of the row cache key)
 ROW_FORMAT = 2  # 2: seat margin and demand, unseated flag, loop time
 MAX_CASES = 1_000_000
@@ -217,7 +235,8 @@ def run_variability(
     scheduler: str | None = None,
     progress: bool = True,
 ):
-    """Run the study, write ``variability.csv``, ``variability_summary.csv`` and
+    """Run the study, write ``variability.csv``, ``variability_summary.csv`` (units in the
+    header, :func:`table_units`; the summary's statistics in its ``unit`` column's unit) and
     ``variability.png`` in ``out``; return (table, summary)."""
 
     if (cases is None) == (records is None):
@@ -249,8 +268,8 @@ def run_variability(
     )
     summary = summarize(table)
     summary.attrs["wall"] = time.perf_counter() - t0
-    write_csv(table, out / "variability.csv")
-    write_csv(summary, out / "variability_summary.csv")
+    write_csv(table, out / "variability.csv", table_units(table))
+    write_csv(summary, out / "variability_summary.csv", SUMMARY_UNITS)
     figure(table, summary, scene, out / "variability.png")
     atomic_write_text(
         out / "variability.json",
@@ -269,6 +288,13 @@ def run_variability(
         ),
     )
     return table, summary
+
+
+def table_units(table) -> dict[str, str]:
+    """Units of a case table's columns (:data:`CASE_UNITS`; ``closures_c1``… counts)."""
+    units = {c: u for c, u in CASE_UNITS.items() if c in table}
+    units.update({c: "-" for c in table.columns if str(c).startswith("closures_")})
+    return units
 
 
 def summarize(table) -> object:

@@ -322,9 +322,29 @@ def atomic_path(path: str | Path, *, field: str = "--output") -> Iterator[Path]:
             _unlink_quietly(tmp)
 
 
-def write_csv(frame, path: str | Path, **kwargs) -> Path:
-    """``frame.to_csv(path, index=False, **kwargs)`` atomically."""
+#: a CSV header cell that states its column's unit: ``deck_theta [rad]``, ``gap_closures [-]``
+UNIT_HEADER = re.compile(r"^(?P<name>.*?) \[(?P<unit>[^\[\]]*)\]$")
+
+
+def unit_label(name: str, unit: str | None) -> str:
+    """The header cell of column ``name`` in ``unit``: ``"deck_theta [rad]"``; a column without
+    a unit (text, flags: ``engine``, ``status``) keeps its plain name. Dimensionless is ``-``."""
+    return f"{name} [{unit}]" if unit else name
+
+
+def split_unit_label(header: str) -> tuple[str, str | None]:
+    """(name, unit) of a header cell written by :func:`unit_label` (unit None without one)."""
+    m = UNIT_HEADER.match(header)
+    return (m.group("name"), m.group("unit")) if m else (header, None)
+
+
+def write_csv(frame, path: str | Path, units: dict[str, str] | None = None, **kwargs) -> Path:
+    """``frame.to_csv(path, index=False, **kwargs)`` atomically, each column named
+    ``name [unit]`` for the columns ``units`` gives a unit (:func:`unit_label`), so that a plain
+    ``pandas.read_csv(path)`` reads the numbers as numbers and the header says their units."""
     kwargs.setdefault("index", False)
+    if units:
+        frame = frame.rename(columns={c: unit_label(c, units.get(c)) for c in frame.columns})
     with atomic_path(path) as tmp:
         frame.to_csv(tmp, **kwargs)
     return Path(path)

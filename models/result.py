@@ -20,10 +20,12 @@ name), ``message``, ``failed_step``/``failed_time`` on failure, ``steps``, ``new
 ``failures``, ``wall_time`` (run time without compilation) and ``compile_time`` [s],
 ``scene_hash``, ``physics_hash``, ``settings``, ``settings_hash``, ``version``, ``units``.
 
-Files: ``DIR/<engine>.csv`` (the columns; units in a ``# units:`` comment line) and
-``DIR/<engine>.json`` (the metadata), written as a pair all or nothing (temporary files renamed
+Files: ``DIR/<engine>.csv`` (the columns; each header cell names its unit, ``deck_theta [rad]``,
+so a plain ``pandas.read_csv`` gives float columns; the time column rounded to the step's
+resolution, :func:`rounded_time`) and ``DIR/<engine>.json`` (the metadata), written as a pair all or nothing (temporary files renamed
 into place, :mod:`deckpound.models.file_io`), so an interruption or a full disk leaves no partial file; a
-symbolic link in their place is refused.
+symbolic link in their place is refused. :meth:`Result.read` and :func:`read_table` also read the
+files of earlier versions, whose units stood in a ``# units:`` comment line above a plain header.
 """
 
 from __future__ import annotations
@@ -40,7 +42,12 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from deckpound.models.file_io import atomic_write_files, ensure_folder
+from deckpound.models.file_io import (
+    atomic_write_files,
+    ensure_folder,
+    split_unit_label,
+    unit_label,
+)
 
 from ._rows_text import format_array
 from .columns import column_unit
@@ -55,14 +62,18 @@ __all__ = [
     "STATUS_FAILED",
     "STATUS_SUCCESS",
     "STATUS_UNSEATED",
+    "TIME_DIGITS",
     "Result",
     "closure_times",
+    "decimal_step",
     "display_unit",
     "gap_closures",
     "in_contact",
     "peak_columns",
     "physics_hash",
     "physics_mapping",
+    "read_table",
+    "rounded_time",
     "row_peak",
     "scene_hash",
     "settings_hash",
@@ -443,16 +454,23 @@ class Result:
         )
         return csv_path, json_path
 
-    def csv_bytes(self) -> bytes:
-        """The columns as CSV: a ``# units:`` comment line, the header, then the rows (the
-        shortest text of each double that reads back as the same double: ``repr``'s text, written
-        by ``orjson``, see :mod:`._rows_text`)."""
+    def csv_bytes(self, exact_time: bool = False) -> bytes:
+        """The columns as CSV: the header (``t [s],deck_x_abs [m],…``: each column's unit in
+        its name, :func:`deckpound.models.file_io.unit_label`), then the rows (the shortest text
+        of each double that reads back as the same double: ``repr``'s text, written by
+        ``orjson``, see :mod:`._rows_text`). The time column is written rounded to the step's
+        resolution (:func:`rounded_time`: ``0.175``, not the ``0.17500000000000002`` of k·Δt);
+        ``exact_time`` writes it as computed (the result cache, whose results must come back
+        bit-identical). Every other column is written exactly."""
 
         names = list(self.columns)
-        head = ["# units: " + ",".join(column_unit(n) for n in names), ",".join(names)]
-        arr = np.column_stack([self.columns[n] for n in names]) if names else np.empty((0, 0))
+        head = ",".join(_csv_cell(unit_label(n, column_unit(n))) for n in names)
+        cols = [self.columns[n] for n in names]
+        if "t" in self.columns and not exact_time:
+            cols[names.index("t")] = rounded_time(self.columns["t"])
+        arr = np.column_stack(cols) if names else np.empty((0, 0))
         body = format_array(arr)
-        return ("\n".join(head) + "\n" + body).encode()
+        return (head + "\n" + body).encode()
 
     def json_bytes(self) -> bytes:
         """The metadata as JSON text."""
@@ -491,7 +509,7 @@ class Result:
                 "result", f"{source}: {engine}.json must hold an object, got {type(meta).__name__}"
             )
         try:
-            frame = pd.read_csv(io.BytesIO(csv_data), comment="#")
+            frame = read_table(io.BytesIO(csv_data))
             cols = {str(k): frame[k].to_numpy(dtype=float) for k in frame.columns}
         except (
             ValueError,
@@ -508,6 +526,88 @@ class Result:
         if "t" not in cols:
             raise SceneError("result", f"{source}: {engine}.csv has no time column 't'")
         return cls(engine=engine, columns=cols, meta=meta)
+
+
+def _csv_cell(text: str) -> str:
+    """A header cell as CSV text: quoted when it holds a comma or a quote (RFC 4180); the
+    contact-state columns' unit reads ``0 open, 1 stick, 2 slip``."""
+    return '"' + text.replace('"', '""') + '"' if ("," in text or '"' in text) else text
+
+
+#: significant digits of the output step kept in a written time column (:func:`rounded_time`)
+TIME_DIGITS = 12
+#: a step is a decimal one when it has at most this many significant digits (0.005, 0.01, 0.002)
+#: up to round-off (relative 1e-9): only such grids are rounded
+STEP_DIGITS = 6
+#: round-off of k·Δt a rounded time may remove, in units in the last place of the time
+ROUNDOFF_ULPS = 8
+
+
+def decimal_step(step: float) -> float | None:
+    """``step`` [s] as the decimal it stands for (``0.004999999999999893`` → ``0.005``): its
+    :data:`STEP_DIGITS` significant digits, if they are within 1e-9·Δt of it, else None (a step
+    such as 1/30 s has no short decimal)."""
+    if not (np.isfinite(step) and step > 0):
+        return None
+    short = float(f"{step:.{STEP_DIGITS}g}")
+    return short if abs(short - step) <= 1e-9 * step else None
+
+
+def rounded_time(t: np.ndarray, step: float | None = None) -> np.ndarray:
+    """A time base [s] with the round-off of k·Δt taken out: a time within
+    :data:`ROUNDOFF_ULPS` units in the last place of a grid time k·Δt is written as that grid
+    time rounded to :data:`TIME_DIGITS` (12) significant digits of the step, i.e. to the decimal
+    place 10^(⌊log10 Δt⌋ − 11) (``0.17500000000000002`` → ``0.175`` for Δt = 0.005 s). Times
+    off the grid (an adaptive engine's event rows) and grids whose step is not a short decimal
+    (:func:`decimal_step`; Δt = 1/30 s) are kept bit for bit. ``step`` defaults to the median
+    spacing of ``t``. The decimal place is capped so that the largest |t| keeps 15 significant
+    digits. Applied where time bases are written or made (result files, the aligned base), never
+    inside the engines."""
+
+    t = np.asarray(t, dtype=float)
+    if step is None:
+        step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    step = decimal_step(step)
+    largest = float(np.max(np.abs(t))) if len(t) else 0.0
+    if step is None or not np.isfinite(largest):
+        return t.copy()
+    decimals = TIME_DIGITS - 1 - int(np.floor(np.log10(step)))
+    if largest > 0:
+        decimals = min(decimals, 14 - int(np.floor(np.log10(largest))))
+    grid = np.round(np.rint(t / step) * step, decimals)
+    on_grid = np.abs(grid - t) <= ROUNDOFF_ULPS * np.spacing(np.abs(t))
+    return np.where(on_grid, grid, t)
+
+
+def read_table(source) -> pd.DataFrame:
+    """A CSV table deckpound wrote (a path or a binary stream) with plain column names
+    (``deck_theta``) and the units in ``frame.attrs["units"]`` (name → unit).
+
+    Reads both header formats: ``name [unit]`` cells (this version) and a plain header below a
+    ``# units: s,m,…`` comment line (result files of earlier versions), without a warning."""
+
+    if isinstance(source, (str, Path)):
+        source = io.BytesIO(Path(source).read_bytes())
+    data = source.read()
+    first = data.split(b"\n", 1)[0].strip()
+    old_units: list[str] = []
+    if first.startswith(b"#") and first[1:].strip().startswith(b"units:"):
+        old_units = first[1:].strip()[len(b"units:") :].decode("utf-8").strip().split(",")
+    frame = pd.read_csv(io.BytesIO(data), skiprows=1 if old_units else None)
+    if old_units and len(old_units) != len(frame.columns):
+        # a unit with commas of its own (the contact states') split the comment line
+        old_units = [column_unit(str(c)) for c in frame.columns]
+    names, units = [], {}
+    for i, header in enumerate(frame.columns):
+        name, unit = split_unit_label(str(header))
+        if unit is None and i < len(old_units) and old_units[i].strip():
+            unit = old_units[i].strip()
+        names.append(name)
+        if unit is not None:
+            units[name] = unit
+    frame.columns = names
+    frame.attrs["units"] = units
+    return frame
 
 
 #: units drawn in figures at a readable scale: SI unit → (factor, shown unit)

@@ -37,10 +37,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from deckpound.cli import main
 from deckpound.models.file_io import INCOMPLETE, is_temporary
+from deckpound.models.result import read_table
 
 OK_OUTCOMES = ("refused", "engine failure", "I/O error", "interrupted", "success")
 BAD_OUTCOMES = ("TRACEBACK", "UNCLEAN", "PARTIAL OUTPUT", "SILENT NONSENSE")
@@ -238,7 +238,7 @@ def materialise(case, root: Path, result_dir: Path | None) -> list[str]:
 
 
 def _damage(csv: Path, how: str) -> None:
-    frame = pd.read_csv(csv, comment="#")
+    frame = read_table(csv)
     if how == "csv-nan":
         frame.loc[3, "deck_theta"] = np.nan
     elif how == "csv-decreasing":
@@ -410,7 +410,7 @@ def _damaged_results(folder: Path) -> str:
             return f"{e}: one of csv/json missing"
         if csv.exists():
             try:
-                pd.read_csv(csv, comment="#")
+                read_table(csv)
                 json.loads(js.read_text())
             except Exception as err:
                 return f"{e} result does not parse: {err}"[:200]
@@ -430,7 +430,7 @@ def _nonsense(case, target: str, stdout: str) -> str:
         for e in ENGINES:
             csv = Path(target) / f"{e}.csv"
             if csv.exists():
-                frame = pd.read_csv(csv, comment="#")
+                frame = read_table(csv)
                 if len(frame) < 2:
                     return f"{e}.csv holds {len(frame)} row(s)"
                 values = frame.to_numpy(dtype=float)

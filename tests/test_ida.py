@@ -14,6 +14,7 @@ from _record_helpers import quake, write_at2
 from deckpound import cli
 from deckpound.compare.ida import fragility_table, limit_states, parse_levels
 from deckpound.models.errors import SceneError
+from deckpound.models.result import read_table
 
 PAIRS = 4
 #: a short seat so that the suite unseats within its levels (the benchmark's seat never does)
@@ -51,7 +52,7 @@ def test_ida_runs_every_pair_at_every_level_and_fits_unseating(tmp_path, suite, 
     code, out = _sweep(tmp_path, suite, "ida", levels, "--theta-limit", "0.002")
     printed = capsys.readouterr().out
     assert code == 0
-    table = pd.read_csv(out / "ida.csv", comment="#")
+    table = read_table(out / "ida.csv")
     assert len(table) == PAIRS * 15
     assert table["record"].nunique() == PAIRS
     # one factor per pair: every case's geometric-mean PGA is its level (provenance)
@@ -62,7 +63,7 @@ def test_ida_runs_every_pair_at_every_level_and_fits_unseating(tmp_path, suite, 
     # an unseated case stops at the seat's edge: its seat-width demand is the support length
     hit = table[table["unseated"]]
     np.testing.assert_allclose(hit["seat_demand"], 0.015, rtol=0.05)
-    frag = pd.read_csv(out / "fragility.csv", comment="#")
+    frag = read_table(out / "fragility.csv")
     row = frag[(frag["limit_state"] == "unseating") & (frag["method"] == "ida")].iloc[0]
     assert 0.1 <= row["median"] <= 1.5 and row["beta"] > 0
     assert "compliance, unseating: median" in printed and f"{PAIRS * 15} cases" in printed
@@ -75,7 +76,7 @@ def test_ida_runs_every_pair_at_every_level_and_fits_unseating(tmp_path, suite, 
 def test_msa_fits_stripes_and_counts_what_it_leaves_out(tmp_path, suite, capsys):
     code, out = _sweep(tmp_path, suite, "msa", "0.2,0.4,0.6,0.8,1.0")
     assert code == 0
-    frag = pd.read_csv(out / "fragility.csv", comment="#")
+    frag = read_table(out / "fragility.csv")
     msa = frag[frag["method"] == "msa"].iloc[0]
     assert msa["cases"] + msa["left_out"] == PAIRS * 5
     assert "unseating:" in capsys.readouterr().out
@@ -148,8 +149,8 @@ def test_ida_on_a_local_dask_cluster_of_two_workers_equals_the_local_pool(tmp_pa
         args = ["ida", "saiidi-4span", "--records", str(suite), "--im", "pga", "--levels"]
         args += [levels, *SEATS, "--scheduler", cluster.scheduler_address, "--no-progress"]
         assert cli.main([*args, "-o", str(out)]) == 0
-    local = pd.read_csv(tmp_path / "local" / "ida" / "ida.csv", comment="#")
-    remote = pd.read_csv(out / "ida.csv", comment="#")
+    local = read_table(tmp_path / "local" / "ida" / "ida.csv")
+    remote = read_table(out / "ida.csv")
     for q in ("peak_theta", "seat_margin", "gap_closures"):
         np.testing.assert_array_equal(remote[q], local[q])
 
@@ -168,7 +169,7 @@ def test_a_suite_of_22_pairs_by_10_levels_in_two_engines_end_to_end(tmp_path, ca
     assert cli.main([*base, "--levels", "0.2:2.0:0.2", "-o", str(tmp_path / "full")]) == 0
     meta = json.loads((tmp_path / "full" / "ida.json").read_text())
     assert meta["cases"] == 2 * 22 * 10 and meta["from_cache"] == 2 * 22 * 5
-    frag = pd.read_csv(tmp_path / "full" / "fragility.csv", comment="#")
+    frag = read_table(tmp_path / "full" / "fragility.csv")
     assert set(frag["engine"]) == {"compliance", "nonsmooth"}
     printed = capsys.readouterr().out
     assert "compliance, unseating:" in printed and "nonsmooth, unseating:" in printed
@@ -189,7 +190,7 @@ def test_vary_friction_runs_the_sweep_per_value_and_fits_each(tmp_path, suite, c
     code, out = _sweep(tmp_path, suite, "ida", "0.2:1.0:0.2", *vary)
     printed = capsys.readouterr().out
     assert code == 0
-    table = pd.read_csv(out / "ida.csv", comment="#")
+    table = read_table(out / "ida.csv")
     assert len(table) == 2 * PAIRS * 5
     assert table.groupby("variant").size().to_dict() == {
         "contact.friction=0": PAIRS * 5,
@@ -202,7 +203,7 @@ def test_vary_friction_runs_the_sweep_per_value_and_fits_each(tmp_path, suite, c
     # friction changes the response: the two values do not give the same rows
     a, b = (g.sort_values(["record_key", "level"]) for _, g in table.groupby("variant"))
     assert not np.allclose(a["peak_theta"].to_numpy(), b["peak_theta"].to_numpy())
-    frag = pd.read_csv(out / "fragility.csv", comment="#")
+    frag = read_table(out / "fragility.csv")
     assert len(frag) == 2 * 1 * 2  # variants × limit states × methods
     assert set(frag["variant"]) == {"contact.friction=0", "contact.friction=0.4"}
     assert "compliance (contact.friction=0.4), unseating:" in printed

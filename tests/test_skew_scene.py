@@ -7,11 +7,11 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-import pandas as pd
 import pytest
 
 from deckpound.cli import main
 from deckpound.compare.engines import engine_names
+from deckpound.models.result import read_table
 from deckpound.models.scene_io import builtin_scene_names, load_scene
 
 
@@ -58,7 +58,7 @@ def test_run_skew_30_with_every_engine(engine, tmp_path, capsys):
     )
     out = capsys.readouterr()
     assert code == 0, out.err[-2000:]
-    data = pd.read_csv(tmp_path / engine / f"{engine}.csv", comment="#")
+    data = read_table(tmp_path / engine / f"{engine}.csv")
     assert np.all(np.isfinite(data["deck_theta"]))
     assert data["t"].iloc[-1] == pytest.approx(2.0)
 

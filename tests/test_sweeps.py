@@ -9,13 +9,13 @@ import sys
 import time
 
 import numpy as np
-import pandas as pd
 import pytest
 
 import deckpound as dp
 from deckpound import cli
 from deckpound.compare import pool
 from deckpound.compare.cases import map_parallel
+from deckpound.models.result import read_table
 
 SHORT = ["excitation.duration=2.0"]
 
@@ -83,7 +83,7 @@ def _variability(tmp_path, name, *extra):
         ]
     )
     assert code == 0
-    return out, pd.read_csv(out / "variability.csv"), pd.read_csv(out / "variability_summary.csv")
+    return out, read_table(out / "variability.csv"), read_table(out / "variability_summary.csv")
 
 
 def test_variability_study_table_summary_figure_and_resume(tmp_path, capsys):

@@ -9,6 +9,7 @@ import math
 import re
 
 from deckpound.models.errors import SceneError
+from deckpound.models.file_io import split_unit_label
 
 from ._cli_args import int_in
 from ._terminal import terminal_text
@@ -27,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Fit P(exceed | im) = Φ(ln(im/median)/beta) to multiple-stripe counts by "
         "maximum likelihood (binomial, Baker 2015). STRIPES.csv has a header with the columns "
         "im (IM level > 0), n (records run at it) and exceed (records exceeding the limit "
-        "state), one row per stripe; other columns are ignored. Records are not identified "
+        "state), one row per stripe (a unit may follow a name: 'im [g]'); other columns are "
+        "ignored. Records are not identified "
         "in stripe counts, so --bootstrap is parametric: it redraws each stripe's count from "
         "the fitted curve (Binomial(n, P(im))) and refits.",
     )
@@ -54,7 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def read_stripes_csv(path: str) -> tuple[list[float], list[float], list[float], list[int]]:
     """(im, n, exceed, line number) per stripe row of a stripes CSV; a missing column, an empty file or a value that is
-    not a number is a :class:`SceneError` naming the file, the line and the column."""
+    not a number is a :class:`SceneError` naming the file, the line and the column. Header cells
+    may carry a unit (``im [g]``, ``n [-]``), as in the tables deckpound writes."""
     # an unreadable file raises OSError (exit status 3) here, before any parsing
     with open(path, encoding="utf-8-sig", newline="") as stream:  # -sig: a spreadsheet's BOM
         try:
@@ -68,7 +71,8 @@ def read_stripes_csv(path: str) -> tuple[list[float], list[float], list[float], 
         header = next(reader, None)
         if header is None:
             raise SceneError(path, "is empty; expected a header with the columns im, n, exceed")
-        names = [h.strip() for h in header]
+        # a header cell may state its unit ("im [g]", "n [-]": the tables deckpound writes)
+        names = [split_unit_label(h.strip())[0] for h in header]
         missing = [c for c in STRIPE_COLUMNS if c not in names]
         if missing:
             raise SceneError(
