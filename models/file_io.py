@@ -332,6 +332,14 @@ def unit_label(name: str, unit: str | None) -> str:
     return f"{name} [{unit}]" if unit else name
 
 
+def csv_cell(text: str) -> str:
+    """``text`` as one CSV cell: quoted when it holds a comma, a quote or a line break
+    (RFC 4180); the contact-state columns' unit reads ``0 open, 1 stick, 2 slip``."""
+    if any(ch in text for ch in ',"\n\r'):
+        return '"' + text.replace('"', '""') + '"'
+    return text
+
+
 def split_unit_label(header: str) -> tuple[str, str | None]:
     """(name, unit) of a header cell written by :func:`unit_label` (unit None without one)."""
     m = UNIT_HEADER.match(header)

@@ -44,6 +44,7 @@ import xarray as xr
 
 from deckpound.models.file_io import (
     atomic_write_files,
+    csv_cell,
     ensure_folder,
     split_unit_label,
     unit_label,
@@ -464,7 +465,7 @@ class Result:
         bit-identical). Every other column is written exactly."""
 
         names = list(self.columns)
-        head = ",".join(_csv_cell(unit_label(n, column_unit(n))) for n in names)
+        head = ",".join(csv_cell(unit_label(n, column_unit(n))) for n in names)
         cols = [self.columns[n] for n in names]
         if "t" in self.columns and not exact_time:
             cols[names.index("t")] = rounded_time(self.columns["t"])
@@ -526,12 +527,6 @@ class Result:
         if "t" not in cols:
             raise SceneError("result", f"{source}: {engine}.csv has no time column 't'")
         return cls(engine=engine, columns=cols, meta=meta)
-
-
-def _csv_cell(text: str) -> str:
-    """A header cell as CSV text: quoted when it holds a comma or a quote (RFC 4180); the
-    contact-state columns' unit reads ``0 open, 1 stick, 2 slip``."""
-    return '"' + text.replace('"', '""') + '"' if ("," in text or '"' in text) else text
 
 
 #: significant digits of the output step kept in a written time column (:func:`rounded_time`)

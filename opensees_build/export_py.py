@@ -25,7 +25,8 @@ from __future__ import annotations
 import inspect
 import textwrap
 
-from deckpound.models.columns import column_names
+from deckpound.models.columns import column_names, column_unit
+from deckpound.models.file_io import unit_label
 from deckpound.models.plan import DOF_COLUMNS, plan_of
 
 from . import engine
@@ -54,7 +55,8 @@ def csv_plan(p: ExportParts) -> dict:
     displacement, the channels it is taken relative to the mean of); ``seats``: (engine
     column of a seat's absolute displacement, its actuator's channel); ``springs``: per bent
     spring row of d = B u − S u_g, the (engine column, B coefficient) and (channel, S
-    coefficient) terms; ``columns``: the CSV's columns (the in-process result's), ``order``:
+    coefficient) terms; ``columns``: the CSV's columns (the in-process result's), ``header``:
+    their header cells with units (``deck_theta [rad]``, the result file's header), ``order``:
     their positions in an engine row followed by the derived values.
     """
     plan = plan_of(p.scene)
@@ -99,6 +101,8 @@ def csv_plan(p: ExportParts) -> dict:
         ],
         "springs": springs,
         "columns": columns,
+        # the CSV's header: each column with its unit, as deckpound writes its own result
+        "header": [unit_label(c, column_unit(c)) for c in columns],
         "order": [extended.index(c) for c in columns],
     }
 
@@ -276,7 +280,7 @@ def main(argv=None):
     if a.csv:
         with open(os.path.join(a.out, "opensees.csv"), "w", newline="") as fh:
             w = csv.writer(fh)
-            w.writerow(CSV["columns"])
+            w.writerow(CSV["header"])
             for row in result_rows(out["rows"], CSV, _read_record):
                 w.writerow([repr(float(v)) for v in row])
     with open(os.path.join(a.out, "opensees.stats.json"), "w") as fh:

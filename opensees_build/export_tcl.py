@@ -19,6 +19,8 @@ Layout (each part generated; scene text appears only in the header comments):
 
 from __future__ import annotations
 
+from deckpound.models.file_io import csv_cell
+
 from .export_header import ExportParts, header_lines
 from .export_py import csv_plan
 from .ops import render_commands
@@ -260,7 +262,7 @@ proc csvRow {{row}} {{
 def tcl_step_loop(csv: dict) -> str:
     """The gap-closure count and the step loop with the sub-step fallback of
     :func:`deckpound.opensees_build.engine.run_steps`, writing the CSV's rows."""
-    columns = " ".join(tcl_word(c) for c in csv["columns"])
+    columns = " ".join(tcl_word(csv_cell(c)) for c in csv["header"])
     return f"""# gap closures at every converged step and sub-step (deckpound's one definition, the engine's
 # track_step): a corner is in contact when its gap is <= 0 or its normal force > 0; a closure
 # is a step at which a corner goes from out of contact to in contact (in contact at t = 0: one)

@@ -14,10 +14,11 @@ import pandas as pd
 import pytest
 from tests_helpers_scene import short_benchmark
 
-from deckpound.models.columns import column_names
+from deckpound.models.columns import column_names, column_unit
 from deckpound.models.engine_contract import engine_columns
 from deckpound.models.excitation import support_motion
 from deckpound.models.plan import DOF_COLUMNS, plan_of
+from deckpound.models.result import read_table
 from deckpound.opensees_build.export_py import interp_record
 
 pytest.importorskip("openseespy.opensees")
@@ -101,8 +102,9 @@ def test_python_export_csv_has_the_result_columns(case, tmp_path):
         check=False,
     )
     assert cp.returncode == 0, cp.stderr[-2000:]
-    df = pd.read_csv(tmp_path / "out" / "opensees.csv", dtype=float)
+    df = read_table(tmp_path / "out" / "opensees.csv")
     assert list(df.columns) == column_names(plan)  # the in-process result's columns, in order
+    assert df.attrs["units"] == {c: column_unit(c) for c in df.columns}  # in the header
     assert set(_derived(plan)) <= set(df.columns) and len(df) == len(ref.t)
     for c in engine_columns(plan):  # sampled by the same code on the same library
         assert np.array_equal(df[c].to_numpy(), ref[c]), c
@@ -128,8 +130,9 @@ def test_tcl_export_csv_has_the_result_columns(case, tmp_path):
         input=f"set writeCsv 1\nset outDir {tcl_word(str(out))}\nsource {tcl_word(str(script))}\n",
     )
     assert cp.returncode == 0, (cp.stdout + cp.stderr)[-2000:]
-    df = pd.read_csv(out / "opensees.csv", dtype=float)
+    df = read_table(out / "opensees.csv")
     assert list(df.columns) == column_names(plan)
+    assert df.attrs["units"] == {c: column_unit(c) for c in df.columns}  # in the header
     own = _expected(scene, df)  # the Tcl arithmetic on its own rows
     for c in _derived(plan):
         assert _worst(df[c].to_numpy(), own[c]) <= 1e-13, c

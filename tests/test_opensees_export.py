@@ -12,12 +12,12 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 
-from deckpound.models.columns import column_names
+from deckpound.models.columns import column_names, column_unit
 from deckpound.models.engine_contract import engine_columns
 from deckpound.models.plan import plan_of
+from deckpound.models.result import read_table
 
 pytest.importorskip("openseespy.opensees")
 
@@ -88,10 +88,11 @@ def test_exported_python_csv_reproduces_in_process_run(exported, tmp_path):
         check=False,
     )
     assert cp.returncode == 0, cp.stderr[-2000:]
-    df = pd.read_csv(tmp_path / "opensees.csv", dtype=float)
+    df = read_table(tmp_path / "opensees.csv")
     # the result's columns; the derived ones (relative, bent deformations) are compared to
     # round-off in tests/test_export_columns.py
     assert list(df.columns) == column_names(plan_of(sc))
+    assert df.attrs["units"] == {c: column_unit(c) for c in df.columns}  # in the header
     assert len(df) == len(r.t)
     for c in engine_columns(plan_of(sc)):
         assert np.array_equal(df[c].to_numpy(), r[c]), c

@@ -27,9 +27,10 @@ import pytest
 from tests_helpers_scene import short_benchmark
 
 from deckpound.compare.engines import run_engine
-from deckpound.models.columns import column_names
+from deckpound.models.columns import column_names, column_unit
 from deckpound.models.engine_contract import engine_columns
 from deckpound.models.plan import plan_of
+from deckpound.models.result import read_table
 from deckpound.models.scene_io import scene_from_mapping
 from deckpound.opensees_build.export import export_script
 from deckpound.opensees_build.quoting import tcl_word
@@ -144,7 +145,6 @@ def test_tcl_recorders_match_the_in_process_run(trip):
 @needs_tcl
 def test_tcl_csv_block_reproduces_deckpound_csv(trip, tmp_path):
     """The optional writeCsv block writes deckpound's columns as the engine samples them."""
-    import pandas as pd
 
     scene, folder, ref = trip
     script = export_script(scene, "tcl", folder / "csv.tcl")
@@ -158,8 +158,9 @@ def test_tcl_csv_block_reproduces_deckpound_csv(trip, tmp_path):
         input=f"set writeCsv 1\nset outDir {tcl_word(str(out))}\nsource {tcl_word(str(script))}\n",
     )
     assert cp.returncode == 0, (cp.stdout + cp.stderr)[-2000:]
-    df = pd.read_csv(out / "opensees.csv")
+    df = read_table(out / "opensees.csv")
     assert list(df.columns) == column_names(plan_of(scene))  # derived ones: test_export_columns
+    assert df.attrs["units"] == {c: column_unit(c) for c in df.columns}  # in the header
     dev = deviation({c: df[c].to_numpy() for c in engine_columns(plan_of(scene))}, ref)
     assert max(dev.values()) <= 1e-10, dev
     assert (out / "deck_x_abs.out").exists()  # outDir set before source is honoured
