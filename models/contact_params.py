@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .contact_laws_table import contact_law
 from .plan import plan_of
 from .scene import Scene
 
@@ -50,13 +51,14 @@ def kelvin_voigt_damping(scene: Scene) -> np.ndarray:
 def contact_period(scene: Scene) -> float:
     """Period of the stiffest corner's contact oscillation, T_c = 2π √(m_eff / k_eff) [s].
 
-    k_eff is ``contact.stiffness`` (K1 of the bilinear law); for the Hertz laws the secant
-    stiffness k δ^(n−1) at δ = :data:`HERTZ_SECANT_DEPTH`. NaN when there is no contact
-    stiffness or no moving mass.
+    k_eff is ``contact.stiffness`` (K1 of the bilinear law); for the Hertz-type laws (those
+    whose force reads ``contact.exponent`` in the law table: hertz, hertz-damp, hertzdamp,
+    flores) the secant stiffness k δ^(n−1) at δ = :data:`HERTZ_SECANT_DEPTH`. NaN when there
+    is no contact stiffness or no moving mass.
     """
     ct = scene.contact
     k = ct.stiffness
-    if ct.law in ("hertz", "hertz-damp", "hertzdamp"):
+    if "contact.exponent" in contact_law(ct.law).params:  # λ ∝ δ^n: the Hertz-type laws
         k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
     m = float(np.min(effective_masses(scene)))
     return float(2.0 * np.pi * np.sqrt(m / k)) if k > 0 and m > 0 else float("nan")

@@ -119,3 +119,14 @@ def test_law_study_has_one_case_per_row():
     from deckpound.compare.studies import law_cases
 
     assert [c.params["law"] for c in law_cases(base_scene())] == LAWS
+
+
+def test_the_opensees_refusals_name_the_laws_opensees_expresses():
+    """The refusal texts list, in words, the laws that have an OpenSees material: the same set
+    as the table's ``opensees`` column."""
+    expressed = {law.name for law in CONTACT_LAW_TABLE if law.opensees}
+    for law in CONTACT_LAW_TABLE:
+        if law.opensees_refusal and "; use " in law.opensees_refusal:
+            listed = law.opensees_refusal.rsplit("; use ", 1)[1]
+            named = {w.strip(" ,") for w in listed.replace(" or ", ", ").split(",")}
+            assert named == expressed, law.name

@@ -141,8 +141,10 @@ def test_contact_step_keeps_the_benchmark_step_and_shortens_a_stiff_contact():
     assert contact_resolving_step(off, 5e-4) == 5e-4
 
 
-def test_hertz_contact_period_uses_the_secant_stiffness():
-    s = load_scene("saiidi-4span", ["contact.law=hertz", "contact.stiffness=1e7"])
+@pytest.mark.parametrize("law", ["hertz", "hertz-damp", "hertzdamp", "flores"])
+def test_hertz_contact_period_uses_the_secant_stiffness(law):
+    """Every law whose force is k δ^n (it reads contact.exponent in the law table)."""
+    s = load_scene("saiidi-4span", [f"contact.law={law}", "contact.stiffness=1e7"])
     lin = load_scene("saiidi-4span", ["contact.stiffness=1e6"])  # 1e7 * 0.01^0.5
     assert contact_period(s) == pytest.approx(contact_period(lin), rel=1e-12)
 
