@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound.compare.engines import engine_names
+from deckpound.compare.engines import engine_names, get_engine
 from deckpound.compare.verify_clone import verify_clone
 from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 from deckpound.models.plan import CORNER_NAMES
@@ -102,12 +102,11 @@ def skew_cases(scene: Scene, quick: bool = False) -> list[Case]:
             dt = contact_step(base)
             penalty = modified(base, f"compliance.dt={dt!r}", f"opensees.dt={dt!r}")
             for engine in engine_names():
-                sc = base if engine == "nonsmooth" else penalty
+                rigid = not get_engine(engine).compliant_contact  # no contact step to resolve
+                sc = base if rigid else penalty
                 if not engine_expresses(engine, sc, "skew"):
                     continue
-                friction = (
-                    "none" if mu == 0 else "Coulomb" if engine == "nonsmooth" else DEFAULT_FRICTION
-                )
+                friction = "none" if mu == 0 else "Coulomb" if rigid else DEFAULT_FRICTION
                 cases.append(
                     Case(
                         f"{engine} skew={phi:g} mu={mu:g}",
