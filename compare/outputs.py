@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -56,11 +57,32 @@ def unit_header(frame: pd.DataFrame, units: dict[str, str]) -> pd.DataFrame:
     return frame.rename(columns={c: unit_label(c, units.get(c)) for c in frame.columns})
 
 
+#: columns that count things (dimensionless, ``[-]``) wherever a table of deckpound has them
+COUNT_COLUMNS = frozenset(
+    {"run", "case", "cases", "hits", "misses", "steps", "left_out", "n", "gap_closures"}
+)
+
+
+def vocabulary_unit(name: str) -> str | None:
+    """The unit a column name has across deckpound's tables, for a writer that names none:
+    counts (:data:`COUNT_COLUMNS`, ``closures_c1``…) and shares (``*_share``) ``-``, times
+    (``*_time``: ``first_time``, ``wall_time``) ``s``; None for any other name."""
+    if name in COUNT_COLUMNS or re.fullmatch(r"closures_c\d+", name):
+        return "-"
+    if name.endswith("_share"):
+        return "-"
+    if name.endswith("_time"):
+        return "s"
+    return None
+
+
 def write_csv(frame: pd.DataFrame, path: str | Path, units: dict[str, str]) -> Path:
-    """A CSV table whose header states each column's unit (``peak_theta [rad]``;
-    :func:`deckpound.models.file_io.write_csv`)."""
+    """A CSV table whose header states each numeric column's unit (``peak_theta [rad]``;
+    :func:`deckpound.models.file_io.write_csv`): the unit ``units`` gives, else the
+    column name's unit across deckpound's tables (:func:`vocabulary_unit`)."""
     folder(Path(path).parent)
-    return file_io_write_csv(frame, path, units)
+    named = {c: units.get(c) or vocabulary_unit(str(c)) for c in frame.columns}
+    return file_io_write_csv(frame, path, {c: u for c, u in named.items() if u})
 
 
 def write_parquet(

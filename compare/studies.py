@@ -278,6 +278,7 @@ STUDIES: dict[str, Study] = {
             "Skewed deck: skew angle, with and without friction",
             skew_cases,
             "skew",
+            "deg",
             row=skew_row,
             figure=skew_figure,
             summary=skew_headlines,

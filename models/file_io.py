@@ -348,11 +348,18 @@ def split_unit_label(header: str) -> tuple[str, str | None]:
 
 def write_csv(frame, path: str | Path, units: dict[str, str] | None = None, **kwargs) -> Path:
     """``frame.to_csv(path, index=False, **kwargs)`` atomically, each column named
-    ``name [unit]`` for the columns ``units`` gives a unit (:func:`unit_label`), so that a plain
+    ``name [unit]`` for the numeric columns ``units`` gives a unit (:func:`unit_label`), so that a plain
     ``pandas.read_csv(path)`` reads the numbers as numbers and the header says their units."""
     kwargs.setdefault("index", False)
     if units:
-        frame = frame.rename(columns={c: unit_label(c, units.get(c)) for c in frame.columns})
+        # a unit names a number: a column of text (a study's "initial" stiffness choice) or of
+        # flags keeps its plain name
+        numeric = {c for c in frame.columns if frame[c].dtype.kind in "iufc"}
+        frame = frame.rename(
+            columns={
+                c: unit_label(c, units.get(c) if c in numeric else None) for c in frame.columns
+            }
+        )
     with atomic_path(path) as tmp:
         frame.to_csv(tmp, **kwargs)
     return Path(path)

@@ -15,6 +15,7 @@ from _record_helpers import quake, write_at2
 
 from deckpound import cli
 from deckpound.compare.align import align, common_time_base, write_tables
+from deckpound.compare.outputs import write_csv
 from deckpound.compare.result_cache import ResultCache
 from deckpound.models.columns import column_unit, standard_columns
 from deckpound.models.file_io import split_unit_label
@@ -267,3 +268,32 @@ def test_export_vtk_reads_a_folder_of_the_previous_format(outputs, tmp_path):
     assert written and written == sorted(
         p.name for p in (tmp_path / "vtk_old").rglob("*") if p.is_file()
     )
+
+
+def test_report_writer_units_numbers_only_and_names_counts(tmp_path):
+    """The report's writer labels numbers only (a study's text column keeps its name even
+    where the study's units name it) and gives counts, shares and times their unit when the
+    caller names none (the paper's cache counts, run numbers)."""
+    frame = pd.DataFrame(
+        {
+            "run": [1, 2],
+            "engine": ["opensees", "compliance"],
+            "stiffness": ["initial", "secant"],
+            "hits": [3, 0],
+            "stick_share": [0.5, 0.25],
+            "first_time": [0.8, 0.9],
+            "peak_theta": [1e-3, 2e-3],
+        }
+    )
+    write_csv(frame, tmp_path / "t.csv", {"stiffness": "kN/m", "peak_theta": "rad"})
+    back = pd.read_csv(tmp_path / "t.csv")
+    assert list(back.columns) == [
+        "run [-]",
+        "engine",
+        "stiffness",
+        "hits [-]",
+        "stick_share [-]",
+        "first_time [s]",
+        "peak_theta [rad]",
+    ]
+    assert check_plain(tmp_path / "t.csv") == []
