@@ -12,7 +12,14 @@ from deckpound.compare import cases as cases_mod
 from deckpound.compare.cases import Case, run_cases
 from deckpound.compare.result_cache import ResultCache
 from deckpound.compare.sequence_run import run_sequence
-from deckpound.compare.studies import STUDIES, Study, friction_cases, run_study, start_state
+from deckpound.compare.studies import (
+    STUDIES,
+    STUDY_NAMES,
+    Study,
+    friction_cases,
+    run_study,
+    start_state,
+)
 from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene, modified
 
@@ -227,3 +234,13 @@ def test_damping_study_cases_and_sentences(tiny):
     table.loc[0, "peak_fn"] = 0.0
     (s,) = damping_headlines(table)
     assert "peak gap force 0 kN in the reference case, 0–700 kN over the choices;" in s
+
+
+def test_the_study_help_names_every_registered_study(capsys):
+    """The CLI starts without pandas, so ``deckpound study --help`` names the studies in words
+    instead of reading the registry: they must be the same set."""
+    assert main(["study", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    listed = text.split("positional arguments: NAME ", 1)[1].split(" SCENE", 1)[0]
+    named = {w.strip(" ,") for w in listed.replace(" or ", ", ").split(",")}
+    assert named == {*STUDY_NAMES, "variability"}
