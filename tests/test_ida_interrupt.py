@@ -12,27 +12,12 @@ import sys
 import time
 
 import pytest
+from _process_helpers import alive, children
 from _record_helpers import quake, write_at2
 
 PAIRS = 12
 LEVELS = "0.1:3.0:0.1"  # 30 levels: 360 cases of 30 s records, minutes of work
 CASES = PAIRS * 30
-
-
-def _children(pid: int) -> list[int]:
-    try:
-        with open(f"/proc/{pid}/task/{pid}/children") as fh:
-            return [int(p) for p in fh.read().split()]
-    except OSError:
-        return []
-
-
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
-    except FileNotFoundError:
-        return False
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc needed")
@@ -60,7 +45,7 @@ def test_ctrl_c_stops_an_ida_cleanly_and_it_resumes(tmp_path):
         if rows.is_dir() and len(list(rows.rglob("*.json"))) >= 3:
             break
         time.sleep(0.2)
-    workers = _children(proc.pid)
+    workers = children(proc.pid)
     assert proc.poll() is None and len(workers) >= 2, "the sweep ended before the interrupt"
     assert not (tmp_path / "out" / "ida.json").exists()  # interrupted inside the sweep
     os.killpg(proc.pid, signal.SIGINT)
@@ -71,7 +56,7 @@ def test_ctrl_c_stops_an_ida_cleanly_and_it_resumes(tmp_path):
     assert lines[0].startswith("deckpound: interrupted: ")
     assert "run the same command again to resume" in lines[0]
     time.sleep(0.5)
-    assert not [p for p in workers if _alive(p)]  # every worker is gone
+    assert not [p for p in workers if alive(p)]  # every worker is gone
     assert (tmp_path / "out" / "INCOMPLETE").is_file()
     cached = len(list(rows.rglob("*.json")))
     done = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=900)

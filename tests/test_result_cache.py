@@ -16,6 +16,7 @@ import warnings
 
 import numpy as np
 import pytest
+from _process_helpers import alive
 
 from deckpound.compare.result_cache import MANIFEST, ResultCache
 from deckpound.compare.result_cache import ResultCache as ReExported
@@ -163,14 +164,6 @@ PARENT = textwrap.dedent("""
 """)
 
 
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
-    except FileNotFoundError:
-        return False
-
-
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc needed")
 @pytest.mark.parametrize("mode", ["prctl", "watchdog-only"])
 def test_workers_die_with_their_parent(tmp_path, mode):
@@ -184,13 +177,13 @@ def test_workers_die_with_their_parent(tmp_path, mode):
         while len(list(pids_dir.iterdir())) < 2 and time.time() < deadline:
             time.sleep(0.1)
         workers = [int(p.name) for p in pids_dir.iterdir()]
-        assert len(workers) == 2 and all(_alive(w) for w in workers)
+        assert len(workers) == 2 and all(alive(w) for w in workers)
         os.kill(parent.pid, signal.SIGKILL)
         parent.wait(10)
         t0 = time.time()
-        while any(_alive(w) for w in workers) and time.time() - t0 < 5:
+        while any(alive(w) for w in workers) and time.time() - t0 < 5:
             time.sleep(0.05)
-        assert not any(_alive(w) for w in workers), f"workers alive {time.time() - t0:.1f} s later"
+        assert not any(alive(w) for w in workers), f"workers alive {time.time() - t0:.1f} s later"
     finally:
         parent.kill()
         for p in pids_dir.iterdir():

@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 import pytest
+from _process_helpers import alive, children
 
 import deckpound as dp
 from deckpound import cli
@@ -121,22 +122,6 @@ def test_variability_on_a_dask_cluster_over_tcp_equals_local(tmp_path):
         np.testing.assert_array_equal(remote[q], local[q])
 
 
-def _children(pid: int) -> list[int]:
-    try:
-        with open(f"/proc/{pid}/task/{pid}/children") as fh:
-            return [int(p) for p in fh.read().split()]
-    except OSError:
-        return []
-
-
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
-    except FileNotFoundError:
-        return False
-
-
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc needed")
 @pytest.mark.parametrize(
     ("sig", "status", "word"),
@@ -177,7 +162,7 @@ def test_ctrl_c_stops_every_worker_with_one_line_and_resumes(tmp_path, sig, stat
         if rows.is_dir() and len(list(rows.glob("*.json"))) >= 3:
             break
         time.sleep(0.2)
-    workers = _children(proc.pid)
+    workers = children(proc.pid)
     assert proc.poll() is None and len(workers) >= 2, "the study ended before the interrupt"
     if sig == signal.SIGINT:
         os.killpg(proc.pid, sig)
@@ -190,7 +175,7 @@ def test_ctrl_c_stops_every_worker_with_one_line_and_resumes(tmp_path, sig, stat
     assert lines[0].startswith(f"deckpound: {word}: study variability: ")
     assert "cached in" in lines[0] and "run the same command again to resume" in lines[0]
     time.sleep(0.5)
-    assert not [p for p in workers if _alive(p)]  # every worker is gone
+    assert not [p for p in workers if alive(p)]  # every worker is gone
     cached = len(list(rows.glob("*.json")))
     assert (tmp_path / "out" / "INCOMPLETE").is_file()
     # resume: the same command computes only the missing cases
