@@ -18,6 +18,7 @@ from deckpound.models.plan import plan_of
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
 
+from .figure_cache import reusable
 from .mechanism import contact_moments, mechanism_row
 from .report_text import TOL
 from .style import CYCLE, engine_style, new_figure, save
@@ -44,6 +45,7 @@ def _style_for(label: str, k: int) -> dict:
     return st
 
 
+@reusable
 def histories(
     results: dict[str, Result],
     scene: Scene,
@@ -68,6 +70,7 @@ def histories(
     return save(fig, path, scene.name, formats)
 
 
+@reusable
 def contact_forces(
     results: dict[str, Result],
     scene: Scene,
@@ -91,6 +94,7 @@ def contact_forces(
     return save(fig, path, scene.name, formats)
 
 
+@reusable
 def peak_vs_pga(
     table: pd.DataFrame,
     scene: Scene,
@@ -119,6 +123,7 @@ def peak_vs_pga(
     return save(fig, path, scene.name, formats)
 
 
+@reusable
 def friction_ratio(
     effect: pd.DataFrame,
     scene: Scene,
@@ -147,6 +152,7 @@ def friction_ratio(
     return save(fig, path, scene.name, formats)
 
 
+@reusable
 def friction_mechanism(
     pairs: dict, path: str | Path, title: str = "", formats: tuple[str, ...] = ()
 ) -> list[Path]:
@@ -191,6 +197,7 @@ def friction_mechanism(
     return save(fig, path, scene.name, formats)
 
 
+@reusable
 def study_figure(
     study,
     scene: Scene,
@@ -256,6 +263,7 @@ def study_figure(
     return save(fig, path, scene.name, formats)
 
 
+@reusable
 def hysteresis(
     result: Result, scene: Scene, path: str | Path, title: str = "", formats: tuple[str, ...] = ()
 ) -> list[Path]:
@@ -336,6 +344,7 @@ def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.
 PLAN_SCALE = 100.0
 
 
+@reusable
 def plan_snapshot(
     results: dict[str, Result],
     scene: Scene,

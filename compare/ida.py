@@ -40,6 +40,7 @@ from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified
 
+from .figure_cache import reusable
 from .fragility import (
     LimitState,
     bootstrap_ida,
@@ -363,6 +364,7 @@ def run_ida(
     return table, frag
 
 
+@reusable
 def ida_figure(table, im: str, scene_name: str, path: Path) -> list[Path]:
     """IDA curves, one panel per engine: the level against each record's seat-width demand
     [mm] (the largest opening of a deck end from its seat) and, beside it, its peak deck
@@ -389,6 +391,7 @@ def ida_figure(table, im: str, scene_name: str, path: Path) -> list[Path]:
     return save(fig, path, scene_name)
 
 
+@reusable
 def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) -> list[Path]:
     """Fragility curves (IDA fits) per limit state, one curve per engine (colour) and variant
     (line style), with its 90 % bootstrap band over records when no variant is swept; the

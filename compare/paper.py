@@ -38,6 +38,7 @@ from deckpound.models.scene_io import modified, scene_to_toml
 from . import figures
 from .align import align, write_tables
 from .case_rows import ROW_UNITS
+from .figure_cache import MANIFEST_NAME, FigureManifest, reuse_figures
 from .mechanism import MECHANISM_UNITS, mechanism_row
 from .metrics import closure_times_per_corner, compare_pair
 from .outputs import folder, folder_size, write_csv, write_text
@@ -177,6 +178,9 @@ class PaperData:
     wall: float = 0.0
     sizes: dict[str, int] = field(default_factory=dict)
     unseating: UnseatingRun | None = None
+    #: figures drawn by this run, and reused unchanged from an earlier run into the folder
+    figures_drawn: int = 0
+    figures_reused: int = 0
 
 
 def _mech_rows(source: str, state: str, run: int | None, results, scenes) -> list[dict]:
@@ -223,37 +227,44 @@ def run_paper(
     reference: str = DEFAULT_REFERENCE,
     full_histories: bool = False,
     formats: tuple[str, ...] = (),
+    redraw: bool = False,
 ) -> Path:
     """Run the whole comparison and write the report folder; returns the report.md path.
 
     ``engines`` (default: every registered engine) run the sequence; the others are compared
     against ``reference``. ``formats`` adds figure formats to PNG (e.g. ``("pdf",)``).
+    A figure whose inputs are those it was drawn from into this folder before, and whose files
+    are intact, is not drawn again (:mod:`.figure_cache`; fingerprints in
+    ``out/figure_inputs.json``); ``redraw`` draws every figure.
     Off a terminal, the paper's stages report between the runs' own progress lines (figures and
     the report are drawn without a progress of their own): a log shows a line at least every
     :data:`~deckpound.compare.progress.PROGRESS_INTERVAL` s.
     """
     stages = Progress(PAPER_STAGES, "paper", progress, log_only=True, eta=False)
     try:
-        return _paper(
-            stages,
-            scene,
-            out,
-            quick=quick,
-            workers=workers,
-            scheduler=scheduler,
-            cache_dir=cache_dir,
-            studies=studies,
-            progress=progress,
-            engines=engines,
-            reference=reference,
-            full_histories=full_histories,
-            formats=formats,
-        )
+        with reuse_figures(Path(out) / MANIFEST_NAME, reuse=not redraw) as manifest:
+            return _paper(
+                manifest,
+                stages,
+                scene,
+                out,
+                quick=quick,
+                workers=workers,
+                scheduler=scheduler,
+                cache_dir=cache_dir,
+                studies=studies,
+                progress=progress,
+                engines=engines,
+                reference=reference,
+                full_histories=full_histories,
+                formats=formats,
+            )
     finally:
         stages.close()
 
 
 def _paper(
+    manifest: FigureManifest,
     stages: Progress,
     scene: Scene,
     out: str | Path,
@@ -269,7 +280,8 @@ def _paper(
     full_histories: bool,
     formats: tuple[str, ...],
 ) -> Path:
-    """:func:`run_paper`'s work, reporting its stages to ``stages``."""
+    """:func:`run_paper`'s work, reporting its stages to ``stages`` and the figures it drew
+    or reused to ``manifest``."""
     from .report_sections import write_report
 
     t0 = time.perf_counter()
@@ -455,6 +467,7 @@ def _paper(
         "report": folder_size(out, exclude=("cache",)),
         "cache": folder_size(cache_dir) if cache_dir.is_dir() else 0,
     }
+    data.figures_drawn, data.figures_reused = len(manifest.drawn), len(manifest.reused)
     data.wall = time.perf_counter() - t0
     report = write_report(data)
     stages.advance()

@@ -327,7 +327,9 @@ def outputs(d) -> list:
                 ),
                 "figures/*.png"
                 + (f" (also {', '.join(d.formats)})" if d.formats else " (PDF with --pdf)")
-                + ".",
+                + f". This run drew {d.figures_drawn} figures and reused {d.figures_reused} "
+                "whose inputs and files were those of their last drawing into this folder "
+                "(fingerprints in figure_inputs.json; --redraw draws every figure).",
                 (
                     "tables/runK/aligned_*.parquet|csv: full aligned histories (units in the "
                     "Parquet schema metadata and the CSV headers)."

@@ -12,6 +12,7 @@ uncertainty of a median fitted from that many records.
 
 from __future__ import annotations
 
+import filecmp
 import math
 import shutil
 from dataclasses import dataclass
@@ -109,8 +110,8 @@ def run_unseating(
         title="unseating",
     )
     figures = ("figures/unseating_fragility.png", "figures/unseating_ida.png")
-    shutil.copyfile(work / "fragility.png", out / figures[0])
-    shutil.copyfile(work / "ida.png", out / figures[1])
+    copy_figure(work / "fragility.png", out / figures[0])
+    copy_figure(work / "ida.png", out / figures[1])
     unit = IMS[IM][2]
     write_csv(
         table.drop(columns=["file_x", "file_y"], errors="ignore"),
@@ -125,6 +126,14 @@ def run_unseating(
         )
         run.figures += ("figures/unseating_fragility_friction.png",)
     return run
+
+
+def copy_figure(source: Path, target: Path) -> None:
+    """Copy a figure of the sweep's folder into the report, leaving an identical copy
+    untouched (a re-run that reused the figure rewrites nothing)."""
+    if target.is_file() and filecmp.cmp(source, target, shallow=False):
+        return
+    shutil.copyfile(source, target)
 
 
 def _friction_sweep(scene, out, cache_dir, records, plan, workers, scheduler, progress):
@@ -155,7 +164,7 @@ def _friction_sweep(scene, out, cache_dir, records, plan, workers, scheduler, pr
         title="unseating friction",
         variants=variants,
     )
-    shutil.copyfile(work / "fragility.png", out / "figures" / "unseating_fragility_friction.png")
+    copy_figure(work / "fragility.png", out / "figures" / "unseating_fragility_friction.png")
     write_csv(
         frag, out / "tables" / "unseating_fragility_friction.csv", fragility_units(IMS[IM][2])
     )

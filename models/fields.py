@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 import re
 import types
@@ -53,7 +54,10 @@ def spec(
     return dataclasses.field(default=default, metadata=meta)
 
 
+@functools.cache
 def _hints(cls: type) -> dict[str, Any]:
+    """The resolved type hints of a description class (read-only; resolved once per class, as
+    every scene built or modified reads them for each of its records)."""
     return typing.get_type_hints(cls)
 
 

@@ -116,6 +116,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="also write every run's aligned histories (Parquet and CSV, ~120 MB on the benchmark)",
     )
     p.add_argument("--pdf", action="store_true", help="figures also as PDF")
+    p.add_argument(
+        "--redraw",
+        action="store_true",
+        help="draw every figure (default: reuse those whose inputs are unchanged)",
+    )
     _parallel_args(p)
     p.set_defaults(func=_paper)
 
@@ -329,6 +334,7 @@ def _paper(args) -> int:
             progress=not args.no_progress,
             full_histories=args.full_histories,
             formats=("pdf",) if args.pdf else (),
+            redraw=args.redraw,
         )
     print(f"wrote {terminal_text(report)} and {terminal_text(report.with_suffix('.html'))}")
     return 0
