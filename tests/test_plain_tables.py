@@ -17,9 +17,11 @@ from deckpound import cli
 from deckpound.compare.align import align, common_time_base, write_tables
 from deckpound.compare.outputs import write_csv
 from deckpound.compare.result_cache import ResultCache
+from deckpound.compare.stress import run_stress
 from deckpound.models.columns import column_unit, standard_columns
 from deckpound.models.file_io import split_unit_label
 from deckpound.models.result import Result, read_table, rounded_time
+from deckpound.models.scene_io import load_scene
 
 SHORT = ["--set", "excitation.duration=2.0"]
 #: columns of long tables that are in the unit of their row (named in the row's ``unit`` column)
@@ -297,3 +299,20 @@ def test_report_writer_units_numbers_only_and_names_counts(tmp_path):
         "peak_theta [rad]",
     ]
     assert check_plain(tmp_path / "t.csv") == []
+
+
+def test_stress_table_opens_plainly(tmp_path):
+    """``deckpound stress``'s table: one cell, one engine, numbers with units."""
+    cell = {"stiffness": 1e6, "dt": 1e-3, "pga": 0.5, "gap": 0.0127}
+    run_stress(
+        load_scene("saiidi-4span"),
+        tmp_path,
+        engines=("compliance",),
+        duration=0.5,
+        timeout=45.0,
+        progress=False,
+        cells=[cell],
+    )
+    assert check_plain(tmp_path / "stress.csv") == []
+    head = set(pd.read_csv(tmp_path / "stress.csv").columns)
+    assert {"stiffness [kN/m]", "max_penetration [m]", "wall [s]", "status"} <= head

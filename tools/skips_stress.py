@@ -25,6 +25,7 @@ import pandas as pd
 from docs_blocks import DOCS, RESULTS, write_block
 
 from deckpound.compare.skips import skip_failures
+from deckpound.models.result import read_table
 from deckpound.models.scene_settings import SUBNORMALS_UNCHANGED_ABOVE as UNCHANGED_ABOVE
 
 __all__ = [
@@ -257,7 +258,7 @@ def load_skips(folder: str | Path) -> tuple[pd.DataFrame, pd.DataFrame]:
 
 
 def load_stress(folder: str | Path) -> pd.DataFrame:
-    return pd.read_csv(Path(folder) / "stress.csv")
+    return read_table(Path(folder) / "stress.csv")  # units in the header (or none: older files)
 
 
 def publish_skips(folder: str | Path, page: str | Path = PAGE, results=RESULTS) -> Path:
