@@ -51,6 +51,8 @@ from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified
 from deckpound.models.scene_settings import SUBNORMALS_UNCHANGED_ABOVE
 
+from .outputs import write_csv
+
 #: (row, the alternative's override, columns of max_abs_diff (None: every column), note): the
 #: rows that time a modelling or floating-point choice against its default
 CHOICES = (
@@ -69,6 +71,21 @@ CHOICES = (
         "choice, not a skip; max_abs_diff over every column",
     ),
 )
+
+
+#: units of adaptive_steps.csv's numeric columns (the step statistics and ``time``, the
+#: simulated time the steps cover, in s)
+STEP_UNITS = {
+    "commit_step": "s",
+    "steps": "-",
+    "median": "s",
+    "min": "s",
+    "max": "s",
+    "mean": "s",
+    "time": "s",
+    "wall": "s",
+    "rtol": "-",
+}
 
 
 def skip_scenes(base: Scene, quick: bool) -> dict[str, Scene]:
@@ -307,5 +324,5 @@ def run_skips(
     table = pd.DataFrame(rows)
     steps = pd.DataFrame(steps_rows)
     table.to_csv(out / "skips.csv", index=False)
-    steps.to_csv(out / "adaptive_steps.csv", index=False)
+    write_csv(steps, out / "adaptive_steps.csv", STEP_UNITS)
     return table, steps

@@ -254,7 +254,8 @@ def _publish(folder, files, begin, end, block, page, results) -> Path:
 
 def load_skips(folder: str | Path) -> tuple[pd.DataFrame, pd.DataFrame]:
     folder = Path(folder)
-    return pd.read_csv(folder / "skips.csv"), pd.read_csv(folder / "adaptive_steps.csv")
+    # adaptive_steps.csv names its units in the header (older files: plain names)
+    return pd.read_csv(folder / "skips.csv"), read_table(folder / "adaptive_steps.csv")
 
 
 def load_stress(folder: str | Path) -> pd.DataFrame:
