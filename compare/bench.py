@@ -41,6 +41,7 @@ from deckpound.models.scene_io import modified
 from .align import align
 from .guarded import run_guarded
 from .metrics import nrmse, peak
+from .outputs import write_csv
 from .progress import Progress
 from .speed import reference_loop_ns
 
@@ -135,6 +136,21 @@ REFERENCES = {
 #: ratio: the deck rotation, except for the single longitudinal pulse (a symmetric,
 #: rotation-free response, where the peak rotation is round-off) — there the deck x.
 PRIMARY = {"single-impact": "deck_x_rel"}
+#: units of bench.csv's numeric columns (errors relative to the reference's peak, speed-up a
+#: ratio; us: microseconds)
+BENCH_UNITS = {
+    "wall": "s",
+    "steps": "-",
+    "us_per_step": "us",
+    "iterations": "-",
+    "compile_time": "s",
+    "err_peak_theta": "-",
+    "err_peak_y": "-",
+    "err_peak_x": "-",
+    "nrmse_theta": "-",
+    "err_primary": "-",
+    "speedup_vs_opensees_equal_error": "-",
+}
 
 
 def _rel_peak_error(result, ref, col) -> float:
@@ -289,7 +305,7 @@ def run_bench(
     table["speedup_vs_opensees_equal_error"] = ratio
     table["speedup_bound"] = kind
     table.attrs["wall"] = time.perf_counter() - t0
-    table.to_csv(out / "bench.csv", index=False)
+    write_csv(table, out / "bench.csv", BENCH_UNITS)
     context = {
         "date": time.strftime("%Y-%m-%d"),
         "cpus": os.cpu_count(),

@@ -574,12 +574,13 @@ def rounded_time(t: np.ndarray, step: float | None = None) -> np.ndarray:
     return np.where(on_grid, grid, t)
 
 
-def read_table(source) -> pd.DataFrame:
+def read_table(source, **read_csv_options) -> pd.DataFrame:
     """A CSV table deckpound wrote (a path or a binary stream) with plain column names
     (``deck_theta``) and the units in ``frame.attrs["units"]`` (name → unit).
 
     Reads both header formats: ``name [unit]`` cells (this version) and a plain header below a
-    ``# units: s,m,…`` comment line (result files of earlier versions), without a warning."""
+    ``# units: s,m,…`` comment line (result files of earlier versions), without a warning.
+    ``read_csv_options`` go to :func:`pandas.read_csv` (``keep_default_na=False``)."""
 
     if isinstance(source, (str, Path)):
         source = io.BytesIO(Path(source).read_bytes())
@@ -588,7 +589,7 @@ def read_table(source) -> pd.DataFrame:
     old_units: list[str] = []
     if first.startswith(b"#") and first[1:].strip().startswith(b"units:"):
         old_units = first[1:].strip()[len(b"units:") :].decode("utf-8").strip().split(",")
-    frame = pd.read_csv(io.BytesIO(data), skiprows=1 if old_units else None)
+    frame = pd.read_csv(io.BytesIO(data), skiprows=1 if old_units else None, **read_csv_options)
     if old_units and len(old_units) != len(frame.columns):
         # a unit with commas of its own (the contact states') split the comment line
         old_units = [column_unit(str(c)) for c in frame.columns]

@@ -29,6 +29,8 @@ import numpy as np
 import pandas as pd
 from docs_blocks import DOCS, RESULTS, write_block
 
+from deckpound.models.result import read_table
+
 __all__ = ["BEGIN", "END", "FILES", "PAGE", "load", "publish", "render"]
 
 BEGIN = (
@@ -53,7 +55,8 @@ _PARAM = re.compile(r"^(?P<family>.*?) (?P<name>dt|h|rtol)=(?P<value>\S+)$")
 def load(folder: str | Path) -> tuple[pd.DataFrame, dict]:
     """(table, context) from ``bench.csv`` and ``bench_context.json`` in ``folder``."""
     folder = Path(folder)
-    table = pd.read_csv(folder / "bench.csv", keep_default_na=False, na_values=[""])
+    # units in the header (older files: plain names)
+    table = read_table(folder / "bench.csv", keep_default_na=False, na_values=[""])
     context = json.loads((folder / "bench_context.json").read_text(encoding="utf-8"))
     return table, context
 
