@@ -36,7 +36,7 @@ import pandas as pd
 
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import support_motion
-from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
+from deckpound.models.file_io import atomic_write_text, ensure_folder
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified
 
@@ -50,6 +50,7 @@ from .fragility import (
     fragility_curve,
     ida_capacities,
 )
+from .outputs import write_csv
 from .variability import record_cases, sweep_rows, table_units
 
 __all__ = [

@@ -65,11 +65,11 @@ COUNT_COLUMNS = frozenset(
 
 def vocabulary_unit(name: str) -> str | None:
     """The unit a column name has across deckpound's tables, for a writer that names none:
-    counts (:data:`COUNT_COLUMNS`, ``closures_c1``…) and shares (``*_share``) ``-``, times
-    (``*_time``: ``first_time``, ``wall_time``) ``s``; None for any other name."""
+    counts (:data:`COUNT_COLUMNS`, ``closures_c1``…) and shares (``*_share``, ``share_*``)
+    ``-``, times (``*_time``: ``first_time``, ``wall_time``) ``s``; None for any other name."""
     if name in COUNT_COLUMNS or re.fullmatch(r"closures_c\d+", name):
         return "-"
-    if name.endswith("_share"):
+    if name.endswith("_share") or name.startswith("share_"):
         return "-"
     if name.endswith("_time"):
         return "s"

@@ -37,13 +37,14 @@ import pandas as pd
 
 from deckpound.compare.cases import run_case
 from deckpound.models.errors import SceneError
-from deckpound.models.file_io import atomic_write_text, ensure_folder, write_csv
+from deckpound.models.file_io import atomic_write_text, ensure_folder
 from deckpound.models.motion import RecordWarning
 from deckpound.models.record_suite import read_suite
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified
 
 from .cases import case_key, interrupted, map_parallel
+from .outputs import write_csv
 from .progress import Progress
 
 #: quantities of a row that the summary describes

@@ -285,6 +285,7 @@ def test_report_writer_units_numbers_only_and_names_counts(tmp_path):
             "stiffness": ["initial", "secant"],
             "hits": [3, 0],
             "stick_share": [0.5, 0.25],
+            "share_acute": [0.6, 0.7],
             "first_time": [0.8, 0.9],
             "peak_theta": [1e-3, 2e-3],
         }
@@ -297,6 +298,7 @@ def test_report_writer_units_numbers_only_and_names_counts(tmp_path):
         "stiffness",
         "hits [-]",
         "stick_share [-]",
+        "share_acute [-]",
         "first_time [s]",
         "peak_theta [rad]",
     ]
