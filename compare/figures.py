@@ -3,7 +3,8 @@ style, greyscale-readable).
 
 Displacements are drawn relative to the supports (the deck relative to the shake tables, a seat
 relative to its actuator) unless a column named ``*_abs`` is asked for; every axis names which
-and its unit.
+and its unit. matplotlib is imported by the functions that draw (through :mod:`.style`), so a
+run whose figures are all reused (:mod:`.figure_cache`) does not load it.
 """
 
 from __future__ import annotations
@@ -21,7 +22,6 @@ from deckpound.models.scene import Scene
 from .figure_cache import reusable
 from .mechanism import contact_moments, mechanism_row
 from .report_text import TOL
-from .style import CYCLE, engine_style, new_figure, save
 
 LABELS = {
     "deck_theta": ("deck rotation θ_d", 1e3, "mrad"),
@@ -35,6 +35,8 @@ LABELS = {
 
 
 def _style_for(label: str, k: int) -> dict:
+    from .style import CYCLE, engine_style
+
     engine = label.split()[0]
     st = engine_style(engine)
     if engine not in engine_names() and engine != "measured":
@@ -55,6 +57,8 @@ def histories(
     formats: tuple[str, ...] = (),
 ) -> list[Path]:
     """Time histories of quantities overlaid per engine/case (paper Figs. 4–6 style)."""
+    from .style import new_figure, save
+
     fig, axes = new_figure(len(quantities), 1, width=7.5, height=2.2, sharex=True)
     for i, q in enumerate(quantities):
         name, scale, unit = LABELS.get(q, (q, 1.0, ""))
@@ -79,6 +83,8 @@ def contact_forces(
     formats: tuple[str, ...] = (),
 ) -> list[Path]:
     """Normal contact force per corner (c1, c2 at seat 1; c3, c4 at seat 2)."""
+    from .style import new_figure, save
+
     fig, axes = new_figure(2, 2, width=8.0, height=2.0, sharex=True)
     for c in range(4):
         ax = axes[c % 2, c // 2]
@@ -104,6 +110,8 @@ def peak_vs_pga(
 ) -> list[Path]:
     """Peak deck rotation vs run PGA over the sequence, one line per engine and friction
     assumption (``case`` column: engine name, then a variant tag; paper Fig. 7)."""
+    from .style import CYCLE, engine_style, new_figure, save
+
     fig, axes = new_figure(1, 1, width=5.5, height=3.2)
     ax = axes[0, 0]
     markers = {e: CYCLE[k % len(CYCLE)]["marker"] for k, e in enumerate(engine_names())}
@@ -133,6 +141,7 @@ def friction_ratio(
 ) -> list[Path]:
     """Peak rotation with friction / without, per run and engine (1 = no effect; the band is
     the ±tol within which the report calls the change negligible)."""
+    from .style import CYCLE, engine_style, new_figure, save
 
     tol = TOL if tol is None else tol
     fig, axes = new_figure(1, 1, width=5.5, height=3.0)
@@ -160,6 +169,7 @@ def friction_mechanism(
     (SequenceRun μ = 0, SequenceRun μ > 0), either order): deck rotation of both (top) and
     the moment of the tangential contact forces about the deck centre with friction
     (bottom), the excursion that reaches the frictional peak shaded."""
+    from .style import engine_style, new_figure, save
 
     fig, axes = new_figure(2, 1, width=7.5, height=2.3, sharex=True)
     shaded = False
@@ -209,6 +219,8 @@ def study_figure(
     subtitle: str = "",
 ) -> list[Path]:
     """Left: the study's headline (peak rotation vs parameter); right: rotation histories."""
+    from .style import CYCLE, engine_style, new_figure, save
+
     fig, axes = new_figure(1, 2, width=9.0, height=3.2)
     ax = axes[0, 0]
     x = study.x
@@ -269,6 +281,8 @@ def hysteresis(
 ) -> list[Path]:
     """Bent force–deformation loops (Takeda springs), x and y, one panel per bent (the result's
     ``<bent>_fx``/``<bent>_dx`` columns: nothing is recomputed from the excitation)."""
+    from .style import new_figure, save
+
     fig, axes = new_figure(2, len(scene.bents), width=3.0 * len(scene.bents), height=2.4)
     for i, b in enumerate(scene.bents):
         for j, axis in enumerate(("x", "y")):
@@ -355,6 +369,8 @@ def plan_snapshot(
     """Plan view of deck and seats at each engine's peak rotation (displacements × scale): the
     output row of the largest |θ_d| (the drawn state is a stored row; the title gives its time
     and rotation, which the every-step peak :meth:`Result.peak` may exceed between rows)."""
+    from .style import new_figure, save
+
     fig, axes = new_figure(len(results), 1, width=8.0, height=2.0)
     for i, (label, r) in enumerate(results.items()):
         k = int(np.argmax(np.abs(r["deck_theta"])))

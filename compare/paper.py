@@ -43,6 +43,7 @@ from .mechanism import MECHANISM_UNITS, mechanism_row
 from .metrics import closure_times_per_corner, compare_pair
 from .outputs import folder, folder_size, write_csv, write_text
 from .progress import Progress
+from .report_sections import write_report
 from .report_text import friction_effect
 from .report_unseating import UnseatingRun, run_unseating
 from .sequence_run import SequenceRun, run_sequences, strongest_run
@@ -282,8 +283,6 @@ def _paper(
 ) -> Path:
     """:func:`run_paper`'s work, reporting its stages to ``stages`` and the figures it drew
     or reused to ``manifest``."""
-    from .report_sections import write_report
-
     t0 = time.perf_counter()
     names = tuple(engines) if engines is not None else engine_names()
     if reference not in names:

@@ -45,6 +45,7 @@ from deckpound.models.scene_io import modified
 
 from .case_rows import ROW_UNITS, case_row, contact_step
 from .damping_study import damping_cases, damping_figure, damping_headlines, damping_row
+from .figures import study_figure
 from .outputs import folder, write_csv
 from .sequence_run import state_before, strongest_run
 from .skew import skew_cases, skew_figure, skew_headlines, skew_row
@@ -359,8 +360,6 @@ def run_study(
     """Run a study from ``state`` (default: the scene as given) and write ``<name>.csv`` and
     ``<name>.png`` (``<name>_<state>.*`` for a carried state; ``formats`` adds e.g. PDF) in
     ``out``; return the table and the results."""
-    from .figures import study_figure
-
     if not isinstance(state, StartState):
         cache_folder = cache.folder if cache is not None else None
         state = start_state(scene, state, engine=state_engine, cache_folder=cache_folder)

@@ -4,6 +4,9 @@ figures that draw results it changes; a damaged or missing figure file is drawn 
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -89,6 +92,14 @@ def test_the_fingerprint_reads_results_tables_and_scenes_but_not_timings():
     # an engine setting reaches a figure only through the results it draws
     assert key() == key(sc=modified(scene, "compliance.rtol=1e-7"))
     assert fingerprint(line_figure, {"x": object()}) is None  # unreadable: always drawn
+
+
+def test_the_paper_loads_matplotlib_only_to_draw():
+    """A paper whose figures are all reused never draws, so importing it must not load
+    matplotlib (the figure functions import it when they draw)."""
+    code = "import sys, deckpound.compare.paper; print('matplotlib' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
 
 
 def _figure_files(out):
