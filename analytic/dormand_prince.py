@@ -131,9 +131,9 @@ def _rhs(t, y, sa, contact, record, ws, dy):
     spring_deformations(sa, u, v, ug, vg, ws.d, ws.dd)
     spring_update_materials(sa.hparams, ws.hstate, sa.kind, ws.d)
     spring_assemble(sa, ws.hstate, ws.d, ws.dd, v, ws.f, ws.fs, ws.kt)
-    n = ca.eval_contacts(contact, ws.cstate, cw, u, v, ws.uc)
+    n = ca.eval_contacts(contact, ws.cstate, cw, u, v, ws.uc, sa.dofs)
     if n < 0:
-        ca.eval_closed(contact, ws.cstate, cw, u, v, ws.uc)
+        ca.eval_closed(contact, ws.cstate, cw, u, v, ws.uc, sa.dofs)
     for j in range(nd):
         dy[j] = v[j]
         dy[nd + j] = (cw.fc[j] - ws.f[j]) / sa.mass[j]
@@ -179,7 +179,7 @@ def _events(y, sa, contact, ws, ev):
     nc = len(cw.corners)
     u = y[0:nd]
     v = y[nd : 2 * nd]
-    ca.gaps_and_rates(contact, u, v, cw)
+    ca.gaps_and_rates(contact, u, v, cw, sa.dofs)
     for c in range(nc):
         ev[c] = cw.g[c]
     for i in range(nbs):
@@ -212,7 +212,7 @@ def _event_value(kind_idx, y, sa, contact, record, t, ws):
     nc = len(cw.corners)
     u = y[0:nd]
     v = y[nd : 2 * nd]
-    ca.gaps_and_rates(contact, u, v, cw)
+    ca.gaps_and_rates(contact, u, v, cw, sa.dofs)
     nbs2 = kind_idx - nc
     if kind_idx < nc:
         return cw.g[kind_idx]

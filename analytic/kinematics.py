@@ -1,8 +1,9 @@
-"""Contact kinematics of the 7-DOF plan model: gaps g_N and direction matrices W_N, W_T.
+"""Contact kinematics of the plan model: gaps g_N and direction matrices W_N, W_T.
 
-The corner table of :mod:`deckpound.models.plan` is packed once into a (4, :data:`N_K`) array
-(:func:`pack_corners`, columns named by the ``K_*`` constants) that the kernels read; the
-equations are those of the plan model (DOFs u = [x₁, θ₁, x₂, θ₂, x_d, y_d, θ_d]):
+The corner table of :mod:`deckpound.models.plan` is packed once into a
+(n_corners, :data:`N_K`) array (:func:`pack_corners`, columns named by the ``K_*`` constants)
+that the kernels read; the equations are those of the plan model (DOFs
+u = [x₁, θ₁, x₂, θ₂, x_d, y_d, θ_d]):
 
 Geometrically linear (small rotations), corner at (x, y) with gap-opening normal n, tangent t
 and facing seat point r (relative to the seat pivot)::
@@ -20,9 +21,15 @@ tangent t₀ rotated by θ_s: n = R(θ_s) n₀, t = R(θ_s) t₀; g_N = n·(P �
 U_T = t·Ṗ − t_x ẋ_s (the term θ̇_s g_N of the face's rotation is dropped: it vanishes in
 contact).
 
-W_N[c] = ∂g_N/∂u and W_T[c] = ∂U_T/∂u̇ are rows (shape (4, 7)); the generalised contact force
-is W_Nᵀ λ_N + W_Tᵀ λ_T with λ_N ≥ 0 compression. The functions are numba kernels on flat
-arrays, usable inside the engines' step loops and from Python alike.
+W_N[c] = ∂g_N/∂u and W_T[c] = ∂U_T/∂u̇ are rows (shape (n_corners, n_dof)); the generalised
+contact force is W_Nᵀ λ_N + W_Tᵀ λ_T with λ_N ≥ 0 compression. The functions are numba kernels
+on flat arrays, usable inside the engines' step loops and from Python alike. Each corner names
+the DOF of its seat (columns ``K_SX``, ``K_ST``); the deck DOF are the plan's. The corner and
+DOF counts are the lengths of the size tags the kernels take (``corner_slots``, ``dof_slots``:
+any tuples of n_corners and n_dof entries, e.g. ``ContactWork.corners`` and
+``SystemArrays.dofs``, or :func:`deckpound.analytic.impulses.size_tag`), compile-time
+constants of the compiled loops, so a model with more corners or DOF (several deck segments)
+runs through the same kernels.
 """
 
 from __future__ import annotations
@@ -30,9 +37,19 @@ from __future__ import annotations
 import numpy as np
 
 from deckpound.analytic._jit import kernel
-from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, N_CORNERS, Plan
+from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, Plan
 
-__all__ = ["K_G0", "N_K", "contact_kinematics", "linear_gap", "pack_corners"]
+__all__ = [
+    "K_G0",
+    "K_ST",
+    "K_SX",
+    "N_K",
+    "contact_kinematics",
+    "gap_hessian",
+    "linear_gap",
+    "linear_gap_rate",
+    "pack_corners",
+]
 
 # DOF indices
 XD, YD, TD = DECK_X, DECK_Y, DECK_THETA
@@ -44,12 +61,12 @@ N_K = 14
 
 
 def pack_corners(plan: Plan) -> np.ndarray:
-    """The plan's corner table as a (4, N_K) float array (see the ``K_*`` column constants).
+    """The plan's corner table as a (n_corners, N_K) float array (``K_*`` column constants).
 
     The seat pivot at rest is the mid-point of the seat's contact face: the deck end face's
     mid-point moved by the gap against the normal, F₀ = (∓L/2, 0) − g₀ n.
     """
-    out = np.zeros((N_CORNERS, N_K))
+    out = np.zeros((len(plan.corners), N_K))
     for c in plan.corners:
         row = out[c.index]
         row[K_X], row[K_Y], row[K_G0] = c.x, c.y, c.gap
@@ -88,21 +105,24 @@ def linear_gap_rate(k, v):
 
 
 @kernel
-def contact_kinematics(u, corners, nonlinear, gap, WN, WT):
-    """Fill gap (4,), WN (4, 7) and WT (4, 7) for displacement u (7,).
+def contact_kinematics(u, corners, nonlinear, gap, WN, WT, corner_slots, dof_slots):
+    """Fill gap (n_corners,), WN (n_corners, n_dof) and WT (n_corners, n_dof) for
+    displacement u (n_dof,).
 
     Parameters
     ----------
-    u : (7,) absolute displacements [m, rad].
+    u : (n_dof,) absolute displacements [m, rad].
     corners : the corner table of :func:`pack_corners`.
     nonlinear : bool, exact (True) or small-rotation (False) kinematics.
+    corner_slots, dof_slots : size tags, tuples of n_corners and n_dof entries (module
+        docstring).
     """
-    for c in range(4):
+    for c in range(len(corner_slots)):
         k = corners[c]
         xc, yc = k[K_X], k[K_Y]
         sx = int(k[K_SX])
         st = int(k[K_ST])
-        for j in range(7):
+        for j in range(len(dof_slots)):
             WN[c, j] = 0.0
             WT[c, j] = 0.0
         if not nonlinear:
@@ -152,14 +172,16 @@ def contact_kinematics(u, corners, nonlinear, gap, WN, WT):
 
 
 @kernel
-def gap_hessian(u, corners, c, H):
-    """∂²g_N/∂u² of corner c for the geometrically nonlinear kinematics (7×7, filled)."""
+def gap_hessian(u, corners, c, H, dof_slots):
+    """∂²g_N/∂u² of corner c for the geometrically nonlinear kinematics (n_dof × n_dof,
+    filled; n_dof = len(dof_slots), the DOF size tag)."""
+    n_dof = len(dof_slots)
     k = corners[c]
     xc, yc = k[K_X], k[K_Y]
     sx = int(k[K_SX])
     st = int(k[K_ST])
-    for i in range(7):
-        for j in range(7):
+    for i in range(n_dof):
+        for j in range(n_dof):
             H[i, j] = 0.0
     th, ths = u[TD], u[st]
     ct, sn = np.cos(th), np.sin(th)
@@ -184,7 +206,7 @@ def gap_hessian(u, corners, c, H):
     for i in (XD, YD, TD, sx):
         H[st, i] = H[i, st]
     if k[K_FREE] == 0.0:  # fixed seat: no seat rows or columns
-        for i in range(7):
+        for i in range(n_dof):
             H[sx, i] = 0.0
             H[i, sx] = 0.0
             H[st, i] = 0.0

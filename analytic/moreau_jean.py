@@ -147,13 +147,22 @@ def _copy_state(final, q, v, n_dof):
 
 
 @kernel(inline="always")
-def _corner_gaps(contact, q, gap, WN, WT, n_corners):
+def _corner_rows(contact, q, gap, WN, WT, work):
+    """Gaps and rows WN, WT at q (:func:`.kinematics.contact_kinematics`), the corner and DOF
+    counts of the workspace's size tags."""
+    contact_kinematics(
+        q, contact.corners, contact.nonlinear, gap, WN, WT, work.corner_slots, work.dof_slots
+    )
+
+
+@kernel(inline="always")
+def _corner_gaps(contact, q, gap, WN, WT, work):
     """Gaps at q; rows WN, WT too for nonlinear kinematics (constant for linear kinematics,
     filled before the loop, so only the gaps change)."""
     if contact.nonlinear:
-        contact_kinematics(q, contact.corners, contact.nonlinear, gap, WN, WT)
+        _corner_rows(contact, q, gap, WN, WT, work)
     else:
-        for c in range(n_corners):
+        for c in range(len(work.corner_slots)):
             gap[c] = linear_gap(contact.corners[c], q)
 
 
@@ -180,8 +189,8 @@ def _start(system, contact, record, output, work):
         ke0 += 0.5 * sa.mass[j] * v[j] * v[j]
     W[W_INPUT] = ke0 + es0
     W[W_SPRING] = es0
-    contact_kinematics(q, contact.corners, contact.nonlinear, cor.gapo, cor.WNo, cor.WTo)
-    contact_kinematics(q, contact.corners, contact.nonlinear, cor.gap, cor.WN, cor.WT)
+    _corner_rows(contact, q, cor.gapo, cor.WNo, cor.WTo, work)
+    _corner_rows(contact, q, cor.gap, cor.WN, cor.WT, work)
     output_energies(sa, work.hstate, q, v, work.ug, W, work.energy)
     store_row(
         output,
@@ -235,7 +244,7 @@ def _predict(system, contact, record, work, h, t1, jrec, count):
         dof.qk[j] = q[j]
         dof.vk[j] = v[j]
         dof.qM[j] = q[j] + 0.5 * h * v[j]
-    _corner_gaps(contact, dof.qM, cor.gap, cor.WN, cor.WT, n_corners)
+    _corner_gaps(contact, dof.qM, cor.gap, cor.WN, cor.WT, work)
     nact = 0
     for c in range(n_corners):
         if cor.gap[c] <= 0.0:
@@ -457,7 +466,7 @@ def _commit_contact(contact, work, peaks, nact, th, inv_h, value):
     and the step's forces P / h for the peaks."""
     dof, cor, W = work.dof, work.corner, work.W
     n_corners = len(work.corner_slots)
-    _corner_gaps(contact, dof.q, cor.gapo, cor.WNo, cor.WTo, n_corners)
+    _corner_gaps(contact, dof.q, cor.gapo, cor.WNo, cor.WTo, work)
     fn_step, ft_step = peaks.force[0], peaks.force[1]
     for c in range(n_corners):
         value[bd.VAL_MAX_PEN] = max(value[bd.VAL_MAX_PEN], -cor.gapo[c])
@@ -490,7 +499,7 @@ def _store(system, contact, output, work, row, t1, inv_out):
     over the output interval × inv_out, energies; the accumulators restart."""
     sa = system
     dof, cor = work.dof, work.corner
-    contact_kinematics(dof.q, contact.corners, contact.nonlinear, cor.gapo, cor.WNo, cor.WTo)
+    _corner_rows(contact, dof.q, cor.gapo, cor.WNo, cor.WTo, work)
     for c in range(len(work.corner_slots)):
         cor.fn_out[c] = cor.pn_acc[c] * inv_out
         cor.ft_out[c] = cor.pt_acc[c] * inv_out

@@ -98,14 +98,14 @@ def _form_unbalance(sa, contact, hstate, cs, cw, dof, spr, sup, skip_contact):
     spring_deformations(sa, u, v, sup.ug, sup.vg, d, dd)
     spring_update_materials(sa.hparams, hstate, sa.kind, d)
     nonel = spring_assemble(sa, hstate, d, dd, v, dof.f, spr.fs, spr.kt)
-    ncl = ca.eval_contacts(contact, cs, cw, u, v, dof.un)
+    ncl = ca.eval_contacts(contact, cs, cw, u, v, dof.un, sa.dofs)
     evaluated = cw.evaluated
     if not skip_contact and not contact.nonlinear:
         for c in range(len(cw.corners)):
             evaluated[c] = True
         ncl = -1
     if ncl < 0:
-        ca.eval_closed(contact, cs, cw, u, v, dof.un)
+        ca.eval_closed(contact, cs, cw, u, v, dof.un, sa.dofs)
     R, f, a = dof.R, dof.f, dof.a
     for j in range(len(sa.dofs)):
         R[j] = cw.fc[j] - f[j] - sa.mass[j] * a[j]
@@ -331,7 +331,7 @@ def _solve(sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_on
     _effective_tangent(sa, mat.K, c2, 1.0 / (BETA * h * h), mat.Keff)
     spring_damping_tangent(sa, c2, mat.Keff)
     if anyev:
-        ca.contact_tangent(contact, work.cw, dof.u, c2, mat.Keff, mat.H)
+        ca.contact_tangent(contact, work.cw, dof.u, c2, mat.Keff, mat.H, sa.dofs)
     _copy_matrix(mat.Keff, mat.LU, len(sa.dofs))
     _copy(spr.kt, spr.kt_fact, spr.kt.shape[0])
     if not lu_factor(mat.LU, mat.piv):
@@ -379,7 +379,7 @@ def _newton(sa, contact, opt, work, stats, h, nsub, nonel, anyev, reuse, lu_spri
             # left u bitwise as it was: the materials, spring forces and gaps are those just
             # evaluated; only the rates follow the new u̇
             spring_deformations(sa, dof.u, dof.v, sup.ug, sup.vg, spr.d_new, spr.dd_new)
-            ca.gap_rates(contact, dof.v, cw)
+            ca.gap_rates(contact, dof.v, cw, sa.dofs)
             stats.count[bd.CNT_UNMOVED] += 1
         else:
             nonel, anyev = _form_unbalance(
@@ -408,7 +408,7 @@ def _commit(sa, contact, work, output, stats, anyev, t_now):
         if cs[c, cl.S_CCLOSED] == 0.0 and cs[c, cl.S_TCLOSED] != 0.0 and cw.evaluated[c]:
             stats.count[bd.CNT_EVENTS] += 1
     if contact.nonlinear and not anyev:
-        ca.gaps_and_rates(contact, dof.u, dof.v, cw)
+        ca.gaps_and_rates(contact, dof.u, dof.v, cw, sa.dofs)
     cl.contact_commit(cs, cw.g, cw.gd, cw.evaluated)
     for c in range(len(cw.corners)):
         if -cw.g[c] > stats.value[bd.VAL_MAX_PEN]:

@@ -47,16 +47,18 @@ from collections import namedtuple
 import numpy as np
 
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.system import C_BENT, C_FN, C_GAP
+from deckpound.analytic.system import C_GAP
 from deckpound.models.engine_contract import engine_columns
 from deckpound.models.plan import CORNER_NAMES, DECK_X, DECK_Y, RELATIVE_COLUMNS, SEAT_X
 from deckpound.models.result import peak_columns
 
 __all__ = [
+    "N_RELATIVE",
     "Peaks",
     "corner_support_lengths",
     "in_contact_now",
     "new_peaks",
+    "peak_layout",
     "run_output_fields",
     "run_peaks",
     "step_closures",
@@ -71,12 +73,14 @@ __all__ = [
 #: of each column so far (max |x|; min x for the gaps), ``time`` (n,) when it was reached [s];
 #: ``tx``, ``ty`` int64 the support channels of the shake tables in x and y (their mean is the
 #: reference of deck_x_rel, deck_y_rel), ``seat`` (2,) int64 the actuator channel of each seat;
-#: ``inside`` (4,) bool corner in contact at the last step, ``closures`` (4,) int64 closures per
-#: corner; ``force`` (2, 4) scratch for the step's normal and tangential forces; per corner
-#: ``gap_open`` (4,) the largest gap [m] and ``gap_open_time`` (4,) its time [s],
-#: ``gap_start`` (4,) the gap at t = 0 [m], ``support`` (4,) the support length of the facing
-#: seat [m] (+inf: not checked); ``unseat`` int64 (1,) 1 + the first unseated corner (0:
-#: none) and ``unseat_time`` (1,) when [s] (module docstring).
+#: ``inside`` (nc,) bool corner in contact at the last step, ``closures`` (nc,) int64 closures
+#: per corner; ``force`` (2, nc) scratch for the step's normal and tangential forces; per
+#: corner ``gap_open`` (nc,) the largest gap [m] and ``gap_open_time`` (nc,) its time [s],
+#: ``gap_start`` (nc,) the gap at t = 0 [m], ``support`` (nc,) the support length of the
+#: facing seat [m] (+inf: not checked); ``unseat`` int64 (1,) 1 + the first unseated corner
+#: (0: none) and ``unseat_time`` (1,) when [s] (module docstring); ``corners`` the tuple
+#: (0, …, nc − 1) of the nc corners, a size tag (:func:`deckpound.analytic.impulses.size_tag`:
+#: its length is a compile-time constant of :func:`track_step`).
 Peaks = namedtuple(
     "Peaks",
     [
@@ -95,8 +99,22 @@ Peaks = namedtuple(
         "support",
         "unseat",
         "unseat_time",
+        "corners",
     ],
 )
+
+#: Number of relative-displacement columns of the peak layout (the bent deformations follow).
+N_RELATIVE = len(RELATIVE_COLUMNS)
+
+
+@kernel(inline="always")
+def peak_layout(n_corners):
+    """(first normal-force column, first bent-force column) of the peak layout of a model with
+    ``n_corners`` corners: after the gaps come the n_corners normal and the n_corners
+    tangential forces (the order of :func:`deckpound.models.engine_contract.engine_columns`);
+    for the plan's four corners these are ``C_FN`` and ``C_BENT`` of
+    :mod:`deckpound.analytic.system`."""
+    return C_GAP + n_corners, C_GAP + 3 * n_corners
 
 
 def corner_support_lengths(scene, plan) -> np.ndarray:
@@ -111,14 +129,17 @@ def corner_support_lengths(scene, plan) -> np.ndarray:
 def new_peaks(channels, bent_names, n_bent_springs: int, support=None) -> Peaks:
     """Zeroed :data:`Peaks` for a model with these support ``channels`` (the order of u_g) and
     bents; the gap entries start at +inf (their statistic is the minimum), the largest gaps at
-    −inf. ``support`` (4,) the corners' support lengths [m] (:func:`corner_support_lengths`;
-    None: none checked)."""
-    n = C_BENT + 2 * n_bent_springs + len(RELATIVE_COLUMNS)
+    −inf. ``support`` (n_corners,) the corners' support lengths [m]
+    (:func:`corner_support_lengths`; None: the plan's four corners, none checked): its length
+    is the model's corner count."""
+    support = (
+        np.full(len(CORNER_NAMES), np.inf) if support is None else np.asarray(support, dtype=float)
+    )
+    nc = support.shape[0]
+    n = peak_layout(nc)[1] + 2 * n_bent_springs + N_RELATIVE
     channels = list(channels)
     value = np.zeros(n)
-    value[C_GAP : C_GAP + len(CORNER_NAMES)] = np.inf
-    nc = len(CORNER_NAMES)
-    support = np.full(nc, np.inf) if support is None else np.asarray(support, dtype=float)
+    value[C_GAP : C_GAP + nc] = np.inf
     return Peaks(
         row=np.zeros(n),
         value=value,
@@ -126,15 +147,16 @@ def new_peaks(channels, bent_names, n_bent_springs: int, support=None) -> Peaks:
         tx=np.array([channels.index(f"{b}_x") for b in bent_names], dtype=np.int64),
         ty=np.array([channels.index(f"{b}_y") for b in bent_names], dtype=np.int64),
         seat=np.array([channels.index("seat1_x"), channels.index("seat2_x")], dtype=np.int64),
-        inside=np.zeros(len(CORNER_NAMES), dtype=np.bool_),
-        closures=np.zeros(len(CORNER_NAMES), dtype=np.int64),
-        force=np.zeros((2, len(CORNER_NAMES))),
+        inside=np.zeros(nc, dtype=np.bool_),
+        closures=np.zeros(nc, dtype=np.int64),
+        force=np.zeros((2, nc)),
         gap_open=np.full(nc, -np.inf),
         gap_open_time=np.zeros(nc),
         gap_start=np.zeros(nc),
         support=support.copy(),
         unseat=np.zeros(1, dtype=np.int64),
         unseat_time=np.zeros(1),
+        corners=tuple(range(nc)),
     )
 
 
@@ -159,9 +181,12 @@ def track_step(pk, t, u, ug, d, nbs):
     u (7,) displacements [m, rad] and ug (n_channels,) support displacements [m] at the step,
     d the spring deformations d = B u − S u_g (the first ``nbs`` are the bents'), t [s].
     Returns True when a corner's seat margin N − (g − g(0)) became negative at this step (the
-    deck is unseated; module docstring): one comparison per corner while no gap grows."""
+    deck is unseated; module docstring): one comparison per corner while no gap grows. The
+    corner count is the length of the size tag ``pk.corners`` (:func:`peak_layout`)."""
     row = pk.row
-    base = C_BENT + nbs
+    nc = len(pk.corners)
+    c_fn, c_bent = peak_layout(nc)
+    base = c_bent + nbs
     mx = 0.0
     for k in range(pk.tx.shape[0]):
         mx += ug[pk.tx[k]]
@@ -176,7 +201,7 @@ def track_step(pk, t, u, ug, d, nbs):
     row[base + 2] = u[SEAT_X[0]] - ug[pk.seat[0]]
     row[base + 3] = u[SEAT_X[1]] - ug[pk.seat[1]]
     for i in range(nbs):
-        row[base + 4 + i] = d[i]
+        row[base + N_RELATIVE + i] = d[i]
     value, time = pk.value, pk.time
     # the gaps: the most negative value; every other column: the largest |x| (t excluded)
     for k in range(1, C_GAP):
@@ -184,18 +209,18 @@ def track_step(pk, t, u, ug, d, nbs):
         if a > value[k]:
             value[k] = a
             time[k] = t
-    for c in range(4):
+    for c in range(nc):
         k = C_GAP + c
         if row[k] < value[k]:
             value[k] = row[k]
             time[k] = t
-        now = in_contact_now(row[k], row[C_FN + c])
+        now = in_contact_now(row[k], row[c_fn + c])
         if now and not pk.inside[c]:
             pk.closures[c] += 1
         pk.inside[c] = now
     # the largest gap (seat margin): the initial gap at the first call (largest still −inf)
     unseated = False
-    for c in range(4):
+    for c in range(nc):
         gk = row[C_GAP + c]
         if gk > pk.gap_open[c]:
             if pk.gap_open[c] == -np.inf:
@@ -207,7 +232,7 @@ def track_step(pk, t, u, ug, d, nbs):
                 if pk.unseat[0] == 0:
                     pk.unseat[0] = c + 1
                     pk.unseat_time[0] = t
-    for k in range(C_GAP + 4, row.shape[0]):
+    for k in range(c_fn, row.shape[0]):
         a = abs(row[k])
         if a > value[k]:
             value[k] = a

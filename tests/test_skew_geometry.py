@@ -17,6 +17,7 @@ import math
 import numpy as np
 import pytest
 
+from deckpound.analytic.impulses import size_tag
 from deckpound.analytic.kinematics import contact_kinematics, gap_hessian, pack_corners
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import plan_of
@@ -66,7 +67,7 @@ def relative_position(scene, u, c):
 
 def kin(corners, u, nonlinear):
     g, wn, wt = np.zeros(4), np.zeros((4, 7)), np.zeros((4, 7))
-    contact_kinematics(u, corners, nonlinear, g, wn, wt)
+    contact_kinematics(u, corners, nonlinear, g, wn, wt, size_tag(4), size_tag(7))
     return g, wn, wt
 
 
@@ -175,7 +176,7 @@ def test_nonlinear_gap_rows_and_hessian_against_finite_differences(phi):
             st = 1 if c < 2 else 3
             t = rot(u[st]) @ reference_corners(sc)[c][3]
             H = np.zeros((7, 7))
-            gap_hessian(u, corners, c, H)
+            gap_hessian(u, corners, c, H, size_tag(7))
             for j in range(7):
                 e = np.zeros(7)
                 e[j] = h
