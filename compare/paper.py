@@ -40,7 +40,7 @@ from .align import align, write_tables
 from .case_rows import ROW_UNITS
 from .figure_cache import MANIFEST_NAME, FigureManifest, reuse_figures
 from .mechanism import MECHANISM_UNITS, mechanism_row
-from .metrics import closure_times_per_corner, compare_pair
+from .metrics import METRIC_UNITS, closure_times_per_corner, compare_pair
 from .outputs import folder, folder_size, write_csv, write_text
 from .progress import Progress
 from .report_sections import write_report
@@ -51,13 +51,6 @@ from .studies import STUDIES, StartState, start_state, state_caption, study_resu
 
 QUANTITIES = ["deck_theta", "deck_y_rel", "deck_x_rel", "seat1_x_rel", "seat2_x_rel"]
 EFFECT_UNITS = {"pga": "g", "mu": "-", "peak_theta_0": "rad", "peak_theta_mu": "rad", "ratio": "-"}
-METRIC_UNITS = {
-    "t_peak": "s",
-    "t_peak_ref": "s",
-    "nrmse": "-",
-    "correlation": "-",
-    "peak_ratio": "-",
-}
 
 
 class CountingCache(ResultCache):
