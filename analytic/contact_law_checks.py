@@ -8,8 +8,12 @@ kernels have no branch for.
 
 from __future__ import annotations
 
-import numpy as np
+import types
 
+import numpy as np
+from numba.extending import is_jitted
+
+from . import contact_laws
 from .contact_laws import (
     N_CS,
     P_C,
@@ -30,7 +34,7 @@ from .contact_laws import (
     normal_law,
 )
 
-__all__ = ["check_kernel_branches", "law_parameters"]
+__all__ = ["check_kernel_branches", "law_parameters", "python_source_kernels"]
 
 
 def law_parameters(cp_row, cs_row) -> dict:
@@ -53,25 +57,46 @@ def law_parameters(cp_row, cs_row) -> dict:
     }
 
 
+def python_source_kernels(module) -> dict:
+    """The numba kernels of ``module`` as plain Python functions, by name: each kernel's
+    Python source (``py_func``) with the module's other kernels it calls bound to their
+    Python source too, so a dispatcher such as :func:`normal_law` runs the law kernels it
+    inlines without compiling or loading any of them."""
+    namespace = dict(vars(module))
+    pure = {}
+    for name, value in vars(module).items():
+        if is_jitted(value):
+            fn = value.py_func
+            pure[name] = types.FunctionType(
+                fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__
+            )
+    namespace.update(pure)  # the functions' globals: calls between kernels stay in Python
+    return pure
+
+
+_PYTHON_LAWS = python_source_kernels(contact_laws)
+
+
 def check_kernel_branches(cp) -> None:
     """Raise NotImplementedError if a corner's law or friction code has no kernel branch.
 
     Probes :func:`normal_law` and :func:`friction_law` on a scratch state at a closed state;
     the final branch of each gives a non-finite force. The probe runs their Python source
-    (``py_func``: the branches numba compiles, no compiled code needed): calling the compiled
-    kernels from Python would load each from numba's cache, ~60 ms of every fresh process
-    (``tests/test_contact_law_table.py`` checks the compiled kernels' branches).
+    (:func:`python_source_kernels`: the branches numba compiles, no compiled code needed):
+    calling the compiled kernels from Python would load them from numba's cache in every
+    fresh process (``tests/test_contact_law_table.py`` checks the compiled kernels' branches).
     """
+    normal, friction = _PYTHON_LAWS[normal_law.__name__], _PYTHON_LAWS[friction_law.__name__]
     for row in cp:
         cs = np.zeros(N_CS)
-        closed, lam, dg, _ = normal_law.py_func(row, cs, -1.0e-3, 0.0)
+        closed, lam, dg, _ = normal(row, cs, -1.0e-3, 0.0)
         if not (closed and np.isfinite(lam) and np.isfinite(dg)):
             raise NotImplementedError(
                 f"contact law code {int(row[P_LAW])} has no branch in "
                 "deckpound.analytic.contact_laws.normal_law (table: "
                 "deckpound.models.contact_laws_table)"
             )
-        _, lt, *_ = friction_law.py_func(row, cs, 1.0, 0.0, 0.0)
+        _, lt, *_ = friction(row, cs, 1.0, 0.0, 0.0)
         if not np.isfinite(lt):
             raise NotImplementedError(
                 f"friction code {int(row[P_FMODE])} has no branch in "

@@ -209,117 +209,153 @@ def new_contact_state(gaps0) -> np.ndarray:
     return cs
 
 
+# One kernel per normal law (or family), inlined into :func:`normal_law`, which dispatches on
+# the law code: the compiled dispatch is one function, as when the branches were written in
+# it. Each returns (closed, λ_N, ∂λ_N/∂g, ∂λ_N/∂ġ) and writes the law's own trial members of
+# the corner state; normal_law writes the trial force and the closed flag.
+
+
+@kernel(inline="always")
+def _linear_force(cp, g):
+    """OpenSees ElasticPPGap with Fy → ∞: λ = −k g for g ≤ 0 (closed at g = 0 exactly)."""
+    if g <= 0.0:
+        return True, -cp[P_K] * g, -cp[P_K], 0.0
+    return False, 0.0, 0.0, 0.0
+
+
+@kernel(inline="always")
+def _kelvin_voigt_force(cp, g, gd):
+    """OpenSees ViscoelasticGap: λ = −k g − c ġ for g < 0, tension kept unless clipped
+    (P_CLIP); no damping tangent with OpenSees's tangent (P_OTAN)."""
+    if g < 0.0:
+        lam = cp[P_K] * (-g) + cp[P_C] * (-gd)
+        dg = -cp[P_K]
+        dgd = -cp[P_C] if cp[P_OTAN] == 0.0 else 0.0  # ViscoelasticGap: no damping tangent
+        if cp[P_CLIP] != 0.0 and lam < 0.0:
+            return True, 0.0, 0.0, 0.0
+        return True, lam, dg, dgd
+    return False, 0.0, 0.0, 0.0
+
+
+@kernel(inline="always")
+def _hertz_force(cp, g):
+    """λ = k δ^n for δ = −g > 0; OpenSees's tangent (P_OTAN) with Hertzdamp's sign."""
+    if g < 0.0:
+        n = cp[P_N]
+        dlt = -g
+        lam = cp[P_K] * dlt**n
+        dg = -n * cp[P_K] * dlt ** (n - 1.0)
+        if cp[P_OTAN] != 0.0:
+            dg = -dg  # Hertzdamp's tangent sign (see hertzdamp)
+        return True, lam, dg, 0.0
+    return False, 0.0, 0.0, 0.0
+
+
+@kernel(inline="always")
+def _hertzdamp_force(cp, cs, g, gd):
+    """OpenSees Hertzdamp, its arithmetic: λ = (k + ξ δ̇) δ^n, ξ = ξ_n k / v_i set at the
+    first closed trial of an impact (S_XI), reset when a trial opens after a closed commit."""
+    n = cp[P_N]
+    if g >= 0.0:
+        if cs[S_CCLOSED] != 0.0:  # "commitTangent != 0": the impact is over
+            cs[S_XI] = 0.0
+        return False, 0.0, 0.0, 0.0
+    if cs[S_CCLOSED] == 0.0 and gd < 0.0:  # a new impact: ξ from this trial's rate
+        cs[S_XI] = cp[P_D] * cp[P_K] / (-gd)
+    xi = cs[S_XI]
+    dlt = -g
+    fac = cp[P_K] + xi * (-gd)
+    lam = fac * dlt**n  # no clipping: tension near separation
+    if cp[P_OTAN] != 0.0:
+        return True, lam, n * fac * dlt ** (n - 1.0), 0.0  # Hertzdamp's tangent, sign as is
+    return True, lam, -n * fac * dlt ** (n - 1.0), -xi * dlt**n
+
+
+@kernel(inline="always")
+def _hunt_crossley_force(cp, cs, g, gd):
+    """Hunt–Crossley type (hertz-damp, flores): λ = k δ^n (1 + D δ̇ / v⁻) clipped at 0, D =
+    cp[P_D], v⁻ the committed approach velocity at the impact (floored, kept in S_TVIMP)."""
+    if g < 0.0:
+        if cs[S_CCLOSED] == 0.0:
+            vimp = -cs[S_CGD]
+            vimp = max(vimp, V_IMPACT_MIN)
+        else:
+            vimp = cs[S_CVIMP]
+        cs[S_TVIMP] = vimp
+        n = cp[P_N]
+        dlt = -g
+        dn = dlt**n
+        fac = 1.0 + cp[P_D] * (-gd) / vimp
+        lam = cp[P_K] * dn * fac
+        if lam > 0.0:
+            dg = -n * cp[P_K] * dlt ** (n - 1.0) * fac
+            dgd = -cp[P_K] * dn * cp[P_D] / vimp
+            return True, lam, dg, dgd
+        return True, 0.0, 0.0, 0.0
+    return False, 0.0, 0.0, 0.0
+
+
+@kernel(inline="always")
+def _bilinear_stress(k1, k2, dy, g, dstrain, cstress):
+    """ImpactMaterial's closed trial for a non-zero strain increment dstrain (stress = −λ,
+    strain g, yield strain dy < 0, committed stress cstress): (stress, tangent), loading with
+    K1 capped by the line K1 δ_y + K2 (δ − δ_y), unloading with K1 floored by the line K2 δ."""
+    if dstrain < 0.0:
+        lim = k1 * dy + k2 * (g - dy)
+        if cstress + k1 * dstrain < lim:
+            return lim, k2
+        return cstress + k1 * dstrain, k1
+    lim = k2 * g
+    if cstress + k1 * dstrain > lim:
+        return lim, k2
+    return cstress + k1 * dstrain, k1
+
+
+@kernel(inline="always")
+def _bilinear_force(cp, cs, g):
+    """OpenSees ImpactMaterial (Muthukumar), stress = −λ; the trial tangent kept in S_TTAN."""
+    g_committed = cs[S_CG]
+    if cp[P_IMPQ] == 0.0 and g_committed > 0.0:
+        g_committed = 0.0  # first contact: load from the closure point (continuous law)
+    dstrain = g - g_committed
+    if g >= 0.0:
+        closed = False
+        stress = 0.0
+        tan = 0.0
+    elif dstrain < 0.0 or dstrain > 0.0:
+        closed = True
+        stress, tan = _bilinear_stress(cp[P_K], cp[P_K2], -cp[P_DY], g, dstrain, -cs[S_CLAM])
+    else:  # OpenSees: a zero increment keeps the trial values
+        closed = True
+        stress = -cs[S_TLAM]
+        tan = cs[S_TTAN]
+    cs[S_TTAN] = tan
+    return closed, -stress, -tan, 0.0
+
+
 @kernel
 def normal_law(cp, cs, g, gd):
     """Trial normal force of one corner. cp, cs: that corner's rows.
 
-    Returns (closed, λ_N, ∂λ_N/∂g, ∂λ_N/∂ġ); closed is True when the corner is closed.
+    Returns (closed, λ_N, ∂λ_N/∂g, ∂λ_N/∂ġ); closed is True when the corner is closed. One
+    branch per law code, each the law's kernel above; a code without a branch gives a
+    non-finite force.
     """
     law = int(cp[P_LAW])
-    lam = 0.0
-    dg = 0.0
-    dgd = 0.0
-    closed = False
-    if law == LAW_LINEAR:  # ElasticPPGap, Fy -> inf
-        if g <= 0.0:
-            closed = True
-            lam = -cp[P_K] * g
-            dg = -cp[P_K]
-    elif law == LAW_KELVIN_VOIGT:  # ViscoelasticGap
-        if g < 0.0:
-            closed = True
-            lam = cp[P_K] * (-g) + cp[P_C] * (-gd)
-            dg = -cp[P_K]
-            dgd = -cp[P_C] if cp[P_OTAN] == 0.0 else 0.0  # ViscoelasticGap: no damping tangent
-            if cp[P_CLIP] != 0.0 and lam < 0.0:
-                lam = 0.0
-                dg = 0.0
-                dgd = 0.0
+    if law == LAW_LINEAR:
+        closed, lam, dg, dgd = _linear_force(cp, g)
+    elif law == LAW_KELVIN_VOIGT:
+        closed, lam, dg, dgd = _kelvin_voigt_force(cp, g, gd)
     elif law == LAW_HERTZ:
-        if g < 0.0:
-            closed = True
-            n = cp[P_N]
-            dlt = -g
-            lam = cp[P_K] * dlt**n
-            dg = -n * cp[P_K] * dlt ** (n - 1.0)
-            if cp[P_OTAN] != 0.0:
-                dg = -dg  # Hertzdamp's tangent sign (see hertzdamp)
-    elif law == LAW_HERTZDAMP:  # OpenSees Hertzdamp, its arithmetic
-        n = cp[P_N]
-        if g >= 0.0:
-            if cs[S_CCLOSED] != 0.0:  # "commitTangent != 0": the impact is over
-                cs[S_XI] = 0.0
-        else:
-            closed = True
-            if cs[S_CCLOSED] == 0.0 and gd < 0.0:  # a new impact: ξ from this trial's rate
-                cs[S_XI] = cp[P_D] * cp[P_K] / (-gd)
-            xi = cs[S_XI]
-            dlt = -g
-            fac = cp[P_K] + xi * (-gd)
-            lam = fac * dlt**n  # no clipping: tension near separation
-            if cp[P_OTAN] != 0.0:
-                dg = n * fac * dlt ** (n - 1.0)  # Hertzdamp's reported tangent, sign as is
-            else:
-                dg = -n * fac * dlt ** (n - 1.0)
-                dgd = -xi * dlt**n
-    elif law in (LAW_HERTZ_DAMP, LAW_FLORES):  # Hunt–Crossley type, factor cp[P_D]
-        if g < 0.0:
-            closed = True
-            if cs[S_CCLOSED] == 0.0:
-                vimp = -cs[S_CGD]
-                vimp = max(vimp, V_IMPACT_MIN)
-            else:
-                vimp = cs[S_CVIMP]
-            cs[S_TVIMP] = vimp
-            n = cp[P_N]
-            dlt = -g
-            dn = dlt**n
-            fac = 1.0 + cp[P_D] * (-gd) / vimp
-            lam = cp[P_K] * dn * fac
-            if lam > 0.0:
-                dg = -n * cp[P_K] * dlt ** (n - 1.0) * fac
-                dgd = -cp[P_K] * dn * cp[P_D] / vimp
-            else:
-                lam = 0.0
-    elif law == LAW_BILINEAR:  # ImpactMaterial (stress = -lambda)
-        k1 = cp[P_K]
-        k2 = cp[P_K2]
-        dy = -cp[P_DY]
-        g_committed = cs[S_CG]
-        if cp[P_IMPQ] == 0.0 and g_committed > 0.0:
-            g_committed = 0.0  # first contact: load from the closure point (continuous law)
-        dstrain = g - g_committed
-        cstress = -cs[S_CLAM]
-        if g >= 0.0:
-            stress = 0.0
-            tan = 0.0
-        else:
-            closed = True
-            if dstrain < 0.0:
-                stress = cstress + k1 * dstrain
-                tan = k1
-                lim = k1 * dy + k2 * (g - dy)
-                if cstress + k1 * dstrain < lim:
-                    stress = lim
-                    tan = k2
-            elif dstrain > 0.0:
-                stress = cstress + k1 * dstrain
-                tan = k1
-                lim = k2 * g
-                if cstress + k1 * dstrain > lim:
-                    stress = lim
-                    tan = k2
-            else:  # OpenSees: trial values unchanged
-                stress = -cs[S_TLAM]
-                tan = cs[S_TTAN]
-        lam = -stress
-        dg = -tan
-        cs[S_TTAN] = tan
+        closed, lam, dg, dgd = _hertz_force(cp, g)
+    elif law == LAW_HERTZDAMP:
+        closed, lam, dg, dgd = _hertzdamp_force(cp, cs, g, gd)
+    elif law in (LAW_HERTZ_DAMP, LAW_FLORES):
+        closed, lam, dg, dgd = _hunt_crossley_force(cp, cs, g, gd)
+    elif law == LAW_BILINEAR:
+        closed, lam, dg, dgd = _bilinear_force(cp, cs, g)
     else:  # no branch for this code: fail, loudly
-        closed = True
-        lam = np.nan
-        dg = np.nan
-        dgd = np.nan
+        closed, lam, dg, dgd = True, np.nan, np.nan, np.nan
     cs[S_TLAM] = lam
     cs[S_TCLOSED] = 1.0 if closed else 0.0
     return closed, lam, dg, dgd

@@ -1,12 +1,14 @@
 """Small dense linear algebra for the step loops (numba): LU with partial pivoting, and a
 rank-revealing solve with complete pivoting for the contact problems' small systems.
 
-The 7×7 iteration matrices of the analytic engines are factored and solved here in place,
-without allocation, so the compiled step loops never call into LAPACK's Python layer. The size
-is the compile-time constant :data:`~deckpound.models.plan.N_DOF` (every matrix of the step
-loops is N_DOF × N_DOF), so LLVM unrolls the loops: the factorisation takes about half the time
-of the same code with the size read from the array (measured by a micro-benchmark), with the
-same operations in the same order (identical factors).
+The iteration matrices of the analytic engines (n_dof × n_dof) are factored and solved here in
+place, without allocation, so the compiled step loops never call into LAPACK's Python layer.
+The size comes from the caller as a *size tag*: a tuple whose length is the matrix size
+(``SystemArrays.dofs`` = (0, …, n_dof − 1), :func:`deckpound.analytic.impulses.size_tag`).
+numba types a tuple by its length, so ``len(tag)`` is a compile-time constant: the LU is
+compiled once per model size, and its short loops have a fixed trip count that LLVM unrolls
+(as it did when the size was a module constant; a size read from the array's shape at run
+time does not unroll). The operations and their order are the same for every size.
 """
 
 from __future__ import annotations
@@ -14,13 +16,16 @@ from __future__ import annotations
 import numpy as np
 
 from deckpound.analytic._jit import compiled, kernel
-from deckpound.models.plan import N_DOF
+
+__all__ = ["lu_factor", "lu_solve", "solve_dense_cp", "solve_dense_cp_into"]
 
 
 @kernel
-def lu_factor(A, piv):
-    """In-place LU with partial pivoting of an N_DOF × N_DOF matrix. Returns False if singular."""
-    n = N_DOF
+def lu_factor(A, piv, size):
+    """In-place LU with partial pivoting (PA = LU, unit lower L below the diagonal) of the
+    n × n matrix A, n = len(size) (a size tag, see the module docstring); piv (n,) int64 the
+    row swaps. Returns False if a pivot is zero or not finite (singular)."""
+    n = len(size)
     for k in range(n):
         p = k
         amax = abs(A[k, k])
@@ -47,9 +52,10 @@ def lu_factor(A, piv):
 
 
 @kernel
-def lu_solve(LU, piv, b, x):
-    """Solve with the factors of :func:`lu_factor` (x may alias b; N_DOF long)."""
-    n = N_DOF
+def lu_solve(LU, piv, b, x, size):
+    """Solve A x = b with the factors LU, piv of :func:`lu_factor` (x may alias b); n =
+    len(size), the size tag the factors were computed with."""
+    n = len(size)
     for i in range(n):
         x[i] = b[i]
     for k in range(n):
@@ -85,70 +91,91 @@ def solve_dense_cp(A, b, x, rtol):
     return solve_dense_cp_into(A, b, x, rtol, np.empty(m, dtype=np.int64), np.empty(m))
 
 
-@kernel
-def solve_dense_cp_into(A, b, x, rtol, perm, y):
-    """:func:`solve_dense_cp` with its scratch given: perm (≥ m,) int64, y (≥ m,)."""
-    m = A.shape[0]
-    for i in range(m):
-        perm[i] = i
+# The stages of solve_dense_cp_into, inlined into it (one compiled function, as before). The
+# system size m varies from call to call (the number of active contact unknowns), so it is
+# read from A's shape.
+
+
+@kernel(inline="always")
+def _abs_max(A, b, m):
+    """(max |A_ij|, max |b_i|) over the m × m system."""
     amax = 0.0
     bmax = 0.0
     for i in range(m):
         bmax = max(bmax, abs(b[i]))
         for j in range(m):
             amax = max(amax, abs(A[i, j]))
+    return amax, bmax
+
+
+@kernel(inline="always")
+def _complete_pivot(A, k, m):
+    """The largest |A_ij| of the trailing block i, j ≥ k: (value, row, column); the first in
+    row-major order among equals, (0, k, k) for a zero block."""
+    best = 0.0
+    pr = k
+    pc = k
+    for i in range(k, m):
+        for j in range(k, m):
+            v = abs(A[i, j])
+            if v > best:
+                best = v
+                pr = i
+                pc = j
+    return best, pr, pc
+
+
+@kernel(inline="always")
+def _swap_rows(A, b, k, pr, m):
+    """Rows k and pr of A and b exchanged."""
+    for j in range(m):
+        t = A[k, j]
+        A[k, j] = A[pr, j]
+        A[pr, j] = t
+    t = b[k]
+    b[k] = b[pr]
+    b[pr] = t
+
+
+@kernel(inline="always")
+def _swap_columns(A, perm, k, pc, m):
+    """Columns k and pc of A exchanged, and the unknowns' order perm with them."""
     for i in range(m):
-        x[i] = 0.0
-    if m == 0:
-        return 0, True
-    if amax == 0.0:
-        return 0, bmax == 0.0
-    ptol = rtol * amax
-    rank = m
-    for k in range(m):
-        # complete pivot search
-        best = 0.0
-        pr = k
-        pc = k
-        for i in range(k, m):
-            for j in range(k, m):
-                v = abs(A[i, j])
-                if v > best:
-                    best = v
-                    pr = i
-                    pc = j
-        if best <= ptol:
-            rank = k
-            break
-        if pr != k:
-            for j in range(m):
-                t = A[k, j]
-                A[k, j] = A[pr, j]
-                A[pr, j] = t
-            t = b[k]
-            b[k] = b[pr]
-            b[pr] = t
-        if pc != k:
-            for i in range(m):
-                t = A[i, k]
-                A[i, k] = A[i, pc]
-                A[i, pc] = t
-            ti = perm[k]
-            perm[k] = perm[pc]
-            perm[pc] = ti
-        piv = A[k, k]
-        for i in range(k + 1, m):
-            f = A[i, k] / piv
-            if f != 0.0:
-                A[i, k] = 0.0
-                for j in range(k + 1, m):
-                    A[i, j] -= f * A[k, j]
-                b[i] -= f * b[k]
+        t = A[i, k]
+        A[i, k] = A[i, pc]
+        A[i, pc] = t
+    ti = perm[k]
+    perm[k] = perm[pc]
+    perm[pc] = ti
+
+
+@kernel(inline="always")
+def _eliminate_below(A, b, k, m):
+    """Zero column k below the pivot A_kk: row_i −= (A_ik / A_kk) row_k, b likewise."""
+    piv = A[k, k]
+    for i in range(k + 1, m):
+        f = A[i, k] / piv
+        if f != 0.0:
+            A[i, k] = 0.0
+            for j in range(k + 1, m):
+                A[i, j] -= f * A[k, j]
+            b[i] -= f * b[k]
+
+
+@kernel(inline="always")
+def _dropped_rows_consistent(b, rank, m, btol):
+    """True when the right-hand sides of the rows beyond the rank are all within btol."""
     consistent = True
-    btol = 1e3 * rtol * bmax
     for i in range(rank, m):
         if abs(b[i]) > btol:
             consistent = False
+    return consistent
+
+
+@kernel(inline="always")
+def _back_substitute(A, b, x, perm, y, rank, m):
+    """Upper-triangular solve of the leading rank × rank block into y (the other unknowns 0),
+    then x in the original order of the unknowns: x[perm[k]] = y[k]."""
     for k in range(m):
         y[k] = 0.0
     for k in range(rank - 1, -1, -1):
@@ -158,4 +185,33 @@ def solve_dense_cp_into(A, b, x, rtol, perm, y):
         y[k] = s / A[k, k]
     for k in range(m):
         x[perm[k]] = y[k]
+
+
+@kernel
+def solve_dense_cp_into(A, b, x, rtol, perm, y):
+    """:func:`solve_dense_cp` with its scratch given: perm (≥ m,) int64, y (≥ m,)."""
+    m = A.shape[0]
+    for i in range(m):
+        perm[i] = i
+    amax, bmax = _abs_max(A, b, m)
+    for i in range(m):
+        x[i] = 0.0
+    if m == 0:
+        return 0, True
+    if amax == 0.0:
+        return 0, bmax == 0.0
+    ptol = rtol * amax
+    rank = m
+    for k in range(m):
+        best, pr, pc = _complete_pivot(A, k, m)
+        if best <= ptol:
+            rank = k
+            break
+        if pr != k:
+            _swap_rows(A, b, k, pr, m)
+        if pc != k:
+            _swap_columns(A, perm, k, pc, m)
+        _eliminate_below(A, b, k, m)
+    consistent = _dropped_rows_consistent(b, rank, m, 1e3 * rtol * bmax)
+    _back_substitute(A, b, x, perm, y, rank, m)
     return rank, consistent

@@ -109,7 +109,7 @@ def solve_active_impulses(
     for r in range(2 * nc):
         for j in range(n_dof):
             col[j] = Wr[r, j]
-        lu_solve(LU, piv, col, col)
+        lu_solve(LU, piv, col, col, work.dof_slots)
         for j in range(n_dof):
             X[r, j] = col[j]
     G = work.G[: 2 * nc, : 2 * nc]

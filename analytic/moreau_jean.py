@@ -125,8 +125,10 @@ __all__ = ["moreau_jean_run"]
 
 
 @kernel(inline="always")
-def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv, n_dof):
-    """LU of Ŵ = M + θhC + θ²h² Bᵀ diag(kt) B (K scratch). Returns False if singular."""
+def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv, dof_slots):
+    """LU of Ŵ = M + θhC + θ²h² Bᵀ diag(kt) B (K scratch), n_dof = len(dof_slots) (the size
+    tag). Returns False if singular."""
+    n_dof = len(dof_slots)
     spring_tangent(sa, kt, K)
     c1 = theta * h
     c2 = c1 * c1
@@ -134,7 +136,7 @@ def _iteration_matrix(sa, Cmat, kt, h, theta, K, LU, piv, n_dof):
         for j in range(n_dof):
             LU[i, j] = c1 * Cmat[i, j] + c2 * K[i, j]
         LU[i, i] += sa.mass[i]
-    return lu_factor(LU, piv)
+    return lu_factor(LU, piv, dof_slots)
 
 
 @kernel(inline="always")
@@ -293,9 +295,8 @@ def _factor(system, work, h, theta, count):
     kt_lin, kt_fact = spr.kt_lin, spr.kt_fact
     for i in range(kt_lin.shape[0]):
         if kt_lin[i] != kt_fact[i]:
-            n_dof = len(work.dof_slots)
             if not _iteration_matrix(
-                system, system.C, kt_lin, h, theta, dof.K, dof.LU, dof.piv, n_dof
+                system, system.C, kt_lin, h, theta, dof.K, dof.LU, dof.piv, work.dof_slots
             ):
                 return False
             count[bd.CNT_FACTORISATIONS] += 1
@@ -313,7 +314,7 @@ def _velocity(work, opt, nact, stats):
     dof, cor = work.dof, work.corner
     v, vfree = dof.v, dof.vfree
     n_dof = len(work.dof_slots)
-    lu_solve(dof.LU, dof.piv, dof.R, dof.dv)
+    lu_solve(dof.LU, dof.piv, dof.R, dof.dv, work.dof_slots)
     for j in range(n_dof):
         vfree[j] = v[j] - dof.dv[j]
     if nact == 0:

@@ -20,7 +20,7 @@ from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.impulses import impulse_work, size_tag
 from deckpound.analytic.system import C_BENT, spring_stored_energy, store_standard
-from deckpound.models.plan import CORNER_NAMES, N_DOF
+from deckpound.models.plan import CORNER_NAMES
 
 __all__ = [
     "ENERGY_COLUMNS",
@@ -181,17 +181,10 @@ def store_row(output, row, t, q, v, g, fn, ft, fs, nbs, pn, pt, state, energy):
 def moreau_jean_workspace(u0, v0, hstate, ns: int, nch: int, n_corners: int) -> MoreauJeanWork:
     """The workspace of :func:`moreau_jean_run` for ``ns`` springs, ``nch`` support channels
     and ``n_corners`` contact corners around the initial state u0, v0 (n_dof,) and the virgin
-    Takeda states. Allocated here because the kernel runs without numba's runtime.
-
-    The loop's own arrays take any n_dof; the iteration matrix is factored by
-    :func:`deckpound.analytic.dense.lu_factor`, which is compiled for N_DOF × N_DOF, so another
-    n_dof is refused (ValueError) rather than factored wrongly."""
+    Takeda states. Allocated here because the kernel runs without numba's runtime. Any n_dof:
+    the loop, the dense LU of the iteration matrix and the contact solve take it from the size
+    tag ``dof_slots`` (compiled once per model size)."""
     n_dof = u0.shape[0]
-    if n_dof != N_DOF:
-        raise ValueError(
-            f"moreau_jean_workspace: the initial state has {n_dof} DOFs; the dense LU of the "
-            f"iteration matrix (deckpound.analytic.dense) is compiled for N_DOF = {N_DOF}"
-        )
     springs = bd.row_views(_SPRING_VECTORS, ns)
     springs["kt_fact"][:] = np.nan  # no factorisation held yet
     dof = MoreauJeanDofs(

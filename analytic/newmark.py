@@ -159,7 +159,7 @@ def _elastic_factors(sa, mat, dt):
     spring_tangent(sa, sa.k0, mat.K)
     _effective_tangent(sa, mat.K, GAMMA / (BETA * dt), 1.0 / (BETA * dt * dt), mat.Kel)
     _copy_matrix(mat.Kel, mat.LUel, len(sa.dofs))
-    return lu_factor(mat.LUel, mat.pivel)
+    return lu_factor(mat.LUel, mat.pivel, sa.dofs)
 
 
 @kernel(inline="always")
@@ -319,11 +319,11 @@ def _solve(sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_on
     mat, spr, dof = work.mat, work.spring, work.dof
     if reuse and not anyev:
         if nonel == 0 and nsub == 1:
-            lu_solve(mat.LUel, mat.pivel, dof.R, dof.du)
+            lu_solve(mat.LUel, mat.pivel, dof.R, dof.du, sa.dofs)
             stats.count[bd.CNT_REUSED] += 1
             return True, lu_springs_only, lu_h
         if lu_springs_only and lu_h == h and _same_tangents(spr.kt, spr.kt_fact):
-            lu_solve(mat.LU, mat.piv, dof.R, dof.du)
+            lu_solve(mat.LU, mat.piv, dof.R, dof.du, sa.dofs)
             stats.count[bd.CNT_REUSED] += 1
             return True, lu_springs_only, lu_h
     c2 = GAMMA / (BETA * h)
@@ -334,9 +334,9 @@ def _solve(sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_on
         ca.contact_tangent(contact, work.cw, dof.u, c2, mat.Keff, mat.H, sa.dofs)
     _copy_matrix(mat.Keff, mat.LU, len(sa.dofs))
     _copy(spr.kt, spr.kt_fact, spr.kt.shape[0])
-    if not lu_factor(mat.LU, mat.piv):
+    if not lu_factor(mat.LU, mat.piv, sa.dofs):
         return False, False, h
-    lu_solve(mat.LU, mat.piv, dof.R, dof.du)
+    lu_solve(mat.LU, mat.piv, dof.R, dof.du, sa.dofs)
     return True, not anyev, h
 
 

@@ -5,6 +5,8 @@ the engines' reads, the OpenSees refusals and the law study come from the table.
 from __future__ import annotations
 
 import dataclasses
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -130,3 +132,51 @@ def test_the_opensees_refusals_name_the_laws_opensees_expresses():
             listed = law.opensees_refusal.rsplit("; use ", 1)[1]
             named = {w.strip(" ,") for w in listed.replace(" or ", ", ").split(",")}
             assert named == expressed, law.name
+
+
+def _trial_path():
+    """A corner's trials through an impact: approach, loading, a repeated (zero-increment)
+    trial, unloading, tension-side rates, separation, with commits between steps."""
+    return [(+2e-4, -0.3), (-1e-4, -0.3), (-4e-4, -0.2), (-4e-4, -0.2), (-1.5e-3, -0.1),
+            (-9e-4, 0.2), (-2e-4, 0.5), (-1e-5, 0.6), (+1e-4, 0.6), (-3e-4, -0.4)]  # fmt: skip
+
+
+@pytest.mark.parametrize("law", LAWS)
+@pytest.mark.parametrize("variant", ["default", "opensees"])
+def test_the_python_source_of_the_law_kernels_is_the_compiled_law(law, variant):
+    """check_kernel_branches probes the laws' Python source (no compiled code); along an
+    impact's loading and unloading trials it gives bitwise the compiled kernels' forces,
+    derivatives and state writes, for the law's default and OpenSees variants."""
+    opensees = variant == "opensees"
+    sc = with_contact(base_scene(), law=law, stiffness=2.0e6, restitution=0.7)
+    cp = cl.pack_contact(sc, kv_clip=not opensees, impact_opensees=opensees)
+    cp[:, cl.P_OTAN] = 1.0 if opensees else 0.0
+    python_law = clc.python_source_kernels(cl)["normal_law"]
+    row = cp[0]
+    cs_c, cs_p = cl.new_contact_state(np.full(4, 0.01)), cl.new_contact_state(np.full(4, 0.01))
+    for g, gd in _trial_path():
+        for trial in (1.0, 0.5):  # two Newton trials, then commit the second
+            got = cl.normal_law(row, cs_c[0], trial * g, gd)
+            want = python_law(row, cs_p[0], trial * g, gd)
+            assert got == want, (law, variant, g, gd)
+            np.testing.assert_array_equal(cs_c, cs_p)
+        gg = np.full(4, g / 2)
+        cl.contact_commit(cs_c, gg, np.full(4, gd), np.ones(4, dtype=np.bool_))
+        cl.contact_commit(cs_p, gg, np.full(4, gd), np.ones(4, dtype=np.bool_))
+
+
+def test_the_branch_check_compiles_no_kernel():
+    """check_kernel_branches runs before every compliance run: it loads no compiled kernel."""
+    code = (
+        "import numba\n"
+        "from deckpound.analytic import contact_laws as cl, contact_law_checks as clc\n"
+        "from deckpound.api import load_scene\n"
+        "from deckpound.models.contact_laws_table import LAW_CODES\n"
+        "for law in LAW_CODES:\n"
+        "    clc.check_kernel_branches(cl.pack_contact(load_scene('saiidi-4span', "
+        "set={'contact.law': law})))\n"
+        "print([n for n, v in vars(cl).items() if numba.extending.is_jitted(v) and "
+        "v.signatures])\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

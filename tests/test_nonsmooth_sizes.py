@@ -3,9 +3,9 @@
 The next capability (several deck segments, all active contacts of all joints in one LCP) needs
 more than the four corners of one deck: the impulse solve of a Moreau–Jean step and the loop's
 workspace are sized by their arguments, not by a module constant. Checked here on six corners,
-three of them active, against the contact laws and the momentum balance of the step. (The DOF
-count is still the N_DOF of the dense LU, deckpound.analytic.dense; the workspace refuses
-another.)
+three of them active, against the contact laws and the momentum balance of the step, for the
+plan's DOF count and for a larger model (the dense LU takes its size from the size tag, as the
+loop does).
 """
 
 from __future__ import annotations
@@ -16,18 +16,19 @@ import pytest
 from deckpound.analytic.contact_checks import STATUS_FAILED
 from deckpound.analytic.dense import lu_factor
 from deckpound.analytic.frictional_contact import MODE_AUTO
-from deckpound.analytic.impulses import impulse_work, solve_active_impulses
+from deckpound.analytic.impulses import impulse_work, size_tag, solve_active_impulses
 from deckpound.analytic.moreau_jean_work import moreau_jean_workspace
 from deckpound.models.plan import N_DOF
 
 
-def test_impulses_of_three_active_corners_out_of_six():
+@pytest.mark.parametrize("n_dof", [N_DOF, N_DOF + 4])
+def test_impulses_of_three_active_corners_out_of_six(n_dof):
     rng = np.random.default_rng(7)
-    n_corners, n_dof, mu, e = 6, N_DOF, 0.3, 0.5
+    n_corners, mu, e = 6, 0.3, 0.5
     A = rng.standard_normal((n_dof, n_dof))
     W_hat = A @ A.T + n_dof * np.eye(n_dof)  # the iteration matrix Ŵ (SPD)
     LU, piv = W_hat.copy(), np.zeros(n_dof, dtype=np.int64)
-    assert lu_factor(LU, piv)
+    assert lu_factor(LU, piv, size_tag(n_dof))
     WN = rng.standard_normal((n_corners, n_dof))
     WT = rng.standard_normal((n_corners, n_dof))
     act = np.array([1, 3, 4, 0, 0, 0], dtype=np.int64)
@@ -78,8 +79,9 @@ def test_impulses_of_three_active_corners_out_of_six():
     np.testing.assert_allclose(P_T[a][slip], -mu * P_N[a][slip] * np.sign(uT_plus[slip]))
 
 
-def test_workspace_is_sized_by_its_arguments():
-    n_dof, ns, nch, n_corners = N_DOF, 5, 3, 6
+@pytest.mark.parametrize("n_dof", [N_DOF, N_DOF + 2])
+def test_workspace_is_sized_by_its_arguments(n_dof):
+    ns, nch, n_corners = 5, 3, 6
     u0 = np.zeros(n_dof)
     work = moreau_jean_workspace(u0, u0.copy(), np.zeros((ns, 17)), ns, nch, n_corners)
     assert work.dof.q.shape == (n_dof,) and work.dof.LU.shape == (n_dof, n_dof)
@@ -91,11 +93,3 @@ def test_workspace_is_sized_by_its_arguments():
     assert work.impulse.G.shape == (2 * n_corners, 2 * n_corners)
     assert len(work.dof_slots) == len(work.impulse.dof_slots) == n_dof
     assert len(work.corner_slots) == n_corners
-
-
-def test_workspace_refuses_a_dof_count_the_dense_lu_is_not_compiled_for():
-    """The dense LU (deckpound.analytic.dense) is compiled for N_DOF: another count would
-    factor only part of the iteration matrix, so the workspace refuses it."""
-    u0 = np.zeros(N_DOF + 2)
-    with pytest.raises(ValueError, match="N_DOF"):
-        moreau_jean_workspace(u0, u0.copy(), np.zeros((5, 17)), 5, 3, 4)
