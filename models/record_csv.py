@@ -12,7 +12,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd  # only CSV records need it (0.3-0.6 s to import)
 
 from .errors import SceneError
 from .records import MAX_SAMPLES, RecordFile, check_count, excerpt, read_capped
@@ -44,6 +43,8 @@ def read_csv_record(
     against the scene is the caller's. Size (bytes, rows, rows x columns) is checked before
     the values are parsed.
     """
+    import pandas as pd  # only CSV records need it (0.3-0.6 s to import)
+
     raw, rec = read_capped(path, field_name, "CSV record", MAX_SAMPLES + 1)
     text = raw.decode("utf-8", errors="replace")
     first = text.split("\n", 1)[0]

@@ -36,10 +36,9 @@ import io
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 import xarray as xr
 
 from deckpound.models.file_io import (
@@ -56,6 +55,9 @@ from .errors import SceneError
 from .fields import to_mapping
 from .html_table import html_table, short_text
 from .plan import CORNER_NAMES, RELATIVE_COLUMNS
+
+if TYPE_CHECKING:  # annotations only
+    import pandas as pd
 
 __all__ = [
     "N_CORNERS",
@@ -375,6 +377,7 @@ class Result:
 
     def to_frame(self):
         """pandas DataFrame with time [s] as the index; ``attrs`` holds units, engine, status."""
+        import pandas as pd  # tables only (0.3-0.6 s to import; a run does not need it)
 
         frame = pd.DataFrame(
             {k: v for k, v in self.columns.items() if k != "t"}, index=pd.Index(self.t, name="t")
@@ -498,6 +501,7 @@ class Result:
         cls, engine: str, csv_data: bytes, json_data: bytes, source: str = "result"
     ) -> Result:
         """A result from the contents of its two files; SceneError names what is damaged."""
+        import pandas as pd  # tables only (0.3-0.6 s to import; a run does not need it)
 
         try:
             meta = json.loads(json_data.decode("utf-8"))
@@ -581,6 +585,7 @@ def read_table(source, **read_csv_options) -> pd.DataFrame:
     Reads both header formats: ``name [unit]`` cells (this version) and a plain header below a
     ``# units: s,m,…`` comment line (result files of earlier versions), without a warning.
     ``read_csv_options`` go to :func:`pandas.read_csv` (``keep_default_na=False``)."""
+    import pandas as pd  # tables only (0.3-0.6 s to import; a run does not need it)
 
     if isinstance(source, (str, Path)):
         source = io.BytesIO(Path(source).read_bytes())

@@ -216,6 +216,7 @@ def test_no_re_exports_and_no_private_names_across_modules():
 HEAVY_LIBRARIES = (
     "openseespy",
     "scipy.signal",
+    "pandas",
     "matplotlib",
     "dask",
     "distributed",

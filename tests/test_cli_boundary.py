@@ -375,12 +375,12 @@ def test_run_failing_mid_write_leaves_no_half_result(tmp_path, monkeypatch):
 
 def test_study_failing_is_marked_incomplete_then_resumes_from_the_cache(tmp_path, monkeypatch):
     """A study killed while drawing its figure keeps its cases; the re-run resumes."""
-    from deckpound.compare import figures
+    from deckpound.compare import studies
 
     def dies(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "s" / "f.png"))
 
-    monkeypatch.setattr(figures, "study_figure", dies)
+    monkeypatch.setattr(studies, "study_figure", dies)  # where the study calls it
     argv = [
         "study",
         "friction",

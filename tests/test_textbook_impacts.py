@@ -37,7 +37,6 @@ decade).
 
 from __future__ import annotations
 
-import csv
 import json
 import subprocess
 import sys
@@ -49,6 +48,7 @@ import pytest
 from test_nonsmooth_impact import closed_form_face, closed_form_single, left_rows
 
 from deckpound.compare.engines import run_engine
+from deckpound.models.result import read_table
 from deckpound.models.scene_io import load_scene
 
 SCENE = Path(__file__).parent / "data" / "corner_impact.toml"
@@ -68,9 +68,8 @@ def cli_run(tmp_path, overrides: list[str], engine: str = "nonsmooth"):
         cmd += ["--set", o]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr
-    with open(out / f"{engine}.csv", encoding="utf-8") as f:
-        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
-    cols = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+    table = read_table(out / f"{engine}.csv")  # plain names; the units are in the header
+    cols = {k: table[k].to_numpy(dtype=float) for k in table.columns}
     meta = json.loads((out / f"{engine}.json").read_text(encoding="utf-8"))
     return cols, meta
 
