@@ -39,7 +39,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
 from deckpound.models.file_io import (
     atomic_write_files,
@@ -438,6 +437,8 @@ class Result:
         if bents:
             coords["bent"] = bents
             coords["direction"] = ["x", "y"]
+        import xarray as xr  # notebooks only (pulls in pandas: 0.3 s a run does not need)
+
         ds = xr.Dataset(data_vars, coords=coords)
         ds.attrs = {
             "engine": self.engine,
