@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from deckpound.compare.engines import engine_names
+from deckpound.compare.engines import engine_names, engine_style
 from deckpound.models.result import Result
 from deckpound.models.scene import DAMPING_MASS, DAMPING_MEMBERS, DAMPING_STIFFNESS, Scene
 from deckpound.models.scene_io import modified
@@ -100,7 +100,7 @@ def damping_figure(
 ) -> list[Path]:
     """Peak deck rotation (top) and peak normal gap force (bottom) per damping case, one
     marker series per engine."""
-    from .style import CYCLE, engine_style, new_figure, save
+    from .style import CYCLE, new_figure, save
 
     labels = list(dict.fromkeys(table["damping"]))
     fig, axes = new_figure(2, 1, width=9.0, height=2.6)

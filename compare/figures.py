@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound.compare.engines import engine_names
+from deckpound.compare.engines import engine_names, engine_style
 from deckpound.models.plan import plan_of
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
@@ -35,7 +35,7 @@ LABELS = {
 
 
 def _style_for(label: str, k: int) -> dict:
-    from .style import CYCLE, engine_style
+    from .style import CYCLE
 
     engine = label.split()[0]
     st = engine_style(engine)
@@ -110,7 +110,7 @@ def peak_vs_pga(
 ) -> list[Path]:
     """Peak deck rotation vs run PGA over the sequence, one line per engine and friction
     assumption (``case`` column: engine name, then a variant tag; paper Fig. 7)."""
-    from .style import CYCLE, engine_style, new_figure, save
+    from .style import CYCLE, new_figure, save
 
     fig, axes = new_figure(1, 1, width=5.5, height=3.2)
     ax = axes[0, 0]
@@ -141,7 +141,7 @@ def friction_ratio(
 ) -> list[Path]:
     """Peak rotation with friction / without, per run and engine (1 = no effect; the band is
     the ±tol within which the report calls the change negligible)."""
-    from .style import CYCLE, engine_style, new_figure, save
+    from .style import CYCLE, new_figure, save
 
     tol = TOL if tol is None else tol
     fig, axes = new_figure(1, 1, width=5.5, height=3.0)
@@ -169,7 +169,7 @@ def friction_mechanism(
     (SequenceRun μ = 0, SequenceRun μ > 0), either order): deck rotation of both (top) and
     the moment of the tangential contact forces about the deck centre with friction
     (bottom), the excursion that reaches the frictional peak shaded."""
-    from .style import engine_style, new_figure, save
+    from .style import new_figure, save
 
     fig, axes = new_figure(2, 1, width=7.5, height=2.3, sharex=True)
     shaded = False
@@ -219,7 +219,7 @@ def study_figure(
     subtitle: str = "",
 ) -> list[Path]:
     """Left: the study's headline (peak rotation vs parameter); right: rotation histories."""
-    from .style import CYCLE, engine_style, new_figure, save
+    from .style import CYCLE, new_figure, save
 
     fig, axes = new_figure(1, 2, width=9.0, height=3.2)
     ax = axes[0, 0]

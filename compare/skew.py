@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from deckpound.compare.engines import engine_names, get_engine
+from deckpound.compare.engines import engine_names, engine_style, get_engine
 from deckpound.compare.verify_clone import verify_clone
 from deckpound.models.contact_laws_table import DEFAULT_FRICTION
 from deckpound.models.plan import CORNER_NAMES
@@ -219,7 +219,7 @@ def skew_figure(
     """Peak deck rotation (left) and peak transverse deck displacement relative to the tables
     (right) against the skew angle; one line per engine × friction (friction: open markers,
     thinner line)."""
-    from .style import CYCLE, engine_style, new_figure, save
+    from .style import CYCLE, new_figure, save
 
     fig, axes = new_figure(1, 2, width=9.0, height=3.4)
     markers = {}

@@ -15,7 +15,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from deckpound.compare.engines import engine_style as _registry_style
 from deckpound.models.file_io import atomic_path
 
 CYCLE = [
@@ -43,13 +42,6 @@ RC = {
     "axes.spines.right": False,
     "lines.linewidth": 1.2,
 }
-
-
-def engine_style(engine: str) -> dict:
-    """Line style of an engine, declared by the engine itself (:mod:`deckpound.compare.engines`);
-    ``measured`` and unknown labels get neutral styles."""
-
-    return _registry_style(engine)
 
 
 def new_figure(
