@@ -3,6 +3,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import time
+
 
 def children(pid: int) -> list[int]:
     """PIDs of the direct children of ``pid`` (empty when it has none or is gone)."""
@@ -20,3 +23,29 @@ def alive(pid: int) -> bool:
             return fh.read().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
     except FileNotFoundError:
         return False
+
+
+def start_in_own_group(argv: list[str], cwd) -> subprocess.Popen:
+    """Start a command in a process group of its own, as a terminal runs one: a Ctrl-C sent to
+    the group (``os.killpg``) reaches it and every worker it started."""
+    return subprocess.Popen(
+        argv,
+        cwd=cwd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+
+
+def wait_for_rows(
+    proc: subprocess.Popen, rows, at_least: int = 3, timeout: float = 300
+) -> list[int]:
+    """Wait until a sweep has cached ``at_least`` row files (``*.json`` below ``rows``) or ended;
+    the PIDs of its workers at that moment."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and proc.poll() is None:
+        if rows.is_dir() and len(list(rows.rglob("*.json"))) >= at_least:
+            break
+        time.sleep(0.2)
+    return children(proc.pid)

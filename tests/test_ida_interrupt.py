@@ -12,7 +12,7 @@ import sys
 import time
 
 import pytest
-from _process_helpers import alive, children
+from _process_helpers import alive, start_in_own_group, wait_for_rows
 from _record_helpers import quake, write_at2
 
 PAIRS = 12
@@ -30,22 +30,9 @@ def test_ctrl_c_stops_an_ida_cleanly_and_it_resumes(tmp_path):
     argv = [sys.executable, "-m", "deckpound", "ida", "saiidi-4span", "--records", str(suite)]
     argv += ["--im", "pga", "--levels", LEVELS, "--engines", "compliance"]
     argv += ["--workers", "2", "--no-progress", "-o", "out"]
-    # a terminal's Ctrl-C reaches the whole process group: the command in a group of its own
-    proc = subprocess.Popen(
-        argv,
-        cwd=tmp_path,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-    )
+    proc = start_in_own_group(argv, tmp_path)  # as a terminal runs it
     rows = tmp_path / "out" / "cache" / "rows"
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and proc.poll() is None:
-        if rows.is_dir() and len(list(rows.rglob("*.json"))) >= 3:
-            break
-        time.sleep(0.2)
-    workers = children(proc.pid)
+    workers = wait_for_rows(proc, rows)
     assert proc.poll() is None and len(workers) >= 2, "the sweep ended before the interrupt"
     assert not (tmp_path / "out" / "ida.json").exists()  # interrupted inside the sweep
     os.killpg(proc.pid, signal.SIGINT)

@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 import pytest
-from _process_helpers import alive, children
+from _process_helpers import alive, start_in_own_group, wait_for_rows
 
 import deckpound as dp
 from deckpound import cli
@@ -147,22 +147,9 @@ def test_ctrl_c_stops_every_worker_with_one_line_and_resumes(tmp_path, sig, stat
         "--set",
         "excitation.duration=4.0",
     ]
-    # a terminal's Ctrl-C reaches the whole process group: the command in a group of its own
-    proc = subprocess.Popen(
-        argv,
-        cwd=tmp_path,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-    )
+    proc = start_in_own_group(argv, tmp_path)  # as a terminal runs it
     rows = tmp_path / "out" / "cache" / "variability"
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and proc.poll() is None:
-        if rows.is_dir() and len(list(rows.glob("*.json"))) >= 3:
-            break
-        time.sleep(0.2)
-    workers = children(proc.pid)
+    workers = wait_for_rows(proc, rows)
     assert proc.poll() is None and len(workers) >= 2, "the study ended before the interrupt"
     if sig == signal.SIGINT:
         os.killpg(proc.pid, sig)
