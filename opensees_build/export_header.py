@@ -325,7 +325,27 @@ def analysis_lines(p: ExportParts) -> list[str]:
         )
     else:
         out.append("  (fallback 'none') stops the run with status 'failed'.")
-    return out
+    return out + seat_lines(p)
+
+
+def seat_lines(p: ExportParts) -> list[str]:
+    """The unseating check of the step loop, with each corner's support length."""
+    lengths = p.plan["support_lengths"]
+    per_corner = ", ".join(
+        f"c{c + 1} {'none (not checked)' if n is None else f'{_fmt(n)} m'}"
+        for c, n in enumerate(lengths)
+    )
+    where = "" if p.fmt == "tcl" else " and written to opensees.stats.json"
+    return [
+        (
+            "  Unseating, as deckpound checks it: at every converged step and sub-step, corner c "
+            "is unseated when its gap has opened by more than the support length N of the seat "
+            "it faces since t = 0 (seat margin N - (g - g(0)) < 0); the loop stops after that "
+            "step with status 'unseated' (exit 0), stores no row of it and cuts the recorder "
+            "files to the rows stored; the smallest margin of each corner and its time are "
+            f"printed{where}. N: {per_corner}."
+        )
+    ]
 
 
 def record_lines(p: ExportParts) -> list[str]:

@@ -9,8 +9,16 @@ Layout (scene text appears only in the header comments, from line 3 on):
    and calling ``build()`` gives the model alone, e.g. for opsvis);
 4. ``PLAN`` (tags and constants of the step loop), ``REC_DT`` and ``add_recorders(out_dir)``;
 5. the runtime functions of :mod:`.engine` (``define_analysis``, ``run_steps``, ...) copied
-   verbatim, so the script steps exactly as the in-process run does;
+   verbatim, so the script steps exactly as the in-process run does — unseating included: the
+   loop stops after the first step at which a corner's seat margin is negative, status
+   ``"unseated"``;
 6. ``main()``: build, recorders, ``record`` at t = 0, run, optional CSV, statistics.
+
+The statistics (``opensees.stats.json``, and the status and seat-margin lines on stdout) add
+to the loop's own the seat margins of :func:`seat_margin_minima`, the engine's equation
+(:func:`deckpound.models.engine_contract.seat_margins`). A run stopped by unseating ends its
+recorder files with the last row deckpound stores (:func:`keep_stored_rows`: OpenSees recorded
+the unseating step's commit when it was an output step; the engine keeps no row of that step).
 
 The optional CSV (``--csv``) holds every column of the in-process result, in its order: the
 engine's sampled columns plus the displacements relative to the supports and the bent
@@ -163,8 +171,61 @@ def result_rows(rows, rel, read_record):
     return out
 
 
-#: the functions of this module the script carries (its CSV's derived columns)
-CSV_RUNTIME = (interp_record, _total, result_rows)
+#: the engine contract's words for seats without a support length (``seat_margin_basis``)
+UNCHECKED_SEATS = "not checked (no seats[i].support_length)"
+
+
+def seat_margin_minima(plan, stats, unchecked):
+    """The seat margins of a finished step loop, the equation of deckpound's epilogue
+    (deckpound.models.engine_contract.seat_margins): for each corner c whose facing seat has a
+    support length N = plan['support_lengths'][c] [m], the smallest seat margin
+    m = N - (g_max - g(0)) [m] and its time [s], from the largest opening over every converged
+    step and sub-step (stats['gap_openings'] of run_steps). Returns 'seat_margin_min'
+    ({corner: [margin m, time s]}) and 'seat_margin_basis' ('every step', or ``unchecked``
+    when no corner's seat has a support length)."""
+    margins = {}
+    for c, length in enumerate(plan["support_lengths"]):
+        if length is not None:
+            opening, when = stats["gap_openings"][f"c{c + 1}"]
+            margins[f"c{c + 1}"] = [float(length) - opening, when]
+    return {
+        "seat_margin_min": margins,
+        "seat_margin_basis": "every step" if margins else unchecked,
+    }
+
+
+def seat_margin_line(stats):
+    """The seat margins as one line of text: corner, margin [m], time [s] of each checked
+    corner (floats as repr: read back exactly), or the basis when none is checked."""
+    margins = stats["seat_margin_min"]
+    if not margins:
+        return "seat_margin_min: " + stats["seat_margin_basis"]
+    cells = [f"{c} {m!r} {t!r}" for c, (m, t) in margins.items()]
+    return "seat_margin_min (margin m, time s): " + ", ".join(cells)
+
+
+def keep_stored_rows(paths, n_rows):
+    """Cut each recorder file to its first n_rows lines, the rows deckpound stores: a run
+    stopped by unseating keeps no row of its last step, which OpenSees recorded at its commit
+    when it was an output step."""
+    for path in paths:
+        with open(path, newline="") as fh:
+            lines = fh.readlines()
+        if len(lines) > n_rows:
+            with open(path, "w", newline="") as fh:
+                fh.writelines(lines[:n_rows])
+
+
+#: the functions of this module the script carries (its CSV's derived columns, the seat
+#: margins and the recorder rows of an unseated run)
+SCRIPT_RUNTIME = (
+    interp_record,
+    _total,
+    result_rows,
+    seat_margin_minima,
+    seat_margin_line,
+    keep_stored_rows,
+)
 
 
 def py_literal(v, indent: int = 0) -> str:
@@ -207,7 +268,7 @@ def py_script(p: ExportParts) -> str:
     head = "\n".join(f"# {comment_text(x, 'py')}".rstrip() for x in header_lines(p))
     body = textwrap.indent(render_commands(p.log, "py", file_of=p.file_of), "    ")
     recorders = textwrap.indent("\n".join(render_recorders(p.recorders, "py")), "    ")
-    runtime = "\n\n".join(inspect.getsource(f) for f in RUNTIME + CSV_RUNTIME)
+    runtime = "\n\n".join(inspect.getsource(f) for f in RUNTIME + SCRIPT_RUNTIME)
     margin = "0.5 / PLAN['substeps']" if p.plan["fallback"] == "substep" else "0.5"
     return f'''#!/usr/bin/env python3
 # OpenSeesPy script written by deckpound; scene text appears only in comments below.
@@ -247,6 +308,9 @@ CSV = {py_literal(csv_plan(p))}
 # the sub-steps of the fallback
 REC_DT = (PLAN['stride'] - {margin}) * PLAN['dt']
 
+# the recorder files (add_recorders), cut to deckpound's rows after an unseating
+RECORDER_FILES = {py_literal([r.file for r in p.recorders])}
+
 
 def _out(out_dir, name):
     return os.path.join(out_dir, name)
@@ -277,6 +341,9 @@ def main(argv=None):
     ops.record()  # the row at t = 0
     out = run_steps(ops, PLAN, log=lambda m: print(m, file=sys.stderr))
     ops.wipe()  # closes the recorder files
+    out["stats"].update(seat_margin_minima(PLAN, out["stats"], {py_str(UNCHECKED_SEATS)}))
+    if out["stats"]["status"] == "unseated":
+        keep_stored_rows([_out(a.out, name) for name in RECORDER_FILES], len(out["rows"]))
     if a.csv:
         with open(os.path.join(a.out, "opensees.csv"), "w", newline="") as fh:
             w = csv.writer(fh)
@@ -287,6 +354,7 @@ def main(argv=None):
         json.dump(out["stats"], fh, indent=2)
     st = out["stats"]
     print(st["status"], st["message"], "gap_closures:", st["gap_closures"])
+    print(seat_margin_line(st))
     return 0 if out["stats"]["status"] in ("success", "unseated") else 1
 
 

@@ -10,11 +10,18 @@ Layout (each part generated; scene text appears only in the header comments):
 4. the step plan as variables and ``defineAnalysis`` (re-issued by the fallback);
 5. the recorders (:mod:`.recorders`) and ``record`` at t = 0;
 6. the step loop: ``analyze 1 $dt`` with every return code checked and the sub-step fallback of
-   :func:`deckpound.opensees_build.engine.run_steps`, the gap closures counted at every
-   converged step and sub-step as the engine counts them (printed as ``gap_closures``),
-   optionally writing deckpound's CSV: every column of the in-process result, the relative
-   displacements and bent deformations derived from the support displacement records as
-   :func:`.export_py.result_rows` derives them (``csvRow``, ``interpRecord``).
+   :func:`deckpound.opensees_build.engine.run_steps`, and ``trackStep`` at every converged step
+   and sub-step, the engine's :func:`~deckpound.opensees_build.engine.track_step`: the gap
+   closures counted as the engine counts them (printed as ``gap_closures``) and each corner's
+   largest gap and its time; the first step after which a corner's seat margin
+   N - (g - g(0)) is negative ends the loop with status ``unseated`` before its row is stored,
+   as in the engine, and the recorder files are cut to the rows deckpound stores
+   (``keepStoredRows``, :func:`.export_py.keep_stored_rows`). The status line, the unseating
+   line (the engine loop's message) and the seat margins of
+   :func:`.export_py.seat_margin_minima` (:func:`.export_py.seat_margin_line`) are printed.
+   Optionally the loop writes deckpound's CSV: every column of the in-process result, the
+   relative displacements and bent deformations derived from the support displacement records
+   as :func:`.export_py.result_rows` derives them (``csvRow``, ``interpRecord``).
 """
 
 from __future__ import annotations
@@ -22,7 +29,7 @@ from __future__ import annotations
 from deckpound.models.file_io import csv_cell
 
 from .export_header import ExportParts, header_lines
-from .export_py import csv_plan
+from .export_py import UNCHECKED_SEATS, csv_plan
 from .ops import render_commands
 from .quoting import comment_text, tcl_path_word, tcl_word
 from .recorders import render_recorders
@@ -34,6 +41,11 @@ def _num(v) -> str:
 
 def _tcl_list(values) -> str:
     return "{" + " ".join(_num(v) for v in values) + "}"
+
+
+def _tcl_lengths(values) -> str:
+    """Support lengths [m] as a Tcl list, the empty word for a seat without one."""
+    return "{" + " ".join("{}" if v is None else _num(v) for v in values) + "}"
 
 
 def _tcl_nested(v) -> str:
@@ -106,6 +118,9 @@ set tX {_tcl_list([t[0] for t in plan["tangents"]])}
 set tY {_tcl_list([t[1] for t in plan["tangents"]])}
 set bentEles {_tcl_list(plan["bent_elements"])}
 set friction {1 if plan["friction"] else 0}
+# the support length N of the seat each corner faces [m] (empty: unseating not checked)
+set seatLengths {_tcl_lengths(plan["support_lengths"])}
+set seatsUnchecked {tcl_word(UNCHECKED_SEATS)}
 
 proc defineAnalysis {{}} {{
     {_analysis_body(plan)}
@@ -115,6 +130,7 @@ proc defineAnalysis {{}} {{
 # -dT = (stride - half a sub-step) * dt: one row per output step, none from sub-steps
 set recDT [expr {{($stride - {margin}) * $dt}}]
 {recorders}
+set recorderFiles [list {" ".join(tcl_word(r.file) for r in p.recorders)}]
 # --- end recorders ---
 
 """
@@ -260,38 +276,78 @@ proc csvRow {{row}} {{
 
 
 def tcl_step_loop(csv: dict) -> str:
-    """The gap-closure count and the step loop with the sub-step fallback of
-    :func:`deckpound.opensees_build.engine.run_steps`, writing the CSV's rows."""
+    """``trackStep`` (the engine's :func:`~.engine.track_step`: gap closures and seat
+    margins), ``keepStoredRows`` and the step loop with the sub-step fallback and the
+    unseating stop of :func:`deckpound.opensees_build.engine.run_steps`, writing the CSV's
+    rows, then the status, unseating and seat-margin lines."""
     columns = " ".join(tcl_word(csv_cell(c)) for c in csv["header"])
-    return f"""# gap closures at every converged step and sub-step (deckpound's one definition, the engine's
-# track_step): a corner is in contact when its gap is <= 0 or its normal force > 0; a closure
-# is a step at which a corner goes from out of contact to in contact (in contact at t = 0: one)
+    return f"""# every converged step and sub-step, as the engine's track_step: the gap closures (deckpound's
+# one definition: a corner is in contact when its gap is <= 0 or its normal force > 0; a closure
+# is a step at which a corner goes from out of contact to in contact, in contact at t = 0: one)
+# and each corner's largest gap g_max and its time (the first call gives g(0)): the corner is
+# unseated at the first step at which g_max - g(0) exceeds the support length N of the seat it
+# faces, seat margin N - (g - g(0)) < 0
 set inside {{0 0 0 0}}
 set gapClosures 0
-proc countClosures {{}} {{
+set gapOpen {{-Inf -Inf -Inf -Inf}}
+set gapOpenTime {{0.0 0.0 0.0 0.0}}
+set gapStart {{0.0 0.0 0.0 0.0}}
+set unseated {{}}
+proc trackStep {{t}} {{
     global inside gapClosures hasGaps gapEles friction nX nY
-    if {{!$hasGaps}} {{ return }}
-    set g [cornerGaps]
+    global seatLengths gapOpen gapOpenTime gapStart unseated
+    set gaps [cornerGaps]
     for {{set c 0}} {{$c < 4}} {{incr c}} {{
-        set now [expr {{[lindex $g $c] <= 0.0}}]
-        if {{!$now}} {{
-            set e [lindex $gapEles $c]
-            if {{$friction}} {{
-                set f [eleResponse $e force]
-                set fn [expr {{-([lindex $nX $c] * [lindex $f 3] + [lindex $nY $c] * [lindex $f 4])}}]
-            }} else {{
-                set fn [expr {{-[lindex [eleResponse $e basicForce] 0]}}]
+        set g [lindex $gaps $c]
+        if {{$hasGaps}} {{
+            set now [expr {{$g <= 0.0}}]
+            if {{!$now}} {{
+                set e [lindex $gapEles $c]
+                if {{$friction}} {{
+                    set f [eleResponse $e force]
+                    set fn [expr {{-([lindex $nX $c] * [lindex $f 3] + [lindex $nY $c] * [lindex $f 4])}}]
+                }} else {{
+                    set fn [expr {{-[lindex [eleResponse $e basicForce] 0]}}]
+                }}
+                set now [expr {{$fn > 0.0}}]
             }}
-            set now [expr {{$fn > 0.0}}]
+            if {{$now && ![lindex $inside $c]}} {{ incr gapClosures }}
+            lset inside $c $now
         }}
-        if {{$now && ![lindex $inside $c]}} {{ incr gapClosures }}
-        lset inside $c $now
+        if {{$g > [lindex $gapOpen $c]}} {{
+            if {{[lindex $gapOpen $c] == -Inf}} {{ lset gapStart $c $g }}
+            lset gapOpen $c $g
+            lset gapOpenTime $c $t
+            set support [lindex $seatLengths $c]
+            if {{$support ne "" && $unseated eq ""}} {{
+                if {{$g - [lindex $gapStart $c] > $support}} {{
+                    set unseated [list c[expr {{$c + 1}}] $t]
+                }}
+            }}
+        }}
     }}
 }}
 
-# --- step loop (deckpound's run_steps): every analyze checked, sub-step fallback ---
+# the recorder files keep the rows deckpound stores: OpenSees recorded the commit of the
+# unseating step when it was an output step, the engine keeps no row of that step
+proc keepStoredRows {{nRows}} {{
+    global outDir recorderFiles
+    foreach name $recorderFiles {{
+        set path [file join $outDir $name]
+        set fh [open $path r]
+        set lines [split [read -nonewline $fh] "\\n"]
+        close $fh
+        if {{[llength $lines] > $nRows}} {{
+            set fh [open $path w]
+            puts $fh [join [lrange $lines 0 [expr {{$nRows - 1}}]] "\\n"]
+            close $fh
+        }}
+    }}
+}}
+
+# --- step loop (deckpound's run_steps): every analyze checked, sub-step fallback, unseating ---
 record
-countClosures
+trackStep 0.0
 if {{$writeCsv}} {{
     set relRecords {{}}
     foreach name $relRecordFiles {{ lappend relRecords [readRecord $name] }}
@@ -302,9 +358,11 @@ if {{$writeCsv}} {{
 set failures 0
 set rescued 0
 set status success
+set steps 0
+set storedRows 1
 for {{set n 1}} {{$n <= $nSteps}} {{incr n}} {{
     set ok [analyze 1 $dt]
-    if {{$ok == 0}} {{ countClosures }}
+    if {{$ok == 0}} {{ trackStep [expr {{$n * $dt}}] }}
     if {{$ok != 0}} {{
         incr failures
         puts "step $n (t = [expr {{$n * $dt}}] s) failed with code $ok"
@@ -315,7 +373,11 @@ for {{set n 1}} {{$n <= $nSteps}} {{incr n}} {{
             for {{set k 0}} {{$k < $nSub}} {{incr k}} {{
                 set ok [analyze 1 $h]
                 if {{$ok != 0}} {{ break }}
-                countClosures
+                if {{$k == $nSub - 1}} {{
+                    trackStep [expr {{$n * $dt}}]
+                }} else {{
+                    trackStep [expr {{($n - 1) * $dt + ($k + 1) * $h}}]
+                }}
             }}
             wipeAnalysis
             defineAnalysis
@@ -327,12 +389,38 @@ for {{set n 1}} {{$n <= $nSteps}} {{incr n}} {{
         puts "step $n (t = [expr {{$n * $dt}}] s) did not converge"
         break
     }}
-    if {{$writeCsv && $n % $stride == 0}} {{
-        puts $fh [csvRow [sampleRow [expr {{$n * $dt}}]]]
+    set steps $n
+    if {{$unseated ne ""}} {{
+        set status unseated
+        break
+    }}
+    if {{$n % $stride == 0}} {{
+        incr storedRows
+        if {{$writeCsv}} {{ puts $fh [csvRow [sampleRow [expr {{$n * $dt}}]]] }}
     }}
 }}
 if {{$writeCsv}} {{ close $fh }}
 wipe
+if {{$status == "unseated"}} {{ keepStoredRows $storedRows }}
 puts "$status, failures: $failures, rescued by sub-steps: $rescued, gap_closures: $gapClosures"
-if {{$status != "success"}} {{ exit 1 }}
+if {{$status == "unseated"}} {{
+    lassign $unseated corner when
+    puts "corner $corner unseated at t = [format %.6g $when] s (step $steps)"
+}}
+# the seat margins N - (g_max - g(0)) [m] at the time of the largest gap [s], the engine's
+# (export_py.seat_margin_minima)
+set margins {{}}
+for {{set c 0}} {{$c < 4}} {{incr c}} {{
+    set support [lindex $seatLengths $c]
+    if {{$support ne ""}} {{
+        set opening [expr {{[lindex $gapOpen $c] - [lindex $gapStart $c]}}]
+        lappend margins "c[expr {{$c + 1}}] [expr {{$support - $opening}}] [lindex $gapOpenTime $c]"
+    }}
+}}
+if {{[llength $margins]}} {{
+    puts "seat_margin_min (margin m, time s): [join $margins {{, }}]"
+}} else {{
+    puts "seat_margin_min: $seatsUnchecked"
+}}
+if {{$status ni {{success unseated}}}} {{ exit 1 }}
 """

@@ -48,6 +48,7 @@ from deckpound.models.result import scene_hash
 from deckpound.models.scene_io import load_scene
 from deckpound.models.scene_settings import RunSettings
 from deckpound.opensees_build import engine, export
+from deckpound.opensees_build.export_py import UNCHECKED_SEATS
 from deckpound.opensees_build.ops import ArrayArg, OpsSession
 from deckpound.opensees_build.recorders import PRECISION
 
@@ -221,6 +222,21 @@ STATUS_LINE = "success, failures: 0, rescued by sub-steps: 0, gap_closures: 0"
 QUERIES = frozenset({"nodeDisp", "nodeVel", "eleResponse", "testIter", "getTime"})
 
 
+def is_sandbox_seat_line(line: str, plan: dict) -> bool:
+    """``line`` is the seat-margin line of a sandboxed run: nothing moves (the queries answer
+    0), so each checked corner keeps its whole support length, its largest gap at t = 0; with
+    no support length, the engine's words for it."""
+    lengths = {f"c{c + 1}": n for c, n in enumerate(plan["support_lengths"]) if n is not None}
+    if not lengths:
+        return line == f"seat_margin_min: {UNCHECKED_SEATS}"
+    head = "seat_margin_min (margin m, time s): "
+    if not line.startswith(head):
+        return False
+    cells = [cell.split(" ") for cell in line.removeprefix(head).split(", ")]
+    got = {cell[0]: [float(x) for x in cell[1:]] for cell in cells}
+    return got == {c: [n, 0.0] for c, n in lengths.items()}
+
+
 def run_tcl_sandbox(script: Path, ops_names: set[str]) -> tuple[list[list], list[list]]:
     """(OpenSees calls, other calls) of ``script`` sourced in the logging sandbox."""
     env = dict(os.environ)
@@ -251,7 +267,7 @@ def run_tcl_sandbox(script: Path, ops_names: set[str]) -> tuple[list[list], list
 def verify_tcl_script(sc, script: Path) -> None:
     """``script`` (the Tcl export of ``sc``) calls exactly deckpound's command log, the
     recorders and the step loop's commands, and of the rest only its path helpers, ``file
-    mkdir`` of its results folder and the status line."""
+    mkdir`` of its results folder, the status line and the seat-margin line."""
     parts, _ = export.export_parts(sc, "tcl", script.stem)
     here = os.path.realpath(script.parent)
     want = model_calls(sc, parts, os.path.join(here, parts.data_dir))
@@ -268,7 +284,10 @@ def verify_tcl_script(sc, script: Path) -> None:
         elif c[1] == "file":
             assert c[2] in ("join", "dirname", "normalize"), c
         else:
-            assert c[1:] == ["puts", STATUS_LINE], c
+            assert c[1] == "puts", c
+    printed = [c[2:] for c in other if c[1] == "puts"]
+    assert len(printed) == 2 and printed[0] == [STATUS_LINE], printed
+    assert len(printed[1]) == 1 and is_sandbox_seat_line(printed[1][0], parts.plan), printed
 
 
 def beyond_bmp(path: Path) -> bool:
