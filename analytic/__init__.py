@@ -7,14 +7,14 @@
   bit for bit.
 
 Smooth forces, kinematics and the Takeda kernel are shared by both engines
-(:mod:`.system`, :mod:`.kinematics`, :mod:`._hysteretic_kernel`).
+(:mod:`.system`, :mod:`.kinematics`, :mod:`.hysteretic_kernel`).
 """
 
-from ._jit import use_source_keyed_cache
+from deckpound.analytic._jit import use_source_keyed_cache
 
 use_source_keyed_cache()
 
-from .hysteretic import HystereticMaterial  # noqa: E402 (after the cache is keyed)
+from deckpound.analytic.kernels.hysteretic import HystereticMaterial  # noqa: E402 (after the cache is keyed)
 
 __all__ = ["HystereticMaterial", "run_compliance", "run_nonsmooth"]
 
@@ -22,11 +22,11 @@ __all__ = ["HystereticMaterial", "run_compliance", "run_nonsmooth"]
 def __getattr__(name):
     # the engines are imported on first use: importing the package stays cheap
     if name == "run_compliance":
-        from .compliance import run_compliance
+        from deckpound.analytic.compliance.engine import run_compliance
 
         return run_compliance
     if name == "run_nonsmooth":
-        from .nonsmooth import run_nonsmooth
+        from deckpound.analytic.nonsmooth.engine import run_nonsmooth
 
         return run_nonsmooth
     raise AttributeError(name)

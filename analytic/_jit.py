@@ -99,7 +99,7 @@ def use_source_keyed_cache() -> Path | None:
     """Put numba's on-disk cache of the analytic kernels in a directory keyed by their sources.
 
     numba checks a cached function against its *own* file only; a kernel it calls from another
-    module is compiled into it, so after a change to e.g. ``_hysteretic_kernel.py`` the cached
+    module is compiled into it, so after a change to e.g. ``hysteretic_kernel.py`` the cached
     Newmark loop of ``compliance.py`` would still run the old Takeda arithmetic, silently. Keying
     the cache directory by a hash of every source file of this package, of the modules whose
     constants the kernels freeze (:data:`FROZEN_MODULES`) and of the environment switches the
@@ -113,8 +113,8 @@ def use_source_keyed_cache() -> Path | None:
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     h = hashlib.sha256()
-    for src in sorted(_HERE.glob("*.py")) + _frozen_sources():
-        h.update(src.name.encode())
+    for src in sorted(_HERE.rglob("*.py")) + _frozen_sources():
+        h.update(str(src.relative_to(src.parents[1])).encode())
         h.update(src.read_bytes())
     h.update(os.environ.get("DECKPOUND_TAKEDA_SHORTCUT", "1").encode())
     h.update(numba.__version__.encode())

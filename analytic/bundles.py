@@ -1,15 +1,15 @@
 """The named bundles the compiled step loops take, their statistics and how a loop is run.
 
-Every step-loop kernel (:func:`~deckpound.analytic.newmark.newmark_run`,
-:func:`~deckpound.analytic.moreau_jean.moreau_jean_run`,
-:func:`~deckpound.analytic.dormand_prince.adaptive_run`) takes the same seven bundles, all
+Every step-loop kernel (:func:`~deckpound.analytic.compliance.newmark.newmark_run`,
+:func:`~deckpound.analytic.nonsmooth.moreau_jean.moreau_jean_run`,
+:func:`~deckpound.analytic.compliance.dormand_prince.adaptive_run`) takes the same seven bundles, all
 numba-compatible namedtuples of arrays and scalars (STYLE: "hot kernels are pure functions of
 arrays"; the kernels run without numba's runtime, see :mod:`deckpound.analytic._jit`, and
 namedtuples of arrays need none)::
 
     loop(system, contact, record, options, output, work, stats)
 
-* ``system`` — :class:`~deckpound.analytic.system.SystemArrays`: springs, mass, damping (the
+* ``system`` — :class:`~deckpound.analytic.kernels.system.SystemArrays`: springs, mass, damping (the
   constant damping matrix ``C`` [kN·s/m] and the number of bent springs ``nbs`` included).
 * ``contact`` — :data:`Contact`: the packed corner table (:mod:`.kinematics`), the per-corner
   law parameters (:mod:`.contact_laws`) and the kinematics flag.
@@ -43,7 +43,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from deckpound.analytic.support_motion import record_slopes
+from deckpound.analytic.kernels.support_motion import record_slopes
 from deckpound.models.engine_contract import Status
 from deckpound.models.errors import SceneError
 
@@ -81,14 +81,14 @@ __all__ = [
 # attribute name makes numba pickle the class by value (the on-disk cache never hits).
 
 #: The contact description of a loop: ``corners`` (4, N_K) corner table
-#: (:func:`deckpound.analytic.kinematics.pack_corners`), ``params`` (4, N_CP) law parameters
-#: (:func:`deckpound.analytic.contact_laws.pack_contact`), ``nonlinear`` (bool) exact
+#: (:func:`deckpound.analytic.kernels.kinematics.pack_corners`), ``params`` (4, N_CP) law parameters
+#: (:func:`deckpound.analytic.kernels.contact_laws.pack_contact`), ``nonlinear`` (bool) exact
 #: kinematics.
 Contact = namedtuple("Contact", ["corners", "params", "nonlinear"])
 #: The support record: ``t`` (n,) [s], ``disp`` (n, n_channels) [m or rad], ``vel`` (n,
-#: n_channels) [m/s or rad/s] (:func:`deckpound.analytic.support_motion.support_record`) and
+#: n_channels) [m/s or rad/s] (:func:`deckpound.analytic.kernels.support_motion.support_record`) and
 #: their segment slopes ``dslope``, ``vslope`` (same shapes; per second,
-#: :func:`deckpound.analytic.support_motion.record_slopes`). Build with :func:`record`.
+#: :func:`deckpound.analytic.kernels.support_motion.record_slopes`). Build with :func:`record`.
 Record = namedtuple("Record", ["t", "disp", "vel", "dslope", "vslope"])
 
 
@@ -99,7 +99,7 @@ def record(tb, D, V) -> Record:
 
 #: The output: ``table`` (rows, n_selected) written row by row, ``select`` (n_selected,) int64
 #: indices into the loop's full row, ``row`` the full-row buffer, ``peaks`` the peaks of the
-#: columns and the gap closures over every step (:data:`deckpound.analytic.peaks.Peaks`).
+#: columns and the gap closures over every step (:data:`deckpound.analytic.kernels.peaks.Peaks`).
 Output = namedtuple("Output", ["table", "select", "row", "peaks"])
 #: Statistics: ``count`` int64 (:data:`COUNT_NAMES`, indices ``CNT_*``), ``value`` float64
 #: (:data:`VALUE_NAMES`, indices ``VAL_*``), ``halt`` int64 (1,) — set to 1 to stop the loop.
@@ -208,7 +208,7 @@ def status_of(code: int) -> Status:
     if code == RUN_UNKNOWN_LAW:
         raise NotImplementedError(
             "a contact law or friction model of the scene has no branch "
-            "in deckpound.analytic.contact_laws (normal_law / "
+            "in deckpound.analytic.kernels.contact_laws (normal_law / "
             "friction_law): add it there (see "
             "deckpound.models.contact_laws_table)"
         )

@@ -26,11 +26,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from deckpound.compare.report.outputs import folder as make_folder
+from deckpound.compare.report.outputs import write_csv, write_parquet
 from deckpound.models.columns import column_unit
 from deckpound.models.result import Result, decimal_step, rounded_time
-
-from .outputs import folder as make_folder
-from .outputs import write_csv, write_parquet
 
 FORCE_PREFIXES = ("fn_", "ft_")
 IMPULSE_PREFIXES = ("pn_", "pt_")

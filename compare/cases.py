@@ -27,15 +27,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deckpound.compare.engines import get_engine, run_engine
+from deckpound.compare.pool import Interrupted, map_local
+from deckpound.compare.progress import Progress
+from deckpound.compare.result_cache import ResultCache
 from deckpound.models.errors import SceneError
 from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 from deckpound.models.result import Result, physics_hash, settings_hash
 from deckpound.models.scene import Scene
 from deckpound.models.version import VERSION
-
-from .pool import Interrupted, map_local
-from .progress import Progress
-from .result_cache import ResultCache
 
 __all__ = [
     "Case",

@@ -6,16 +6,15 @@ from pathlib import Path
 
 import pandas as pd
 
+from deckpound.compare.align import align, write_tables
 from deckpound.compare.cases import Case, run_cases
 from deckpound.compare.engines import DEFAULT_REFERENCE
+from deckpound.compare.metrics import METRIC_UNITS, metrics_against, summary
+from deckpound.compare.report import figures
+from deckpound.compare.report.outputs import write_csv
 from deckpound.compare.result_cache import ResultCache
 from deckpound.models.result import Result
 from deckpound.models.scene import Scene
-
-from . import figures
-from .align import align, write_tables
-from .metrics import METRIC_UNITS, metrics_against, summary
-from .outputs import write_csv
 
 QUANTITIES = [
     "deck_theta",

@@ -31,8 +31,8 @@ __all__ = [
 
 ENGINES: dict[str, str] = {
     "opensees": "deckpound.opensees_build.engine:OpenSeesEngine",
-    "compliance": "deckpound.analytic.compliance:ComplianceEngine",
-    "nonsmooth": "deckpound.analytic.nonsmooth:NonsmoothEngine",
+    "compliance": "deckpound.analytic.compliance.engine:ComplianceEngine",
+    "nonsmooth": "deckpound.analytic.nonsmooth.engine:NonsmoothEngine",
 }
 #: The engine other engines are compared against unless a comparison names another.
 DEFAULT_REFERENCE = "opensees"

@@ -27,9 +27,8 @@ import sys
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
+from deckpound.compare._workers import die_with_parent
 from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
-
-from ._workers import die_with_parent
 
 __all__ = ["Interrupted", "map_local", "pool_scope", "worker_init"]
 

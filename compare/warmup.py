@@ -129,7 +129,14 @@ PACKAGES = (
     "deckpound.models",
     "deckpound.opensees_build",
     "deckpound.analytic",
+    "deckpound.analytic.kernels",
+    "deckpound.analytic.compliance",
+    "deckpound.analytic.nonsmooth",
     "deckpound.compare",
+    "deckpound.compare.report",
+    "deckpound.compare.studies",
+    "deckpound.compare.verify",
+    "deckpound.compare.bench",
 )
 
 
@@ -213,8 +220,8 @@ def _scene(overrides: Iterable[str]):
 
 
 def _warm_takeda() -> None:
-    from deckpound.analytic.hysteretic import HystereticMaterial
-    from deckpound.compare.verify_takeda import PARAMETER_SETS
+    from deckpound.analytic.kernels.hysteretic import HystereticMaterial
+    from deckpound.compare.verify.takeda import PARAMETER_SETS
 
     for args in PARAMETER_SETS:
         m = HystereticMaterial(*args, element_copy=False)

@@ -7,15 +7,15 @@ nonsmooth engine treats it, and its force equation as plain Python (the executab
 of the law, against which a test runs the compiled kernel branch). Readers:
 
 * the scene's allowed values (:data:`deckpound.models.scene.CONTACT_LAWS`, ``FRICTION_MODES``);
-* the compiled kernels (:mod:`deckpound.analytic.contact_laws`: named code constants, one
+* the compiled kernels (:mod:`deckpound.analytic.kernels.contact_laws`: named code constants, one
   branch per law, a final branch that fails: non-finite force, never a fall-through);
 * the compliance and nonsmooth engines' ``reads()`` (the "option does nothing" warnings) and
   notes;
 * the OpenSees refusals (:func:`deckpound.opensees_build.model.refuse_scene`);
-* the contact-law study (:func:`deckpound.compare.studies.law_cases`).
+* the contact-law study (:func:`deckpound.compare.studies.sensitivity.law_cases`).
 
 Adding a law: a row here (code = the next integer), its branch in
-:func:`deckpound.analytic.contact_laws.normal_law` (and its recoverable energy in
+:func:`deckpound.analytic.kernels.contact_laws.normal_law` (and its recoverable energy in
 ``contact_stored_energy``), tests. ``tests/test_contact_law_table.py`` runs every row through
 the kernel against ``force``. Importable without numba.
 
@@ -54,7 +54,7 @@ class ContactLaw:
     params : scene fields the compliance engine's force depends on.
     equation : the force law in one line (docs, messages).
     force : λ_N(δ, δ̇, p) [kN] on first loading from the open state (virgin corner; δ > 0
-        closed), p the packed parameters by name (:func:`deckpound.analytic.contact_law_checks.
+        closed), p the packed parameters by name (:func:`deckpound.analytic.kernels.contact_law_checks.
         law_parameters`); the executable form of ``equation`` the kernel is tested against.
     opensees : OpenSees uniaxial material expressing it, or None; opensees_refusal : the
         refusal message when None.
@@ -230,7 +230,7 @@ CONTACT_LAW_TABLE: tuple[ContactLaw, ...] = (
         refuse=_needs_positive_restitution,
     ),
     # Hertzdamp(k, 3(1−e²)/4, −g₀, n): the material's arithmetic in every engine
-    # (deckpound.analytic.contact_laws, hertzdamp)
+    # (deckpound.analytic.kernels.contact_laws, hertzdamp)
     ContactLaw(
         "hertzdamp",
         6,

@@ -42,7 +42,7 @@ A new engine is one module plus one registry entry. It must:
    engine takes its step from :meth:`Engine.fixed_step` (the contact-step rule).
 10. Optionally measure, at every step, the peak of each standard column and the gap closures
     (``RunOutput.peaks``, ``RunOutput.gap_closures_per_corner``; the analytic engines with
-    :mod:`deckpound.analytic.peaks`, OpenSees in its step loop): the epilogue puts them into
+    :mod:`deckpound.analytic.kernels.peaks`, OpenSees in its step loop): the epilogue puts them into
     ``meta["peaks"]`` and ``meta["gap_closures"]`` (:meth:`deckpound.models.result.Result.peak`
     reads them); without them it takes both from the output rows and says so
     (``meta["peaks_basis"]``, ``meta["gap_closures_basis"]``).
@@ -212,7 +212,7 @@ class RunOutput:
     peaks : ``{column: (peak, time [s])}`` over **every** step (sub-steps and adaptive steps
         included): the largest |x| of each standard column the engine tracks (for a gap the
         smallest, most negative value), independent of the output rate
-        (:mod:`deckpound.analytic.peaks`); None when the engine does not track them (the
+        (:mod:`deckpound.analytic.kernels.peaks`); None when the engine does not track them (the
         epilogue then says ``meta["peaks_basis"] = "output rows"``).
     gap_closures_per_corner : ``{"c1": n, ...}`` closures counted at every step with the one
         contact test (:func:`deckpound.models.result.in_contact`); None: counted on the

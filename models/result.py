@@ -135,7 +135,7 @@ def in_contact(columns: dict[str, np.ndarray], corner: str) -> np.ndarray | None
     the output interval divided by its length, so a rigid impact that leaves g ≥ 0 counts).
 
     The one contact test: the engines apply it at every step
-    (:func:`deckpound.analytic.peaks.in_contact_now`, and the OpenSees loop and the exported
+    (:func:`deckpound.analytic.kernels.peaks.in_contact_now`, and the OpenSees loop and the exported
     scripts with the same two comparisons). For every penalty law the force is zero while
     g > 0, so it is g ≤ 0 there; the force term is for rigid contact, whose impact impulse can
     reverse the approach within a step and leave g ≥ 0 at both ends of it."""
@@ -618,7 +618,7 @@ DISPLAY_UNITS = {"m": (1e3, "mm"), "rad": (1e3, "mrad"), "m/s": (1e3, "mm/s")}
 
 def display_unit(unit: str) -> tuple[float, str]:
     """(factor, unit) a column in SI ``unit`` is drawn in: lengths in mm, angles in mrad (the
-    paper figures' units, :mod:`deckpound.compare.figures`); other units as they are."""
+    paper figures' units, :mod:`deckpound.compare.report.figures`); other units as they are."""
     return DISPLAY_UNITS.get(unit, (1.0, unit))
 
 

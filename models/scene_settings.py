@@ -15,7 +15,7 @@ from .fields import spec, validate
 MAX_STEPS = 50_000_000
 #: largest number of Newton iterations per step (more means the step does not converge)
 MAX_ITERATIONS = 10_000
-#: the nonsmooth engine's impact laws (:func:`deckpound.analytic.nonsmooth.separating_restitution`)
+#: the nonsmooth engine's impact laws (:func:`deckpound.analytic.nonsmooth.engine.separating_restitution`)
 IMPACT_LAWS = ("newton", "energy-safe")
 #: what the analytic engines' step loops do with subnormal numbers (:mod:`deckpound.analytic.fp_mode`)
 SUBNORMAL_MODES = ("flush", "keep")

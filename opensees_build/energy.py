@@ -7,7 +7,7 @@ deformations and forces (``deformationsANDforces``), their Rayleigh forces (``ra
 node displacements, velocities and masses — and adds each element's work over the (sub)step by
 the trapezoidal rule, W += ½(f_n + f_{n+1})·(d_{n+1} − d_n). At every output step it writes the
 energy columns :data:`deckpound.models.columns.ENERGY_COLUMNS` [kJ] with the meanings the
-compliance engine gives them (:mod:`deckpound.analytic.compliance`):
+compliance engine gives them (:mod:`deckpound.analytic.compliance.engine`):
 
 * ``energy_input`` — the initial mechanical energy plus the work of the supports,
   −Σ ½(f_n + f_{n+1})·Δu_i over the elements whose node i is a support (bent tables, seat
@@ -16,7 +16,7 @@ compliance engine gives them (:mod:`deckpound.analytic.compliance`):
 * ``energy_kinetic`` — ½ Σ m v² over the nodes with mass (deck centre, seats);
 * ``energy_strain`` — recoverable energy of the bents (Hysteretic: f²/(2 k_u), k_u = E_u /
   max(1, μ^β) the Takeda unloading stiffness at the largest committed excursion μ, as
-  :func:`deckpound.analytic.system.spring_stored_energy`), the seat springs (½ f d), the seat
+  :func:`deckpound.analytic.kernels.system.spring_stored_energy`), the seat springs (½ f d), the seat
   guides and the deck sticks of stick mode (½ q·v: linear elements, whose trapezoidal work is
   exactly this, so they are read at output steps only);
 * ``energy_viscous`` — Rayleigh damping (the elements' α_M M + β K forces as OpenSees computes
@@ -109,7 +109,7 @@ def takeda_unloading_stiffness(constants, rot_max: float, rot_min: float, stress
 def contact_stored_energy(material: str, args, g: float, lam: float) -> float:
     """Recoverable energy [kJ] of one gap material at gap g [m] (< 0 closed) and normal force
     lam ≥ 0 [kN]; ``material``/``args`` as :func:`.gaps.gap_mapping` gives them (the tag first).
-    The same potentials as :func:`deckpound.analytic.contact_laws.contact_stored_energy`."""
+    The same potentials as :func:`deckpound.analytic.kernels.contact_laws.contact_stored_energy`."""
     if not (lam > 0.0 and g < 0.0):
         return 0.0
     k = float(args[1])

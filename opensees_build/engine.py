@@ -156,7 +156,7 @@ def new_tracker(ops, plan):
     'gap_open' is the largest gap so far and 'gap_open_time' its first time, 'gap_start' the
     gap at t = 0; 'unseated' = [corner, time] of the first step at which the opening
     g - g(0) exceeded the support length ``plan['support_lengths'][c]`` of the facing seat (None:
-    not checked), else None (deckpound.analytic.peaks, the same rule)."""
+    not checked), else None (deckpound.analytic.kernels.peaks, the same rule)."""
     cols = plan["peak_columns"]
     g0 = cols.index("gap_c1")
     value = [0.0] * len(cols)

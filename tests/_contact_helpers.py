@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from deckpound.analytic.frictional_contact import (
+from deckpound.analytic.nonsmooth.frictional_contact import (
     CONTACT_SLIP,
     CONTACT_STICK,
     delassus,

@@ -95,7 +95,7 @@ def record_scene(kind: str = "at2", file_x=None, file_y=None, file=None, *overri
 
 def synthetic_suite(folder: Path, pairs: int, seed: int = 0, duration: float = 20.0) -> Path:
     """``pairs`` PEER-named AT2 station pairs of the benchmark's synthetic generator
-    (:func:`deckpound.compare.ida.synthetic_pairs`)."""
-    from deckpound.compare.ida import synthetic_pairs
+    (:func:`deckpound.compare.studies.ida.synthetic_pairs`)."""
+    from deckpound.compare.studies.ida import synthetic_pairs
 
     return synthetic_pairs(load_scene("saiidi-4span"), folder, pairs, seed, duration)

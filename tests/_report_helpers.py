@@ -77,7 +77,7 @@ def read_table(path) -> pd.DataFrame:
 def check_clauses(found: list[tuple[str, str, float, float]], truth: dict, keys_of) -> None:
     """Every key of ``truth`` (key → ratio) appears in exactly one clause, whose direction
     and ×range agree with the ratios of its keys."""
-    from deckpound.compare.report_text import direction
+    from deckpound.compare.report.text import direction
 
     seen = set()
     for word, keys_text, lo, hi in found:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from deckpound.analytic.hysteretic import HystereticMaterial
+from deckpound.analytic.kernels.hysteretic import HystereticMaterial
 from deckpound.compare.engines import run_engine
 from deckpound.models.excitation import support_motion
 from deckpound.models.plan import takeda_hysteretic_args

@@ -141,8 +141,11 @@ PACKAGES = {
 def _modules() -> dict[str, Path]:
     out = {}
     for package, folder in PACKAGES.items():
-        for path in folder.glob("*.py"):
-            out[package if path.name == "__init__.py" else f"{package}.{path.stem}"] = path
+        for path in folder.rglob("*.py"):
+            parts = path.relative_to(folder).with_suffix("").parts
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out[".".join((package, *parts))] = path
     return out
 
 

@@ -279,8 +279,8 @@ HOSTILE_NAMES = ["$\\frac{$", "$x^$", "$", "a\nb", "nul\x00in", "x" * 3000]
 @pytest.mark.parametrize("name", HOSTILE_NAMES, ids=range(len(HOSTILE_NAMES)))
 def test_every_figure_renders_any_scene_name(tmp_path, tiny_result, name):
     """A name with TeX broke every figure after all engines ran."""
-    from deckpound.compare import figures
-    from deckpound.compare.plotting import plot_excitation
+    from deckpound.compare.report import figures
+    from deckpound.compare.report.plotting import plot_excitation
     from deckpound.models.excitation import support_motion
     from deckpound.models.result import Result
     from deckpound.models.scene_io import load_scene
@@ -375,7 +375,7 @@ def test_run_failing_mid_write_leaves_no_half_result(tmp_path, monkeypatch):
 
 def test_study_failing_is_marked_incomplete_then_resumes_from_the_cache(tmp_path, monkeypatch):
     """A study killed while drawing its figure keeps its cases; the re-run resumes."""
-    from deckpound.compare import studies
+    from deckpound.compare.studies import sensitivity as studies
 
     def dies(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "s" / "f.png"))
@@ -413,7 +413,7 @@ def test_study_failing_is_marked_incomplete_then_resumes_from_the_cache(tmp_path
 @pytest.mark.slow
 def test_paper_failing_is_marked_incomplete_then_resumes(tmp_path, monkeypatch):
     """A failed paper keeps its cache and says so; the re-run resumes and unmarks the folder."""
-    from deckpound.compare import report_sections
+    from deckpound.compare.report import sections as report_sections
 
     def dies(*a, **k):
         raise OSError(errno.ENOSPC, "No space left on device", str(tmp_path / "p" / "x"))

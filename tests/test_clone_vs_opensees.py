@@ -29,7 +29,7 @@ def _scene(duration=None):
 
 
 def test_clone_agrees_with_opensees_first_5_s():
-    from deckpound.compare.verify_clone import verify_clone
+    from deckpound.compare.verify.clone import verify_clone
 
     rep = verify_clone(_scene(5.0))
     print(
@@ -50,7 +50,7 @@ def test_clone_agrees_with_opensees_first_5_s():
 
 @pytest.mark.slow
 def test_clone_agrees_with_opensees_whole_record():
-    from deckpound.compare.verify_clone import verify_clone
+    from deckpound.compare.verify.clone import verify_clone
 
     rep = verify_clone(_scene())
     print(
@@ -66,7 +66,7 @@ def test_clone_agrees_with_opensees_whole_record():
 
 @pytest.mark.slow
 def test_clone_speed_at_dt_1e4():
-    from deckpound.analytic.compliance import run_compliance
+    from deckpound.analytic.compliance.engine import run_compliance
 
     sc = load_scene("saiidi-4span", ["compliance.dt=1e-4"])
     run_compliance(sc)

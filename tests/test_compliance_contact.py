@@ -15,7 +15,7 @@ from _compliance_helpers import (
     with_seats,
 )
 
-from deckpound.analytic.compliance import run_compliance
+from deckpound.analytic.compliance.engine import run_compliance
 from deckpound.models.contact_params import kelvin_voigt_ratio
 from deckpound.models.plan import plan_of
 

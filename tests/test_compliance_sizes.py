@@ -11,11 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from deckpound.analytic import contact_laws as cl
-from deckpound.analytic.dormand_prince_work import adaptive_workspace
-from deckpound.analytic.newmark_work import newmark_workspace
-from deckpound.analytic.system import initial_dofs
-from deckpound.analytic.work_energy import (
+from deckpound.analytic.compliance.dormand_prince_work import adaptive_workspace
+from deckpound.analytic.compliance.newmark_work import newmark_workspace
+from deckpound.analytic.compliance.work_energy import (
     E_CONTACT_DISSIPATED,
     E_CONTACT_STORED,
     E_ERROR,
@@ -34,6 +32,8 @@ from deckpound.analytic.work_energy import (
     W_VISCOUS,
     energy_columns,
 )
+from deckpound.analytic.kernels import contact_laws as cl
+from deckpound.analytic.kernels.system import initial_dofs
 from deckpound.api import load_scene, run
 from deckpound.models.columns import ENERGY_COLUMNS
 from deckpound.models.engine_contract import Status

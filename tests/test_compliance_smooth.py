@@ -16,8 +16,8 @@ from _compliance_helpers import (
 )
 from scipy.integrate import solve_ivp
 
-from deckpound.analytic.compliance import run_compliance
-from deckpound.analytic.system import pack_system
+from deckpound.analytic.compliance.engine import run_compliance
+from deckpound.analytic.kernels.system import pack_system
 from deckpound.models.damping import damping_model
 from deckpound.models.plan import plan_of
 

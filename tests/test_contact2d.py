@@ -13,9 +13,9 @@ import importlib.util
 import numpy as np
 import pytest
 
-from deckpound.analytic import contact_laws as cl
+from deckpound.analytic.kernels import contact_laws as cl
 from deckpound.compare.engines import get_engine
-from deckpound.compare.verify_clone import verify_clone
+from deckpound.compare.verify.clone import verify_clone
 from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene
 

@@ -13,11 +13,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from deckpound.analytic import contact_assembly as ca
-from deckpound.analytic import contact_laws as cl
 from deckpound.analytic.bundles import Contact, new_contact_work
-from deckpound.analytic.impulses import size_tag
-from deckpound.analytic.kinematics import (
+from deckpound.analytic.kernels import contact_assembly as ca
+from deckpound.analytic.kernels import contact_laws as cl
+from deckpound.analytic.kernels.kinematics import (
     K_G0,
     K_ST,
     K_SX,
@@ -25,8 +24,9 @@ from deckpound.analytic.kinematics import (
     gap_hessian,
     pack_corners,
 )
-from deckpound.analytic.peaks import N_RELATIVE, new_peaks, peak_layout, track_step
-from deckpound.analytic.system import C_BENT, C_FN, C_GAP
+from deckpound.analytic.kernels.peaks import N_RELATIVE, new_peaks, peak_layout, track_step
+from deckpound.analytic.kernels.system import C_BENT, C_FN, C_GAP
+from deckpound.analytic.nonsmooth.impulses import size_tag
 from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import load_scene
 

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from _compliance_helpers import base_scene, with_contact, with_run
 
-from deckpound.analytic import contact_law_checks as clc
-from deckpound.analytic import contact_laws as cl
+from deckpound.analytic.kernels import contact_law_checks as clc
+from deckpound.analytic.kernels import contact_laws as cl
 from deckpound.compare.engines import get_engine, run_engine
 from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_MODEL_TABLE, contact_law
 from deckpound.models.errors import SceneError
@@ -118,7 +118,7 @@ def test_reads_and_refusals_follow_the_table(law):
 
 
 def test_law_study_has_one_case_per_row():
-    from deckpound.compare.studies import law_cases
+    from deckpound.compare.studies.sensitivity import law_cases
 
     assert [c.params["law"] for c in law_cases(base_scene())] == LAWS
 
@@ -169,7 +169,7 @@ def test_the_branch_check_compiles_no_kernel():
     """check_kernel_branches runs before every compliance run: it loads no compiled kernel."""
     code = (
         "import numba\n"
-        "from deckpound.analytic import contact_laws as cl, contact_law_checks as clc\n"
+        "from deckpound.analytic.kernels import contact_laws as cl, contact_law_checks as clc\n"
         "from deckpound.api import load_scene\n"
         "from deckpound.models.contact_laws_table import LAW_CODES\n"
         "for law in LAW_CODES:\n"

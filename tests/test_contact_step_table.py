@@ -6,7 +6,7 @@ from __future__ import annotations
 import importlib.util
 from pathlib import Path
 
-from deckpound.compare.contact_step import contact_step_table, failures
+from deckpound.compare.studies.contact_step import contact_step_table, failures
 from deckpound.models.scene_io import load_scene
 
 TOOL = Path(__file__).resolve().parents[1] / "tools" / "contact_step_table.py"

@@ -14,10 +14,10 @@ import importlib.util
 import numpy as np
 import pytest
 
-from deckpound.analytic.compliance import run_compliance
-from deckpound.analytic.system import pack_system
+from deckpound.analytic.compliance.engine import run_compliance
+from deckpound.analytic.kernels.system import pack_system
 from deckpound.compare.engines import get_engine, run_engine
-from deckpound.compare.verify_clone import verify_clone
+from deckpound.compare.verify.clone import verify_clone
 from deckpound.models.damping import damping_model
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import plan_of
@@ -87,7 +87,7 @@ def test_energy_balance_closes_for_each_damping_choice(ov):
 
 
 def test_relative_mass_damping_is_the_same_matrix_in_clone_and_nonsmooth():
-    """Both engines pack the damping through :func:`deckpound.analytic.system.pack_system`:
+    """Both engines pack the damping through :func:`deckpound.analytic.kernels.system.pack_system`:
     the relative mass part appears as dashpots against the supports, and the total damping
     matrix equals the model's (a0 M on the diagonal either way)."""
 

@@ -1,4 +1,4 @@
-"""The step loops' dense solvers (deckpound.analytic.dense) for any model size (issue 29, item 3).
+"""The step loops' dense solvers (deckpound.analytic.kernels.dense) for any model size (issue 29, item 3).
 
 The LU of the iteration matrices takes its size from a size tag (a tuple whose length is the
 size, a compile-time constant of the kernels), not from a module constant, so a model with more
@@ -11,8 +11,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from deckpound.analytic.dense import lu_factor, lu_solve, solve_dense_cp, solve_dense_cp_into
-from deckpound.analytic.impulses import size_tag
+from deckpound.analytic.kernels.dense import (
+    lu_factor,
+    lu_solve,
+    solve_dense_cp,
+    solve_dense_cp_into,
+)
+from deckpound.analytic.nonsmooth.impulses import size_tag
 from deckpound.models.plan import N_DOF
 
 

@@ -159,7 +159,7 @@ def importlib_find(name: str) -> bool:
 def test_one_contact_test():
     """In contact: gap ≤ 0, or a normal force over the step (a rigid impact can leave g ≥ 0
     at both ends of its step); the kernel and the rows' test agree."""
-    from deckpound.analytic.peaks import in_contact_now
+    from deckpound.analytic.kernels.peaks import in_contact_now
     from deckpound.models.result import in_contact
 
     g = np.array([1e-3, 0.0, -1e-9, 1e-3, 2e-3])

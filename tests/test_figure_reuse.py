@@ -11,14 +11,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from deckpound.compare.figure_cache import (
+from deckpound.compare.report.figure_cache import (
     MANIFEST_NAME,
     FigureManifest,
     fingerprint,
     reusable,
     reuse_figures,
 )
-from deckpound.compare.paper import run_paper
+from deckpound.compare.report.paper import run_paper
 from deckpound.models.result import Result
 from deckpound.models.scene_io import load_scene, modified
 
@@ -97,7 +97,7 @@ def test_the_fingerprint_reads_results_tables_and_scenes_but_not_timings():
 def test_the_paper_loads_matplotlib_only_to_draw():
     """A paper whose figures are all reused never draws, so importing it must not load
     matplotlib (the figure functions import it when they draw)."""
-    code = "import sys, deckpound.compare.paper; print('matplotlib' in sys.modules)"
+    code = "import sys, deckpound.compare.report.paper; print('matplotlib' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
 

@@ -1,4 +1,4 @@
-"""Lognormal fragility fitting (:mod:`deckpound.compare.fragility`) and ``deckpound fragility fit``.
+"""Lognormal fragility fitting (:mod:`deckpound.compare.studies.fragility`) and ``deckpound fragility fit``.
 
 Recovery of known (θ, β) from seeded synthetic stripes and IDA capacities, with the spread of
 the estimates checked against the Fisher information; agreement with an independent fitter,
@@ -18,7 +18,7 @@ import pytest
 from scipy import special
 
 from deckpound.cli import main
-from deckpound.compare import fragility as fr
+from deckpound.compare.studies import fragility as fr
 
 THETA, BETA = 0.5, 0.4  # the known fragility of the synthetic data (IM unit: g, say)
 LEVELS = np.geomspace(0.15, 1.6, 10)  # 10 stripes

@@ -1,4 +1,4 @@
-"""Tests for deckpound.analytic.frictional_contact (planar frictional impact
+"""Tests for deckpound.analytic.nonsmooth.frictional_contact (planar frictional impact
 impulses on the velocity level)."""
 
 import itertools
@@ -17,13 +17,14 @@ from _contact_helpers import (
     solve_for,
 )
 
-from deckpound.analytic.contact_checks import (
+from deckpound.analytic.kernels.lcp import lcp_lemke
+from deckpound.analytic.nonsmooth.contact_checks import (
     STATUS_ENUM,
     STATUS_FAILED,
     STATUS_LEMKE,
     STATUS_LEMKE_ST,
 )
-from deckpound.analytic.frictional_contact import (
+from deckpound.analytic.nonsmooth.frictional_contact import (
     CONTACT_OPEN,
     CONTACT_SLIP,
     CONTACT_STICK,
@@ -33,7 +34,6 @@ from deckpound.analytic.frictional_contact import (
     solve_contact_impulses,
     solve_contact_impulses_into,
 )
-from deckpound.analytic.lcp import lcp_lemke
 
 # -------------------------------------------------------------- (a) point mass
 

@@ -1,4 +1,4 @@
-"""Randomised properties of deckpound.analytic.frictional_contact (hypothesis): the contact
+"""Randomised properties of deckpound.analytic.nonsmooth.frictional_contact (hypothesis): the contact
 laws hold, the fall-back methods give valid solutions, and impacts with e = 0 dissipate."""
 
 import numpy as np
@@ -6,8 +6,8 @@ from _contact_helpers import B_DECK, I_DECK, L_DECK, M_DECK, build, check_laws, 
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from deckpound.analytic.contact_checks import STATUS_ENUM, STATUS_LEMKE, STATUS_LEMKE_ST
-from deckpound.analytic.frictional_contact import MODE_ENUM, MODE_LEMKE_ST
+from deckpound.analytic.nonsmooth.contact_checks import STATUS_ENUM, STATUS_LEMKE, STATUS_LEMKE_ST
+from deckpound.analytic.nonsmooth.frictional_contact import MODE_ENUM, MODE_LEMKE_ST
 
 # ------------------------------------------------------ (d) random properties
 

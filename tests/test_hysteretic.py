@@ -1,4 +1,4 @@
-"""Tests for deckpound.analytic.hysteretic (OpenSees ``Hysteretic`` clone).
+"""Tests for deckpound.analytic.kernels.hysteretic (OpenSees ``Hysteretic`` clone).
 
 The reference is openseespy 3.7.1 itself.  ``ops.setStrain`` in 3.7.1 is
 ``setTrialStrain`` followed by ``commitState`` (verified below: the stress at
@@ -22,8 +22,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from numba import njit
 
-from deckpound.analytic import _hysteretic_kernel as K
-from deckpound.analytic.hysteretic import HystereticMaterial, pack_hysteretic
+from deckpound.analytic.kernels import hysteretic_kernel as K
+from deckpound.analytic.kernels.hysteretic import HystereticMaterial, pack_hysteretic
 
 ops = pytest.importorskip("openseespy.opensees")
 

@@ -12,7 +12,7 @@ import pytest
 from _record_helpers import quake, write_at2
 
 from deckpound import cli
-from deckpound.compare.ida import fragility_table, limit_states, parse_levels
+from deckpound.compare.studies.ida import fragility_table, limit_states, parse_levels
 from deckpound.models.errors import SceneError
 from deckpound.models.result import read_table
 
@@ -177,7 +177,7 @@ def test_a_suite_of_22_pairs_by_10_levels_in_two_engines_end_to_end(tmp_path, ca
 
 def test_an_unseated_case_exceeds_the_rotation_limit_state():
     """The run stops where the deck loses its seat: its rotation so far is not its demand."""
-    from deckpound.compare.ida import with_rotation_flag
+    from deckpound.compare.studies.ida import with_rotation_flag
 
     table = pd.DataFrame({"peak_theta": [0.001, 0.006, 0.001], "unseated": [False, False, True]})
     assert with_rotation_flag(table, 0.005)["theta_exceeded"].tolist() == [False, True, True]
@@ -211,7 +211,7 @@ def test_vary_friction_runs_the_sweep_per_value_and_fits_each(tmp_path, suite, c
 
 
 def test_vary_gap_shorthand_sets_both_seats(tmp_path):
-    from deckpound.compare.ida import parse_vary
+    from deckpound.compare.studies.ida import parse_vary
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene("saiidi-4span")
@@ -253,8 +253,8 @@ def test_varying_friction_without_a_friction_mode_exits_2(tmp_path, suite, capsy
 def test_synthetic_pairs_are_a_readable_suite_of_distinct_motions(tmp_path):
     """The generator's first-bent motions of seeds 7, 8 as AT2 pairs: read back as two
     station pairs whose x components differ and match the generator to the file's 8 digits."""
-    from deckpound.compare.ida import synthetic_pairs
-    from deckpound.compare.variability import record_cases
+    from deckpound.compare.studies.ida import synthetic_pairs
+    from deckpound.compare.studies.variability import record_cases
     from deckpound.models.excitation import support_motion
     from deckpound.models.records import read_at2
     from deckpound.models.scene_io import load_scene

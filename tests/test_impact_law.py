@@ -2,7 +2,7 @@
 
 ``deckpound verify impact-law saiidi-4span`` prints the table docs/verification.md quotes
 between the ``impact-law-table`` markers (``python tools/verify_tables.py impact-law``); this
-test re-runs the measurement (:func:`deckpound.compare.impact_law.impact_law_table`) and checks
+test re-runs the measurement (:func:`deckpound.compare.studies.impact_law.impact_law_table`) and checks
 that the page's block is exactly what it prints (here, not under tests/docs: the measurement
 is shared with the physics checks), and that the measurement supports the default
 (``nonsmooth.impact_law = "newton"``): smaller penetration and closer agreement with the
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from deckpound.compare.impact_law import FRICTION_LABEL, format_table, impact_law_table
+from deckpound.compare.studies.impact_law import FRICTION_LABEL, format_table, impact_law_table
 from deckpound.models.engine_contract import PENETRATION_WARN_FRACTION
 from deckpound.models.scene_io import load_scene
 from deckpound.models.scene_settings import NonsmoothSettings

@@ -55,7 +55,7 @@ def test_a_cached_kernel_that_allocates_gets_the_runtime():
         "from deckpound.analytic.kernel_load import install; install()\n"
         "import numpy as np\n"
         "from numba.core.runtime import rtsys\n"
-        "from deckpound.analytic.dense import solve_dense_cp\n"
+        "from deckpound.analytic.kernels.dense import solve_dense_cp\n"
         "A = np.array([[2.0, 0.0], [0.0, 4.0]]); b = np.array([2.0, 4.0]); x = np.zeros(2)\n"
         "print(solve_dense_cp(A, b, x, 1e-12), x.tolist(), rtsys._init)"
     )

@@ -1,11 +1,11 @@
-"""Tests for deckpound.analytic.lcp (Lemke, enumeration, residuals)."""
+"""Tests for deckpound.analytic.kernels.lcp (Lemke, enumeration, residuals)."""
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from deckpound.analytic.lcp import (
+from deckpound.analytic.kernels.lcp import (
     LEMKE_RAY,
     LEMKE_SOLVED,
     lcp_enumerate,

@@ -12,7 +12,7 @@ import pytest
 
 from deckpound.cli import main
 from deckpound.compare.engines import engine_names, get_engine
-from deckpound.compare.studies import STUDIES
+from deckpound.compare.studies.sensitivity import STUDIES
 from deckpound.models import plausibility
 from deckpound.models.errors import SceneError
 from deckpound.models.magnitudes import STIFFNESS_WARN, magnitude_findings

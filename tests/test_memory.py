@@ -1,6 +1,6 @@
 """Bounded memory: the compliance engine's peak RSS does not grow with the number of steps.
 
-Each measurement runs in a fresh subprocess (:func:`deckpound.compare.memory.peak_rss`):
+Each measurement runs in a fresh subprocess (:func:`deckpound.compare.bench.memory.peak_rss`):
 peak RSS after one warm-up run (imports, numba cache) is the baseline, and ``run_mb`` is what
 the measured run added on top. Resampling the support motion onto the step would cost
 n_steps × 8 channels × 2 × 8 B (128 MB per million steps, more with temporaries).
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pytest
 
-from deckpound.compare.memory import LONG_RUN, peak_rss
+from deckpound.compare.bench.memory import LONG_RUN, peak_rss
 
 
 def test_memory_does_not_grow_with_steps():

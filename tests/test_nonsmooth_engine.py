@@ -17,9 +17,9 @@ from _compliance_helpers import (
     with_seats,
 )
 
-from deckpound.analytic.compliance import run_compliance
-from deckpound.analytic.moreau_jean_work import ENERGY_COLUMNS
-from deckpound.analytic.nonsmooth import output_columns, run_nonsmooth
+from deckpound.analytic.compliance.engine import run_compliance
+from deckpound.analytic.nonsmooth.engine import output_columns, run_nonsmooth
+from deckpound.analytic.nonsmooth.moreau_jean_work import ENERGY_COLUMNS
 from deckpound.compare.engines import run_engine
 from deckpound.models.columns import standard_columns
 from deckpound.models.contact_params import effective_masses

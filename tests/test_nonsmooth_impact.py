@@ -24,7 +24,7 @@ from _compliance_helpers import (
     with_seats,
 )
 
-from deckpound.analytic.nonsmooth import run_nonsmooth
+from deckpound.analytic.nonsmooth.engine import run_nonsmooth
 
 GAP = 0.05
 H = 1.0e-4

@@ -13,11 +13,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from deckpound.analytic.contact_checks import STATUS_FAILED
-from deckpound.analytic.dense import lu_factor
-from deckpound.analytic.frictional_contact import MODE_AUTO
-from deckpound.analytic.impulses import impulse_work, size_tag, solve_active_impulses
-from deckpound.analytic.moreau_jean_work import moreau_jean_workspace
+from deckpound.analytic.kernels.dense import lu_factor
+from deckpound.analytic.nonsmooth.contact_checks import STATUS_FAILED
+from deckpound.analytic.nonsmooth.frictional_contact import MODE_AUTO
+from deckpound.analytic.nonsmooth.impulses import impulse_work, size_tag, solve_active_impulses
+from deckpound.analytic.nonsmooth.moreau_jean_work import moreau_jean_workspace
 from deckpound.models.plan import N_DOF
 
 

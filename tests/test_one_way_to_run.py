@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import deckpound as dp
-from deckpound.analytic.compliance import run_compliance
-from deckpound.analytic.nonsmooth import run_nonsmooth
+from deckpound.analytic.compliance.engine import run_compliance
+from deckpound.analytic.nonsmooth.engine import run_nonsmooth
 from deckpound.cli import main as cli_main
 from deckpound.compare.engines import get_engine, run_engine
 from deckpound.models.fields import to_mapping

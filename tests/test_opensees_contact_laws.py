@@ -22,9 +22,9 @@ import warnings
 import numpy as np
 import pytest
 
-from deckpound.analytic import contact_laws as cl
+from deckpound.analytic.kernels import contact_laws as cl
 from deckpound.compare.engines import run_engine
-from deckpound.compare.verify_clone import verify_clone
+from deckpound.compare.verify.clone import verify_clone
 from deckpound.models.scene_io import load_scene
 from deckpound.opensees_build.ops import OpsSession
 

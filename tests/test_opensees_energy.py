@@ -19,8 +19,8 @@ import pytest
 
 pytest.importorskip("openseespy.opensees")
 
-from deckpound.analytic.compliance import run_compliance
-from deckpound.analytic.hysteretic import HystereticMaterial
+from deckpound.analytic.compliance.engine import run_compliance
+from deckpound.analytic.kernels.hysteretic import HystereticMaterial
 from deckpound.models.columns import ENERGY_COLUMNS
 from deckpound.models.plan import takeda_hysteretic_args
 from deckpound.models.scene_io import load_scene

@@ -14,12 +14,12 @@ import pytest
 from _record_helpers import quake, write_at2
 
 from deckpound import cli
-from deckpound.analytic.adaptive import step_size_summary
+from deckpound.analytic.compliance.adaptive import step_size_summary
 from deckpound.compare.align import align, common_time_base, write_tables
-from deckpound.compare.outputs import write_csv
+from deckpound.compare.bench.skips import STEP_UNITS
+from deckpound.compare.bench.stress import run_stress
+from deckpound.compare.report.outputs import write_csv
 from deckpound.compare.result_cache import ResultCache
-from deckpound.compare.skips import STEP_UNITS
-from deckpound.compare.stress import run_stress
 from deckpound.models.columns import column_unit, standard_columns
 from deckpound.models.file_io import split_unit_label
 from deckpound.models.result import Result, read_table, rounded_time
@@ -324,7 +324,7 @@ def test_stress_table_opens_plainly(tmp_path):
 
 def test_adaptive_steps_layout_has_every_unit(tmp_path):
     """adaptive_steps.csv (the skips measurement, a timing run not repeated here): its row
-    layout, as compare/skips.py builds it from the adaptive engine's ``step_sizes``, written
+    layout, as compare/bench/skips.py builds it from the adaptive engine's ``step_sizes``, written
     with STEP_UNITS, opens plainly."""
     stats = step_size_summary(np.ones((2, 40)), np.ones((2, 3)))["free"]
     row = dict(scene="benchmark", commit_cap="default", commit_step=1e-4, where="free", **stats)

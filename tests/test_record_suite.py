@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from _record_helpers import quake, record_scene, write_acc_csv, write_at2
 
-from deckpound.compare.variability import record_cases, run_variability
+from deckpound.compare.studies.variability import record_cases, run_variability
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import support_motion
 from deckpound.models.record_suite import component_of, read_suite

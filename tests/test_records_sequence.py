@@ -59,7 +59,7 @@ def test_sequence_applies_every_label_to_a_real_unequal_pair(unequal_pair):
 def test_sequence_through_an_engine_labels_what_was_applied(unequal_pair):
     """End to end with the compliance engine on a shortened record: each run's scene, as the
     sequence runner built it, drives the record at its label."""
-    from deckpound.compare.sequence_run import run_sequence
+    from deckpound.compare.studies.sequence_run import run_sequence
 
     scene = record_scene(
         "at2",

@@ -11,9 +11,10 @@ import pandas as pd
 import pytest
 from _report_helpers import check_clauses, claims, expand_runs, mu_values
 
-from deckpound.compare import report_inputs, report_text
 from deckpound.compare.mechanism import mechanism_row, stick_states, tangential_output
-from deckpound.compare.report_text import (
+from deckpound.compare.report import inputs as report_inputs
+from deckpound.compare.report import text as report_text
+from deckpound.compare.report.text import (
     direction,
     friction_effect,
     headline_sentences,
@@ -22,7 +23,7 @@ from deckpound.compare.report_text import (
     study_friction_effect,
     study_friction_sentences,
 )
-from deckpound.compare.studies import StartState
+from deckpound.compare.studies.sensitivity import StartState
 from deckpound.models.result import Result
 from deckpound.models.scene_io import load_scene
 
@@ -410,7 +411,7 @@ def _unseating_frag(medians: dict[str, float], beta: float = 0.3) -> pd.DataFram
 
 def test_unseating_sentence_says_same_when_the_medians_agree_within_their_error():
     """|ln(m_a/m_b)| against sqrt(β_a² + β_b²)/sqrt(n): 2 % apart with 8 records is the same."""
-    from deckpound.compare.report_unseating import approach_sentence
+    from deckpound.compare.report.unseating import approach_sentence
 
     s = approach_sentence(_unseating_frag({"compliance": 2.80, "nonsmooth": 2.86}), 8)
     assert s.count("does not measurably change") == 2
@@ -419,7 +420,7 @@ def test_unseating_sentence_says_same_when_the_medians_agree_within_their_error(
 
 
 def test_unseating_sentence_names_the_engine_that_unseats_earlier():
-    from deckpound.compare.report_unseating import approach_sentence
+    from deckpound.compare.report.unseating import approach_sentence
 
     s = approach_sentence(_unseating_frag({"compliance": 2.0, "nonsmooth": 3.0}), 8)
     assert "does not" not in s and s.count("the compliance engine reaches it at lower") == 2
@@ -432,7 +433,7 @@ def test_unseating_sentence_names_the_engine_that_unseats_earlier():
 
 
 def test_unseating_sentence_without_two_fits_says_it_cannot_judge():
-    from deckpound.compare.report_unseating import approach_sentence
+    from deckpound.compare.report.unseating import approach_sentence
 
     frag = _unseating_frag({"compliance": 2.8, "nonsmooth": 2.9})
     frag.loc[frag["engine"] == "nonsmooth", "median"] = np.nan

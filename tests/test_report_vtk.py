@@ -20,9 +20,9 @@ import pytest
 from _report_helpers import check_clauses, claims, expand_runs, mu_values, read_table
 
 from deckpound.cli import main
-from deckpound.compare.outputs import folder_size, parquet_units
-from deckpound.compare.paper import run_paper
-from deckpound.compare.report_text import direction, engine_label
+from deckpound.compare.report.outputs import folder_size, parquet_units
+from deckpound.compare.report.paper import run_paper
+from deckpound.compare.report.text import direction, engine_label
 from deckpound.models.scene_io import load_scene
 
 TINY = [
@@ -400,7 +400,7 @@ def test_report_of_a_real_record_names_its_files_and_applies_its_labels(tmp_path
 
 def test_unseating_section_is_built_from_its_tables(report):
     """Issue 30, item 6: the IDA per engine gives the section's table and its sentence."""
-    from deckpound.compare.report_unseating import QUICK, approach_sentence
+    from deckpound.compare.report.unseating import QUICK, approach_sentence
 
     out, md = report
     body = section(md.read_text(), "Will the deck unseat?")

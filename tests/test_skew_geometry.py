@@ -17,8 +17,8 @@ import math
 import numpy as np
 import pytest
 
-from deckpound.analytic.impulses import size_tag
-from deckpound.analytic.kinematics import contact_kinematics, gap_hessian, pack_corners
+from deckpound.analytic.kernels.kinematics import contact_kinematics, gap_hessian, pack_corners
+from deckpound.analytic.nonsmooth.impulses import size_tag
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import load_scene

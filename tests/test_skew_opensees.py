@@ -10,7 +10,7 @@
 * the exported Python and Tcl scripts of a skewed deck, with and without friction, reproduce
   the in-process run through their recorders (the skew column maps project x and y on n, t);
 * clone vs OpenSees on the benchmark at φ = 30° and 45° to round-off (the straight deck's
-  tolerances), through :func:`deckpound.compare.skew.verify_skew`.
+  tolerances), through :func:`deckpound.compare.studies.skew.verify_skew`.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from test_tcl_export_runs import HAS_TCL, deviation, recorded, run_tcl
 from tests_helpers_scene import short_benchmark
 
 from deckpound.compare.engines import run_engine
-from deckpound.compare.skew import verify_skew
+from deckpound.compare.studies.skew import verify_skew
 from deckpound.models.columns import column_unit
 from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import load_scene
@@ -186,7 +186,7 @@ def test_skew_exports_match_the_in_process_run(variant, tmp_path):
     print(f"{variant}: Tcl recorders vs in-process, worst {dev[worst]:.2e} ({worst})")
     # another OpenSees build (xara): round-off, within the clone check's tolerances (1e-9 of
     # each column's peak; velocities 1e-8, Newmark's update amplifies round-off by 2/dt, see
-    # deckpound.compare.verify_clone). Measured: 8.7e-13 without friction; with friction 1.1e-10 on
+    # deckpound.compare.verify.clone). Measured: 8.7e-13 without friction; with friction 1.1e-10 on
     # ft (the 1e6 kN/m stick spring on a difference of node displacements), 2.0e-10 on the
     # seat rotation velocity.
     for c, d in dev.items():

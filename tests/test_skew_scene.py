@@ -67,8 +67,8 @@ def test_skew_study_table_on_a_tiny_scene(tmp_path):
     """The skew study's own columns on a 1 s record: every angle × friction × engine, the
     first corner and the impulse share of the acute corners, stick + slip = 1 with friction
     (NaN without), and OpenSees = its clone without friction (same step, same model)."""
-    from deckpound.compare.skew import skew_headlines
-    from deckpound.compare.studies import run_study
+    from deckpound.compare.studies.sensitivity import run_study
+    from deckpound.compare.studies.skew import skew_headlines
 
     tiny = load_scene(
         "saiidi-4span", ["excitation.duration=1.0", "run.output_dt=0.01", "nonsmooth.h=0.001"]

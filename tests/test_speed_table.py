@@ -1,10 +1,10 @@
-"""The speed table of ``deckpound bench`` (compare/speed.py): its ratios, its line on how it was
+"""The speed table of ``deckpound bench`` (compare/bench/speed.py): its ratios, its line on how it was
 measured and the machine-speed reference. (docs/performance.md's copy of it is checked in
 tests/docs/test_docs_pages.py.)"""
 
 import numpy as np
 
-from deckpound.compare import speed
+from deckpound.compare.bench import speed
 
 
 def _fake(engines):

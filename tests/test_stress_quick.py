@@ -1,4 +1,4 @@
-"""A quick subset of the stress grid (compare/stress.py): every cell ends finished with finite
+"""A quick subset of the stress grid (compare/bench/stress.py): every cell ends finished with finite
 output or with a clear failure status — never NaN silently, never a hang — and the table and
 heat maps are written."""
 
@@ -9,7 +9,7 @@ import importlib.util
 import numpy as np
 import pytest
 
-from deckpound.compare.stress import run_stress
+from deckpound.compare.bench.stress import run_stress
 from deckpound.models.scene_io import load_scene
 
 CELLS = [
@@ -24,7 +24,7 @@ CLEAR = {"success", "failed", "timeout", "crashed", "refused"}
 
 def _nonsmooth_available() -> bool:
     try:
-        return importlib.util.find_spec("deckpound.analytic.nonsmooth") is not None
+        return importlib.util.find_spec("deckpound.analytic.nonsmooth.engine") is not None
     except ImportError:
         return False
 
@@ -37,7 +37,8 @@ def _nonsmooth_available() -> bool:
         pytest.param(
             "nonsmooth",
             marks=pytest.mark.skipif(
-                not _nonsmooth_available(), reason="deckpound.analytic.nonsmooth not written yet"
+                not _nonsmooth_available(),
+                reason="deckpound.analytic.nonsmooth.engine not written yet",
             ),
         ),
     ],

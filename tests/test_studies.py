@@ -11,8 +11,7 @@ from deckpound.cli import main
 from deckpound.compare import cases as cases_mod
 from deckpound.compare.cases import Case, run_cases
 from deckpound.compare.result_cache import ResultCache
-from deckpound.compare.sequence_run import run_sequence
-from deckpound.compare.studies import (
+from deckpound.compare.studies.sensitivity import (
     STUDIES,
     STUDY_NAMES,
     Study,
@@ -20,6 +19,7 @@ from deckpound.compare.studies import (
     run_study,
     start_state,
 )
+from deckpound.compare.studies.sequence_run import run_sequence
 from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene, modified
 
@@ -192,7 +192,7 @@ def test_damping_study_cases_and_sentences(tiny):
     """Issue 12: the damping study crosses members × stiffness × mass for every engine that
     expresses the case (the nonsmooth engine refuses the committed and current tangents), and
     its sentences are the table's numbers."""
-    from deckpound.compare.damping_study import damping_cases, damping_headlines
+    from deckpound.compare.studies.damping import damping_cases, damping_headlines
 
     cases = damping_cases(tiny, quick=False)
     labels = {c.params["damping"] for c in cases}

@@ -1,4 +1,4 @@
-"""Support motion interpolated in the compiled loop (analytic/support_motion.py): bit-identical
+"""Support motion interpolated in the compiled loop (analytic/kernels/support_motion.py): bit-identical
 to np.interp / SupportMotion.resample, and the compliance engine keeps no per-step arrays."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from deckpound.analytic.support_motion import (
+from deckpound.analytic.kernels.support_motion import (
     record_at,
     record_at_times,
     record_slopes,
@@ -55,7 +55,7 @@ def test_scene_motion_matches_resample():
 
 
 def test_compliance_channels_and_skips_keep_results():
-    from deckpound.analytic.compliance import SKIPS, run_compliance
+    from deckpound.analytic.compliance.engine import SKIPS, run_compliance
 
     sc = load_scene("saiidi-4span", ["run.duration=1.5", "contact.law=kelvin-voigt"])
     full = run_compliance(sc)
@@ -79,7 +79,7 @@ def test_unmoved_iterates_are_most_converged_steps_and_change_nothing():
     """The benchmark's steps converge at Newton's second iterate, whose round-off increment
     (~1e-23 m against u ~ 1e-2 m) leaves u bitwise unchanged: the skip fires at most steps,
     and its results are the forces-re-evaluated ones bit for bit."""
-    from deckpound.analytic.compliance import run_compliance
+    from deckpound.analytic.compliance.engine import run_compliance
 
     sc = load_scene("saiidi-4span", ["run.duration=3.0"])
     on = run_compliance(sc)
@@ -94,7 +94,7 @@ def test_unmoved_iterates_are_most_converged_steps_and_change_nothing():
 
 
 def test_adaptive_reports_step_sizes_in_and_out_of_contact():
-    from deckpound.analytic.compliance import run_compliance
+    from deckpound.analytic.compliance.engine import run_compliance
 
     # commit_step lifted so the error control alone sets the steps (after a yield the default
     # caps them at 1e-4 s in and out of contact alike)

@@ -220,7 +220,7 @@ def test_opensees_runs_the_scene_file_and_agrees_with_the_clone():
 
     if importlib.util.find_spec("openseespy") is None:
         pytest.skip("openseespy not installed")
-    from deckpound.compare.verify_clone import verify_clone
+    from deckpound.compare.verify.clone import verify_clone
 
     sc = load_scene(
         SCENE,
@@ -271,7 +271,7 @@ def test_opensees_starts_displaced_like_the_clone():
 
     if importlib.util.find_spec("openseespy") is None:
         pytest.skip("openseespy not installed")
-    from deckpound.compare.verify_clone import column_deviations
+    from deckpound.compare.verify.clone import column_deviations
     from deckpound.models.columns import standard_columns
 
     cases = [

@@ -13,7 +13,7 @@ import sys
 
 import pytest
 
-from deckpound.compare import verify_matrix as vm
+from deckpound.compare.verify import matrix as vm
 
 HAS_OPENSEES = importlib.util.find_spec("openseespy") is not None
 

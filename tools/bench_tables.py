@@ -28,11 +28,11 @@ import skips_stress
 import work_precision
 from docs_blocks import RESULTS, write_block
 
-from deckpound.compare import speed
-from deckpound.compare.bench import run_bench
+from deckpound.compare.bench import speed
+from deckpound.compare.bench.skips import run_skips
+from deckpound.compare.bench.stress import run_stress
+from deckpound.compare.bench.work_precision import run_bench
 from deckpound.compare.engines import engine_names
-from deckpound.compare.skips import run_skips
-from deckpound.compare.stress import run_stress
 from deckpound.models.file_io import atomic_write_text
 from deckpound.models.scene_io import load_scene
 

@@ -1,7 +1,7 @@
 """Write docs/contact_step.md: the contact-step rule measured on the built-in benchmark.
 
 Repository tooling (not installed with the package): ``python tools/contact_step_table.py``
-runs :func:`deckpound.compare.contact_step.contact_step_table` on ``saiidi-4span`` and writes
+runs :func:`deckpound.compare.studies.contact_step.contact_step_table` on ``saiidi-4span`` and writes
 the page; ``tests/test_contact_step_table.py`` recomputes the table and fails when the page is
 stale.
 """
@@ -11,7 +11,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from deckpound.compare.contact_step import contact_step_table, failures, format_table
+from deckpound.compare.studies.contact_step import contact_step_table, failures, format_table
 from deckpound.models.scene_io import load_scene
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "contact_step.md"

@@ -3,11 +3,11 @@ commands that measure them.
 
 Repository tooling (not installed with the package):
 
-* ``python tools/bench_tables.py skips`` runs :func:`deckpound.compare.skips.run_skips` (or
+* ``python tools/bench_tables.py skips`` runs :func:`deckpound.compare.bench.skips.run_skips` (or
   publishes a folder of ``deckpound bench --skips -o DIR``, ``--from DIR``), copies
   ``skips.csv`` and ``adaptive_steps.csv`` into ``docs/results`` and puts :func:`render_skips` of
   them between :data:`SKIPS_BEGIN` and :data:`SKIPS_END`;
-* ``python tools/bench_tables.py stress`` does the same with :func:`deckpound.compare.stress.
+* ``python tools/bench_tables.py stress`` does the same with :func:`deckpound.compare.bench.stress.
   run_stress`, ``stress.csv`` and its heat maps, and :func:`render_stress`.
 
 ``tests/docs/test_docs_skips_stress.py`` renders the committed CSVs again and fails when a block
@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 from docs_blocks import DOCS, RESULTS, write_block
 
-from deckpound.compare.skips import skip_failures
+from deckpound.compare.bench.skips import skip_failures
 from deckpound.models.result import read_table
 from deckpound.models.scene_settings import SUBNORMALS_UNCHANGED_ABOVE as UNCHANGED_ABOVE
 

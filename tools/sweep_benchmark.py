@@ -2,7 +2,7 @@
 
 Repository tooling (not installed): ``python tools/sweep_benchmark.py [--cases N]
 [--memory-cases M]`` runs the variability study's sweep machinery
-(:func:`deckpound.compare.variability.sweep_rows`: one summary row per case, no histories) on
+(:func:`deckpound.compare.studies.variability.sweep_rows`: one summary row per case, no histories) on
 the built-in benchmark with N seeds of its 20 s synthetic record, on 1 and on 2 worker
 processes, each into an empty row cache, and reports
 
@@ -27,7 +27,7 @@ import numpy as np
 
 from deckpound.compare.engines import run_engine
 from deckpound.compare.pool import pool_scope
-from deckpound.compare.variability import seed_cases, sweep_rows
+from deckpound.compare.studies.variability import seed_cases, sweep_rows
 from deckpound.models.scene_io import load_scene
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "sweeps.md"

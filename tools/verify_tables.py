@@ -18,7 +18,8 @@ from pathlib import Path
 
 from docs_blocks import DOCS, block_of, write_block
 
-from deckpound.compare import impact_law, verify_matrix
+from deckpound.compare.studies import impact_law
+from deckpound.compare.verify import matrix as verify_matrix
 from deckpound.models.scene_io import load_scene
 
 PAGE = DOCS / "verification.md"

@@ -13,7 +13,7 @@ cannot drift from the measurement they quote.
 Table: one line per scene and configuration family (the steps or tolerances of the family
 joined by " / "): median wall time [s] (engine-reported, warm, compile excluded), µs per step,
 the primary error (relative error of the primary peak against the converged reference of
-:data:`deckpound.compare.bench.REFERENCES`) and the speed ratio to OpenSees at equal error
+:data:`deckpound.compare.bench.work_precision.REFERENCES`) and the speed ratio to OpenSees at equal error
 (``≥`` / ``≤``: a bound outside OpenSees's measured error range).
 """
 

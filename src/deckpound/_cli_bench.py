@@ -45,11 +45,11 @@ def _bench(args) -> int:
 
 
 def _bench_body(args, scene) -> int:
-    from deckpound.compare.bench import run_bench
-    from deckpound.compare.skips import skip_failures
+    from deckpound.compare.bench.skips import skip_failures
+    from deckpound.compare.bench.work_precision import run_bench
 
     if args.skips:
-        from deckpound.compare.skips import run_skips
+        from deckpound.compare.bench.skips import run_skips
 
         table, steps = run_skips(scene, args.output, quick=args.quick, repeats=args.repeats)
         cols = [
@@ -105,7 +105,7 @@ def _bench_body(args, scene) -> int:
 
 
 def _stress(args) -> int:
-    from deckpound.compare.stress import run_stress
+    from deckpound.compare.bench.stress import run_stress
     from deckpound.models.file_io import output_folder
     from deckpound.models.scene_io import load_scene
 
@@ -138,7 +138,7 @@ def _speed_args(p: argparse.ArgumentParser) -> None:
 def _speed_table(args) -> None:
     import sys
 
-    from deckpound.compare import speed
+    from deckpound.compare.bench import speed
     from deckpound.models.file_io import atomic_write_text
 
     repeats = args.repeats if args.repeats is not None else 3

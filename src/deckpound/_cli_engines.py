@@ -162,7 +162,7 @@ def _modes(args) -> int:
 
 
 def _verify_takeda(args) -> int:
-    from deckpound.compare.verify_takeda import verify_takeda
+    from deckpound.compare.verify.takeda import verify_takeda
 
     report = verify_takeda(n_states=args.states, seed=args.seed)
     print(
@@ -174,10 +174,10 @@ def _verify_takeda(args) -> int:
 
 
 def _verify_clone(args) -> int:
-    """One line per case (compare/verify_matrix.py); exit 1 when a case exceeds its tolerance.
+    """One line per case (compare/verify/matrix.py); exit 1 when a case exceeds its tolerance.
     With --set: one case, the scene as given, with its column-by-column deviations."""
 
-    from deckpound.compare import verify_matrix
+    from deckpound.compare.verify import matrix as verify_matrix
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene(args.scene, args.overrides)
@@ -189,7 +189,7 @@ def _verify_clone(args) -> int:
 
 
 def _verify_single(scene, verify_matrix) -> int:
-    from deckpound.compare.verify_clone import verify_clone
+    from deckpound.compare.verify.clone import verify_clone
 
     report = verify_clone(scene)
     for note in report["notes"]:
@@ -221,7 +221,7 @@ def _verify_single(scene, verify_matrix) -> int:
 
 
 def _verify_contact_step(args) -> int:
-    from deckpound.compare.contact_step import contact_step_table, failures, format_table
+    from deckpound.compare.studies.contact_step import contact_step_table, failures, format_table
     from deckpound.models.scene_io import load_scene
 
     rows = contact_step_table(load_scene(args.scene, args.overrides))
@@ -235,7 +235,7 @@ def _verify_contact_step(args) -> int:
 
 
 def _verify_impact_law(args) -> int:
-    from deckpound.compare.impact_law import format_table, impact_law_table
+    from deckpound.compare.studies.impact_law import format_table, impact_law_table
     from deckpound.models.scene_io import load_scene
 
     rows = impact_law_table(load_scene(args.scene, args.overrides))

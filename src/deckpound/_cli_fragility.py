@@ -110,7 +110,7 @@ def read_stripes_csv(path: str) -> tuple[list[float], list[float], list[float], 
 
 
 def _fit(args) -> int:
-    from deckpound.compare import fragility
+    from deckpound.compare.studies import fragility
 
     im, n, exceed, lines = read_stripes_csv(args.stripes)
     try:

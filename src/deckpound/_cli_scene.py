@@ -104,7 +104,7 @@ def _plot(args) -> int:
     check_parent(out)  # below a regular file: can never be written
     scene = load_scene(args.scene, args.overrides)
     motion = support_motion(scene)
-    from deckpound.compare.plotting import plot_excitation
+    from deckpound.compare.report.plotting import plot_excitation
 
     plot_excitation(scene, motion, out)  # atomic (compare.style.save); OSError: exit status 3
     print(f"wrote {terminal_text(out)}")

@@ -232,7 +232,7 @@ def _compare(args) -> int:
 
 def _study(args) -> int:
     from deckpound.compare.result_cache import ResultCache
-    from deckpound.compare.studies import STUDY_NAMES, run_study
+    from deckpound.compare.studies.sensitivity import STUDY_NAMES, run_study
     from deckpound.models.file_io import output_folder, write_csv
 
     if args.name == "variability":
@@ -247,10 +247,10 @@ def _study(args) -> int:
     with output_folder(out, f"study {args.name}") as out:
         cache_dir = Path(args.cache) if args.cache else out / "cache"
         if args.name == "sequence":
-            from deckpound.compare import figures
-            from deckpound.compare.outputs import write_csv
-            from deckpound.compare.paper import sequence_table, sequence_units
-            from deckpound.compare.sequence_run import run_sequences
+            from deckpound.compare.report import figures
+            from deckpound.compare.report.outputs import write_csv
+            from deckpound.compare.report.paper import sequence_table, sequence_units
+            from deckpound.compare.studies.sequence_run import run_sequences
 
             if args.state != "virgin":
                 raise SceneError(
@@ -299,8 +299,8 @@ def _study(args) -> int:
         )
         if c in table
     ]
-    from deckpound.compare.outputs import unit_header
-    from deckpound.compare.paper import sequence_units
+    from deckpound.compare.report.outputs import unit_header
+    from deckpound.compare.report.paper import sequence_units
 
     print(unit_header(table[cols], sequence_units(table)).to_string(index=False))
     print(f"wrote {terminal_text(out)}")
@@ -308,8 +308,8 @@ def _study(args) -> int:
 
 
 def _paper(args) -> int:
-    from deckpound.compare.paper import run_paper
-    from deckpound.compare.studies import STUDIES
+    from deckpound.compare.report.paper import run_paper
+    from deckpound.compare.studies.sensitivity import STUDIES
     from deckpound.models.file_io import output_folder
 
     studies = None
@@ -341,7 +341,7 @@ def _paper(args) -> int:
 
 
 def _export_vtk(args) -> int:
-    from deckpound.compare.vtk import check_result_folder, export_vtk
+    from deckpound.compare.report.vtk import check_result_folder, export_vtk
     from deckpound.models.file_io import output_folder
 
     check_output_folder(args.output)
@@ -386,7 +386,7 @@ def _variability_args(p: argparse.ArgumentParser) -> None:
 
 def _variability(args) -> int:
     from deckpound.compare.engines import get_engine
-    from deckpound.compare.variability import QUANTITIES, run_variability
+    from deckpound.compare.studies.variability import QUANTITIES, run_variability
     from deckpound.models.file_io import output_folder
 
     get_engine(args.engine)  # an unknown name is refused before any work
@@ -429,7 +429,7 @@ def _variability(args) -> int:
 
 def _ida(args) -> int:
     """``deckpound ida|msa``: the sweep's rows, the fragility table, one line per limit state."""
-    from deckpound.compare.ida import IMS, parse_levels, parse_vary, run_ida
+    from deckpound.compare.studies.ida import IMS, parse_levels, parse_vary, run_ida
     from deckpound.models.file_io import output_folder
 
     engines = engine_list(args.engines)  # an unknown name is refused before any work

@@ -21,10 +21,10 @@ from _record_helpers import quake, write_at2
 from docs_blocks import block_of, replace_block
 
 from deckpound.cli import main
-from deckpound.compare import speed
-from deckpound.compare import verify_matrix as vm
+from deckpound.compare.bench import speed
 from deckpound.compare.engines import engine_names
 from deckpound.compare.progress import PROGRESS_INTERVAL
+from deckpound.compare.verify import matrix as vm
 from deckpound.models.scene_io import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -10,7 +10,7 @@ import skips_stress as rr
 from docs_blocks import RESULTS, block_of
 
 from deckpound.cli import main
-from deckpound.compare.skips import skip_failures
+from deckpound.compare.bench.skips import skip_failures
 
 
 def _block(begin: str, end: str) -> str:

@@ -1,0 +1,213 @@
+"""Contact kinematics of the plan model: gaps g_N and direction matrices W_N, W_T.
+
+The corner table of :mod:`deckpound.models.plan` is packed once into a
+(n_corners, :data:`N_K`) array (:func:`pack_corners`, columns named by the ``K_*`` constants)
+that the kernels read; the equations are those of the plan model (DOFs
+u = [x₁, θ₁, x₂, θ₂, x_d, y_d, θ_d]):
+
+Geometrically linear (small rotations), corner at (x, y) with gap-opening normal n, tangent t
+and facing seat point r (relative to the seat pivot)::
+
+    g_N = g₀ + n_x [(x_d − y θ_d) − (x_s − r_y θ_s)] + n_y [(y_d + x θ_d) − r_x θ_s]
+    U_T = t_x (ẋ_d − y θ̇_d) + t_y (ẏ_d + x θ̇_d) − t_x ẋ_s
+
+(written so that a straight deck, n = (±1, 0), t = (0, 1), r = (0, y), performs exactly the
+floating-point operations of the paper's g_N = g₀ ± [(x_d − y θ_d) − (x_s − y θ_s)]).
+
+Geometrically nonlinear (paper Fig. 2b): the deck corner at
+P = (x_d + x cos θ_d − y sin θ_d, y_d + x sin θ_d + y cos θ_d); the seat face is the line
+through the seat pivot F = F₀ + (x_s, 0) (the seats slide along x) with the rest normal n₀ and
+tangent t₀ rotated by θ_s: n = R(θ_s) n₀, t = R(θ_s) t₀; g_N = n·(P − F),
+U_T = t·Ṗ − t_x ẋ_s (the term θ̇_s g_N of the face's rotation is dropped: it vanishes in
+contact).
+
+W_N[c] = ∂g_N/∂u and W_T[c] = ∂U_T/∂u̇ are rows (shape (n_corners, n_dof)); the generalised
+contact force is W_Nᵀ λ_N + W_Tᵀ λ_T with λ_N ≥ 0 compression. The functions are numba kernels
+on flat arrays, usable inside the engines' step loops and from Python alike. Each corner names
+the DOF of its seat (columns ``K_SX``, ``K_ST``); the deck DOF are the plan's. The corner and
+DOF counts are the lengths of the size tags the kernels take (``corner_slots``, ``dof_slots``:
+any tuples of n_corners and n_dof entries, e.g. ``ContactWork.corners`` and
+``SystemArrays.dofs``, or :func:`deckpound.analytic.nonsmooth.impulses.size_tag`), compile-time
+constants of the compiled loops, so a model with more corners or DOF (several deck segments)
+runs through the same kernels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from deckpound.analytic._jit import kernel
+from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, Plan
+
+__all__ = [
+    "K_G0",
+    "K_ST",
+    "K_SX",
+    "N_K",
+    "contact_kinematics",
+    "gap_hessian",
+    "linear_gap",
+    "linear_gap_rate",
+    "pack_corners",
+]
+
+# DOF indices
+XD, YD, TD = DECK_X, DECK_Y, DECK_THETA
+#: columns of the packed corner table: position, gap, normal, tangent, lever arm, seat pivot
+#: at rest, the DOF indices of the facing seat, and K_FREE = 0 for a fixed (rigid) seat, 1
+#: otherwise (the contact then puts no force on the seat: its W_N, W_T columns are zero)
+K_X, K_Y, K_G0, K_NX, K_NY, K_TX, K_TY, K_RX, K_RY, K_PX, K_PY, K_SX, K_ST, K_FREE = range(14)
+N_K = 14
+
+
+def pack_corners(plan: Plan) -> np.ndarray:
+    """The plan's corner table as a (n_corners, N_K) float array (``K_*`` column constants).
+
+    The seat pivot at rest is the mid-point of the seat's contact face: the deck end face's
+    mid-point moved by the gap against the normal, F₀ = (∓L/2, 0) − g₀ n.
+    """
+    out = np.zeros((len(plan.corners), N_K))
+    for c in plan.corners:
+        row = out[c.index]
+        row[K_X], row[K_Y], row[K_G0] = c.x, c.y, c.gap
+        row[K_NX], row[K_NY] = c.normal
+        row[K_TX], row[K_TY] = c.tangent
+        row[K_RX], row[K_RY] = c.lever
+        mid = -plan.half_length if c.seat == 0 else plan.half_length
+        row[K_PX] = mid - c.gap * c.normal[0]
+        row[K_PY] = 0.0 - c.gap * c.normal[1]
+        sx, st = c.seat_dofs
+        row[K_SX], row[K_ST] = sx, st
+        row[K_FREE] = 0.0 if c.seat_fixed else 1.0
+    return out
+
+
+@kernel(inline="always")
+def linear_gap(k, u):
+    """Gap of one corner (row k of the corner table) for displacement u, linear kinematics."""
+    sx = int(k[K_SX])
+    st = int(k[K_ST])
+    return (
+        k[K_G0]
+        + k[K_NX] * ((u[XD] - k[K_Y] * u[TD]) - (u[sx] - k[K_RY] * u[st]))
+        + k[K_NY] * ((u[YD] + k[K_X] * u[TD]) - k[K_RX] * u[st])
+    )
+
+
+@kernel(inline="always")
+def linear_gap_rate(k, v):
+    """ġ_N = W_N u̇ of one corner, linear kinematics (the gap formula without g₀)."""
+    sx = int(k[K_SX])
+    st = int(k[K_ST])
+    return k[K_NX] * ((v[XD] - k[K_Y] * v[TD]) - (v[sx] - k[K_RY] * v[st])) + k[K_NY] * (
+        (v[YD] + k[K_X] * v[TD]) - k[K_RX] * v[st]
+    )
+
+
+@kernel
+def contact_kinematics(u, corners, nonlinear, gap, WN, WT, corner_slots, dof_slots):
+    """Fill gap (n_corners,), WN (n_corners, n_dof) and WT (n_corners, n_dof) for
+    displacement u (n_dof,).
+
+    Parameters
+    ----------
+    u : (n_dof,) absolute displacements [m, rad].
+    corners : the corner table of :func:`pack_corners`.
+    nonlinear : bool, exact (True) or small-rotation (False) kinematics.
+    corner_slots, dof_slots : size tags, tuples of n_corners and n_dof entries (module
+        docstring).
+    """
+    for c in range(len(corner_slots)):
+        k = corners[c]
+        xc, yc = k[K_X], k[K_Y]
+        sx = int(k[K_SX])
+        st = int(k[K_ST])
+        for j in range(len(dof_slots)):
+            WN[c, j] = 0.0
+            WT[c, j] = 0.0
+        if not nonlinear:
+            nx, ny, tx, ty = k[K_NX], k[K_NY], k[K_TX], k[K_TY]
+            gap[c] = linear_gap(k, u)
+            WN[c, XD] = nx
+            WN[c, YD] = ny
+            WN[c, TD] = -nx * yc + ny * xc
+            WN[c, sx] = -nx
+            WN[c, st] = nx * k[K_RY] - ny * k[K_RX]
+            WT[c, XD] = tx
+            WT[c, YD] = ty
+            WT[c, TD] = -tx * yc + ty * xc
+            WT[c, sx] = -tx
+            if k[K_FREE] == 0.0:  # fixed seat: the contact does not load it
+                WN[c, sx] = 0.0
+                WN[c, st] = 0.0
+                WT[c, sx] = 0.0
+        else:
+            th, ths = u[TD], u[st]
+            ct, sn = np.cos(th), np.sin(th)
+            px = u[XD] + xc * ct - yc * sn
+            py = u[YD] + xc * sn + yc * ct
+            dpx = -xc * sn - yc * ct  # ∂P_x/∂θ_d
+            dpy = xc * ct - yc * sn  # ∂P_y/∂θ_d
+            cs, ss = np.cos(ths), np.sin(ths)
+            nx = k[K_NX] * cs - k[K_NY] * ss  # n = R(θ_s) n₀
+            ny = k[K_NX] * ss + k[K_NY] * cs
+            tx = k[K_TX] * cs - k[K_TY] * ss  # t = R(θ_s) t₀
+            ty = k[K_TX] * ss + k[K_TY] * cs
+            rx = px - (k[K_PX] + u[sx])
+            ry = py - k[K_PY]
+            gap[c] = nx * rx + ny * ry
+            WN[c, XD] = nx
+            WN[c, YD] = ny
+            WN[c, TD] = nx * dpx + ny * dpy
+            WN[c, sx] = -nx
+            WN[c, st] = -ny * rx + nx * ry  # (∂n/∂θ_s)·(P − F), ∂n/∂θ_s = (−n_y, n_x)
+            WT[c, XD] = tx
+            WT[c, YD] = ty
+            WT[c, TD] = tx * dpx + ty * dpy
+            WT[c, sx] = -tx
+            if k[K_FREE] == 0.0:
+                WN[c, sx] = 0.0
+                WN[c, st] = 0.0
+                WT[c, sx] = 0.0
+
+
+@kernel
+def gap_hessian(u, corners, c, H, dof_slots):
+    """∂²g_N/∂u² of corner c for the geometrically nonlinear kinematics (n_dof × n_dof,
+    filled; n_dof = len(dof_slots), the DOF size tag)."""
+    n_dof = len(dof_slots)
+    k = corners[c]
+    xc, yc = k[K_X], k[K_Y]
+    sx = int(k[K_SX])
+    st = int(k[K_ST])
+    for i in range(n_dof):
+        for j in range(n_dof):
+            H[i, j] = 0.0
+    th, ths = u[TD], u[st]
+    ct, sn = np.cos(th), np.sin(th)
+    cs_, ss = np.cos(ths), np.sin(ths)
+    px = u[XD] + xc * ct - yc * sn
+    py = u[YD] + xc * sn + yc * ct
+    dpx = -xc * sn - yc * ct
+    dpy = xc * ct - yc * sn
+    d2px = -xc * ct + yc * sn
+    d2py = -xc * sn - yc * ct
+    nx = k[K_NX] * cs_ - k[K_NY] * ss
+    ny = k[K_NX] * ss + k[K_NY] * cs_
+    rx = px - (k[K_PX] + u[sx])
+    ry = py - k[K_PY]
+    dnx, dny = -ny, nx  # ∂n/∂θ_s
+    H[TD, TD] = nx * d2px + ny * d2py
+    H[XD, st] = dnx
+    H[YD, st] = dny
+    H[TD, st] = dnx * dpx + dny * dpy
+    H[sx, st] = -dnx
+    H[st, st] = -(nx * rx + ny * ry)  # ∂²n/∂θ_s² = −n
+    for i in (XD, YD, TD, sx):
+        H[st, i] = H[i, st]
+    if k[K_FREE] == 0.0:  # fixed seat: no seat rows or columns
+        for i in range(n_dof):
+            H[sx, i] = 0.0
+            H[i, sx] = 0.0
+            H[st, i] = 0.0
+            H[i, st] = 0.0

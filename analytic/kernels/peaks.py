@@ -1,0 +1,291 @@
+"""Peaks of the result columns and gap closures, taken at every step of the compiled loops.
+
+The output rows see one step in ``stride`` (``run.output_dt`` / the engine's step): a peak or
+a closure between two rows is lost, and how much depends on the output rate (issue 28: the
+benchmark's peak deck rotation read 0.81 mrad instead of 3.62 at ``run.output_dt = 0.5``).
+Every step loop therefore calls :func:`track_step` once per accepted step (every sub-step of
+a rescued step, every adaptive step) and once at t = 0, with the state it commits:
+
+* the step's row in the **peak layout** is written into ``Peaks.row``: the engine columns in
+  the layout of :func:`deckpound.analytic.kernels.system.store_standard` (time, absolute displacements
+  and velocities, gaps, normal and tangential contact forces, bent spring forces), then the
+  displacements relative to the supports (:data:`deckpound.models.plan.RELATIVE_COLUMNS`:
+  deck x, y relative to the mean shake-table motion, each seat relative to its actuator) and
+  the bent deformations d = B u − S u_g of the ``nbs`` bent springs — the columns
+  :func:`deckpound.models.engine_contract.finish` derives from the output rows, here from the
+  support displacement at the step (:func:`deckpound.models.result.peak_columns` names the
+  layout);
+* ``Peaks.value`` / ``Peaks.time`` keep, per column, the largest |x| and the first time it
+  was reached [s] — for the gaps the smallest (most negative: the deepest penetration)
+  signed value instead;
+* ``Peaks.closures`` counts, per corner, the steps at which the corner goes from out of
+  contact to in contact (:func:`in_contact_now`, the one definition; a run that starts in
+  contact counts one: ``Peaks.inside`` starts False);
+* ``Peaks.gap_open`` / ``Peaks.gap_open_time`` keep, per corner, the **largest** gap g_c [m]
+  and its first time [s], ``Peaks.gap_start`` the gap at t = 0: the largest opening
+  g_c − g_c(0) is the seat-width demand, and with the support length N of the facing seat
+  (``seats[i].support_length``, ``Peaks.support``; +inf: not checked) the seat margin is
+  m_c = N − (g_c − g_c(0)). Its minimum over the run is at the largest gap. The first step at
+  which a margin is negative (g_c − g_c(0) > N: the deck end has moved away from the
+  backwall by more than the seat under it) is the **unseating**: :func:`track_step` returns
+  True and ``Peaks.unseat`` holds 1 + the corner's index and ``Peaks.unseat_time`` its time;
+  the loops finish that step and stop (status ``RUN_UNSEATED``).
+
+The engine fills the standard part of ``Peaks.row`` itself (its force columns differ: the
+compliance engines' λ_N, λ_T; the nonsmooth engine's impulse of the step divided by the step,
+``Peaks.force`` is its scratch) and then calls :func:`track_step`. The arrays are allocated by
+:func:`new_peaks` (the loops run without numba's runtime) and read back by
+:func:`step_peaks` and :func:`step_closures` into :class:`~deckpound.models.engine_contract.
+RunOutput`. The tracking reads and writes only its own arrays: the result columns are those
+of a run without it, bit for bit.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+from deckpound.analytic._jit import kernel
+from deckpound.analytic.kernels.system import C_GAP
+from deckpound.models.engine_contract import engine_columns
+from deckpound.models.plan import CORNER_NAMES, DECK_X, DECK_Y, RELATIVE_COLUMNS, SEAT_X
+from deckpound.models.result import peak_columns
+
+__all__ = [
+    "N_RELATIVE",
+    "Peaks",
+    "corner_support_lengths",
+    "in_contact_now",
+    "new_peaks",
+    "peak_layout",
+    "run_output_fields",
+    "run_peaks",
+    "step_closures",
+    "step_openings",
+    "step_peaks",
+    "step_unseated",
+    "track_step",
+]
+
+#: The per-step peaks bundle (a field of :data:`deckpound.analytic.bundles.Output`):
+#: ``row`` (n,) the step's row in the peak layout (module docstring), ``value`` (n,) the peak
+#: of each column so far (max |x|; min x for the gaps), ``time`` (n,) when it was reached [s];
+#: ``tx``, ``ty`` int64 the support channels of the shake tables in x and y (their mean is the
+#: reference of deck_x_rel, deck_y_rel), ``seat`` (2,) int64 the actuator channel of each seat;
+#: ``inside`` (nc,) bool corner in contact at the last step, ``closures`` (nc,) int64 closures
+#: per corner; ``force`` (2, nc) scratch for the step's normal and tangential forces; per
+#: corner ``gap_open`` (nc,) the largest gap [m] and ``gap_open_time`` (nc,) its time [s],
+#: ``gap_start`` (nc,) the gap at t = 0 [m], ``support`` (nc,) the support length of the
+#: facing seat [m] (+inf: not checked); ``unseat`` int64 (1,) 1 + the first unseated corner
+#: (0: none) and ``unseat_time`` (1,) when [s] (module docstring); ``corners`` the tuple
+#: (0, …, nc − 1) of the nc corners, a size tag (:func:`deckpound.analytic.nonsmooth.impulses.size_tag`:
+#: its length is a compile-time constant of :func:`track_step`).
+Peaks = namedtuple(
+    "Peaks",
+    [
+        "row",
+        "value",
+        "time",
+        "tx",
+        "ty",
+        "seat",
+        "inside",
+        "closures",
+        "force",
+        "gap_open",
+        "gap_open_time",
+        "gap_start",
+        "support",
+        "unseat",
+        "unseat_time",
+        "corners",
+    ],
+)
+
+#: Number of relative-displacement columns of the peak layout (the bent deformations follow).
+N_RELATIVE = len(RELATIVE_COLUMNS)
+
+
+@kernel(inline="always")
+def peak_layout(n_corners):
+    """(first normal-force column, first bent-force column) of the peak layout of a model with
+    ``n_corners`` corners: after the gaps come the n_corners normal and the n_corners
+    tangential forces (the order of :func:`deckpound.models.engine_contract.engine_columns`);
+    for the plan's four corners these are ``C_FN`` and ``C_BENT`` of
+    :mod:`deckpound.analytic.kernels.system`."""
+    return C_GAP + n_corners, C_GAP + 3 * n_corners
+
+
+def corner_support_lengths(scene, plan) -> np.ndarray:
+    """The support length N [m] of the seat each corner faces (``seats[i].support_length`` of
+    ``scene`` through the ``plan``'s corner table), +inf where it is not set (not checked)."""
+    lengths = [s.support_length for s in scene.seats]
+    return np.array(
+        [np.inf if lengths[c.seat] is None else float(lengths[c.seat]) for c in plan.corners]
+    )
+
+
+def new_peaks(channels, bent_names, n_bent_springs: int, support=None) -> Peaks:
+    """Zeroed :data:`Peaks` for a model with these support ``channels`` (the order of u_g) and
+    bents; the gap entries start at +inf (their statistic is the minimum), the largest gaps at
+    −inf. ``support`` (n_corners,) the corners' support lengths [m]
+    (:func:`corner_support_lengths`; None: the plan's four corners, none checked): its length
+    is the model's corner count."""
+    support = (
+        np.full(len(CORNER_NAMES), np.inf) if support is None else np.asarray(support, dtype=float)
+    )
+    nc = support.shape[0]
+    n = peak_layout.py_func(nc)[1] + 2 * n_bent_springs + N_RELATIVE  # no kernel load here
+    channels = list(channels)
+    value = np.zeros(n)
+    value[C_GAP : C_GAP + nc] = np.inf
+    return Peaks(
+        row=np.zeros(n),
+        value=value,
+        time=np.zeros(n),
+        tx=np.array([channels.index(f"{b}_x") for b in bent_names], dtype=np.int64),
+        ty=np.array([channels.index(f"{b}_y") for b in bent_names], dtype=np.int64),
+        seat=np.array([channels.index("seat1_x"), channels.index("seat2_x")], dtype=np.int64),
+        inside=np.zeros(nc, dtype=np.bool_),
+        closures=np.zeros(nc, dtype=np.int64),
+        force=np.zeros((2, nc)),
+        gap_open=np.full(nc, -np.inf),
+        gap_open_time=np.zeros(nc),
+        gap_start=np.zeros(nc),
+        support=support.copy(),
+        unseat=np.zeros(1, dtype=np.int64),
+        unseat_time=np.zeros(1),
+        corners=tuple(range(nc)),
+    )
+
+
+@kernel(inline="always")
+def in_contact_now(gap, fn):
+    """Whether a corner is in contact at a step: its gap is closed (g ≤ 0 [m]) or it carried a
+    normal force over the step (fn > 0 [kN]).
+
+    The one contact test of the gap-closure count (every engine, the exported scripts and
+    :func:`deckpound.models.result.in_contact` on output rows). For the penalty laws every law
+    gives zero force while g > 0, so the test is g ≤ 0; the force term is there for rigid
+    contact: the nonsmooth engine's impact impulse of a step can reverse the approach within
+    the step, leaving g ≥ 0 at both its ends, and the impact is still a contact."""
+    return gap <= 0.0 or fn > 0.0
+
+
+@kernel(inline="always")
+def track_step(pk, t, u, ug, d, nbs):
+    """Complete the step's row in ``pk.row`` (its standard part written by the engine) with
+    the relative displacements and bent deformations, then update the peaks and the closures.
+
+    u (7,) displacements [m, rad] and ug (n_channels,) support displacements [m] at the step,
+    d the spring deformations d = B u − S u_g (the first ``nbs`` are the bents'), t [s].
+    Returns True when a corner's seat margin N − (g − g(0)) became negative at this step (the
+    deck is unseated; module docstring): one comparison per corner while no gap grows. The
+    corner count is the length of the size tag ``pk.corners`` (:func:`peak_layout`)."""
+    row = pk.row
+    nc = len(pk.corners)
+    c_fn, c_bent = peak_layout(nc)
+    base = c_bent + nbs
+    mx = 0.0
+    for k in range(pk.tx.shape[0]):
+        mx += ug[pk.tx[k]]
+    my = 0.0
+    for k in range(pk.ty.shape[0]):
+        my += ug[pk.ty[k]]
+    if pk.tx.shape[0] > 0:
+        mx = mx / pk.tx.shape[0]
+        my = my / pk.ty.shape[0]
+    row[base] = u[DECK_X] - mx
+    row[base + 1] = u[DECK_Y] - my
+    row[base + 2] = u[SEAT_X[0]] - ug[pk.seat[0]]
+    row[base + 3] = u[SEAT_X[1]] - ug[pk.seat[1]]
+    for i in range(nbs):
+        row[base + N_RELATIVE + i] = d[i]
+    value, time = pk.value, pk.time
+    # the gaps: the most negative value; every other column: the largest |x| (t excluded)
+    for k in range(1, C_GAP):
+        a = abs(row[k])
+        if a > value[k]:
+            value[k] = a
+            time[k] = t
+    for c in range(nc):
+        k = C_GAP + c
+        if row[k] < value[k]:
+            value[k] = row[k]
+            time[k] = t
+        now = in_contact_now(row[k], row[c_fn + c])
+        if now and not pk.inside[c]:
+            pk.closures[c] += 1
+        pk.inside[c] = now
+    # the largest gap (seat margin): the initial gap at the first call (largest still −inf)
+    unseated = False
+    for c in range(nc):
+        gk = row[C_GAP + c]
+        if gk > pk.gap_open[c]:
+            if pk.gap_open[c] == -np.inf:
+                pk.gap_start[c] = gk
+            pk.gap_open[c] = gk
+            pk.gap_open_time[c] = t
+            if gk - pk.gap_start[c] > pk.support[c]:
+                unseated = True
+                if pk.unseat[0] == 0:
+                    pk.unseat[0] = c + 1
+                    pk.unseat_time[0] = t
+    for k in range(c_fn, row.shape[0]):
+        a = abs(row[k])
+        if a > value[k]:
+            value[k] = a
+            time[k] = t
+    return unseated
+
+
+def step_peaks(pk: Peaks, names: list[str]) -> dict[str, tuple[float, float]]:
+    """``{column: (peak, time)}`` of :func:`track_step`'s statistics, ``names`` from
+    :func:`deckpound.models.result.peak_columns` (``t`` left out; a gap's peak is its smallest
+    value)."""
+    return {
+        n: (float(pk.value[k]), float(pk.time[k]))
+        for k, n in enumerate(names)
+        if n != "t" and np.isfinite(pk.value[k])
+    }
+
+
+def step_openings(pk: Peaks) -> dict[str, tuple[float, float]]:
+    """``{corner: (opening, time)}``: the largest gap opening g_c − g_c(0) over every step
+    [m] (the seat-width demand; negative if the gap only closed) and when it was reached [s]."""
+    return {
+        c: (float(pk.gap_open[k] - pk.gap_start[k]), float(pk.gap_open_time[k]))
+        for k, c in enumerate(CORNER_NAMES)
+    }
+
+
+def step_unseated(pk: Peaks) -> tuple[str, float] | None:
+    """``(corner, time [s])`` of the first unseating (:func:`track_step`), or None."""
+    k = int(pk.unseat[0])
+    return None if k == 0 else (CORNER_NAMES[k - 1], float(pk.unseat_time[0]))
+
+
+def step_closures(pk: Peaks) -> dict[str, int]:
+    """Gap closures per corner counted at every step (``{"c1": n, ...}``)."""
+    return {c: int(pk.closures[k]) for k, c in enumerate(CORNER_NAMES)}
+
+
+def run_peaks(scene, plan, ps) -> Peaks:
+    """Zeroed :data:`Peaks` for a run of ``scene`` on ``plan`` with the packed system ``ps``
+    (its support channels and bent springs) and the seats' support lengths: what every
+    analytic engine's driver hands its step loop."""
+    return new_peaks(
+        ps.channels, plan.bent_names, ps.n_bent_springs, corner_support_lengths(scene, plan)
+    )
+
+
+def run_output_fields(pk: Peaks, plan) -> dict:
+    """The :class:`~deckpound.models.engine_contract.RunOutput` fields of a finished loop's every-step
+    statistics: ``peaks``, ``gap_closures_per_corner``, ``gap_openings`` and ``unseated``."""
+    return {
+        "peaks": step_peaks(pk, peak_columns(engine_columns(plan), plan.bent_names)),
+        "gap_closures_per_corner": step_closures(pk),
+        "gap_openings": step_openings(pk),
+        "unseated": step_unseated(pk),
+    }

@@ -1,0 +1,397 @@
+"""Paper-style figures of results (matplotlib; PNG, other formats such as PDF on request; one
+style, greyscale-readable).
+
+Displacements are drawn relative to the supports (the deck relative to the shake tables, a seat
+relative to its actuator) unless a column named ``*_abs`` is asked for; every axis names which
+and its unit. matplotlib is imported by the functions that draw (through :mod:`.style`), so a
+run whose figures are all reused (:mod:`.figure_cache`) does not load it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from deckpound.compare.engines import engine_names, engine_style
+from deckpound.compare.mechanism import contact_moments, mechanism_row
+from deckpound.compare.report.figure_cache import reusable
+from deckpound.compare.report.text import TOL
+from deckpound.models.plan import plan_of
+from deckpound.models.result import Result
+from deckpound.models.scene import Scene
+
+LABELS = {
+    "deck_theta": ("deck rotation θ_d", 1e3, "mrad"),
+    "deck_y_rel": ("deck y_d rel. tables", 1e3, "mm"),
+    "deck_x_rel": ("deck x_d rel. tables", 1e3, "mm"),
+    "deck_y_abs": ("deck y_d absolute", 1e3, "mm"),
+    "deck_x_abs": ("deck x_d absolute", 1e3, "mm"),
+    "seat1_x_rel": ("seat 1 x rel. actuator", 1e3, "mm"),
+    "seat2_x_rel": ("seat 2 x rel. actuator", 1e3, "mm"),
+}
+
+
+def _style_for(label: str, k: int) -> dict:
+    from deckpound.compare.report.style import CYCLE
+
+    engine = label.split()[0]
+    st = engine_style(engine)
+    if engine not in engine_names() and engine != "measured":
+        st = dict(CYCLE[k % len(CYCLE)])
+        st.pop("marker", None)
+        st.pop("markersize", None)
+    st["label"] = label
+    return st
+
+
+@reusable
+def histories(
+    results: dict[str, Result],
+    scene: Scene,
+    path: str | Path,
+    quantities: tuple[str, ...] = ("deck_theta", "deck_y_rel"),
+    title: str = "",
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
+    """Time histories of quantities overlaid per engine/case (paper Figs. 4–6 style)."""
+    from deckpound.compare.report.style import new_figure, save
+
+    fig, axes = new_figure(len(quantities), 1, width=7.5, height=2.2, sharex=True)
+    for i, q in enumerate(quantities):
+        name, scale, unit = LABELS.get(q, (q, 1.0, ""))
+        ax = axes[i, 0]
+        for k, (label, r) in enumerate(results.items()):
+            if q in r.columns:
+                ax.plot(r.t, scale * r[q], **_style_for(label, k))
+        ax.set_ylabel(f"{name} [{unit}]")
+    axes[0, 0].legend(loc="upper right", ncol=min(3, len(results)))
+    if title:
+        axes[0, 0].set_title(title)
+    axes[-1, 0].set_xlabel("time [s]")
+    return save(fig, path, scene.name, formats)
+
+
+@reusable
+def contact_forces(
+    results: dict[str, Result],
+    scene: Scene,
+    path: str | Path,
+    title: str = "",
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
+    """Normal contact force per corner (c1, c2 at seat 1; c3, c4 at seat 2)."""
+    from deckpound.compare.report.style import new_figure, save
+
+    fig, axes = new_figure(2, 2, width=8.0, height=2.0, sharex=True)
+    for c in range(4):
+        ax = axes[c % 2, c // 2]
+        for k, (label, r) in enumerate(results.items()):
+            ax.plot(r.t, 1e-3 * r[f"fn_c{c + 1}"], **_style_for(label, k))
+        ax.set_title(f"corner c{c + 1} (seat {1 + c // 2})")
+        ax.set_ylabel("normal force fn [MN]")
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[-1, 1].set_xlabel("time [s]")
+    axes[0, 0].legend(loc="upper right", fontsize=7)
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return save(fig, path, scene.name, formats)
+
+
+@reusable
+def peak_vs_pga(
+    table: pd.DataFrame,
+    scene: Scene,
+    path: str | Path,
+    quantity: str = "peak_theta",
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
+    """Peak deck rotation vs run PGA over the sequence, one line per engine and friction
+    assumption (``case`` column: engine name, then a variant tag; paper Fig. 7)."""
+    from deckpound.compare.report.style import CYCLE, new_figure, save
+
+    fig, axes = new_figure(1, 1, width=5.5, height=3.2)
+    ax = axes[0, 0]
+    markers = {e: CYCLE[k % len(CYCLE)]["marker"] for k, e in enumerate(engine_names())}
+    key = "case" if "case" in table else "engine"
+    for case, g in table.groupby(key, sort=False):
+        base, _, variant = case.partition(" ")
+        st = engine_style(base)
+        if variant:  # the same engine under another assumption: hollow markers, thinner line
+            st.update(label=f"{st['label']}, {variant}", markerfacecolor="white", linewidth=0.9)
+        ax.plot(g["run"], 1e3 * g[quantity], marker=markers.get(base, "x"), **st)
+    runs = table.drop_duplicates("run")
+    ax.set_xticks(runs["run"])
+    ax.set_xticklabels([f"{r}\n{p:g} g" for r, p in zip(runs["run"], runs["pga"])])
+    ax.set_xlabel("run (transverse PGA label)")
+    ax.set_ylabel("peak deck rotation |θ_d| [mrad]")
+    ax.legend(fontsize=7)
+    return save(fig, path, scene.name, formats)
+
+
+@reusable
+def friction_ratio(
+    effect: pd.DataFrame,
+    scene: Scene,
+    path: str | Path,
+    tol: float | None = None,
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
+    """Peak rotation with friction / without, per run and engine (1 = no effect; the band is
+    the ±tol within which the report calls the change negligible)."""
+    from deckpound.compare.report.style import CYCLE, new_figure, save
+
+    tol = TOL if tol is None else tol
+    fig, axes = new_figure(1, 1, width=5.5, height=3.0)
+    ax = axes[0, 0]
+    ax.axhspan(1 - tol, 1 + tol, color="#dddddd", zorder=0)
+    ax.axhline(1.0, color="#777777", linewidth=0.8)
+    for k, (engine, g) in enumerate(effect.groupby("engine", sort=False)):
+        st = engine_style(engine)
+        ax.plot(g["run"], g["ratio"], marker=CYCLE[k % len(CYCLE)]["marker"], **st)
+    runs = effect.drop_duplicates("run")
+    ax.set_xticks(runs["run"])
+    ax.set_xticklabels([f"{r}\n{p:g} g" for r, p in zip(runs["run"], runs["pga"])])
+    ax.set_xlabel("run (transverse PGA label)")
+    mu = effect["mu"].iloc[0] if len(effect) else 0.0
+    ax.set_ylabel(f"peak θ_d with μ = {mu:g} / without [-]")
+    ax.legend(fontsize=7)
+    return save(fig, path, scene.name, formats)
+
+
+@reusable
+def friction_mechanism(
+    pairs: dict, path: str | Path, title: str = "", formats: tuple[str, ...] = ()
+) -> list[Path]:
+    """Per engine, a sequence run without and with friction (``pairs``: engine →
+    (SequenceRun μ = 0, SequenceRun μ > 0), either order): deck rotation of both (top) and
+    the moment of the tangential contact forces about the deck centre with friction
+    (bottom), the excursion that reaches the frictional peak shaded."""
+    from deckpound.compare.report.style import new_figure, save
+
+    fig, axes = new_figure(2, 1, width=7.5, height=2.3, sharex=True)
+    shaded = False
+    for _k, (engine, runs) in enumerate(pairs.items()):
+        plain, rough = sorted(runs, key=lambda r: r.scene.contact.friction)
+        st = engine_style(engine)
+        label = st.pop("label", engine)
+        for run, dash in ((plain, ":"), (rough, "-")):
+            r = run.result
+            axes[0, 0].plot(
+                r.t,
+                1e3 * r["deck_theta"],
+                **{**st, "linestyle": dash},
+                label=f"{label}, μ = {run.scene.contact.friction:g}",
+            )
+        row = mechanism_row(rough.result, rough.scene)
+        if np.isfinite(row["friction_impulse"]):
+            mt, _ = contact_moments(rough.result, rough.scene)
+            axes[1, 0].plot(rough.result.t, 1e-3 * mt, **st, label=label)
+            if not shaded:
+                for ax in axes[:, 0]:
+                    ax.axvspan(row["t_start"], row["t_peak"], color="#eeeeee", zorder=0)
+                shaded = True
+    axes[0, 0].set_ylabel("deck rotation θ_d [mrad]")
+    axes[0, 0].legend(fontsize=6, ncol=2)
+    axes[1, 0].set_ylabel("friction moment about\ndeck centre [MN·m]")
+    axes[1, 0].set_xlabel("time [s]")
+    if axes[1, 0].get_legend_handles_labels()[0]:
+        axes[1, 0].legend(fontsize=6)
+    if title:
+        axes[0, 0].set_title(
+            f"{title}: shaded, the excursion that reaches the frictional peak", fontsize=8
+        )
+    scene = next(iter(pairs.values()))[0].scene
+    return save(fig, path, scene.name, formats)
+
+
+@reusable
+def study_figure(
+    study,
+    scene: Scene,
+    cases,
+    results: dict[str, Result],
+    table: pd.DataFrame,
+    path: str | Path,
+    formats: tuple[str, ...] = (),
+    subtitle: str = "",
+) -> list[Path]:
+    """Left: the study's headline (peak rotation vs parameter); right: rotation histories."""
+    from deckpound.compare.report.style import CYCLE, new_figure, save
+
+    fig, axes = new_figure(1, 2, width=9.0, height=3.2)
+    ax = axes[0, 0]
+    x = study.x
+    if x in ("stiffness", "mu"):
+        keys = ["engine"] + (["friction_mode"] if "friction_mode" in table else [])
+        for k, (engine, g) in enumerate(table.groupby(keys, sort=False)):
+            label = " ".join(engine) if isinstance(engine, tuple) else engine
+            finite = g[np.isfinite(g[x].astype(float))]
+            eng = label.split()[0]
+            st = engine_style(eng)
+            st["label"] = label
+            if len(finite):
+                ax.plot(
+                    finite[x].astype(float),
+                    1e3 * finite["peak_theta"],
+                    marker=CYCLE[k % len(CYCLE)]["marker"],
+                    **st,
+                )
+            inf = g[~np.isfinite(g[x].astype(float))]
+            for _, row in inf.iterrows():
+                ax.axhline(1e3 * row["peak_theta"], **{**st, "label": f"{row['label']}"})
+        if x == "stiffness":
+            ax.set_xscale("log")
+            ax.set_xlabel("contact stiffness [kN/m]")
+        else:
+            ax.set_xlabel("friction coefficient μ [-]")
+    else:
+        labels = table["label"].tolist()
+        ax.bar(
+            range(len(labels)),
+            1e3 * table["peak_theta"],
+            color="#888888",
+            edgecolor="k",
+            hatch="//",
+        )
+        ax.set_xticks(range(len(labels)))
+        ax.set_xticklabels(labels, rotation=30, ha="right", fontsize=7)
+    ax.set_ylabel("peak deck rotation [mrad]")
+    ax.set_title(study.title + (f"\n{subtitle}" if subtitle else ""), fontsize=8)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7)
+    ax2 = axes[0, 1]
+    for k, c in enumerate(cases):
+        r = results[c.label]
+        st = dict(CYCLE[k % len(CYCLE)])
+        st.pop("marker")
+        st.pop("markersize")
+        ax2.plot(r.t, 1e3 * r["deck_theta"], label=c.label, linewidth=0.9, **st)
+    ax2.set_xlabel("time [s]")
+    ax2.set_ylabel("deck rotation [mrad]")
+    ax2.legend(fontsize=6, ncol=2)
+    return save(fig, path, scene.name, formats)
+
+
+@reusable
+def hysteresis(
+    result: Result, scene: Scene, path: str | Path, title: str = "", formats: tuple[str, ...] = ()
+) -> list[Path]:
+    """Bent force–deformation loops (Takeda springs), x and y, one panel per bent (the result's
+    ``<bent>_fx``/``<bent>_dx`` columns: nothing is recomputed from the excitation)."""
+    from deckpound.compare.report.style import new_figure, save
+
+    fig, axes = new_figure(2, len(scene.bents), width=3.0 * len(scene.bents), height=2.4)
+    for i, b in enumerate(scene.bents):
+        for j, axis in enumerate(("x", "y")):
+            ax = axes[j, i]
+            ax.plot(
+                1e3 * result[f"{b.name}_d{axis}"],
+                result[f"{b.name}_f{axis}"],
+                color="k",
+                linewidth=0.7,
+            )
+            ax.set_title(f"{b.name} {axis}")
+            ax.set_xlabel("deformation [mm]")
+            ax.set_ylabel("force [kN]")
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return save(fig, path, scene.name, formats)
+
+
+#: the state columns a plan-view outline reads: displacements relative to the supports, so the
+#: picture shows the gaps and the rotation rather than the ground's translation
+OUTLINE_COLUMNS = (
+    "deck_x_rel",
+    "deck_y_rel",
+    "deck_theta",
+    "seat1_x_rel",
+    "seat1_theta",
+    "seat2_x_rel",
+    "seat2_theta",
+)
+
+
+def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.ndarray]:
+    """Deck and seat outlines (closed polygons, metres) at one state, displacements × scale.
+
+    The deck is the plan model's corner polygon (a parallelogram for a skewed deck) moved by
+    its displacement relative to the shake tables; each seat is a block behind its contact face
+    (the facing points of its two corners, g₀ behind the deck end along the normal), moved by
+    its displacement relative to its actuator and rotated about its pivot.
+    """
+    plan = plan_of(scene)
+    th = scale * row["deck_theta"]
+    c, s = np.cos(th), np.sin(th)
+    k = {cn.name: cn for cn in plan.corners}
+    box = np.array([[k[n].x, k[n].y] for n in ("c1", "c3", "c4", "c2", "c1")])
+    deck = np.column_stack(
+        [
+            scale * row["deck_x_rel"] + c * box[:, 0] - s * box[:, 1],
+            scale * row["deck_y_rel"] + s * box[:, 0] + c * box[:, 1],
+        ]
+    )
+    out = {"deck": deck}
+    depth, overhang = 0.6, 0.3
+    for j in (1, 2):
+        a, b = (k["c1"], k["c2"]) if j == 1 else (k["c3"], k["c4"])
+        n, t = np.array(a.normal), np.array(a.tangent)
+        fa = np.array([a.x, a.y]) - a.gap * n - overhang * t
+        fb = np.array([b.x, b.y]) - b.gap * n + overhang * t
+        seat = np.array([fa, fb, fb - depth * n, fa - depth * n, fa])
+        pivot = 0.5 * (np.array([a.x, a.y]) + np.array([b.x, b.y])) - a.gap * n
+        ts = scale * row[f"seat{j}_theta"]
+        cs, ss = np.cos(ts), np.sin(ts)
+        rel = seat - pivot
+        out[f"seat{j}"] = np.column_stack(
+            [
+                pivot[0] + scale * row[f"seat{j}_x_rel"] + cs * rel[:, 0] - ss * rel[:, 1],
+                pivot[1] + ss * rel[:, 0] + cs * rel[:, 1],
+            ]
+        )
+    return out
+
+
+#: displacement magnification of the plan view
+PLAN_SCALE = 100.0
+
+
+@reusable
+def plan_snapshot(
+    results: dict[str, Result],
+    scene: Scene,
+    path: str | Path,
+    scale: float = PLAN_SCALE,
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
+    """Plan view of deck and seats at each engine's peak rotation (displacements × scale): the
+    output row of the largest |θ_d| (the drawn state is a stored row; the title gives its time
+    and rotation, which the every-step peak :meth:`Result.peak` may exceed between rows)."""
+    from deckpound.compare.report.style import new_figure, save
+
+    fig, axes = new_figure(len(results), 1, width=8.0, height=2.0)
+    for i, (label, r) in enumerate(results.items()):
+        k = int(np.argmax(np.abs(r["deck_theta"])))
+        row = {q: r[q][k] for q in OUTLINE_COLUMNS}
+        ax = axes[i, 0]
+        rest = outlines(scene, dict.fromkeys(row, 0.0), 1.0)
+        for poly in rest.values():
+            ax.plot(poly[:, 0], poly[:, 1], color="#bbbbbb", linewidth=0.8, linestyle="--")
+        for name, poly in outlines(scene, row, scale).items():
+            ax.fill(
+                poly[:, 0],
+                poly[:, 1],
+                facecolor="#dddddd" if name == "deck" else "#888888",
+                edgecolor="k",
+                linewidth=1.0,
+                alpha=0.8,
+            )
+        ax.set_aspect("equal")
+        ax.set_title(
+            f"{label}: t = {r.t[k]:.2f} s, θ_d = {1e3 * row['deck_theta']:.2f} mrad "
+            f"(displacements relative to the supports × {scale:g})"
+        )
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    return save(fig, path, scene.name, formats)
