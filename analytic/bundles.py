@@ -43,6 +43,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from deckpound.analytic.kernels.contact_assembly import N_LAW_DERIVATIVES
 from deckpound.analytic.kernels.support_motion import record_slopes
 from deckpound.models.engine_contract import Status
 from deckpound.models.errors import SceneError
@@ -80,8 +81,9 @@ __all__ = [
 # would be a new numba type (a fresh compilation every run), and a typename differing from the
 # attribute name makes numba pickle the class by value (the on-disk cache never hits).
 
-#: The contact description of a loop: ``corners`` (4, N_K) corner table
-#: (:func:`deckpound.analytic.kernels.kinematics.pack_corners`), ``params`` (4, N_CP) law parameters
+#: The contact description of a loop: ``corners`` (n_corners, N_K) corner table
+#: (:func:`deckpound.analytic.kernels.kinematics.pack_corners`), ``params`` (n_corners, N_CP) law
+#: parameters
 #: (:func:`deckpound.analytic.kernels.contact_laws.pack_contact`), ``nonlinear`` (bool) exact
 #: kinematics.
 Contact = namedtuple("Contact", ["corners", "params", "nonlinear"])
@@ -99,7 +101,8 @@ def record(tb, D, V) -> Record:
 
 #: The output: ``table`` (rows, n_selected) written row by row, ``select`` (n_selected,) int64
 #: indices into the loop's full row, ``row`` the full-row buffer, ``peaks`` the peaks of the
-#: columns and the gap closures over every step (:data:`deckpound.analytic.kernels.peaks.Peaks`).
+#: columns and the gap closures over every step (:data:`deckpound.analytic.kernels.peaks.Peaks`),
+#: whose ``layout`` is also the layout of the engine columns of ``row``.
 Output = namedtuple("Output", ["table", "select", "row", "peaks"])
 #: Statistics: ``count`` int64 (:data:`COUNT_NAMES`, indices ``CNT_*``), ``value`` float64
 #: (:data:`VALUE_NAMES`, indices ``VAL_*``), ``halt`` int64 (1,) — set to 1 to stop the loop.
@@ -107,7 +110,8 @@ Stats = namedtuple("Stats", ["count", "value", "halt"])
 #: Per-corner contact arrays of the compliance loops (:mod:`.contact_laws`): gaps ``g`` [m],
 #: rates ``gd`` [m/s], rows ``WN``, ``WT`` (n_corners, n_dof), generalised contact force ``fc``
 #: (n_dof,), forces ``lam``, ``lt`` (n_corners,) [kN], law derivatives ``der`` (n_corners,
-#: n_dof), ``evaluated`` (n_corners,) bool, and ``corners`` the tuple (0, …, n_corners − 1):
+#: N_LAW_DERIVATIVES, :mod:`deckpound.analytic.kernels.contact_assembly`), ``evaluated``
+#: (n_corners,) bool, and ``corners`` the tuple (0, …, n_corners − 1):
 #: numba types a tuple by its length, so ``len(cw.corners)`` is a compile-time constant of the
 #: kernels (loops over the corners unroll as over a literal) while the count still comes from
 #: the bundle.
@@ -152,7 +156,7 @@ COUNT_NAMES = (
 ) = range(len(COUNT_NAMES))
 #: Names of ``Stats.value`` entries, in index order: largest verified complementarity and cone
 #: residuals of the contact solves [m/s], time reached [s], and the largest penetration
-#: max(0, −g) over the four corners at the end of **every accepted step** [m] (issue 12: the
+#: max(0, −g) over the corners at the end of **every accepted step** [m] (issue 12: the
 #: output rows see only every stride-th step and missed the true maximum by a factor of 6 on
 #: the benchmark).
 VALUE_NAMES = ("max_complementarity", "max_cone_residual", "time", "max_penetration")
@@ -215,17 +219,16 @@ def status_of(code: int) -> Status:
     return _STATUS.get(code, Status.NONFINITE)
 
 
-def new_contact_work(n_corners: int = 4, n_dof: int = 7) -> ContactWork:
-    """Zeroed :data:`ContactWork` of ``n_corners`` corners on ``n_dof`` DOF (views of two
-    blocks)."""
-    v4 = row_views(("g", "gd", "lam", "lt"), n_corners)
-    w47 = row_views(("WN", "WT", "der"), n_corners, n_dof)
+def new_contact_work(n_corners: int, n_dof: int) -> ContactWork:
+    """Zeroed :data:`ContactWork` of ``n_corners`` corners on ``n_dof`` DOF (per-corner
+    vectors, rows and law derivatives each views of one block)."""
     return ContactWork(
         fc=np.zeros(n_dof),
         evaluated=np.zeros(n_corners, dtype=np.bool_),
         corners=tuple(range(n_corners)),
-        **v4,
-        **w47,
+        der=np.zeros((n_corners, N_LAW_DERIVATIVES)),
+        **row_views(("g", "gd", "lam", "lt"), n_corners),
+        **row_views(("WN", "WT"), n_corners, n_dof),
     )
 
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from .contact_laws_table import contact_law
-from .plan import plan_of
+from .plan import Plan, plan_of
 from .scene import Scene
 
 #: penetration at which the Hertz secant stiffness is taken for the contact period [m]
@@ -42,10 +42,11 @@ def kelvin_voigt_ratio(e: float) -> float:
     return float(-le / np.sqrt(np.pi**2 + le**2))
 
 
-def kelvin_voigt_damping(scene: Scene) -> np.ndarray:
-    """Dashpot of each corner [kN·s/m]: c = 2 ζ(e) √(k m_eff)."""
+def kelvin_voigt_damping(scene: Scene, plan: Plan | None = None) -> np.ndarray:
+    """Dashpot of each corner of ``plan`` (default: the scene's) [kN·s/m]: c = 2 ζ(e) √(k m_eff)."""
     z = kelvin_voigt_ratio(scene.contact.restitution)
-    return 2.0 * z * np.sqrt(scene.contact.stiffness * effective_masses(scene))
+    m_eff = effective_masses(scene) if plan is None else plan.effective_masses()
+    return 2.0 * z * np.sqrt(scene.contact.stiffness * m_eff)
 
 
 def contact_period(scene: Scene) -> float:

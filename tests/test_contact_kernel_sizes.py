@@ -24,8 +24,15 @@ from deckpound.analytic.kernels.kinematics import (
     gap_hessian,
     pack_corners,
 )
-from deckpound.analytic.kernels.peaks import N_RELATIVE, new_peaks, peak_layout, track_step
-from deckpound.analytic.kernels.system import C_BENT, C_FN, C_GAP
+from deckpound.analytic.kernels.peaks import N_RELATIVE, new_peaks, peak_row_size, track_step
+from deckpound.analytic.kernels.system import (
+    RowLayout,
+    bent_column,
+    end_column,
+    gap_column,
+    normal_force_column,
+    row_layout,
+)
 from deckpound.analytic.nonsmooth.impulses import size_tag
 from deckpound.models.plan import plan_of
 from deckpound.models.scene_io import load_scene
@@ -163,20 +170,23 @@ def test_peaks_track_six_corners():
     """The peak layout of six corners (gaps, then six normal and six tangential forces, bents,
     relative displacements, bent deformations): closures, deepest gaps and the unseating of a
     fifth and sixth corner counted as of the first four."""
-    assert peak_layout(4) == (C_FN, C_BENT)  # the plan's layout of the engines' rows
+    plan_layout = row_layout(plan_of(scene()))
+    layout = RowLayout(plan_layout.dof_columns, size_tag(N_CORNERS), 2)
     channels = ["bent1_x", "bent1_y", "seat1_x", "seat2_x"]
     support = np.array([np.inf, np.inf, np.inf, np.inf, np.inf, 0.05])
-    pk = new_peaks(channels, ["bent1"], 2, support)
-    c_fn, c_bent = peak_layout(N_CORNERS)
-    assert (c_fn, c_bent) == (C_GAP + 6, C_GAP + 18)
-    assert pk.row.shape == (c_bent + 2 * 2 + N_RELATIVE,) and len(pk.corners) == N_CORNERS
+    pk = new_peaks(layout, channels, ["bent1"], support)
+    c_gap, c_fn, c_bent = gap_column(layout), normal_force_column(layout), bent_column(layout)
+    assert (c_fn, c_bent) == (c_gap + 6, c_gap + 18)
+    assert c_gap == gap_column(plan_layout)  # the same DOF columns as the plan's
+    assert pk.row.shape == (c_bent + 2 * 2 + N_RELATIVE,) == (peak_row_size(layout),)
+    assert len(pk.layout.corners) == N_CORNERS and end_column(layout) == c_bent + 2
     u, ug, d = np.zeros(7), np.zeros(4), np.array([0.001, -0.002])
 
     def step(t, gaps, fn):
         pk.row[:] = 0.0
-        pk.row[C_GAP : C_GAP + N_CORNERS] = gaps
+        pk.row[c_gap : c_gap + N_CORNERS] = gaps
         pk.row[c_fn : c_fn + N_CORNERS] = fn
-        return track_step(pk, t, u, ug, d, 2)
+        return track_step(pk, t, u, ug, d)
 
     open6 = np.full(N_CORNERS, 0.01)
     assert not step(0.0, open6, np.zeros(N_CORNERS))
@@ -187,7 +197,7 @@ def test_peaks_track_six_corners():
     fn[5] = 3.0
     assert not step(0.1, gaps, fn)
     assert pk.closures.tolist() == [0, 0, 0, 0, 1, 1]
-    assert pk.value[C_GAP + 4] == -0.001 and pk.time[C_GAP + 4] == 0.1
+    assert pk.value[c_gap + 4] == -0.001 and pk.time[c_gap + 4] == 0.1
     assert pk.value[c_fn + 5] == 3.0  # the sixth normal-force column
     # the bent deformations follow the relative displacements
     np.testing.assert_array_equal(pk.row[c_bent + 2 + N_RELATIVE :], d)

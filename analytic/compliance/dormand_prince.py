@@ -61,9 +61,9 @@ from deckpound.analytic.kernels import contact_laws as cl
 from deckpound.analytic.kernels.hysteretic_layout import C_ROTMAX, C_ROTMIN, P_E1N, P_E1P, T_STRESS
 from deckpound.analytic.kernels.peaks import track_step
 from deckpound.analytic.kernels.system import (
-    C_BENT,
     KIND_HYSTERETIC,
     SCAL_A0,
+    end_column,
     spring_assemble,
     spring_commit,
     spring_deformations,
@@ -545,9 +545,9 @@ def _adaptive_track(sa, ws, pk, t):
     nd = len(sa.dofs)
     u = y[0:nd]
     store_standard(
-        pk.row, t, u, y[nd : 2 * nd], cw.g, cw.lam, cw.lt, ws.hstate[:, T_STRESS], sa.nbs
+        pk.row, pk.layout, t, u, y[nd : 2 * nd], cw.g, cw.lam, cw.lt, ws.hstate[:, T_STRESS]
     )
-    return track_step(pk, t, u, ws.ug, ws.d, sa.nbs)
+    return track_step(pk, t, u, ws.ug, ws.d)
 
 
 @kernel
@@ -561,13 +561,15 @@ def _adaptive_store(sa, contact, ws, output, row, t):
     hstate = ws.hstate
     y = ws.y
     buf = output.row
-    nbs = sa.nbs
+    layout = output.peaks.layout
     nd = len(sa.dofs)
-    store_standard(buf, t, y[0:nd], y[nd : 2 * nd], cw.g, cw.lam, cw.lt, hstate[:, T_STRESS], nbs)
+    store_standard(
+        buf, layout, t, y[0:nd], y[nd : 2 * nd], cw.g, cw.lam, cw.lt, hstate[:, T_STRESS]
+    )
     ke = _kinetic_energy(sa, y)
     es = spring_stored_energy(sa, hstate, y[0:nd], ws.ug)
     ec = cl.contact_stored_energy(cp, cs)
-    energy_columns(buf, C_BENT + nbs, y[2 * nd :], ke, es, ec, stick_spring_energy(cp, cs))
+    energy_columns(buf, end_column(layout), y[2 * nd :], ke, es, ec, stick_spring_energy(cp, cs))
     sel = output.select
     table = output.table
     for q in range(sel.shape[0]):

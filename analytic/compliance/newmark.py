@@ -209,8 +209,8 @@ def _start(sa, contact, record, opt, output, work):
     W[W_CONTACT] = ec0
     _store_output(sa, contact, work, output, 0, 0.0, True)
     pk = output.peaks
-    fill_row(pk.row, 0.0, dof.u, dof.v, cw, cs, work.spring.fs, sa.nbs)
-    track_step(pk, 0.0, dof.u, sup.ug, work.spring.d_new, sa.nbs)
+    fill_row(pk.row, pk.layout, 0.0, dof.u, dof.v, cw, cs, work.spring.fs)
+    track_step(pk, 0.0, dof.u, sup.ug, work.spring.d_new)
     return jrec
 
 
@@ -230,9 +230,7 @@ def _store_output(sa, contact, work, output, row, t, energy):
             work.W,
             work.energy,
         )
-    store_row(
-        output, row, t, dof.u, dof.v, work.cw, work.cstate, work.spring.fs, sa.nbs, work.energy
-    )
+    store_row(output, row, t, dof.u, dof.v, work.cw, work.cstate, work.spring.fs, work.energy)
 
 
 @kernel(inline="always")
@@ -414,8 +412,8 @@ def _commit(sa, contact, work, output, stats, anyev, t_now):
         if -cw.g[c] > stats.value[bd.VAL_MAX_PEN]:
             stats.value[bd.VAL_MAX_PEN] = -cw.g[c]
     pk = output.peaks
-    fill_row(pk.row, t_now, dof.u, dof.v, cw, cs, work.spring.fs, sa.nbs)
-    return track_step(pk, t_now, dof.u, work.support.ug, work.spring.d_new, sa.nbs)
+    fill_row(pk.row, pk.layout, t_now, dof.u, dof.v, cw, cs, work.spring.fs)
+    return track_step(pk, t_now, dof.u, work.support.ug, work.spring.d_new)
 
 
 @kernel(inline="always")

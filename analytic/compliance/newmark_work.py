@@ -22,7 +22,12 @@ from deckpound.analytic.compliance.work_energy import (
     stick_spring_energy,
 )
 from deckpound.analytic.kernels import contact_laws as cl
-from deckpound.analytic.kernels.system import C_BENT, C_FT, spring_stored_energy, store_standard
+from deckpound.analytic.kernels.system import (
+    end_column,
+    spring_stored_energy,
+    store_standard,
+    tangential_force_column,
+)
 
 __all__ = [
     "NewmarkOptions",
@@ -118,24 +123,26 @@ def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
 
 
 @kernel(inline="always")
-def fill_row(buf, t, u, v, cw, cs, fs, nbs):
-    """The engine columns of the state (t, u, v) into ``buf`` (layout of
-    :func:`deckpound.analytic.kernels.system.store_standard`): every output row, and every step's
-    row of the peaks (:mod:`.peaks`)."""
-    store_standard(buf, t, u, v, cw.g, cw.lam, cw.lt, fs, nbs)
+def fill_row(buf, layout, t, u, v, cw, cs, fs):
+    """The engine columns of the state (t, u, v) into ``buf`` in ``layout``
+    (:func:`deckpound.analytic.kernels.system.store_standard`): every output row, and every
+    step's row of the peaks (:mod:`.peaks`)."""
+    store_standard(buf, layout, t, u, v, cw.g, cw.lam, cw.lt, fs)
     # ft: the committed tangential force (the trial one for every model but contact2d, whose
     # element reports 0 after a sliding commit, as OpenSees's recorders see it)
+    c_ft = tangential_force_column(layout)
     for c in range(len(cw.corners)):
-        buf[C_FT + c] = cs[c, cl.S_CFT]
+        buf[c_ft + c] = cs[c, cl.S_CFT]
 
 
 @kernel
-def store_row(output, row, t, u, v, cw, cs, fs, nbs, energy):
-    """Output row ``row``: the full row into ``output.row``, then the selected columns into
-    ``output.table``."""
+def store_row(output, row, t, u, v, cw, cs, fs, energy):
+    """Output row ``row``: the full row into ``output.row`` (engine columns in the layout
+    ``output.peaks.layout``, then the energies), the selected columns into ``output.table``."""
     buf = output.row
-    fill_row(buf, t, u, v, cw, cs, fs, nbs)
-    base = C_BENT + nbs
+    layout = output.peaks.layout
+    fill_row(buf, layout, t, u, v, cw, cs, fs)
+    base = end_column(layout)
     for k in range(energy.shape[0]):
         buf[base + k] = energy[k]
     sel = output.select

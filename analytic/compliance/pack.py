@@ -30,7 +30,7 @@ def pack_run(plan: Plan, scene: Scene, motion: SupportMotion, *, kv_clip: bool =
     """
     ps = system.pack_system(plan, damping_model(scene, plan))
     record = support_record(motion, ps.channels)
-    cp = cl.pack_contact(scene, kv_clip=kv_clip)
+    cp = cl.pack_contact(scene, plan=plan, kv_clip=kv_clip)
     check_kernel_branches(cp)
     corners = pack_corners(plan)
     cs = cl.new_contact_state(corners[:, K_G0])

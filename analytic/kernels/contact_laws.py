@@ -4,7 +4,9 @@ One corner at a time: the engine gives the gap g (g < 0 penetration, δ = −g),
 for friction, the tangential relative velocity U_T and the tangential relative displacement
 increment Δs of the step; the law returns the normal force λ_N (compression > 0), the tangential
 force λ_T (force on the deck along +t, i.e. +y for linear kinematics) and their derivatives for
-Newton. The generalised contact force on the 7 DOF is W_Nᵀ λ_N + W_Tᵀ λ_T (right-hand side).
+Newton. The generalised contact force on the DOF is W_Nᵀ λ_N + W_Tᵀ λ_T (right-hand side).
+Per-corner arrays have one row per corner of the plan (:func:`pack_contact`,
+:func:`new_contact_state`); the kernels loop over those rows.
 
 The laws and friction models, their codes, parameters and OpenSees counterparts are rows of
 :mod:`deckpound.models.contact_laws_table`; the kernels dispatch on the named codes ``LAW_*`` and
@@ -77,6 +79,7 @@ from numba import njit
 from deckpound.analytic._jit import kernel
 from deckpound.models import contact_params
 from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, FRICTION_CODES, LAW_CODES
+from deckpound.models.plan import Plan, plan_of
 from deckpound.models.scene import Scene
 
 __all__ = [
@@ -161,12 +164,15 @@ N_CS = 15
 
 def pack_contact(
     scene: Scene,
+    plan: Plan | None = None,
     *,
     kv_clip: bool = False,
     impact_opensees: bool = False,
     opensees_tangent: bool = False,
 ) -> np.ndarray:
-    """Per-corner parameter array (4, N_CP) of the scene's contact law and friction.
+    """Per-corner parameter array (n_corners, N_CP) of the scene's contact law and friction,
+    one row per corner of ``plan`` (default: the scene's plan, :func:`deckpound.models.plan.
+    plan_of`); every corner gets the scene's law.
 
     ``impact_opensees`` keeps ImpactMaterial's first-contact quirk in the bilinear law (the
     increment taken from the last open strain, so the force jumps at closure and Newton can
@@ -181,14 +187,15 @@ def pack_contact(
     (+n(k + ξ δ̇) δ^(n−1) as ∂λ/∂g) and no damping tangent.
     """
     ct = scene.contact
-    cp = np.zeros((4, N_CP))
+    plan = plan_of(scene) if plan is None else plan
+    cp = np.zeros((len(plan.corners), N_CP))
     law = CONTACT_LAW_TABLE[LAW_CODES[ct.law]]
     cp[:, P_LAW] = law.code
     cp[:, P_EVENT] = 1.0 if law.rate_event else 0.0
     cp[:, P_E] = ct.restitution
     cp[:, P_K] = ct.stiffness
     cp[:, P_N] = ct.exponent
-    cp[:, P_C] = contact_params.kelvin_voigt_damping(scene)
+    cp[:, P_C] = contact_params.kelvin_voigt_damping(scene, plan)
     cp[:, P_D] = law.hysteresis(ct.restitution) if law.hysteresis is not None else 0.0
     cp[:, P_K2] = ct.bilinear_ratio * ct.stiffness
     cp[:, P_DY] = ct.bilinear_yield
@@ -203,8 +210,8 @@ def pack_contact(
 
 
 def new_contact_state(gaps0) -> np.ndarray:
-    """Virgin corner states (4, N_CS) with committed gaps ``gaps0``."""
-    cs = np.zeros((4, N_CS))
+    """Virgin corner states (n_corners, N_CS) with committed gaps ``gaps0`` (n_corners,)."""
+    cs = np.zeros((len(gaps0), N_CS))
     cs[:, S_CG] = gaps0
     return cs
 
@@ -427,7 +434,8 @@ def friction_law(cp, cs, lam_n, ds, ut):
 
 @kernel
 def contact_commit(cs, g, gd, evaluated):
-    """Commit the corners after a converged step; g, gd: converged gaps and rates (4,).
+    """Commit the corners after a converged step; g, gd: converged gaps and rates (n_corners,)
+    of the n_corners rows of ``cs``.
 
     ``evaluated[c]`` False means the law was skipped (corner open by a margin): its trial is the
     open state. Committed gaps are updated for every corner (the bilinear law and the impact
@@ -435,7 +443,7 @@ def contact_commit(cs, g, gd, evaluated):
     (``ZeroLengthContact2D::commitState``): a corner whose last evaluation slid moves its stick
     point to the trial s, and its committed force becomes the element's force there (0).
     """
-    for c in range(4):
+    for c in range(cs.shape[0]):
         if not evaluated[c]:
             cs[c, S_TLAM] = 0.0
             cs[c, S_TFT] = 0.0
@@ -456,8 +464,9 @@ def contact_commit(cs, g, gd, evaluated):
 
 @kernel
 def contact_revert(cs):
-    """Trial := committed (OpenSees revertToLastCommit; the bilinear tangent is kept)."""
-    for c in range(4):
+    """Trial := committed (OpenSees revertToLastCommit; the bilinear tangent is kept), every
+    corner (row of ``cs``)."""
+    for c in range(cs.shape[0]):
         cs[c, S_TLAM] = cs[c, S_CLAM]
         cs[c, S_TFT] = cs[c, S_CFT]
         cs[c, S_TCLOSED] = cs[c, S_CCLOSED]
@@ -466,9 +475,10 @@ def contact_revert(cs):
 
 @kernel
 def contact_stored_energy(cp, cs):
-    """Recoverable energy in the committed contact springs and stick springs [kJ]."""
+    """Recoverable energy in the committed contact springs and stick springs of every corner
+    (row of ``cs``) [kJ]."""
     e = 0.0
-    for c in range(4):
+    for c in range(cs.shape[0]):
         law = int(cp[c, P_LAW])
         g = cs[c, S_CG]
         lam = cs[c, S_CLAM]

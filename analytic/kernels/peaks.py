@@ -7,8 +7,9 @@ Every step loop therefore calls :func:`track_step` once per accepted step (every
 a rescued step, every adaptive step) and once at t = 0, with the state it commits:
 
 * the step's row in the **peak layout** is written into ``Peaks.row``: the engine columns in
-  the layout of :func:`deckpound.analytic.kernels.system.store_standard` (time, absolute displacements
-  and velocities, gaps, normal and tangential contact forces, bent spring forces), then the
+  the layout ``Peaks.layout`` of :func:`deckpound.analytic.kernels.system.store_standard` (time,
+  absolute displacements and velocities, gaps, normal and tangential contact forces, bent spring
+  forces; :data:`deckpound.analytic.kernels.system.RowLayout`), then the
   displacements relative to the supports (:data:`deckpound.models.plan.RELATIVE_COLUMNS`:
   deck x, y relative to the mean shake-table motion, each seat relative to its actuator) and
   the bent deformations d = B u − S u_g of the ``nbs`` bent springs — the columns
@@ -47,9 +48,16 @@ from collections import namedtuple
 import numpy as np
 
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.kernels.system import C_GAP
+from deckpound.analytic.kernels.system import (
+    C_U,
+    RowLayout,
+    end_column,
+    gap_column,
+    normal_force_column,
+    row_layout,
+)
 from deckpound.models.engine_contract import engine_columns
-from deckpound.models.plan import CORNER_NAMES, DECK_X, DECK_Y, RELATIVE_COLUMNS, SEAT_X
+from deckpound.models.plan import DECK_X, DECK_Y, RELATIVE_COLUMNS, SEAT_X
 from deckpound.models.result import peak_columns
 
 __all__ = [
@@ -58,7 +66,7 @@ __all__ = [
     "corner_support_lengths",
     "in_contact_now",
     "new_peaks",
-    "peak_layout",
+    "peak_row_size",
     "run_output_fields",
     "run_peaks",
     "step_closures",
@@ -78,9 +86,10 @@ __all__ = [
 #: corner ``gap_open`` (nc,) the largest gap [m] and ``gap_open_time`` (nc,) its time [s],
 #: ``gap_start`` (nc,) the gap at t = 0 [m], ``support`` (nc,) the support length of the
 #: facing seat [m] (+inf: not checked); ``unseat`` int64 (1,) 1 + the first unseated corner
-#: (0: none) and ``unseat_time`` (1,) when [s] (module docstring); ``corners`` the tuple
-#: (0, …, nc − 1) of the nc corners, a size tag (:func:`deckpound.analytic.nonsmooth.impulses.size_tag`:
-#: its length is a compile-time constant of :func:`track_step`).
+#: (0: none) and ``unseat_time`` (1,) when [s] (module docstring); ``layout`` the
+#: :data:`deckpound.analytic.kernels.system.RowLayout` of the engine columns (of these rows and
+#: of the loop's output rows): its DOF columns, the corners' size tag (nc = its length, a
+#: compile-time constant of :func:`track_step`) and the number of bent springs.
 Peaks = namedtuple(
     "Peaks",
     [
@@ -99,7 +108,7 @@ Peaks = namedtuple(
         "support",
         "unseat",
         "unseat_time",
-        "corners",
+        "layout",
     ],
 )
 
@@ -107,14 +116,10 @@ Peaks = namedtuple(
 N_RELATIVE = len(RELATIVE_COLUMNS)
 
 
-@kernel(inline="always")
-def peak_layout(n_corners):
-    """(first normal-force column, first bent-force column) of the peak layout of a model with
-    ``n_corners`` corners: after the gaps come the n_corners normal and the n_corners
-    tangential forces (the order of :func:`deckpound.models.engine_contract.engine_columns`);
-    for the plan's four corners these are ``C_FN`` and ``C_BENT`` of
-    :mod:`deckpound.analytic.kernels.system`."""
-    return C_GAP + n_corners, C_GAP + 3 * n_corners
+def peak_row_size(layout: RowLayout) -> int:
+    """Length of the peak layout's row: the engine columns of ``layout``, the relative
+    displacements, then the deformations of the ``layout.nbs`` bent springs."""
+    return end_column.py_func(layout) + N_RELATIVE + layout.nbs  # no kernel load here
 
 
 def corner_support_lengths(scene, plan) -> np.ndarray:
@@ -126,20 +131,23 @@ def corner_support_lengths(scene, plan) -> np.ndarray:
     )
 
 
-def new_peaks(channels, bent_names, n_bent_springs: int, support=None) -> Peaks:
-    """Zeroed :data:`Peaks` for a model with these support ``channels`` (the order of u_g) and
-    bents; the gap entries start at +inf (their statistic is the minimum), the largest gaps at
-    −inf. ``support`` (n_corners,) the corners' support lengths [m]
-    (:func:`corner_support_lengths`; None: the plan's four corners, none checked): its length
-    is the model's corner count."""
-    support = (
-        np.full(len(CORNER_NAMES), np.inf) if support is None else np.asarray(support, dtype=float)
-    )
-    nc = support.shape[0]
-    n = peak_layout.py_func(nc)[1] + 2 * n_bent_springs + N_RELATIVE  # no kernel load here
+def new_peaks(layout: RowLayout, channels, bent_names, support) -> Peaks:
+    """Zeroed :data:`Peaks` for a model whose engine columns are in ``layout``
+    (:func:`deckpound.analytic.kernels.system.row_layout`), with these support ``channels`` (the
+    order of u_g) and bents; the gap entries start at +inf (their statistic is the minimum),
+    the largest gaps at −inf. ``support`` (n_corners,) the corners' support lengths [m]
+    (:func:`corner_support_lengths`; +inf: not checked), one per corner of the layout."""
+    support = np.asarray(support, dtype=float)
+    nc = len(layout.corners)
+    if support.shape != (nc,):
+        raise ValueError(
+            f"support lengths: one per corner of the layout ({nc}), got shape {support.shape}"
+        )
+    n = peak_row_size(layout)
     channels = list(channels)
     value = np.zeros(n)
-    value[C_GAP : C_GAP + nc] = np.inf
+    c_gap = gap_column.py_func(layout)
+    value[c_gap : c_gap + nc] = np.inf
     return Peaks(
         row=np.zeros(n),
         value=value,
@@ -156,7 +164,7 @@ def new_peaks(channels, bent_names, n_bent_springs: int, support=None) -> Peaks:
         support=support.copy(),
         unseat=np.zeros(1, dtype=np.int64),
         unseat_time=np.zeros(1),
-        corners=tuple(range(nc)),
+        layout=layout,
     )
 
 
@@ -174,19 +182,22 @@ def in_contact_now(gap, fn):
 
 
 @kernel(inline="always")
-def track_step(pk, t, u, ug, d, nbs):
+def track_step(pk, t, u, ug, d):
     """Complete the step's row in ``pk.row`` (its standard part written by the engine) with
     the relative displacements and bent deformations, then update the peaks and the closures.
 
-    u (7,) displacements [m, rad] and ug (n_channels,) support displacements [m] at the step,
-    d the spring deformations d = B u − S u_g (the first ``nbs`` are the bents'), t [s].
+    u (n_dof,) displacements [m, rad] and ug (n_channels,) support displacements [m] at the
+    step, d the spring deformations d = B u − S u_g (the first ``nbs`` are the bents'), t [s].
     Returns True when a corner's seat margin N − (g − g(0)) became negative at this step (the
     deck is unseated; module docstring): one comparison per corner while no gap grows. The
-    corner count is the length of the size tag ``pk.corners`` (:func:`peak_layout`)."""
+    column offsets, the corner count nc and nbs come from ``pk.layout``."""
     row = pk.row
-    nc = len(pk.corners)
-    c_fn, c_bent = peak_layout(nc)
-    base = c_bent + nbs
+    layout = pk.layout
+    nc = len(layout.corners)
+    nbs = layout.nbs
+    c_gap = gap_column(layout)
+    c_fn = normal_force_column(layout)
+    base = end_column(layout)
     mx = 0.0
     for k in range(pk.tx.shape[0]):
         mx += ug[pk.tx[k]]
@@ -204,13 +215,13 @@ def track_step(pk, t, u, ug, d, nbs):
         row[base + N_RELATIVE + i] = d[i]
     value, time = pk.value, pk.time
     # the gaps: the most negative value; every other column: the largest |x| (t excluded)
-    for k in range(1, C_GAP):
+    for k in range(C_U, c_gap):
         a = abs(row[k])
         if a > value[k]:
             value[k] = a
             time[k] = t
     for c in range(nc):
-        k = C_GAP + c
+        k = c_gap + c
         if row[k] < value[k]:
             value[k] = row[k]
             time[k] = t
@@ -221,7 +232,7 @@ def track_step(pk, t, u, ug, d, nbs):
     # the largest gap (seat margin): the initial gap at the first call (largest still −inf)
     unseated = False
     for c in range(nc):
-        gk = row[C_GAP + c]
+        gk = row[c_gap + c]
         if gk > pk.gap_open[c]:
             if pk.gap_open[c] == -np.inf:
                 pk.gap_start[c] = gk
@@ -251,41 +262,65 @@ def step_peaks(pk: Peaks, names: list[str]) -> dict[str, tuple[float, float]]:
     }
 
 
-def step_openings(pk: Peaks) -> dict[str, tuple[float, float]]:
+def _checked_names(pk: Peaks, corner_names) -> tuple[str, ...]:
+    names = tuple(corner_names)
+    if len(names) != len(pk.layout.corners):
+        raise ValueError(
+            f"corner names {list(names)}: one per corner of the peaks "
+            f"({len(pk.layout.corners)}) is needed"
+        )
+    return names
+
+
+def step_openings(pk: Peaks, corner_names) -> dict[str, tuple[float, float]]:
     """``{corner: (opening, time)}``: the largest gap opening g_c − g_c(0) over every step
-    [m] (the seat-width demand; negative if the gap only closed) and when it was reached [s]."""
+    [m] (the seat-width demand; negative if the gap only closed) and when it was reached [s];
+    ``corner_names`` in the corners' order (the plan's ``Corner.name``)."""
     return {
         c: (float(pk.gap_open[k] - pk.gap_start[k]), float(pk.gap_open_time[k]))
-        for k, c in enumerate(CORNER_NAMES)
+        for k, c in enumerate(_checked_names(pk, corner_names))
     }
 
 
-def step_unseated(pk: Peaks) -> tuple[str, float] | None:
+def step_unseated(pk: Peaks, corner_names) -> tuple[str, float] | None:
     """``(corner, time [s])`` of the first unseating (:func:`track_step`), or None."""
     k = int(pk.unseat[0])
-    return None if k == 0 else (CORNER_NAMES[k - 1], float(pk.unseat_time[0]))
+    names = _checked_names(pk, corner_names)
+    return None if k == 0 else (names[k - 1], float(pk.unseat_time[0]))
 
 
-def step_closures(pk: Peaks) -> dict[str, int]:
+def step_closures(pk: Peaks, corner_names) -> dict[str, int]:
     """Gap closures per corner counted at every step (``{"c1": n, ...}``)."""
-    return {c: int(pk.closures[k]) for k, c in enumerate(CORNER_NAMES)}
+    return {c: int(pk.closures[k]) for k, c in enumerate(_checked_names(pk, corner_names))}
 
 
 def run_peaks(scene, plan, ps) -> Peaks:
     """Zeroed :data:`Peaks` for a run of ``scene`` on ``plan`` with the packed system ``ps``
     (its support channels and bent springs) and the seats' support lengths: what every
-    analytic engine's driver hands its step loop."""
-    return new_peaks(
-        ps.channels, plan.bent_names, ps.n_bent_springs, corner_support_lengths(scene, plan)
-    )
+    analytic engine's driver hands its step loop.
+
+    The drivers size the output rows by the names of
+    :func:`deckpound.models.engine_contract.engine_columns` and the loops write the columns of
+    the plan's :func:`~deckpound.analytic.kernels.system.row_layout` (without bounds checks):
+    a plan whose corners or DOF those names do not cover is refused here (ValueError)."""
+    layout = row_layout(plan)
+    n_named, n_layout = len(engine_columns(plan)), end_column.py_func(layout)
+    if n_named != n_layout:
+        raise ValueError(
+            f"the plan's row layout has {n_layout} engine columns ({len(layout.corners)} "
+            f"corners, {len(layout.dof_columns)} DOF), but "
+            f"deckpound.models.engine_contract.engine_columns names {n_named}"
+        )
+    return new_peaks(layout, ps.channels, plan.bent_names, corner_support_lengths(scene, plan))
 
 
 def run_output_fields(pk: Peaks, plan) -> dict:
     """The :class:`~deckpound.models.engine_contract.RunOutput` fields of a finished loop's every-step
     statistics: ``peaks``, ``gap_closures_per_corner``, ``gap_openings`` and ``unseated``."""
+    names = [c.name for c in plan.corners]
     return {
         "peaks": step_peaks(pk, peak_columns(engine_columns(plan), plan.bent_names)),
-        "gap_closures_per_corner": step_closures(pk),
-        "gap_openings": step_openings(pk),
-        "unseated": step_unseated(pk),
+        "gap_closures_per_corner": step_closures(pk, names),
+        "gap_openings": step_openings(pk, names),
+        "unseated": step_unseated(pk, names),
     }

@@ -74,7 +74,7 @@ from deckpound.analytic.kernels.hysteretic_layout import (
     T_TANGENT,
 )
 from deckpound.models.damping import DampingModel
-from deckpound.models.plan import DOF_COLUMNS, DOF_NAMES, N_CORNERS, N_DOF, VELOCITY_COLUMNS, Plan
+from deckpound.models.plan import DOF_COLUMNS, DOF_NAMES, Plan
 
 __all__ = [
     "KIND_HYSTERETIC",
@@ -83,8 +83,15 @@ __all__ = [
     "SCAL_A1",
     "SCAL_TANGENT_DAMPING",
     "PackedSystem",
+    "RowLayout",
     "SystemArrays",
+    "bent_column",
+    "end_column",
+    "gap_column",
+    "initial_dofs",
+    "normal_force_column",
     "pack_system",
+    "row_layout",
     "spring_assemble",
     "spring_commit",
     "spring_damping_tangent",
@@ -93,6 +100,9 @@ __all__ = [
     "spring_stored_energy",
     "spring_tangent",
     "spring_update_materials",
+    "store_standard",
+    "tangential_force_column",
+    "velocity_column",
 ]
 
 KIND_LINEAR = 0
@@ -154,8 +164,8 @@ class PackedSystem:
     Attributes
     ----------
     arrays : SystemArrays, the read-only inputs of the kernels.
-    C : (7, 7) constant damping matrix a0 M + Bᵀ diag(a1 k0 + c_dash) B.
-    K0 : (7, 7) initial stiffness Bᵀ diag(k0) B.
+    C : (n_dof, n_dof) constant damping matrix a0 M + Bᵀ diag(a1 k0 + c_dash) B.
+    K0 : (n_dof, n_dof) initial stiffness Bᵀ diag(k0) B.
     a0, a1 : Rayleigh coefficients; omega : the two matched circular frequencies.
     spring_names : labels of the springs (``bent1_x``, ..., ``seat2_theta``).
     channels : support channel names, the order of u_g.
@@ -444,7 +454,7 @@ def spring_stored_energy(sa, hstate, u, ug):
 _ = C_STRAIN  # (index kept importable for callers reading the committed deformation)
 
 
-def initial_dofs(initial_state, n_dof: int = N_DOF) -> tuple[np.ndarray, np.ndarray]:
+def initial_dofs(initial_state, n_dof: int) -> tuple[np.ndarray, np.ndarray]:
     """(u0, v0) of the ``n_dof`` DOF (``SystemArrays.mass.shape[0]``) from an engine's
     ``initial_state = (u0, v0)`` keyword (None: rest).
 
@@ -453,43 +463,112 @@ def initial_dofs(initial_state, n_dof: int = N_DOF) -> tuple[np.ndarray, np.ndar
     u0 = np.zeros(n_dof)
     v0 = np.zeros(n_dof)
     if initial_state is not None:
+        # the DOF names are the plan model's; a model of another size has no names here
+        order = f" (DOF order {', '.join(DOF_NAMES)})" if n_dof == len(DOF_NAMES) else ""
         for name, dst, src in (("u0", u0, initial_state[0]), ("v0", v0, initial_state[1])):
             arr = np.asarray(src, dtype=float)
             if arr.shape != (n_dof,) or not np.all(np.isfinite(arr)):
                 raise ValueError(
-                    f"initial_state {name} must be {n_dof} finite numbers (DOF order "
-                    f"{', '.join(DOF_NAMES)}); got {arr.tolist()!r}"
+                    f"initial_state {name} must be {n_dof} finite numbers{order}; "
+                    f"got {arr.tolist()!r}"
                 )
             dst[:] = arr
     return u0, v0
 
 
-# Output array layout of the analytic engines' compiled loops, in the order of
+# Output row layout of the analytic engines' compiled loops, in the order of
 # deckpound.models.engine_contract.engine_columns: time, the absolute displacement columns, the
-# velocity columns, gaps, normal and tangential forces, then the bent forces.
+# velocity columns, gaps, normal and tangential forces, then the bent forces. Only the first two
+# offsets are fixed; the others follow from the counts of a RowLayout (the offset functions
+# below), so a model with more DOF or corners (several deck segments) gets its own layout.
 C_T = 0
 C_U = 1
-C_V = C_U + len(DOF_COLUMNS)
-C_GAP = C_V + len(VELOCITY_COLUMNS)
-C_FN = C_GAP + N_CORNERS
-C_FT = C_FN + N_CORNERS
-C_BENT = C_FT + N_CORNERS
-#: DOF index of each displacement (and velocity) column, from the plan model
-DOF_OF_COLUMN = np.array([dof for _, dof in DOF_COLUMNS], dtype=np.int64)
+
+#: The layout of the engine columns of an output row (:func:`row_layout`; the ``layout`` field
+#: of :data:`deckpound.analytic.kernels.peaks.Peaks`): ``dof_columns`` the DOF index of each
+#: displacement (and velocity) column, in column order; ``corners`` the size tag (0, …,
+#: n_corners − 1) of the corners (gap, normal and tangential force columns); ``nbs`` the
+#: number of bent-force columns (the bent springs). Both tuples are typed by their length, so
+#: the column counts are compile-time constants of the kernels (the offsets fold to literals).
+RowLayout = namedtuple("RowLayout", ["dof_columns", "corners", "nbs"])
+
+
+def row_layout(plan: Plan) -> RowLayout:
+    """The :data:`RowLayout` of ``plan``'s engine columns: its corners and bent springs, and
+    the displacement columns of :data:`deckpound.models.plan.DOF_COLUMNS` (the columns
+    :func:`deckpound.models.engine_contract.engine_columns` names), which must cover the plan's
+    DOF once each (ValueError otherwise: a plan of another size needs its own columns)."""
+    dof_columns = tuple(int(dof) for _, dof in DOF_COLUMNS)
+    n_dof = int(plan.mass.shape[0])
+    if sorted(dof_columns) != list(range(n_dof)):
+        raise ValueError(
+            f"the displacement columns (deckpound.models.plan.DOF_COLUMNS) read DOF "
+            f"{list(dof_columns)}; the plan has {n_dof} DOF, each needs one column"
+        )
+    return RowLayout(
+        dof_columns=dof_columns,
+        corners=tuple(range(len(plan.corners))),
+        nbs=int(plan.n_bent_springs),
+    )
+
+
+# Each offset is written out in full (no call of another offset kernel), so that Python code
+# sizing a row can call its ``py_func`` without loading a compiled kernel.
+@kernel(inline="always")
+def velocity_column(layout):
+    """First velocity column of a row in ``layout`` (after time and the displacements)."""
+    return C_U + len(layout.dof_columns)
+
+
+@kernel(inline="always")
+def gap_column(layout):
+    """First gap column (after the displacements and the velocities)."""
+    return C_U + 2 * len(layout.dof_columns)
+
+
+@kernel(inline="always")
+def normal_force_column(layout):
+    """First normal-force column (after the n_corners gaps)."""
+    return C_U + 2 * len(layout.dof_columns) + len(layout.corners)
+
+
+@kernel(inline="always")
+def tangential_force_column(layout):
+    """First tangential-force column (after the n_corners normal forces)."""
+    return C_U + 2 * len(layout.dof_columns) + 2 * len(layout.corners)
+
+
+@kernel(inline="always")
+def bent_column(layout):
+    """First bent-force column (after the n_corners tangential forces)."""
+    return C_U + 2 * len(layout.dof_columns) + 3 * len(layout.corners)
+
+
+@kernel(inline="always")
+def end_column(layout):
+    """One past the last engine column (after the ``nbs`` bent forces): where an engine's own
+    columns (impulses, energies) and the peaks' extra columns start."""
+    return C_U + 2 * len(layout.dof_columns) + 3 * len(layout.corners) + layout.nbs
 
 
 @kernel
-def store_standard(row, t, u, v, g, fn, ft, fs, nbs):
-    """Fill the engine columns of one output row (layout ``C_*`` above): time, absolute
-    displacements and velocities, gaps, normal and tangential contact forces, bent forces."""
+def store_standard(row, layout, t, u, v, g, fn, ft, fs):
+    """Fill the engine columns of one output row in ``layout`` (:data:`RowLayout`): time,
+    absolute displacements and velocities, gaps, normal and tangential contact forces, bent
+    forces (the first ``layout.nbs`` of ``fs``)."""
+    c_v = velocity_column(layout)
+    c_gap = gap_column(layout)
+    c_fn = normal_force_column(layout)
+    c_ft = tangential_force_column(layout)
+    c_bent = bent_column(layout)
     row[C_T] = t
-    for k in range(DOF_OF_COLUMN.shape[0]):
-        j = DOF_OF_COLUMN[k]
+    for k in range(len(layout.dof_columns)):
+        j = layout.dof_columns[k]
         row[C_U + k] = u[j]
-        row[C_V + k] = v[j]
-    for c in range(g.shape[0]):
-        row[C_GAP + c] = g[c]
-        row[C_FN + c] = fn[c]
-        row[C_FT + c] = ft[c]
-    for i in range(nbs):
-        row[C_BENT + i] = fs[i]
+        row[c_v + k] = v[j]
+    for c in range(len(layout.corners)):
+        row[c_gap + c] = g[c]
+        row[c_fn + c] = fn[c]
+        row[c_ft + c] = ft[c]
+    for i in range(layout.nbs):
+        row[c_bent + i] = fs[i]

@@ -77,8 +77,8 @@ from deckpound.analytic.nonsmooth.moreau_jean_work import (
     ENERGY_COLUMNS,
     FINAL_U,
     FINAL_V,
-    IMPULSE_COLUMNS,
     MoreauJeanOptions,
+    impulse_columns,
     moreau_jean_workspace,
 )
 from deckpound.models.columns import standard_columns
@@ -92,7 +92,7 @@ from deckpound.models.engine_contract import (
     output_stride,
 )
 from deckpound.models.motion import SupportMotion, analysis_duration
-from deckpound.models.plan import Plan
+from deckpound.models.plan import Plan, plan_of
 from deckpound.models.scene import Scene
 from deckpound.models.scene_settings import NonsmoothSettings
 
@@ -100,10 +100,11 @@ __all__ = ["NonsmoothEngine", "output_columns", "run_nonsmooth", "separating_res
 
 
 def output_columns(scene: Scene) -> list[str]:
-    """Column names of the nonsmooth result (standard, impulses, contact states, energies)."""
+    """Column names of the nonsmooth result (standard, impulses and contact states of the
+    scene's plan's corners, energies)."""
     return (
         standard_columns([b.name for b in scene.bents])
-        + list(IMPULSE_COLUMNS)
+        + list(impulse_columns(c.name for c in plan_of(scene).corners))
         + list(ENERGY_COLUMNS)
     )
 
@@ -217,7 +218,8 @@ class NonsmoothEngine(Engine):
         mu = float(ct.friction) if ct.has_friction else 0.0
         stride = output_stride(h, scene.run.output_dt)
         nsteps = round(duration / h)
-        cols = engine_columns(plan) + list(IMPULSE_COLUMNS) + list(ENERGY_COLUMNS)
+        corner_names = [c.name for c in plan.corners]
+        cols = engine_columns(plan) + list(impulse_columns(corner_names)) + list(ENERGY_COLUMNS)
         bd.check_output_size(nsteps // stride + 1, len(cols))
         peaks = run_peaks(scene, plan, ps)
         output = bd.Output(
@@ -226,8 +228,10 @@ class NonsmoothEngine(Engine):
             np.zeros(len(cols)),
             peaks,
         )
-        u0, v0 = initial_dofs(initial_state)
-        contact = bd.Contact(pack_corners(plan), pack_contact(scene), ct.geometry == "nonlinear")
+        u0, v0 = initial_dofs(initial_state, ps.arrays.mass.shape[0])
+        contact = bd.Contact(
+            pack_corners(plan), pack_contact(scene, plan=plan), ct.geometry == "nonlinear"
+        )
         work = moreau_jean_workspace(
             u0, v0, ps.new_state(), ps.n_springs, len(ps.channels), contact.corners.shape[0]
         )

@@ -204,7 +204,6 @@ def _start(system, contact, record, output, work):
         cor.fn_out,
         cor.ft_out,
         spr.fs_k,
-        sa.nbs,
         cor.pn_acc,
         cor.pt_acc,
         cor.state,
@@ -212,8 +211,8 @@ def _start(system, contact, record, output, work):
     )
     # peaks and gap closures of every step (.peaks): the step's forces are its impulses / h
     pk = output.peaks
-    store_standard(pk.row, 0.0, q, v, cor.gapo, pk.force[0], pk.force[1], spr.fs_k, sa.nbs)
-    track_step(pk, 0.0, q, work.ug, spr.d_k, sa.nbs)
+    store_standard(pk.row, pk.layout, 0.0, q, v, cor.gapo, pk.force[0], pk.force[1], spr.fs_k)
+    track_step(pk, 0.0, q, work.ug, spr.d_k)
     return jrec
 
 
@@ -515,7 +514,6 @@ def _store(system, contact, output, work, row, t1, inv_out):
         cor.fn_out,
         cor.ft_out,
         work.spring.fs,
-        sa.nbs,
         cor.pn_acc,
         cor.pt_acc,
         cor.state,
@@ -595,6 +593,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
         _commit_contact(contact, work, output.peaks, nact, opt.theta, inv_h, stats.value)
         store_standard(
             output.peaks.row,
+            output.peaks.layout,
             t1,
             dof.q,
             dof.v,
@@ -602,9 +601,8 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
             output.peaks.force[0],
             output.peaks.force[1],
             work.spring.fs,
-            system.nbs,
         )
-        if track_step(output.peaks, t1, dof.q, work.ug, work.spring.d, system.nbs):
+        if track_step(output.peaks, t1, dof.q, work.ug, work.spring.d):
             # a seat margin became negative (.peaks): the answer ends with this step
             status = RUN_UNSEATED
             failed = n + 1

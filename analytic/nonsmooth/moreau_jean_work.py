@@ -18,19 +18,18 @@ import numpy as np
 
 from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.kernels.system import C_BENT, spring_stored_energy, store_standard
+from deckpound.analytic.kernels.system import end_column, spring_stored_energy, store_standard
 from deckpound.analytic.nonsmooth.impulses import impulse_work, size_tag
-from deckpound.models.plan import CORNER_NAMES
 
 __all__ = [
     "ENERGY_COLUMNS",
     "FINAL_U",
     "FINAL_V",
-    "IMPULSE_COLUMNS",
     "N_ENERGY",
     "N_WORK",
     "MoreauJeanOptions",
     "MoreauJeanWork",
+    "impulse_columns",
     "moreau_jean_workspace",
     "output_energies",
     "store_row",
@@ -51,8 +50,16 @@ ENERGY_COLUMNS = (
 N_ENERGY = len(ENERGY_COLUMNS)
 (E_INPUT, E_KINETIC, E_STRAIN, E_VISCOUS, E_HYSTERETIC, E_IMPACT, E_FRICTION, E_NUMERICAL,
  E_ERROR) = range(N_ENERGY)  # fmt: skip
-#: Per-corner extras of the nonsmooth result, in kernel order (:func:`store_row`).
-IMPULSE_COLUMNS = tuple(f"{kind}_{c}" for kind in ("pn", "pt", "state") for c in CORNER_NAMES)
+
+
+def impulse_columns(corner_names) -> tuple[str, ...]:
+    """Per-corner extras of the nonsmooth result, in kernel order (:func:`store_row`): the
+    impulses ``pn_<corner>``, ``pt_<corner>`` and the contact states ``state_<corner>`` of the
+    corners named ``corner_names`` (the plan's ``Corner.name``, in the corners' order)."""
+    names = tuple(corner_names)
+    return tuple(f"{kind}_{c}" for kind in ("pn", "pt", "state") for c in names)
+
+
 #: The running work totals ``work.W`` [kJ], by name: work of the support reactions plus the
 #: initial mechanical energy (input), spring work Σ Δdᵀ f_s,θ, viscous work, impact and
 #: friction work of the impulses, numerical dissipation Σ (θ − ½) Δvᵀ M Δv.
@@ -157,14 +164,16 @@ def output_energies(sa, hstate, q, v, ug, W, energy):
 
 
 @kernel
-def store_row(output, row, t, q, v, g, fn, ft, fs, nbs, pn, pt, state, energy):
-    """Output row ``row``: standard columns, then per corner the impulses pn, pt and the
-    contact states (:data:`IMPULSE_COLUMNS`) and the energies (:data:`ENERGY_COLUMNS`) into
-    the full-row buffer ``output.row``, the selected columns into ``output.table``."""
+def store_row(output, row, t, q, v, g, fn, ft, fs, pn, pt, state, energy):
+    """Output row ``row``: the engine columns in the layout ``output.peaks.layout``, then per
+    corner the impulses pn, pt and the contact states (:func:`impulse_columns`) and the
+    energies (:data:`ENERGY_COLUMNS`) into the full-row buffer ``output.row``, the selected
+    columns into ``output.table``."""
     buf = output.row
-    store_standard(buf, t, q, v, g, fn, ft, fs, nbs)
-    n_corners = pn.shape[0]
-    base = C_BENT + nbs
+    layout = output.peaks.layout
+    store_standard(buf, layout, t, q, v, g, fn, ft, fs)
+    n_corners = len(layout.corners)
+    base = end_column(layout)
     for c in range(n_corners):
         buf[base + c] = pn[c]
         buf[base + n_corners + c] = pt[c]
