@@ -227,13 +227,13 @@ def test_damping_study_cases_and_sentences(tiny):
     assert s == (
         "opensees, from bents·initial·absolute: peak rotation 2 mrad ×1 "
         "(bents·initial·absolute) to ×1.1 (bents+seats·initial·absolute); peak gap "
-        "force 1000 kN ×0.7 (bents+seats·initial·absolute) to ×1 "
+        "force 1 MN ×0.7 (bents+seats·initial·absolute) to ×1 "
         "(bents·initial·absolute); gap closures 10 (5–10)."
     )
     # no contact in the reference case (a short or weak record): no ratio to a zero force
     table.loc[0, "peak_fn"] = 0.0
     (s,) = damping_headlines(table)
-    assert "peak gap force 0 kN in the reference case, 0–700 kN over the choices;" in s
+    assert "peak gap force 0 MN in the reference case, 0–0.7 MN over the choices;" in s
 
 
 def test_the_study_help_names_every_registered_study(capsys):

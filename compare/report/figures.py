@@ -17,6 +17,7 @@ import pandas as pd
 from deckpound.compare.engines import engine_names, engine_style
 from deckpound.compare.mechanism import contact_moments, mechanism_row
 from deckpound.compare.report.figure_cache import reusable
+from deckpound.compare.report.render import BENT_FORCE, CONTACT_FORCE
 from deckpound.compare.report.text import TOL
 from deckpound.models.plan import plan_of
 from deckpound.models.result import Result
@@ -33,19 +34,6 @@ LABELS = {
 }
 
 
-def _style_for(label: str, k: int) -> dict:
-    from deckpound.compare.report.style import CYCLE
-
-    engine = label.split()[0]
-    st = engine_style(engine)
-    if engine not in engine_names() and engine != "measured":
-        st = dict(CYCLE[k % len(CYCLE)])
-        st.pop("marker", None)
-        st.pop("markersize", None)
-    st["label"] = label
-    return st
-
-
 @reusable
 def histories(
     results: dict[str, Result],
@@ -56,17 +44,18 @@ def histories(
     formats: tuple[str, ...] = (),
 ) -> list[Path]:
     """Time histories of quantities overlaid per engine/case (paper Figs. 4–6 style)."""
-    from deckpound.compare.report.style import new_figure, save
+    from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
     fig, axes = new_figure(len(quantities), 1, width=7.5, height=2.2, sharex=True)
+    styles = series_styles(list(results), dense=True)
     for i, q in enumerate(quantities):
         name, scale, unit = LABELS.get(q, (q, 1.0, ""))
         ax = axes[i, 0]
-        for k, (label, r) in enumerate(results.items()):
+        for st, r in zip(styles, results.values()):
             if q in r.columns:
-                ax.plot(r.t, scale * r[q], **_style_for(label, k))
+                ax.plot(r.t, scale * r[q], **st)
         ax.set_ylabel(f"{name} [{unit}]")
-    axes[0, 0].legend(loc="upper right", ncol=min(3, len(results)))
+    outside_legend(axes[0, 0])
     if title:
         axes[0, 0].set_title(title)
     axes[-1, 0].set_xlabel("time [s]")
@@ -81,19 +70,21 @@ def contact_forces(
     title: str = "",
     formats: tuple[str, ...] = (),
 ) -> list[Path]:
-    """Normal contact force per corner (c1, c2 at seat 1; c3, c4 at seat 2)."""
-    from deckpound.compare.report.style import new_figure, save
+    """Normal contact force per corner (c1, c2 at seat 1; c3, c4 at seat 2), in the report's
+    contact-force unit (:data:`~.render.CONTACT_FORCE`)."""
+    from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
     fig, axes = new_figure(2, 2, width=8.0, height=2.0, sharex=True)
+    styles = series_styles(list(results), dense=True)
     for c in range(4):
         ax = axes[c % 2, c // 2]
-        for k, (label, r) in enumerate(results.items()):
-            ax.plot(r.t, 1e-3 * r[f"fn_c{c + 1}"], **_style_for(label, k))
+        for st, r in zip(styles, results.values()):
+            ax.plot(r.t, CONTACT_FORCE.scale * r[f"fn_c{c + 1}"], **st)
         ax.set_title(f"corner c{c + 1} (seat {1 + c // 2})")
-        ax.set_ylabel("normal force fn [MN]")
+        ax.set_ylabel(f"normal force fn [{CONTACT_FORCE.unit}]")
     axes[-1, 0].set_xlabel("time [s]")
     axes[-1, 1].set_xlabel("time [s]")
-    axes[0, 0].legend(loc="upper right", fontsize=7)
+    outside_legend(axes[0, 1])
     if title:
         fig.suptitle(title, fontsize=9)
     return save(fig, path, scene.name, formats)
@@ -109,24 +100,28 @@ def peak_vs_pga(
 ) -> list[Path]:
     """Peak deck rotation vs run PGA over the sequence, one line per engine and friction
     assumption (``case`` column: engine name, then a variant tag; paper Fig. 7)."""
-    from deckpound.compare.report.style import CYCLE, new_figure, save
+    from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
-    fig, axes = new_figure(1, 1, width=5.5, height=3.2)
+    fig, axes = new_figure(1, 1, width=6.5, height=3.2)
     ax = axes[0, 0]
-    markers = {e: CYCLE[k % len(CYCLE)]["marker"] for k, e in enumerate(engine_names())}
     key = "case" if "case" in table else "engine"
-    for case, g in table.groupby(key, sort=False):
-        base, _, variant = case.partition(" ")
-        st = engine_style(base)
-        if variant:  # the same engine under another assumption: hollow markers, thinner line
-            st.update(label=f"{st['label']}, {variant}", markerfacecolor="white", linewidth=0.9)
-        ax.plot(g["run"], 1e3 * g[quantity], marker=markers.get(base, "x"), **st)
+    groups = list(table.groupby(key, sort=False))
+    labels, engines = [], []
+    for case, _ in groups:
+        base, _, variant = str(case).partition(" ")
+        engine = base if base in engine_names() else None
+        name = engine_style(base)["label"] if engine else str(case)
+        labels.append(f"{name}, {variant}" if variant and engine else name)
+        engines.append(engine)
+    # the same engine under another assumption: its marker hollow, another line style
+    for st, (_, g) in zip(series_styles(labels, engines), groups):
+        ax.plot(g["run"], 1e3 * g[quantity], **st)
     runs = table.drop_duplicates("run")
     ax.set_xticks(runs["run"])
     ax.set_xticklabels([f"{r}\n{p:g} g" for r, p in zip(runs["run"], runs["pga"])])
     ax.set_xlabel("run (transverse PGA label)")
     ax.set_ylabel("peak deck rotation |θ_d| [mrad]")
-    ax.legend(fontsize=7)
+    outside_legend(ax)
     return save(fig, path, scene.name, formats)
 
 
@@ -140,23 +135,26 @@ def friction_ratio(
 ) -> list[Path]:
     """Peak rotation with friction / without, per run and engine (1 = no effect; the band is
     the ±tol within which the report calls the change negligible)."""
-    from deckpound.compare.report.style import CYCLE, new_figure, save
+    from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
     tol = TOL if tol is None else tol
-    fig, axes = new_figure(1, 1, width=5.5, height=3.0)
+    fig, axes = new_figure(1, 1, width=6.5, height=3.0)
     ax = axes[0, 0]
     ax.axhspan(1 - tol, 1 + tol, color="#dddddd", zorder=0)
     ax.axhline(1.0, color="#777777", linewidth=0.8)
-    for k, (engine, g) in enumerate(effect.groupby("engine", sort=False)):
-        st = engine_style(engine)
-        ax.plot(g["run"], g["ratio"], marker=CYCLE[k % len(CYCLE)]["marker"], **st)
+    groups = list(effect.groupby("engine", sort=False))
+    names = [str(engine) for engine, _ in groups]
+    labels = [engine_style(e)["label"] if e in engine_names() else e for e in names]
+    engines = [e if e in engine_names() else None for e in names]
+    for st, (_, g) in zip(series_styles(labels, engines), groups):
+        ax.plot(g["run"], g["ratio"], **st)
     runs = effect.drop_duplicates("run")
     ax.set_xticks(runs["run"])
     ax.set_xticklabels([f"{r}\n{p:g} g" for r, p in zip(runs["run"], runs["pga"])])
     ax.set_xlabel("run (transverse PGA label)")
     mu = effect["mu"].iloc[0] if len(effect) else 0.0
     ax.set_ylabel(f"peak θ_d with μ = {mu:g} / without [-]")
-    ax.legend(fontsize=7)
+    outside_legend(ax)
     return save(fig, path, scene.name, formats)
 
 
@@ -167,37 +165,41 @@ def friction_mechanism(
     """Per engine, a sequence run without and with friction (``pairs``: engine →
     (SequenceRun μ = 0, SequenceRun μ > 0), either order): deck rotation of both (top) and
     the moment of the tangential contact forces about the deck centre with friction
-    (bottom), the excursion that reaches the frictional peak shaded."""
-    from deckpound.compare.report.style import new_figure, save
+    (bottom, in the report's contact-force unit times metres: :data:`~.render.CONTACT_FORCE`),
+    the excursion that reaches the frictional peak shaded. A run with friction is drawn in the
+    same style in both panels."""
+    from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
     fig, axes = new_figure(2, 1, width=7.5, height=2.3, sharex=True)
+    ordered = {
+        engine: sorted(runs, key=lambda r: r.scene.contact.friction)
+        for engine, runs in pairs.items()
+    }
+    series = [(engine, run) for engine, runs in ordered.items() for run in runs]
+    labels = [
+        f"{engine_style(engine).get('label', engine)}, μ = {run.scene.contact.friction:g}"
+        for engine, run in series
+    ]
+    styles = series_styles(labels, [engine for engine, _ in series], dense=True)
     shaded = False
-    for _k, (engine, runs) in enumerate(pairs.items()):
-        plain, rough = sorted(runs, key=lambda r: r.scene.contact.friction)
-        st = engine_style(engine)
-        label = st.pop("label", engine)
-        for run, dash in ((plain, ":"), (rough, "-")):
-            r = run.result
-            axes[0, 0].plot(
-                r.t,
-                1e3 * r["deck_theta"],
-                **{**st, "linestyle": dash},
-                label=f"{label}, μ = {run.scene.contact.friction:g}",
-            )
-        row = mechanism_row(rough.result, rough.scene)
+    for (engine, run), st in zip(series, styles):
+        r = run.result
+        axes[0, 0].plot(r.t, 1e3 * r["deck_theta"], **st)
+        if run is not ordered[engine][-1]:
+            continue
+        row = mechanism_row(r, run.scene)
         if np.isfinite(row["friction_impulse"]):
-            mt, _ = contact_moments(rough.result, rough.scene)
-            axes[1, 0].plot(rough.result.t, 1e-3 * mt, **st, label=label)
+            mt, _ = contact_moments(r, run.scene)
+            axes[1, 0].plot(r.t, CONTACT_FORCE.scale * mt, **st)
             if not shaded:
                 for ax in axes[:, 0]:
                     ax.axvspan(row["t_start"], row["t_peak"], color="#eeeeee", zorder=0)
                 shaded = True
     axes[0, 0].set_ylabel("deck rotation θ_d [mrad]")
-    axes[0, 0].legend(fontsize=6, ncol=2)
-    axes[1, 0].set_ylabel("friction moment about\ndeck centre [MN·m]")
+    outside_legend(axes[0, 0], fontsize=6)
+    axes[1, 0].set_ylabel(f"friction moment about\ndeck centre [{CONTACT_FORCE.unit}·m]")
     axes[1, 0].set_xlabel("time [s]")
-    if axes[1, 0].get_legend_handles_labels()[0]:
-        axes[1, 0].legend(fontsize=6)
+    outside_legend(axes[1, 0], fontsize=6)
     if title:
         axes[0, 0].set_title(
             f"{title}: shaded, the excursion that reaches the frictional peak", fontsize=8
@@ -217,30 +219,36 @@ def study_figure(
     formats: tuple[str, ...] = (),
     subtitle: str = "",
 ) -> list[Path]:
-    """Left: the study's headline (peak rotation vs parameter); right: rotation histories."""
-    from deckpound.compare.report.style import CYCLE, new_figure, save
+    """Left: the study's headline (peak rotation vs parameter); right: rotation histories,
+    one per case. A case at an infinite parameter (the rigid limit of the stiffness study) is a
+    horizontal line on the left, marked at the other cases' parameters."""
+    from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
-    fig, axes = new_figure(1, 2, width=9.0, height=3.2)
+    fig, axes = new_figure(1, 2, width=10.0, height=3.2)
     ax = axes[0, 0]
     x = study.x
     if x in ("stiffness", "mu"):
         keys = ["engine"] + (["friction_mode"] if "friction_mode" in table else [])
-        for k, (engine, g) in enumerate(table.groupby(keys, sort=False)):
-            label = " ".join(engine) if isinstance(engine, tuple) else engine
-            finite = g[np.isfinite(g[x].astype(float))]
-            eng = label.split()[0]
-            st = engine_style(eng)
-            st["label"] = label
-            if len(finite):
-                ax.plot(
-                    finite[x].astype(float),
-                    1e3 * finite["peak_theta"],
-                    marker=CYCLE[k % len(CYCLE)]["marker"],
-                    **st,
-                )
-            inf = g[~np.isfinite(g[x].astype(float))]
-            for _, row in inf.iterrows():
-                ax.axhline(1e3 * row["peak_theta"], **{**st, "label": f"{row['label']}"})
+        series = []  # (label, engine, rows, horizontal line)
+        for engine, g in table.groupby(keys, sort=False):
+            label = " ".join(engine) if isinstance(engine, tuple) else str(engine)
+            finite = np.isfinite(g[x].astype(float))
+            if finite.any():
+                series.append((label, label.split()[0], g[finite], False))
+            for _, row in g[~finite].iterrows():
+                series.append((str(row["label"]), label.split()[0], row, True))
+        styles = series_styles(
+            [s[0] for s in series], [e if e in engine_names() else None for _, e, _, _ in series]
+        )
+        xs = np.unique(table[x].astype(float))
+        xs = xs[np.isfinite(xs)]
+        for (_, _, rows, flat), st in zip(series, styles):
+            if flat and len(xs):  # marked at the other cases' parameters
+                ax.plot(xs, np.full(len(xs), 1e3 * rows["peak_theta"]), **st)
+            elif flat:
+                ax.axhline(1e3 * rows["peak_theta"], **st)
+            else:
+                ax.plot(rows[x].astype(float), 1e3 * rows["peak_theta"], **st)
         if x == "stiffness":
             ax.set_xscale("log")
             ax.set_xlabel("contact stiffness [kN/m]")
@@ -259,18 +267,15 @@ def study_figure(
         ax.set_xticklabels(labels, rotation=30, ha="right", fontsize=7)
     ax.set_ylabel("peak deck rotation [mrad]")
     ax.set_title(study.title + (f"\n{subtitle}" if subtitle else ""), fontsize=8)
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=7)
+    outside_legend(ax, fontsize=6)
     ax2 = axes[0, 1]
-    for k, c in enumerate(cases):
+    styles = series_styles([c.label for c in cases], [c.engine for c in cases], dense=True)
+    for c, st in zip(cases, styles):
         r = results[c.label]
-        st = dict(CYCLE[k % len(CYCLE)])
-        st.pop("marker")
-        st.pop("markersize")
-        ax2.plot(r.t, 1e3 * r["deck_theta"], label=c.label, linewidth=0.9, **st)
+        ax2.plot(r.t, 1e3 * r["deck_theta"], **{**st, "linewidth": 0.9})
     ax2.set_xlabel("time [s]")
     ax2.set_ylabel("deck rotation [mrad]")
-    ax2.legend(fontsize=6, ncol=2)
+    outside_legend(ax2, fontsize=6)
     return save(fig, path, scene.name, formats)
 
 
@@ -288,13 +293,13 @@ def hysteresis(
             ax = axes[j, i]
             ax.plot(
                 1e3 * result[f"{b.name}_d{axis}"],
-                result[f"{b.name}_f{axis}"],
+                BENT_FORCE.scale * result[f"{b.name}_f{axis}"],
                 color="k",
                 linewidth=0.7,
             )
             ax.set_title(f"{b.name} {axis}")
             ax.set_xlabel("deformation [mm]")
-            ax.set_ylabel("force [kN]")
+            ax.set_ylabel(f"bent force [{BENT_FORCE.unit}]")
     if title:
         fig.suptitle(title, fontsize=9)
     return save(fig, path, scene.name, formats)

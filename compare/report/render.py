@@ -22,6 +22,43 @@ MM, MRAD = 1e3, 1e3
 
 
 @dataclass(frozen=True)
+class DisplayUnit:
+    """How the report shows one quantity: ``scale`` × the value in deckpound's units (kN and
+    what it makes: kN·m, kN·m·s) gives it in ``unit``."""
+
+    scale: float
+    unit: str
+
+    def moment(self) -> str:
+        """The unit of a moment of this force [unit·m]."""
+        return f"{self.unit}·m"
+
+    def impulse(self) -> str:
+        """The unit of an angular impulse of this force [unit·m·s]."""
+        return f"{self.unit}·m·s"
+
+
+#: the report's one unit for contact (pounding) forces at the deck's corners, normal and
+#: tangential, and for their moments and angular impulses about the deck centre, in every
+#: figure, table and sentence of the page
+CONTACT_FORCE = DisplayUnit(1e-3, "MN")
+#: the report's one unit for the bents' forces (their Takeda springs' shear): kN
+BENT_FORCE = DisplayUnit(1.0, "kN")
+
+
+def units_sentence() -> str:
+    """The report's units, stated once (in "What was run")."""
+    return (
+        f"Units on this page: contact (pounding) forces in {CONTACT_FORCE.unit}, their moments "
+        f"about the deck centre in {CONTACT_FORCE.moment()} and their angular impulses in "
+        f"{CONTACT_FORCE.impulse()}, in every figure, table and sentence; bent forces in "
+        f"{BENT_FORCE.unit}; stiffnesses as the scene gives them (kN/m). The CSV tables keep "
+        "deckpound's units (kN, m, rad, s), named in their headers; the scene's notes are "
+        "quoted as their author wrote them."
+    )
+
+
+@dataclass(frozen=True)
 class Table:
     frame: pd.DataFrame
     caption: str = ""

@@ -1,32 +1,52 @@
 """One figure style for every deckpound plot: readable in greyscale, units on every axis.
 
-Engines are told apart by line style and grey level as well as colour, so a greyscale print
-keeps them distinct. Every figure is saved atomically (:func:`deckpound.models.file_io.atomic_path`), and
-text that may carry user strings (the scene-name stamp, titles, axis labels, legends) is drawn
-literally, without mathtext: a scene named ``$\\frac{$`` must not break a figure.
+Every series of a figure (an engine, a case, an engine under another assumption) is told apart
+by its line style *and* its marker, not by colour alone (:func:`series_styles`: no two series of
+a figure share a (line style, marker) pair), so a greyscale print keeps them distinct; an
+engine's colour, line style, width and label come from the registry
+(:func:`deckpound.compare.engines.engine_style`) and its marker from its place in it, so an
+engine looks the same in every figure. Markers on a dense line (a time history) are spaced
+along it (``markevery``), so the line stays readable. Legends stand beside the data, never on
+it (:func:`outside_legend`). Every figure is saved atomically
+(:func:`deckpound.models.file_io.atomic_path`), and text that may carry user strings (the
+scene-name stamp, titles, axis labels, legends) is drawn literally, without mathtext: a scene
+named ``$\\frac{$`` must not break a figure.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+from deckpound.compare.engines import engine_names, engine_style
 from deckpound.models.file_io import atomic_path
 
+#: colours of series that are not an engine, in the order they receive them
+COLORS = ("#000000", "#1f5fa8", "#c0392b", "#27ae60", "#7f7f7f", "#8e44ad")
+#: the line styles of :func:`series_styles` (named ones: matplotlib reports them as given)
+LINESTYLES = ("-", "--", ":", "-.")
+#: markers that stay apart in greyscale; an engine's is the one at its place in the registry
+MARKERS = ("o", "s", "^", "D", "v", "x", "P", "<", ">", "h", "*", "d")
+#: the marker of measured data (not an engine of the registry)
+MEASURED_MARKER = "*"
+#: marker size [pt]
+MARKERSIZE = 4.0
+#: spacing of the markers along a dense line, as a fraction of the axes' diagonal (for up to
+#: four lines; more lines space them further, up to MAX_MARK_SPACING)
+MARK_SPACING = 0.1
+MAX_MARK_SPACING = 0.3
+
+#: colour, line style and marker by position, for figures outside the report (the benchmark
+#: plots of :mod:`deckpound.compare.bench`); the report's figures use :func:`series_styles`
 CYCLE = [
-    {"color": c, "linestyle": s, "marker": m, "markersize": 4}
-    for c, s, m in (
-        ("#000000", "-", "o"),
-        ("#1f5fa8", "--", "s"),
-        ("#c0392b", ":", "^"),
-        ("#27ae60", "-.", "D"),
-        ("#7f7f7f", (0, (5, 1)), "v"),
-        ("#8e44ad", (0, (3, 1, 1, 1)), "x"),
-    )
+    {"color": c, "linestyle": s, "marker": m, "markersize": MARKERSIZE}
+    for c, s, m in zip(COLORS, LINESTYLES + ((0, (5, 1)), (0, (3, 1, 1, 1))), MARKERS)
 ]
 
 RC = {
@@ -55,6 +75,126 @@ def new_figure(
     for ax in axes.flat:
         ax.grid(True, alpha=0.3)
     return fig, axes
+
+
+def engine_of(label: str) -> str | None:
+    """The engine a series label names by its first word (``"compliance mu=0.2"``), or
+    ``"measured"``; None for a label that names neither."""
+    first = str(label).split(" ", 1)[0].rstrip(",")
+    return first if first in engine_names() or first == "measured" else None
+
+
+def engine_marker(engine: str) -> str:
+    """An engine's marker: the one at its place in the registry (the same in every figure)."""
+    if engine == "measured":
+        return MEASURED_MARKER
+    names = engine_names()
+    return MARKERS[names.index(engine) % len(MARKERS)] if engine in names else MARKERS[-1]
+
+
+def series_styles(
+    labels: Sequence[str],
+    engines: Sequence[str | None] | None = None,
+    *,
+    dense: bool = False,
+) -> list[dict[str, Any]]:
+    """Line keyword arguments for the series of one figure (one per label, in order), no two
+    with the same (line style, marker) pair.
+
+    ``engines`` names the engine each series was computed with (default :func:`engine_of` of
+    its label; None for a series that is no engine's). The first series of an engine takes
+    the registry's colour, line style and width (:func:`~deckpound.compare.engines.engine_style`)
+    and the engine's marker (:func:`engine_marker`); a further series of the same engine (the
+    engine under another assumption) keeps its colour and marker, drawn hollow, and takes a
+    line style no series of the figure has yet, or else the first that keeps the pair free.
+    Other series take colour, line style and marker by position. A pair taken already moves
+    the marker on. ``dense``: the series has many points (a time history), so its markers are
+    spaced :data:`MARK_SPACING` of the axes' diagonal apart along the line (``markevery``;
+    further apart when a figure has more than four, up to :data:`MAX_MARK_SPACING`), each
+    series offset so that coinciding lines do not hide each other's markers; otherwise every
+    point carries a marker.
+    """
+    labels = [str(label) for label in labels]
+    if engines is None:
+        engines = [engine_of(label) for label in labels]
+    if len(engines) != len(labels):
+        raise ValueError(f"{len(labels)} labels but {len(engines)} engines")
+    styles: list[dict[str, Any] | None] = [None] * len(labels)
+    pairs: set[tuple[Any, str]] = set()
+    used_lines: set[Any] = set()
+
+    owned = {engine_marker(e) for e in engines if e is not None}
+
+    def take(i: int, base: dict[str, Any], lines: Sequence[Any], marker: str) -> None:
+        """Give series i the first free pair: its line styles in order, then later markers
+        (first those no engine of the figure owns)."""
+        start = MARKERS.index(marker) if marker in MARKERS else 0
+        later = [MARKERS[(start + j) % len(MARKERS)] for j in range(1, len(MARKERS))]
+        markers = [marker] + [m for m in later if m not in owned] + [m for m in later if m in owned]
+        for m in markers:
+            for ls in lines:
+                if (ls, m) not in pairs:
+                    pairs.add((ls, m))
+                    used_lines.add(ls)
+                    styles[i] = {**base, "linestyle": ls, "marker": m}
+                    return
+        raise ValueError(f"more than {len(LINESTYLES) * len(MARKERS)} series in one figure")
+
+    # the first series of each engine: the registry's style, so an engine looks alike everywhere
+    first: dict[str, int] = {}
+    for i, engine in enumerate(engines):
+        if engine is not None and engine not in first:
+            first[engine] = i
+            st = engine_style(engine)
+            st.pop("label", None)
+            own = st.pop("linestyle", "-")
+            take(i, st, [own, *LINESTYLES], engine_marker(engine))
+    others = 0
+    for i, engine in enumerate(engines):
+        if styles[i] is not None:
+            continue
+        if engine is not None:
+            st = engine_style(engine)
+            st.pop("label", None)
+            st.pop("linestyle", None)
+            st["markerfacecolor"] = "white"
+            fresh = [ls for ls in LINESTYLES if ls not in used_lines]
+            take(i, st, fresh + list(LINESTYLES), engine_marker(engine))
+        else:
+            k = others
+            others += 1
+            lines = LINESTYLES[k % len(LINESTYLES) :] + LINESTYLES[: k % len(LINESTYLES)]
+            take(i, {"color": COLORS[k % len(COLORS)]}, lines, MARKERS[k % len(MARKERS)])
+    # many dense lines: markers further apart, so the lines stay readable
+    spacing = min(MAX_MARK_SPACING, MARK_SPACING * max(1.0, len(labels) / 4))
+    out = []
+    for i, (label, st) in enumerate(zip(labels, styles)):
+        st = {**st, "markersize": MARKERSIZE, "label": label}
+        if dense:
+            st["markevery"] = (spacing * i / max(len(labels), 1), spacing)
+        out.append(st)
+    return out
+
+
+def outside_legend(ax, *, fontsize: float = 7, ncol: int = 1, title: str | None = None):
+    """The legend of ``ax``'s labelled artists beside its data area, never on it: its upper
+    left corner at the axes' upper right corner (the layout of :func:`save` makes room for
+    it). Returns the legend, or None when nothing is labelled."""
+    handles, labels = ax.get_legend_handles_labels()
+    if not handles:
+        return None
+    return ax.legend(
+        handles,
+        labels,
+        loc="upper left",
+        bbox_to_anchor=(1.02, 1.0),
+        borderaxespad=0.0,
+        frameon=False,
+        fontsize=fontsize,
+        ncol=ncol,
+        title=title,
+        title_fontsize=fontsize,
+    )
 
 
 def stamp_text(name: str, limit: int = 80) -> str:

@@ -19,6 +19,7 @@ import pandas as pd
 
 from deckpound.compare.cases import Case, engine_expresses
 from deckpound.compare.engines import engine_names, engine_style
+from deckpound.compare.report.render import CONTACT_FORCE
 from deckpound.compare.studies.case_rows import case_row
 from deckpound.models.result import Result
 from deckpound.models.scene import DAMPING_MASS, DAMPING_MEMBERS, DAMPING_STIFFNESS, Scene
@@ -97,26 +98,26 @@ def damping_figure(
     formats: tuple[str, ...] = (),
     subtitle: str = "",
 ) -> list[Path]:
-    """Peak deck rotation (top) and peak normal gap force (bottom) per damping case, one
-    marker series per engine."""
-    from deckpound.compare.report.style import CYCLE, new_figure, save
+    """Peak deck rotation (top) and peak normal gap force (bottom, in the report's contact-force
+    unit :data:`~deckpound.compare.report.render.CONTACT_FORCE`) per damping case, one marker
+    series per engine (markers only: the cases are choices, not a continuum)."""
+    from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
     labels = list(dict.fromkeys(table["damping"]))
     fig, axes = new_figure(2, 1, width=9.0, height=2.6)
-    for k, (engine, g) in enumerate(table.groupby("engine", sort=False)):
-        st = engine_style(engine)
+    groups = list(table.groupby("engine", sort=False))
+    names = [str(engine) for engine, _ in groups]
+    styles = series_styles(
+        [engine_style(e).get("label", e) if e in engine_names() else e for e in names],
+        [e if e in engine_names() else None for e in names],
+    )
+    force = CONTACT_FORCE
+    for k, ((_, g), st) in enumerate(zip(groups, styles)):
         x = [labels.index(lab) + 0.12 * (k - 1) for lab in g["damping"]]
-        for ax, q, scale in ((axes[0, 0], "peak_theta", 1e3), (axes[1, 0], "peak_fn", 1e-3)):
-            ax.plot(
-                x,
-                scale * g[q],
-                linestyle="none",
-                marker=CYCLE[k % len(CYCLE)]["marker"],
-                color=st.get("color"),
-                label=st.get("label", engine),
-            )
+        for ax, q, scale in ((axes[0, 0], "peak_theta", 1e3), (axes[1, 0], "peak_fn", force.scale)):
+            ax.plot(x, scale * g[q], **{**st, "linestyle": "none"})
     axes[0, 0].set_ylabel("peak θ_d [mrad]")
-    axes[1, 0].set_ylabel("peak gap force [MN]")
+    axes[1, 0].set_ylabel(f"peak gap force [{force.unit}]")
     axes[1, 0].set_xticks(range(len(labels)))
     axes[1, 0].set_xticklabels(labels, rotation=35, ha="right", fontsize=6)
     axes[0, 0].set_xticks(range(len(labels)))
@@ -125,7 +126,7 @@ def damping_figure(
         (study.title if study is not None else "damping") + (f" — {subtitle}" if subtitle else ""),
         fontsize=8,
     )
-    axes[0, 0].legend(fontsize=7)
+    outside_legend(axes[0, 0])
     return save(fig, path, scene.name, formats)
 
 
@@ -140,7 +141,7 @@ def damping_headlines(table: pd.DataFrame) -> list[str]:
         parts = []
         for q, name, unit, scale in (
             ("peak_theta", "peak rotation", "mrad", 1e3),
-            ("peak_fn", "peak gap force", "kN", 1.0),
+            ("peak_fn", "peak gap force", CONTACT_FORCE.unit, CONTACT_FORCE.scale),
         ):
             ratio = g[q] / ref[q] if ref[q] > 0 else None
             if ratio is None or not ratio.notna().any():

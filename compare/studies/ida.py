@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from deckpound.compare.engines import engine_names
 from deckpound.compare.report.figure_cache import reusable
 from deckpound.compare.report.outputs import write_csv
 from deckpound.compare.studies.fragility import (
@@ -393,10 +394,17 @@ def ida_figure(table, im: str, scene_name: str, path: Path) -> list[Path]:
 
 @reusable
 def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) -> list[Path]:
-    """Fragility curves (IDA fits) per limit state, one curve per engine (colour) and variant
-    (line style), with its 90 % bootstrap band over records when no variant is swept; the
-    stripes' observed fractions as markers; the legend beside the panels, off the data."""
-    from deckpound.compare.report.style import new_figure, save
+    """Fragility curves (IDA fits) per limit state, one curve per engine and variant (each its
+    own line style and marker, :func:`~deckpound.compare.report.style.series_styles`), with its
+    90 % bootstrap band over records when no variant is swept; the stripes' observed fractions
+    as the curve's marker, hollow and larger; the legend beside the panels, off the data."""
+    from deckpound.compare.report.style import (
+        MARKERSIZE,
+        new_figure,
+        outside_legend,
+        save,
+        series_styles,
+    )
 
     levels = np.sort(table["level"].unique())
     grid = np.geomspace(levels[0] / 2, levels[-1] * 2, 60)
@@ -406,62 +414,64 @@ def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) 
         frag = frag.assign(variant="")
     variants = list(dict.fromkeys(table["variant"]))
     fig, axes = new_figure(1, len(states), width=3.6 * len(states) + 2.4, height=3.0)
-    colors = ("#1f4e79", "#c0392b", "#2e7d32", "#7b1fa2")
-    styles = ("-", "--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (8, 2)), (0, (1, 3)))
-    markers = ("o", "s", "^", "v", "D", "P", "X", "<", ">", "h")
+    series = [(e, v) for e in dict.fromkeys(table["engine"]) for v in variants]
+    styles = dict(
+        zip(
+            series,
+            series_styles(
+                [f"{e}, {v}" if v else str(e) for e, v in series],
+                [e if e in engine_names() else None for e, _ in series],
+                dense=True,
+            ),
+        )
+    )
     for ax, (name, state) in zip(axes[0], states):
-        for k, engine in enumerate(dict.fromkeys(table["engine"])):
-            color = colors[k % len(colors)]
-            for j, variant in enumerate(variants):
-                mine = table[
-                    (table["engine"] == engine)
-                    & (table["variant"] == variant)
-                    & table["status"].isin(FITTED)
-                ]
-                row = frag[
-                    (frag["engine"] == engine)
-                    & (frag["variant"] == variant)
-                    & (frag["limit_state"] == name)
-                    & (frag["method"] == "ida")
-                ]
-                if len(mine):
-                    counts = count_exceedances(mine, state, im_column="level")
-                    ax.plot(
-                        counts["im"],
-                        counts["exceed"] / counts["n"],
-                        markers[j % len(markers)],
-                        ms=3,
-                        color=color,
-                        mfc="white",
-                    )
-                if not len(row) or not np.isfinite(row["median"].iloc[0]):
-                    continue
-                if len(variants) == 1:
-                    caps = ida_capacities(
-                        mine, state, im_column="level", record_column="record_key"
-                    )
-                    try:
-                        band = bootstrap_ida(caps["capacity"], caps["censored"], grid, 200, seed=0)
-                        ax.fill_between(grid, band.lower, band.upper, color=color, alpha=0.15, lw=0)
-                    except SceneError:
-                        pass  # too few records to resample: the curve alone
-                m, b = row["median"].iloc[0], row["beta"].iloc[0]
-                who = f"{engine}, {variant}" if variant else engine
+        for engine, variant in series:
+            st = styles[(engine, variant)]
+            color = st["color"]
+            mine = table[
+                (table["engine"] == engine)
+                & (table["variant"] == variant)
+                & table["status"].isin(FITTED)
+            ]
+            row = frag[
+                (frag["engine"] == engine)
+                & (frag["variant"] == variant)
+                & (frag["limit_state"] == name)
+                & (frag["method"] == "ida")
+            ]
+            if len(mine):
+                counts = count_exceedances(mine, state, im_column="level")
                 ax.plot(
-                    grid,
-                    fragility_curve(grid, m, b),
-                    linestyle=styles[j % len(styles)],
+                    counts["im"],
+                    counts["exceed"] / counts["n"],
+                    linestyle="none",
+                    marker=st["marker"],
+                    ms=MARKERSIZE + 1.5,
                     color=color,
-                    lw=1.2,
-                    label=f"{who}: median {m:.3g}, β {b:.2f}",
+                    mfc="white",
                 )
+            if not len(row) or not np.isfinite(row["median"].iloc[0]):
+                continue
+            if len(variants) == 1:
+                caps = ida_capacities(mine, state, im_column="level", record_column="record_key")
+                try:
+                    band = bootstrap_ida(caps["capacity"], caps["censored"], grid, 200, seed=0)
+                    ax.fill_between(grid, band.lower, band.upper, color=color, alpha=0.15, lw=0)
+                except SceneError:
+                    pass  # too few records to resample: the curve alone
+            m, b = row["median"].iloc[0], row["beta"].iloc[0]
+            who = f"{engine}, {variant}" if variant else engine
+            ax.plot(
+                grid,
+                fragility_curve(grid, m, b),
+                **{**st, "linewidth": 1.2, "label": f"{who}: median {m:.3g}, β {b:.2f}"},
+            )
         ax.set_xscale("log")
         ax.set_ylim(-0.02, 1.02)
         ax.set_title(name, fontsize=9)
         ax.set_xlabel(f"{im} [{IMS[im][2]}]")
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-        else:
+        if outside_legend(ax, fontsize=6) is None:
             ax.text(
                 0.5,
                 0.5,

@@ -216,26 +216,25 @@ def skew_figure(
     subtitle: str = "",
 ) -> list[Path]:
     """Peak deck rotation (left) and peak transverse deck displacement relative to the tables
-    (right) against the skew angle; one line per engine × friction (friction: open markers,
-    thinner line)."""
-    from deckpound.compare.report.style import CYCLE, new_figure, save
+    (right) against the skew angle; one line per engine × friction (an engine's case with
+    friction: hollow markers and another line style,
+    :func:`~deckpound.compare.report.style.series_styles`)."""
+    from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
-    fig, axes = new_figure(1, 2, width=9.0, height=3.4)
-    markers = {}
-    for (engine, mu), g in table.groupby(["engine", "mu"], sort=False):
-        g = g.sort_values("skew")
-        st = engine_style(engine)
-        markers.setdefault(engine, CYCLE[len(markers) % len(CYCLE)]["marker"])
-        fr = g["friction"].iloc[0]
-        st = {
-            **st,
-            "label": f"{st.get('label', engine)}, "
-            + ("no friction" if mu == 0 else f"μ = {mu:g} ({fr})"),
-        }
-        if mu > 0:
-            st.update(markerfacecolor="white", linewidth=0.9)
+    fig, axes = new_figure(1, 2, width=10.0, height=3.4)
+    groups = [
+        (engine, mu, g.sort_values("skew"))
+        for (engine, mu), g in table.groupby(["engine", "mu"], sort=False)
+    ]
+    labels = [
+        f"{engine_style(engine).get('label', engine)}, "
+        + ("no friction" if mu == 0 else f"μ = {mu:g} ({g['friction'].iloc[0]})")
+        for engine, mu, g in groups
+    ]
+    engines = [engine if engine in engine_names() else None for engine, _, _ in groups]
+    for (_, _, g), st in zip(groups, series_styles(labels, engines)):
         for ax, q in zip(axes[0], ("peak_theta", Y_PEAK)):
-            ax.plot(g["skew"], 1e3 * g[q], marker=markers[engine], **st)
+            ax.plot(g["skew"], 1e3 * g[q], **st)
     axes[0, 0].set_ylabel("peak deck rotation θ_d [mrad]")
     axes[0, 1].set_ylabel("peak transverse y_d rel. tables [mm]")
     for ax in axes[0]:
@@ -244,7 +243,7 @@ def skew_figure(
     axes[0, 0].set_title(study.title if study is not None else "skew")
     if subtitle:
         axes[0, 1].set_title(subtitle, fontsize=7)
-    axes[0, 1].legend(fontsize=7)
+    outside_legend(axes[0, 1])
     return save(fig, path, scene.name, formats)
 
 

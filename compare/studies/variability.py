@@ -327,8 +327,8 @@ def summarize(table) -> object:
 
 def figure(table, summary, scene: Scene, path: Path) -> list[Path]:
     """Empirical distributions of peak rotation, transverse displacement and gap closures,
-    with the median and the 16–84 % band."""
-    from deckpound.compare.report.style import new_figure, save
+    with the median and the 16–84 % band (the legend beside the last panel, off the data)."""
+    from deckpound.compare.report.style import new_figure, outside_legend, save
 
     ok = table[table["status"] == "success"]
     panels = (
@@ -347,9 +347,9 @@ def figure(table, summary, scene: Scene, path: Path) -> list[Path]:
                 s["p16"] * scale, s["p84"] * scale, color="#1f5fa8", alpha=0.15, label="16-84 %"
             )
             ax.axvline(s["median"] * scale, color="#c0392b", linestyle="--", label="median")
-            ax.legend(loc="lower right")
         ax.set_xlabel(label)
         ax.set_ylabel("fraction of cases [-]")
+    outside_legend(axes[0, -1])  # the same band and median in every panel
     axes[0, 0].set_title(
         f"{len(ok)} of {len(table)} cases, {table['engine'].iloc[0]} engine"
         if len(table)
