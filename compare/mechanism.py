@@ -15,8 +15,11 @@ For one result (corner positions, normals and tangents from the plan model):
   (``friction_impulse_ref``): negative when friction resists the rotation that was the peak
   without friction;
 * **where contact happens**: contact time per seat face (corners c1, c2 face seat 1; c3, c4
-  seat 2) [s], the corners in contact at the peak and their face, the first closure time per
-  corner [s] (:func:`deckpound.models.result.closure_times`);
+  seat 2) [s], the corners in contact at the peak and their face, and per corner its *first
+  contact row* [s]: the time of the first output row at which it is in contact
+  (:func:`deckpound.models.result.closure_times` on the rows). That is not the engines' gap
+  closure, which they detect and count at every step (``meta["gap_closures"]``): a row-based
+  time can lag it by up to one output step, hence its own name;
 * **stick and slip**: the share of each corner's contact time spent sticking [-], from the
   nonsmooth engine's ``state_c*`` columns (1 stick, 2 slip) where a result has them, otherwise
   from the Coulomb limit: a contact row slips when |ft| ≥ (1 − 10⁻³) μ·fn.
@@ -55,7 +58,7 @@ MECHANISM_UNITS = {
     "contact_seat2": "s",
     "mu": "-",
     "ft_zero_share": "-",
-    **{f"first_closure_c{c}": "s" for c in range(1, 5)},
+    **{f"first_contact_row_c{c}": "s" for c in range(1, 5)},
     **{f"stick_share_c{c}": "-" for c in range(1, 5)},
 }
 
@@ -176,7 +179,7 @@ def mechanism_row(
     row["face_at_peak"] = _face(at_peak)
     for c in corners:
         times = closure_times(t, result[f"gap_{c.name}"], result[f"fn_{c.name}"])
-        row[f"first_closure_{c.name}"] = float(times[0]) if len(times) else float("nan")
+        row[f"first_contact_row_{c.name}"] = float(times[0]) if len(times) else float("nan")
     states, source = stick_states(result, mu)
     row["stick_source"] = source
     for k, c in enumerate(corners):

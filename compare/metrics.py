@@ -67,7 +67,11 @@ def residual(x: np.ndarray, frac: float = 0.02) -> float:
 
 
 def closure_times_per_corner(result: Result) -> dict[str, list[float]]:
-    """Gap closure times per corner (their counts are ``result.meta["gap_closures_per_corner"]``)."""
+    """Per corner, the times of the output rows at which it comes into contact [s]
+    (:func:`deckpound.models.result.closure_times`): the closures as the rows show them. The
+    engines' count, at every step, is ``result.meta["gap_closures_per_corner"]``; a closure
+    that opens again between two rows is in that count but not among these times, so the
+    report calls the first of them the *first contact row*, not a closure."""
     return {
         f"c{c}": closure_times(
             result.t, result[f"gap_c{c}"], result.columns.get(f"fn_c{c}")

@@ -293,7 +293,7 @@ def test_friction_impulse_sign_and_stick_share():
     assert row["t_start"] == 0.0 and row["t_peak"] == pytest.approx(0.5)
     assert row["stick_source"] == "coulomb"
     assert row["stick_share_c1"] == pytest.approx(0.5, abs=0.03)
-    assert row["first_closure_c1"] == pytest.approx(0.21)
+    assert row["first_contact_row_c1"] == pytest.approx(0.21)
     assert row["corners_at_peak"] == "c1" and row["face_at_peak"] == "seat 1"
     flipped = mechanism_row(_result(scene, -theta, ft, fn), scene)
     assert flipped["friction_impulse"] == pytest.approx(-row["friction_impulse"])
@@ -311,9 +311,10 @@ def test_state_columns_win_and_zero_tangential_output_is_not_read():
     assert tangential_output(silent, 0.2) == (False, 1.0)
     row = mechanism_row(silent, scene)
     assert np.isnan(row["friction_impulse"]) and row["stick_source"] == "n/a"
-    assert "zero in 100 %" in report_text.mechanism_sentence(
-        pd.Series({**row, "engine": "opensees"}), "run 1"
-    )
+    said = report_text.unread_impulse_sentence(pd.DataFrame([{**row, "engine": "opensees"}]))
+    assert "OpenSees (ft = 0 in 100 % of the rows with a normal force)" in said
+    read = mechanism_row(_result(scene, np.zeros(n), np.full(n, 20.0), fn), scene)
+    assert report_text.unread_impulse_sentence(pd.DataFrame([{**read, "engine": "opensees"}])) == ""
 
 
 def test_impulse_agreement_reads_the_right_excursion():

@@ -20,9 +20,13 @@ import pytest
 from _report_helpers import check_clauses, claims, expand_runs, mu_values, read_table
 
 from deckpound.cli import main
+from deckpound.compare.engines import run_engine
 from deckpound.compare.report.outputs import folder_size, parquet_units
 from deckpound.compare.report.paper import run_paper
+from deckpound.compare.report.render import BENT_FORCE, CONTACT_FORCE
 from deckpound.compare.report.text import direction, engine_label
+from deckpound.compare.studies.sensitivity import friction_cases
+from deckpound.compare.studies.sequence_run import state_before
 from deckpound.models.scene_io import load_scene
 
 TINY = [
@@ -264,6 +268,114 @@ def test_excitation_and_notes_come_from_what_was_run(report):
     notes = section(text, "The scene's notes")
     assert "| excitation.duration | 1 | ASSUMPTION: 20 s" in notes
     assert "20 (built-in saiidi-4span)" in notes
+
+
+#: a force unit on the page: kN or MN, alone or in a moment (·m) or impulse (·m·s); not a
+#: stiffness (kN/m)
+FORCE_UNIT = re.compile(r"(?<![\w/])([kM]N)((?:·m)?(?:·s)?)(?![\w/])")
+
+
+def test_one_force_unit_per_quantity_on_the_page(report):
+    """Issue 32, item 6: every contact force of the page (tables, captions, sentences) and
+    what it makes (moments, impulses) in the one contact-force unit, every bent force in the
+    bent-force unit; the choice stated once; only the CSV tables, said to keep deckpound's
+    units, name kN for everything, and the scene's notes are quoted as their author wrote
+    them."""
+    out, md = report
+    text = md.read_text()
+    assert text.count("Units on this page:") == 1
+    seen = {"contact": 0, "bent": 0}
+    generated = text.split("## The scene's notes")[0]  # the notes are their author's words
+    for piece in re.split(r"\n|\||;|\. ", generated):
+        units = FORCE_UNIT.findall(piece)
+        if not units or "csv" in piece.lower():
+            continue
+        kind = "bent" if "bent" in piece.lower() else "contact"
+        want = (BENT_FORCE if kind == "bent" else CONTACT_FORCE).unit
+        assert {u for u, _ in units} == {want}, (kind, piece)
+        seen[kind] += 1
+    # the study tables' peak force, the mechanism's impulses, the contact-force and the
+    # hysteresis captions at least
+    assert seen["contact"] >= 4 and seen["bent"] >= 2, seen
+    # and the numbers are scaled to it: the study table's peak force against its CSV
+    header, rows = md_table(section(text, "Study: Contact stiffness, from the virgin state"))
+    table = read_table(out / "tables" / "study_stiffness_virgin.csv").set_index("label")
+    column = header.index(f"peak fn [{CONTACT_FORCE.unit}]")
+    for row in rows:
+        want = CONTACT_FORCE.scale * table.loc[row[0], "peak_fn"]
+        assert float(row[column]) == pytest.approx(want, rel=1e-3, abs=1e-12)
+
+
+def md_table(block: str) -> tuple[list[str], list[list[str]]]:
+    """Header and rows (cells as text) of the first Markdown table in ``block``."""
+    lines = block.splitlines()
+    first = next(k for k, ln in enumerate(lines) if ln.startswith("|"))
+    end = next((k for k in range(first, len(lines)) if not lines[k].startswith("|")), len(lines))
+    cells = [[c.strip() for c in ln.split("|")[1:-1]] for ln in lines[first:end]]
+    return cells[0], cells[2:]
+
+
+def test_the_reports_gap_closures_are_the_engines(report):
+    """Issue 32, item 6: the report's closure numbers (the sequence table, per corner too, the
+    study tables, the headline's first run with a closure) are the counts the engine itself
+    returns for the same run, at every step; the row-based first contact time is named apart
+    and the page says which is which."""
+    out, md = report
+    text = md.read_text()
+    scene = load_scene("saiidi-4span", TINY)
+    seq = read_table(out / "tables" / "sequence.csv")
+    assert "first_closure" not in seq and "first_contact_row" in seq
+    closed = 0
+    for engine in ("opensees", "compliance", "nonsmooth"):
+        for run in (1, 2):
+            _, run_scene = state_before(scene, run, engine)
+            result = run_engine(engine, run_scene)
+            assert result.meta["gap_closures_basis"] == "every step"
+            row = seq[(seq["case"] == engine) & (seq["run"] == run)].iloc[0]
+            per = result.meta["gap_closures_per_corner"]
+            assert int(row["gap_closures"]) == result.gap_closures == sum(per.values())
+            assert {c: int(row[f"closures_{c}"]) for c in per} == per
+            closed += result.gap_closures
+    assert closed > 0
+    study = read_table(out / "tables" / "study_friction_virgin.csv").set_index("label")
+    for case in friction_cases(scene, quick=True):
+        result = run_engine(case.engine, case.scene)
+        assert int(study.loc[case.label, "gap_closures"]) == result.gap_closures
+    first = int(seq.loc[seq["gap_closures"] > 0, "run"].min())
+    head = section(text, "Headline")
+    assert f"The gaps first close in run {first} for every engine" in head
+    what = section(text, "What was run")
+    assert "Gap closures (the sequence and study tables, the headline) are the engines' own" in what
+    assert "The first contact row (first_contact_row" in what
+    assert "first closure" not in text.replace("first closure by", "")
+    mech = read_table(out / "tables" / "friction_mechanism.csv")
+    assert not [c for c in mech.columns if c.startswith("first_closure")]
+    assert {f"first_contact_row_c{c}" for c in range(1, 5)} <= set(mech.columns)
+
+
+def test_the_mechanism_is_a_short_table_and_one_figure(report):
+    """Issue 32, item 6: the friction section's mechanism is a table of a few rows (one per
+    engine with friction in the strongest run) and a few columns, whose numbers are those of
+    tables/friction_mechanism.csv, and one figure; no per-case wall of prose."""
+    out, md = report
+    fric = section(md.read_text(), "Friction: where it raises")
+    mech = fric.split("**Mechanism**")[1]
+    assert len([ln for ln in mech.splitlines() if ln.startswith("|---")]) == 1  # one table
+    header, rows = md_table(mech)
+    assert len(rows) == 3 and len(header) <= 10
+    assert mech.count("![") == 1 and "figures/friction_mechanism_strongest.png" in mech
+    table = read_table(out / "tables" / "friction_mechanism.csv")
+    strong = table[(table["source"] == "sequence") & (table["run"] == 2) & (table["mu"] > 0)]
+    jt = header.index(f"J_T, peak excursion [{CONTACT_FORCE.impulse()}]")
+    for engine, r in strong.set_index("engine").iterrows():
+        row = next(x for x in rows if x[0] == engine_label(engine))
+        want = CONTACT_FORCE.scale * r["friction_impulse"]
+        if np.isfinite(want):
+            assert float(row[jt]) == pytest.approx(want, rel=1e-3, abs=1e-12)
+        else:
+            assert row[jt] == "—"
+    # the bullets of the mechanism: one sentence per engine, not one per case
+    assert len([ln for ln in mech.splitlines() if ln.startswith("- ")]) <= 3
 
 
 def test_cache_counts_per_engine_and_nonsmooth_h_reruns_no_opensees_case(report, tmp_path):

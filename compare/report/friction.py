@@ -1,8 +1,9 @@
 """The report's friction section: friction's effect along the sequence and in the friction
-studies, and its mechanism (:mod:`.report_sections` assembles the report).
+studies, and its mechanism as a short table and one figure (:mod:`.sections` assembles the
+report).
 
 Every number comes from the job's tables (``friction_effect_sequence.csv``,
-``friction_mechanism.csv``, the friction studies) through :mod:`.report_text`.
+``friction_mechanism.csv``, the friction studies) through :mod:`.text`.
 """
 
 from __future__ import annotations
@@ -10,29 +11,9 @@ from __future__ import annotations
 import numpy as np
 
 from deckpound.compare.report import text as text
-from deckpound.compare.report.render import MRAD, Bullets, Figure, Table, view
+from deckpound.compare.report.render import CONTACT_FORCE, MRAD, Bullets, Figure, Table, view
 
-__all__ = ["MECHANISM_COLUMNS", "friction"]
-
-MECHANISM_COLUMNS = (
-    [
-        ("source", "source", 1),
-        ("state", "state", 1),
-        ("engine", "engine", 1),
-        ("mu", "μ [-]", 1),
-        ("peak_theta", "peak θ_d [mrad]", MRAD),
-        ("t_start", "excursion from [s]", 1),
-        ("t_peak", "peak at [s]", 1),
-        ("friction_impulse", "J_T [kN·m·s]", 1),
-        ("normal_impulse", "J_N [kN·m·s]", 1),
-        ("friction_impulse_ref", "J_T over the μ = 0 peak excursion [kN·m·s]", 1),
-        ("corners_at_peak", "in contact at peak", 1),
-        ("face_at_peak", "face", 1),
-    ]
-    + [(f"stick_share_c{c}", f"stick c{c} [%]", 100) for c in range(1, 5)]
-    + [(f"first_closure_c{c}", f"first closure c{c} [s]", 1) for c in range(1, 5)]
-    + [("contact_seat1", "contact seat 1 [s]", 1), ("contact_seat2", "contact seat 2 [s]", 1)]
-)
+__all__ = ["friction"]
 
 
 def friction(d) -> list:
@@ -82,68 +63,52 @@ def friction(d) -> list:
             items.append(
                 Bullets(tuple(text.study_friction_sentences(text.study_friction_effect(r.table))))
             )
-    items.append(
-        "**Mechanism.** The numbers below come from tables/friction_mechanism.csv: the "
-        "excursion of θ_d that reaches the peak (from its last change of sign), the "
-        "angular impulse about the deck centre of the friction forces and of the normal "
-        "forces over it (positive: towards the peak rotation), the corners in contact "
-        "at the peak, stick shares and first closures."
-    )
-    items.append(Bullets(tuple(_mechanism_sentences(d))))
     contrast = _state_contrasts(d)
     if contrast:
         items.append("**The two start states side by side** (friction study):")
         items.append(Bullets(tuple(contrast)))
-    seq_mech = d.mech[d.mech["source"] == "sequence"] if len(d.mech) else d.mech
-    if len(seq_mech):
-        items.append(Bullets(tuple(text.impulse_agreement_sentences(eff, seq_mech))))
-        shown = d.mech[
-            (d.mech["mu"] > 0) & ((d.mech["source"] != "sequence") | (d.mech["run"] == d.strongest))
-        ]
-        items.append(
-            Table(
-                view(shown, MECHANISM_COLUMNS),
-                "Friction mechanism of the frictional "
-                f"cases of run {d.strongest} and of the friction studies "
-                "(every run and case: tables/friction_mechanism.csv). J_T, J_N: angular "
-                "impulse of the friction / normal contact forces about the deck centre "
-                "over the peak excursion, positive towards the peak rotation.",
-            )
-        )
-        items.append(
-            Figure(
-                "figures/friction_mechanism_strongest.png",
-                f"Run {d.strongest}: deck rotation θ_d [mrad] without (dotted) and "
-                "with "
-                "friction (solid), and the moment of the tangential contact forces "
-                "about the deck centre [MN·m].",
-            )
-        )
+    items += _mechanism(d)
     return items
 
 
-def _mechanism_sentences(d) -> list[str]:
-    out = []
-    m = d.mech
-    if not len(m):
-        return out
-    strong = m[(m["source"] == "sequence") & (m["run"] == d.strongest) & (m["mu"] > 0)]
-    for _, row in strong.iterrows():
-        out.append(text.mechanism_sentence(row, f"run {d.strongest} of the sequence"))
-    mu = strong["mu"].iloc[0] if len(strong) else None
-    for r in d.studies:
-        if r.name != "friction":
-            continue
-        rows = m[(m["source"] == "friction study") & (m["state"] == r.state.label) & (m["mu"] > 0)]
-        if mu is not None:
-            rows = rows[np.isclose(rows["mu"], mu)]
-        for _, row in rows.iterrows():
-            out.append(
-                text.mechanism_sentence(
-                    row, f"friction study from {text.state_name(r.state.label)}"
-                )
-            )
-    return out
+def _mechanism(d) -> list:
+    """How friction acts on the rotation: a short table of the strongest run (one row per
+    engine), whether the friction impulse explains friction's effect along the whole sequence
+    (one sentence per engine), and the figure of the strongest run."""
+    seq_mech = d.mech[d.mech["source"] == "sequence"] if len(d.mech) else d.mech
+    if not len(seq_mech):
+        return []
+    items = [
+        (
+            f"**Mechanism** (run {d.strongest}). J_T: the angular impulse of the friction forces "
+            "about the deck centre over the excursion of θ_d that reaches the peak (from its "
+            "last change of sign), positive towards the peak; J_T over the μ = 0 peak "
+            "excursion: the same over the excursion that was the peak without friction. J_T > 0 "
+            "explains a raised peak; a negative impulse over the frictionless peak's excursion "
+            "explains a lowered one."
+        ),
+        Table(
+            text.mechanism_table(d.mech, d.effect, d.strongest),
+            f"Friction mechanism of run {d.strongest}, one row per engine with friction. Every "
+            "run and study case, with the normal forces' impulse, the contact time per seat "
+            "face, the stick share per corner and the first contact rows: "
+            "tables/friction_mechanism.csv.",
+        ),
+    ]
+    unread = text.unread_impulse_sentence(seq_mech[seq_mech["run"] == d.strongest])
+    if unread:
+        items.append(unread)
+    items.append(Bullets(tuple(text.impulse_agreement_sentences(d.effect, seq_mech))))
+    items.append(
+        Figure(
+            "figures/friction_mechanism_strongest.png",
+            f"Run {d.strongest}: deck rotation θ_d [mrad] per engine without and with "
+            "friction, and the moment of the tangential contact forces about the deck "
+            f"centre [{CONTACT_FORCE.moment()}]; shaded, the excursion that reaches the "
+            "frictional peak.",
+        )
+    )
+    return items
 
 
 def _state_contrasts(d) -> list[str]:

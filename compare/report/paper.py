@@ -91,7 +91,10 @@ def sequence_table(sequences: dict[str, list[SequenceRun]]) -> pd.DataFrame:
     """One row per (case, run): ``case`` is the key of ``sequences`` (an engine name, or an
     engine and a variant tag); peaks of displacements relative to the supports (``_rel``) and
     absolute (``_abs``); the applied PGA from the result's record provenance; run time without
-    compilation and compilation time apart; whether the result came from the cache."""
+    compilation and compilation time apart; whether the result came from the cache. Gap
+    closures are the engine's count at every step (``gap_closures``, per corner
+    ``closures_c1`` …: ``meta["gap_closures_per_corner"]``); ``first_contact_row`` is the time
+    of the first output row with a corner in contact, a row-based time named apart."""
     rows = []
     for case, runs in sequences.items():
         for run in runs:
@@ -114,6 +117,7 @@ def sequence_table(sequences: dict[str, list[SequenceRun]]) -> pd.DataFrame:
             for b, (kx, ky) in zip(run.scene.bents, run.state.stiffness):
                 row[f"{b.name}_kx"], row[f"{b.name}_ky"] = kx, ky
             firsts = [t[0] for t in closure_times_per_corner(r).values() if t]
+            per_corner = r.meta.get("gap_closures_per_corner") or {}
             row.update(
                 peak_theta=r.peak("deck_theta"),  # every step (Result.peak)
                 peak_y_rel=r.peak("deck_y_rel"),
@@ -121,8 +125,9 @@ def sequence_table(sequences: dict[str, list[SequenceRun]]) -> pd.DataFrame:
                 peak_y_abs=r.peak("deck_y_abs"),
                 peak_x_abs=r.peak("deck_x_abs"),
                 peak_fn=max(r.peak(f"fn_c{c}") for c in range(1, 5)),
-                gap_closures=r.gap_closures,
-                first_closure=min(firsts) if firsts else np.nan,
+                gap_closures=r.gap_closures,  # the engine's count, at every step
+                **{f"closures_{c}": int(n) for c, n in sorted(per_corner.items())},
+                first_contact_row=min(firsts) if firsts else np.nan,
                 wall_time=r.meta.get("wall_time", np.nan),
                 compile_time=r.meta.get("compile_time", np.nan),
                 steps=r.meta.get("steps", 0),
@@ -138,7 +143,7 @@ def sequence_units(seq: pd.DataFrame) -> dict[str, str]:
         "pga": "g",
         "applied_pga_x": "g",
         "applied_pga_y": "g",
-        "first_closure": "s",
+        "first_contact_row": "s",
         "steps": "-",
     }
     units.update({c: "kN/m" for c in seq.columns if c.endswith(("_kx", "_ky"))})

@@ -1,7 +1,7 @@
 """The report of ``deckpound paper``: its sections, built from the job's tables and results.
 
 Nothing here types a number: every value and every direction of an effect comes from the
-tables (:mod:`.report_text`, :mod:`.report_inputs`); descriptions of the excitation come from
+tables (:mod:`.text`, :mod:`.inputs`); descriptions of the excitation come from
 the record provenance each result carries; the scene's notes are shown as its author's words.
 """
 
@@ -17,7 +17,18 @@ from deckpound.compare.report import figures
 from deckpound.compare.report import inputs as inputs
 from deckpound.compare.report import text as text
 from deckpound.compare.report.friction import friction
-from deckpound.compare.report.render import MM, MRAD, Bullets, Figure, Table, render, view
+from deckpound.compare.report.render import (
+    BENT_FORCE,
+    CONTACT_FORCE,
+    MM,
+    MRAD,
+    Bullets,
+    Figure,
+    Table,
+    render,
+    units_sentence,
+    view,
+)
 from deckpound.compare.report.unseating import unseating_section
 from deckpound.compare.studies.sensitivity import STUDIES
 from deckpound.models.engine_contract import PENETRATION_WARN_FRACTION
@@ -34,7 +45,7 @@ STUDY_COLUMNS = [
     ("peak_theta", "peak θ_d [mrad]", MRAD),
     ("peak_x_rel", "peak x_d rel. tables [mm]", MM),
     ("peak_y_rel", "peak y_d rel. tables [mm]", MM),
-    ("peak_fn", "peak fn [kN]", 1),
+    ("peak_fn", f"peak fn [{CONTACT_FORCE.unit}]", CONTACT_FORCE.scale),
     ("gap_closures", "gap closures", 1),
     ("wall_time", "run time [s]", 1),
     ("status", "status", 1),
@@ -56,6 +67,8 @@ def what_was_run(d) -> list:
             f"{platform.machine()} / Python {platform.python_version()}; the whole job took "
             f"{d.wall:.1f} s of wall time."
         ),
+        units_sentence(),
+        text.closure_definition_sentence(s.run.output_dt),
         f"Engines (reference: {text.engine_label(d.reference)}):",
         Bullets(
             tuple(f"{text.engine_label(e)} (`{e}`): {_settings_text(e, s)}" for e in d.engines)
@@ -242,11 +255,12 @@ def engines_vs_reference(d) -> list:
         ),
         Figure(
             "figures/contact_forces_strongest.png",
-            f"Run {d.strongest}: normal contact force fn per corner [MN].",
+            f"Run {d.strongest}: normal contact force fn per corner [{CONTACT_FORCE.unit}].",
         ),
         Figure(
             "figures/bent_hysteresis_strongest.png",
-            f"Run {d.strongest}: bent force [kN] against bent deformation (deck point "
+            f"Run {d.strongest}: bent force [{BENT_FORCE.unit}] against bent deformation "
+            "(deck point "
             f"above the bent relative to its table) [mm], {ref} engine.",
         ),
         Figure(

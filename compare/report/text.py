@@ -1,7 +1,8 @@
 """The report's sentences, generated from its tables: no number or direction is typed in.
 
 The sequence and the studies, the friction effect (peak rotation with μ against μ = 0) and the
-mechanism behind a peak (excursion, friction impulse, gap closures) alike.
+mechanism behind a peak (excursion, friction impulse) alike; forces, their moments and impulses
+in the report's units (:data:`~.render.CONTACT_FORCE`).
 
 Every function here takes tables (pandas frames of the report's own CSV tables) and returns
 sentences; changing a table changes the sentences (``tests/test_report_text.py``). The
@@ -17,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from deckpound.compare.engines import engine_names, engine_style
+from deckpound.compare.report.render import CONTACT_FORCE
 
 TOL = 0.02
 
@@ -328,7 +330,8 @@ def state_contrast_sentence(engine: str, mu: float, parts: list[tuple]) -> str:
         else:
             jt, what = row["friction_impulse"], "the peak excursion"
         drive = (
-            f", its impulse {'driving' if jt > 0 else 'resisting'} {what} ({jt:+.3g} kN·m·s)"
+            f", its impulse {'driving' if jt > 0 else 'resisting'} {what} "
+            f"({CONTACT_FORCE.scale * jt:+.3g} {CONTACT_FORCE.impulse()})"
             if np.isfinite(jt)
             else ""
         )
@@ -451,67 +454,97 @@ def study_friction_sentences(effect: pd.DataFrame) -> list[str]:
 # -- the mechanism ------------------------------------------------------------------------------
 
 
-def _corner_face(corner: str) -> str:
-    return "seat 1" if corner in ("c1", "c2") else "seat 2"
+def impulse_explains(direction_: str, jt: float, jt_ref: float) -> bool | None:
+    """Does the friction impulse explain friction's effect on the peak rotation? Where friction
+    raises the peak, the impulse over the new peak's excursion ``jt`` must drive it (> 0);
+    where it lowers the peak, the impulse over the excursion that was the peak without
+    friction ``jt_ref`` must resist that rotation (< 0). None: no change to explain
+    (``unchanged``, ``undetermined``) or no impulse read (NaN)."""
+    if direction_ not in ("raises", "lowers"):
+        return None
+    raises = direction_ == "raises"
+    j = jt if raises else jt_ref
+    if j is None or not np.isfinite(j):
+        return None
+    return (j > 0) == raises
 
 
-def mechanism_sentence(row: pd.Series, where: str) -> str:
-    """What one frictional result shows: the peak excursion, the friction and normal angular
-    impulses over it, the corners in contact at the peak, stick shares and first closures."""
-    label = engine_label(row["engine"])
-    s = (
-        f"{label}, {where} (μ = {short(row['mu'])}): the peak rotation "
-        f"{num(1e3 * row['peak_theta'])} mrad at t = {row['t_peak']:.2f} s ends an excursion "
-        f"that began at t = {row['t_start']:.2f} s"
+def mechanism_table(mech: pd.DataFrame, effect: pd.DataFrame, run: int) -> pd.DataFrame:
+    """The friction mechanism of one run of the sequence, one row per engine's frictional
+    case (``mech``: the mechanism rows, :func:`deckpound.compare.mechanism.mechanism_row`;
+    ``effect``: :func:`friction_effect`): peak rotation with friction and its ratio to μ = 0,
+    the friction impulses J_T over the peak excursion and over the frictionless peak's
+    excursion in the report's contact-force unit (:data:`~.render.CONTACT_FORCE`), whether
+    they explain the change (:func:`impulse_explains`), the corners in contact at the peak
+    and the share of contact time sticking (mean over the corners that touched)."""
+    rows = mech[(mech["source"] == "sequence") & (mech["run"] == run) & (mech["mu"] > 0)]
+    eff = effect[effect["run"] == run].set_index("engine") if len(effect) else None
+    impulse = CONTACT_FORCE.impulse()
+    out = []
+    for _, r in rows.iterrows():
+        ratio, word = float("nan"), "undetermined"
+        if eff is not None and r["engine"] in eff.index:
+            ratio, word = float(eff.loc[r["engine"], "ratio"]), eff.loc[r["engine"], "direction"]
+        explains = impulse_explains(word, r["friction_impulse"], r["friction_impulse_ref"])
+        shares = [r[f"stick_share_c{c}"] for c in range(1, 5)]
+        shares = [v for v in shares if np.isfinite(v)]
+        corners = r["corners_at_peak"]
+        out.append(
+            {
+                "engine": engine_label(r["engine"]),
+                "μ [-]": r["mu"],
+                "peak θ_d [mrad]": 1e3 * r["peak_theta"],
+                "with / without friction [-]": ratio,
+                f"J_T, peak excursion [{impulse}]": CONTACT_FORCE.scale * r["friction_impulse"],
+                f"J_T, μ = 0 peak excursion [{impulse}]": CONTACT_FORCE.scale
+                * r["friction_impulse_ref"],
+                "J_T explains the change": "—"
+                if explains is None
+                else ("yes" if explains else "no"),
+                "in contact at peak": "none"
+                if corners == "none"
+                else f"{corners.replace('+', ', ')} ({r['face_at_peak']})",
+                "sticking [% of contact time]": 100 * float(np.mean(shares))
+                if shares
+                else float("nan"),
+            }
+        )
+    return pd.DataFrame(out)
+
+
+def unread_impulse_sentence(mech: pd.DataFrame) -> str:
+    """Which engines' tangential contact forces are not read for the friction impulse, and
+    why (their share of exactly zero ft among the rows with a normal force); empty when every
+    engine's are read."""
+    unread = mech[mech["ft_source"] == "n/a"] if len(mech) else mech
+    if not len(unread):
+        return ""
+    parts = [
+        f"{engine_label(e)} (ft = 0 in {100 * g['ft_zero_share'].max():.0f} % of the rows "
+        "with a normal force)"
+        for e, g in unread.groupby("engine", sort=False)
+    ]
+    return (
+        "No friction impulse (—) is read from the reported tangential forces of "
+        + join(parts)
+        + ": a frictional contact that transmits no tangential force in most of its rows is "
+        "not what the engine computed."
     )
-    jt, jn = row["friction_impulse"], row["normal_impulse"]
-    if np.isfinite(jt):
-        s += (
-            f"; over it the friction forces' angular impulse about the deck centre is "
-            f"{jt:+.3g} kN·m·s ({'towards' if jt > 0 else 'against'} the peak rotation), "
-            f"the normal forces' {jn:+.3g} kN·m·s"
-        )
-        jr = row.get("friction_impulse_ref", float("nan"))
-        if np.isfinite(jr):
-            s += (
-                f"; over the excursion that is the peak without friction (t = "
-                f"{row['t_start_ref']:.2f}–{row['t_peak_ref']:.2f} s) the friction impulse is "
-                f"{jr:+.3g} kN·m·s ({'with' if jr > 0 else 'against'} that rotation)"
-            )
-    else:
-        s += (
-            f"; its reported tangential forces are zero in {100 * row['ft_zero_share']:.0f} % "
-            "of the rows with a normal force, so no friction impulse is read from them"
-        )
-    corners = row["corners_at_peak"]
-    if corners == "none":
-        s += ". No corner is in contact at the peak"
-    else:
-        s += f". At the peak {corners.replace('+', ' and ')} ({row['face_at_peak']}) in contact"
-    shares = {c: row[f"stick_share_{c}"] for c in ("c1", "c2", "c3", "c4")}
-    known = {c: v for c, v in shares.items() if np.isfinite(v)}
-    if known:
-        src = "state_c*" if row["stick_source"] == "state" else "|ft| against μ·fn"
-        s += (
-            "; share of contact time sticking ("
-            + src
-            + "): "
-            + ", ".join(f"{c} {100 * v:.0f} %" for c, v in known.items())
-        )
-    firsts = {c: row[f"first_closure_{c}"] for c in ("c1", "c2", "c3", "c4")}
-    closed = {c: t for c, t in firsts.items() if np.isfinite(t)}
-    if closed:
-        t1 = min(closed.values())
-        first = [c for c, t in closed.items() if t <= t1 + 1e-9]
-        faces = join(sorted({_corner_face(c) for c in first}))
-        s += f"; the gaps close first at {join(first)} ({faces}) at t = {t1:.2f} s"
-    c1, c2 = row["contact_seat1"], row["contact_seat2"]
-    if c1 + c2 > 0:
-        s += (
-            f"; {100 * c1 / (c1 + c2):.0f} % of the face contact time is at seat 1 "
-            f"({c1:.2f} s against {c2:.2f} s at seat 2)"
-        )
-    return s + "."
+
+
+def closure_definition_sentence(output_dt: float) -> str:
+    """The report's one gap-closure count and the name of the output-row time it also shows."""
+    return (
+        "Gap closures (the sequence and study tables, the headline) are the engines' own count, "
+        "the one definition of every engine and of the exported OpenSees scripts: the steps at "
+        "which a corner goes from out of contact to in contact (gap ≤ 0 or a normal force), "
+        "counted at every step, a corner in contact at the start counting one; the report "
+        "never recounts them from the output rows. The first contact row (first_contact_row "
+        "in tables/sequence.csv and tables/friction_mechanism.csv) is another, clearly "
+        "different number: the time of the first output row at which a corner is in contact "
+        f"(the same test on the rows, every {short(output_dt)} s), which can lag the engines' "
+        "first closure by up to one output step."
+    )
 
 
 def impulse_agreement_sentences(effect: pd.DataFrame, mech: pd.DataFrame) -> list[str]:
@@ -521,17 +554,20 @@ def impulse_agreement_sentences(effect: pd.DataFrame, mech: pd.DataFrame) -> lis
     excursion that was the peak without friction (< 0: friction resists it). ``mech`` holds
     the sequence's rows (run, engine, mu, friction_impulse, friction_impulse_ref)."""
     out = []
+    nan = float("nan")
     for engine, g in effect.groupby("engine", sort=False):
         m = mech[(mech["engine"] == engine) & (mech["mu"] > 0)].set_index("run")
         changed = g[g["direction"].isin(["raises", "lowers"])]
         agree, disagree, unknown = [], [], []
         for _, r in changed.iterrows():
-            raises = r["direction"] == "raises"
-            col = "friction_impulse" if raises else "friction_impulse_ref"
-            j = m[col].get(r["run"], float("nan")) if col in m else float("nan")
-            if not np.isfinite(j):
+            jt, jr = (
+                m[col].get(r["run"], nan) if col in m else nan
+                for col in ("friction_impulse", "friction_impulse_ref")
+            )
+            explains = impulse_explains(r["direction"], jt, jr)
+            if explains is None:
                 unknown.append(r["run"])
-            elif (j > 0) == raises:
+            elif explains:
                 agree.append(r["run"])
             else:
                 disagree.append(r["run"])
