@@ -106,8 +106,10 @@ def check_figure(fig, *, min_series: int = 2, cases: bool = True) -> int:
         assert len(set(pairs)) == len(pairs), pairs
         for ln in lines if cases else []:
             assert ln.get_marker() not in ("None", "", None, " "), ln.get_label()
-            if len(ln.get_xdata()) > DENSE:
-                assert ln.get_markevery() is not None, ln.get_label()
+            if len(ln.get_xdata()) > DENSE:  # markers evenly over its points, not on every one
+                start, step = ln.get_markevery()
+                marks = len(range(start, len(ln.get_xdata()), step))
+                assert style.MIN_MARKS - 1 <= marks <= style.MARKS_PER_LINE + 1, ln.get_label()
     legends = [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
     legends += list(fig.legends)
     assert legends or most < min_series, "a figure of several series has no legend"
@@ -156,12 +158,19 @@ def test_series_styles_keep_the_engines_and_never_repeat_a_pair():
     )
     assert len({style.engine_marker(e) for e in engine_names()}) == len(engine_names())
     # cases that are no engine's: by position, still all distinct
-    many = style.series_styles([f"table {k}" for k in range(20)], [None] * 20, dense=True)
+    many = style.series_styles([f"table {k}" for k in range(20)], [None] * 20, points=1000)
     assert len({(s["linestyle"], s["marker"]) for s in many}) == 20
     assert len({s["markevery"] for s in many}) == 20  # offset: coinciding lines show both
+    assert all(1000 // s["markevery"][1] == style.MIN_MARKS for s in many)  # many: fewer each
+    few = style.series_styles(["opensees", "compliance"], points=[4001, 801])
+    assert [1 + (n - 1) // s["markevery"][1] for s, n in zip(few, (4001, 801))] == [
+        style.MARKS_PER_LINE + 1
+    ] * 2  # about MARKS_PER_LINE, evenly over each line's own points
     assert all("markevery" not in s for s in styles)  # sparse: a marker on every point
     with pytest.raises(ValueError, match="labels but"):
         style.series_styles(["a", "b"], [None])
+    with pytest.raises(ValueError, match="point counts"):
+        style.series_styles(["a", "b"], points=[10])
 
 
 # -- the report's figures -----------------------------------------------------------------------

@@ -290,7 +290,7 @@ def test_one_force_unit_per_quantity_on_the_page(report):
         units = FORCE_UNIT.findall(piece)
         if not units or "csv" in piece.lower():
             continue
-        kind = "bent" if "bent" in piece.lower() else "contact"
+        kind = "bent" if "bent force" in piece.lower() else "contact"
         want = (BENT_FORCE if kind == "bent" else CONTACT_FORCE).unit
         assert {u for u, _ in units} == {want}, (kind, piece)
         seen[kind] += 1
@@ -345,7 +345,7 @@ def test_the_reports_gap_closures_are_the_engines(report):
     head = section(text, "Headline")
     assert f"The gaps first close in run {first} for every engine" in head
     what = section(text, "What was run")
-    assert "Gap closures (the sequence and study tables, the headline) are the engines' own" in what
+    assert "tables/sequence.csv with closures per corner) are the engines' own count" in what
     assert "The first contact row (first_contact_row" in what
     assert "first closure" not in text.replace("first closure by", "")
     mech = read_table(out / "tables" / "friction_mechanism.csv")

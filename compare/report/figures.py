@@ -47,7 +47,7 @@ def histories(
     from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
     fig, axes = new_figure(len(quantities), 1, width=7.5, height=2.2, sharex=True)
-    styles = series_styles(list(results), dense=True)
+    styles = series_styles(list(results), points=[len(r.t) for r in results.values()])
     for i, q in enumerate(quantities):
         name, scale, unit = LABELS.get(q, (q, 1.0, ""))
         ax = axes[i, 0]
@@ -75,7 +75,7 @@ def contact_forces(
     from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
     fig, axes = new_figure(2, 2, width=8.0, height=2.0, sharex=True)
-    styles = series_styles(list(results), dense=True)
+    styles = series_styles(list(results), points=[len(r.t) for r in results.values()])
     for c in range(4):
         ax = axes[c % 2, c // 2]
         for st, r in zip(styles, results.values()):
@@ -180,7 +180,9 @@ def friction_mechanism(
         f"{engine_style(engine).get('label', engine)}, μ = {run.scene.contact.friction:g}"
         for engine, run in series
     ]
-    styles = series_styles(labels, [engine for engine, _ in series], dense=True)
+    styles = series_styles(
+        labels, [engine for engine, _ in series], points=[len(run.result.t) for _, run in series]
+    )
     shaded = False
     for (engine, run), st in zip(series, styles):
         r = run.result
@@ -269,7 +271,11 @@ def study_figure(
     ax.set_title(study.title + (f"\n{subtitle}" if subtitle else ""), fontsize=8)
     outside_legend(ax, fontsize=6)
     ax2 = axes[0, 1]
-    styles = series_styles([c.label for c in cases], [c.engine for c in cases], dense=True)
+    styles = series_styles(
+        [c.label for c in cases],
+        [c.engine for c in cases],
+        points=[len(results[c.label].t) for c in cases],
+    )
     for c, st in zip(cases, styles):
         r = results[c.label]
         ax2.plot(r.t, 1e3 * r["deck_theta"], **{**st, "linewidth": 0.9})

@@ -16,7 +16,7 @@ def plot_excitation(scene: Scene, motion: SupportMotion, path: str | Path) -> li
     fig, axes = new_figure(3, 2, width=8.0, height=2.0, sharex=True)
     for col, axis in enumerate(("x", "y")):
         channels = [c for c in motion.channels if c.endswith(f"_{axis}")]
-        styles = series_styles(channels, [None] * len(channels), dense=True)
+        styles = series_styles(channels, [None] * len(channels), points=len(motion.t))
         for ch, st in zip(channels, styles):
             axes[0, col].plot(motion.t, 1e3 * motion.disp[ch], **st)
             axes[1, col].plot(motion.t, motion.vel[ch], **{**st, "label": "_nolegend_"})

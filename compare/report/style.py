@@ -6,7 +6,7 @@ a figure share a (line style, marker) pair), so a greyscale print keeps them dis
 engine's colour, line style, width and label come from the registry
 (:func:`deckpound.compare.engines.engine_style`) and its marker from its place in it, so an
 engine looks the same in every figure. Markers on a dense line (a time history) are spaced
-along it (``markevery``), so the line stays readable. Legends stand beside the data, never on
+evenly along its points (``markevery``), so the line stays readable. Legends stand beside the data, never on
 it (:func:`outside_legend`). Every figure is saved atomically
 (:func:`deckpound.models.file_io.atomic_path`), and text that may carry user strings (the
 scene-name stamp, titles, axis labels, legends) is drawn literally, without mathtext: a scene
@@ -37,10 +37,10 @@ MARKERS = ("o", "s", "^", "D", "v", "x", "P", "<", ">", "h", "*", "d")
 MEASURED_MARKER = "*"
 #: marker size [pt]
 MARKERSIZE = 4.0
-#: spacing of the markers along a dense line, as a fraction of the axes' diagonal (for up to
-#: four lines; more lines space them further, up to MAX_MARK_SPACING)
-MARK_SPACING = 0.1
-MAX_MARK_SPACING = 0.3
+#: markers along a dense line of a figure of up to four lines; more lines carry fewer each, at
+#: least MIN_MARKS
+MARKS_PER_LINE = 12
+MIN_MARKS = 5
 
 #: colour, line style and marker by position, for figures outside the report (the benchmark
 #: plots of :mod:`deckpound.compare.bench`); the report's figures use :func:`series_styles`
@@ -96,7 +96,7 @@ def series_styles(
     labels: Sequence[str],
     engines: Sequence[str | None] | None = None,
     *,
-    dense: bool = False,
+    points: int | Sequence[int] | None = None,
 ) -> list[dict[str, Any]]:
     """Line keyword arguments for the series of one figure (one per label, in order), no two
     with the same (line style, marker) pair.
@@ -108,11 +108,12 @@ def series_styles(
     engine under another assumption) keeps its colour and marker, drawn hollow, and takes a
     line style no series of the figure has yet, or else the first that keeps the pair free.
     Other series take colour, line style and marker by position. A pair taken already moves
-    the marker on. ``dense``: the series has many points (a time history), so its markers are
-    spaced :data:`MARK_SPACING` of the axes' diagonal apart along the line (``markevery``;
-    further apart when a figure has more than four, up to :data:`MAX_MARK_SPACING`), each
-    series offset so that coinciding lines do not hide each other's markers; otherwise every
-    point carries a marker.
+    the marker on. ``points``: the number of points of each series (one number for all) when
+    they are dense lines (time histories): about :data:`MARKS_PER_LINE` markers per line,
+    evenly spaced over its points (``markevery``; fewer per line when a figure has more than
+    four, at least :data:`MIN_MARKS`; evenly in time, where a spacing along the drawn path
+    would crowd them on impact spikes), each series offset so that coinciding lines do not
+    hide each other's markers. None: every point carries a marker.
     """
     labels = [str(label) for label in labels]
     if engines is None:
@@ -165,13 +166,18 @@ def series_styles(
             others += 1
             lines = LINESTYLES[k % len(LINESTYLES) :] + LINESTYLES[: k % len(LINESTYLES)]
             take(i, {"color": COLORS[k % len(COLORS)]}, lines, MARKERS[k % len(MARKERS)])
-    # many dense lines: markers further apart, so the lines stay readable
-    spacing = min(MAX_MARK_SPACING, MARK_SPACING * max(1.0, len(labels) / 4))
+    if points is not None and not isinstance(points, Sequence):
+        points = [int(points)] * len(labels)
+    if points is not None and len(points) != len(labels):
+        raise ValueError(f"{len(labels)} labels but {len(points)} point counts")
+    # many dense lines: fewer markers each, so the lines stay readable
+    marks = max(MIN_MARKS, round(MARKS_PER_LINE * min(1.0, 4 / max(len(labels), 1))))
     out = []
     for i, (label, st) in enumerate(zip(labels, styles)):
         st = {**st, "markersize": MARKERSIZE, "label": label}
-        if dense:
-            st["markevery"] = (spacing * i / max(len(labels), 1), spacing)
+        if points is not None:
+            step = max(1, int(points[i]) // marks)
+            st["markevery"] = ((step * i) // len(labels), step)
         out.append(st)
     return out
 

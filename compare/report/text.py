@@ -535,8 +535,9 @@ def unread_impulse_sentence(mech: pd.DataFrame) -> str:
 def closure_definition_sentence(output_dt: float) -> str:
     """The report's one gap-closure count and the name of the output-row time it also shows."""
     return (
-        "Gap closures (the sequence and study tables, the headline) are the engines' own count, "
-        "the one definition of every engine and of the exported OpenSees scripts: the steps at "
+        "Gap closures (the study tables, the headline, tables/sequence.csv with closures per "
+        "corner) are the engines' own count, the one definition of every engine and of the "
+        "exported OpenSees scripts: the steps at "
         "which a corner goes from out of contact to in contact (gap ≤ 0 or a normal force), "
         "counted at every step, a corner in contact at the start counting one; the report "
         "never recounts them from the output rows. The first contact row (first_contact_row "

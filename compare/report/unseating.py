@@ -240,7 +240,7 @@ def unseating_section(run: UnseatingRun | None) -> list:
             run.figures[0],
             f"Fragility of unseating and of peak θ_d > {THETA_LIMIT:g} rad against Sa(T1) "
             f"[{unit}], lognormal fits of the IDA capacities per engine (band: 90 % bootstrap "
-            "over records); markers: observed fractions per level.",
+            "over records); large markers: observed fractions per level.",
         ),
         Figure(
             run.figures[1],

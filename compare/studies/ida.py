@@ -397,7 +397,10 @@ def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) 
     """Fragility curves (IDA fits) per limit state, one curve per engine and variant (each its
     own line style and marker, :func:`~deckpound.compare.report.style.series_styles`), with its
     90 % bootstrap band over records when no variant is swept; the stripes' observed fractions
-    as the curve's marker, hollow and larger; the legend beside the panels, off the data."""
+    as the curve's marker, larger, without a line; the legend beside the panels, off the
+    data."""
+    from matplotlib.ticker import NullFormatter
+
     from deckpound.compare.report.style import (
         MARKERSIZE,
         new_figure,
@@ -421,7 +424,7 @@ def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) 
             series_styles(
                 [f"{e}, {v}" if v else str(e) for e, v in series],
                 [e if e in engine_names() else None for e, _ in series],
-                dense=True,
+                points=len(grid),
             ),
         )
     )
@@ -447,9 +450,9 @@ def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) 
                     counts["exceed"] / counts["n"],
                     linestyle="none",
                     marker=st["marker"],
-                    ms=MARKERSIZE + 1.5,
+                    ms=MARKERSIZE + 2.5,
                     color=color,
-                    mfc="white",
+                    mfc=st.get("markerfacecolor", color),
                 )
             if not len(row) or not np.isfinite(row["median"].iloc[0]):
                 continue
@@ -468,6 +471,9 @@ def fragility_figure(table, frag, states, im: str, scene_name: str, path: Path) 
                 **{**st, "linewidth": 1.2, "label": f"{who}: median {m:.3g}, β {b:.2f}"},
             )
         ax.set_xscale("log")
+        # the levels as plain numbers: a log axis labels its minor ticks on top of each other
+        ax.set_xticks(levels, [f"{v:g}" for v in levels])
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_ylim(-0.02, 1.02)
         ax.set_title(name, fontsize=9)
         ax.set_xlabel(f"{im} [{IMS[im][2]}]")
