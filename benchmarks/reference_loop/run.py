@@ -244,7 +244,7 @@ def _row(label: str, us: list[float], ref_us: float, newton: float, facts, step:
     med = statistics.median(us)
     facts_text = "" if facts is None else str(facts)
     return (
-        f"{label:<44} {med:7.3f} {min(us):7.3f} {med / ref_us:6.2f}× "
+        f"{label:<46} {med:7.3f} {min(us):7.3f} {med / ref_us:6.2f}× "
         f"{newton:8.3f} {facts_text:>9} {step:8g}"
     )
 
@@ -331,10 +331,10 @@ def main(argv: list[str] | None = None) -> int:
         f"machine may be shared: medians of {args.rounds} rounds, interleaved"
     )
     print(
-        f"{'step loop':<44} {'µs/step':>7} {'min':>7} {'× ref':>7} {'Newton/':>8} "
+        f"{'step loop':<46} {'µs/step':>7} {'min':>7} {'× ref':>7} {'Newton/':>8} "
         f"{'factor-':>9} {'step':>8}"
     )
-    print(f"{'':<44} {'median':>7} {'':>7} {'':>7} {'step':>8} {'isations':>9} {'[s]':>8}")
+    print(f"{'':<46} {'median':>7} {'':>7} {'':>7} {'step':>8} {'isations':>9} {'[s]':>8}")
     print(ref_line("reference"))
     print(_engine_line("compliance", comp, ref_us))
     if args.variants:
