@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deckpound.compare.engines import get_engine, run_engine
-from deckpound.compare.pool import Interrupted, map_local
+from deckpound.compare.pool import Interrupted, map_local, one_blas_thread
 from deckpound.compare.progress import Progress
 from deckpound.compare.result_cache import ResultCache
 from deckpound.models.errors import SceneError
@@ -280,5 +280,6 @@ def _map_dask(
 def _dask_worker_setup() -> bool:
     from deckpound.analytic.kernel_load import install
 
+    one_blas_thread()  # several workers share the machine's cores (see the function)
     load_compiled_filter()  # a long-lived worker: scipy.signal now, not mid-sweep
     return install()

@@ -9,8 +9,9 @@ scope a map starts its own pool and stops it when done.
 
 Workers (:func:`worker_init`) die with their parent (:mod:`._workers`), ignore SIGINT — a Ctrl-C
 in a terminal reaches the whole process group; the parent alone decides — take SIGTERM's default
-action (the CLI turns SIGTERM into a Ctrl-C in the parent only) and load cached kernels the fast
-way (:mod:`deckpound.analytic.kernel_load`).
+action (the CLI turns SIGTERM into a Ctrl-C in the parent only), load cached kernels the fast
+way (:mod:`deckpound.analytic.kernel_load`) and keep the BLAS library to one thread
+(:func:`one_blas_thread`).
 
 Interrupts: on Ctrl-C (or any error) while a map runs, the parent kills every worker at once
 (SIGKILL: a worker inside a compiled loop cannot be asked), cancels what is queued and re-raises;
@@ -27,10 +28,12 @@ import sys
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
+from threadpoolctl import threadpool_limits
+
 from deckpound.compare._workers import die_with_parent
 from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 
-__all__ = ["Interrupted", "map_local", "pool_scope", "worker_init"]
+__all__ = ["Interrupted", "map_local", "one_blas_thread", "pool_scope", "worker_init"]
 
 #: seconds to wait for killed workers to be reaped
 REAP_TIMEOUT = 5.0
@@ -40,10 +43,23 @@ class Interrupted(KeyboardInterrupt):
     """A Ctrl-C, with one sentence on what is cached and how to resume (``str(err)``)."""
 
 
+def one_blas_thread() -> None:
+    """Keep this process's BLAS (OpenBLAS, MKL) and OpenMP pools to one thread.
+
+    A sweep runs one case per worker and core. A case's matrix products (its output columns,
+    e.g. the bent deformations B·u of every row) are large enough for OpenBLAS to wake its
+    thread pool, whose threads then busy-wait on the other cores, where the other workers run
+    their step loops: two workers ran at the speed of one (``tools/sweep_benchmark.py``)."""
+
+    threadpool_limits(limits=1)
+
+
 def worker_init(parent_pid: int) -> None:
-    """Pool initializer: die with the parent, leave SIGINT to it, load kernels fast."""
+    """Pool initializer: die with the parent, leave SIGINT to it, one BLAS thread, load kernels
+    fast."""
 
     die_with_parent(parent_pid)
+    one_blas_thread()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     # the CLI's SIGTERM handler (forked with the parent) is the parent's: a worker told to
     # terminate does so at once

@@ -32,6 +32,21 @@ def _boom(x):
     return x
 
 
+def _blas_threads(_x):
+    from threadpoolctl import threadpool_info
+
+    np.ones((300, 300)) @ np.ones((300, 300))  # BLAS loaded and used in this worker
+    return max((lib["num_threads"] for lib in threadpool_info()), default=1)
+
+
+def test_workers_keep_blas_to_one_thread():
+    """A worker's BLAS threads would busy-wait on the cores the other workers' step loops
+    need (compare/pool.py, one_blas_thread): each worker runs BLAS on one thread."""
+    threads = []
+    map_parallel([0, 1], lambda i: (i,), _blas_threads, lambda it, v: threads.append(v), 2, None)
+    assert threads == [1, 1]
+
+
 def test_pool_scope_reuses_workers_across_maps():
     def pids(n_items):
         out = []
