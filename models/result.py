@@ -34,6 +34,7 @@ import dataclasses
 import hashlib
 import io
 import json
+import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -100,9 +101,31 @@ def _hash(obj: Any) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+#: the hashes of live frozen descriptions, by (id, kind): a frozen scene's hash never changes,
+#: and a sweep asks for each case's several times (its cache key, its result's provenance); an
+#: entry goes when its scene is collected, so a new object never meets an old id's entry
+_LIVE_HASHES: dict[tuple[int, str], str] = {}
+
+
+def _frozen_hash(obj: Any, kind: str, mapping) -> str:
+    params = getattr(type(obj), "__dataclass_params__", None)
+    if params is None or not params.frozen:
+        return _hash(mapping(obj))
+    key = (id(obj), kind)
+    h = _LIVE_HASHES.get(key)
+    if h is None:
+        h = _hash(mapping(obj))
+        try:
+            weakref.finalize(obj, _LIVE_HASHES.pop, key, None)
+        except TypeError:  # no weak references (slots): not remembered
+            return h
+        _LIVE_HASHES[key] = h
+    return h
+
+
 def scene_hash(scene: Any) -> str:
     """SHA-256 of the scene's canonical JSON (every field, notes included): provenance."""
-    return _hash(to_mapping(scene))
+    return _frozen_hash(scene, "scene", to_mapping)
 
 
 def physics_mapping(scene: Any) -> dict[str, Any]:
@@ -112,7 +135,7 @@ def physics_mapping(scene: Any) -> dict[str, Any]:
 
 def physics_hash(scene: Any) -> str:
     """SHA-256 of :func:`physics_mapping`: the part of a cache key shared by every engine."""
-    return _hash(physics_mapping(scene))
+    return _frozen_hash(scene, "physics", physics_mapping)
 
 
 def settings_hash(settings: Any) -> str:

@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
+import gc
+import hashlib
+import json
+
 import numpy as np
 import pytest
 
 from deckpound.models.columns import column_unit, standard_columns
-from deckpound.models.result import Result, scene_hash
+from deckpound.models.fields import to_mapping
+from deckpound.models.result import Result, physics_hash, physics_mapping, scene_hash
+from deckpound.models.scene_io import load_scene, modified
 
 
 def _result():
@@ -61,3 +67,25 @@ def test_scene_hash_changes_with_any_field(bench_scene):
     other = bench_scene.replace(description="x")
     assert scene_hash(bench_scene) == scene_hash(bench_scene.replace())
     assert scene_hash(bench_scene) != scene_hash(other)
+
+
+def test_a_scene_is_hashed_once_and_a_changed_copy_anew():
+    """scene_hash and physics_hash remember a frozen scene's hashes while it lives (a sweep asks
+    for them several times per case); a modified copy is hashed anew, and the answers equal the
+    canonical JSON's SHA-256."""
+
+    def sha(mapping):
+        text = json.dumps(mapping, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    scene = load_scene("saiidi-4span")
+    assert scene_hash(scene) == scene_hash(scene) == sha(to_mapping(scene))
+    assert physics_hash(scene) == sha(physics_mapping(scene))
+    other = modified(scene, f"deck.mass={scene.deck.mass * 2}")
+    assert physics_hash(other) != physics_hash(scene)
+    assert physics_hash(other) == sha(physics_mapping(other))
+    before = physics_hash(other)
+    del other
+    gc.collect()
+    again = modified(scene, f"deck.mass={scene.deck.mass * 3}")  # may reuse the freed id
+    assert physics_hash(again) == sha(physics_mapping(again)) != before
