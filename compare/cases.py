@@ -38,16 +38,22 @@ from deckpound.models.version import VERSION
 
 __all__ = [
     "Case",
+    "batch_size",
     "case_key",
     "check_scheduler_address",
     "engine_expresses",
     "map_parallel",
+    "run_batch",
     "run_case",
     "run_cases",
 ]
 
 #: seconds to wait for a Dask scheduler before giving up (exit status 3 on the CLI)
 CONNECT_TIMEOUT = 20.0
+#: the most cases one task carries to a worker (a batch: one round trip, one pickled list),
+#: and how many batches each worker gets at least, so that the last ones still balance
+MAX_BATCH = 8
+BATCHES_PER_WORKER = 8
 
 
 @dataclass(frozen=True)
@@ -213,7 +219,12 @@ def map_parallel(
     workers: int | None,
     scheduler: str | None,
 ) -> None:
-    """Apply func(*args_of(item)) to items on Dask, a process pool, or in this process."""
+    """Apply func(*args_of(item)) to items on Dask, a process pool, or in this process.
+
+    Workers take the items in batches (:func:`batch_size`): a task is one round trip however
+    many cases it carries, and a case of a sweep takes tens of milliseconds, which a task per
+    case would spend again on scheduling and transfer. ``on_done`` still sees every item.
+    """
     if not items:
         return
     if scheduler:
@@ -226,7 +237,35 @@ def map_parallel(
         for it in items:
             on_done(it, func(*args_of(it)))
         return
-    map_local(items, args_of, func, on_done, n)
+    batches = _batches(items, batch_size(len(items), n))
+    map_local(batches, _batch_args(args_of, func), run_batch, _batch_done(on_done), n)
+
+
+def batch_size(items: int, workers: int) -> int:
+    """Cases per task: at most :data:`MAX_BATCH`, and at least :data:`BATCHES_PER_WORKER`
+    tasks per worker while there are enough items (1 for short maps)."""
+    return max(1, min(MAX_BATCH, items // (BATCHES_PER_WORKER * max(1, workers))))
+
+
+def run_batch(func: Callable, arguments: list[tuple]) -> list:
+    """The worker side of a batch: ``[func(*args) for args in arguments]``."""
+    return [func(*args) for args in arguments]
+
+
+def _batches(items: list, size: int) -> list[tuple]:
+    return [tuple(items[i : i + size]) for i in range(0, len(items), size)]
+
+
+def _batch_args(args_of: Callable, func: Callable) -> Callable:
+    return lambda batch: (func, [args_of(it) for it in batch])
+
+
+def _batch_done(on_done: Callable) -> Callable:
+    def done(batch: tuple, values: list) -> None:
+        for it, value in zip(batch, values, strict=True):
+            on_done(it, value)
+
+    return done
 
 
 _ADDRESS = re.compile(
@@ -266,10 +305,13 @@ def _map_dask(
     with client:
         # every worker loads cached kernels the fast way; a worker keeps them for its lifetime
         client.run(_dask_worker_setup)
-        futures = {client.submit(func, *args_of(it), pure=False): it for it in items}
+        threads = sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values())
+        batches = _batches(items, batch_size(len(items), threads))
+        arguments, done = _batch_args(args_of, func), _batch_done(on_done)
+        futures = {client.submit(run_batch, *arguments(b), pure=False): b for b in batches}
         try:
             for fut in dask_completed(futures):
-                on_done(futures[fut], fut.result())
+                done(futures[fut], fut.result())
         except BaseException:
             # an error or Ctrl-C: drop the queued cases from the cluster (a worker's running
             # case ends on its own; the cluster is not ours to kill)

@@ -15,7 +15,7 @@ from _process_helpers import alive, start_in_own_group, wait_for_rows
 import deckpound as dp
 from deckpound import cli
 from deckpound.compare import pool
-from deckpound.compare.cases import map_parallel
+from deckpound.compare.cases import MAX_BATCH, batch_size, map_parallel
 from deckpound.models.result import read_table
 
 SHORT = ["excitation.duration=2.0"]
@@ -45,6 +45,27 @@ def test_workers_keep_blas_to_one_thread():
     threads = []
     map_parallel([0, 1], lambda i: (i,), _blas_threads, lambda it, v: threads.append(v), 2, None)
     assert threads == [1, 1]
+
+
+def _square_pid(x):
+    return x * x, os.getpid()
+
+
+def test_a_sweep_travels_in_batches_and_every_item_is_done_once():
+    """Workers take several cases per task (compare/cases.py, batch_size); on_done still sees
+    every item once, with its own value."""
+    assert batch_size(1, 2) == 1 and batch_size(10, 2) == 1
+    assert batch_size(10_000, 2) == MAX_BATCH
+    assert 1 < batch_size(60, 2) <= MAX_BATCH
+    seen = {}
+    map_parallel(
+        list(range(60)), lambda i: (i,), _square_pid, lambda it, v: seen.setdefault(it, v), 2, None
+    )
+    assert sorted(seen) == list(range(60))
+    assert all(seen[i][0] == i * i for i in seen)
+    # items of one batch run in one worker, one after the other
+    size = batch_size(60, 2)
+    assert all(seen[i][1] == seen[i - i % size][1] for i in seen)
 
 
 def test_pool_scope_reuses_workers_across_maps():
