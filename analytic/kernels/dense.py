@@ -24,8 +24,12 @@ __all__ = ["lu_factor", "lu_solve", "solve_dense_cp", "solve_dense_cp_into"]
 def lu_factor(A, piv, size):
     """In-place LU with partial pivoting (PA = LU, unit lower L below the diagonal) of the
     n × n matrix A, n = len(size) (a size tag, see the module docstring); piv (n,) int64 the
-    row swaps. Returns False if a pivot is zero or not finite (singular)."""
+    row permutation: row k of the factors is row piv[k] of A (the row exchanges composed, so
+    :func:`lu_solve` applies them in one pass). Returns False if a pivot is zero or not finite
+    (singular)."""
     n = len(size)
+    for i in range(n):
+        piv[i] = i
     for k in range(n):
         p = k
         amax = abs(A[k, k])
@@ -33,7 +37,6 @@ def lu_factor(A, piv, size):
             if abs(A[i, k]) > amax:
                 amax = abs(A[i, k])
                 p = i
-        piv[k] = p
         if amax == 0.0 or not np.isfinite(amax):
             return False
         if p != k:
@@ -41,6 +44,9 @@ def lu_factor(A, piv, size):
                 tmp = A[k, j]
                 A[k, j] = A[p, j]
                 A[p, j] = tmp
+            tmp_row = piv[k]
+            piv[k] = piv[p]
+            piv[p] = tmp_row
         inv = 1.0 / A[k, k]
         for i in range(k + 1, n):
             A[i, k] *= inv
@@ -53,19 +59,14 @@ def lu_factor(A, piv, size):
 
 @kernel
 def lu_solve(LU, piv, b, x, size):
-    """Solve A x = b with the factors LU, piv of :func:`lu_factor` (x may alias b); n =
-    len(size), the size tag the factors were computed with."""
+    """Solve A x = b with the factors LU, piv of :func:`lu_factor`; n = len(size), the size
+    tag the factors were computed with. x must not alias b: the forward substitution reads
+    b through the permutation, L y = P b with (P b)_i = b[piv[i]], while it writes y into x
+    (the same operations, in the same order, as exchanging the rows of b one by one first);
+    then U x = y in place."""
     n = len(size)
     for i in range(n):
-        x[i] = b[i]
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            tmp = x[k]
-            x[k] = x[p]
-            x[p] = tmp
-    for i in range(n):
-        s = x[i]
+        s = b[piv[i]]
         for j in range(i):
             s -= LU[i, j] * x[j]
         x[i] = s

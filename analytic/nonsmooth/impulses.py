@@ -29,7 +29,7 @@ from deckpound.analytic.nonsmooth.frictional_contact import (
 __all__ = ["ImpulseWork", "impulse_work", "size_tag", "solve_active_impulses"]
 
 #: Scratch of :func:`solve_active_impulses` for up to nc active corners and n_dof DOFs: X, Wr
-#: (2nc, n_dof) rows Ŵ⁻¹ w and w of W = [W_N; W_T]; col (n_dof,); G (2nc, 2nc) Delassus matrix;
+#: (2nc, n_dof) rows Ŵ⁻¹ w and w of W = [W_N; W_T]; G (2nc, 2nc) Delassus matrix;
 #: per corner (nc,) uNf, uTf free contact velocities, uNm pre-impact normal velocity, ea, ma
 #: restitution and friction, pN, pT impulses, uNp, uTp post-impact velocities, st int64 states;
 #: ``contact`` the frictional solve's scratch (:data:`.frictional_contact.ContactSolveWork`);
@@ -39,7 +39,6 @@ ImpulseWork = namedtuple(
     [
         "X",
         "Wr",
-        "col",
         "G",
         "uNf",
         "uTf",
@@ -77,7 +76,6 @@ def impulse_work(n_corners: int, n_dof: int) -> ImpulseWork:
     return ImpulseWork(
         X=np.zeros((2 * nc, nd)),
         Wr=np.zeros((2 * nc, nd)),
-        col=np.zeros(nd),
         G=np.zeros((2 * nc, 2 * nc)),
         st=np.zeros(nc, dtype=np.int64),
         contact=contact_solve_work(nc),
@@ -103,18 +101,13 @@ def solve_active_impulses(
     n_dof = len(work.dof_slots)
     X = work.X[: 2 * nc]  # rows: Ŵ⁻¹ w for each column w of W
     Wr = work.Wr[: 2 * nc]
-    col = work.col
     for a in range(nc):
         c = act[a]
         for j in range(n_dof):
             Wr[a, j] = WN[c, j]
             Wr[nc + a, j] = WT[c, j]
     for r in range(2 * nc):
-        for j in range(n_dof):
-            col[j] = Wr[r, j]
-        lu_solve(LU, piv, col, col, work.dof_slots)
-        for j in range(n_dof):
-            X[r, j] = col[j]
+        lu_solve(LU, piv, Wr[r], X[r], work.dof_slots)
     G = work.G[: 2 * nc, : 2 * nc]
     for r in range(2 * nc):
         for s in range(r, 2 * nc):
