@@ -136,6 +136,7 @@ COUNT_NAMES = (
     "rejected_steps",
     "rhs_calls",
     "unmoved_iterates",
+    "contact_factor_reuses",
 )
 (
     CNT_STATUS,
@@ -153,6 +154,7 @@ COUNT_NAMES = (
     CNT_REJECTED,
     CNT_RHS_CALLS,
     CNT_UNMOVED,
+    CNT_CONTACT_REUSED,
 ) = range(len(COUNT_NAMES))
 #: Names of ``Stats.value`` entries, in index order: largest verified complementarity and cone
 #: residuals of the contact solves [m/s], time reached [s], and the largest penetration

@@ -83,10 +83,12 @@ SUBSTEPS = 10  # sub-steps of the fallback for a failed step (OpenSees engine de
 #:   kinematics already evaluates the gaps every iteration).
 #: * ``friction`` — no friction law when μ = 0 (or friction_mode = none); off: the
 #:   regularised slip law runs with μ = 0 at every closed corner (forces exactly 0).
-#: * ``factor_reuse`` — the Takeda elastic short-circuit at the system level: while every
-#:   bent spring's tangent is its initial one (and no corner is closed) the effective tangent
-#:   is bitwise the elastic one and its factors are reused; off: assembled and factorised
-#:   every iteration. (The material kernel's own short-circuit, ``pow`` skipped while the
+#: * ``factor_reuse`` — the effective tangent's factors reused while the matrix is bitwise
+#:   the one factorised: the elastic one while every bent spring's tangent is its initial one
+#:   and no corner is closed (the Takeda elastic short-circuit at the system level), or the
+#:   last one while the step, the spring tangents and, with linear contact kinematics, the
+#:   closed corners and their law derivatives stay (in contact too; meta ``factorisations``,
+#:   ``contact_factor_reuses``); off: assembled and factorised every iteration. (The material kernel's own short-circuit, ``pow`` skipped while the
 #:   ductility is ≤ 1, is measured separately, see
 #:   :data:`deckpound.analytic.kernels.hysteretic_kernel.ELASTIC_SHORTCUT`.)
 #: * ``unmoved_iterate`` — no force evaluation at a converged Newton iterate whose last
@@ -336,6 +338,8 @@ def _run_newmark(
         "contact_tangent": settings.contact_tangent,
         "max_step_iterations": st["max_step_iterations"],
         "elastic_factor_reuses": st["factor_reuses"],
+        "factorisations": st["factorisations"],
+        "contact_factor_reuses": st["contact_factor_reuses"],
         "unmoved_iterates": st["unmoved_iterates"],
         "rayleigh": {"a0": ps.a0, "a1": ps.a1, "omega": list(ps.omega)},
         "energy_note": "energy_error = input - (kinetic + strain + viscous + hysteretic + "

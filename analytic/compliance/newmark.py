@@ -24,8 +24,11 @@ takes the named bundles of :mod:`.bundles` (workspace from
 :func:`.newmark_work.newmark_workspace`, scalars
 in :data:`.newmark_work.NewmarkOptions`); the contact laws are skipped while every corner's
 gap is open (g > 0, where every law gives zero force) and the tangent factorisation is reused
-while it is bitwise the elastic one (identical matrix → identical factors, so results do not
-change). Output every :func:`deckpound.compare.engines.output_stride` steps.
+while the matrix is bitwise the one factorised (identical matrix → identical factors, so results
+do not change): the elastic one, or the last one while its key stays (the step, the spring
+tangents and, for linear contact kinematics, the evaluated corners and their law derivatives,
+:func:`_held_factors_fit`), in contact too. ``stats`` counts the factorisations and the reuses.
+Output every :func:`deckpound.compare.engines.output_stride` steps.
 
 :func:`newmark_run` is a short driver over stages, each a kernel inlined into it
 (``inline="always"``: one compiled loop, no calls that pass the bundles by value): at the
@@ -61,6 +64,7 @@ from deckpound.analytic.compliance.work_energy import (
 from deckpound.analytic.fp_mode import flush_enter, flush_leave
 from deckpound.analytic.kernels import contact_assembly as ca
 from deckpound.analytic.kernels import contact_laws as cl
+from deckpound.analytic.kernels.contact_assembly import N_TANGENT_DERIVATIVES
 from deckpound.analytic.kernels.dense import lu_factor, lu_solve
 from deckpound.analytic.kernels.peaks import track_step
 from deckpound.analytic.kernels.support_motion import record_at
@@ -305,25 +309,79 @@ def _same_tangents(kt, kt_fact):
 
 
 @kernel(inline="always")
-def _solve(sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_only, lu_h):
+def _same_contact_key(cw, ev_fact, der_fact):
+    """True when the corners evaluated at the last trial are those whose contact tangent the
+    held factors contain (``ev_fact``), each with the same law derivatives ∂λ/∂(g, ġ, Δs, U_T,
+    λ_N) (``der_fact``, :data:`.contact_assembly.N_TANGENT_DERIVATIVES`).
+
+    Equal as numbers is enough: the derivatives enter Keff only through sums onto entries
+    that are never −0 (they start from K + c2 C + c3 M, whose zeros are +0, and x + y = 0 is
+    +0), so a −0 in place of a +0 changes no bit of Keff."""
+    for c in range(len(cw.corners)):
+        ev = cw.evaluated[c]
+        if ev != ev_fact[c]:
+            return False
+        if ev:
+            for k in range(N_TANGENT_DERIVATIVES):
+                if cw.der[c, k] != der_fact[c, k]:
+                    return False
+    return True
+
+
+@kernel(inline="always")
+def _hold_contact_key(cw, ev_fact, der_fact):
+    """Record the contact part of the key of the factors just formed (:func:`_same_contact_key`)."""
+    for c in range(len(cw.corners)):
+        ev = cw.evaluated[c]
+        ev_fact[c] = ev
+        if ev:
+            for k in range(N_TANGENT_DERIVATIVES):
+                der_fact[c, k] = cw.der[c, k]
+
+
+@kernel(inline="always")
+def _held_factors_fit(contact, work, h, anyev, lu_held, lu_h):
+    """True when the factors held in LU are those of the effective tangent at the last trial
+    state, bit for bit: Keff = K(k_t) + c2 C + c3 M + Σ_c (contact tangent of corner c) is a
+    function of the step h, the spring tangents k_t, the corners evaluated and their law
+    derivatives, and of W_N, W_T, which are constant for linear kinematics. With nonlinear
+    kinematics and a corner evaluated, W_N and the geometric term λ_N ∂²g/∂u² change with u:
+    never reused. (Tangent-dependent damping, whose matrix also changes with k_t and k_c,
+    turns every reuse off in :func:`_run_steps`.)"""
+    if not lu_held or lu_h != h:
+        return False
+    if anyev and contact.nonlinear:
+        return False
+    if not _same_tangents(work.spring.kt, work.spring.kt_fact):
+        return False
+    return _same_contact_key(work.cw, work.mat.ev_fact, work.mat.der_fact)
+
+
+@kernel(inline="always")
+def _solve(sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_held, lu_h):
     """formTangent + solve: du = Keff⁻¹ R at the last trial state.
 
-    The factors are reused when the matrix is bitwise the one they factor (``reuse``, no
-    corner evaluated): the elastic factors of the main step when every spring is elastic, or
-    the held factors LU when they have no contact terms (``lu_springs_only``), the same step
-    ``lu_h`` and the same spring tangents. Returns (factorised or reused without a singular
-    pivot, lu_springs_only, lu_h) of the factors now held in LU.
+    The factors are reused when the matrix is bitwise the one they factor (``reuse``): the
+    elastic factors of the main step when every spring is elastic and no corner is evaluated,
+    or the factors held in LU (``lu_held``, of the step ``lu_h``) when their key matches
+    (:func:`_held_factors_fit`), in contact too. Otherwise Keff is assembled and factorised
+    (``stats`` counts factorisations, reuses and reuses of factors with contact terms).
+    Returns (factorised or reused without a singular pivot, lu_held, lu_h) of the factors now
+    held in LU.
     """
     mat, spr, dof = work.mat, work.spring, work.dof
-    if reuse and not anyev:
-        if nonel == 0 and nsub == 1:
+    cnt = stats.count
+    if reuse:
+        if not anyev and nonel == 0 and nsub == 1:
             lu_solve(mat.LUel, mat.pivel, dof.R, dof.du, sa.dofs)
-            stats.count[bd.CNT_REUSED] += 1
-            return True, lu_springs_only, lu_h
-        if lu_springs_only and lu_h == h and _same_tangents(spr.kt, spr.kt_fact):
+            cnt[bd.CNT_REUSED] += 1
+            return True, lu_held, lu_h
+        if _held_factors_fit(contact, work, h, anyev, lu_held, lu_h):
             lu_solve(mat.LU, mat.piv, dof.R, dof.du, sa.dofs)
-            stats.count[bd.CNT_REUSED] += 1
-            return True, lu_springs_only, lu_h
+            cnt[bd.CNT_REUSED] += 1
+            if anyev:
+                cnt[bd.CNT_CONTACT_REUSED] += 1
+            return True, lu_held, lu_h
     c2 = GAMMA / (BETA * h)
     spring_tangent(sa, spr.kt, mat.K)
     _effective_tangent(sa, mat.K, c2, 1.0 / (BETA * h * h), mat.Keff)
@@ -332,10 +390,12 @@ def _solve(sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_on
         ca.contact_tangent(contact, work.cw, dof.u, c2, mat.Keff, mat.H, sa.dofs)
     _copy_matrix(mat.Keff, mat.LU, len(sa.dofs))
     _copy(spr.kt, spr.kt_fact, spr.kt.shape[0])
+    _hold_contact_key(work.cw, mat.ev_fact, mat.der_fact)
+    cnt[bd.CNT_FACTORISATIONS] += 1
     if not lu_factor(mat.LU, mat.piv, sa.dofs):
         return False, False, h
     lu_solve(mat.LU, mat.piv, dof.R, dof.du, sa.dofs)
-    return True, not anyev, h
+    return True, True, h
 
 
 @kernel(inline="always")
@@ -358,19 +418,19 @@ def _update(nd, dof, h):
 
 
 @kernel(inline="always")
-def _newton(sa, contact, opt, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_only, lu_h):
+def _newton(sa, contact, opt, work, stats, h, nsub, nonel, anyev, reuse, lu_held, lu_h):
     """Newton iterations of one (sub)step from the predictor's residual until ‖Δu‖₂ ≤ tol
     (``CTestNormDispIncr``), ``opt.maxit`` solves, a singular matrix, a non-finite increment
     or the halt flag. Returns (status, iterations, any corner evaluated at the last
-    evaluation, lu_springs_only, lu_h)."""
+    evaluation, lu_held, lu_h)."""
     dof, spr, sup, cw = work.dof, work.spring, work.support, work.cw
     it = 0
     while True:
-        ok, lu_springs_only, lu_h = _solve(
-            sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_only, lu_h
+        ok, lu_held, lu_h = _solve(
+            sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_held, lu_h
         )
         if not ok:
-            return RUN_SINGULAR, it, anyev, lu_springs_only, lu_h
+            return RUN_SINGULAR, it, anyev, lu_held, lu_h
         nrm, moved = _update(len(sa.dofs), dof, h)
         if opt.skip_unmoved and not moved and not anyev and nrm <= opt.tol:
             # converged, and the increment (round-off of a step that stayed on its branches)
@@ -385,13 +445,13 @@ def _newton(sa, contact, opt, work, stats, h, nsub, nonel, anyev, reuse, lu_spri
             )
         it += 1
         if not np.isfinite(nrm):
-            return RUN_NONFINITE, it, anyev, lu_springs_only, lu_h
+            return RUN_NONFINITE, it, anyev, lu_held, lu_h
         if nrm <= opt.tol:
-            return RUN_OK, it, anyev, lu_springs_only, lu_h
+            return RUN_OK, it, anyev, lu_held, lu_h
         if it >= opt.maxit:
-            return RUN_NOT_CONVERGED, it, anyev, lu_springs_only, lu_h
+            return RUN_NOT_CONVERGED, it, anyev, lu_held, lu_h
         if stats.halt[0] != 0:
-            return RUN_INTERRUPTED, it, anyev, lu_springs_only, lu_h
+            return RUN_INTERRUPTED, it, anyev, lu_held, lu_h
 
 
 @kernel(inline="always")
@@ -463,9 +523,9 @@ def _accumulate_work(sa, work):
 
 
 @kernel(inline="always")
-def _attempt(sa, contact, opt, output, work, stats, n, nsub, reuse, lu_springs_only, lu_h):
+def _attempt(sa, contact, opt, output, work, stats, n, nsub, reuse, lu_held, lu_h):
     """Step n (from t_n = n·dt) in nsub equal sub-steps: predict, form the unbalance, Newton,
-    commit, work. Returns (status, a seat margin became negative, lu_springs_only, lu_h); stops
+    commit, work. Returns (status, a seat margin became negative, lu_held, lu_h); stops
     at the first sub-step that does not converge."""
     dt = opt.dt
     h = dt / nsub
@@ -484,38 +544,38 @@ def _attempt(sa, contact, opt, output, work, stats, n, nsub, reuse, lu_springs_o
             work.support,
             opt.skip_contact,
         )
-        status, it, anyev, lu_springs_only, lu_h = _newton(
-            sa, contact, opt, work, stats, h, nsub, nonel, anyev, reuse, lu_springs_only, lu_h
+        status, it, anyev, lu_held, lu_h = _newton(
+            sa, contact, opt, work, stats, h, nsub, nonel, anyev, reuse, lu_held, lu_h
         )
         cnt[bd.CNT_NEWTON] += it
         cnt[bd.CNT_MAX_IT] = max(cnt[bd.CNT_MAX_IT], it)
         if status != RUN_OK:
-            return status, unseated, lu_springs_only, lu_h
+            return status, unseated, lu_held, lu_h
         t_now = (n + 1) * dt if ksub == nsub - 1 else n * dt + (ksub + 1) * h
         if _commit(sa, contact, work, output, stats, anyev, t_now):
             unseated = True
         if opt.want_energy:
             _accumulate_work(sa, work)
-    return RUN_OK, unseated, lu_springs_only, lu_h
+    return RUN_OK, unseated, lu_held, lu_h
 
 
 @kernel(inline="always")
-def _step(sa, contact, opt, output, work, stats, n, reuse, lu_springs_only, lu_h):
+def _step(sa, contact, opt, output, work, stats, n, reuse, lu_held, lu_h):
     """Step n in one attempt; if it fails (not by a non-finite state or the halt flag) it is
     redone from its start in ``opt.substeps`` sub-steps (OpenSees engine ``fallback =
-    "substep"``). Returns (status, unseated, lu_springs_only, lu_h) as :func:`_attempt`."""
+    "substep"``). Returns (status, unseated, lu_held, lu_h) as :func:`_attempt`."""
     nsub = 1
     while True:
         # one copy of the (sub)step code in the compiled loop: the attempts share it
-        status, unseated, lu_springs_only, lu_h = _attempt(
-            sa, contact, opt, output, work, stats, n, nsub, reuse, lu_springs_only, lu_h
+        status, unseated, lu_held, lu_h = _attempt(
+            sa, contact, opt, output, work, stats, n, nsub, reuse, lu_held, lu_h
         )
         if status == RUN_OK:
             if nsub > 1:
                 stats.count[bd.CNT_RESCUED] += 1
-            return status, unseated, lu_springs_only, lu_h
+            return status, unseated, lu_held, lu_h
         if nsub > 1 or opt.substeps <= 1 or status in (RUN_NONFINITE, RUN_INTERRUPTED):
-            return status, unseated, lu_springs_only, lu_h
+            return status, unseated, lu_held, lu_h
         _revert_step(sa, work)
         nsub = opt.substeps
 
@@ -528,7 +588,7 @@ def _run_steps(sa, contact, record, opt, output, work, stats):
     jrec = _start(sa, contact, record, opt, output, work)
     # tangent-dependent damping: the matrix changes with k_t and k_c, never the elastic one
     reuse = opt.reuse_factors and sa.scal[SCAL_TANGENT_DAMPING] == 0.0
-    lu_springs_only = False  # the factors in LU have no contact terms
+    lu_held = False  # LU holds factors whose key is recorded (_held_factors_fit)
     lu_h = 0.0  # the step of the factors in LU [s]
     row = 1
     for n in range(opt.nsteps):
@@ -536,8 +596,8 @@ def _run_steps(sa, contact, record, opt, output, work, stats):
             _set_stats(stats, RUN_INTERRUPTED, row, n + 1, n, dt)
             return
         jrec = _begin_step(len(sa.dofs), record, work, (n + 1) * dt, jrec)
-        status, unseated, lu_springs_only, lu_h = _step(
-            sa, contact, opt, output, work, stats, n, reuse, lu_springs_only, lu_h
+        status, unseated, lu_held, lu_h = _step(
+            sa, contact, opt, output, work, stats, n, reuse, lu_held, lu_h
         )
         if status != RUN_OK:
             _set_stats(stats, status, row, n + 1, n, dt)
@@ -573,7 +633,9 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     and the gap closures over every converged (sub)step, :mod:`.peaks`) and ``stats.count``:
     status (RUN_OK, RUN_NOT_CONVERGED, RUN_SINGULAR, RUN_NONFINITE, RUN_INTERRUPTED), rows
     written, failed step, steps completed, Newton iterations, contact events, factorisations
-    reused (same matrix), max iterations of a step, steps rescued by sub-stepping. A step at
+    reused (same matrix; those with contact terms also in ``contact_factor_reuses``),
+    factorisations formed in the steps, max iterations of a step, steps rescued by
+    sub-stepping. A step at
     which a corner's seat margin becomes negative (:func:`deckpound.analytic.kernels.peaks.track_step`)
     is completed (all its sub-steps) and the loop stops there with RUN_UNSEATED (failed step =
     steps = that step, its output row not written). ``stats.halt[0]`` ≠ 0 stops the loop at the

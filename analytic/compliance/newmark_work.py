@@ -22,6 +22,7 @@ from deckpound.analytic.compliance.work_energy import (
     stick_spring_energy,
 )
 from deckpound.analytic.kernels import contact_laws as cl
+from deckpound.analytic.kernels.contact_assembly import N_TANGENT_DERIVATIVES
 from deckpound.analytic.kernels.system import (
     end_column,
     spring_stored_energy,
@@ -76,8 +77,12 @@ _CH = ("ug", "vg", "ugo", "ug0", "vg0", "ug1", "vg1")
 #: of the step, du Newton increment, R residual, f internal force.
 NewmarkDofs = namedtuple("NewmarkDofs", _V7)
 #: (n_dof, n_dof) matrices: K, Keff, LU (tangent, effective tangent, its factors), H gap Hessian, Kel,
-#: LUel (elastic effective tangent and factors); pivots piv, pivel (n_dof,) int64.
-NewmarkMatrices = namedtuple("NewmarkMatrices", _M77 + _PIV)
+#: LUel (elastic effective tangent and factors); row permutations piv, pivel (n_dof,) int64
+#: (:func:`deckpound.analytic.kernels.dense.lu_factor`); the contact part of the key of the
+#: factors held in LU: ev_fact (n_corners,) bool the corners whose contact tangent they contain,
+#: der_fact (n_corners, N_TANGENT_DERIVATIVES) those corners' law derivatives
+#: (:data:`deckpound.analytic.kernels.contact_assembly.N_TANGENT_DERIVATIVES`).
+NewmarkMatrices = namedtuple("NewmarkMatrices", _M77 + _PIV + ("ev_fact", "der_fact"))
 #: Per spring (ns,): fs, kt forces and tangents, kt_fact tangents of the factors held in LU,
 #: d/dd/fs_prev last committed, d/dd_new trial deformations and rates, cv_prev the last committed
 #: tangent-dependent damping coefficient βK k_t + βKc k_c.
@@ -113,7 +118,12 @@ def newmark_workspace(u0, v0, hstate, cstate, ns: int, nch: int) -> NewmarkWork:
         cstate=cstate,
         cw=bd.new_contact_work(nc, nd),
         dof=NewmarkDofs(**bd.row_views(_V7, nd)),
-        mat=NewmarkMatrices(**bd.row_views(_M77, nd, nd), **bd.row_views(_PIV, nd, dtype=np.int64)),
+        mat=NewmarkMatrices(
+            **bd.row_views(_M77, nd, nd),
+            **bd.row_views(_PIV, nd, dtype=np.int64),
+            ev_fact=np.zeros(nc, dtype=np.bool_),
+            der_fact=np.zeros((nc, N_TANGENT_DERIVATIVES)),
+        ),
         spring=NewmarkSprings(**bd.row_views(_NS, ns)),
         support=NewmarkSupports(**bd.row_views(_CH, nch)),
         **bd.row_views(_V4, nc),

@@ -37,6 +37,7 @@ from deckpound.analytic.kernels.kinematics import (
 
 __all__ = [
     "N_LAW_DERIVATIVES",
+    "N_TANGENT_DERIVATIVES",
     "contact_tangent",
     "eval_closed",
     "eval_contacts",
@@ -47,6 +48,10 @@ __all__ = [
 #: Columns of ``ContactWork.der`` a corner's laws fill (:func:`eval_contacts`): ∂λ_N/∂g,
 #: ∂λ_N/∂ġ, ∂λ_T/∂Δs, ∂λ_T/∂U_T, ∂λ_T/∂λ_N, Δs, U_T (a count of law quantities, not of DOF).
 N_LAW_DERIVATIVES = 7
+#: The first columns of ``ContactWork.der`` that :func:`contact_tangent` reads (∂λ_N/∂g,
+#: ∂λ_N/∂ġ, ∂λ_T/∂Δs, ∂λ_T/∂U_T, ∂λ_T/∂λ_N): with the step, the corners evaluated and, for
+#: linear kinematics, the constant rows W_N, W_T, they fix the contact part of the tangent.
+N_TANGENT_DERIVATIVES = 5
 
 
 @njit(cache=True, inline="always")
