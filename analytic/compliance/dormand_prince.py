@@ -59,7 +59,7 @@ from deckpound.analytic.fp_mode import flush_enter, flush_leave
 from deckpound.analytic.kernels import contact_assembly as ca
 from deckpound.analytic.kernels import contact_laws as cl
 from deckpound.analytic.kernels.hysteretic_layout import C_ROTMAX, C_ROTMIN, P_E1N, P_E1P, T_STRESS
-from deckpound.analytic.kernels.peaks import track_step
+from deckpound.analytic.kernels.peaks import track_state
 from deckpound.analytic.kernels.system import (
     KIND_HYSTERETIC,
     SCAL_A0,
@@ -539,15 +539,13 @@ def adaptive_run(system, contact, record, opt, output, work, stats):
 def _adaptive_track(sa, ws, pk, t):
     """Peaks and gap closures of the accepted step ending at t (:mod:`.peaks`): the engine
     columns as :func:`_adaptive_store` writes them, from the state of the last :func:`_rhs`
-    call at (t, y); True when a seat margin became negative (:func:`.peaks.track_step`)."""
+    call at (t, y); True when a seat margin became negative (:func:`.peaks.track_state`)."""
     y = ws.y
     cw = ws.cw
     nd = len(sa.dofs)
-    u = y[0:nd]
-    store_standard(
-        pk.row, pk.layout, t, u, y[nd : 2 * nd], cw.g, cw.lam, cw.lt, ws.hstate[:, T_STRESS]
+    return track_state(
+        pk, t, y[0:nd], y[nd : 2 * nd], cw.g, cw.lam, cw.lt, ws.hstate[:, T_STRESS], ws.ug, ws.d
     )
-    return track_step(pk, t, u, ws.ug, ws.d)
 
 
 @kernel

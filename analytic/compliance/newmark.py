@@ -53,7 +53,7 @@ from deckpound.analytic.bundles import (
     RUN_SINGULAR,
     RUN_UNSEATED,
 )
-from deckpound.analytic.compliance.newmark_work import fill_row, output_energies, store_row
+from deckpound.analytic.compliance.newmark_work import output_energies, store_row
 from deckpound.analytic.compliance.work_energy import (
     W_CONTACT,
     W_FRICTION,
@@ -66,7 +66,7 @@ from deckpound.analytic.kernels import contact_assembly as ca
 from deckpound.analytic.kernels import contact_laws as cl
 from deckpound.analytic.kernels.contact_assembly import N_TANGENT_DERIVATIVES
 from deckpound.analytic.kernels.dense import lu_factor, lu_solve
-from deckpound.analytic.kernels.peaks import track_step
+from deckpound.analytic.kernels.peaks import track_state
 from deckpound.analytic.kernels.support_motion import record_at
 from deckpound.analytic.kernels.system import (
     SCAL_A0,
@@ -212,10 +212,18 @@ def _start(sa, contact, record, opt, output, work):
     W[W_SPRINGS] = es0
     W[W_CONTACT] = ec0
     _store_output(sa, contact, work, output, 0, 0.0, True)
-    pk = output.peaks
-    fill_row(pk.row, pk.layout, 0.0, dof.u, dof.v, cw, cs, work.spring.fs)
-    track_step(pk, 0.0, dof.u, sup.ug, work.spring.d_new)
+    _track_peaks(output.peaks, 0.0, dof, cw, cs, work.spring, sup)
     return jrec
+
+
+@kernel(inline="always")
+def _track_peaks(pk, t, dof, cw, cs, spr, sup):
+    """The peaks and closures of the committed state at t [s] (:func:`.peaks.track_state`):
+    the columns :func:`.newmark_work.fill_row` writes (the committed tangential force
+    ``cs[:, S_CFT]``, as the output rows). Returns True when a seat margin became negative."""
+    return track_state(
+        pk, t, dof.u, dof.v, cw.g, cw.lam, cs[:, cl.S_CFT], spr.fs, sup.ug, spr.d_new
+    )
 
 
 @kernel(inline="always")
@@ -459,7 +467,7 @@ def _commit(sa, contact, work, output, stats, anyev, t_now):
     """Commit a converged (sub)step ending at t_now [s]: materials, contact events (a corner
     that closed), gaps (nonlinear kinematics, when no corner was evaluated), corner states,
     the largest penetration and the peaks of every column at every converged (sub)step.
-    Returns True when a seat margin became negative (:func:`.peaks.track_step`)."""
+    Returns True when a seat margin became negative (:func:`.peaks.track_state`)."""
     cs, cw, dof = work.cstate, work.cw, work.dof
     spring_commit(sa, work.hstate)
     for c in range(len(cw.corners)):
@@ -471,9 +479,7 @@ def _commit(sa, contact, work, output, stats, anyev, t_now):
     for c in range(len(cw.corners)):
         if -cw.g[c] > stats.value[bd.VAL_MAX_PEN]:
             stats.value[bd.VAL_MAX_PEN] = -cw.g[c]
-    pk = output.peaks
-    fill_row(pk.row, pk.layout, t_now, dof.u, dof.v, cw, cs, work.spring.fs)
-    return track_step(pk, t_now, dof.u, work.support.ug, work.spring.d_new)
+    return _track_peaks(output.peaks, t_now, dof, cw, cs, work.spring, work.support)
 
 
 @kernel(inline="always")
@@ -636,7 +642,7 @@ def newmark_run(system, contact, record, opt, output, work, stats):
     reused (same matrix; those with contact terms also in ``contact_factor_reuses``),
     factorisations formed in the steps, max iterations of a step, steps rescued by
     sub-stepping. A step at
-    which a corner's seat margin becomes negative (:func:`deckpound.analytic.kernels.peaks.track_step`)
+    which a corner's seat margin becomes negative (:func:`deckpound.analytic.kernels.peaks.track_state`)
     is completed (all its sub-steps) and the loop stops there with RUN_UNSEATED (failed step =
     steps = that step, its output row not written). ``stats.halt[0]`` ≠ 0 stops the loop at the
     next Newton iteration (status RUN_INTERRUPTED).

@@ -3,19 +3,20 @@
 The output rows see one step in ``stride`` (``run.output_dt`` / the engine's step): a peak or
 a closure between two rows is lost, and how much depends on the output rate (issue 28: the
 benchmark's peak deck rotation read 0.81 mrad instead of 3.62 at ``run.output_dt = 0.5``).
-Every step loop therefore calls :func:`track_step` once per accepted step (every sub-step of
+Every step loop therefore calls :func:`track_state` once per accepted step (every sub-step of
 a rescued step, every adaptive step) and once at t = 0, with the state it commits:
 
-* the step's row in the **peak layout** is written into ``Peaks.row``: the engine columns in
-  the layout ``Peaks.layout`` of :func:`deckpound.analytic.kernels.system.store_standard` (time,
-  absolute displacements and velocities, gaps, normal and tangential contact forces, bent spring
-  forces; :data:`deckpound.analytic.kernels.system.RowLayout`), then the
+* the step's values of the columns of the **peak layout** are read from that state: the engine
+  columns in the layout ``Peaks.layout`` of
+  :func:`deckpound.analytic.kernels.system.store_standard` (time, absolute displacements and
+  velocities, gaps, normal and tangential contact forces, bent spring forces;
+  :data:`deckpound.analytic.kernels.system.RowLayout`), then the
   displacements relative to the supports (:data:`deckpound.models.plan.RELATIVE_COLUMNS`:
   deck x, y relative to the mean shake-table motion, each seat relative to its actuator) and
   the bent deformations d = B u − S u_g of the ``nbs`` bent springs — the columns
   :func:`deckpound.models.engine_contract.finish` derives from the output rows, here from the
   support displacement at the step (:func:`deckpound.models.result.peak_columns` names the
-  layout);
+  layout); no row is built;
 * ``Peaks.value`` / ``Peaks.time`` keep, per column, the largest |x| and the first time it
   was reached [s] — for the gaps the smallest (most negative: the deepest penetration)
   signed value instead;
@@ -28,13 +29,15 @@ a rescued step, every adaptive step) and once at t = 0, with the state it commit
   (``seats[i].support_length``, ``Peaks.support``; +inf: not checked) the seat margin is
   m_c = N − (g_c − g_c(0)). Its minimum over the run is at the largest gap. The first step at
   which a margin is negative (g_c − g_c(0) > N: the deck end has moved away from the
-  backwall by more than the seat under it) is the **unseating**: :func:`track_step` returns
+  backwall by more than the seat under it) is the **unseating**: :func:`track_state` returns
   True and ``Peaks.unseat`` holds 1 + the corner's index and ``Peaks.unseat_time`` its time;
   the loops finish that step and stop (status ``RUN_UNSEATED``).
 
-The engine fills the standard part of ``Peaks.row`` itself (its force columns differ: the
-compliance engines' λ_N, λ_T; the nonsmooth engine's impulse of the step divided by the step,
-``Peaks.force`` is its scratch) and then calls :func:`track_step`. The arrays are allocated by
+The engine passes its own force values (the compliance engines' λ_N, λ_T; the nonsmooth
+engine's impulse of the step divided by the step, ``Peaks.force`` is its scratch).
+:func:`track_step` does the same from a row in the peak layout whose engine columns the caller
+wrote into ``Peaks.row`` (it completes the row, then takes its peaks): the same statistics, bit
+for bit. The arrays are allocated by
 :func:`new_peaks` (the loops run without numba's runtime) and read back by
 :func:`step_peaks` and :func:`step_closures` into :class:`~deckpound.models.engine_contract.
 RunOutput`. The tracking reads and writes only its own arrays: the result columns are those
@@ -51,10 +54,13 @@ from deckpound.analytic._jit import kernel
 from deckpound.analytic.kernels.system import (
     C_U,
     RowLayout,
+    bent_column,
     end_column,
     gap_column,
     normal_force_column,
     row_layout,
+    tangential_force_column,
+    velocity_column,
 )
 from deckpound.models.engine_contract import engine_columns
 from deckpound.models.plan import DECK_X, DECK_Y, RELATIVE_COLUMNS, SEAT_X
@@ -73,11 +79,12 @@ __all__ = [
     "step_openings",
     "step_peaks",
     "step_unseated",
+    "track_state",
     "track_step",
 ]
 
 #: The per-step peaks bundle (a field of :data:`deckpound.analytic.bundles.Output`):
-#: ``row`` (n,) the step's row in the peak layout (module docstring), ``value`` (n,) the peak
+#: ``row`` (n,) a step's row in the peak layout (:func:`track_step`), ``value`` (n,) the peak
 #: of each column so far (max |x|; min x for the gaps), ``time`` (n,) when it was reached [s];
 #: ``tx``, ``ty`` int64 the support channels of the shake tables in x and y (their mean is the
 #: reference of deck_x_rel, deck_y_rel), ``seat`` (2,) int64 the actuator channel of each seat;
@@ -182,22 +189,46 @@ def in_contact_now(gap, fn):
 
 
 @kernel(inline="always")
-def track_step(pk, t, u, ug, d):
-    """Complete the step's row in ``pk.row`` (its standard part written by the engine) with
-    the relative displacements and bent deformations, then update the peaks and the closures.
+def _peak_abs(value, time, k, x, t):
+    """Column k's largest |x| and the first time t [s] it was reached."""
+    a = abs(x)
+    if a > value[k]:
+        value[k] = a
+        time[k] = t
 
-    u (n_dof,) displacements [m, rad] and ug (n_channels,) support displacements [m] at the
-    step, d the spring deformations d = B u − S u_g (the first ``nbs`` are the bents'), t [s].
-    Returns True when a corner's seat margin N − (g − g(0)) became negative at this step (the
-    deck is unseated; module docstring): one comparison per corner while no gap grows. The
-    column offsets, the corner count nc and nbs come from ``pk.layout``."""
-    row = pk.row
-    layout = pk.layout
-    nc = len(layout.corners)
-    nbs = layout.nbs
-    c_gap = gap_column(layout)
-    c_fn = normal_force_column(layout)
-    base = end_column(layout)
+
+@kernel(inline="always")
+def _track_corner(pk, c, k_gap, gap, fn, t):
+    """Corner c at a step (t [s]) with gap [m] and normal force fn [kN] (gap column k_gap):
+    the deepest gap, the closures and the largest gap (module docstring). Returns True when
+    the corner's seat margin is negative (the first such corner and time kept)."""
+    value, time = pk.value, pk.time
+    if gap < value[k_gap]:
+        value[k_gap] = gap
+        time[k_gap] = t
+    now = in_contact_now(gap, fn)
+    if now and not pk.inside[c]:
+        pk.closures[c] += 1
+    pk.inside[c] = now
+    # the largest gap (seat margin): the initial gap at the first call (largest still −inf)
+    unseated = False
+    if gap > pk.gap_open[c]:
+        if pk.gap_open[c] == -np.inf:
+            pk.gap_start[c] = gap
+        pk.gap_open[c] = gap
+        pk.gap_open_time[c] = t
+        if gap - pk.gap_start[c] > pk.support[c]:
+            unseated = True
+            if pk.unseat[0] == 0:
+                pk.unseat[0] = c + 1
+                pk.unseat_time[0] = t
+    return unseated
+
+
+@kernel(inline="always")
+def _table_means(pk, ug):
+    """The mean support displacement of the shake tables in x and in y [m] (the reference of
+    the deck's relative displacements)."""
     mx = 0.0
     for k in range(pk.tx.shape[0]):
         mx += ug[pk.tx[k]]
@@ -207,47 +238,83 @@ def track_step(pk, t, u, ug, d):
     if pk.tx.shape[0] > 0:
         mx = mx / pk.tx.shape[0]
         my = my / pk.ty.shape[0]
+    return mx, my
+
+
+@kernel(inline="always")
+def track_state(pk, t, u, v, g, fn, ft, fs, ug, d):
+    """Update the peaks and the closures with the state of a step, column by column of the
+    peak layout, without building its row (module docstring).
+
+    t [s]; u, v (n_dof,) displacements and velocities [m, rad; m/s, rad/s]; g, fn, ft
+    (n_corners,) gaps [m] and the normal and tangential forces the engine reports [kN]; fs
+    the spring forces (the first ``nbs`` are the bents') [kN]; ug (n_channels,) support
+    displacements [m]; d the spring deformations d = B u − S u_g [m]. Returns True when a
+    corner's seat margin N − (g − g(0)) became negative at this step (the deck is unseated):
+    one comparison per corner while no gap grows. The column offsets, the corner count and
+    nbs come from ``pk.layout``; the statistics are those of :func:`track_step` on the row
+    :func:`deckpound.analytic.kernels.system.store_standard` writes, bit for bit."""
+    layout = pk.layout
+    value, time = pk.value, pk.time
+    c_v = velocity_column(layout)
+    c_gap = gap_column(layout)
+    c_fn = normal_force_column(layout)
+    c_ft = tangential_force_column(layout)
+    c_bent = bent_column(layout)
+    base = end_column(layout)
+    for k in range(len(layout.dof_columns)):
+        j = layout.dof_columns[k]
+        _peak_abs(value, time, C_U + k, u[j], t)
+        _peak_abs(value, time, c_v + k, v[j], t)
+    unseated = False
+    for c in range(len(layout.corners)):
+        if _track_corner(pk, c, c_gap + c, g[c], fn[c], t):
+            unseated = True
+        _peak_abs(value, time, c_fn + c, fn[c], t)
+        _peak_abs(value, time, c_ft + c, ft[c], t)
+    for i in range(layout.nbs):
+        _peak_abs(value, time, c_bent + i, fs[i], t)
+    mx, my = _table_means(pk, ug)
+    _peak_abs(value, time, base, u[DECK_X] - mx, t)
+    _peak_abs(value, time, base + 1, u[DECK_Y] - my, t)
+    _peak_abs(value, time, base + 2, u[SEAT_X[0]] - ug[pk.seat[0]], t)
+    _peak_abs(value, time, base + 3, u[SEAT_X[1]] - ug[pk.seat[1]], t)
+    for i in range(layout.nbs):
+        _peak_abs(value, time, base + N_RELATIVE + i, d[i], t)
+    return unseated
+
+
+@kernel(inline="always")
+def track_step(pk, t, u, ug, d):
+    """:func:`track_state` from a row: complete the step's row in ``pk.row`` (its engine
+    columns written by the caller) with the relative displacements and bent deformations, then
+    update the peaks and the closures from the row's columns.
+
+    u (n_dof,) displacements [m, rad] and ug (n_channels,) support displacements [m] at the
+    step, d the spring deformations d = B u − S u_g (the first ``nbs`` are the bents'), t [s].
+    Returns True when a corner's seat margin became negative at this step."""
+    row = pk.row
+    layout = pk.layout
+    c_gap = gap_column(layout)
+    c_fn = normal_force_column(layout)
+    base = end_column(layout)
+    mx, my = _table_means(pk, ug)
     row[base] = u[DECK_X] - mx
     row[base + 1] = u[DECK_Y] - my
     row[base + 2] = u[SEAT_X[0]] - ug[pk.seat[0]]
     row[base + 3] = u[SEAT_X[1]] - ug[pk.seat[1]]
-    for i in range(nbs):
+    for i in range(layout.nbs):
         row[base + N_RELATIVE + i] = d[i]
     value, time = pk.value, pk.time
     # the gaps: the most negative value; every other column: the largest |x| (t excluded)
     for k in range(C_U, c_gap):
-        a = abs(row[k])
-        if a > value[k]:
-            value[k] = a
-            time[k] = t
-    for c in range(nc):
-        k = c_gap + c
-        if row[k] < value[k]:
-            value[k] = row[k]
-            time[k] = t
-        now = in_contact_now(row[k], row[c_fn + c])
-        if now and not pk.inside[c]:
-            pk.closures[c] += 1
-        pk.inside[c] = now
-    # the largest gap (seat margin): the initial gap at the first call (largest still −inf)
+        _peak_abs(value, time, k, row[k], t)
     unseated = False
-    for c in range(nc):
-        gk = row[c_gap + c]
-        if gk > pk.gap_open[c]:
-            if pk.gap_open[c] == -np.inf:
-                pk.gap_start[c] = gk
-            pk.gap_open[c] = gk
-            pk.gap_open_time[c] = t
-            if gk - pk.gap_start[c] > pk.support[c]:
-                unseated = True
-                if pk.unseat[0] == 0:
-                    pk.unseat[0] = c + 1
-                    pk.unseat_time[0] = t
+    for c in range(len(layout.corners)):
+        if _track_corner(pk, c, c_gap + c, row[c_gap + c], row[c_fn + c], t):
+            unseated = True
     for k in range(c_fn, row.shape[0]):
-        a = abs(row[k])
-        if a > value[k]:
-            value[k] = a
-            time[k] = t
+        _peak_abs(value, time, k, row[k], t)
     return unseated
 
 

@@ -85,7 +85,7 @@ from deckpound.analytic.bundles import (
 from deckpound.analytic.fp_mode import flush_enter, flush_leave
 from deckpound.analytic.kernels.dense import lu_factor, lu_solve
 from deckpound.analytic.kernels.kinematics import contact_kinematics, linear_gap
-from deckpound.analytic.kernels.peaks import track_step
+from deckpound.analytic.kernels.peaks import track_state
 from deckpound.analytic.kernels.support_motion import record_at
 from deckpound.analytic.kernels.system import (
     KIND_HYSTERETIC,
@@ -95,7 +95,6 @@ from deckpound.analytic.kernels.system import (
     spring_stored_energy,
     spring_tangent,
     spring_update_materials,
-    store_standard,
 )
 from deckpound.analytic.nonsmooth.contact_checks import STATUS_FAILED
 from deckpound.analytic.nonsmooth.impulses import solve_active_impulses
@@ -211,8 +210,7 @@ def _start(system, contact, record, output, work):
     )
     # peaks and gap closures of every step (.peaks): the step's forces are its impulses / h
     pk = output.peaks
-    store_standard(pk.row, pk.layout, 0.0, q, v, cor.gapo, pk.force[0], pk.force[1], spr.fs_k)
-    track_step(pk, 0.0, q, work.ug, spr.d_k)
+    track_state(pk, 0.0, q, v, cor.gapo, pk.force[0], pk.force[1], spr.fs_k, work.ug, spr.d_k)
     return jrec
 
 
@@ -559,7 +557,7 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
     step are its impulses divided by h).
     ``stats.halt[0]`` ≠ 0 stops the loop at the next Newton iteration (RUN_INTERRUPTED). A
     step at which a corner's seat margin becomes negative (:func:`deckpound.analytic.kernels.peaks.
-    track_step`) ends the loop with RUN_UNSEATED (failed step = steps = that step, its output
+    track_state`) ends the loop with RUN_UNSEATED (failed step = steps = that step, its output
     row not written).
     """
     # subnormal numbers flushed to zero while the loop runs (opt.flush_subnormals,
@@ -591,18 +589,19 @@ def moreau_jean_run(system, contact, record, opt, output, work, stats):
             break
         _commit(system, work, h, opt.theta)
         _commit_contact(contact, work, output.peaks, nact, opt.theta, inv_h, stats.value)
-        store_standard(
-            output.peaks.row,
-            output.peaks.layout,
+        pk = output.peaks
+        if track_state(
+            pk,
             t1,
             dof.q,
             dof.v,
             work.corner.gapo,
-            output.peaks.force[0],
-            output.peaks.force[1],
+            pk.force[0],
+            pk.force[1],
             work.spring.fs,
-        )
-        if track_step(output.peaks, t1, dof.q, work.ug, work.spring.d):
+            work.ug,
+            work.spring.d,
+        ):
             # a seat margin became negative (.peaks): the answer ends with this step
             status = RUN_UNSEATED
             failed = n + 1
