@@ -1,93 +1,690 @@
-"""Measure summary-only sweeps (issue 30, item 7) and write docs/sweeps.md.
+"""The sweep benchmark of issues 30 (item 7) and 33 (item 5): step loops against the reference
+loop, summary-only sweeps on local workers and on a Dask cluster, and memory, measured in one
+sitting; writes docs/results/sweeps.json and docs/sweeps.md.
 
-Repository tooling (not installed): ``python tools/sweep_benchmark.py [--cases N]
-[--memory-cases M]`` runs the variability study's sweep machinery
-(:func:`deckpound.compare.studies.variability.sweep_rows`: one summary row per case, no histories) on
-the built-in benchmark with N seeds of its 20 s synthetic record, on 1 and on 2 worker
-processes, each into an empty row cache, and reports
+Repository tooling (not installed)::
 
-* cases per second (compile time excluded: the kernels are loaded before the clock starts);
-* the overhead over the step loops: workers × wall time / Σ loop time − 1 (record synthesis,
-  result assembly, row cache, inter-process traffic);
-* the peak resident memory of the parent and of the largest worker during a sweep of M cases.
+    python tools/sweep_benchmark.py                  # the full benchmark (an idle machine)
+    python tools/sweep_benchmark.py --quick          # a check that it works (small, short)
+    python tools/sweep_benchmark.py --render         # the page again from the stored file
 
-Timings depend on the machine and on what else it runs: run it on an otherwise idle machine.
-The numbers are measurements, not pass/fail tests.
+It measures, one after the other in one process (so the ratios share the machine's state):
+
+1. µs/step of the C reference loop, of the compliance engine and of the nonsmooth engine on
+   the built-in benchmark (``benchmarks/reference_loop/run.py``'s :func:`measure`: interleaved
+   rounds, medians) and their ratios, per step and over the record;
+2. summary-only sweeps (:func:`deckpound.compare.studies.variability.sweep_rows`: one summary
+   row per case, no histories, each sweep into an empty row cache) of N seeds of the 20 s
+   synthetic record with the compliance engine: in this process (1 worker), on the local pool
+   of 2 workers and on a local Dask cluster of two single-threaded worker processes. Before the
+   clock starts the kernels are loaded and the workers have run a few cases of other seeds
+   (the steady rate of a sweep). Overhead over the step loops: workers × wall / Σ loop − 1;
+3. a sweep of M cases on 2 local workers in a fresh process, end to end (the cases built, the
+   pool started, the sweep): its wall time, the peak resident memory of that process
+   (``ru_maxrss``) and of its largest worker (``RUSAGE_CHILDREN``, read after the pool's
+   workers are joined, i.e. reaped; and ``VmHWM`` of the living workers before that);
+4. the peak memory of one run against its output length
+   (:func:`deckpound.compare.bench.memory.peak_rss`, a fresh process per run) for both analytic
+   engines and records of several lengths at the default output rate, beside the raw output
+   (rows × columns × 8 B).
+
+The page (:func:`render`, from the stored file only) states every target of the two issues
+next to its measured value with a verdict computed from the file; ``tests/docs/
+test_docs_sweeps.py`` renders the stored file again and fails when the page differs. Timings
+depend on the machine and on what else it runs: run the full benchmark on an idle machine.
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
+import importlib.util
+import json
+import math
+import multiprocessing
+import os
+import platform
 import resource
+import statistics
+import subprocess
+import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
-import numpy as np
+from docs_blocks import DOCS, RESULTS, ROOT
 
+from deckpound.compare.bench.memory import peak_rss
 from deckpound.compare.engines import run_engine
 from deckpound.compare.pool import pool_scope
-from deckpound.compare.studies.variability import seed_cases, sweep_rows
+from deckpound.compare.studies.variability import FINISHED, seed_cases, sweep_rows
+from deckpound.models.file_io import atomic_write_text
+from deckpound.models.iir import load_compiled_filter
 from deckpound.models.scene_io import load_scene
 
-PAGE = Path(__file__).resolve().parents[1] / "docs" / "sweeps.md"
+PAGE = DOCS / "sweeps.md"
+#: the measurement behind the page
+RESULTS_FILE = RESULTS / "sweeps.json"
+REFERENCE_LOOP = ROOT / "benchmarks" / "reference_loop" / "run.py"
+#: version of the measurement file's layout
+FORMAT = 1
+SCENE = "saiidi-4span"
+#: the engine of the sweeps (the issues' targets are for the compliance engine)
+SWEEP_ENGINE = "compliance"
+#: the engines whose memory is measured against output length
+MEMORY_ENGINES = ("compliance", "nonsmooth")
+#: local workers of the sweeps (the issues' "2 cores")
+WORKERS = 2
+#: warm-up cases per worker before a timed sweep (other seeds than the timed ones)
+WARM_CASES_PER_WORKER = 4
+FULL = {"cases": 400, "memory_cases": 10_000, "rounds": 5, "repeats": 3,
+        "durations": (20.0, 80.0, 320.0)}  # fmt: skip
+QUICK = {"cases": 24, "memory_cases": 48, "rounds": 1, "repeats": 1,
+         "durations": (5.0, 10.0, 20.0)}  # fmt: skip
+MB = 1024.0 * 1024.0
+
+# the targets of the issues (the sizes they are stated for, and the limits)
+#: issue 30, item 7: summary-only sweeps cost at most this over the step loops
+MAX_OVERHEAD = 0.15
+#: issue 30, item 7: cases/s on 2 cores for the compliance engine
+MIN_RATE = 30.0
+#: issue 30, item 7: the memory of a sweep of TARGET_CASES cases [MB]
+MAX_SWEEP_MB = 1024.0
+#: issue 33, done when: TARGET_CASES runs in at most this [s] on 2 cores
+MAX_SWEEP_SECONDS = 90.0
+TARGET_CASES = 10_000
+#: issue 33, done when: a Dask cluster of two workers within 15 % of the local pool
+MAX_DASK_RATIO = 1.15
+#: issue 33, done when: the loops within 1.5× of the reference loop
+MAX_LOOP_RATIO = 1.5
+#: issue 33, done when: a record of LONG_RECORD s at the default output rate in under this [MB]
+MAX_LONG_RECORD_MB = 300.0
+LONG_RECORD = 320.0
+#: issue 33, item 3: peak memory at most about twice the raw output plus a constant
+MAX_MEMORY_SLOPE = 2.0
 
 
-def sweep(scene, cases: int, workers: int) -> dict:
+# --------------------------------------------------------------------------- measurement
+def reference_loop():
+    """benchmarks/reference_loop/run.py as a module (the benchmarks are not installed)."""
+    spec = importlib.util.spec_from_file_location("reference_loop_run", REFERENCE_LOOP)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # its dataclasses resolve the module by name
+    spec.loader.exec_module(module)
+    return module
+
+
+def measure_loops(scene, rounds: int, repeats: int) -> dict:
+    """µs/step and loop times [s] of the reference, compliance and nonsmooth loops (every
+    timed round), and how far the reference's deck peaks are from the compliance engine's."""
+    ref = reference_loop()
+    times = ref.measure(scene, rounds=rounds, repeats=repeats)
+    steps = times.problem.steps
+    peaks = ref.reference_peaks(times.reports["reference"])
+    last = times.compliance[-1]
+    nonsmooth = times.nonsmooth[-1].meta
+    return {
+        "steps": steps,
+        "dt": times.problem.dt,
+        "ndof": times.ndof,
+        "reference_us": times.reference_us(),
+        "reference_loop_s": times.reference_seconds["reference"],
+        "compliance_us": [r.meta["us_per_step"] for r in times.compliance],
+        "compliance_loop_s": [r.meta["loop_time"] for r in times.compliance],
+        "nonsmooth_us": [r.meta["us_per_step"] for r in times.nonsmooth],
+        "nonsmooth_loop_s": [r.meta["loop_time"] for r in times.nonsmooth],
+        "nonsmooth_steps": nonsmooth["steps"],
+        "nonsmooth_h": nonsmooth["settings"]["h"],
+        "peak_difference": max(
+            ref.relative_difference(peaks[c], last.peak(c)) for c in ref.DECK_COLUMNS
+        ),
+    }
+
+
+def _timed_sweep(scene, cases: int, scheduler: str | None, workers: int) -> dict:
+    """A sweep of ``cases`` seeds after a warm-up of other seeds on the same workers."""
+    warm = seed_cases(
+        scene.replace({"excitation.seed": scene.excitation.seed + cases}),
+        WARM_CASES_PER_WORKER * workers,
+    )
     scenes = [sc for _, _, sc in seed_cases(scene, cases)]
-    with tempfile.TemporaryDirectory() as cache, pool_scope():
+    with tempfile.TemporaryDirectory(prefix="deckpound-sweep-") as cache:
+        opts = {"workers": workers, "scheduler": scheduler, "progress": False}
+        sweep_rows([sc for _, _, sc in warm], SWEEP_ENGINE, Path(cache) / "warm", "warm", **opts)
         t0 = time.perf_counter()
-        rows, computed = sweep_rows(
-            scenes, "compliance", Path(cache), "bench", workers=workers, progress=False
-        )
+        rows, computed = sweep_rows(scenes, SWEEP_ENGINE, Path(cache) / "timed", "bench", **opts)
         wall = time.perf_counter() - t0
-    loop = float(np.nansum([r.get("loop_time", np.nan) for r in rows.values()]))
     return {
         "workers": workers,
         "cases": computed,
         "wall": wall,
-        "rate": computed / wall,
-        "overhead": workers * wall / loop - 1.0,
-        "finished": sum(r.get("status") == "success" for r in rows.values()),
+        # a refused or failed case has no finite loop time: it adds none
+        "loop": math.fsum(v for r in rows.values() if math.isfinite(v := r.get("loop_time", 0.0))),
+        "finished": sum(r.get("status") in FINISHED for r in rows.values()),
     }
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cases", type=int, default=400)
-    ap.add_argument("--memory-cases", type=int, default=2000)
-    args = ap.parse_args()
-    scene = load_scene("saiidi-4span")
-    run_engine("compliance", scene)  # load the kernels before any clock starts
-    runs = [sweep(scene, args.cases, w) for w in (1, 2)]
-    big = sweep(scene, args.memory_cases, 2)
-    parent = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    child = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    lines = [
-        "# Summary-only sweeps, measured",
-        "",
-        "Written by `python tools/sweep_benchmark.py` (repository tooling) on the built-in",
-        "benchmark: the compliance engine, 20 s synthetic records with different seeds, one",
-        "summary row per case (peaks over every step, closures, seat margins, status; no",
-        "histories), each sweep into an empty row cache. Machine-dependent measurements.",
-        "",
-        "| workers | cases | wall [s] | cases/s | overhead over the step loops |",
-        "|---|---|---|---|---|",
-    ]
-    for r in [*runs, big]:
-        lines.append(
-            f"| {r['workers']} | {r['cases']} | {r['wall']:.1f} | {r['rate']:.1f} | "
-            f"{100 * r['overhead']:.0f} % |"
+def local_sweep(scene, cases: int, workers: int) -> dict:
+    """A timed sweep on ``workers`` local workers (1: in this process)."""
+    with pool_scope():  # the warm-up's workers run the timed sweep
+        out = _timed_sweep(scene, cases, None, workers)
+    return {"where": "this process" if workers == 1 else "local pool", **out}
+
+
+def dask_sweep(scene, cases: int) -> dict:
+    """A timed sweep on a local Dask cluster of WORKERS single-threaded worker processes."""
+    import logging
+
+    from distributed import LocalCluster
+
+    with LocalCluster(
+        n_workers=WORKERS,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,  # no web server: the machine is shared
+        silence_logs=logging.ERROR,
+    ) as cluster:
+        out = _timed_sweep(scene, cases, cluster.scheduler_address, WORKERS)
+    return {"where": "Dask LocalCluster", **out}
+
+
+def children_hwm_mb() -> list[float]:
+    """The peak resident memory (``VmHWM``) of every living child process of this one [MB]
+    (Linux ``/proc``; the children of all of its threads)."""
+    pids = set()
+    for listing in Path("/proc/self/task").glob("*/children"):
+        pids.update(int(p) for p in listing.read_text().split())
+    peaks = []
+    for pid in sorted(pids):
+        try:
+            status = Path(f"/proc/{pid}/status").read_text()
+        except OSError:
+            continue  # ended meanwhile
+        peaks += [
+            int(ln.split()[1]) / 1024.0 for ln in status.splitlines() if ln.startswith("VmHWM:")
+        ]
+    return peaks
+
+
+def memory_sweep_here(cases: int) -> dict:
+    """A sweep of ``cases`` seeds on WORKERS local workers in this (fresh) process, end to end:
+    wall time [s], this process's peak RSS and the largest worker's [MB], the latter read twice:
+    ``VmHWM`` of the living workers when the sweep is done, and ``RUSAGE_CHILDREN`` (the
+    largest reaped child) once the pool's workers are joined."""
+    scene = load_scene(SCENE)
+    with tempfile.TemporaryDirectory(prefix="deckpound-sweep-") as cache:
+        t0 = time.perf_counter()
+        with pool_scope():  # closing the scope joins (reaps) its workers
+            scenes = [sc for _, _, sc in seed_cases(scene, cases)]
+            rows, computed = sweep_rows(
+                scenes, SWEEP_ENGINE, Path(cache), "memory", workers=WORKERS, progress=False
+            )
+            wall = time.perf_counter() - t0
+            living = children_hwm_mb()
+    if multiprocessing.active_children():
+        raise RuntimeError("the sweep's workers are still running: their peak cannot be read")
+    return {
+        "cases": computed,
+        "workers": WORKERS,
+        "wall": wall,
+        "finished": sum(r.get("status") in FINISHED for r in rows.values()),
+        # ru_maxrss: KiB on Linux; RUSAGE_CHILDREN: the largest reaped child
+        "parent_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "worker_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0,
+        "worker_hwm_mb": living,
+    }
+
+
+def memory_sweep(cases: int) -> dict:
+    """:func:`memory_sweep_here` in a fresh process (nothing of this one counts)."""
+    proc = subprocess.run(
+        [sys.executable, str(Path(__file__).resolve()), "--memory-child", str(cases)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if proc.returncode != 0:
+        raise RuntimeError(f"the memory sweep failed ({proc.returncode}): {proc.stderr[-2000:]}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def output_columns(engine: str) -> int:
+    """Number of output columns of ``engine`` on the benchmark scene (independent of the
+    record's length)."""
+    short = load_scene(SCENE, ["excitation.duration=0.5", "run.duration=0.5"])
+    return len(run_engine(engine, short).columns)
+
+
+def output_memory(durations) -> list[dict]:
+    """Peak RSS of one run per engine and record length D [s] (``excitation.duration`` =
+    ``run.duration`` = D, default output rate), with its output's rows and columns."""
+    out = []
+    for engine in MEMORY_ENGINES:
+        columns = output_columns(engine)
+        for d in durations:
+            m = peak_rss(engine, [f"excitation.duration={d:g}", f"run.duration={d:g}"], SCENE)
+            keys = ("rows", "status", "peak_mb", "baseline_mb", "run_mb")
+            out.append(
+                {"engine": engine, "duration": d, "columns": columns, **{k: m[k] for k in keys}}
+            )
+    return out
+
+
+def git_commit() -> str:
+    """``git describe --always --dirty`` of the repository (``unknown`` without git)."""
+    try:
+        out = subprocess.run(
+            ["git", "describe", "--always", "--dirty"], cwd=ROOT, capture_output=True, text=True
         )
-    lines += [
+    except OSError:
+        return "unknown"
+    return out.stdout.strip() or "unknown"
+
+
+def measure(settings: dict, quick: bool, say: Callable[[str], None] = print) -> dict:
+    """Every measurement of the page, in one sitting (the module docstring)."""
+    scene = load_scene(SCENE)
+    load_before = os.getloadavg()
+    started = time.perf_counter()
+    run_engine(SWEEP_ENGINE, scene)  # the kernels loaded (or compiled) before any clock
+    load_compiled_filter()  # the sweeps' scipy.signal now: the pools fork with it
+    say("step loops against the reference loop")
+    loops = measure_loops(scene, settings["rounds"], settings["repeats"])
+    sweeps = []
+    for workers in (1, WORKERS):
+        say(f"summary-only sweep of {settings['cases']} cases, {workers} local worker(s)")
+        sweeps.append(local_sweep(scene, settings["cases"], workers))
+    say(f"summary-only sweep of {settings['cases']} cases on a local Dask cluster")
+    sweeps.append(dask_sweep(scene, settings["cases"]))
+    say(f"a sweep of {settings['memory_cases']} cases in a fresh process (memory)")
+    big = memory_sweep(settings["memory_cases"])
+    say("peak memory against output length")
+    runs = output_memory(settings["durations"])
+    context = {
+        "date": datetime.date.today().isoformat(),
+        "machine": platform.machine(),
+        "cpus": os.cpu_count(),
+        "python": platform.python_version(),
+        "commit": git_commit(),
+        "scene": SCENE,
+        "record_duration": scene.excitation.duration,
+        "output_dt": scene.run.output_dt,
+        "quick": quick,
+        "settings": {**settings, "durations": list(settings["durations"])},
+        "load_before": load_before[0],
+        "load_after": os.getloadavg()[0],
+        "minutes": (time.perf_counter() - started) / 60.0,
+    }
+    return {
+        "format": FORMAT,
+        "context": context,
+        "loops": loops,
+        "sweeps": sweeps,
+        "memory_sweep": big,
+        "output_memory": runs,
+    }
+
+
+# --------------------------------------------------------------------------- the page
+def _num(v: float, digits: int = 3) -> str:
+    """``v`` to ``digits`` significant digits, at least the units."""
+    return f"{v:.0f}" if abs(v) >= 10 ** (digits - 1) else f"{v:.{digits}g}"
+
+
+def _verdict(value: float | None, limit: float, at_most: bool = True) -> str:
+    if value is None:
+        return "not measured"
+    return "met" if (value <= limit if at_most else value >= limit) else "not met"
+
+
+def overhead(sweep: dict) -> float:
+    """A sweep's cost over its step loops: workers × wall / Σ loop − 1."""
+    return sweep["workers"] * sweep["wall"] / sweep["loop"] - 1.0
+
+
+def loop_figures(loops: dict) -> dict[str, dict[str, float]]:
+    """Per loop (reference, compliance, nonsmooth): µs/step (median, minimum), loop over the
+    record [s] (median), and the ratios of the medians to the reference's."""
+    out = {}
+    for name in ("reference", "compliance", "nonsmooth"):
+        us, loop = loops[f"{name}_us"], loops[f"{name}_loop_s"]
+        out[name] = {
+            "us": statistics.median(us),
+            "us_min": min(us),
+            "loop": statistics.median(loop),
+        }
+    for fig in out.values():
+        fig["per_step"] = fig["us"] / out["reference"]["us"]
+        fig["per_record"] = fig["loop"] / out["reference"]["loop"]
+    return out
+
+
+def memory_slope(runs: list[dict], engine: str) -> float | None:
+    """Growth of the peak RSS per byte of raw output between the shortest and the longest
+    record of ``engine`` [MB/MB]; None with fewer than two lengths."""
+    mine = sorted((r for r in runs if r["engine"] == engine), key=lambda r: r["duration"])
+    if len(mine) < 2:
+        return None
+    a, b = mine[0], mine[-1]
+    return (b["peak_mb"] - a["peak_mb"]) / (raw_mb(b) - raw_mb(a))
+
+
+def raw_mb(run: dict) -> float:
+    """The raw output of a run: rows × columns × 8 B [MB]."""
+    return run["rows"] * run["columns"] * 8 / MB
+
+
+def _loop_lines(loops: dict) -> list[str]:
+    figs = loop_figures(loops)
+    steps = {
+        "reference": (loops["dt"], loops["steps"]),
+        "compliance": (loops["dt"], loops["steps"]),
+    }
+    steps["nonsmooth"] = (loops["nonsmooth_h"], loops["nonsmooth_steps"])
+    label = {"reference": "reference (C, gcc -O3)", "compliance": "compliance",
+             "nonsmooth": "nonsmooth (its own step)"}  # fmt: skip
+    lines = [
+        "| step loop | step [s] | steps | µs/step (median) | µs/step (min) | × reference per step "
+        "| loop over the record [s] | × reference over the record |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, f in figs.items():
+        h, n = steps[name]
+        lines.append(
+            f"| {label[name]} | {h:g} | {n} | {f['us']:.3f} | {f['us_min']:.3f} | "
+            f"{f['per_step']:.2f} | {f['loop']:.4f} | {f['per_record']:.2f} |"
+        )
+    return lines
+
+
+def _sweep_lines(sweeps: list[dict]) -> list[str]:
+    lines = [
+        "| where | workers | cases | finished | wall [s] | cases/s | Σ step loops [s] "
+        "| overhead over the step loops |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for s in sweeps:
+        lines.append(
+            f"| {s['where']} | {s['workers']} | {s['cases']} | {s['finished']} | {s['wall']:.1f} "
+            f"| {s['cases'] / s['wall']:.1f} | {s['loop']:.1f} | {100 * overhead(s):.0f} % |"
+        )
+    return lines
+
+
+def _memory_lines(runs: list[dict]) -> list[str]:
+    lines = [
+        "| engine | record [s] | status | output rows | columns | raw output [MB] | peak RSS [MB] "
+        "| after imports and warm-up [MB] | the run's own [MB] | run's own / raw |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in runs:
+        raw = raw_mb(r)
+        lines.append(
+            f"| {r['engine']} | {r['duration']:g} | {r['status']} | {r['rows']} | {r['columns']} "
+            f"| {_num(raw)} | {r['peak_mb']:.0f} | {r['baseline_mb']:.0f} | {r['run_mb']:.0f} "
+            f"| {r['run_mb'] / raw:.1f} |"
+        )
+    return lines
+
+
+def targets(m: dict) -> list[tuple[str, str, str, str]]:
+    """(issue, target, measured, verdict) of every target of the two issues, from the stored
+    measurement ``m``."""
+    figs = loop_figures(m["loops"])
+    local = {s["workers"]: s for s in m["sweeps"] if s["where"] != "Dask LocalCluster"}
+    dask = next(s for s in m["sweeps"] if s["where"] == "Dask LocalCluster")
+    big = m["memory_sweep"]
+    full_size = big["cases"] >= TARGET_CASES
+    size = f"{big['cases']} cases" + ("" if full_size else f", fewer than {TARGET_CASES}")
+    sweep_mb = big["parent_mb"] + big["workers"] * big["worker_mb"]
+    out = []
+    for s in (*local.values(), dask):
+        where = "in this process" if s["workers"] == 1 else f"{s['where']}, {s['workers']} workers"
+        out.append(
+            (
+                "30 (7)",
+                f"summary-only sweeps cost at most {100 * MAX_OVERHEAD:.0f} % over the "
+                f"step loops ({where})",
+                f"{100 * overhead(s):.0f} %",
+                _verdict(overhead(s), MAX_OVERHEAD),
+            )
+        )
+    rate = local[WORKERS]["cases"] / local[WORKERS]["wall"]
+    out.append(
+        (
+            "30 (7)",
+            f"at least {MIN_RATE:g} cases/s on 2 cores, compliance engine, "
+            f"{m['context']['record_duration']:g} s records (local pool)",
+            f"{rate:.1f} cases/s",
+            _verdict(rate, MIN_RATE, at_most=False),
+        )
+    )
+    out.append(
+        (
+            "30 (7)",
+            f"a {TARGET_CASES:,}-case sweep stays below {MAX_SWEEP_MB / 1024:g} GB of "
+            "memory (this process + workers × largest worker)",
+            f"{sweep_mb:.0f} MB ({size})",
+            _verdict(sweep_mb if full_size else None, MAX_SWEEP_MB),
+        )
+    )
+    out.append(
+        (
+            "33",
+            f"{TARGET_CASES:,} runs ({m['context']['record_duration']:g} s records, "
+            f"summary-only, compliance) in at most "
+            f"{MAX_SWEEP_SECONDS:g} s on 2 cores",
+            f"{big['wall']:.1f} s ({size})",
+            _verdict(big["wall"] if full_size else None, MAX_SWEEP_SECONDS),
+        )
+    )
+    ratio = dask["wall"] / local[WORKERS]["wall"]
+    out.append(
+        (
+            "33",
+            f"the same sweep on a local Dask cluster of two workers within "
+            f"{100 * (MAX_DASK_RATIO - 1):.0f} % of the local pool (wall time ratio)",
+            f"{ratio:.2f} ({dask['cases']} cases)",
+            _verdict(ratio, MAX_DASK_RATIO),
+        )
+    )
+    out.append(
+        (
+            "33",
+            f"the compliance loop within {MAX_LOOP_RATIO:g}× of the reference loop per step",
+            f"{figs['compliance']['per_step']:.2f}×",
+            _verdict(figs["compliance"]["per_step"], MAX_LOOP_RATIO),
+        )
+    )
+    for basis, key in (("per step (its own step)", "per_step"), ("over the record", "per_record")):
+        out.append(
+            (
+                "33",
+                f"the nonsmooth loop within {MAX_LOOP_RATIO:g}× of the compliance reference "
+                f"loop, {basis}",
+                f"{figs['nonsmooth'][key]:.2f}×",
+                _verdict(figs["nonsmooth"][key], MAX_LOOP_RATIO),
+            )
+        )
+    for engine in MEMORY_ENGINES:
+        long = [
+            r for r in m["output_memory"] if r["engine"] == engine and r["duration"] == LONG_RECORD
+        ]
+        out.append(
+            (
+                "33",
+                f"a {LONG_RECORD:g} s record at the default output rate runs in under "
+                f"{MAX_LONG_RECORD_MB:g} MB ({engine})",
+                f"{long[0]['peak_mb']:.0f} MB" if long else "no such record measured",
+                _verdict(long[0]["peak_mb"] if long else None, MAX_LONG_RECORD_MB),
+            )
+        )
+        slope = memory_slope(m["output_memory"], engine)
+        out.append(
+            (
+                "33 (3)",
+                f"a run's peak memory at most about {MAX_MEMORY_SLOPE:g}× its raw output "
+                f"plus a constant ({engine}: growth per MB of raw output)",
+                "–" if slope is None else f"{slope:.1f} MB/MB",
+                _verdict(slope, MAX_MEMORY_SLOPE),
+            )
+        )
+    return out
+
+
+def render(m: dict) -> str:
+    """docs/sweeps.md from the stored measurement ``m`` (every number computed from it)."""
+    if m.get("format") != FORMAT:
+        raise ValueError(f"sweeps.json: format {m.get('format')!r}, this tool reads {FORMAT}")
+    c, loops, big = m["context"], m["loops"], m["memory_sweep"]
+    local2 = next(s for s in m["sweeps"] if s["where"] == "local pool")
+    dask = next(s for s in m["sweeps"] if s["where"] == "Dask LocalCluster")
+    quick = (
+        [
+            "",
+            "**A quick run (`--quick`)**: few cases, one round, short records for the memory "
+            "table; it checks that the benchmark works, its numbers test no target at its size.",
+        ]
+        if c["quick"]
+        else []
+    )
+    lines = [
+        "# Summary-only sweeps and step loops, measured",
         "",
-        f"Peak resident memory after these sweeps: parent {parent:.0f} MB, largest worker "
-        f"{child:.0f} MB (the {args.memory_cases}-case sweep keeps one small row per case).",
+        "Written by `python tools/sweep_benchmark.py` (repository tooling) from "
+        "`docs/results/sweeps.json`; every number and verdict below is computed from that file "
+        "(`tests/docs/test_docs_sweeps.py` renders it again). Measured in one sitting of "
+        f"{c['minutes']:.1f} min on {c['date']}: {c['machine']}, {c['cpus']} CPUs, Python "
+        f"{c['python']}, commit {c['commit']}, load average (1 min) {c['load_before']:.2f} "
+        f"before and {c['load_after']:.2f} after. Machine-dependent measurements, not tests.",
+        *quick,
+        "",
+        "## Targets",
+        "",
+        "| issue | target | measured | verdict |",
+        "|---|---|---|---|",
+        *(f"| {i} | {t} | {v} | {ok} |" for i, t, v, ok in targets(m)),
+        "",
+        "## Step loops against the reference loop",
+        "",
+        f"The built-in benchmark ({c['scene']}, its {c['record_duration']:g} s synthetic "
+        f"record, {loops['ndof']} DOF), timed by `benchmarks/reference_loop/run.py`'s "
+        f"`measure` in {c['settings']['rounds']} interleaved round(s) (each: the reference loop "
+        f"{c['settings']['repeats']}×, each engine once): the step loop alone, medians. The "
+        "reference is the lean C loop of the compliance engine's problem (what it leaves out: "
+        "`benchmarks/reference_loop/README.md`); its peak deck "
+        "displacements and rotation differ from the compliance engine's by at most "
+        f"{loops['peak_difference']:.1e} (relative).",
+        "",
+        *_loop_lines(loops),
+        "",
+        "## Summary-only sweeps",
+        "",
+        f"{local2['cases']} seeds of the {c['record_duration']:g} s synthetic record with the "
+        f"{SWEEP_ENGINE} engine, one summary row per case (peaks over every step, closures, seat "
+        "margins, status; no histories), each sweep into an empty row cache, after "
+        f"{WARM_CASES_PER_WORKER} warm-up cases per worker (kernels loaded, workers started). "
+        "Overhead: workers × wall / Σ step loops − 1 (record synthesis, result assembly, row "
+        "cache, inter-process traffic, idle workers). The Dask cluster is "
+        f"`distributed.LocalCluster(n_workers={WORKERS}, threads_per_worker=1, processes=True)`; "
+        f"its wall time is {dask['wall'] / local2['wall']:.2f}× the local pool's.",
+        "",
+        *_sweep_lines(m["sweeps"]),
+        "",
+        f"A sweep of {big['cases']} cases on {big['workers']} local workers in a fresh process, "
+        "end to end (the cases built, the pool started, the sweep): "
+        f"{big['wall']:.1f} s ({big['cases'] / big['wall']:.1f} cases/s, {big['finished']} "
+        f"finished); peak resident memory of that process {big['parent_mb']:.0f} MB and of its "
+        f"largest worker {big['worker_mb']:.0f} MB (`RUSAGE_CHILDREN` after the workers were "
+        "joined; `VmHWM` of the living workers at the sweep's end: "
+        f"{', '.join(f'{v:.0f}' for v in big['worker_hwm_mb']) or 'none read'} MB), at most "
+        f"{big['parent_mb'] + big['workers'] * big['worker_mb']:.0f} MB together (an upper "
+        "bound: the peaks need not coincide, and forked workers share pages with the process "
+        "that forked them).",
+        "",
+        "## Peak memory against output length",
+        "",
+        "One run per engine and record length (`excitation.duration` = `run.duration`), at the "
+        f"default output rate (every {c['output_dt']:g} s), in a fresh process "
+        "(`deckpound.compare.bench.memory.peak_rss`): its peak resident memory, the process's "
+        "after the imports and a tiny warm-up run, and the difference (what the run itself "
+        "held at its peak); raw output = rows × columns × 8 B (MB = 2²⁰ B).",
+        "",
+        *_memory_lines(m["output_memory"]),
         "",
     ]
-    PAGE.write_text("\n".join(lines), encoding="utf-8")
-    print("\n".join(lines))
+    for engine in MEMORY_ENGINES:
+        slope = memory_slope(m["output_memory"], engine)
+        if slope is not None:
+            lines.append(
+                f"- {engine}: the peak grows by {slope:.1f} MB per MB of raw output between the "
+                "shortest and the longest record."
+            )
+    return "\n".join(lines) + "\n"
+
+
+def load(path: Path = RESULTS_FILE) -> dict:
+    """The stored measurement."""
+    return json.loads(Path(path).read_text(encoding="utf-8"))
+
+
+def publish(m: dict, results: Path = RESULTS_FILE, page: Path = PAGE) -> None:
+    """Store the measurement and write the page rendered from the stored file."""
+    atomic_write_text(results, json.dumps(m, indent=1) + "\n", field="--results")
+    atomic_write_text(page, render(load(results)), field="--page")
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+def _durations(text: str) -> tuple[float, ...]:
+    values = tuple(float(v) for v in text.split(","))
+    if len(set(values)) != len(values) or len(values) < 2 or any(v <= 0 for v in values):
+        raise argparse.ArgumentTypeError(
+            f"two or more different positive lengths [s], got {text!r}"
+        )
+    return values
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="small case counts, short records")
+    ap.add_argument("--cases", type=_positive, help="cases of the timed sweeps (400)")
+    ap.add_argument("--memory-cases", type=_positive, help="cases of the memory sweep (10000)")
+    ap.add_argument("--rounds", type=_positive, help="rounds of the step loops (5)")
+    ap.add_argument("--repeats", type=_positive, help="reference loops per round (3)")
+    ap.add_argument("--durations", type=_durations, help="record lengths [s] (20,80,320)")
+    ap.add_argument("--results", type=Path, default=RESULTS_FILE, help="measurement file")
+    ap.add_argument("--page", type=Path, default=PAGE, help="the page written")
+    ap.add_argument("--render", action="store_true", help="only render --results to --page")
+    ap.add_argument("--memory-child", type=_positive, help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.memory_child:
+        print(json.dumps(memory_sweep_here(args.memory_child)))
+        return 0
+    if args.render:
+        atomic_write_text(args.page, render(load(args.results)), field="--page")
+        return 0
+    settings = dict(QUICK if args.quick else FULL)
+    for key in settings:
+        if getattr(args, key) is not None:
+            settings[key] = getattr(args, key)
+    if settings["cases"] < WORKERS:
+        ap.error(f"--cases must be >= {WORKERS} (one per worker), got {settings['cases']}")
+    try:
+        m = measure(settings, args.quick, lambda text: print(text, file=sys.stderr, flush=True))
+    except (RuntimeError, OSError, ImportError) as err:  # the reference loop, a child, Dask
+        print(f"sweep_benchmark: {err}", file=sys.stderr)
+        return 1
+    publish(m, args.results, args.page)
+    print(args.page.read_text(encoding="utf-8"))
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -28,6 +28,9 @@ does in addition (``REF_REFACTOR_CONTACT``, ``REF_FULL_RESIDUAL``) and runs the 
 without its energy columns (``channels=[]``) and with one output row (``run.output_dt`` = the
 record): what each costs.
 
+:func:`measure` does the timed rounds and returns them (:class:`LoopTimes`); ``main`` prints
+them, and ``tools/sweep_benchmark.py`` puts them on docs/sweeps.md beside the sweeps.
+
 The reference solves the compliance engine's problem only for what it implements: linear
 contact law, no friction, linear contact kinematics, initial-stiffness damping, the Newmark
 integrator; another scene is refused with the field and the value that it cannot run.
@@ -261,6 +264,83 @@ def _engine_line(label: str, results: list, ref_us: float) -> str:
     return _row(label, us, ref_us, newton / steps, facts, step)
 
 
+@dataclass
+class LoopTimes:
+    """The timed rounds of :func:`measure`: the problem, the reference builds' loop times [s]
+    (every timed repeat of every round) and last reports, and the engines' results of every
+    round (``meta["us_per_step"]``, ``meta["loop_time"]``: the step loop alone)."""
+
+    problem: Problem
+    ndof: int
+    reference_seconds: dict[str, list[float]]
+    reports: dict[str, dict]
+    compliance: list
+    nonsmooth: list
+    compliance_no_energy: list
+    compliance_one_row: list
+    load_before: tuple[float, float, float]
+    load_after: tuple[float, float, float]
+
+    def reference_us(self, label: str = "reference") -> list[float]:
+        """µs/step of every timed loop of the reference build ``label``."""
+        return [1e6 * t / self.problem.steps for t in self.reference_seconds[label]]
+
+
+def measure(
+    scene, *, rounds: int = 5, repeats: int = 3, variants: bool = False, nonsmooth: bool = True
+) -> LoopTimes:
+    """Time the reference loop and the engines on ``scene`` in ``rounds`` interleaved rounds
+    (each round: every reference build ``repeats`` times, then the compliance engine, then the
+    nonsmooth engine), after one untimed run of each engine (numba loads or compiles). Raises
+    ReferenceError when the reference cannot run the scene or fails."""
+    if rounds < 1 or repeats < 1:
+        raise ValueError(f"rounds and repeats must be >= 1, got {rounds} and {repeats}")
+    check_scene(scene)
+    motion = dp.support_motion(scene)
+    load_before = os.getloadavg()
+    warm = dp.run(scene, engine="compliance", motion=motion)  # numba loads or compiles
+    if nonsmooth:
+        dp.run(scene, engine="nonsmooth", motion=motion)
+    problem = problem_of(scene, motion, warm)
+
+    with tempfile.TemporaryDirectory(prefix="deckpound-reference-") as tmp:
+        folder = Path(tmp)
+        inputs = folder / "inputs.f64"
+        nd = write_inputs(problem, inputs)
+        builds = {"reference": compile_reference(folder, nd)}
+        if variants:
+            for label, defines in VARIANTS.items():
+                builds[label] = compile_reference(folder, nd, defines)
+        scene_one_row = scene.replace({"run.output_dt": problem.steps * problem.dt})
+        ref_times: dict[str, list[float]] = {k: [] for k in builds}
+        reports: dict[str, dict] = {}
+        comp, nons, comp_noenergy, comp_onerow = [], [], [], []
+        for _ in range(rounds):
+            for label, exe in builds.items():
+                # one loop more than timed: the first touches the input's pages
+                rep = run_reference(exe, inputs, repeats + 1)
+                ref_times[label] += rep["loop_seconds"][1:]
+                reports[label] = rep
+            comp.append(dp.run(scene, engine="compliance", motion=motion))
+            if variants:
+                comp_noenergy.append(dp.run(scene, engine="compliance", motion=motion, channels=[]))
+                comp_onerow.append(dp.run(scene_one_row, engine="compliance", motion=motion))
+            if nonsmooth:
+                nons.append(dp.run(scene, engine="nonsmooth", motion=motion))
+    return LoopTimes(
+        problem=problem,
+        ndof=nd,
+        reference_seconds=ref_times,
+        reports=reports,
+        compliance=comp,
+        nonsmooth=nons,
+        compliance_no_energy=comp_noenergy,
+        compliance_one_row=comp_onerow,
+        load_before=load_before,
+        load_after=os.getloadavg(),
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scene", default="saiidi-4span", help="built-in scene or TOML file")
@@ -281,50 +361,32 @@ def main(argv: list[str] | None = None) -> int:
     except ReferenceError as exc:
         print(f"run.py: {exc}", file=sys.stderr)
         return 2
-    motion = dp.support_motion(scene)
-    load_before = os.getloadavg()
-    warm = dp.run(scene, engine="compliance", motion=motion)  # numba loads or compiles
-    if not args.no_nonsmooth:
-        dp.run(scene, engine="nonsmooth", motion=motion)
-    problem = problem_of(scene, motion, warm)
-
-    with tempfile.TemporaryDirectory(prefix="deckpound-reference-") as tmp:
-        folder = Path(tmp)
-        inputs = folder / "inputs.f64"
-        nd = write_inputs(problem, inputs)
-        builds = {"reference": compile_reference(folder, nd)}
-        if args.variants:
-            for label, defines in VARIANTS.items():
-                builds[label] = compile_reference(folder, nd, defines)
-        scene_one_row = scene.replace({"run.output_dt": problem.steps * problem.dt})
-        ref_times: dict[str, list[float]] = {k: [] for k in builds}
-        reports: dict[str, dict] = {}
-        comp, nons, comp_noenergy, comp_onerow = [], [], [], []
-        for _ in range(args.rounds):
-            for label, exe in builds.items():
-                # one loop more than timed: the first touches the input's pages
-                rep = run_reference(exe, inputs, args.repeats + 1)
-                ref_times[label] += rep["loop_seconds"][1:]
-                reports[label] = rep
-            comp.append(dp.run(scene, engine="compliance", motion=motion))
-            if args.variants:
-                comp_noenergy.append(dp.run(scene, engine="compliance", motion=motion, channels=[]))
-                comp_onerow.append(dp.run(scene_one_row, engine="compliance", motion=motion))
-            if not args.no_nonsmooth:
-                nons.append(dp.run(scene, engine="nonsmooth", motion=motion))
-    load_after = os.getloadavg()
+    times = measure(
+        scene,
+        rounds=args.rounds,
+        repeats=args.repeats,
+        variants=args.variants,
+        nonsmooth=not args.no_nonsmooth,
+    )
+    problem, nd, reports = times.problem, times.ndof, times.reports
+    comp, nons = times.compliance, times.nonsmooth
+    load_before, load_after = times.load_before, times.load_after
 
     ref = reports["reference"]
     steps = problem.steps
 
     def ref_line(label: str) -> str:
-        us = [1e6 * t / steps for t in ref_times[label]]
         rep = reports[label]
         return _row(
-            label, us, ref_us, rep["newton_iterations"] / steps, rep["factorisations"], problem.dt
+            label,
+            times.reference_us(label),
+            ref_us,
+            rep["newton_iterations"] / steps,
+            rep["factorisations"],
+            problem.dt,
         )
 
-    ref_us = statistics.median(1e6 * t / steps for t in ref_times["reference"])
+    ref_us = statistics.median(times.reference_us())
     print(f"scene {scene.name}: {steps} steps of {problem.dt:g} s, {nd} DOF")
     print(
         f"load average (1 min) {load_before[0]:.2f} before, {load_after[0]:.2f} after; the "
@@ -340,8 +402,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.variants:
         for label in VARIANTS:
             print(ref_line(label))
-        print(_engine_line("compliance, no energy columns", comp_noenergy, ref_us))
-        print(_engine_line("compliance, one output row", comp_onerow, ref_us))
+        print(_engine_line("compliance, no energy columns", times.compliance_no_energy, ref_us))
+        print(_engine_line("compliance, one output row", times.compliance_one_row, ref_us))
     if nons:
         print(_engine_line("nonsmooth (its own step)", nons, ref_us))
         nons_s = statistics.median(r.meta["loop_time"] for r in nons)
