@@ -21,7 +21,7 @@ It measures, one after the other in one process (so the ratios share the machine
    (the steady rate of a sweep). Overhead over the step loops: workers × wall / Σ loop − 1;
 3. a sweep of M cases on 2 local workers in a fresh process, end to end (the cases built, the
    pool started, the sweep): its wall time, the peak resident memory of that process
-   (``ru_maxrss``) and of its largest worker (``RUSAGE_CHILDREN``, read after the pool's
+   (``VmHWM``: its own address space, not ``ru_maxrss``, which a fresh process inherits) and of its largest worker (``RUSAGE_CHILDREN``, read after the pool's
    workers are joined, i.e. reaped; and ``VmHWM`` of the living workers before that);
 4. the peak memory of one run against its output length
    (:func:`deckpound.compare.bench.memory.peak_rss`, a fresh process per run) for both analytic
@@ -55,7 +55,7 @@ from pathlib import Path
 
 from docs_blocks import DOCS, RESULTS, ROOT
 
-from deckpound.compare.bench.memory import peak_rss
+from deckpound.compare.bench.memory import peak_resident_mb, peak_rss
 from deckpound.compare.engines import run_engine
 from deckpound.compare.pool import pool_scope
 from deckpound.compare.studies.variability import FINISHED, seed_cases, sweep_rows
@@ -229,8 +229,8 @@ def memory_sweep_here(cases: int) -> dict:
         "workers": WORKERS,
         "wall": wall,
         "finished": sum(r.get("status") in FINISHED for r in rows.values()),
-        # ru_maxrss: KiB on Linux; RUSAGE_CHILDREN: the largest reaped child
-        "parent_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        # RUSAGE_CHILDREN: the largest reaped child (KiB on Linux)
+        "parent_mb": peak_resident_mb(),
         "worker_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0,
         "worker_hwm_mb": living,
     }

@@ -2,7 +2,7 @@
 
 ``peak_rss(engine, overrides)`` runs ``deckpound.compare.engines.run_engine(engine, scene)`` in a new
 Python process (so nothing from the caller counts) and returns that process's peak resident
-set size (``resource.getrusage(RUSAGE_SELF).ru_maxrss``, KiB on Linux) together with the
+set size (:func:`peak_resident_mb`) together with the
 baseline after the imports and one tiny warm-up run (numba compilation or cache loading,
 OpenSees loading), the run's wall time, steps and status. The difference ``peak − baseline``
 is what the run itself allocated at its peak.
@@ -16,28 +16,49 @@ from __future__ import annotations
 
 import argparse
 import json
+import resource
 import subprocess
 import sys
+from pathlib import Path
 
 _CHILD = r"""
-import json, resource, sys, time, warnings
+import json, sys, time, warnings
 warnings.simplefilter("ignore")
+from deckpound.compare.bench.memory import peak_resident_mb
 from deckpound.compare.engines import run_engine
 from deckpound.models.scene_io import load_scene
 engine, scene_name, overrides, warm = json.loads(sys.argv[1])
 if warm:
     run_engine(engine, load_scene(scene_name, overrides + ["run.duration=0.05"]))
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+base = peak_resident_mb()
 scene = load_scene(scene_name, overrides)
 t0 = time.perf_counter()
 r = run_engine(engine, scene)
 wall = time.perf_counter() - t0
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-print(json.dumps({"baseline_mb": base / 1024, "peak_mb": peak / 1024,
-                  "run_mb": (peak - base) / 1024, "wall": wall,
+peak = peak_resident_mb()
+print(json.dumps({"baseline_mb": base, "peak_mb": peak,
+                  "run_mb": peak - base, "wall": wall,
                   "steps": r.meta.get("steps"), "rows": len(r.t),
                   "status": r.meta.get("status"), "message": r.meta.get("message")}))
 """
+
+
+def peak_resident_mb() -> float:
+    """This process's peak resident set size [MB]: ``VmHWM`` of ``/proc/self/status`` on Linux.
+
+    Not ``getrusage(RUSAGE_SELF).ru_maxrss``: Linux keeps that across fork and exec, so a fresh
+    process started by a large one reports its parent's peak (every run measured 297 MB when
+    started from a sweep benchmark of that size); ``VmHWM`` belongs to the process's own address
+    space, which exec replaces. Elsewhere, ``ru_maxrss`` (KiB on Linux, bytes on macOS).
+    """
+    try:
+        status = Path("/proc/self/status").read_text()
+    except OSError:
+        scale = 1024.0 * 1024.0 if sys.platform == "darwin" else 1024.0
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / scale
+    return next(
+        int(ln.split()[1]) / 1024.0 for ln in status.splitlines() if ln.startswith("VmHWM:")
+    )
 
 
 def peak_rss(
