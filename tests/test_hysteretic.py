@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from numba import njit
 
 from deckpound.analytic.kernels import hysteretic_kernel as K
+from deckpound.analytic.kernels import hysteretic_layout as L
 from deckpound.analytic.kernels.hysteretic import HystereticMaterial, pack_hysteretic
 
 ops = pytest.importorskip("openseespy.opensees")
@@ -280,8 +281,8 @@ def test_element_copy_energy_convention():
     args = GENERAL["general2_odd"]
     p_true = pack_hysteretic(*args, element_copy=True)
     p_false = pack_hysteretic(*args, element_copy=False)
-    assert np.array_equal(p_true[: K.P_ENERGYA], p_false[: K.P_ENERGYA])
-    assert p_true[K.P_ENERGYA] != p_false[K.P_ENERGYA]
+    assert np.array_equal(p_true[: L.P_ENERGYA], p_false[: L.P_ENERGYA])
+    assert p_true[L.P_ENERGYA] != p_false[L.P_ENERGYA]
 
     strains = np.concatenate(
         [_scripted_history(args), _random_history(args, 3000, np.random.default_rng(1))]
@@ -314,8 +315,8 @@ def _kernel_drive(params, st, strains, ops_codes):
     out = np.empty((n, 2))
     for i in range(n):
         K.hyst_set_trial(params, st, strains[i])
-        out[i, 0] = st[K.T_STRESS]
-        out[i, 1] = st[K.T_TANGENT]
+        out[i, 0] = st[L.T_STRESS]
+        out[i, 1] = st[L.T_TANGENT]
         if ops_codes[i] == 0:
             K.hyst_commit(st)
         elif ops_codes[i] == 2:
@@ -379,7 +380,7 @@ def test_revert_to_start_and_initial_tangent():
 def test_beta_keyword_equals_positional():
     a = TAKEDA_2PT["takeda2_b0.3"]
     np.testing.assert_array_equal(pack_hysteretic(*a), pack_hysteretic(*a[:-1], beta=0.3))
-    assert pack_hysteretic(*a[:-1])[K.P_BETA] == 0.0
+    assert pack_hysteretic(*a[:-1])[L.P_BETA] == 0.0
 
 
 # -------------------------------------------------------------- bad args

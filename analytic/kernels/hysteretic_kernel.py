@@ -28,8 +28,7 @@ import numpy as np
 from numba import njit
 
 from deckpound.analytic._jit import kernel
-from deckpound.analytic.kernels import hysteretic_layout as _layout
-from deckpound.analytic.kernels.hysteretic_layout import (  # noqa: F401 (re-exported: data format)
+from deckpound.analytic.kernels.hysteretic_layout import (
     C_ENERGYD,
     C_LOADIND,
     C_ROTMAX,
@@ -43,7 +42,6 @@ from deckpound.analytic.kernels.hysteretic_layout import (  # noqa: F401 (re-exp
     K_KN_ROT,
     K_KP,
     K_KP_ROT,
-    N_PARAMS,
     N_STATE,
     NEG_INF_STRAIN,
     P_BETA,
@@ -82,17 +80,15 @@ from deckpound.analytic.kernels.hysteretic_layout import (  # noqa: F401 (re-exp
     T_STRAIN,
     T_STRESS,
     T_TANGENT,
-    pack_hysteretic_params,
 )
 
 __all__ = [
-    *_layout.__all__,
     "ELASTIC_SHORTCUT",
-    "hyst_init_state",
-    "hyst_set_trial",
     "hyst_commit",
+    "hyst_init_state",
     "hyst_revert",
     "hyst_revert_to_start",
+    "hyst_set_trial",
 ]
 
 #: The elastic short-circuit of :func:`_degradation` (``pow`` skipped while the ductility is
