@@ -70,7 +70,9 @@ __all__ = [
     "check_output_size",
     "new_contact_work",
     "new_stats",
+    "output_table",
     "record",
+    "result_columns",
     "row_views",
     "run_loop",
     "stats_dict",
@@ -251,6 +253,31 @@ def check_output_size(rows: int, columns: int, field: str = "run.output_dt") -> 
             f"{MAX_OUTPUT_BYTES / 2**30:g} GiB is allowed: store fewer rows "
             f"(a larger {field})",
         )
+
+
+def output_table(rows: int, columns: int, field: str = "run.output_dt") -> np.ndarray:
+    """The zeroed output table of a step loop, (rows, columns) [column units], refused above
+    :data:`MAX_OUTPUT_BYTES` (:func:`check_output_size`).
+
+    Column-major (Fortran order): each column is one contiguous block, so the result's columns
+    are views of the table (:func:`result_columns`), not copies: a run holds its output once.
+    The loop writes one row per output step, a strided store per column; its arithmetic does
+    not depend on the layout."""
+    check_output_size(rows, columns, field)
+    return np.zeros((int(rows), int(columns)), order="F")
+
+
+def result_columns(table: np.ndarray, rows: int, names) -> dict[str, np.ndarray]:
+    """The first ``rows`` rows of each column of ``table`` as read-only views, by name.
+
+    Read-only arrays are handed to :class:`deckpound.models.result.Result` as they are (it
+    copies only writeable ones), so the table is the run's one copy of its histories."""
+    out = {}
+    for i, name in enumerate(names):
+        col = table[:rows, i]
+        col.flags.writeable = False
+        out[name] = col
+    return out
 
 
 def run_loop(loop, args, stats: Stats) -> bool:

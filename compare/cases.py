@@ -122,8 +122,9 @@ def engine_expresses(engine: str, scene: Scene, study: str) -> bool:
     return True
 
 
-def run_case(engine: str, scene: Scene) -> Result:
-    """Run one case in this process (the worker function; picklable arguments).
+def run_case(engine: str, scene: Scene, summary_only: bool = False) -> Result:
+    """Run one case in this process (the worker function; picklable arguments);
+    ``summary_only``: a result without histories (``Engine.run``'s option, for sweeps).
 
     Every warning raised during the run is recorded in ``meta["warnings"]`` (the engine's own
     option notes are there already) so that the main process can show it
@@ -132,7 +133,7 @@ def run_case(engine: str, scene: Scene) -> Result:
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        result = run_engine(engine, scene)
+        result = run_engine(engine, scene, summary_only=summary_only)
     notes = list(result.meta.get("warnings", []))
     notes += [str(w.message) for w in caught if str(w.message) not in notes]
     return result.with_meta(warnings=notes)

@@ -75,7 +75,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from deckpound.models.columns import column_names
+from deckpound.models.columns import ENERGY_COLUMNS, column_names
 from deckpound.models.contact_params import contact_resolving_step
 from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
 from deckpound.models.excitation import support_motion
@@ -329,9 +329,13 @@ class Engine:
         motion=None,
         *,
         raise_on_failure: bool = False,
+        summary_only: bool = False,
         **options: Any,
     ) -> Result:
-        """Run the engine on ``scene`` and return its Result (the shared template)."""
+        """Run the engine on ``scene`` and return its Result (the shared template).
+
+        ``summary_only``: return a result without histories (:func:`finish`), for sweeps that
+        keep one row of peaks, closures, seat margins and status per case."""
 
         t0 = time.perf_counter()
         settings = self.settings_of(scene) if settings is None else settings
@@ -342,7 +346,16 @@ class Engine:
         out = self._run(plan, scene, settings, motion, **options)
         total = time.perf_counter() - t0
         return finish(
-            self, scene, settings, motion, plan, out, total, msgs, raise_on_failure=raise_on_failure
+            self,
+            scene,
+            settings,
+            motion,
+            plan,
+            out,
+            total,
+            msgs,
+            raise_on_failure=raise_on_failure,
+            summary_only=summary_only,
         )
 
     def _run(self, plan: Plan, scene: Scene, settings: Any, motion, **options: Any) -> RunOutput:
@@ -390,6 +403,8 @@ def _relative_columns(plan: Plan, motion, cols: dict[str, np.ndarray]) -> dict[s
     for i, b in enumerate(plan.bent_names):
         out[f"{b}_dx"] = d[:, 2 * i]
         out[f"{b}_dy"] = d[:, 2 * i + 1]
+    for column in out.values():
+        column.flags.writeable = False  # handed to the Result as they are (no copy)
     return out
 
 
@@ -606,18 +621,32 @@ def finish(
     notes: list[str],
     *,
     raise_on_failure: bool = False,
+    summary_only: bool = False,
 ) -> Result:
-    """The shared epilogue: standard columns in order, statistics, status and metadata."""
+    """The shared epilogue: standard columns in order, statistics, status and metadata.
+
+    ``summary_only`` (sweeps): the same checks, statistics and status, taken from the engine's
+    every-step measurements (peaks, closures, openings; contract points 10 and 11) and its
+    output rows (penetration, the energy balance), but the result keeps no histories: its
+    only column is an empty ``t``, ``meta["histories"]`` is False, ``meta["final_energies"]``
+    holds the energy columns' last values [kJ], and the scene itself, its hash and the
+    relative columns are not made (the caller keys the case). An engine that does not measure
+    its peaks at every step gets the full epilogue, whose rows are then dropped."""
     cols = dict(out.columns)
     missing = [c for c in engine_columns(plan) if c not in cols]
     if missing:
         raise RuntimeError(
             f"engine {engine.name!r} returned no column {missing[0]!r} (engine contract, point 5)"
         )
-    cols.update(_relative_columns(plan, motion, cols))
-    order = column_names(plan)
-    columns = {k: cols[k] for k in order}
-    columns.update({k: v for k, v in cols.items() if k not in columns})
+    # without the engine's every-step measurements the statistics come from the rows
+    light = summary_only and out.peaks is not None and out.gap_openings is not None
+    if light:
+        columns: dict[str, np.ndarray] = {}
+    else:
+        cols.update(_relative_columns(plan, motion, cols))
+        order = column_names(plan)
+        columns = {k: cols[k] for k in order}
+        columns.update({k: v for k, v in cols.items() if k not in columns})
     ok = out.status == Status.SUCCESS
     # unseating ends a run with an answer (point 11): no failure, its rows are checked as a
     # finished run's
@@ -640,17 +669,19 @@ def finish(
         "loop_time": float(out.loop_time),
         "us_per_step": 1e6 * float(out.loop_time or run_time) / steps,
         "duration": float(cols["t"][-1]) if len(cols["t"]) else 0.0,
-        "scene_hash": scene_hash(scene),
-        "physics_hash": physics_hash(scene),
         "settings": to_mapping(settings) if dataclasses.is_dataclass(settings) else settings,
-        "settings_hash": settings_hash(settings),
         "version": VERSION,
         "bent_names": list(plan.bent_names),
         "warnings": list(notes),
+        "histories": not summary_only,
+    }
+    if not light:
+        meta["scene_hash"] = scene_hash(scene)
+        meta["physics_hash"] = physics_hash(scene)
+        meta["settings_hash"] = settings_hash(settings)
         # the whole scene: a result folder is self-describing, whichever way the engine was
         # called (a VTK export or a re-run needs nothing else)
-        "scene": to_mapping(scene),
-    }
+        meta["scene"] = to_mapping(scene)
     provenance = getattr(motion, "provenance", None)
     if provenance:
         meta["record"] = provenance
@@ -678,6 +709,11 @@ def finish(
         meta["failed_time"] = t_fail
         reason = out.message or out.status.text
         meta["message"] = f"{reason} at step {meta['failed_step']} (t = {t_fail:.6g} s)"
+    if summary_only:
+        meta["final_energies"] = {
+            k: float(cols[k][-1]) for k in ENERGY_COLUMNS if k in cols and len(cols[k])
+        }
+        columns = {"t": np.empty(0)}
     result = Result(engine=engine.name, columns=columns, meta=meta)
     if not finished and raise_on_failure:
         raise EngineFailure(f"{engine.name} engine: {meta['message']}")

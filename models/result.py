@@ -97,35 +97,68 @@ NON_PHYSICS = ("opensees", "compliance", "nonsmooth", "sequence", "notes", "desc
 
 
 def _hash(obj: Any) -> str:
-    text = json.dumps(_jsonable(obj), sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()
+    return hashlib.sha256(canonical_json(obj).encode()).hexdigest()
 
 
-#: the hashes of live frozen descriptions, by (id, kind): a frozen scene's hash never changes,
-#: and a sweep asks for each case's several times (its cache key, its result's provenance); an
-#: entry goes when its scene is collected, so a new object never meets an old id's entry
-_LIVE_HASHES: dict[tuple[int, str], str] = {}
+#: the canonical JSON texts of live frozen descriptions, by (id, kind): a frozen description
+#: never changes, and the cases of a sweep share all of the scene's tables but one (a seed, a
+#: record), each asked for several times (cache keys, provenance); an entry goes when its
+#: object is collected, so a new object never meets an old id's entry
+_LIVE_TEXTS: dict[tuple[int, str], str] = {}
 
 
-def _frozen_hash(obj: Any, kind: str, mapping) -> str:
+def _remembered(obj: Any, kind: str, make) -> str:
+    """``make(obj)``, remembered for a frozen dataclass ``obj`` while it lives."""
     params = getattr(type(obj), "__dataclass_params__", None)
     if params is None or not params.frozen:
-        return _hash(mapping(obj))
+        return make(obj)
     key = (id(obj), kind)
-    h = _LIVE_HASHES.get(key)
-    if h is None:
-        h = _hash(mapping(obj))
+    text = _LIVE_TEXTS.get(key)
+    if text is None:
+        text = make(obj)
         try:
-            weakref.finalize(obj, _LIVE_HASHES.pop, key, None)
+            weakref.finalize(obj, _LIVE_TEXTS.pop, key, None)
         except TypeError:  # no weak references (slots): not remembered
-            return h
-        _LIVE_HASHES[key] = h
-    return h
+            return text
+        _LIVE_TEXTS[key] = text
+    return text
+
+
+def _fields_of(obj: Any) -> dict[str, Any]:
+    """A description's fields as :func:`~deckpound.models.fields.to_mapping` keeps them (None
+    dropped), values not converted."""
+    out = {}
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        if v is not None:
+            out[f.name] = v
+    return out
+
+
+def _mapping_text(items: dict) -> str:
+    keys = sorted((str(k), k) for k in items)
+    return "{" + ",".join(f"{json.dumps(s)}:{canonical_json(items[k])}" for s, k in keys) + "}"
+
+
+def canonical_json(obj: Any) -> str:
+    """The canonical JSON text of ``obj`` that the hashes are taken of:
+    ``json.dumps(_jsonable(obj), sort_keys=True, separators=(",", ":"))`` with descriptions
+    (dataclasses) as :func:`~deckpound.models.fields.to_mapping` writes them, built from the
+    texts of its parts; the text of a frozen description is made once per object
+    (:data:`_LIVE_TEXTS`), so the cases of a sweep, which share all of the scene's tables but
+    one, cost one table each."""
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return _remembered(obj, "json", lambda o: _mapping_text(_fields_of(o)))
+    if isinstance(obj, dict):
+        return _mapping_text(obj)
+    if isinstance(obj, (list, tuple)):
+        return "[" + ",".join(canonical_json(v) for v in obj) + "]"
+    return json.dumps(_jsonable(obj), sort_keys=True, separators=(",", ":"))
 
 
 def scene_hash(scene: Any) -> str:
     """SHA-256 of the scene's canonical JSON (every field, notes included): provenance."""
-    return _frozen_hash(scene, "scene", to_mapping)
+    return _remembered(scene, "scene", _hash)
 
 
 def physics_mapping(scene: Any) -> dict[str, Any]:
@@ -133,14 +166,19 @@ def physics_mapping(scene: Any) -> dict[str, Any]:
     return {k: v for k, v in to_mapping(scene).items() if k not in NON_PHYSICS}
 
 
+def _physics_hash_of(scene: Any) -> str:
+    parts = _fields_of(scene) if dataclasses.is_dataclass(scene) else to_mapping(scene)
+    return _hash({k: v for k, v in parts.items() if k not in NON_PHYSICS})
+
+
 def physics_hash(scene: Any) -> str:
     """SHA-256 of :func:`physics_mapping`: the part of a cache key shared by every engine."""
-    return _frozen_hash(scene, "physics", physics_mapping)
+    return _remembered(scene, "physics", _physics_hash_of)
 
 
 def settings_hash(settings: Any) -> str:
     """SHA-256 of an engine's settings (a dataclass or mapping)."""
-    return _hash(to_mapping(settings) if dataclasses.is_dataclass(settings) else settings)
+    return _hash(settings)
 
 
 def closure_times(t: np.ndarray, gap: np.ndarray, fn: np.ndarray | None = None) -> np.ndarray:
@@ -203,6 +241,19 @@ def peak_columns(engine_columns, bent_names) -> list[str]:
     return out
 
 
+def _frozen_column(values: Any) -> np.ndarray:
+    """A result column as a read-only float array.
+
+    A read-only float64 array is taken as it is, without a copy: the engines hand over views of
+    their output table (:func:`deckpound.analytic.bundles.result_columns`) and so a run holds
+    its histories once; whoever hands over a read-only array promises not to change it through
+    another view. Anything else (a writeable array, a list) is copied, so the caller's object
+    and the result never share memory."""
+    if isinstance(values, np.ndarray) and values.dtype == np.float64 and not values.flags.writeable:
+        return values
+    return np.array(values, dtype=float)
+
+
 def row_peak(name: str, t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
     """(peak, time [s]) of a column on its rows: the largest |x| and its first time; for a
     gap column (``gap_*``) the smallest (most negative) value. (nan, nan) without rows."""
@@ -233,7 +284,7 @@ class Result:
         n = len(self.columns["t"])
         cols = {}
         for k, v in self.columns.items():
-            arr = np.array(v, dtype=float)
+            arr = _frozen_column(v)
             if arr.shape != (n,):
                 raise ValueError(f"column {k!r} has shape {arr.shape}, expected ({n},)")
             arr.flags.writeable = False
@@ -283,6 +334,12 @@ class Result:
         return bool(self.meta.get("unseated", False))
 
     @property
+    def has_histories(self) -> bool:
+        """False for a summary-only run (``Engine.run(..., summary_only=True)``): no rows, its
+        peaks, closures, seat margins and final energies are in ``meta``."""
+        return bool(self.meta.get("histories", True))
+
+    @property
     def units(self) -> dict[str, str]:
         return dict(self.meta["units"])
 
@@ -301,11 +358,11 @@ class Result:
         facts = {
             "engine": self.engine,
             "status": str(self.meta.get("status")),
-            "duration": f"{t[-1] - t[0]:g} s" if len(t) else "0 s",
-            "rows": f"{len(t)}",
+            "duration": f"{t[-1] - t[0]:g} s" if len(t) else f"{self.meta.get('duration', 0):g} s",
+            "rows": f"{len(t)}" if self.has_histories else "none (summary only)",
             "columns": f"{len(self.columns)}",
         }
-        if "deck_theta" in self.columns:
+        if "deck_theta" in self.columns or "deck_theta" in (self.meta.get("peaks") or {}):
             facts["peak θ_d"] = f"{self.peak('deck_theta'):.4g} rad"
         if "gap_closures" in self.meta:
             facts["gap closures"] = f"{self.gap_closures}"
@@ -364,10 +421,10 @@ class Result:
 
     # -- peaks -----------------------------------------------------------------------
     def _step_peak(self, column: str):
-        if column not in self.columns:
-            raise KeyError(f"no column {column!r} in the {self.engine} result")
         peaks = self.meta.get("peaks")
         entry = peaks.get(column) if isinstance(peaks, dict) else None
+        if column not in self.columns and (self.has_histories or entry is None):
+            raise KeyError(f"no column {column!r} in the {self.engine} result")
         return entry if entry is not None and len(entry) == 2 else None
 
     def peak(self, column: str) -> float:

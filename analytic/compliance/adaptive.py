@@ -109,10 +109,9 @@ def run_adaptive(
     out_dt = scene.run.output_dt
     nout = round(duration / out_dt) + 1
     cols = engine_columns(plan) + list(ENERGY_COLUMNS)
-    bd.check_output_size(nout, len(cols))
     peaks = run_peaks(scene, plan, ps)
     output = bd.Output(
-        np.zeros((nout, len(cols))),
+        bd.output_table(nout, len(cols)),
         np.arange(len(cols), dtype=np.int64),
         np.zeros(len(cols)),
         peaks,
@@ -142,7 +141,7 @@ def run_adaptive(
         raise KeyboardInterrupt
     st = bd.stats_dict(stats)
     rows = st["rows"]
-    columns = {k: output.table[:rows, i].copy() for i, k in enumerate(cols)}
+    columns = bd.result_columns(output.table, rows, cols)
     ein = np.max(np.abs(columns["energy_input"])) if rows else 0.0
     code = st["status"]
     ok = code == bd.RUN_OK and rows == nout

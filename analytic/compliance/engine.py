@@ -291,7 +291,6 @@ def _run_newmark(
     nsteps = round(duration / dt)
     cols, colsel = _stored_columns(plan, scene, channels)
     rows_max = nsteps // kstride + 1
-    bd.check_output_size(rows_max, len(cols))
     opts = NewmarkOptions(
         nsteps=nsteps,
         dt=float(dt),
@@ -307,7 +306,7 @@ def _run_newmark(
     )
     peaks = run_peaks(scene, plan, ps)
     n_full = len(engine_columns(plan)) + len(ENERGY_COLUMNS)
-    output = bd.Output(np.zeros((rows_max, len(cols))), colsel, np.zeros(n_full), peaks)
+    output = bd.Output(bd.output_table(rows_max, len(cols)), colsel, np.zeros(n_full), peaks)
     u0, v0 = initial_dofs(initial_state, ps.arrays.mass.shape[0])
     work = newmark_workspace(u0, v0, ps.new_state(), cs, ps.n_springs, len(ps.channels))
     contact = bd.Contact(corners, cp, scene.contact.geometry == "nonlinear")
@@ -325,7 +324,7 @@ def _run_newmark(
     if kstride != stride:
         out = out[:rows:stride]
         rows = out.shape[0]
-    columns = {k: out[:rows, i].copy() for i, k in enumerate(cols)}
+    columns = bd.result_columns(out, rows, cols)
     ok = status == Status.SUCCESS
     finished = ok or status == Status.UNSEATED  # unseating is an answer, not a failure
     extra = {

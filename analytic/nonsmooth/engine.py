@@ -220,10 +220,9 @@ class NonsmoothEngine(Engine):
         nsteps = round(duration / h)
         corner_names = [c.name for c in plan.corners]
         cols = engine_columns(plan) + list(impulse_columns(corner_names)) + list(ENERGY_COLUMNS)
-        bd.check_output_size(nsteps // stride + 1, len(cols))
         peaks = run_peaks(scene, plan, ps)
         output = bd.Output(
-            np.zeros((nsteps // stride + 1, len(cols))),
+            bd.output_table(nsteps // stride + 1, len(cols)),
             np.arange(len(cols), dtype=np.int64),
             np.zeros(len(cols)),
             peaks,
@@ -262,7 +261,7 @@ class NonsmoothEngine(Engine):
         ok = status == Status.SUCCESS
         finished = ok or status == Status.UNSEATED  # unseating is an answer, not a failure
         rows = st["rows"]
-        columns = {k: output.table[:rows, i].copy() for i, k in enumerate(cols)}
+        columns = bd.result_columns(output.table, rows, cols)
         ein = float(np.max(np.abs(columns["energy_input"]))) if rows else 0.0
         eerr = float(np.max(np.abs(columns["energy_error"]))) if rows else 0.0
         extra = {
