@@ -12,6 +12,7 @@ the engines that run it (the engine settings are plain data read by the engines)
 from __future__ import annotations
 
 import dataclasses
+import functools
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -525,14 +526,18 @@ def _plain(value: Any) -> Any:
     return to_mapping(value)
 
 
+@functools.cache
+def _field_names(cls: type) -> frozenset[str]:
+    """The field names of a description class (asked for every notes key of every scene)."""
+    return frozenset(f.name for f in dataclasses.fields(cls))
+
+
 def _check_path(scene: Scene, key: str) -> None:
     """Check that a notes key names an existing field (``bents[0].x.stiffness``)."""
     obj = scene
     for part in key.replace("]", "").split("."):
         name, _, index = part.partition("[")
-        if not dataclasses.is_dataclass(obj) or name not in {
-            f.name for f in dataclasses.fields(obj)
-        }:
+        if not dataclasses.is_dataclass(obj) or name not in _field_names(type(obj)):
             raise SceneError(f"notes.{key}", "names no field of the scene")
         obj = getattr(obj, name)
         if index:
