@@ -166,7 +166,9 @@ def run(
     """Run one engine on a scene and return its :class:`~deckpound.models.result.Result`.
 
     ``settings`` replaces the engine's settings table of the scene (an instance of the engine's
-    ``Settings`` class); ``options`` are the engine's extra keywords (e.g. ``initial_state``).
+    ``Settings`` class); ``options`` are the engine's extra keywords (e.g. ``initial_state``),
+    and ``summary_only=True`` gives a result without histories (peaks, closures, seat margins,
+    energy check and status only: what a sweep keeps of each case).
     """
     from deckpound.compare.engines import run_engine
 
