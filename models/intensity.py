@@ -26,6 +26,7 @@ motion's provenance under ``intensity`` (:data:`UNITS`).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -37,6 +38,14 @@ ROTD_ANGLES = np.deg2rad(np.arange(180.0))  # 0°, 1°, …, 179° (Boore 2010)
 BLOCK = 64
 #: most elements of one rotated-response array held at once (RotD over long records)
 ROTD_CHUNK = 4_000_000
+#: consecutive angles sharing one bound in the candidate search (see :func:`_rotd_candidates`)
+ROTD_GROUP = 10
+#: responses of at most this many samples are rotated whole, without a candidate search
+ROTD_KEEP = 64
+_ROTD_COS, _ROTD_SIN = np.cos(ROTD_ANGLES), np.sin(ROTD_ANGLES)
+_GROUP_CENTRES = np.deg2rad(np.arange(180.0).reshape(-1, ROTD_GROUP).mean(axis=1))
+_GROUP_COS, _GROUP_SIN = np.cos(_GROUP_CENTRES), np.sin(_GROUP_CENTRES)
+_GROUP_HALF_SIN = math.sin(math.radians(0.5 * (ROTD_GROUP - 1)))
 
 #: unit of each measure as kept in the provenance
 UNITS = {
@@ -56,7 +65,7 @@ UNITS = {
 
 
 def _check_oscillators(periods: np.ndarray, damping: float) -> None:
-    if not np.all(np.isfinite(periods)) or not np.all(periods > 0.0):
+    if not all(math.isfinite(p) and p > 0.0 for p in periods.tolist()):
         raise ValueError(f"oscillator periods must be finite and > 0 s, got {periods}")
     if not 0.0 <= damping < 1.0:
         raise ValueError(f"damping ratio must lie in [0, 1), got {damping}")
@@ -122,44 +131,74 @@ def oscillator_displacements(
     periods = np.atleast_1d(np.asarray(periods, float))
     _check_oscillators(periods, damping)
     n = len(a)
-    omega = 2.0 * np.pi / periods
-    k = len(omega)
+    k = len(periods)
     if n < 2:
         return np.zeros((k, n))
-    p_load, q_load = load_matrices(omega, damping, dt)
-    forcing = p_load[:, None, :] * a[None, :-1, None] + q_load[:, None, :] * a[None, 1:, None]
+    p_load, q_load, conv_t, step, free_t = block_operators(
+        tuple(periods.tolist()), float(damping), float(dt)
+    )
+    # the forcing f_n = P a_n + Q a_{n+1} of each oscillator and state component, zero-padded
+    # to whole blocks
     nb = -(-(n - 1) // BLOCK)
     padded = np.zeros((k, nb * BLOCK, 2))
-    padded[:, : n - 1] = forcing
-    blocks = padded.reshape(k, nb, BLOCK, 2)
+    for i in range(k):
+        for c in range(2):
+            np.multiply(p_load[i, c], a[:-1], out=padded[i, : n - 1, c])
+            padded[i, : n - 1, c] += q_load[i, c] * a[1:]
+    flat = padded.reshape(k, nb, 2 * BLOCK)
+    # particular part of every block, one matrix product per oscillator (2-D products: a
+    # stacked 3-D matmul runs several times slower under a threaded BLAS on a busy machine)
+    part = np.empty((k, nb, 2 * (BLOCK + 1)))
+    for i in range(k):
+        np.matmul(flat[i], conv_t[i], out=part[i])
+    part = part.reshape(k, nb, BLOCK + 1, 2)
+    # chain the blocks by their end states: s_{b+1} = Φ(LΔt) s_b + part_b(L), in Python
+    # floats (the same products and sums as numpy's, without a numpy call per block)
+    ends = part[:, :, BLOCK].tolist()
+    chained = []
+    for i in range(k):
+        (f00, f01), (f10, f11) = step[i]
+        s0 = s1 = 0.0
+        starts = []
+        for e0, e1 in ends[i]:
+            starts.append((s0, s1))
+            s0, s1 = f00 * s0 + f01 * s1 + e0, f10 * s0 + f11 * s1 + e1
+        chained.append((starts, s0))
+    free = np.empty((k, nb, 2 * BLOCK))
+    for i in range(k):
+        np.matmul(np.array(chained[i][0]), free_t[i], out=free[i])
+    z = (free.reshape(k, nb, BLOCK, 2) + part[:, :, :BLOCK]).reshape(k, nb * BLOCK, 2)
+    u = np.empty((k, n))
+    u[:, : n - 1] = z[:, : n - 1, 0]
+    u[:, n - 1] = [end for _, end in chained] if (n - 1) % BLOCK == 0 else z[:, n - 1, 0]
+    return u
+
+
+@functools.lru_cache(maxsize=64)
+def block_operators(periods: tuple[float, ...], damping: float, dt: float) -> tuple:
+    """The matrices of :func:`oscillator_displacements` for oscillators of ``periods`` [s] and
+    ``damping`` at the step ``dt`` [s], computed once per (periods, damping, dt) and kept
+    (a sweep of one structure asks for the same oscillator every case).
+
+    Returns (P, Q) of :func:`load_matrices`, each (K, 2); the block convolution (K, 2·BLOCK,
+    2·(BLOCK + 1)) whose row 2i + c, column 2j + r is Φ((j − 1 − i)Δt)[r, c] for i < j, else
+    0; Φ(BLOCK·Δt) as nested lists of floats (K, 2, 2); and the free motion over a block
+    (K, 2, 2·BLOCK), column 2m + r of row c being Φ(mΔt)[r, c]. The arrays are read-only.
+    """
+    omega = 2.0 * np.pi / np.array(periods, float)
+    k = len(omega)
+    p_load, q_load = load_matrices(omega, damping, dt)
     # kernel[:, m] = Φ(mΔt), m = 0..BLOCK; conv[:, j, i] = Φ((j − 1 − i)Δt) for i < j
     kernel = free_transition(omega, damping, dt * np.arange(BLOCK + 1))
     lag = np.arange(BLOCK + 1)[:, None] - 1 - np.arange(BLOCK)[None, :]
     conv = np.where((lag >= 0)[None, :, :, None, None], kernel[:, np.maximum(lag, 0)], 0.0)
-    # particular part of every block, one matrix product per oscillator (2-D products: a
-    # stacked 3-D matmul runs several times slower under a threaded BLAS on a busy machine)
     conv_t = conv.transpose(0, 2, 4, 1, 3).reshape(k, 2 * BLOCK, 2 * (BLOCK + 1))
-    flat = blocks.reshape(k, nb, 2 * BLOCK)
-    part = np.stack([flat[i] @ conv_t[i] for i in range(k)]).reshape(k, nb, BLOCK + 1, 2)
-    # chain the blocks by their end states: s_{b+1} = Φ(LΔt) s_b + part_b(L)
-    step = kernel[:, BLOCK]
-    ends = part[:, :, BLOCK]
-    starts = np.zeros((k, nb, 2))
-    s0, s1 = np.zeros(k), np.zeros(k)
-    for b in range(nb):
-        starts[:, b, 0], starts[:, b, 1] = s0, s1
-        s0, s1 = (
-            step[:, 0, 0] * s0 + step[:, 0, 1] * s1 + ends[:, b, 0],
-            step[:, 1, 0] * s0 + step[:, 1, 1] * s1 + ends[:, b, 1],
-        )
     free_t = kernel[:, :BLOCK].transpose(0, 3, 1, 2).reshape(k, 2, 2 * BLOCK)
-    free = np.stack([starts[i] @ free_t[i] for i in range(k)])
-    z = (free.reshape(k, nb, BLOCK, 2) + part[:, :, :BLOCK]).reshape(k, nb * BLOCK, 2)
-    state = np.stack([s0, s1], axis=1)
-    u = np.empty((k, n))
-    u[:, : n - 1] = z[:, : n - 1, 0]
-    u[:, n - 1] = state[:, 0] if (n - 1) % BLOCK == 0 else z[:, n - 1, 0]
-    return u
+    arrays = [np.ascontiguousarray(x) for x in (p_load, q_load, conv_t, free_t)]
+    for x in arrays:
+        x.flags.writeable = False
+    p_load, q_load, conv_t, free_t = arrays
+    return p_load, q_load, conv_t, kernel[:, BLOCK].tolist(), free_t
 
 
 def spectral_acceleration(
@@ -180,36 +219,64 @@ def rotd(
     omega = 2.0 * np.pi / period
     u_x, u_y = _rotd_candidates(np.asarray(u_x, float), np.asarray(u_y, float))
     peaks = _rotated_peaks(u_x, u_y)
-    return tuple(float(omega**2 * np.percentile(peaks, p)) for p in percentiles)
+    return tuple(float(omega**2 * p) for p in np.percentile(peaks, percentiles))
 
 
 def _rotated_peaks(u_x: np.ndarray, u_y: np.ndarray) -> np.ndarray:
     """max_t |u_x cos θ + u_y sin θ| for every angle of ROTD_ANGLES (chunked in memory)."""
-    peaks = np.zeros(len(ROTD_ANGLES))
     if not len(u_x):
-        return peaks
+        return np.zeros(len(ROTD_ANGLES))
+    peaks = np.empty(len(ROTD_ANGLES))
     chunk = max(1, ROTD_CHUNK // len(u_x))
     for lo in range(0, len(ROTD_ANGLES), chunk):
-        th = ROTD_ANGLES[lo : lo + chunk]
-        rotated = np.cos(th)[:, None] * u_x[None, :] + np.sin(th)[:, None] * u_y[None, :]
-        peaks[lo : lo + chunk] = np.max(np.abs(rotated), axis=1)
+        rotated = np.multiply.outer(_ROTD_COS[lo : lo + chunk], u_x)
+        rotated += np.multiply.outer(_ROTD_SIN[lo : lo + chunk], u_y)
+        peaks[lo : lo + chunk] = np.abs(rotated, out=rotated).max(axis=1)
     return peaks
 
 
-def _rotd_candidates(u_x: np.ndarray, u_y: np.ndarray, keep: int = 256):
+def _rotd_candidates(u_x: np.ndarray, u_y: np.ndarray):
     """The samples that can hold the peak of some rotation, every other dropped (exact).
 
-    |u_x cos θ + u_y sin θ| ≤ r = √(u_x² + u_y²) at every sample, and the peak at θ is at
-    least the peak over any subset; so with L = min_θ (peak over the ``keep`` samples of
-    largest r), a sample with r < L is the peak of no rotation.
+    The peak at θ is at least the peak over any subset of samples (the witnesses below).
+    First by radius: |u_x cos θ + u_y sin θ| ≤ r = √(u_x² + u_y²) at every sample, so with
+    L = min_θ (peak over the samples of largest r, |u_x|, |u_y|, |u_x + u_y| and |u_x − u_y|),
+    a sample with r < L is the peak of no rotation. Then by groups of ``ROTD_GROUP``
+    consecutive angles, of centre θ_c and half-width h: for θ = θ_c + δ (|δ| ≤ h),
+    u(θ) = u(θ_c) cos δ + u⊥(θ_c) sin δ with u⊥(θ_c) = −u_x sin θ_c + u_y cos θ_c, so
+    |u(θ)| ≤ U = |u(θ_c)| + |u⊥(θ_c)| sin h at every sample; with L_c the least, over a
+    group's angles, of the peak over the witnesses (each group's sample of largest
+    |u(θ_c)|), a sample with U < L_c is the peak of no angle of that group, and one below it
+    for every group is dropped. Both comparisons allow 10⁻¹² of the largest r for round-off.
+    A pair at rest in one axis keeps one sample: |u(θ)| is then |cos θ| or |sin θ| times the
+    other axis' |u|, largest (rounding being monotone) where that |u| is.
     """
-    r = np.hypot(u_x, u_y)
-    if len(r) <= keep:
+    if len(u_x) <= ROTD_KEEP:
         return u_x, u_y
-    top = np.argpartition(r, -keep)[-keep:]
-    bound = float(np.min(_rotated_peaks(u_x[top], u_y[top])))
-    mask = r >= bound
-    return u_x[mask], u_y[mask]
+    for moving, still in ((u_x, u_y), (u_y, u_x)):
+        if not still.any():
+            peak = int(np.argmax(np.abs(moving)))
+            return u_x[peak : peak + 1], u_y[peak : peak + 1]
+    radius = np.sqrt(u_x * u_x + u_y * u_y)
+    tolerance = 1e-12 * float(np.max(radius))
+    witnesses = [np.argmax(radius)]
+    witnesses += [np.argmax(np.abs(w)) for w in (u_x, u_y, u_x + u_y, u_x - u_y)]
+    bound = float(np.min(_rotated_peaks(u_x[witnesses], u_y[witnesses])))
+    keep = radius >= bound - tolerance
+    u_x, u_y = u_x[keep], u_y[keep]
+    centre = np.multiply.outer(_GROUP_COS, u_x)
+    centre += np.multiply.outer(_GROUP_SIN, u_y)
+    np.abs(centre, out=centre)
+    witnesses = np.argmax(centre, axis=1)
+    lower = _rotated_peaks(u_x[witnesses], u_y[witnesses])
+    needed = lower.reshape(-1, ROTD_GROUP).min(axis=1) - tolerance
+    across = np.multiply.outer(_GROUP_COS, u_y)
+    across -= np.multiply.outer(_GROUP_SIN, u_x)
+    np.abs(across, out=across)
+    across *= _GROUP_HALF_SIN
+    centre += across
+    keep = np.any(centre >= needed[:, None], axis=0)
+    return u_x[keep], u_y[keep]
 
 
 def arias_curve(acc: np.ndarray, dt: float) -> np.ndarray:
@@ -223,7 +290,11 @@ def significant_duration(
 ) -> float | None:
     """Time [s] between ``start`` and ``end`` fractions of the final Arias intensity, on the
     cumulative curve interpolated linearly; None for a record without motion."""
-    curve = arias_curve(acc, dt)
+    return _curve_duration(arias_curve(acc, dt), dt, start, end)
+
+
+def _curve_duration(curve: np.ndarray, dt: float, start: float, end: float) -> float | None:
+    """:func:`significant_duration` from the cumulative Arias curve ``curve`` [m/s]."""
     total = curve[-1]
     if not total > 0.0:
         return None
@@ -244,13 +315,14 @@ def component_measures(
         if period is not None and len(a)
         else None
     )
+    curve = arias_curve(a, dt)
     return {
         "pga": float(np.max(absolute)) / G if len(a) else 0.0,
         "pgv": float(np.max(np.abs(vel))) if len(vel) else 0.0,
         "pgd": float(np.max(np.abs(disp))) if len(disp) else 0.0,
-        "arias": float(arias_curve(a, dt)[-1]) if len(a) else 0.0,
+        "arias": float(curve[-1]) if len(a) else 0.0,
         "cav": float(np.sum(0.5 * (absolute[1:] + absolute[:-1])) * dt),
-        "d5_95": significant_duration(a, dt),
+        "d5_95": _curve_duration(curve, dt, 0.05, 0.95),
         "sa": sa,
     }
 

@@ -10,7 +10,8 @@ period of the spectral intensity measures and the run length.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import operator
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -228,15 +229,33 @@ def check_time_base(t: np.ndarray, field: str) -> None:
         )
 
 
+#: the scene's sections but its excitation: everything the contact-free modes can depend on
+_STRUCTURE = operator.attrgetter(*(f.name for f in fields(Scene) if f.name != "excitation"))
+#: structures whose T1 is remembered (a sweep asks for one structure's period every case)
+T1_MEMO_SIZE = 8
+_T1_MEMO: list[tuple[tuple, float | None]] = []
+
+
 def intensity_period(scene: Scene) -> float | None:
     """Period [s] of the spectral intensity measures: ``excitation.im_period`` if given, else
     T1 of the contact-free model (the longest finite natural period, as ``deckpound modes``
-    lists it); None when no mode has a finite period."""
+    lists it); None when no mode has a finite period.
+
+    T1 is remembered for the last :data:`T1_MEMO_SIZE` structures, each keyed on every section
+    of the scene but its excitation (compared by value; the sections a sweep's cases share are
+    the same objects, so the lookup costs a few identity tests)."""
     if scene.excitation.im_period is not None:
         return float(scene.excitation.im_period)
+    key = _STRUCTURE(scene)
+    for known, period in _T1_MEMO:
+        if known == key:
+            return period
     periods = natural_modes(scene).periods
     finite = periods[np.isfinite(periods) & (periods > 0.0)]
-    return float(np.max(finite)) if len(finite) else None
+    period = float(np.max(finite)) if len(finite) else None
+    _T1_MEMO.insert(0, (key, period))
+    del _T1_MEMO[T1_MEMO_SIZE:]
+    return period
 
 
 def analysis_duration(scene: Scene, motion: SupportMotion) -> float:

@@ -3,6 +3,7 @@ agreement with independent implementations (eqsig, pyrotd; test-only dependencie
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -137,6 +138,88 @@ def test_rotd_pruning_equals_every_sample():
     assert r50 == w2 * np.percentile(brute, 50)
     assert r100 == w2 * np.max(brute)
     assert r100 >= w2 * max(np.max(np.abs(u[0])), np.max(np.abs(u[1])))
+
+
+def brute_rotated_peaks(u_x: np.ndarray, u_y: np.ndarray) -> np.ndarray:
+    """max_t |u_x cos θ + u_y sin θ| over every sample at θ = 0°..179° (Boore 2010)."""
+    th = np.deg2rad(np.arange(180.0))
+    return np.max(np.abs(np.cos(th)[:, None] * u_x + np.sin(th)[:, None] * u_y), axis=1)
+
+
+@pytest.mark.parametrize(
+    "shape", ["isotropic", "polarised", "one-axis", "collinear", "ties", "orbit", "tiny"]
+)
+def test_rotd_candidates_hold_every_angles_peak(shape):
+    """The candidate search keeps, for every angle, a sample with the peak over all samples:
+    the 180 peaks from the candidates equal the brute force to the last bit, for motions
+    polarised along one direction (where a radius bound alone keeps most samples), at rest
+    in one axis, collinear, with tied values, an elliptic orbit and at tiny amplitude."""
+    rng = np.random.default_rng(len(shape))
+    for n in (65, 500, 4001):
+        u_x, u_y = rng.standard_normal((2, n))
+        if shape == "polarised":
+            u_y = 0.3 * u_x + 0.01 * u_y
+        elif shape == "one-axis":
+            u_x, u_y = (np.zeros(n), u_y) if n % 2 else (u_x, -0.0 * u_y)
+        elif shape == "collinear":
+            u_y = -2.0 * u_x
+        elif shape == "ties":
+            u_x, u_y = np.round(u_x, 1), np.round(u_y, 1)
+        elif shape == "orbit":
+            t = np.linspace(0.0, 30.0, n)
+            u_x, u_y = np.sin(t) * np.exp(-0.05 * t), 0.2 * np.cos(1.01 * t)
+        elif shape == "tiny":
+            u_x, u_y = 1e-12 * u_x, 1e-12 * u_y
+        c_x, c_y = im._rotd_candidates(u_x, u_y)
+        assert len(c_x) < n
+        np.testing.assert_array_equal(im._rotated_peaks(c_x, c_y), brute_rotated_peaks(u_x, u_y))
+
+
+def test_block_operators_follow_period_damping_and_step():
+    """The remembered recurrence matrices are those of the oscillator asked for: another
+    period, damping or step gives the displacements of a fresh sample-by-sample
+    recurrence, not those of an oscillator computed before."""
+    a = np.random.default_rng(5).standard_normal(300)
+    cases = ((0.5, 0.05, 0.01), (0.8, 0.05, 0.01), (0.8, 0.02, 0.01), (0.8, 0.02, 0.005))
+    for period, zeta, dt in (*cases, cases[0]):
+        u = im.oscillator_displacements(a, dt, [period], zeta)[0]
+        ref = reference_displacements(a, dt, period, zeta)
+        assert np.max(np.abs(u - ref)) <= 1e-12 * np.max(np.abs(ref))
+    p_load, _, conv, step, _ = im.block_operators((0.5,), 0.05, 0.01)
+    assert not p_load.flags.writeable and not conv.flags.writeable
+    assert isinstance(step[0][0][0], float)
+
+
+def test_t1_is_recomputed_for_another_structure(bench_scene):
+    """The remembered T1 belongs to its structure: a heavier deck, a softer bent or a softer
+    seat give their own (longer) period, equal to that of the modes; another record of
+    the same structure (a sweep's cases) gives the same period; a given im_period wins."""
+    from deckpound.models.scene_io import modified
+
+    def t1(scene):
+        return float(np.max(natural_modes(scene).periods))
+
+    base = intensity_period(bench_scene)
+    assert base == t1(bench_scene)
+    heavier = modified(bench_scene, f"deck.mass={2 * bench_scene.deck.mass}")
+    assert intensity_period(heavier) == t1(heavier) > base
+    bent = bench_scene.bents[0]
+    softer_bent = dataclasses.replace(
+        bent, y=dataclasses.replace(bent.y, stiffness=0.5 * bent.y.stiffness)
+    )
+    softer = bench_scene.replace(bents=(softer_bent, *bench_scene.bents[1:]))
+    assert intensity_period(softer) == t1(softer) != base
+    seat = bench_scene.seats[0]
+    soft_seat = dataclasses.replace(seat, kx=1e-3 * seat.kx)  # its sliding mode becomes T1
+    loose = bench_scene.replace(seats=(soft_seat, bench_scene.seats[1]))
+    assert intensity_period(loose) == t1(loose) != base
+    reseeded = bench_scene.replace(
+        excitation=bench_scene.excitation.__class__(seed=bench_scene.excitation.seed + 1)
+    )
+    assert intensity_period(reseeded) == base
+    assert intensity_period(bench_scene) == base  # still known after the others
+    given = bench_scene.replace(excitation=bench_scene.excitation.__class__(im_period=0.9))
+    assert intensity_period(given) == 0.9
 
 
 @pytest.fixture(scope="module")
