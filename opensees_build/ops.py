@@ -24,6 +24,7 @@ exported scripts read them from files in the script's data folder (``-filePath``
 from __future__ import annotations
 
 import hashlib
+import resource
 from dataclasses import dataclass, field
 from importlib.metadata import version
 from typing import Any
@@ -31,6 +32,27 @@ from typing import Any
 import numpy as np
 
 from .quoting import comment_text, py_str, tcl_word
+
+#: address space [MiB] that loading openseespy and running it need beyond what the process
+#: has mapped already: under a tighter ``ulimit -v`` its C libraries fail where Python cannot
+#: see it (MPI_Init ends the process with status 15, OpenBLAS prints an error and fails the
+#: run), so such a limit is refused before the import
+OPENSEES_ADDRESS_SPACE_MIB = 256
+
+
+def address_space_left_mib() -> float | None:
+    """Address space [MiB] this process may still map under its ``RLIMIT_AS`` (``ulimit -v``):
+    the soft limit less the mapped size (``VmSize`` of ``/proc/self/status``); None when
+    unlimited or not readable."""
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft == resource.RLIM_INFINITY:
+        return None
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            mapped_kib = next(int(line.split()[1]) for line in status if line.startswith("VmSize:"))
+    except (OSError, StopIteration, ValueError, IndexError):
+        return None
+    return (soft - 1024 * mapped_kib) / 2**20
 
 
 def _load_openseespy():
@@ -41,7 +63,17 @@ def _load_openseespy():
     ``RuntimeError("Failed to import openseespy on Linux.")`` (a bare ``except``), so a
     missing shared library or too little memory to map it (``ulimit -v``) looked like a bug in
     deckpound. The innermost cause is named instead; the CLI reports an ImportError of a
-    library as a resource or environment failure (exit status 3)."""
+    library as a resource or environment failure (exit status 3). An address-space limit that
+    leaves less than :data:`OPENSEES_ADDRESS_SPACE_MIB` is refused the same way before the
+    import: below it the C libraries end or fail the process themselves."""
+    left = address_space_left_mib()
+    if left is not None and left < OPENSEES_ADDRESS_SPACE_MIB:
+        raise ImportError(
+            f"the memory limit (ulimit -v) leaves this process {max(left, 0.0):.0f} MiB of "
+            f"address space and OpenSees needs about {OPENSEES_ADDRESS_SPACE_MIB} MiB more (its "
+            "MPI and BLAS libraries end the process when they run out)",
+            name="openseespy",
+        )
     try:
         import openseespy.opensees as module
     except Exception as err:  # MemoryError included: it is an Exception
@@ -55,7 +87,15 @@ def _load_openseespy():
 
 _ops = _load_openseespy()
 
-__all__ = ["ArrayArg", "Command", "OpsSession", "openseespy_version", "render_value"]
+__all__ = [
+    "OPENSEES_ADDRESS_SPACE_MIB",
+    "ArrayArg",
+    "Command",
+    "OpsSession",
+    "address_space_left_mib",
+    "openseespy_version",
+    "render_value",
+]
 
 #: commands executed but never logged: state queries, stepping and analysis bookkeeping
 QUERIES = frozenset(

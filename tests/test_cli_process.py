@@ -180,3 +180,35 @@ def test_a_library_that_cannot_be_loaded_is_a_resource_failure(tmp_path, case):
     assert len(lines) == 1 and lines[0].startswith("deckpound: error: "), p.stderr
     assert all(w in lines[0] for w in words), lines[0]
     assert sorted(x.name for x in tmp_path.iterdir()) == ["site"]
+
+
+#: run in a child: the modules a run loads before the OpenSees engine, then an address-space
+#: limit just above what is mapped, then the CLI (the issue's `ulimit -v 409600`, which left
+#: the real openseespy about 80 MiB: MPI_Init ended the process with status 15 and raw MPI text)
+_TIGHT_LIMIT = """
+import resource, sys
+import deckpound.cli, deckpound.compare.engines, deckpound.models.excitation, scipy.linalg
+import deckpound.analytic.compliance.engine  # noqa: F401  (numba, llvmlite)
+
+with open("/proc/self/status") as f:
+    mapped = next(int(x.split()[1]) for x in f if x.startswith("VmSize:")) * 1024
+limit = mapped + 80 * 2**20
+resource.setrlimit(resource.RLIMIT_AS, (limit, resource.getrlimit(resource.RLIMIT_AS)[1]))
+sys.exit(deckpound.cli.main(sys.argv[1:]))
+"""
+
+
+def test_a_tight_address_space_limit_is_refused_before_openseespy_loads(tmp_path):
+    p = subprocess.run(
+        [sys.executable, "-c", _TIGHT_LIMIT, "run", "saiidi-4span", "--engine", "opensees"]
+        + ["--set", "excitation.duration=0.3", "-o", str(tmp_path / "out")],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert p.returncode == 3, p.stderr
+    lines = [x for x in p.stderr.splitlines() if not PROGRESS_LINE.match(x)]
+    assert len(lines) == 1 and lines[0].startswith("deckpound: error: "), p.stderr
+    assert "ulimit -v" in lines[0] and "MiB of address space" in lines[0], lines[0]
+    assert not (tmp_path / "out").exists()
