@@ -22,6 +22,7 @@ a sweep imports it at its start (:func:`load_compiled_filter`).
 
 from __future__ import annotations
 
+import functools
 import math
 import sys
 
@@ -37,7 +38,15 @@ _CALLS = [0]
 
 def butter_highpass_sos(order: int, wn: float) -> np.ndarray:
     """Second-order sections of a digital Butterworth high-pass of even ``order`` at ``wn``
-    (a fraction of the Nyquist frequency, 0 < wn < 1); shape (order // 2, 6)."""
+    (a fraction of the Nyquist frequency, 0 < wn < 1); shape (order // 2, 6). Designed once
+    per (order, wn) (every record of a sweep asks for the same filter); each call returns its
+    own copy."""
+    return _butter_highpass_design(order, wn).copy()
+
+
+@functools.lru_cache(maxsize=32, typed=True)
+def _butter_highpass_design(order: int, wn: float) -> np.ndarray:
+    """:func:`butter_highpass_sos`, remembered (read-only)."""
     if order < 2 or order % 2:
         raise ValueError(f"order must be even and >= 2, got {order}")
     if not 0.0 < wn < 1.0:
@@ -69,12 +78,22 @@ def butter_highpass_sos(order: int, wn: float) -> np.ndarray:
         sos[si, :3] = np.poly([z1, z2])
         sos[si, 3:] = np.poly([p1, p1.conj()]).real
     sos[0, :3] *= k_z
+    sos.flags.writeable = False
     return sos
 
 
 def sosfilt_zi(sos: np.ndarray) -> np.ndarray:
     """Initial conditions of each section for the steady state of a unit step
     (``scipy.signal.sosfilt_zi``); shape (sections, 2)."""
+    sos = np.asarray(sos, dtype=float)
+    return _step_state(sos.shape, sos.tobytes()).copy()
+
+
+@functools.lru_cache(maxsize=32)
+def _step_state(shape: tuple[int, ...], coefficients: bytes) -> np.ndarray:
+    """:func:`sosfilt_zi` of the sections given by their ``shape`` and float64 bytes, computed
+    once per filter (read-only)."""
+    sos = np.frombuffer(coefficients).reshape(shape)
     zi = np.empty((sos.shape[0], 2))
     scale = 1.0
     for s in range(sos.shape[0]):
@@ -85,6 +104,7 @@ def sosfilt_zi(sos: np.ndarray) -> np.ndarray:
         i_minus_a = np.eye(2) - np.array([[-a[1], 1.0], [-a[2], 0.0]])
         zi[s] = scale * np.linalg.solve(i_minus_a, b[1:] - a[1:] * b[0])
         scale *= b.sum() / a.sum()
+    zi.flags.writeable = False
     return zi
 
 
@@ -113,25 +133,40 @@ def load_compiled_filter() -> None:
 
 
 def sosfiltfilt(sos: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Forward-backward filtering of a 1-D signal (``scipy.signal.sosfiltfilt`` with its
-    defaults: odd padding of 3 · (2 · sections + 1) samples)."""
+    """Forward-backward filtering of a 1-D signal, or of each row of a 2-D array of signals
+    (``scipy.signal.sosfiltfilt`` with its defaults, along the last axis: odd padding of
+    3 · (2 · sections + 1) samples); each row gives the bits it gives alone."""
     sos = np.asarray(sos, dtype=float)
     x = np.asarray(x, dtype=float)
     ntaps = 2 * sos.shape[0] + 1
     ntaps -= min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
     edge = 3 * ntaps
-    if x.ndim != 1 or x.shape[0] <= edge:
+    if x.ndim not in (1, 2) or x.shape[-1] <= edge:
         raise ValueError(f"the signal needs more than {edge} samples, got {x.shape}")
-    _CALLS[0] += 1
-    if _CALLS[0] == SCIPY_AFTER and "scipy.signal" not in sys.modules:
+    _CALLS[0] += 1 if x.ndim == 1 else x.shape[0]
+    if _CALLS[0] >= SCIPY_AFTER and "scipy.signal" not in sys.modules:
         import scipy.signal  # noqa: F401  (a long sweep: worth its import from now on)
+    ext = np.concatenate(
+        (
+            2 * x[..., :1] - x[..., edge:0:-1],
+            x,
+            2 * x[..., -1:] - x[..., -2 : -(edge + 2) : -1],
+        ),
+        axis=-1,
+    )
+    zi = _step_state(sos.shape, sos.tobytes())
     signal = sys.modules.get("scipy.signal")
     if signal is not None:  # already paid for: its compiled loop gives the same bits
-        return signal.sosfiltfilt(sos, x)
-    ext = np.concatenate((2 * x[0] - x[edge:0:-1], x, 2 * x[-1] - x[-2 : -(edge + 2) : -1]))
-    zi = sosfilt_zi(sos)
+        # initial states (sections, [rows,] 2): each row's steady state at its first value
+        zi_rows = zi if x.ndim == 1 else zi[:, None, :]
+        y = signal.sosfilt(sos, ext, zi=zi_rows * ext[..., :1])[0]
+        y = signal.sosfilt(sos, y[..., ::-1], zi=zi_rows * y[..., -1:])[0][..., ::-1]
+        return y[..., edge:-edge]
     # sections are applied one after the other on the whole signal: the same numbers as
     # scipy's sample-by-sample interleaving (each section only sees its predecessor's output)
-    y = _sosfilt(sos, ext, zi * ext[0])
-    y = _sosfilt(sos, y[::-1], zi * y[-1])[::-1]
-    return y[edge:-edge]
+    rows = ext if x.ndim == 2 else ext[None]
+    out = np.empty(rows.shape)
+    for i, row in enumerate(rows):
+        y = _sosfilt(sos, row, zi * row[0])
+        out[i] = _sosfilt(sos, y[::-1], zi * y[-1])[::-1]
+    return (out if x.ndim == 2 else out[0])[..., edge:-edge]

@@ -99,10 +99,11 @@ def remove_baseline(a: np.ndarray, dt: float, degree: int = BASELINE_DEGREE) -> 
 
 
 def highpass_padded(a: np.ndarray, dt: float, corner: float, record: str) -> np.ndarray:
-    """Zero-phase 4th-order Butterworth high-pass at ``corner`` Hz of ``a`` padded with one
-    record length of zeros on each side; returns the whole padded signal (3n samples), pads
-    included. ``record`` names the record in the refusal of a corner outside (1e-6·Nyquist,
-    Nyquist) (the filter design is singular below). Shared by the users' records
+    """Zero-phase 4th-order Butterworth high-pass at ``corner`` Hz of ``a`` (n,) (or of each
+    row of ``a`` (m, n)) padded with one record length of zeros on each side; returns the
+    whole padded signal (3n samples), pads included. ``record`` names the record in the
+    refusal of a corner outside (1e-6·Nyquist, Nyquist) (the filter design is singular
+    below). Shared by the users' records
     (:func:`highpass_filtered`) and the synthetic generator
     (:func:`deckpound.models.synthetic_motion.baseline_corrected`).
     """
@@ -114,8 +115,8 @@ def highpass_padded(a: np.ndarray, dt: float, corner: float, record: str) -> np.
             f"of {record}, got {corner}",
         )
     sos = butter_highpass_sos(4, corner / nyq)
-    n = len(a)
-    return sosfiltfilt(sos, np.concatenate([np.zeros(n), a, np.zeros(n)]))
+    pad = np.zeros(np.shape(a))  # a (n,) signal or (m, n) rows, filtered along the last axis
+    return sosfiltfilt(sos, np.concatenate([pad, a, pad], axis=-1))
 
 
 def highpass_filtered(a: np.ndarray, dt: float, corner: float) -> np.ndarray:

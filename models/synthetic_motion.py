@@ -9,6 +9,8 @@ integration, taper). Tables k are delayed by k·``lag`` (the wave passage helper
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from deckpound.models.scene import Scene
@@ -28,27 +30,46 @@ from .record_motion import highpass_padded
 # -- signal processing ---------------------------------------------------------------------
 
 
-def _spectral_derivative(x: np.ndarray, dt: float) -> np.ndarray:
-    """d/dt of a signal that starts and ends at rest, by FFT on a zero-padded copy."""
-    n = len(x)
-    nfft = 1 << int(np.ceil(np.log2(2 * n)))
-    X = np.fft.rfft(x, nfft)
+def _fft_size(n: int) -> int:
+    """The FFT length of an n-sample signal: the power of two of at least 2n (no wrap-around)."""
+    return 1 << int(np.ceil(np.log2(2 * n)))
+
+
+@functools.lru_cache(maxsize=16)
+def _derivative_factor(nfft: int, dt: float) -> np.ndarray:
+    """iω [rad/s] at the ``nfft``-point real FFT's frequencies for the step ``dt`` [s]
+    (read-only; one per record length and step)."""
     w = 2.0 * np.pi * np.fft.rfftfreq(nfft, dt)
-    return np.fft.irfft(1j * w * X, nfft)[:n]
+    factor = 1j * w
+    factor.flags.writeable = False
+    return factor
 
 
+def _spectral_derivative(x: np.ndarray, dt: float) -> np.ndarray:
+    """d/dt of a signal (or of each row of an array of signals) that starts and ends at
+    rest, by FFT on a zero-padded copy: x' = IFFT(iω · FFT(x))."""
+    n = x.shape[-1]
+    nfft = _fft_size(n)
+    X = np.fft.rfft(x, nfft)
+    return np.fft.irfft(_derivative_factor(nfft, dt) * X, nfft)[..., :n]
+
+
+@functools.lru_cache(maxsize=16)
 def _taper(n: int, frac: float = 0.05) -> np.ndarray:
-    """Tukey-type cosine taper rising over the first and falling over the last frac·n samples."""
+    """Tukey-type cosine taper rising over the first and falling over the last frac·n samples
+    (read-only; one per record length)."""
     w = np.ones(n)
     m = max(2, int(frac * n))
     ramp = 0.5 * (1.0 - np.cos(np.pi * np.arange(m) / m))
     w[:m] = ramp
     w[-m:] = ramp[::-1]
+    w.flags.writeable = False
     return w
 
 
 def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.ndarray, ...]:
-    """Displacement, velocity and acceleration from the synthetic generator's raw signal.
+    """Displacement, velocity and acceleration from the synthetic generator's raw signal
+    ``acc`` (n,), or from each row of ``acc`` (m, n) (every row gives the bits it gives alone).
 
     Part of the generator (users' records are processed only as their scene's
     ``processing`` says, in :mod:`deckpound.models.record_motion`).
@@ -58,13 +79,16 @@ def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.
     re-derived spectrally from the tapered displacement. The three are then consistent and
     the record starts and ends at rest (final displacement and velocity exactly zero).
     """
-    pad = len(acc)
+    pad = np.shape(acc)[-1]
     # integrated over the padded signal, pre-event filter transient included, then cut
     a = highpass_padded(acc, dt, highpass, "the record")
-    v = np.concatenate([[0.0], np.cumsum(0.5 * (a[1:] + a[:-1]) * dt)])
-    d = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)])
-    d = d[pad : 2 * pad]
-    d = (d - np.linspace(d[0], d[-1], len(d))) * _taper(len(d))
+    start = np.zeros(a.shape[:-1] + (1,))
+    v = np.concatenate([start, np.cumsum(0.5 * (a[..., 1:] + a[..., :-1]) * dt, axis=-1)], -1)
+    d = np.concatenate([start, np.cumsum(0.5 * (v[..., 1:] + v[..., :-1]) * dt, axis=-1)], -1)
+    d = d[..., pad : 2 * pad]
+    # the chord of each row, one linspace per row (as one signal alone gets it)
+    chord = np.array([np.linspace(row[0], row[-1], pad) for row in d.reshape(-1, pad)])
+    d = (d - chord.reshape(d.shape)) * _taper(pad)
     v = _spectral_derivative(d, dt)
     a = _spectral_derivative(v, dt)
     return d, v, a
@@ -77,42 +101,78 @@ def _envelope(t: np.ndarray, duration: float) -> np.ndarray:
     return np.where(t < t1, (t / t1) ** 2, np.where(t <= t2, 1.0, np.exp(-c * (t - t2))))
 
 
-def _kanai_tajimi(noise: np.ndarray, dt: float, fg: float, zg: float) -> np.ndarray:
-    """Filter white noise through the Kanai-Tajimi ground filter (frequency domain)."""
-    n = len(noise)
-    nfft = 1 << int(np.ceil(np.log2(2 * n)))
+@functools.lru_cache(maxsize=16)
+def _sampled_envelope(n: int, dt: float, duration: float) -> np.ndarray:
+    """:func:`_envelope` at t = k·dt, k = 0..n − 1 (read-only; one per record)."""
+    envelope = _envelope(np.arange(n) * dt, duration)
+    envelope.flags.writeable = False
+    return envelope
+
+
+@functools.lru_cache(maxsize=16)
+def _kanai_tajimi_response(nfft: int, dt: float, fg: float, zg: float) -> np.ndarray:
+    """H(ω) = (ω_g² + 2iζ_gω_gω) / (ω_g² − ω² + 2iζ_gω_gω), ω_g = 2π·fg, at the ``nfft``-point
+    real FFT's frequencies (read-only; one per record length, step and ground)."""
     w = 2.0 * np.pi * np.fft.rfftfreq(nfft, dt)
     wg = 2.0 * np.pi * fg
     H = (wg**2 + 2j * zg * wg * w) / (wg**2 - w**2 + 2j * zg * wg * w)
-    return np.fft.irfft(H * np.fft.rfft(noise, nfft), nfft)[:n]
+    H.flags.writeable = False
+    return H
 
 
-def synthetic_component(
-    exc: Excitation, pga: float, rng: np.random.Generator, common: np.ndarray | None = None
-) -> tuple[np.ndarray, ...]:
-    """One earthquake-like component scaled so that max|a| = pga [g] exactly.
+def _kanai_tajimi(noise: np.ndarray, dt: float, fg: float, zg: float) -> np.ndarray:
+    """Filter white noise (n,) or rows of white noise (m, n) through the Kanai-Tajimi ground
+    filter (frequency domain)."""
+    n = noise.shape[-1]
+    nfft = _fft_size(n)
+    H = _kanai_tajimi_response(nfft, dt, fg, zg)
+    return np.fft.irfft(H * np.fft.rfft(noise, nfft), nfft)[..., :n]
 
-    Returns (t, d, v, a) in s, m, m/s, m/s². ``common`` (a white-noise sample) is mixed in
-    with weight √(1 − incoherence) to make correlated components at several tables.
+
+def mixed_noise(exc: Excitation, key: list[int], common: np.ndarray) -> np.ndarray:
+    """White noise √(1 − g)·common + √g·w, g = ``incoherence``, w drawn from the generator
+    seeded with ``key``: ``common`` is shared by the components of one direction, w makes
+    them partly independent. With g = 0 and no zero sample in ``common`` this is ``common``
+    itself, bit for bit (1·c + 0·w = c for c ≠ 0), so w is not drawn."""
+    g = exc.incoherence
+    if g == 0.0 and common.all():
+        return common
+    noise = np.random.default_rng(key).standard_normal(len(common))
+    return np.sqrt(1.0 - g) * common + np.sqrt(g) * noise
+
+
+def synthetic_components(
+    exc: Excitation, pgas: list[float], noise: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.float64]]:
+    """Earthquake-like components from the rows of white noise ``noise`` (m, n), row i scaled
+    so that max|a| = pgas[i] [g] exactly.
+
+    Returns d, v, a (m, n) in m, m/s, m/s² and each row's peak before scaling; a row without
+    a finite, positive peak is left unscaled (see :func:`check_peak`).
     """
-    n = round(exc.duration / exc.dt) + 1
-    t = np.arange(n) * exc.dt
-    noise = rng.standard_normal(n)
-    if common is not None:
-        g = exc.incoherence
-        noise = np.sqrt(1.0 - g) * common + np.sqrt(g) * noise
     raw = _kanai_tajimi(noise, exc.dt, exc.dominant_frequency, exc.ground_damping)
-    raw *= _envelope(t, exc.duration)
+    raw *= _sampled_envelope(noise.shape[-1], exc.dt, exc.duration)
     d, v, a = baseline_corrected(raw, exc.dt, exc.highpass)
-    peak = np.max(np.abs(a))
-    if not (np.isfinite(peak) and peak > 0.0):
+    peaks = list(np.max(np.abs(a), axis=-1))
+    scale = np.array([pga * G / peak if _usable(peak) else 1.0 for pga, peak in zip(pgas, peaks)])[
+        :, None
+    ]
+    return d * scale, v * scale, a * scale, peaks
+
+
+def _usable(peak: np.float64) -> bool:
+    return bool(np.isfinite(peak) and peak > 0.0)
+
+
+def check_peak(exc: Excitation, peak: np.float64) -> None:
+    """Refuse a generated component whose peak acceleration before scaling is not finite and
+    positive (no scaling can give it its PGA)."""
+    if not _usable(peak):
         raise SceneError(
             "excitation.dominant_frequency",
             f"gives no usable record with highpass = {exc.highpass} Hz and dt = "
             f"{exc.dt} s (peak acceleration {peak}), got {exc.dominant_frequency} Hz",
         )
-    s = pga * G / peak
-    return t, d * s, v * s, a * s
 
 
 def synthetic_motion(scene: Scene) -> SupportMotion:
@@ -127,26 +187,39 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     rng = np.random.default_rng(exc.seed)
     common = {"x": rng.standard_normal(n), "y": rng.standard_normal(n)}
     pgas = {"x": exc.pga * exc.longitudinal_ratio, "y": exc.pga}
+    t = np.arange(n) * exc.dt
+    # every component, generated together (rows): one per moving direction, then with
+    # incoherence one per table and moving direction, each from its own seeded noise
+    moving = [axis for axis in ("x", "y") if pgas[axis] > 0]
+    rows = [(axis, None) for axis in moving]
+    if exc.incoherence > 0:
+        rows += [(axis, k) for k in range(len(scene.bents)) for axis in moving]
+    noise = np.array(
+        [
+            mixed_noise(exc, [exc.seed, ord(axis)] + ([] if k is None else [k + 1]), common[axis])
+            for axis, k in rows
+        ]
+    )
+    d_rows, v_rows, a_rows, peaks = synthetic_components(
+        exc, [pgas[axis] for axis, _ in rows], noise
+    )
+    component = {row: (d_rows[i], v_rows[i], a_rows[i]) for i, row in enumerate(rows)}
+    for axis in ("x", "y"):
+        if pgas[axis] <= 0:
+            component[(axis, None)] = (np.zeros(n), np.zeros(n), np.zeros(n))
+    # refusals in the order of the generation one component at a time: the components of
+    # the directions, the lag, then the tables' own components
+    for peak in peaks[: len(moving)]:
+        check_peak(exc, peak)
+    lag_steps = check_lag(scene, exc.dt, n)
+    for peak in peaks[len(moving) :]:
+        check_peak(exc, peak)
     disp: dict[str, np.ndarray] = {}
     vel: dict[str, np.ndarray] = {}
     acc: dict[str, np.ndarray] = {}
-    t = np.arange(n) * exc.dt
-    base: dict[str, tuple] = {}
-    for axis in ("x", "y"):
-        sub = np.random.default_rng([exc.seed, ord(axis)])
-        base[axis] = (
-            synthetic_component(exc, pgas[axis], sub, common[axis])
-            if pgas[axis] > 0
-            else (t, np.zeros(n), np.zeros(n), np.zeros(n))
-        )
-    lag_steps = check_lag(scene, exc.dt, n)
     for k, bent in enumerate(scene.bents):
         for axis in ("x", "y"):
-            if exc.incoherence > 0 and pgas[axis] > 0:
-                sub = np.random.default_rng([exc.seed, ord(axis), k + 1])
-                _, d, v, a = synthetic_component(exc, pgas[axis], sub, common[axis])
-            else:
-                _, d, v, a = base[axis]
+            d, v, a = component.get((axis, k), component[(axis, None)])
             disp[f"{bent.name}_{axis}"] = shift_record(d, k * lag_steps)
             vel[f"{bent.name}_{axis}"] = shift_record(v, k * lag_steps)
             acc[f"{bent.name}_{axis}"] = shift_record(a, k * lag_steps)

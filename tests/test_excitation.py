@@ -176,3 +176,57 @@ def test_generator_refuses_a_highpass_corner_outside_the_record_band():
     with pytest.raises(SceneError, match="excitation.highpass") as err:
         support_motion(sc)
     assert "Nyquist frequency 100 Hz of the record, got 1000.0" in str(err.value)
+
+
+def _clear_generator_memos():
+    from deckpound.models import iir, synthetic_motion
+
+    for memo in (
+        synthetic_motion._derivative_factor,
+        synthetic_motion._taper,
+        synthetic_motion._sampled_envelope,
+        synthetic_motion._kanai_tajimi_response,
+        iir._butter_highpass_design,
+        iir._step_state,
+    ):
+        memo.cache_clear()
+
+
+def test_remembered_generator_spectra_follow_the_record():
+    """The generator keeps its spectra, envelope, taper and filter per record; each record
+    generated after others (memos filled by records of the same length with another step,
+    duration, ground filter or high-pass) equals the one generated from empty memos."""
+    sets = [
+        [],
+        ["excitation.duration=10"],  # 2001 samples at 0.005 s
+        ["excitation.duration=20", "excitation.dt=0.01"],  # 2001 samples at 0.01 s
+        ["excitation.duration=20", "excitation.dt=0.01", "excitation.dominant_frequency=4"],
+        ["excitation.duration=20", "excitation.dt=0.01", "excitation.ground_damping=0.3"],
+        ["excitation.duration=20", "excitation.dt=0.01", "excitation.highpass=0.4"],
+    ]
+    scenes = [load_scene("saiidi-4span", s) for s in sets]
+    warm = [support_motion(s) for s in scenes]
+    for scene, motion in zip(scenes, warm):
+        _clear_generator_memos()
+        fresh = support_motion(scene)
+        for ch in motion.channels:
+            np.testing.assert_array_equal(motion.disp[ch], fresh.disp[ch])
+            np.testing.assert_array_equal(motion.acc(ch), fresh.acc(ch))
+
+
+def test_components_generated_together_equal_one_at_a_time():
+    """The generator filters all components of a record as rows of one array; each row is
+    the component generated alone, for the directions and, with incoherence, the tables."""
+    from deckpound.models.synthetic_motion import mixed_noise, synthetic_components
+
+    scene = load_scene("saiidi-4span", ["excitation.incoherence=0.3"])
+    exc = scene.excitation
+    n = round(exc.duration / exc.dt) + 1
+    rng = np.random.default_rng(3)
+    noise = np.array([mixed_noise(exc, [5, k], rng.standard_normal(n)) for k in range(3)])
+    together = synthetic_components(exc, [0.2, 0.5, 0.9], noise)
+    for i, pga in enumerate((0.2, 0.5, 0.9)):
+        alone = synthetic_components(exc, [pga], noise[i : i + 1])
+        for a, b in zip(together[:3], alone[:3]):
+            np.testing.assert_array_equal(a[i], b[0])
+        assert np.max(np.abs(together[2][i])) == pytest.approx(pga * G, rel=1e-12)

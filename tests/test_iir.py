@@ -90,3 +90,30 @@ def test_a_sweep_imports_scipy_signal_at_its_start_not_mid_sweep():
         [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True
     )
     assert cp.stdout.strip() == "{1: True, 2: True, 'scope': True}", cp.stdout + cp.stderr
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_rows_filter_as_they_do_alone(compiled, monkeypatch):
+    """Rows of a 2-D array are filtered as each one alone, with scipy.signal's compiled
+    recursion and with the numpy one, and as scipy.signal.sosfiltfilt filters them."""
+    sos = iir.butter_highpass_sos(4, 0.002)
+    x = np.random.default_rng(2).standard_normal((3, 1500))
+    expected = [scipy.signal.sosfiltfilt(sos, row) for row in x]
+    if not compiled:
+        monkeypatch.delitem(sys.modules, "scipy.signal")
+        monkeypatch.setattr(iir, "_CALLS", [-(10**9)])
+    rows = iir.sosfiltfilt(sos, x)
+    alone = [iir.sosfiltfilt(sos, row) for row in x]
+    monkeypatch.undo()
+    for i in range(3):
+        assert np.array_equal(rows[i], expected[i])
+        assert np.array_equal(alone[i], expected[i])
+
+
+def test_designs_are_remembered_but_not_shared():
+    """The remembered design is handed out as a copy: changing it changes no later design."""
+    sos = iir.butter_highpass_sos(4, 0.01)
+    sos[0, 0] = 123.0
+    again = iir.butter_highpass_sos(4, 0.01)
+    assert again[0, 0] != 123.0
+    assert np.array_equal(again, scipy.signal.butter(4, 0.01, btype="highpass", output="sos"))
