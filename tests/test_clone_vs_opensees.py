@@ -73,3 +73,21 @@ def test_clone_speed_at_dt_1e4():
     r = run_compliance(sc)
     print("us per step (benchmark, dt = 1e-4):", r.meta["us_per_step"])
     assert r.ok and r.meta["us_per_step"] < 5.0
+
+
+def test_stiff_contact_makes_the_response_itself_undetermined():
+    """Issue 28 asks the clone to equal OpenSees at k = 1e8 kN/m to the matrix's tolerance.
+    The response is not determined that well: the clone itself, on the record scaled by
+    1 + 1e-13, moves beyond the tolerance within 3 s at k = 1e7 (Newton iteration counts flip
+    on round-off and the impacts amplify it), as far as the engines are apart; at the
+    paper's 1e6 the same change moves it by round-off only, and the engines agree."""
+    from deckpound.compare.verify.clone import verify_clone
+    from deckpound.compare.verify.matrix import TOLERANCE
+
+    short = ["run.duration=3", "excitation.duration=3"]
+    soft = verify_clone(load_scene("saiidi-4span", short), twin=True)
+    assert soft["twin_worst"][1] < 1e-3 * TOLERANCE and soft["worst"][1] <= TOLERANCE
+    stiff = verify_clone(load_scene("saiidi-4span", [*short, "contact.stiffness=1e7"]), twin=True)
+    assert stiff["status"] == {"opensees": "success", "compliance": "success"}
+    assert stiff["twin_worst"][1] > 100 * TOLERANCE
+    assert stiff["worst"][1] <= 10 * stiff["twin_worst"][1]
