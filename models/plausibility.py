@@ -50,7 +50,7 @@ from .mechanics import ENERGY_GROUPS, energy_shares, mode_label, natural_modes
 from .motion import analysis_duration
 from .plan import plan_of
 from .scene import Scene
-from .scene_settings import MAX_STEPS
+from .scene_settings import MAX_STEPS, RunSettings
 
 #: fewest steps an analysis may hold (fewer resolve no history at all)
 MIN_STEPS = 10
@@ -128,6 +128,11 @@ def contact_duration(scene: Scene) -> float:
     """
     return 0.5 * contact_period(scene)
 
+
+#: steps per contact period the warning of an unresolved contact recommends: the contact-step
+#: rule's default (:func:`~.contact_params.contact_resolving_step`), so that the advice and the
+#: step the engines take by default are one
+RESOLVING_STEPS = RunSettings().steps_per_contact_period
 
 #: fewest output rows per natural period of a deck mode before a warning (T/4: a quarter
 #: period between rows, the coarsest sampling that still shows the swing's extremes)
@@ -275,8 +280,10 @@ def check(scene: Scene, motion=None, *, engines: Iterable[Engine]) -> Plausibili
                         f"(contact.stiffness = {scene.contact.stiffness:g}, the lightest "
                         f"corner's effective mass), shorter than {name} = {h:g} s: impacts "
                         f"are not resolved and their forces depend on the step; use a step "
-                        f"<= {tc / 10:.3g} s, compliance.integrator = 'adaptive', or the "
-                        "nonsmooth engine (rigid limit)",
+                        f"<= {2.0 * tc / RESOLVING_STEPS:.3g} s (what "
+                        f"run.steps_per_contact_period = {RESOLVING_STEPS:g}, its default, "
+                        "gives), compliance.integrator = 'adaptive', or the nonsmooth engine "
+                        "(rigid limit)",
                     )
                 )
 

@@ -177,3 +177,23 @@ def test_stiff_contact_at_its_default_step_is_right():
     ratio = default.peak("deck_theta") / fine.peak("deck_theta")
     assert math.isclose(ratio, 1.0, rel_tol=0.01)
     assert default.meta["energy_created"] < 1e-3 * default.meta["energy_reference"]
+
+
+def test_the_unresolved_contact_warning_recommends_the_rules_step():
+    """With the rule off, the warning of a step that skips through impacts recommends the
+    step the rule gives by default, not a stricter one of its own."""
+    import re
+
+    from deckpound.compare.engines import get_engine
+    from deckpound.models.plausibility import check
+
+    off = load_scene("saiidi-4span", ["contact.stiffness=1e7", "run.steps_per_contact_period=0"])
+    on = load_scene("saiidi-4span", ["contact.stiffness=1e7"])
+    engines = [get_engine("compliance"), get_engine("opensees")]
+    texts = [
+        f.message for f in check(off, engines=engines).findings if "contacts last" in f.message
+    ]
+    assert texts
+    for text in texts:
+        advised = float(re.search(r"use a step <= ([0-9.e+-]+) s", text).group(1))
+        assert advised == pytest.approx(contact_resolving_step(on, 5e-4), rel=2e-3)
