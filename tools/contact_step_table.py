@@ -23,7 +23,11 @@ T_c / `run.steps_per_contact_period` per step (default 3.5; T_c = 2π √(m_eff 
 of the stiffest corner contact). On the built-in benchmark (`{scene}`, 20 s record), the
 compliance engine at each contact stiffness k at its default step and at a tenth of it:
 energy created at the contacts over the input energy (the run is `doubtful` above
-`run.energy_tolerance`, 1 %) and the peak deck rotation over every step.
+`run.energy_tolerance`, 1 %) and the peak deck rotation over every step. The last two columns
+are what the rule does not promise, measured the same way: the largest contact force and the
+number of gap closures. A few steps per contact period resolve the energy exchanged and the
+deck's motion, not the shape of each force pulse; for contact forces or closure counts, run
+more steps per period (`run.steps_per_contact_period`) and compare.
 
 Written by `python tools/contact_step_table.py`; `deckpound verify contact-step {scene}` prints
 the same table and exits 1 when a row misses the stated error (no energy created beyond the
