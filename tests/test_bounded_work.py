@@ -65,7 +65,11 @@ sys.exit(main(["run", "saiidi-4span", "--engine", engine, *sets, "-o", sys.argv[
 
 
 @pytest.mark.parametrize("which", list(LONG))
-def test_ctrl_c_stops_a_long_run_within_two_seconds(which, tmp_path):
+def test_ctrl_c_stops_a_long_run_long_before_it_would_end(which, tmp_path):
+    """The long run holds at least 40 s of step loop (4e7 steps at ~1 µs, more under load);
+    Ctrl-C must end it within one Newton iteration. The bounds are loose on purpose (a
+    loaded machine may be slow to schedule the child): a loop that ignored the flag would run
+    for its whole record, far beyond them."""
     engine, overrides = LONG[which]
     script = tmp_path / "child.py"
     script.write_text(CHILD)
@@ -106,8 +110,8 @@ def test_ctrl_c_stops_a_long_run_within_two_seconds(which, tmp_path):
     )
     assert code == 130, err
     assert "Traceback" not in err, err
-    assert latency is not None and latency < 2.0
-    assert exited < 10.0
+    assert latency is not None and latency < 10.0
+    assert exited < 30.0
 
 
 #: the output row after which the in-process tests stop a long run (0.2 s of its record)
