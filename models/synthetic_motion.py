@@ -67,6 +67,18 @@ def _taper(n: int, frac: float = 0.05) -> np.ndarray:
     return w
 
 
+def _trapezoid_integral(x: np.ndarray, dt: float) -> np.ndarray:
+    """∫ x dt from the first sample, by the trapezoidal rule along the last axis:
+    X_0 = 0, X_k = Σ_{j<k} 0.5·(x_j + x_{j+1})·dt."""
+    out = np.empty(x.shape)
+    out[..., 0] = 0.0
+    steps = x[..., 1:] + x[..., :-1]
+    steps *= 0.5
+    steps *= dt
+    np.cumsum(steps, axis=-1, out=out[..., 1:])
+    return out
+
+
 def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.ndarray, ...]:
     """Displacement, velocity and acceleration from the synthetic generator's raw signal
     ``acc`` (n,), or from each row of ``acc`` (m, n) (every row gives the bits it gives alone).
@@ -80,15 +92,15 @@ def baseline_corrected(acc: np.ndarray, dt: float, highpass: float) -> tuple[np.
     the record starts and ends at rest (final displacement and velocity exactly zero).
     """
     pad = np.shape(acc)[-1]
-    # integrated over the padded signal, pre-event filter transient included, then cut
-    a = highpass_padded(acc, dt, highpass, "the record")
-    start = np.zeros(a.shape[:-1] + (1,))
-    v = np.concatenate([start, np.cumsum(0.5 * (a[..., 1:] + a[..., :-1]) * dt, axis=-1)], -1)
-    d = np.concatenate([start, np.cumsum(0.5 * (v[..., 1:] + v[..., :-1]) * dt, axis=-1)], -1)
-    d = d[..., pad : 2 * pad]
+    # integrated over the padded signal from its start, pre-event filter transient included,
+    # then cut; the running sums stop at the record's end (the trailing pad is not needed)
+    a = highpass_padded(acc, dt, highpass, "the record")[..., : 2 * pad]
+    v = _trapezoid_integral(a, dt)
+    d = _trapezoid_integral(v, dt)[..., pad:]
     # the chord of each row, one linspace per row (as one signal alone gets it)
     chord = np.array([np.linspace(row[0], row[-1], pad) for row in d.reshape(-1, pad)])
-    d = (d - chord.reshape(d.shape)) * _taper(pad)
+    d -= chord.reshape(d.shape)
+    d *= _taper(pad)
     v = _spectral_derivative(d, dt)
     a = _spectral_derivative(v, dt)
     return d, v, a

@@ -117,3 +117,30 @@ def test_designs_are_remembered_but_not_shared():
     again = iir.butter_highpass_sos(4, 0.01)
     assert again[0, 0] != 123.0
     assert np.array_equal(again, scipy.signal.butter(4, 0.01, btype="highpass", output="sos"))
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_silent_start_gives_scipys_bits(compiled, monkeypatch):
+    """Signals that start with exact zeros (the pads of a filtered record), a -0.0 inside
+    them, all zero, and a filter whose sections have b0, b2 < 0 (where zeros need not stay
+    +0.0): every bit, the signs of zeros included, as scipy.signal.sosfiltfilt."""
+    rng = np.random.default_rng(4)
+    butter = iir.butter_highpass_sos(4, 0.003)
+    flipped = butter.copy()
+    flipped[0, :3] *= -1.0
+    x = rng.standard_normal((4, 900))
+    x[:, :300] = 0.0
+    x[1, 150] = -0.0
+    x[2] = 0.0
+    x[3, :2] = 0.0
+    for sos in (butter, flipped):
+        expected = np.array([scipy.signal.sosfiltfilt(sos, row) for row in x])
+        if not compiled:
+            monkeypatch.delitem(sys.modules, "scipy.signal")
+            monkeypatch.setattr(iir, "_CALLS", [-(10**9)])
+        together = iir.sosfiltfilt(sos, x[:3])  # a common silent start of 300 + 15 samples
+        alone = [iir.sosfiltfilt(sos, row) for row in x]
+        monkeypatch.undo()
+        assert np.array_equal(together.view(np.uint64), expected[:3].view(np.uint64))
+        for i, row in enumerate(alone):
+            assert np.array_equal(row.view(np.uint64), expected[i].view(np.uint64))
