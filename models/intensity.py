@@ -134,8 +134,10 @@ def oscillator_displacements(
     k = len(periods)
     if n < 2:
         return np.zeros((k, n))
-    p_load, q_load, conv_t, step, free_t = block_operators(
-        tuple(periods.tolist()), float(damping), float(dt)
+    p_load, q_load, conv_t, step, free_t = (
+        _one_oscillator(float(periods[0]), float(damping), float(dt))
+        if k == 1
+        else block_operators(periods, damping, dt)
     )
     # the forcing f_n = P a_n + Q a_{n+1} of each oscillator and state component, zero-padded
     # to whole blocks
@@ -174,18 +176,16 @@ def oscillator_displacements(
     return u
 
 
-@functools.lru_cache(maxsize=64)
-def block_operators(periods: tuple[float, ...], damping: float, dt: float) -> tuple:
-    """The matrices of :func:`oscillator_displacements` for oscillators of ``periods`` [s] and
-    ``damping`` at the step ``dt`` [s], computed once per (periods, damping, dt) and kept
-    (a sweep of one structure asks for the same oscillator every case).
+def block_operators(periods: np.ndarray, damping: float, dt: float) -> tuple:
+    """The matrices of :func:`oscillator_displacements` for oscillators of ``periods`` [s]
+    (K,) and ``damping`` at the step ``dt`` [s].
 
     Returns (P, Q) of :func:`load_matrices`, each (K, 2); the block convolution (K, 2·BLOCK,
     2·(BLOCK + 1)) whose row 2i + c, column 2j + r is Φ((j − 1 − i)Δt)[r, c] for i < j, else
     0; Φ(BLOCK·Δt) as nested lists of floats (K, 2, 2); and the free motion over a block
-    (K, 2, 2·BLOCK), column 2m + r of row c being Φ(mΔt)[r, c]. The arrays are read-only.
+    (K, 2, 2·BLOCK), column 2m + r of row c being Φ(mΔt)[r, c].
     """
-    omega = 2.0 * np.pi / np.array(periods, float)
+    omega = 2.0 * np.pi / np.asarray(periods, float)
     k = len(omega)
     p_load, q_load = load_matrices(omega, damping, dt)
     # kernel[:, m] = Φ(mΔt), m = 0..BLOCK; conv[:, j, i] = Φ((j − 1 − i)Δt) for i < j
@@ -194,11 +194,18 @@ def block_operators(periods: tuple[float, ...], damping: float, dt: float) -> tu
     conv = np.where((lag >= 0)[None, :, :, None, None], kernel[:, np.maximum(lag, 0)], 0.0)
     conv_t = conv.transpose(0, 2, 4, 1, 3).reshape(k, 2 * BLOCK, 2 * (BLOCK + 1))
     free_t = kernel[:, :BLOCK].transpose(0, 3, 1, 2).reshape(k, 2, 2 * BLOCK)
-    arrays = [np.ascontiguousarray(x) for x in (p_load, q_load, conv_t, free_t)]
-    for x in arrays:
-        x.flags.writeable = False
-    p_load, q_load, conv_t, free_t = arrays
     return p_load, q_load, conv_t, kernel[:, BLOCK].tolist(), free_t
+
+
+@functools.lru_cache(maxsize=16)
+def _one_oscillator(period: float, damping: float, dt: float) -> tuple:
+    """:func:`block_operators` of one oscillator, kept per (period, damping, dt): a sweep of
+    one structure asks for the same oscillator every case (read-only arrays)."""
+    operators = block_operators(np.array([period]), damping, dt)
+    for x in operators:
+        if isinstance(x, np.ndarray):
+            x.flags.writeable = False
+    return operators
 
 
 def spectral_acceleration(

@@ -35,7 +35,7 @@ def _fft_size(n: int) -> int:
     return 1 << int(np.ceil(np.log2(2 * n)))
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=4)
 def _derivative_factor(nfft: int, dt: float) -> np.ndarray:
     """iω [rad/s] at the ``nfft``-point real FFT's frequencies for the step ``dt`` [s]
     (read-only; one per record length and step)."""
@@ -54,7 +54,7 @@ def _spectral_derivative(x: np.ndarray, dt: float) -> np.ndarray:
     return np.fft.irfft(_derivative_factor(nfft, dt) * X, nfft)[..., :n]
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=4)
 def _taper(n: int, frac: float = 0.05) -> np.ndarray:
     """Tukey-type cosine taper rising over the first and falling over the last frac·n samples
     (read-only; one per record length)."""
@@ -113,7 +113,7 @@ def _envelope(t: np.ndarray, duration: float) -> np.ndarray:
     return np.where(t < t1, (t / t1) ** 2, np.where(t <= t2, 1.0, np.exp(-c * (t - t2))))
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=4)
 def _sampled_envelope(n: int, dt: float, duration: float) -> np.ndarray:
     """:func:`_envelope` at t = k·dt, k = 0..n − 1 (read-only; one per record)."""
     envelope = _envelope(np.arange(n) * dt, duration)
@@ -121,7 +121,7 @@ def _sampled_envelope(n: int, dt: float, duration: float) -> np.ndarray:
     return envelope
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=4)
 def _kanai_tajimi_response(nfft: int, dt: float, fg: float, zg: float) -> np.ndarray:
     """H(ω) = (ω_g² + 2iζ_gω_gω) / (ω_g² − ω² + 2iζ_gω_gω), ω_g = 2π·fg, at the ``nfft``-point
     real FFT's frequencies (read-only; one per record length, step and ground)."""
