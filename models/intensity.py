@@ -169,10 +169,14 @@ def oscillator_displacements(
     free = np.empty((k, nb, 2 * BLOCK))
     for i in range(k):
         np.matmul(np.array(chained[i][0]), free_t[i], out=free[i])
-    z = (free.reshape(k, nb, BLOCK, 2) + part[:, :, :BLOCK]).reshape(k, nb * BLOCK, 2)
+    # z = free + particular motion, of which only the displacement u is kept
+    u_blocks = free.reshape(k, nb, BLOCK, 2)[..., 0] + part[:, :, :BLOCK, 0]
     u = np.empty((k, n))
-    u[:, : n - 1] = z[:, : n - 1, 0]
-    u[:, n - 1] = [end for _, end in chained] if (n - 1) % BLOCK == 0 else z[:, n - 1, 0]
+    u[:, : n - 1] = u_blocks.reshape(k, nb * BLOCK)[:, : n - 1]
+    if (n - 1) % BLOCK == 0:
+        u[:, n - 1] = [end for _, end in chained]
+    else:
+        u[:, n - 1] = u_blocks.reshape(k, nb * BLOCK)[:, n - 1]
     return u
 
 

@@ -196,8 +196,9 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     """
     exc = scene.excitation
     n = synthetic_samples(exc)
-    rng = np.random.default_rng(exc.seed)
-    common = {"x": rng.standard_normal(n), "y": rng.standard_normal(n)}
+    # the common noise of x, then of y: one draw of both is the stream of two draws
+    drawn = np.random.default_rng(exc.seed).standard_normal((2, n))
+    common = {"x": drawn[0], "y": drawn[1]}
     pgas = {"x": exc.pga * exc.longitudinal_ratio, "y": exc.pga}
     t = np.arange(n) * exc.dt
     # every component, generated together (rows): one per moving direction, then with
@@ -206,12 +207,12 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     rows = [(axis, None) for axis in moving]
     if exc.incoherence > 0:
         rows += [(axis, k) for k in range(len(scene.bents)) for axis in moving]
-    noise = np.array(
-        [
-            mixed_noise(exc, [exc.seed, ord(axis)] + ([] if k is None else [k + 1]), common[axis])
-            for axis, k in rows
-        ]
-    )
+    mixed = [
+        mixed_noise(exc, [exc.seed, ord(axis)] + ([] if k is None else [k + 1]), common[axis])
+        for axis, k in rows
+    ]
+    together = len(mixed) == 2 and mixed[0] is common["x"] and mixed[1] is common["y"]
+    noise = drawn if together else np.array(mixed)
     d_rows, v_rows, a_rows, peaks = synthetic_components(
         exc, [pgas[axis] for axis, _ in rows], noise
     )
