@@ -16,6 +16,7 @@ progress on stderr (:mod:`.progress`: a bar on a terminal, a line at a steady pa
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
@@ -27,7 +28,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from deckpound.compare.engines import get_engine, run_engine
-from deckpound.compare.pool import Interrupted, map_local, one_blas_thread
+from deckpound.compare.pool import (
+    Interrupted,
+    blas_threads_kept_to_one,
+    map_local,
+    one_blas_thread,
+)
 from deckpound.compare.progress import Progress
 from deckpound.compare.result_cache import ResultCache
 from deckpound.models.errors import SceneError
@@ -233,10 +239,12 @@ def map_parallel(
         return
     n = workers if workers is not None else (os.cpu_count() or 1)
     if n <= 1 or len(items) == 1:
-        if len(items) >= SCIPY_AFTER:  # a sweep: its import now, not at its 16th record
+        sweep = len(items) >= SCIPY_AFTER
+        if sweep:  # its import now, not at its 16th record
             load_compiled_filter()
-        for it in items:
-            on_done(it, func(*args_of(it)))
+        with blas_threads_kept_to_one() if sweep else contextlib.nullcontext():
+            for it in items:
+                on_done(it, func(*args_of(it)))
         return
     batches = _batches(items, batch_size(len(items), n))
     map_local(batches, _batch_args(args_of, func), run_batch, _batch_done(on_done), n)

@@ -33,7 +33,14 @@ from threadpoolctl import threadpool_limits
 from deckpound.compare._workers import die_with_parent
 from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 
-__all__ = ["Interrupted", "map_local", "one_blas_thread", "pool_scope", "worker_init"]
+__all__ = [
+    "Interrupted",
+    "blas_threads_kept_to_one",
+    "map_local",
+    "one_blas_thread",
+    "pool_scope",
+    "worker_init",
+]
 
 #: seconds to wait for killed workers to be reaped
 REAP_TIMEOUT = 5.0
@@ -52,6 +59,14 @@ def one_blas_thread() -> None:
     their step loops: two workers ran at the speed of one (``tools/sweep_benchmark.py``)."""
 
     threadpool_limits(limits=1)
+
+
+def blas_threads_kept_to_one():
+    """A context in which this process's BLAS and OpenMP pools use one thread, restored at its
+    end: a sweep run in this process (one worker) keeps OpenBLAS's idle threads from
+    busy-waiting on the core its step loops share with the rest of the machine, as the pool's
+    workers do (:func:`one_blas_thread`), without changing the caller's process for good."""
+    return threadpool_limits(limits=1)
 
 
 def worker_init(parent_pid: int) -> None:
