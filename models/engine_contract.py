@@ -335,13 +335,16 @@ class Engine:
         """Run the engine on ``scene`` and return its Result (the shared template).
 
         ``summary_only``: return a result without histories (:func:`finish`), for sweeps that
-        keep one row of peaks, closures, seat margins and status per case."""
+        keep one row of peaks, closures, seat margins and status per case; the support motion
+        it makes skips the record's intensity measures (``meta["record"]["intensity"]`` is
+        None)."""
 
         t0 = time.perf_counter()
         settings = self.settings_of(scene) if settings is None else settings
         msgs = self.validate(scene, settings)
         if motion is None:
-            motion = support_motion(scene)
+            # a summary keeps no record provenance a user reads: no intensity measures
+            motion = support_motion(scene, intensity=not summary_only)
         plan = plan_of(scene)
         out = self._run(plan, scene, settings, motion, **options)
         total = time.perf_counter() - t0

@@ -109,8 +109,12 @@ def rest_motion(scene: Scene) -> SupportMotion:
     )
 
 
-def support_motion(scene: Scene) -> SupportMotion:
+def support_motion(scene: Scene, *, intensity: bool = True) -> SupportMotion:
     """The scene's support motion, whatever its source, with its provenance.
+
+    ``intensity``: compute the applied pair's intensity measures (:func:`motion_intensity`,
+    ``provenance["intensity"]``); False leaves them None, for a summary-only run, whose row has
+    no place for them.
 
     Refuses a non-finite motion and, unless ``excitation.allow_extreme``, an applied PGA above
     ``EXTREME_PGA`` g in either direction (measured on the motion). Only then are the record's
@@ -156,7 +160,7 @@ def support_motion(scene: Scene) -> SupportMotion:
                 f"{exc.scaling!r}, scale = {exc.scale:g}); {limit}",
             )
     motion.provenance["applied_pga"] = applied
-    motion.provenance["intensity"] = motion_intensity(scene, motion)
+    motion.provenance["intensity"] = motion_intensity(scene, motion) if intensity else None
     for text in motion.provenance.get("warnings", []):
         # one location for every call: a sequence or several engines print a sentence once
         warnings.warn(text, RecordWarning, stacklevel=1)

@@ -55,6 +55,11 @@ def test_a_summary_says_what_the_full_run_says(case):
     energies = [k for k in ENERGY_COLUMNS if k in full.columns]
     assert summary.meta["final_energies"] == {k: float(full[k][-1]) for k in energies}
     assert "scene" in full.meta and "scene" not in summary.meta
+    # a summary row has no place for the record's intensity measures: not computed
+    assert (
+        full.meta["record"]["intensity"]["x"]["pga"] > 0
+        and summary.meta["record"]["intensity"] is None
+    )
 
 
 def test_a_summary_of_a_doubtful_run_is_doubtful():
