@@ -207,23 +207,25 @@ def ensure_folder(path: str | Path, field: str = "--output") -> Path:
     return path
 
 
-def _write_fd(fd: int, data: bytes) -> None:
+def _write_fd(fd: int, data: bytes, durable: bool = True) -> None:
     view = memoryview(data)
     while view:
         n = os.write(fd, view)
         view = view[n:]
-    os.fsync(fd)
+    if durable:
+        os.fsync(fd)
 
 
-def _write_temporary(path: Path, data: bytes) -> Path:
-    """``data`` in a new temporary file beside ``path`` (mode 0o666 less the umask)."""
+def _write_temporary(path: Path, data: bytes, durable: bool = True) -> Path:
+    """``data`` in a new temporary file beside ``path`` (mode 0o666 less the umask), flushed
+    to the disk unless not ``durable``."""
     tmp = _tmp_name(path)
     try:
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
     except OSError as err:  # name the file the user asked for, not the temporary one
         raise OSError(err.errno, err.strerror, str(path)) from None
     try:
-        _write_fd(fd, data)
+        _write_fd(fd, data, durable=durable)
     except BaseException as err:
         os.close(fd)
         _unlink_quietly(tmp)
@@ -239,15 +241,22 @@ def _unlink_quietly(path: Path) -> None:
         os.unlink(path)
 
 
-def atomic_write_bytes(path: str | Path, data: bytes, *, field: str = "--output") -> Path:
-    """Write ``data`` to ``path`` atomically (temporary file, fsync, rename)."""
+def atomic_write_bytes(
+    path: str | Path, data: bytes, *, field: str = "--output", durable: bool = True
+) -> Path:
+    """Write ``data`` to ``path`` atomically (temporary file, fsync, rename).
+
+    ``durable=False`` leaves out the fsync: the file is still whole or absent for every reader
+    (the rename is atomic), but a power cut may leave it empty — for a cache whose reader
+    recomputes an unreadable entry (a sweep's rows: one fsync per case cost more than the
+    rest of its bookkeeping)."""
     path = Path(path)
     if _kind(path, field) == "stream":
         _write_stream(path, data)
         return path
     check_parent(path, field)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = _write_temporary(path, data)
+    tmp = _write_temporary(path, data, durable)
     try:
         os.replace(tmp, path)
     except BaseException:
@@ -256,9 +265,11 @@ def atomic_write_bytes(path: str | Path, data: bytes, *, field: str = "--output"
     return path
 
 
-def atomic_write_text(path: str | Path, text: str, *, field: str = "--output") -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically."""
-    return atomic_write_bytes(path, text.encode("utf-8"), field=field)
+def atomic_write_text(
+    path: str | Path, text: str, *, field: str = "--output", durable: bool = True
+) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_write_bytes`)."""
+    return atomic_write_bytes(path, text.encode("utf-8"), field=field, durable=durable)
 
 
 def atomic_write_files(files: dict[Path, str | bytes], *, field: str = "--output") -> list[Path]:

@@ -95,7 +95,7 @@ def _inject(fault: str, root: Path, stack: contextlib.ExitStack) -> None:
     if kind in ("enospc-write", "interrupt-write", "memory-write"):
         counter, real = _Counter(int(arg)), dio._write_fd
 
-        def write_fd(fd, data):
+        def write_fd(fd, data, **kw):
             if counter.hit():
                 if kind == "interrupt-write":
                     raise KeyboardInterrupt
@@ -103,7 +103,7 @@ def _inject(fault: str, root: Path, stack: contextlib.ExitStack) -> None:
                     raise MemoryError
                 os.write(fd, bytes(data[: len(data) // 2]))  # half written, then the disk is full
                 raise OSError(errno.ENOSPC, "No space left on device")
-            return real(fd, data)
+            return real(fd, data, **kw)
 
         stack.enter_context(_patched(dio, "_write_fd", write_fd))
     elif kind == "enospc-fsync":

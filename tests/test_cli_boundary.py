@@ -342,11 +342,11 @@ def test_unwritable_output_is_an_io_error(tmp_path):
 def test_export_on_a_full_disk_writes_no_file(tmp_path, monkeypatch):
     real, calls = dio._write_fd, []
 
-    def fills_up(fd, data):
+    def fills_up(fd, data, **kw):
         calls.append(1)
         if len(calls) == 5:
             raise OSError(errno.ENOSPC, "No space left on device")
-        real(fd, data)
+        real(fd, data, **kw)
 
     monkeypatch.setattr(dio, "_write_fd", fills_up)
     code, _, err = cli(
@@ -359,11 +359,11 @@ def test_export_on_a_full_disk_writes_no_file(tmp_path, monkeypatch):
 def test_run_failing_mid_write_leaves_no_half_result(tmp_path, monkeypatch):
     real, calls = dio._write_fd, []
 
-    def second_fails(fd, data):
+    def second_fails(fd, data, **kw):
         calls.append(1)
         if len(calls) == 3:  # the marker, the CSV, then the JSON fails
             raise OSError(errno.ENOSPC, "No space left on device")
-        real(fd, data)
+        real(fd, data, **kw)
 
     monkeypatch.setattr(dio, "_write_fd", second_fails)
     code, _, err = cli(

@@ -68,7 +68,7 @@ def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path, mon
     target = atomic_write_text(tmp_path / "t.csv", "old content\n")
     real = dio._write_fd
 
-    def full_disk(fd, data):
+    def full_disk(fd, data, **_):
         os.write(fd, bytes(data[:5]))
         raise OSError(errno.ENOSPC, "No space left on device")
 
@@ -89,11 +89,11 @@ def test_a_set_of_files_is_written_all_or_nothing(tmp_path, monkeypatch):
     calls = []
     real = dio._write_fd
 
-    def third_fails(fd, data):
+    def third_fails(fd, data, **kw):
         calls.append(len(data))
         if len(calls) == 3:
             raise OSError(errno.ENOSPC, "No space left on device")
-        real(fd, data)
+        real(fd, data, **kw)
 
     monkeypatch.setattr(dio, "_write_fd", third_fails)
     with pytest.raises(OSError):
@@ -428,3 +428,16 @@ def test_an_export_to_a_device_or_pipe_is_refused(tmp_path, capsys):
         assert cli_main(["export", "saiidi-4span", "--format", "py", "-o", target]) == 2
         assert "device or a pipe" in capsys.readouterr().err
     assert not os.path.exists("/dev/null_data") and not (tmp_path / "pipe_data").exists()
+
+
+def test_a_cache_entry_is_written_whole_without_a_flush(tmp_path, monkeypatch):
+    """A sweep's row cache writes one small file per case: atomically (renamed into place,
+    never torn) but without the fsync, which cost more than the rest of a case's bookkeeping;
+    its reader recomputes an entry a power cut left unreadable. Results keep the flush."""
+    flushed = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: flushed.append(fd) or real_fsync(fd))
+    row = atomic_write_text(tmp_path / "row.json", '{"status": "success"}', durable=False)
+    assert row.read_text() == '{"status": "success"}' and flushed == [] and not _temps(tmp_path)
+    atomic_write_text(tmp_path / "result.json", "{}")
+    assert len(flushed) == 1

@@ -209,7 +209,10 @@ def sweep_rows(
     def done(i: int, row: dict) -> None:
         rows[i] = row
         if row.get("status") in FINISHED:
-            atomic_write_text(rows_dir / f"{keys[i]}.json", json.dumps(row), field="--cache")
+            # not durable: a row a power cut leaves unreadable is computed again (_read_row)
+            atomic_write_text(
+                rows_dir / f"{keys[i]}.json", json.dumps(row), field="--cache", durable=False
+            )
         bar.advance()
 
     try:
