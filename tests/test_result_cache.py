@@ -98,7 +98,7 @@ def test_an_entry_without_manifest_is_a_silent_miss_and_replaced(tmp_path):
 def test_a_put_that_cannot_write_warns_and_leaves_nothing(tmp_path, monkeypatch):
     import deckpound.models.file_io as dio
 
-    def full(fd, data):
+    def full(fd, data, **_):
         raise OSError(28, "No space left on device")
 
     cache = ResultCache(tmp_path)
