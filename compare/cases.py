@@ -246,7 +246,7 @@ def map_parallel(
             for it in items:
                 on_done(it, func(*args_of(it)))
         return
-    batches = _batches(items, batch_size(len(items), n))
+    batches = _batches(items, batch_size(len(items), n), n)
     map_local(batches, _batch_args(args_of, func), run_batch, _batch_done(on_done), n)
 
 
@@ -261,8 +261,13 @@ def run_batch(func: Callable, arguments: list[tuple]) -> list:
     return [func(*args) for args in arguments]
 
 
-def _batches(items: list, size: int) -> list[tuple]:
-    return [tuple(items[i : i + size]) for i in range(0, len(items), size)]
+def _batches(items: list, size: int, workers: int = 1) -> list[tuple]:
+    """``items`` in tasks of ``size``, the last ``workers × size`` items one per task (guided
+    self-scheduling): at the end of a map no worker waits for another's whole batch."""
+    tail = min(len(items), workers * size) if size > 1 else 0
+    head = len(items) - tail
+    out = [tuple(items[i : i + size]) for i in range(0, head, size)]
+    return out + [(it,) for it in items[head:]]
 
 
 def _batch_args(args_of: Callable, func: Callable) -> Callable:
@@ -315,7 +320,7 @@ def _map_dask(
         # every worker loads cached kernels the fast way; a worker keeps them for its lifetime
         client.run(_dask_worker_setup)
         threads = sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values())
-        batches = _batches(items, batch_size(len(items), threads))
+        batches = _batches(items, batch_size(len(items), threads), threads)
         arguments, done = _batch_args(args_of, func), _batch_done(on_done)
         futures = {client.submit(run_batch, *arguments(b), pure=False): b for b in batches}
         try:
