@@ -8,6 +8,7 @@ kN·s, kJ); :func:`column_unit` also names those of the engine-specific extras.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 from .plan import CORNER_NAMES, DOF_COLUMNS, RELATIVE_COLUMNS, VELOCITY_COLUMNS, Plan
@@ -83,8 +84,10 @@ def standard_columns(bent_names) -> list[str]:
     return [c.name for c in result_columns(tuple(bent_names))]
 
 
+@functools.lru_cache(maxsize=64)
 def result_columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
-    """The standard columns of a model with these bents, in output order."""
+    """The standard columns of a model with these bents, in output order (frozen columns,
+    made once per set of bent names: every run of a sweep asks for them)."""
     cols = [Column("t", "s", "time", "time")]
     for name, _ in DOF_COLUMNS:
         part = name.split("_")[0]

@@ -49,33 +49,37 @@ def kelvin_voigt_damping(scene: Scene, plan: Plan | None = None) -> np.ndarray:
     return 2.0 * z * np.sqrt(scene.contact.stiffness * m_eff)
 
 
-def contact_period(scene: Scene) -> float:
+def contact_period(scene: Scene, plan: Plan | None = None) -> float:
     """Period of the stiffest corner's contact oscillation, T_c = 2π √(m_eff / k_eff) [s].
 
     k_eff is ``contact.stiffness`` (K1 of the bilinear law); for the Hertz-type laws (those
     whose force reads ``contact.exponent`` in the law table: hertz, hertz-damp, hertzdamp,
     flores) the secant stiffness k δ^(n−1) at δ = :data:`HERTZ_SECANT_DEPTH`. NaN when there
-    is no contact stiffness or no moving mass.
+    is no contact stiffness or no moving mass. ``plan``: the scene's plan model when the
+    caller has it (default: made from the scene).
     """
     ct = scene.contact
     k = ct.stiffness
     if "contact.exponent" in contact_law(ct.law).params:  # λ ∝ δ^n: the Hertz-type laws
         k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
-    m = float(np.min(effective_masses(scene)))
+    m = float(np.min(effective_masses(scene) if plan is None else plan.effective_masses()))
     return float(2.0 * np.pi * np.sqrt(m / k)) if k > 0 and m > 0 else float("nan")
 
 
-def contact_resolving_step(scene: Scene, dt: float) -> float:
+def contact_resolving_step(scene: Scene, dt: float, plan: Plan | None = None) -> float:
     """The step a fixed-step penalty engine runs [s]: ``dt``, or shorter where the contact needs it.
 
     With n = ``run.steps_per_contact_period`` > 0 and T_c = :func:`contact_period`, a step
     dt > T_c / n is replaced by ``output_dt / ceil(output_dt / (T_c / n))`` — the longest step
     ≤ T_c / n that still divides the output step, so the stored rows stay on the output
     times — or by T_c / n itself when the output step is shorter. n = 0 keeps ``dt``.
+    ``plan``: the scene's plan model when the caller has it.
     """
     n = scene.run.steps_per_contact_period
-    period = contact_period(scene)
-    if n <= 0.0 or not np.isfinite(period) or dt <= period / n:
+    if n <= 0.0:
+        return float(dt)
+    period = contact_period(scene, plan)
+    if not np.isfinite(period) or dt <= period / n:
         return float(dt)
     limit = period / n
     out = scene.run.output_dt

@@ -282,7 +282,7 @@ def _run_newmark(
 ) -> RunOutput:
     """The Newmark integrator of :meth:`ComplianceEngine._run` (same keywords)."""
     on = _skip_switches(skips)
-    dt = contact_resolving_step(scene, settings.dt)
+    dt = contact_resolving_step(scene, settings.dt, plan)
     duration = analysis_duration(scene, motion)
     ps, record, cp, cs, corners = pack_run(plan, scene, motion, kv_clip=kv_clip)
     _set_newton_contact(settings, cp, on["friction"])

@@ -42,12 +42,16 @@ def record_slopes(tb, D, V) -> tuple[np.ndarray, np.ndarray]:
     """(SD, SV), shape of D: the slopes (y[j+1] − y[j]) / (x[j+1] − x[j]) of every segment j of
     the record (the divisions of ``np.interp``, elementwise the same IEEE operations); the last
     row, after the last sample, is zero (never read)."""
-    SD = np.zeros_like(D)
-    SV = np.zeros_like(V)
+    SD = np.empty_like(D)
+    SV = np.empty_like(V)
+    SD[-1:] = 0.0
+    SV[-1:] = 0.0
     if tb.shape[0] > 1:
         dx = (tb[1:] - tb[:-1])[:, None]
-        SD[:-1] = (D[1:] - D[:-1]) / dx
-        SV[:-1] = (V[1:] - V[:-1]) / dx
+        # in place: the same subtraction and division as (y[j+1] - y[j]) / dx, no temporaries
+        for y, slope in ((D, SD), (V, SV)):
+            np.subtract(y[1:], y[:-1], out=slope[:-1])
+            np.divide(slope[:-1], dx, out=slope[:-1])
     return SD, SV
 
 
