@@ -15,6 +15,7 @@ import warnings
 
 import numpy as np
 import pytest
+from _free_vibration import FREE_VIBRATION, free_vibration
 
 import deckpound as dp
 from deckpound import cli
@@ -22,28 +23,6 @@ from deckpound.models.contact_params import contact_period, contact_resolving_st
 from deckpound.models.engine_contract import QualityWarning, energy_quality
 from deckpound.models.errors import DoubtfulResult
 from deckpound.models.scene_io import load_scene
-
-ELASTIC = [
-    f"bents[{b}].{d}.{f}={v}"
-    for b in range(3)
-    for d in "xy"
-    for f, v in (("yield_force", 1e6), ("ultimate_displacement", 1e3))
-]
-FREE_VIBRATION = [
-    "excitation.kind=none",
-    "excitation.duration=10",
-    "damping.ratio=0",
-    "seats[0].cx=0",
-    "seats[0].ctheta=0",
-    "seats[1].cx=0",
-    "seats[1].ctheta=0",
-    "initial.deck_velocity=[0.25,0.05,0.002]",
-    *ELASTIC,
-]
-
-
-def free_vibration(*overrides: str):
-    return load_scene("saiidi-4span", [*FREE_VIBRATION, *overrides])
 
 
 def quiet_run(scene, engine, **kw):

@@ -19,6 +19,8 @@ import pytest
 
 pytest.importorskip("openseespy.opensees")
 
+from _free_vibration import undamped
+
 from deckpound.analytic.compliance.engine import run_compliance
 from deckpound.analytic.kernels.hysteretic import HystereticMaterial
 from deckpound.models.columns import ENERGY_COLUMNS
@@ -29,24 +31,8 @@ from deckpound.opensees_build.engine import run_opensees
 
 #: both engines stepped to the same converged states (tests/test_clone_vs_opensees.py)
 TIGHT = ["opensees.tolerance=1e-12", "compliance.tolerance=1e-12", "opensees.mode=rigid"]
-#: bents that never yield
-ELASTIC = [
-    f"bents[{b}].{d}.{f}={v}"
-    for b in range(3)
-    for d in "xy"
-    for f, v in (("yield_force", 1e6), ("ultimate_displacement", 1e3))
-]
 #: no excitation, no damping anywhere (seat dashpots included), elastic bents, for 1 s
-UNDAMPED = [
-    "excitation.kind=none",
-    "excitation.duration=1",
-    "damping.ratio=0",
-    "seats[0].cx=0",
-    "seats[0].ctheta=0",
-    "seats[1].cx=0",
-    "seats[1].ctheta=0",
-    *ELASTIC,
-]
+UNDAMPED = undamped(1)
 
 
 def quiet(run, scene, **kw):

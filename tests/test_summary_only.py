@@ -9,6 +9,7 @@ import warnings
 
 import numpy as np
 import pytest
+from _free_vibration import free_vibration
 
 import deckpound as dp
 from deckpound.models.columns import ENERGY_COLUMNS
@@ -65,21 +66,7 @@ def test_a_summary_says_what_the_full_run_says(case):
 def test_a_summary_of_a_doubtful_run_is_doubtful():
     """The issue-28 free vibration at the default step creates energy at its contacts: the
     summary reads the energy columns of the loop's rows before it drops them."""
-    elastic = [
-        f"bents[{b}].{d}.{f}={v}"
-        for b in range(3)
-        for d in "xy"
-        for f, v in (("yield_force", 1e6), ("ultimate_displacement", 1e3))
-    ]
-    overrides = [
-        "excitation.kind=none",
-        "excitation.duration=4",
-        "damping.ratio=0",
-        *(f"seats[{i}].{f}=0" for i in (0, 1) for f in ("cx", "ctheta")),
-        "initial.deck_velocity=[0.25,0.05,0.002]",
-        *elastic,
-    ]
-    scene = load_scene("saiidi-4span", overrides)
+    scene = free_vibration("excitation.duration=4")
     full = quiet_run(scene, "compliance")
     summary = quiet_run(scene, "compliance", summary_only=True)
     assert full.doubtful and summary.doubtful
