@@ -236,10 +236,15 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
             disp[f"{bent.name}_{axis}"] = shift_record(d, k * lag_steps)
             vel[f"{bent.name}_{axis}"] = shift_record(v, k * lag_steps)
             acc[f"{bent.name}_{axis}"] = shift_record(a, k * lag_steps)
+    # the actuators follow their nearest table: the same arrays, as the tables without lag
+    # share one component (a motion's arrays are never changed in place)
     first, last = scene.bents[0].name, scene.bents[-1].name
-    disp["seat1_x"], vel["seat1_x"] = disp[f"{first}_x"].copy(), vel[f"{first}_x"].copy()
-    disp["seat2_x"], vel["seat2_x"] = disp[f"{last}_x"].copy(), vel[f"{last}_x"].copy()
-    acc["seat1_x"], acc["seat2_x"] = acc[f"{first}_x"].copy(), acc[f"{last}_x"].copy()
+    disp["seat1_x"], vel["seat1_x"] = disp[f"{first}_x"], vel[f"{first}_x"]
+    disp["seat2_x"], vel["seat2_x"] = disp[f"{last}_x"], vel[f"{last}_x"]
+    acc["seat1_x"], acc["seat2_x"] = acc[f"{first}_x"], acc[f"{last}_x"]
+    for arrays in (disp, vel, acc):
+        for x in arrays.values():
+            x.flags.writeable = False
     prov = make_provenance(
         exc,
         files={},
