@@ -52,6 +52,7 @@ __all__ = [
     "run_batch",
     "run_case",
     "run_cases",
+    "summary_key",
 ]
 
 #: seconds to wait for a Dask scheduler before giving up (exit status 3 on the CLI)
@@ -177,6 +178,12 @@ def interrupted(
     )
 
 
+def summary_key(key: str) -> str:
+    """The cache key of a case's summary-only result: never the full result's key, so that
+    a cache holding the one is never asked for the other."""
+    return hashlib.sha256(f"{key}:summary-only".encode()).hexdigest()
+
+
 def run_cases(
     cases: Iterable[Case],
     *,
@@ -185,13 +192,20 @@ def run_cases(
     scheduler: str | None = None,
     progress: bool = True,
     title: str = "cases",
+    summary_only: bool = False,
 ) -> dict[str, Result]:
-    """Run cases (cached ones are loaded), in parallel; results keyed by case label."""
+    """Run cases (cached ones are loaded), in parallel; results keyed by case label.
+    ``summary_only``: results without histories (``Engine.run``), cached under their own
+    keys (:func:`summary_key`)."""
     cases = list(cases)
     results: dict[str, Result] = {}
     todo = []
+
+    def key_of(case: Case) -> str:
+        return summary_key(case.key) if summary_only else case.key
+
     for c in cases:
-        hit = cache.get(c.key, c.engine) if cache is not None else None
+        hit = cache.get(key_of(c), c.engine) if cache is not None else None
         if hit is not None:
             results[c.label] = hit
         else:
@@ -201,12 +215,14 @@ def run_cases(
 
     def finish(case: Case, result: Result) -> None:
         if cache is not None and result.finished:  # finished answers
-            cache.put(case.key, result)
+            cache.put(key_of(case), result)
         results[case.label] = result
         bar.advance()
 
     try:
-        map_parallel(todo, lambda c: (c.engine, c.scene), run_case, finish, workers, scheduler)
+        map_parallel(
+            todo, lambda c: (c.engine, c.scene, summary_only), run_case, finish, workers, scheduler
+        )
     except KeyboardInterrupt as err:
         bar.close()
         raise interrupted(

@@ -103,6 +103,16 @@ def test_run_batch_equals_single_runs(tmp_path):
         np.testing.assert_array_equal(r["deck_theta"], one["deck_theta"])
     again = dp.run_batch(scenes, engine="compliance", workers=2, cache=tmp_path)  # cached
     assert [r.meta["scene_hash"] for r in again] == [r.meta["scene_hash"] for r in batch]
+    # summary-only results: no rows, the full runs' every-step peaks, cached apart from them
+    for _ in range(2):  # computed, then read back from the same cache
+        summaries = dp.run_batch(
+            scenes, engine="compliance", workers=2, cache=tmp_path, summary_only=True
+        )
+        for full, summary in zip(batch, summaries):
+            assert not summary.has_histories and len(summary.t) == 0
+            assert summary.peak("deck_theta") == full.peak("deck_theta")
+            assert summary.meta["gap_closures"] == full.meta["gap_closures"]
+    assert dp.run_batch(scenes, engine="compliance", workers=1, cache=tmp_path)[0].has_histories
 
 
 def _variability(tmp_path, name, *extra):

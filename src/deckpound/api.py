@@ -186,6 +186,7 @@ def run_batch(
     scheduler: str | None = None,
     cache: str | Path | None = None,
     progress: bool = False,
+    summary_only: bool = False,
 ) -> list:
     """Run one engine on many scenes; the results in the order of ``scenes``.
 
@@ -193,7 +194,9 @@ def run_batch(
     or on the Dask cluster at ``scheduler``; each worker loads the compiled kernels once for
     the whole batch (:mod:`deckpound.compare.pool`). ``cache`` is a result-cache folder:
     finished cases are never recomputed, so an interrupted batch resumes. Failed runs are
-    returned as failed results (``result.ok`` is False), not raised.
+    returned as failed results (``result.ok`` is False), not raised. ``summary_only``: results
+    without histories (peaks, closures, seat margins, energy check, status: :func:`run`), what
+    a sweep of thousands of cases keeps.
     """
     from deckpound.compare.cases import Case, run_cases
     from deckpound.compare.engines import get_engine
@@ -212,6 +215,7 @@ def run_batch(
             scheduler=scheduler,
             progress=progress,
             title=f"{engine} batch",
+            summary_only=summary_only,
         )
     return [results[c.label] for c in cases]
 
