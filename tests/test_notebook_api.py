@@ -273,3 +273,6 @@ def test_compare_reuses_the_results_it_is_given_and_refuses_another_scenes():
         other = dp.load_scene("saiidi-4span", set={"run.duration": 1.0, "seats[0].gap": 0.02})
         with pytest.raises(SceneError, match=r"results\['compliance'\]"):
             dp.compare(other, engines=["compliance"], results={"compliance": mine["compliance"]})
+        summary = dp.run(sc, engine="compliance", summary_only=True)
+        with pytest.raises(SceneError, match="summary-only result"):
+            dp.compare(sc, engines=["compliance"], results={"compliance": summary})

@@ -368,6 +368,11 @@ def compare(
     for n in names:
         get_engine(n)  # unknown names are refused with the list of valid ones
     for n, r in given.items():
+        if not r.has_histories:
+            raise SceneError(
+                f"results[{n!r}]",
+                "is a summary-only result (no histories to align): run it without summary_only",
+            )
         if r.meta.get("physics_hash") != physics_hash(scene):
             raise SceneError(
                 f"results[{n!r}]",
