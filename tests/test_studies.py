@@ -63,11 +63,11 @@ def test_resume_after_interrupted_run(tiny, tmp_path, monkeypatch):
     real = cases_mod.run_case
     calls = []
 
-    def dying(engine, scene):
+    def dying(engine, scene, *options):
         calls.append(scene)
         if len(calls) == 2:
             raise KeyboardInterrupt  # the user kills the study during case 2
-        return real(engine, scene)
+        return real(engine, scene, *options)
 
     monkeypatch.setattr(cases_mod, "run_case", dying)
     with pytest.raises(KeyboardInterrupt):
