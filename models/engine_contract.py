@@ -61,7 +61,10 @@ support motion, timing, and the epilogue :func:`finish`, which adds the columns 
 the plan and the support motion (displacements relative to the supports, bent deformations),
 puts the engine's every-step peaks and gap closures into the metadata (point 10), and builds the
 metadata (status, message, failure step/time, statistics, wall and compile time, hashes,
-settings, record provenance, warnings).
+settings, record provenance, warnings). With ``summary_only=True`` (the sweeps) it keeps no
+histories: the statistics, checks and status come from the engine's every-step measurements
+(points 10 and 11) and its rows, which are then dropped; an engine that keeps the contract's
+optional points gets the same answer either way (``tests/test_summary_only.py``).
 """
 
 from __future__ import annotations
