@@ -30,7 +30,6 @@ from typing import Any
 from deckpound.compare.engines import get_engine, run_engine
 from deckpound.compare.pool import (
     Interrupted,
-    blas_threads_kept_to_one,
     map_local,
     one_blas_thread,
 )
@@ -258,7 +257,7 @@ def map_parallel(
         sweep = len(items) >= SCIPY_AFTER
         if sweep:  # its import now, not at its 16th record
             load_compiled_filter()
-        with blas_threads_kept_to_one() if sweep else contextlib.nullcontext():
+        with one_blas_thread() if sweep else contextlib.nullcontext():
             for it in items:
                 on_done(it, func(*args_of(it)))
         return

@@ -35,7 +35,6 @@ from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 
 __all__ = [
     "Interrupted",
-    "blas_threads_kept_to_one",
     "map_local",
     "one_blas_thread",
     "pool_scope",
@@ -50,22 +49,16 @@ class Interrupted(KeyboardInterrupt):
     """A Ctrl-C, with one sentence on what is cached and how to resume (``str(err)``)."""
 
 
-def one_blas_thread() -> None:
-    """Keep this process's BLAS (OpenBLAS, MKL) and OpenMP pools to one thread.
+def one_blas_thread():
+    """Keep this process's BLAS (OpenBLAS, MKL) and OpenMP pools to one thread, from now on;
+    the returned limiter, used as a context (``with one_blas_thread():``), restores them at its
+    end (a sweep run in the caller's own process).
 
     A sweep runs one case per worker and core. A case's matrix products (its output columns,
     e.g. the bent deformations B·u of every row) are large enough for OpenBLAS to wake its
     thread pool, whose threads then busy-wait on the other cores, where the other workers run
     their step loops: two workers ran at the speed of one (``tools/sweep_benchmark.py``)."""
 
-    threadpool_limits(limits=1)
-
-
-def blas_threads_kept_to_one():
-    """A context in which this process's BLAS and OpenMP pools use one thread, restored at its
-    end: a sweep run in this process (one worker) keeps OpenBLAS's idle threads from
-    busy-waiting on the core its step loops share with the rest of the machine, as the pool's
-    workers do (:func:`one_blas_thread`), without changing the caller's process for good."""
     return threadpool_limits(limits=1)
 
 
