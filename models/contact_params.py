@@ -29,9 +29,10 @@ from .scene import Scene
 HERTZ_SECANT_DEPTH = 0.01
 
 
-def effective_masses(scene: Scene) -> np.ndarray:
-    """Effective mass of each corner contact [t]: 1 / (w_N M⁻¹ w_Nᵀ)."""
-    return plan_of(scene).effective_masses()
+def effective_masses(scene: Scene, plan: Plan | None = None) -> np.ndarray:
+    """Effective mass of each corner contact [t]: 1 / (w_N M⁻¹ w_Nᵀ), on ``plan`` when the
+    caller has the scene's plan model (default: made from the scene)."""
+    return (plan_of(scene) if plan is None else plan).effective_masses()
 
 
 def kelvin_voigt_ratio(e: float) -> float:
@@ -45,7 +46,7 @@ def kelvin_voigt_ratio(e: float) -> float:
 def kelvin_voigt_damping(scene: Scene, plan: Plan | None = None) -> np.ndarray:
     """Dashpot of each corner of ``plan`` (default: the scene's) [kN·s/m]: c = 2 ζ(e) √(k m_eff)."""
     z = kelvin_voigt_ratio(scene.contact.restitution)
-    m_eff = effective_masses(scene) if plan is None else plan.effective_masses()
+    m_eff = effective_masses(scene, plan)
     return 2.0 * z * np.sqrt(scene.contact.stiffness * m_eff)
 
 
@@ -62,7 +63,7 @@ def contact_period(scene: Scene, plan: Plan | None = None) -> float:
     k = ct.stiffness
     if "contact.exponent" in contact_law(ct.law).params:  # λ ∝ δ^n: the Hertz-type laws
         k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
-    m = float(np.min(effective_masses(scene) if plan is None else plan.effective_masses()))
+    m = float(np.min(effective_masses(scene, plan)))
     return float(2.0 * np.pi * np.sqrt(m / k)) if k > 0 and m > 0 else float("nan")
 
 
