@@ -375,6 +375,12 @@ def raw_mb(run: dict) -> float:
     return run["rows"] * run["columns"] * 8 / MB
 
 
+def _table(header: list[str], rows: list[list[str]]) -> list[str]:
+    """A Markdown table: the header, its rule, one line per row of cells."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return lines + ["| " + " | ".join(cells) + " |" for cells in rows]
+
+
 def _loop_lines(loops: dict) -> list[str]:
     figs = loop_figures(loops)
     steps = {
@@ -384,48 +390,90 @@ def _loop_lines(loops: dict) -> list[str]:
     steps["nonsmooth"] = (loops["nonsmooth_h"], loops["nonsmooth_steps"])
     label = {"reference": "reference (C, gcc -O3)", "compliance": "compliance",
              "nonsmooth": "nonsmooth (its own step)"}  # fmt: skip
-    lines = [
-        "| step loop | step [s] | steps | µs/step (median) | µs/step (min) | × reference per step "
-        "| loop over the record [s] | × reference over the record |",
-        "|---|---|---|---|---|---|---|---|",
+    header = [
+        "step loop",
+        "step [s]",
+        "steps",
+        "µs/step (median)",
+        "µs/step (min)",
+        "× reference per step",
+        "loop over the record [s]",
+        "× reference over the record",
     ]
+    rows = []
     for name, f in figs.items():
         h, n = steps[name]
-        lines.append(
-            f"| {label[name]} | {h:g} | {n} | {f['us']:.3f} | {f['us_min']:.3f} | "
-            f"{f['per_step']:.2f} | {f['loop']:.4f} | {f['per_record']:.2f} |"
+        rows.append(
+            [
+                label[name],
+                f"{h:g}",
+                f"{n}",
+                f"{f['us']:.3f}",
+                f"{f['us_min']:.3f}",
+                f"{f['per_step']:.2f}",
+                f"{f['loop']:.4f}",
+                f"{f['per_record']:.2f}",
+            ]
         )
-    return lines
+    return _table(header, rows)
 
 
 def _sweep_lines(sweeps: list[dict]) -> list[str]:
-    lines = [
-        "| where | workers | cases | finished | wall [s] | cases/s | Σ step loops [s] "
-        "| overhead over the step loops |",
-        "|---|---|---|---|---|---|---|---|",
+    header = [
+        "where",
+        "workers",
+        "cases",
+        "finished",
+        "wall [s]",
+        "cases/s",
+        "Σ step loops [s]",
+        "overhead over the step loops",
     ]
-    for s in sweeps:
-        lines.append(
-            f"| {s['where']} | {s['workers']} | {s['cases']} | {s['finished']} | {s['wall']:.1f} "
-            f"| {s['cases'] / s['wall']:.1f} | {s['loop']:.1f} | {100 * overhead(s):.0f} % |"
-        )
-    return lines
+    rows = [
+        [
+            s["where"],
+            f"{s['workers']}",
+            f"{s['cases']}",
+            f"{s['finished']}",
+            f"{s['wall']:.1f}",
+            f"{s['cases'] / s['wall']:.1f}",
+            f"{s['loop']:.1f}",
+            f"{100 * overhead(s):.0f} %",
+        ]
+        for s in sweeps
+    ]
+    return _table(header, rows)
 
 
 def _memory_lines(runs: list[dict]) -> list[str]:
-    lines = [
-        "| engine | record [s] | status | output rows | columns | raw output [MB] | peak RSS [MB] "
-        "| after imports and warm-up [MB] | the run's own [MB] | run's own / raw |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+    header = [
+        "engine",
+        "record [s]",
+        "status",
+        "output rows",
+        "columns",
+        "raw output [MB]",
+        "peak RSS [MB]",
+        "after imports and warm-up [MB]",
+        "the run's own [MB]",
+        "run's own / raw",
     ]
-    for r in runs:
-        raw = raw_mb(r)
-        lines.append(
-            f"| {r['engine']} | {r['duration']:g} | {r['status']} | {r['rows']} | {r['columns']} "
-            f"| {_num(raw)} | {r['peak_mb']:.0f} | {r['baseline_mb']:.0f} | {r['run_mb']:.0f} "
-            f"| {r['run_mb'] / raw:.1f} |"
-        )
-    return lines
+    rows = [
+        [
+            r["engine"],
+            f"{r['duration']:g}",
+            r["status"],
+            f"{r['rows']}",
+            f"{r['columns']}",
+            _num(raw_mb(r)),
+            f"{r['peak_mb']:.0f}",
+            f"{r['baseline_mb']:.0f}",
+            f"{r['run_mb']:.0f}",
+            f"{r['run_mb'] / raw_mb(r):.1f}",
+        ]
+        for r in runs
+    ]
+    return _table(header, rows)
 
 
 def targets(m: dict) -> list[tuple[str, str, str, str]]:
@@ -562,9 +610,7 @@ def render(m: dict) -> str:
         "",
         "## Targets",
         "",
-        "| issue | target | measured | verdict |",
-        "|---|---|---|---|",
-        *(f"| {i} | {t} | {v} | {ok} |" for i, t, v, ok in targets(m)),
+        *_table(["issue", "target", "measured", "verdict"], [list(row) for row in targets(m)]),
         "",
         "## Step loops against the reference loop",
         "",
