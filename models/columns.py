@@ -18,6 +18,7 @@ __all__ = [
     "Column",
     "column_names",
     "column_unit",
+    "plan_columns",
     "result_columns",
     "standard_columns",
 ]
@@ -59,8 +60,10 @@ def _unit_of(name: str) -> str:
         return "rad"
     if name.endswith("_omega"):
         return "rad/s"
-    if name.startswith(("deck_v", "seat1_v", "seat2_v")):
+    if name.startswith(("deck_v", "seat1_v", "seat2_v")) or name.endswith(("_vx_abs", "_vy_abs")):
         return "m/s"
+    if name.endswith(("_x_abs", "_y_abs", "_x_rel", "_y_rel")):
+        return "m"
     if name.startswith(("gap_", "deck_", "seat", "ux_", "uy_")) or name.endswith(("_dx", "_dy")):
         return "m"
     if name.startswith(("fn_", "ft_")) or name.endswith(("_fx", "_fy")):
@@ -79,18 +82,31 @@ def column_unit(name: str) -> str:
     return _unit_of(name)
 
 
-def standard_columns(bent_names) -> list[str]:
-    """Names of the columns every engine's result holds, in order (see :meth:`deckpound.models.plan.Plan.columns`)."""
-    return [c.name for c in result_columns(tuple(bent_names))]
+def standard_columns(bent_names, bodies=("deck",), corners=CORNER_NAMES) -> list[str]:
+    """Names of the columns every engine's result holds, in order (:func:`result_columns`)."""
+    return [c.name for c in result_columns(tuple(bent_names), tuple(bodies), tuple(corners))]
+
+
+def _body_of(name: str, bodies: tuple[str, ...]) -> str:
+    """The body a DOF column belongs to: a segment's name (the longest that prefixes the
+    column, since names may contain _) or seat1/seat2."""
+    hits = [b for b in bodies if name.startswith(f"{b}_")]
+    return max(hits, key=len) if hits else name.split("_")[0]
 
 
 @functools.lru_cache(maxsize=64)
-def result_columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
-    """The standard columns of a model with these bents, in output order (frozen columns,
-    made once per set of bent names: every run of a sweep asks for them)."""
+def result_columns(
+    bent_names: tuple[str, ...],
+    bodies: tuple[str, ...] = ("deck",),
+    corners: tuple[str, ...] = CORNER_NAMES,
+) -> tuple[Column, ...]:
+    """The standard columns of a model with these bents, deck bodies (``("deck",)``, or the
+    segments' names) and corners, in output order (frozen columns, made once per model
+    layout: every run of a sweep asks for them)."""
+    dof, vel, rel = _body_columns(bodies)
     cols = [Column("t", "s", "time", "time")]
-    for name, _ in DOF_COLUMNS:
-        part = name.split("_")[0]
+    for name in dof:
+        part = _body_of(name, bodies)
         cols.append(
             Column(
                 name,
@@ -100,28 +116,59 @@ def result_columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
                 (("body", part),),
             )
         )
-    for name in RELATIVE_COLUMNS:
-        part = name.split("_")[0]
-        what = "the mean shake-table motion" if part == "deck" else "its actuator"
+    for name in rel:
+        part = _body_of(name, bodies)
+        if part == "deck":
+            what = "the mean shake-table motion"
+        elif part in bodies:
+            what = "the mean motion of its bents' tables"
+        else:
+            what = "its actuator"
         cols.append(
             Column(
                 name, "m", f"{part} displacement relative to {what}", "relative", (("body", part),)
             )
         )
-    for name, _ in VELOCITY_COLUMNS:
-        part = name.split("_")[0]
+    for name in vel:
+        part = _body_of(name, bodies)
         cols.append(
             Column(
                 name, _unit_of(name), f"{part} velocity, absolute", "velocity", (("body", part),)
             )
         )
-    for c in CORNER_NAMES:
+    cols += _corner_columns(corners)
+    cols += _bent_columns(bent_names)
+    return tuple(cols)
+
+
+def _body_columns(bodies: tuple[str, ...]) -> tuple[list[str], list[str], list[str]]:
+    """The displacement, velocity and relative columns of these deck bodies and the seats
+    (:data:`DOF_COLUMNS`, :data:`VELOCITY_COLUMNS`, :data:`RELATIVE_COLUMNS` for ``deck``)."""
+    if bodies == ("deck",):
+        return (
+            [n for n, _ in DOF_COLUMNS],
+            [n for n, _ in VELOCITY_COLUMNS],
+            list(RELATIVE_COLUMNS),
+        )
+    dof = [f"{b}_{d}" for b in bodies for d in ("x_abs", "y_abs", "theta")]
+    vel = [f"{b}_{d}" for b in bodies for d in ("vx_abs", "vy_abs", "omega")]
+    rel = [f"{b}_{d}_rel" for b in bodies for d in ("x", "y")]
+    return (
+        dof + [n for n, _ in DOF_COLUMNS[3:]],
+        vel + [n for n, _ in VELOCITY_COLUMNS[3:]],
+        rel + list(RELATIVE_COLUMNS[2:]),
+    )
+
+
+def _corner_columns(corners: tuple[str, ...]) -> list[Column]:
+    cols = []
+    for c in corners:
         cols.append(
             Column(
                 f"gap_{c}", "m", f"gap at corner {c} (< 0: penetration)", "gap", (("corner", c),)
             )
         )
-    for c in CORNER_NAMES:
+    for c in corners:
         cols.append(
             Column(
                 f"fn_{c}",
@@ -131,7 +178,7 @@ def result_columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
                 (("corner", c),),
             )
         )
-    for c in CORNER_NAMES:
+    for c in corners:
         cols.append(
             Column(
                 f"ft_{c}",
@@ -141,6 +188,11 @@ def result_columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
                 (("corner", c),),
             )
         )
+    return cols
+
+
+def _bent_columns(bent_names: tuple[str, ...]) -> list[Column]:
+    cols = []
     for b in bent_names:
         for d in ("x", "y"):
             cols.append(
@@ -163,10 +215,18 @@ def result_columns(bent_names: tuple[str, ...]) -> tuple[Column, ...]:
                     (("bent", b), ("direction", d)),
                 )
             )
-    return tuple(cols)
+    return cols
+
+
+def plan_columns(plan: Plan) -> tuple[Column, ...]:
+    """The standard columns of ``plan``: :func:`result_columns` of its bents, segments and
+    corners."""
+    return result_columns(
+        plan.bent_names, tuple(s.name for s in plan.segments), tuple(c.name for c in plan.corners)
+    )
 
 
 def column_names(plan: Plan) -> list[str]:
     """Names of the standard result columns of ``plan`` (every engine writes them), in
-    output order: :func:`result_columns` of its bents."""
-    return [c.name for c in result_columns(plan.bent_names)]
+    output order: :func:`result_columns` of its bents, segments and corners."""
+    return [c.name for c in plan_columns(plan)]

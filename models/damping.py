@@ -45,7 +45,7 @@ import numpy as np
 
 from .errors import SceneError
 from .mechanics import natural_modes
-from .plan import DECK_THETA, DECK_X, DECK_Y, SEAT_THETA, SEAT_X, Plan
+from .plan import SEAT_THETA, SEAT_X, Plan
 from .scene import Scene
 
 __all__ = [
@@ -173,18 +173,22 @@ def _members_mask(scene: Scene, plan: Plan) -> np.ndarray:
 
 def relative_mass_dampers(plan: Plan, a0: float) -> tuple[MassDamper, ...]:
     """The dashpots of the mass-proportional part on relative velocities (module docstring):
-    the deck to every bent table (x, y and the table's fixed rotation), each seat to its
-    actuator (x, and the actuator's fixed rotation). Without bents the deck part acts on
-    absolute velocities (one dashpot to a fixed point per DOF)."""
+    each deck segment to the tables of its bents (x, y and the table's fixed rotation; a
+    segment on no bent to every table), each seat to its actuator (x, and the actuator's fixed
+    rotation). Without bents the deck part acts on absolute velocities (one dashpot to a fixed
+    point per DOF)."""
     out: list[MassDamper] = []
-    tx, ty = plan.table_channels("x"), plan.table_channels("y")
-    n = len(tx)
-    for dof, chans in ((DECK_X, tx), (DECK_Y, ty), (DECK_THETA, [-1] * n)):
-        if n == 0:
-            out.append(MassDamper(dof, -1, a0 * plan.mass[dof]))
-            continue
-        for ch in chans:
-            out.append(MassDamper(dof, ch, a0 * plan.mass[dof] / n))
+    for seg in plan.segments:
+        tx = plan.segment_table_channels(seg.index, "x")
+        ty = plan.segment_table_channels(seg.index, "y")
+        n = len(tx)
+        sx, sy, st = seg.dofs
+        for dof, chans in ((sx, tx), (sy, ty), (st, [-1] * n)):
+            if n == 0:
+                out.append(MassDamper(dof, -1, a0 * plan.mass[dof]))
+                continue
+            for ch in chans:
+                out.append(MassDamper(dof, ch, a0 * plan.mass[dof] / n))
     for seat in range(2):
         ch = plan.channels.index(f"seat{seat + 1}_x")
         out.append(MassDamper(SEAT_X[seat], ch, a0 * plan.mass[SEAT_X[seat]]))

@@ -83,13 +83,7 @@ from deckpound.models.contact_params import contact_resolving_step
 from deckpound.models.errors import DoubtfulResult, EngineFailure, SceneError
 from deckpound.models.excitation import support_motion
 from deckpound.models.fields import to_mapping
-from deckpound.models.plan import (
-    CORNER_NAMES,
-    DOF_COLUMNS,
-    VELOCITY_COLUMNS,
-    Plan,
-    plan_of,
-)
+from deckpound.models.plan import Plan, plan_of
 from deckpound.models.result import (
     STATUS_DOUBTFUL,
     STATUS_FAILED,
@@ -177,9 +171,10 @@ _OPTION_DEFAULTS = {
 def engine_columns(plan: Plan) -> list[str]:
     """Columns an engine's ``_run`` returns: t, absolute displacements and velocities, gaps,
     fn, ft and the bent spring forces (the epilogue adds the rest of the standard columns)."""
-    cols = ["t"] + [n for n, _ in DOF_COLUMNS] + [n for n, _ in VELOCITY_COLUMNS]
-    cols += [f"gap_{c}" for c in CORNER_NAMES] + [f"fn_{c}" for c in CORNER_NAMES]
-    cols += [f"ft_{c}" for c in CORNER_NAMES]
+    corners = [c.name for c in plan.corners]
+    cols = ["t"] + [n for n, _ in plan.dof_columns] + [n for n, _ in plan.velocity_columns]
+    cols += [f"gap_{c}" for c in corners] + [f"fn_{c}" for c in corners]
+    cols += [f"ft_{c}" for c in corners]
     for b in plan.bent_names:
         cols += [f"{b}_fx", f"{b}_fy"]
     return cols
@@ -395,15 +390,17 @@ def _relative_columns(plan: Plan, motion, cols: dict[str, np.ndarray]) -> dict[s
         else np.zeros((0, len(plan.channels)))
     )
     out: dict[str, np.ndarray] = {}
-    tx, ty = plan.table_channels("x"), plan.table_channels("y")
-    mean_x = ug[:, tx].mean(axis=1) if tx else np.zeros(len(t))
-    mean_y = ug[:, ty].mean(axis=1) if ty else np.zeros(len(t))
-    out["deck_x_rel"] = cols["deck_x_abs"] - mean_x
-    out["deck_y_rel"] = cols["deck_y_abs"] - mean_y
+    for seg in plan.segments:
+        tx = plan.segment_table_channels(seg.index, "x")
+        ty = plan.segment_table_channels(seg.index, "y")
+        mean_x = ug[:, tx].mean(axis=1) if tx else np.zeros(len(t))
+        mean_y = ug[:, ty].mean(axis=1) if ty else np.zeros(len(t))
+        out[f"{seg.name}_x_rel"] = cols[f"{seg.name}_x_abs"] - mean_x
+        out[f"{seg.name}_y_rel"] = cols[f"{seg.name}_y_abs"] - mean_y
     for j in (1, 2):
         out[f"seat{j}_x_rel"] = cols[f"seat{j}_x_abs"] - ug[:, plan.channels.index(f"seat{j}_x")]
-    U = np.zeros((len(t), 7))
-    for name, dof in DOF_COLUMNS:
+    U = np.zeros((len(t), plan.n_dof))
+    for name, dof in plan.dof_columns:
         U[:, dof] = cols[name]
     d = plan.deformations(U, ug)
     for i, b in enumerate(plan.bent_names):
@@ -426,10 +423,12 @@ def _relative_columns(plan: Plan, motion, cols: dict[str, np.ndarray]) -> dict[s
 PENETRATION_WARN_FRACTION = {True: 0.10, False: 0.20}
 
 
-def _contact_quality(engine: Engine, scene: Scene, cols: dict, out: RunOutput) -> dict:
+def _contact_quality(
+    engine: Engine, scene: Scene, plan: Plan, cols: dict, out: RunOutput
+) -> dict:
     """``max_penetration`` [m] (per step when the engine measures it, else on the output
     rows), its basis, ``max_complementarity_residual`` and the penetration quality warning."""
-    gaps = [cols[f"gap_{c}"] for c in CORNER_NAMES if len(cols[f"gap_{c}"])]
+    gaps = [cols[k] for k in (f"gap_{c.name}" for c in plan.corners) if len(cols[k])]
     rows_pen = max((float(max(0.0, -np.min(g))) for g in gaps), default=0.0)
     if out.max_penetration is not None:
         pen, basis = max(float(out.max_penetration), rows_pen), "every step"
@@ -442,7 +441,7 @@ def _contact_quality(engine: Engine, scene: Scene, cols: dict, out: RunOutput) -
     }
     if out.max_complementarity_residual is not None:
         q["max_complementarity_residual"] = float(out.max_complementarity_residual)
-    g0 = min(seat.gap for seat in scene.seats)
+    g0 = min([seat.gap for seat in scene.seats] + [j.gap for j in scene.joints or ()])
     frac = PENETRATION_WARN_FRACTION[bool(engine.compliant_contact)]
     if g0 > 0.0 and pen > frac * g0:
         why = (
@@ -572,19 +571,19 @@ def seat_margins(scene: Scene, plan: Plan, columns: dict[str, np.ndarray], out: 
         basis = "every step"
     else:
         openings, basis = {}, "output rows"
-        for c in CORNER_NAMES:
+        for c in (corner.name for corner in plan.corners):
             g = columns[f"gap_{c}"]
             if len(g):
                 k = int(np.argmax(g))
                 openings[c] = (float(g[k] - g[0]), float(columns["t"][k]))
     margins = {}
     for corner in plan.corners:
-        length = scene.seats[corner.seat].support_length
+        length = corner.support_length
         if length is not None and corner.name in openings:
             opening, when = openings[corner.name]
             margins[corner.name] = [float(length) - opening, when]
     if not margins:
-        basis = "not checked (no seats[i].support_length)"
+        basis = "not checked (no seats[i].support_length or joints[i].support_length)"
     q: dict[str, Any] = {
         "gap_opening_max": {c: [o, t] for c, (o, t) in openings.items()},
         "seat_margin_min": margins,
@@ -692,7 +691,7 @@ def finish(
     if provenance:
         meta["record"] = provenance
     meta.update(out.extra)
-    meta.update(_contact_quality(engine, scene, cols, out))
+    meta.update(_contact_quality(engine, scene, plan, cols, out))
     meta.update(_step_statistics(columns, out))
     meta.update(seat_margins(scene, plan, columns, out))
     if unseated:

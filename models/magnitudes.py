@@ -39,8 +39,7 @@ import math
 
 import numpy as np
 
-from deckpound.models.mechanics import mass_matrix, natural_modes
-from deckpound.models.plan import DOF_NAMES
+from deckpound.models.mechanics import natural_modes
 
 from .plan import plan_of
 from .scene import Scene
@@ -248,7 +247,12 @@ def _inertia_and_periods(scene: Scene, flagged: set[str]) -> list[tuple[str, str
 
     found = _bent_springs(scene)
     deck = scene.deck
-    r2 = max(c.x * c.x + c.y * c.y for c in plan_of(scene).corners)
+    plan = plan_of(scene)
+    # corners from the deck centre (a segment's corners are in its own frame)
+    r2 = max(
+        (c.x + plan.segments[c.body].centre) ** 2 + c.y * c.y if c.body else c.x * c.x + c.y * c.y
+        for c in plan.corners
+    )
     if deck.inertia > deck.mass * r2:
         found.append(
             (
@@ -261,19 +265,20 @@ def _inertia_and_periods(scene: Scene, flagged: set[str]) -> list[tuple[str, str
         )
     if not scene.bents:
         return found  # a free deck: no fundamental period of the bridge
-    modes = natural_modes(scene)
+    modes = natural_modes(scene, plan)
     periods = modes.periods
     if not np.all(np.isfinite(periods)):
         return found  # refused by the period checks of plausibility.check
-    # the deck's modes (most of their kinetic energy in deck x, y or θ): the seats' own modes
-    # are set by the seat springs, whatever the bridge
-    energy = np.diag(mass_matrix(scene))[:, None] * modes.shapes**2
+    # the deck's modes (most of their kinetic energy in a deck segment's x, y or θ): the seats'
+    # own modes are set by the seat springs, whatever the bridge
+    energy = np.diag(plan.mass_matrix)[:, None] * modes.shapes**2
     dominant = np.argmax(energy, axis=0)
-    deck_modes = [k for k in range(len(periods)) if DOF_NAMES[dominant[k]].startswith("deck")]
+    names = plan.dof_names
+    deck_modes = [k for k in range(len(periods)) if not names[dominant[k]].startswith("seat")]
     if not deck_modes:
         return found
     first = max(deck_modes, key=lambda k: periods[k])
-    t1, dof = float(periods[first]), DOF_NAMES[dominant[first]]
+    t1, dof = float(periods[first]), names[dominant[first]]
     # a deck mass or inertia already named as too heavy explains a long period by itself
     heavy = {"deck.mass", "deck.inertia"} & ({f for _, f, _ in found} | flagged)
     if t1 > PERIOD_WARN_LONG and not heavy:

@@ -15,7 +15,6 @@ from .plan import (
     DECK_THETA,
     DECK_X,
     DECK_Y,
-    N_DOF,
     SEAT_THETA,
     SEAT_X,
     Plan,
@@ -26,6 +25,7 @@ from .scene import Scene
 __all__ = [
     "ENERGY_GROUPS",
     "Modes",
+    "energy_groups",
     "energy_shares",
     "initial_stiffness",
     "mass_matrix",
@@ -93,12 +93,31 @@ ENERGY_GROUPS = (
     ("deck_theta", "deck θ (torsion)", (DECK_THETA,)),
     ("seats", "seats", (*SEAT_X, *SEAT_THETA)),
 )
+
+
+def energy_groups(plan: Plan) -> tuple[tuple[str, str, tuple[int, ...]], ...]:
+    """:data:`ENERGY_GROUPS` of ``plan``: each deck segment's x, y and θ, then the seats (a
+    one-segment deck: :data:`ENERGY_GROUPS` itself)."""
+    if len(plan.segments) == 1:
+        return ENERGY_GROUPS
+    groups = []
+    for seg in plan.segments:
+        x, y, th = seg.dofs
+        groups += [
+            (f"{seg.name}_x", f"{seg.name} x", (x,)),
+            (f"{seg.name}_y", f"{seg.name} y", (y,)),
+            (f"{seg.name}_theta", f"{seg.name} θ (torsion)", (th,)),
+        ]
+    return (*groups, ENERGY_GROUPS[-1])
+
+
 #: a share below this is left out of a mode's label (the dominant share is always named)
 LABEL_SHARE_MIN = 0.05
 
 
-def energy_shares(shapes: np.ndarray, masses: np.ndarray) -> np.ndarray:
-    """Kinetic-energy shares of each mode among :data:`ENERGY_GROUPS`, shape (4, n_modes).
+def energy_shares(shapes: np.ndarray, masses: np.ndarray, groups=ENERGY_GROUPS) -> np.ndarray:
+    """Kinetic-energy shares of each mode among ``groups`` (:data:`ENERGY_GROUPS`, or
+    :func:`energy_groups` of a plan), shape (n_groups, n_modes).
 
     A mode φ vibrating at ω carries the kinetic energy ½ ω² φᵀ M φ at its peak velocity; with
     M diagonal its DOF i holds ½ ω² M_ii φ_i², so the share of a group G is
@@ -106,32 +125,34 @@ def energy_shares(shapes: np.ndarray, masses: np.ndarray) -> np.ndarray:
     what moves, which the largest entry of φ does not: the deck's rotation θ [rad] and its
     translations [m] are not comparable, and a seat's light mass moves far for little energy.
 
-    ``shapes``: (7, n) columns in :data:`DOF_NAMES` order (any normalisation); ``masses``: the
-    7 diagonal masses [t, t·m²] (``np.diag`` of :func:`mass_matrix`).
+    ``shapes``: (n_dof, n) columns in the plan's DOF order (any normalisation); ``masses``:
+    the n_dof diagonal masses [t, t·m²] (``np.diag`` of :func:`mass_matrix`).
     """
     phi = np.asarray(shapes, dtype=float)
     m = np.asarray(masses, dtype=float)
-    if phi.ndim != 2 or phi.shape[0] != N_DOF or m.shape != (N_DOF,):
+    n_dof = 1 + max(d for _, _, dofs in groups for d in dofs)
+    if phi.ndim != 2 or phi.shape[0] != n_dof or m.shape != (n_dof,):
         raise ValueError(
-            f"energy_shares expects shapes (7, n) and 7 masses, got {phi.shape} and {m.shape}"
+            f"energy_shares expects shapes ({n_dof}, n) and {n_dof} masses, got {phi.shape} "
+            f"and {m.shape}"
         )
     energy = m[:, None] * phi**2
     total = energy.sum(axis=0)
     if not np.all(total > 0):
         raise ValueError("energy_shares: a mode shape has no kinetic energy (all zero)")
-    return np.array([energy[list(dofs)].sum(axis=0) for _, _, dofs in ENERGY_GROUPS]) / total
+    return np.array([energy[list(dofs)].sum(axis=0) for _, _, dofs in groups]) / total
 
 
-def mode_label(shares: np.ndarray) -> str:
+def mode_label(shares: np.ndarray, groups=ENERGY_GROUPS) -> str:
     """'deck θ (torsion) 68 %, deck y 31 %': the groups by falling share, the dominant one
     first, others from :data:`LABEL_SHARE_MIN` up (``shares``: one column of
     :func:`energy_shares`)."""
     order = np.argsort(-np.asarray(shares), kind="stable")
     named = [k for k in order if k == order[0] or shares[k] >= LABEL_SHARE_MIN]
-    return ", ".join(f"{ENERGY_GROUPS[k][1]} {100 * shares[k]:.0f} %" for k in named)
+    return ", ".join(f"{groups[k][1]} {100 * shares[k]:.0f} %" for k in named)
 
 
-def mode_labels(shapes: np.ndarray, masses: np.ndarray) -> list[str]:
+def mode_labels(shapes: np.ndarray, masses: np.ndarray, groups=ENERGY_GROUPS) -> list[str]:
     """:func:`mode_label` of every mode (columns of ``shapes``; see :func:`energy_shares`)."""
-    shares = energy_shares(shapes, masses)
-    return [mode_label(shares[:, k]) for k in range(shares.shape[1])]
+    shares = energy_shares(shapes, masses, groups)
+    return [mode_label(shares[:, k], groups) for k in range(shares.shape[1])]

@@ -57,6 +57,7 @@ __all__ = [
     "SEAT_X",
     "Corner",
     "Plan",
+    "SegmentPlan",
     "Spring",
     "plan_of",
     "support_channels",
@@ -99,22 +100,33 @@ RELATIVE_COLUMNS = ("deck_x_rel", "deck_y_rel", "seat1_x_rel", "seat2_x_rel")
 
 @dataclass(frozen=True)
 class Corner:
-    """One deck corner and the seat face it meets (see the module docstring for the equations).
+    """One deck corner and the face it meets (see the module docstring for the equations).
 
     Attributes
     ----------
-    name : ``c1`` … ``c4``; c1 (−L/2, −W/2) and c2 (−L/2, W/2) face seat 1, c3 and c4 seat 2
-        (for a skewed deck the x coordinates shift by y_c tan φ).
-    index : 0 … 3.
-    seat : 0 (left seat) or 1 (right seat).
-    x, y : corner position at rest, deck coordinates [m].
-    normal : unit vector along which the gap opens (deck corner moving along it opens the gap).
-    tangent : unit tangent of the seat face; the tangential force is reported along it.
-    lever : facing seat point relative to the seat's pivot (contact-face mid-point) [m].
+    name : ``c1`` … ``c4`` at the abutments; c1 (−L/2, −W/2) and c2 (−L/2, W/2) face seat 1,
+        c3 and c4 seat 2 (for a skewed deck the x coordinates shift by y_c tan φ); ``j<k>_c1``,
+        ``j<k>_c2`` (y = −W/2, +W/2) at joint k of a deck of segments: the left-end corners of
+        segment k + 1 (1-based k) striking the right end face of segment k.
+    index : position in the plan's corner table.
+    seat : 0 (left seat), 1 (right seat) or −1 (a joint corner: the facing body is a segment).
+    x, y : corner position at rest in its segment's frame (origin at the segment centre) [m].
+    normal : unit vector along which the gap opens (the corner moving along it opens the gap).
+    tangent : unit tangent of the facing face; the tangential force is reported along it.
+    lever : facing point relative to the facing body's reference point [m]: the seat's pivot
+        (its contact-face mid-point), or the facing segment's centre.
     gap : initial clear gap g₀ measured along the normal [m].
     seat_fixed : the facing seat is a rigid abutment (``seats[i].fixed``): the contact force
         does not act on it, so the seat columns of W_N and W_T are zero (the seat, whose
         actuator is then at rest, stays at rest exactly).
+    body : index of the segment the corner belongs to (0 for a one-segment deck).
+    body_dofs : its DOF indices (x, y, θ).
+    joint : index of the joint (0-based), −1 at an abutment.
+    facing_dofs : DOF indices (x, y, θ) of the facing body; y is −1 for a seat (it is guided
+        in y).
+    pivot : the facing body's reference point at rest in the corner's segment frame [m]: the
+        seat pivot, or the facing segment's centre.
+    support_length : seat (support) length under the corner [m], None: not checked.
     """
 
     name: str
@@ -127,39 +139,53 @@ class Corner:
     lever: tuple[float, float]
     gap: float
     seat_fixed: bool = False
+    body: int = 0
+    body_dofs: tuple[int, int, int] = (DECK_X, DECK_Y, DECK_THETA)
+    joint: int = -1
+    facing_dofs: tuple[int, int, int] = (0, -1, 1)
+    pivot: tuple[float, float] = (0.0, 0.0)
+    support_length: float | None = None
 
     @property
     def seat_dofs(self) -> tuple[int, int]:
-        """DOF indices (x_s, θ_s) of the facing seat."""
-        return SEAT_X[self.seat], SEAT_THETA[self.seat]
+        """DOF indices (x, θ) of the facing body (a seat's, or a facing segment's x and θ)."""
+        return self.facing_dofs[0], self.facing_dofs[2]
 
     @property
     def side(self) -> float:
-        """+1 for a corner facing seat 1 (left), −1 for seat 2 (the sign of n_x)."""
-        return 1.0 if self.seat == 0 else -1.0
+        """−1 for a corner facing seat 2 (right), +1 otherwise (the sign of n_x)."""
+        return -1.0 if self.seat == 1 else 1.0
 
-    def normal_row(self) -> np.ndarray:
-        """∂g_N/∂u at rest (linear kinematics), shape (7,)."""
+    def normal_row(self, n_dof: int = N_DOF) -> np.ndarray:
+        """∂g_N/∂u at rest (linear kinematics), shape (n_dof,)."""
         nx, ny = self.normal
         rx, ry = self.lever
-        sx, st = self.seat_dofs
-        w = np.zeros(N_DOF)
-        w[DECK_X], w[DECK_Y] = nx, ny
-        w[DECK_THETA] = -nx * self.y + ny * self.x
+        sx, sy, st = self.facing_dofs
+        bx, by, bt = self.body_dofs
+        w = np.zeros(n_dof)
+        w[bx], w[by] = nx, ny
+        w[bt] = -nx * self.y + ny * self.x
         if not self.seat_fixed:
             w[sx] = -nx
             w[st] = nx * ry - ny * rx
+            if sy >= 0:
+                w[sy] = -ny
         return w
 
-    def tangent_row(self) -> np.ndarray:
-        """∂U_T/∂u̇ (linear kinematics), shape (7,)."""
+    def tangent_row(self, n_dof: int = N_DOF) -> np.ndarray:
+        """∂U_T/∂u̇ (linear kinematics), shape (n_dof,)."""
         tx, ty = self.tangent
-        sx, _ = self.seat_dofs
-        w = np.zeros(N_DOF)
-        w[DECK_X], w[DECK_Y] = tx, ty
-        w[DECK_THETA] = -tx * self.y + ty * self.x
+        rx, ry = self.lever
+        sx, sy, st = self.facing_dofs
+        bx, by, bt = self.body_dofs
+        w = np.zeros(n_dof)
+        w[bx], w[by] = tx, ty
+        w[bt] = -tx * self.y + ty * self.x
         if not self.seat_fixed:
             w[sx] = -tx
+            if sy >= 0:  # a facing segment: its point moves along t too (r is not along t)
+                w[sy] = -ty
+                w[st] = tx * ry - ty * rx
         return w
 
 
@@ -219,6 +245,33 @@ def support_channels(scene: Scene) -> tuple[str, ...]:
     return tuple(names) + ("seat1_x", "seat2_x")
 
 
+@dataclass(frozen=True)
+class SegmentPlan:
+    """One rigid body of the deck in the plan model.
+
+    Attributes
+    ----------
+    name : ``deck`` for a one-segment deck, else the segment's name (the prefix of its result
+        columns).
+    index : 0-based position, left to right.
+    dofs : its DOF indices (x, y, θ).
+    centre : x of its centre from the deck centre at rest [m].
+    half_length : half its length [m].
+    displacement, velocity : its initial state [m, m, rad; m/s, m/s, rad/s] (zeros for a
+        one-segment deck, whose state is the scene's ``initial`` table).
+    bents : indices of the bents it carries (scene order).
+    """
+
+    name: str
+    index: int
+    dofs: tuple[int, int, int]
+    centre: float
+    half_length: float
+    displacement: tuple[float, ...] = (0.0, 0.0, 0.0)
+    velocity: tuple[float, ...] = (0.0, 0.0, 0.0)
+    bents: tuple[int, ...] = ()
+
+
 @dataclass(frozen=True, eq=False)
 class Plan:
     """The 7-DOF plan model of a scene (build with :func:`plan_of`; see the module docstring).
@@ -229,8 +282,10 @@ class Plan:
     corners : the four corners, c1 … c4.
     springs : bents (x, y each, in scene order), then seat1 x, θ, seat2 x, θ.
     channels : support channel names (the order of u_g).
-    bent_names : bent names in scene order; bent_x : bent positions x_b = station − L/2 [m].
-    half_length : L/2 [m]; skew : φ [rad].
+    bent_names : bent names in scene order; bent_x : bent positions in their segment's frame
+        (x_b = station − L/2 for a one-segment deck) [m].
+    half_length : L/2 [m]; skew : φ [rad] (the abutment faces').
+    segments : the deck's rigid bodies (:class:`SegmentPlan`; one for a one-segment deck).
     """
 
     mass: np.ndarray
@@ -241,6 +296,48 @@ class Plan:
     bent_x: tuple[float, ...]
     half_length: float
     skew: float
+    segments: tuple[SegmentPlan, ...] = ()
+
+    @property
+    def n_dof(self) -> int:
+        """Number of DOF: 4 (the seats) + 3 per segment."""
+        return int(self.mass.shape[0])
+
+    @property
+    def dof_names(self) -> tuple[str, ...]:
+        """Name of each DOF (:data:`DOF_NAMES` for a one-segment deck)."""
+        return DOF_NAMES[:4] + tuple(
+            f"{s.name}_{d}" for s in self.segments for d in ("x", "y", "theta")
+        )
+
+    @property
+    def dof_columns(self) -> tuple[tuple[str, int], ...]:
+        """Absolute displacement columns and the DOF each reads (:data:`DOF_COLUMNS` for a
+        one-segment deck): each segment's x, y, θ, then the seats."""
+        bodies = tuple(
+            (f"{s.name}_{d}", dof)
+            for s in self.segments
+            for d, dof in zip(("x_abs", "y_abs", "theta"), s.dofs)
+        )
+        return bodies + DOF_COLUMNS[3:]
+
+    @property
+    def velocity_columns(self) -> tuple[tuple[str, int], ...]:
+        """Absolute velocity columns, in the order of :attr:`dof_columns`."""
+        bodies = tuple(
+            (f"{s.name}_{d}", dof)
+            for s in self.segments
+            for d, dof in zip(("vx_abs", "vy_abs", "omega"), s.dofs)
+        )
+        return bodies + VELOCITY_COLUMNS[3:]
+
+    @property
+    def relative_columns(self) -> tuple[str, ...]:
+        """Displacements relative to the supports (:data:`RELATIVE_COLUMNS` for a one-segment
+        deck): each segment's x, y relative to the mean motion of its bents' tables, then each
+        seat relative to its actuator."""
+        bodies = tuple(f"{s.name}_{d}_rel" for s in self.segments for d in ("x", "y"))
+        return bodies + RELATIVE_COLUMNS[2:]
 
     # -- springs -----------------------------------------------------------------------------
     @property
@@ -254,7 +351,7 @@ class Plan:
     @cached_property
     def spring_matrices(self) -> tuple[np.ndarray, np.ndarray]:
         """(B, S): deformations d = B u − S u_g, shapes (n_springs, 7), (n_springs, n_channels)."""
-        B = np.zeros((self.n_springs, N_DOF))
+        B = np.zeros((self.n_springs, self.n_dof))
         S = np.zeros((self.n_springs, len(self.channels)))
         for i, s in enumerate(self.springs):
             for j, b in zip(s.dofs, s.coefs):
@@ -289,11 +386,11 @@ class Plan:
         return tuple(c.gap for c in self.corners)
 
     def normal_rows(self) -> np.ndarray:
-        """W_N at rest (linear kinematics), shape (4, 7)."""
-        return np.array([c.normal_row() for c in self.corners])
+        """W_N at rest (linear kinematics), shape (n_corners, n_dof)."""
+        return np.array([c.normal_row(self.n_dof) for c in self.corners])
 
     def linear_gaps(self, u: np.ndarray) -> np.ndarray:
-        """Gaps of the four corners for each row of u (n, 7), linear kinematics [m]."""
+        """Gaps of the corners for each row of u (n, n_dof), linear kinematics [m]."""
         u = np.atleast_2d(np.asarray(u, dtype=float))
         return np.array([c.gap for c in self.corners])[None, :] + u @ self.normal_rows().T
 
@@ -303,59 +400,168 @@ class Plan:
         return 1.0 / np.einsum("ci,ij,cj->c", W, np.diag(1.0 / self.mass), W)
 
     def deformations(self, U: np.ndarray, UG: np.ndarray) -> np.ndarray:
-        """Spring deformations d = B u − S u_g for rows of U (n, 7) and UG (n, n_channels)."""
+        """Spring deformations d = B u − S u_g for rows of U (n, n_dof) and UG (n, n_channels)."""
         B, S = self.spring_matrices
         return U @ B.T - UG @ S.T
 
     def initial_state(self, initial) -> tuple[np.ndarray, np.ndarray] | None:
-        """(u0, v0) of the 7 DOFs from a scene's ``initial`` table, or None when at rest."""
-        if initial.at_rest:
+        """(u0, v0) of the DOFs from a scene's ``initial`` table (one segment) or its segments'
+        ``displacement`` and ``velocity``, or None when everything starts at rest."""
+        moving = [s for s in self.segments if any(s.displacement) or any(s.velocity)]
+        if initial.at_rest and not moving:
             return None
-        u0, v0 = np.zeros(N_DOF), np.zeros(N_DOF)
-        u0[[DECK_X, DECK_Y, DECK_THETA]] = initial.deck
-        v0[[DECK_X, DECK_Y, DECK_THETA]] = initial.deck_velocity
+        u0, v0 = np.zeros(self.n_dof), np.zeros(self.n_dof)
+        if not initial.at_rest:
+            u0[[DECK_X, DECK_Y, DECK_THETA]] = initial.deck
+            v0[[DECK_X, DECK_Y, DECK_THETA]] = initial.deck_velocity
+        for seg in moving:
+            u0[list(seg.dofs)] = seg.displacement
+            v0[list(seg.dofs)] = seg.velocity
         return u0, v0
 
     def table_channels(self, axis: str) -> list[int]:
         """Indices of the shake-table channels along ``axis`` (``x`` or ``y``)."""
         return [self.channels.index(f"{b}_{axis}") for b in self.bent_names]
 
+    def segment_table_channels(self, segment: int, axis: str) -> list[int]:
+        """The shake-table channels along ``axis`` that a segment's relative displacement is
+        measured from: those of the bents it carries, or every table for a segment that
+        carries none (a drop-in span on hinges: it moves with the bridge as a whole)."""
+        bents = self.segments[segment].bents
+        if not bents:
+            return self.table_channels(axis)
+        return [self.channels.index(f"{self.bent_names[i]}_{axis}") for i in bents]
 
-def _corner_table(scene: Scene, gaps: tuple[float, float]) -> tuple[Corner, ...]:
-    hl, hw = 0.5 * scene.deck.length, 0.5 * scene.deck.width
-    phi = math.radians(scene.deck.skew)
-    tn, cs, sn = math.tan(phi), math.cos(phi), math.sin(phi)
-    out = []
+
+def _segment_plans(scene: Scene) -> tuple[SegmentPlan, ...]:
+    """The deck's rigid bodies: the deck itself, or the scene's segments (DOF 4 + 3i …)."""
+    carried = [scene.segment_of_bent(i) for i in range(len(scene.bents))]
+    if scene.segments is None:
+        dofs = (DECK_X, DECK_Y, DECK_THETA)
+        everything = tuple(range(len(scene.bents)))
+        return (SegmentPlan("deck", 0, dofs, 0.0, 0.5 * scene.deck.length, bents=everything),)
+    return tuple(
+        SegmentPlan(
+            s.name,
+            i,
+            (4 + 3 * i, 5 + 3 * i, 6 + 3 * i),
+            centre,
+            0.5 * s.length,
+            s.displacement,
+            s.velocity,
+            tuple(k for k, seg in enumerate(carried) if seg == i),
+        )
+        for i, (s, centre) in enumerate(zip(scene.segments, scene.segment_centres))
+    )
+
+
+def _face_frame(phi_deg: float) -> tuple[float, float, float]:
+    """(tan φ, cos φ, sin φ) of a face skewed by φ degrees."""
+    phi = math.radians(phi_deg)
+    return math.tan(phi), math.cos(phi), math.sin(phi)
+
+
+def _corner_table(
+    scene: Scene, gaps: tuple[float, float], segments: tuple[SegmentPlan, ...]
+) -> tuple[Corner, ...]:
+    """The abutment corners (c1, c2 on the first segment's left end, c3, c4 on the last
+    one's right end) and, for a deck of segments, two corners per joint, in order along x."""
+    hw = 0.5 * scene.deck.width
+    tn, cs, sn = _face_frame(scene.deck.skew)
+    first, last = segments[0], segments[-1]
+    out: list[Corner] = []
     for k, (xs, ys) in enumerate(((-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0))):
         seat = 0 if xs < 0 else 1
+        body = first if seat == 0 else last
+        if k == 2:
+            out += _joint_corners(scene, segments, len(out))
         yc = ys * hw
-        xc = xs * hl + yc * tn
+        xc = xs * body.half_length + yc * tn
         side = 1.0 if seat == 0 else -1.0
         # φ = 0 gives exactly n = (±1, 0), t = (0, 1), r = (0, y_c): the straight-deck formulae
         normal = (side * cs, -side * sn)
+        gap = float(gaps[seat])
+        mid = -body.half_length if seat == 0 else body.half_length
         out.append(
             Corner(
                 name=CORNER_NAMES[k],
-                index=k,
+                index=len(out),
                 seat=seat,
                 x=xc,
                 y=yc,
                 normal=normal,
                 tangent=(sn, cs),
                 lever=(yc * tn, yc),
-                gap=float(gaps[seat]),
+                gap=gap,
                 seat_fixed=bool(scene.seats[seat].fixed),
+                body=body.index,
+                body_dofs=body.dofs,
+                facing_dofs=(SEAT_X[seat], -1, SEAT_THETA[seat]),
+                # the seat pivot: the deck end face's mid-point moved by the gap against n
+                pivot=(mid - gap * normal[0], 0.0 - gap * normal[1]),
+                support_length=scene.seats[seat].support_length,
             )
         )
     return tuple(out)
 
 
-def _springs(scene: Scene) -> tuple[Spring, ...]:
+def _joint_corners(scene: Scene, segments: tuple[SegmentPlan, ...], start: int) -> list[Corner]:
+    """The corners of every joint: segment k + 1's left-end corners (y = ∓W/2) striking
+    segment k's right end face across the joint's gap, both bodies moving.
+
+    In the striking segment's frame the facing point at rest is Q₀ = P₀ − g₀ n, the lever r
+    is Q₀ relative to the facing segment's centre, (L_k/2 + y tan φ, y), and that centre
+    is O₀ = Q₀ − r: the segments lie end to end and the gap is a clearance along n."""
+    hw = 0.5 * scene.deck.width
+    out: list[Corner] = []
+    for k, joint in enumerate(scene.joints or ()):
+        facing, body = segments[k], segments[k + 1]
+        tn, cs, sn = _face_frame(scene.deck.skew if joint.skew is None else joint.skew)
+        normal = (cs, -sn)
+        for m, ys in enumerate((-1.0, 1.0)):
+            yc = ys * hw
+            xc = -body.half_length + yc * tn
+            lever = (facing.half_length + yc * tn, yc)
+            qx, qy = xc - joint.gap * normal[0], yc - joint.gap * normal[1]
+            out.append(
+                Corner(
+                    name=f"j{k + 1}_c{m + 1}",
+                    index=start + len(out),
+                    seat=-1,
+                    x=xc,
+                    y=yc,
+                    normal=normal,
+                    tangent=(sn, cs),
+                    lever=lever,
+                    gap=float(joint.gap),
+                    body=body.index,
+                    body_dofs=body.dofs,
+                    joint=k,
+                    facing_dofs=facing.dofs,
+                    pivot=(qx - lever[0], qy - lever[1]),
+                    support_length=joint.support_length,
+                )
+            )
+    return out
+
+
+def _bent_x(scene: Scene, segments: tuple[SegmentPlan, ...]) -> tuple[float, ...]:
+    """Each bent's x in the frame of the segment it carries [m] (station − L/2 − centre)."""
     hl = 0.5 * scene.deck.length
     out = []
-    nb = len(scene.bents)
     for i, b in enumerate(scene.bents):
-        xb = b.station - hl
+        seg = segments[scene.segment_of_bent(i)]
+        out.append(b.station - hl if len(segments) == 1 else b.station - hl - seg.centre)
+    return tuple(out)
+
+
+def _springs(scene: Scene, segments: tuple[SegmentPlan, ...]) -> tuple[Spring, ...]:
+    out = []
+    nb = len(scene.bents)
+    bent_x = _bent_x(scene, segments)
+    for i, b in enumerate(scene.bents):
+        xb = bent_x[i]
+        sx, sy, st = segments[scene.segment_of_bent(i)].dofs
         out.append(
             Spring(
                 f"{b.name}_x",
@@ -363,7 +569,7 @@ def _springs(scene: Scene) -> tuple[Spring, ...]:
                 b.name,
                 "x",
                 "takeda",
-                (DECK_X,),
+                (sx,),
                 (1.0,),
                 2 * i,
                 1.0,
@@ -379,7 +585,7 @@ def _springs(scene: Scene) -> tuple[Spring, ...]:
                 b.name,
                 "y",
                 "takeda",
-                (DECK_Y, DECK_THETA),
+                (sy, st),
                 (1.0, xb),
                 2 * i + 1,
                 1.0,
@@ -427,16 +633,19 @@ def plan_of(scene: Scene, gaps: tuple[float, float] | None = None) -> Plan:
     """The plan model of ``scene``; ``gaps`` overrides the seats' initial gaps [m]."""
     g = gaps if gaps is not None else (scene.seats[0].gap, scene.seats[1].gap)
     s1, s2, d = scene.seats[0], scene.seats[1], scene.deck
-    hl = 0.5 * d.length
+    segments = _segment_plans(scene)
+    if scene.segments is None:
+        bodies = [d.mass, d.mass, d.inertia]
+    else:
+        bodies = [v for s in scene.segments for v in (s.mass, s.mass, s.inertia)]
     return Plan(
-        mass=np.array(
-            [s1.mass, s1.inertia, s2.mass, s2.inertia, d.mass, d.mass, d.inertia], dtype=float
-        ),
-        corners=_corner_table(scene, (float(g[0]), float(g[1]))),
-        springs=_springs(scene),
+        mass=np.array([s1.mass, s1.inertia, s2.mass, s2.inertia, *bodies], dtype=float),
+        corners=_corner_table(scene, (float(g[0]), float(g[1])), segments),
+        springs=_springs(scene, segments),
         channels=support_channels(scene),
         bent_names=tuple(b.name for b in scene.bents),
-        bent_x=tuple(b.station - hl for b in scene.bents),
-        half_length=hl,
+        bent_x=_bent_x(scene, segments),
+        half_length=0.5 * d.length,
         skew=math.radians(scene.deck.skew),
+        segments=segments,
     )

@@ -46,7 +46,7 @@ from .engine_contract import Engine
 from .errors import SceneError
 from .excitation import support_motion
 from .magnitudes import magnitude_findings
-from .mechanics import ENERGY_GROUPS, energy_shares, mode_label, natural_modes
+from .mechanics import energy_groups, energy_shares, mode_label, natural_modes
 from .motion import analysis_duration
 from .plan import plan_of
 from .scene import Scene
@@ -149,16 +149,18 @@ def output_resolution(scene: Scene) -> Finding | None:
     report are taken at every step (:meth:`deckpound.models.result.Result.peak`) and do not
     depend on the output step."""
 
-    modes = natural_modes(scene)
-    shares = energy_shares(modes.shapes, np.diag(plan_of(scene).mass_matrix))
-    deck = [i for i, (key, _, _) in enumerate(ENERGY_GROUPS) if key.startswith("deck")]
+    plan = plan_of(scene)
+    modes = natural_modes(scene, plan)
+    groups = energy_groups(plan)
+    shares = energy_shares(modes.shapes, np.diag(plan.mass_matrix), groups)
+    deck = [i for i, (key, _, _) in enumerate(groups) if key != "seats"]
     out_dt = scene.run.output_dt
     missed = []
     for k, T in enumerate(modes.periods):
         if math.isfinite(T) and shares[deck, k].sum() >= 0.5:
             if out_dt > T / ROWS_PER_DECK_PERIOD:
                 # named by its kinetic-energy shares, as `deckpound modes` names it
-                missed.append((float(T), k + 1, mode_label(shares[:, k])))
+                missed.append((float(T), k + 1, mode_label(shares[:, k], groups)))
     if not missed:
         return None
     names = "; ".join(

@@ -221,7 +221,8 @@ def gap_closures(columns: dict[str, np.ndarray]) -> dict[str, int]:
     function is the fallback for results without that count (measured data, old results:
     basis ``"output rows"``)."""
     out = {}
-    for c in CORNER_NAMES:
+    corners = [k[4:] for k in columns if k.startswith("gap_")] or list(CORNER_NAMES)
+    for c in corners:
         closed = in_contact(columns, c)
         if closed is None or not len(closed):
             out[c] = 0
@@ -230,12 +231,14 @@ def gap_closures(columns: dict[str, np.ndarray]) -> dict[str, int]:
     return out
 
 
-def peak_columns(engine_columns, bent_names) -> list[str]:
+def peak_columns(engine_columns, bent_names, relative=RELATIVE_COLUMNS) -> list[str]:
     """The columns whose peaks the engines track at every step, in their order: the engine
     columns (``t`` first, :func:`deckpound.models.engine_contract.engine_columns`), the relative
-    displacements (:data:`deckpound.models.plan.RELATIVE_COLUMNS`), then the bent deformations
-    ``<bent>_dx``, ``<bent>_dy`` (the columns the epilogue derives from the output rows)."""
-    out = list(engine_columns) + list(RELATIVE_COLUMNS)
+    displacements (``relative``: the plan's :attr:`~deckpound.models.plan.Plan.relative_columns`,
+    :data:`deckpound.models.plan.RELATIVE_COLUMNS` for a one-segment deck), then the bent
+    deformations ``<bent>_dx``, ``<bent>_dy`` (the columns the epilogue derives from the output
+    rows)."""
+    out = list(engine_columns) + list(relative)
     for b in bent_names:
         out += [f"{b}_dx", f"{b}_dy"]
     return out
@@ -483,15 +486,12 @@ class Result:
         units = self.meta["units"]
         data_vars: dict[str, Any] = {}
         used: set[str] = {"t"}
+        corners = [k[4:] for k in self.columns if k.startswith("gap_")] or list(CORNER_NAMES)
         prefixes = sorted(
-            {
-                k.rsplit("_c", 1)[0]
-                for k in self.columns
-                if k.rsplit("_c", 1)[-1] in ("1", "2", "3", "4") and "_c" in k
-            }
+            {k[: -len(c) - 1] for k in self.columns for c in corners if k.endswith(f"_{c}")}
         )
         for p in prefixes:
-            names = [f"{p}_{c}" for c in CORNER_NAMES]
+            names = [f"{p}_{c}" for c in corners]
             if all(n in self.columns for n in names):
                 data_vars[p] = (
                     ("time", "corner"),
@@ -513,7 +513,7 @@ class Result:
         for k, v in self.columns.items():
             if k not in used:
                 data_vars[k] = (("time",), v, {"units": units[k]})
-        coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}), "corner": list(CORNER_NAMES)}
+        coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}), "corner": corners}
         if bents:
             coords["bent"] = bents
             coords["direction"] = ["x", "y"]

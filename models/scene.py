@@ -49,8 +49,10 @@ __all__ = [
     "Damping",
     "Deck",
     "Initial",
+    "Joint",
     "Scene",
     "Seat",
+    "Segment",
     "TakedaSpring",
 ]
 
@@ -157,6 +159,11 @@ class Bent:
         ge=0.0,
     )
     cy: float = spec(0.0, unit="kN*s/m", doc="explicit dashpot deck-table in y", ge=0.0)
+    segment: str | None = spec(
+        None,
+        doc="name of the deck segment the bent carries (Scene.segments); none: the segment "
+        "whose span holds the station (a bent at a joint's station must name one)",
+    )
 
     def __post_init__(self) -> None:
         validate(self)
@@ -263,6 +270,72 @@ class Contact:
 
 
 @dataclass(frozen=True, kw_only=True)
+class Segment:
+    """One rigid deck segment (frame) of a deck made of several (``Scene.segments``).
+
+    Segments are listed left to right and laid end to end along x: segment i spans
+    [−L/2 + Σ_{j<i} L_j, −L/2 + Σ_{j≤i} L_j] of the deck's length L = Σ L_j (the joint gaps
+    are clearances measured along the joint's face normal and do not shift the stations). A
+    segment's end faces are parallel to the abutment faces (``deck.skew``) at the abutments
+    and to its joint's faces (``joints[i].skew``) at a joint; its width is ``deck.width``.
+    Mass and polar inertia (about the segment's own centre, the mid-point of its axis) are
+    given, not derived: a frame's mass depends on its girders, diaphragms and cap beams.
+    ``displacement`` and ``velocity`` give its initial state (absolute, [x, y, θ] of its
+    centre, at rest by default): the scene's ``initial.deck`` table is for a one-segment deck.
+    """
+
+    name: str = spec(doc="label used in result columns (<name>_x_abs, <name>_theta, ...)")
+    length: float = spec(unit="m", doc="length along x between the end faces' mid-points", gt=0.0)
+    mass: float = spec(unit="t", doc="segment mass", gt=0.0)
+    inertia: float = spec(unit="t*m^2", doc="polar mass moment of inertia about its centre", gt=0.0)
+    displacement: tuple[float, ...] = spec(
+        (0.0, 0.0, 0.0), unit="m, m, rad", doc="initial displacement of its centre [x, y, theta]"
+    )
+    velocity: tuple[float, ...] = spec(
+        (0.0, 0.0, 0.0), unit="m/s, m/s, rad/s", doc="initial velocity [v_x, v_y, omega]"
+    )
+
+    def __post_init__(self) -> None:
+        validate(self)
+        for name in ("displacement", "velocity"):
+            value = getattr(self, name)
+            if len(value) != 3:
+                raise SceneError(name, f"must hold 3 numbers [x, y, theta], got {list(value)}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Joint:
+    """An expansion joint or in-span hinge between segments i and i + 1 (``Scene.joints[i]``).
+
+    The right end face of segment i and the left end face of segment i + 1 face each other
+    across the clear gap ``gap``, measured along the face normal; segment i + 1's two end
+    corners strike segment i's face (the corner table of :mod:`deckpound.models.plan`, both
+    bodies moving). ``support_length`` is the seat (support) length under the joint: the
+    margin N − (g − g₀) of each joint corner is checked like an abutment seat's (a run whose
+    margin becomes negative ends 'unseated'). The joint's corners take the scene's
+    ``contact`` table (law, stiffness, restitution, friction), as the abutment corners do.
+    """
+
+    gap: float = spec(unit="m", doc="initial clear gap between the segment ends", ge=0.0)
+    skew: float | None = spec(
+        None,
+        unit="deg",
+        doc="skew angle of the joint's faces (none: deck.skew, the abutment faces' skew)",
+        ge=0.0,
+        lt=MAX_SKEW,
+    )
+    support_length: float | None = spec(
+        None,
+        unit="m",
+        doc="seat (support) length under the joint, along the face normal, measured from the "
+        "segment end's initial position; none (the default): the margin is not checked",
+        gt=0.0,
+    )
+    def __post_init__(self) -> None:
+        validate(self)
+
+
+@dataclass(frozen=True, kw_only=True)
 class Damping:
     """Damping of the plan model, every choice explicit (see :mod:`deckpound.models.damping`).
 
@@ -364,6 +437,14 @@ class Scene:
     )
     deck: Deck = spec(doc="the deck")
     bents: tuple[Bent, ...] = spec(doc="the bents, left to right")
+    segments: tuple[Segment, ...] | None = spec(
+        None,
+        doc="the deck's rigid segments (frames), left to right, for a deck of two or more; "
+        "none (the default): the deck is one rigid body (deck.length, deck.mass, deck.inertia)",
+    )
+    joints: tuple[Joint, ...] | None = spec(
+        None, doc="the joints between consecutive segments (one fewer than the segments)"
+    )
     seats: tuple[Seat, ...] = spec(doc="seat 1 (left) and seat 2 (right)")
     contact: Contact = spec(default_factory=Contact, doc="deck-seat contact")
     damping: Damping = spec(default_factory=Damping, doc="Rayleigh damping")
@@ -403,12 +484,119 @@ class Scene:
                     f"bents[{i}].station",
                     f"must lie on the deck, in [0, {self.deck.length}] m, got {b.station}",
                 )
+        self._check_segments()
         self._check_free_deck()
         self._check_fixed_seats()
         for key in self.notes:
             _check_path(self, key)
         check_sequence_pgas(self)
         self._check_step_counts()
+
+    def _check_segments(self) -> None:
+        """A deck of segments: two or more, one joint fewer, lengths adding up to deck.length,
+        mass and inertia consistent with the deck's, every bent on one segment."""
+        segs, joints = self.segments, self.joints
+        if segs is None:
+            if joints is not None:
+                raise SceneError("joints", "joints need segments: give segments (two or more)")
+            for i, b in enumerate(self.bents):
+                if b.segment is not None:
+                    raise SceneError(
+                        f"bents[{i}].segment",
+                        f"names segment {b.segment!r}, but the scene has no segments",
+                    )
+            return
+        if len(segs) < 2:
+            raise SceneError(
+                "segments",
+                f"must hold two or more segments, got {len(segs)} (a one-segment deck is the "
+                "deck table alone: leave segments out)",
+            )
+        n_joints = 0 if joints is None else len(joints)
+        if n_joints != len(segs) - 1:
+            raise SceneError(
+                "joints",
+                f"must hold one joint between each pair of consecutive segments: "
+                f"{len(segs) - 1} for {len(segs)} segments, got {n_joints}",
+            )
+        names = [s.name for s in segs]
+        bent_names = {b.name for b in self.bents}
+        for i, name in enumerate(names):
+            if (
+                not _NAME.match(name)
+                or name in ("seat1", "seat2", "deck")
+                or name in bent_names
+                or names.index(name) != i
+            ):
+                raise SceneError(
+                    f"segments[{i}].name",
+                    "must be a unique word of letters, digits and _ (not 'seat1', 'seat2', "
+                    f"'deck' or a bent's name), got {name!r}",
+                )
+        _check_sum("deck.length", self.deck.length, [s.length for s in segs], "segment lengths")
+        _check_sum("deck.mass", self.deck.mass, [s.mass for s in segs], "segment masses")
+        _check_sum(
+            "deck.inertia",
+            self.deck.inertia,
+            [s.inertia + s.mass * c**2 for s, c in zip(segs, self.segment_centres)],
+            "segment inertias about the deck centre (Σ I_i + m_i x_i²)",
+        )
+        for i in range(len(self.bents)):
+            self.segment_of_bent(i)
+        if not self.initial.at_rest:
+            raise SceneError(
+                "initial",
+                "initial.deck and initial.deck_velocity describe a one-segment deck; give "
+                "segments[i].displacement and segments[i].velocity instead",
+            )
+
+    @property
+    def segment_centres(self) -> tuple[float, ...]:
+        """x of each segment's centre from the deck centre [m] (one segment: (0.0,))."""
+        if self.segments is None:
+            return (0.0,)
+        out, left = [], -0.5 * self.deck.length
+        for s in self.segments:
+            out.append(left + 0.5 * s.length)
+            left += s.length
+        return tuple(out)
+
+    def segment_of_bent(self, index: int) -> int:
+        """Index of the segment bent ``index`` carries (0 for a one-segment deck)."""
+        b = self.bents[index]
+        if self.segments is None:
+            return 0
+        names = [s.name for s in self.segments]
+        if b.segment is not None:
+            if b.segment not in names:
+                raise SceneError(
+                    f"bents[{index}].segment",
+                    f"names no segment: {b.segment!r}; the segments are {', '.join(names)}",
+                )
+            k = names.index(b.segment)
+            left = sum(s.length for s in self.segments[:k])
+            if not left <= b.station <= left + self.segments[k].length:
+                raise SceneError(
+                    f"bents[{index}].station",
+                    f"{b.station} m lies outside segment {b.segment!r}, which spans "
+                    f"[{left:g}, {left + self.segments[k].length:g}] m from the deck's left end",
+                )
+            return k
+        left = 0.0
+        for k, s in enumerate(self.segments):
+            right = left + s.length
+            if left < b.station < right or (k == 0 and b.station == left):
+                return k
+            if b.station == right and k == len(self.segments) - 1:
+                return k
+            if b.station == right:
+                raise SceneError(
+                    f"bents[{index}].segment",
+                    f"bent {b.name!r} stands at the joint between segments {s.name!r} and "
+                    f"{self.segments[k + 1].name!r} ({b.station} m): name the segment it carries",
+                )
+            left = right
+        raise SceneError(f"bents[{index}].station", f"lies beyond the deck: {b.station} m")
 
     def _check_free_deck(self) -> None:
         """``bents = []`` leaves the deck free in plan: the contact-free model then has three
@@ -516,6 +704,17 @@ class Scene:
     def _repr_html_(self) -> str:
         """An HTML table of :meth:`summary` for notebooks (every text escaped)."""
         return html_table("Scene", self.summary())
+
+
+def _check_sum(field: str, value: float, parts: list[float], what: str) -> None:
+    """Refuse a deck value that differs from the sum of its segments' (relative 1e-9)."""
+    total = float(sum(parts))
+    if abs(value - total) > 1e-9 * max(abs(value), abs(total)):
+        raise SceneError(
+            field,
+            f"must equal the sum of the {what}, {total:.12g}, for a deck of segments; got "
+            f"{value:.12g}",
+        )
 
 
 def _plain(value: Any) -> Any:

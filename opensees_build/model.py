@@ -145,6 +145,13 @@ def refuse_scene(scene: Scene) -> None:
     The "option does nothing" warnings are derived by the engine contract from
     :meth:`deckpound.opensees_build.engine.OpenSeesEngine.reads`.
     """
+    if scene.segments is not None:
+        raise SceneError(
+            "segments",
+            "the OpenSees model is built for a one-segment deck: its stick model has one deck "
+            "node and gap elements between the deck and the seats only; run a deck of "
+            "segments with the compliance or nonsmooth engine",
+        )
     c = scene.contact
     law = contact_law(c.law)
     if law.opensees is None:

@@ -210,9 +210,10 @@ def test_a_row_of_six_corners_and_its_peaks():
         new_peaks(layout, ps.channels, plan6.bent_names, support[:4])
 
 
-def test_the_engines_refuse_a_plan_their_column_names_do_not_cover():
-    """The drivers size the rows by the models layer's names (four corners for the plan model):
-    a six-corner plan is refused before any loop writes past a row."""
+def test_the_engines_name_the_columns_of_every_corner_of_the_plan():
+    """The drivers size the rows by the models layer's names, which follow the plan's corner
+    table (several deck segments add corners): a six-corner plan gets six corners' columns,
+    and a plan whose DOF the names do not cover is refused before any loop writes past a row."""
     sc = scene()
     plan = plan_of(sc)
     ps = pack_system(plan, damping_model(sc, plan))
@@ -220,8 +221,15 @@ def test_the_engines_refuse_a_plan_their_column_names_do_not_cover():
     assert pk.row.shape[0] > end_column(pk.layout) == len(engine_columns(plan))
     assert set(run_output_fields(pk, plan)["gap_closures_per_corner"]) == {"c1", "c2", "c3", "c4"}
     plan6 = six_corner_plan(plan)
-    with pytest.raises(ValueError, match="6 corners.*engine_columns names"):
-        run_peaks(sc, plan6, pack_system(plan6, damping_model(sc, plan6)))
+    pk6 = run_peaks(sc, plan6, pack_system(plan6, damping_model(sc, plan6)))
+    assert end_column(pk6.layout) == len(engine_columns(plan6)) == end_column(pk.layout) + 6
+    assert "fn_c6" in engine_columns(plan6)
+    assert set(run_output_fields(pk6, plan6)["gap_closures_per_corner"]) == {
+        f"c{k}" for k in range(1, 7)
+    }
+    plan9 = dataclasses.replace(plan, mass=np.ones(9))
+    with pytest.raises(ValueError, match="the plan has 9 DOF"):
+        run_peaks(sc, plan9, ps)
 
 
 def test_nine_dof_layout_and_its_refusal_without_columns():

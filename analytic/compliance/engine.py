@@ -49,7 +49,7 @@ from deckpound.analytic.fp_mode import flush_note
 from deckpound.analytic.kernels import contact_laws as cl
 from deckpound.analytic.kernels.peaks import run_output_fields, run_peaks
 from deckpound.analytic.kernels.system import initial_dofs
-from deckpound.models.columns import ENERGY_COLUMNS, standard_columns  # energies [kJ]
+from deckpound.models.columns import ENERGY_COLUMNS, column_names  # energies [kJ]
 from deckpound.models.contact_laws_table import contact_law, friction_model
 from deckpound.models.contact_params import contact_resolving_step
 from deckpound.models.damping import refuse_tangent_damping
@@ -62,7 +62,7 @@ from deckpound.models.engine_contract import (
 )
 from deckpound.models.errors import SceneError
 from deckpound.models.motion import SupportMotion, analysis_duration
-from deckpound.models.plan import Plan
+from deckpound.models.plan import Plan, plan_of
 from deckpound.models.scene import Scene
 from deckpound.models.scene_settings import ComplianceSettings
 
@@ -102,9 +102,10 @@ SUBSTEPS = 10  # sub-steps of the fallback for a failed step (OpenSees engine de
 SKIPS = ("contact", "friction", "factor_reuse", "unmoved_iterate", "decimate")
 
 
-def output_columns(scene: Scene) -> list[str]:
-    """Column names of the compliance result (standard columns, then the energies)."""
-    return standard_columns([b.name for b in scene.bents]) + list(ENERGY_COLUMNS)
+def output_columns(scene: Scene, plan: Plan | None = None) -> list[str]:
+    """Column names of the compliance result (the standard columns of the scene's plan, then
+    the energies)."""
+    return column_names(plan_of(scene) if plan is None else plan) + list(ENERGY_COLUMNS)
 
 
 class ComplianceEngine(Engine):
@@ -241,7 +242,7 @@ def _skip_switches(skips: dict | None) -> dict[str, bool]:
 def _stored_columns(plan: Plan, scene: Scene, channels) -> tuple[list[str], np.ndarray]:
     """The columns a Newmark run stores (the engine columns and the energies, or the engine
     columns plus ``channels``) and their indices into the loop's full row."""
-    all_cols = output_columns(scene)
+    all_cols = output_columns(scene, plan)
     engine_cols = engine_columns(plan)
     if channels is None:
         cols = [c for c in all_cols if c in engine_cols or c in ENERGY_COLUMNS]

@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from deckpound.analytic._jit import kernel
-from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, Plan
+from deckpound.models.plan import Plan
 
 __all__ = [
     "K_G0",
@@ -51,20 +51,41 @@ __all__ = [
     "pack_corners",
 ]
 
-# DOF indices
-XD, YD, TD = DECK_X, DECK_Y, DECK_THETA
-#: columns of the packed corner table: position, gap, normal, tangent, lever arm, seat pivot
-#: at rest, the DOF indices of the facing seat, and K_FREE = 0 for a fixed (rigid) seat, 1
-#: otherwise (the contact then puts no force on the seat: its W_N, W_T columns are zero)
-K_X, K_Y, K_G0, K_NX, K_NY, K_TX, K_TY, K_RX, K_RY, K_PX, K_PY, K_SX, K_ST, K_FREE = range(14)
-N_K = 14
+#: columns of the packed corner table: position, gap, normal, tangent, lever arm, the facing
+#: body's reference point at rest (seat pivot or facing segment centre, in the corner's segment
+#: frame), the DOF indices of the facing body (x, θ), K_FREE = 0 for a fixed (rigid) seat, 1
+#: otherwise (the contact then puts no force on the seat: its W_N, W_T columns are zero), the
+#: DOF indices (x, y, θ) of the corner's own segment and the facing body's y DOF (−1: a seat,
+#: guided in y; otherwise a segment at a joint)
+(
+    K_X,
+    K_Y,
+    K_G0,
+    K_NX,
+    K_NY,
+    K_TX,
+    K_TY,
+    K_RX,
+    K_RY,
+    K_PX,
+    K_PY,
+    K_SX,
+    K_ST,
+    K_FREE,
+    K_BX,
+    K_BY,
+    K_BT,
+    K_SY,
+) = range(18)
+N_K = 18
 
 
 def pack_corners(plan: Plan) -> np.ndarray:
     """The plan's corner table as a (n_corners, N_K) float array (``K_*`` column constants).
 
     The seat pivot at rest is the mid-point of the seat's contact face: the deck end face's
-    mid-point moved by the gap against the normal, F₀ = (∓L/2, 0) − g₀ n.
+    mid-point moved by the gap against the normal, F₀ = (∓L/2, 0) − g₀ n (``Corner.pivot``);
+    at a joint the facing segment's centre at rest.
     """
     out = np.zeros((len(plan.corners), N_K))
     for c in plan.corners:
@@ -73,12 +94,10 @@ def pack_corners(plan: Plan) -> np.ndarray:
         row[K_NX], row[K_NY] = c.normal
         row[K_TX], row[K_TY] = c.tangent
         row[K_RX], row[K_RY] = c.lever
-        mid = -plan.half_length if c.seat == 0 else plan.half_length
-        row[K_PX] = mid - c.gap * c.normal[0]
-        row[K_PY] = 0.0 - c.gap * c.normal[1]
-        sx, st = c.seat_dofs
-        row[K_SX], row[K_ST] = sx, st
+        row[K_PX], row[K_PY] = c.pivot
+        row[K_SX], row[K_SY], row[K_ST] = c.facing_dofs
         row[K_FREE] = 0.0 if c.seat_fixed else 1.0
+        row[K_BX], row[K_BY], row[K_BT] = c.body_dofs
     return out
 
 
@@ -87,10 +106,18 @@ def linear_gap(k, u):
     """Gap of one corner (row k of the corner table) for displacement u, linear kinematics."""
     sx = int(k[K_SX])
     st = int(k[K_ST])
+    bx, by, bt = int(k[K_BX]), int(k[K_BY]), int(k[K_BT])
+    if k[K_SY] < 0.0:  # a seat: guided in y
+        return (
+            k[K_G0]
+            + k[K_NX] * ((u[bx] - k[K_Y] * u[bt]) - (u[sx] - k[K_RY] * u[st]))
+            + k[K_NY] * ((u[by] + k[K_X] * u[bt]) - k[K_RX] * u[st])
+        )
+    sy = int(k[K_SY])
     return (
         k[K_G0]
-        + k[K_NX] * ((u[XD] - k[K_Y] * u[TD]) - (u[sx] - k[K_RY] * u[st]))
-        + k[K_NY] * ((u[YD] + k[K_X] * u[TD]) - k[K_RX] * u[st])
+        + k[K_NX] * ((u[bx] - k[K_Y] * u[bt]) - (u[sx] - k[K_RY] * u[st]))
+        + k[K_NY] * ((u[by] + k[K_X] * u[bt]) - (u[sy] + k[K_RX] * u[st]))
     )
 
 
@@ -99,8 +126,14 @@ def linear_gap_rate(k, v):
     """ġ_N = W_N u̇ of one corner, linear kinematics (the gap formula without g₀)."""
     sx = int(k[K_SX])
     st = int(k[K_ST])
-    return k[K_NX] * ((v[XD] - k[K_Y] * v[TD]) - (v[sx] - k[K_RY] * v[st])) + k[K_NY] * (
-        (v[YD] + k[K_X] * v[TD]) - k[K_RX] * v[st]
+    bx, by, bt = int(k[K_BX]), int(k[K_BY]), int(k[K_BT])
+    if k[K_SY] < 0.0:
+        return k[K_NX] * ((v[bx] - k[K_Y] * v[bt]) - (v[sx] - k[K_RY] * v[st])) + k[K_NY] * (
+            (v[by] + k[K_X] * v[bt]) - k[K_RX] * v[st]
+        )
+    sy = int(k[K_SY])
+    return k[K_NX] * ((v[bx] - k[K_Y] * v[bt]) - (v[sx] - k[K_RY] * v[st])) + k[K_NY] * (
+        (v[by] + k[K_X] * v[bt]) - (v[sy] + k[K_RX] * v[st])
     )
 
 
@@ -119,56 +152,126 @@ def contact_kinematics(u, corners, nonlinear, gap, WN, WT, corner_slots, dof_slo
     """
     for c in range(len(corner_slots)):
         k = corners[c]
-        xc, yc = k[K_X], k[K_Y]
-        sx = int(k[K_SX])
-        st = int(k[K_ST])
         for j in range(len(dof_slots)):
             WN[c, j] = 0.0
             WT[c, j] = 0.0
-        if not nonlinear:
-            nx, ny, tx, ty = k[K_NX], k[K_NY], k[K_TX], k[K_TY]
-            gap[c] = linear_gap(k, u)
-            WN[c, XD] = nx
-            WN[c, YD] = ny
-            WN[c, TD] = -nx * yc + ny * xc
-            WN[c, sx] = -nx
-            WN[c, st] = nx * k[K_RY] - ny * k[K_RX]
-            WT[c, XD] = tx
-            WT[c, YD] = ty
-            WT[c, TD] = -tx * yc + ty * xc
-            WT[c, sx] = -tx
-            if k[K_FREE] == 0.0:  # fixed seat: the contact does not load it
-                WN[c, sx] = 0.0
-                WN[c, st] = 0.0
-                WT[c, sx] = 0.0
+        if k[K_SY] >= 0.0:
+            _segment_corner_kinematics(u, k, nonlinear, c, gap, WN, WT)
+        elif not nonlinear:
+            _seat_corner_linear(u, k, c, gap, WN, WT)
         else:
-            th, ths = u[TD], u[st]
-            ct, sn = np.cos(th), np.sin(th)
-            px = u[XD] + xc * ct - yc * sn
-            py = u[YD] + xc * sn + yc * ct
-            dpx = -xc * sn - yc * ct  # ∂P_x/∂θ_d
-            dpy = xc * ct - yc * sn  # ∂P_y/∂θ_d
-            cs, ss = np.cos(ths), np.sin(ths)
-            nx = k[K_NX] * cs - k[K_NY] * ss  # n = R(θ_s) n₀
-            ny = k[K_NX] * ss + k[K_NY] * cs
-            tx = k[K_TX] * cs - k[K_TY] * ss  # t = R(θ_s) t₀
-            ty = k[K_TX] * ss + k[K_TY] * cs
-            rx = px - (k[K_PX] + u[sx])
-            ry = py - k[K_PY]
-            gap[c] = nx * rx + ny * ry
-            WN[c, XD] = nx
-            WN[c, YD] = ny
-            WN[c, TD] = nx * dpx + ny * dpy
-            WN[c, sx] = -nx
-            WN[c, st] = -ny * rx + nx * ry  # (∂n/∂θ_s)·(P − F), ∂n/∂θ_s = (−n_y, n_x)
-            WT[c, XD] = tx
-            WT[c, YD] = ty
-            WT[c, TD] = tx * dpx + ty * dpy
-            WT[c, sx] = -tx
-            if k[K_FREE] == 0.0:
-                WN[c, sx] = 0.0
-                WN[c, st] = 0.0
-                WT[c, sx] = 0.0
+            _seat_corner_nonlinear(u, k, c, gap, WN, WT)
+
+
+@kernel(inline="always")
+def _seat_corner_linear(u, k, c, gap, WN, WT):
+    """Row c of gap, W_N, W_T for a corner facing a seat, small rotations."""
+    xc, yc = k[K_X], k[K_Y]
+    sx = int(k[K_SX])
+    st = int(k[K_ST])
+    bx, by, bt = int(k[K_BX]), int(k[K_BY]), int(k[K_BT])
+    nx, ny, tx, ty = k[K_NX], k[K_NY], k[K_TX], k[K_TY]
+    gap[c] = linear_gap(k, u)
+    WN[c, bx] = nx
+    WN[c, by] = ny
+    WN[c, bt] = -nx * yc + ny * xc
+    WN[c, sx] = -nx
+    WN[c, st] = nx * k[K_RY] - ny * k[K_RX]
+    WT[c, bx] = tx
+    WT[c, by] = ty
+    WT[c, bt] = -tx * yc + ty * xc
+    WT[c, sx] = -tx
+    if k[K_FREE] == 0.0:  # fixed seat: the contact does not load it
+        WN[c, sx] = 0.0
+        WN[c, st] = 0.0
+        WT[c, sx] = 0.0
+
+
+@kernel(inline="always")
+def _seat_corner_nonlinear(u, k, c, gap, WN, WT):
+    """Row c of gap, W_N, W_T for a corner facing a seat, exact kinematics (module
+    docstring)."""
+    xc, yc = k[K_X], k[K_Y]
+    sx = int(k[K_SX])
+    st = int(k[K_ST])
+    bx, by, bt = int(k[K_BX]), int(k[K_BY]), int(k[K_BT])
+    th, ths = u[bt], u[st]
+    ct, sn = np.cos(th), np.sin(th)
+    px = u[bx] + xc * ct - yc * sn
+    py = u[by] + xc * sn + yc * ct
+    dpx = -xc * sn - yc * ct  # ∂P_x/∂θ_d
+    dpy = xc * ct - yc * sn  # ∂P_y/∂θ_d
+    cs, ss = np.cos(ths), np.sin(ths)
+    nx = k[K_NX] * cs - k[K_NY] * ss  # n = R(θ_s) n₀
+    ny = k[K_NX] * ss + k[K_NY] * cs
+    tx = k[K_TX] * cs - k[K_TY] * ss  # t = R(θ_s) t₀
+    ty = k[K_TX] * ss + k[K_TY] * cs
+    rx = px - (k[K_PX] + u[sx])
+    ry = py - k[K_PY]
+    gap[c] = nx * rx + ny * ry
+    WN[c, bx] = nx
+    WN[c, by] = ny
+    WN[c, bt] = nx * dpx + ny * dpy
+    WN[c, sx] = -nx
+    WN[c, st] = -ny * rx + nx * ry  # (∂n/∂θ_s)·(P − F), ∂n/∂θ_s = (−n_y, n_x)
+    WT[c, bx] = tx
+    WT[c, by] = ty
+    WT[c, bt] = tx * dpx + ty * dpy
+    WT[c, sx] = -tx
+    if k[K_FREE] == 0.0:
+        WN[c, sx] = 0.0
+        WN[c, st] = 0.0
+        WT[c, sx] = 0.0
+
+
+@kernel(inline="always")
+def _segment_corner_kinematics(u, k, nonlinear, c, gap, WN, WT):
+    """Row c of gap, W_N, W_T for a joint corner: segment b's corner P against the facing
+    segment o's end face, both moving in x, y and θ.
+
+    Small rotations: g_N = g₀ + n·(u_P − u_Q), u_Q = (x_o − r_y θ_o, y_o + r_x θ_o) the
+    facing point's motion (r the lever about o's centre), U_T = t·(u̇_P − u̇_Q). Exact: with
+    the face's normal and tangent rotated by θ_o, n = R(θ_o) n₀, and D = P − (O₀ + (x_o, y_o))
+    the corner relative to o's centre, g_N = n·D − n₀·r (the facing point R(θ_o) r rides on
+    the face, n·R(θ_o) r = n₀·r), W_N[θ_o] = (∂n/∂θ_o)·D, and U_T = t·Ṗ − t·(ẋ_o, ẏ_o)
+    − θ̇_o t₀·(−r_y, r_x) (the facing point's velocity along the face)."""
+    xc, yc = k[K_X], k[K_Y]
+    rx, ry = k[K_RX], k[K_RY]
+    sx, sy, st = int(k[K_SX]), int(k[K_SY]), int(k[K_ST])
+    bx, by, bt = int(k[K_BX]), int(k[K_BY]), int(k[K_BT])
+    if not nonlinear:
+        nx, ny, tx, ty = k[K_NX], k[K_NY], k[K_TX], k[K_TY]
+        gap[c] = linear_gap(k, u)
+        dpx, dpy = -yc, xc
+        wst = nx * ry - ny * rx
+    else:
+        th, tho = u[bt], u[st]
+        ct, sn = np.cos(th), np.sin(th)
+        px = u[bx] + xc * ct - yc * sn
+        py = u[by] + xc * sn + yc * ct
+        dpx = -xc * sn - yc * ct
+        dpy = xc * ct - yc * sn
+        co, so = np.cos(tho), np.sin(tho)
+        nx = k[K_NX] * co - k[K_NY] * so
+        ny = k[K_NX] * so + k[K_NY] * co
+        tx = k[K_TX] * co - k[K_TY] * so
+        ty = k[K_TX] * so + k[K_TY] * co
+        dx = px - (k[K_PX] + u[sx])
+        dy = py - (k[K_PY] + u[sy])
+        gap[c] = nx * dx + ny * dy - (k[K_NX] * rx + k[K_NY] * ry)
+        wst = -ny * dx + nx * dy
+    WN[c, bx] = nx
+    WN[c, by] = ny
+    WN[c, bt] = nx * dpx + ny * dpy
+    WN[c, sx] = -nx
+    WN[c, sy] = -ny
+    WN[c, st] = wst
+    WT[c, bx] = tx
+    WT[c, by] = ty
+    WT[c, bt] = tx * dpx + ty * dpy
+    WT[c, sx] = -tx
+    WT[c, sy] = -ty
+    WT[c, st] = k[K_TX] * ry - k[K_TY] * rx
 
 
 @kernel
@@ -180,14 +283,15 @@ def gap_hessian(u, corners, c, H, dof_slots):
     xc, yc = k[K_X], k[K_Y]
     sx = int(k[K_SX])
     st = int(k[K_ST])
+    bx, by, bt = int(k[K_BX]), int(k[K_BY]), int(k[K_BT])
     for i in range(n_dof):
         for j in range(n_dof):
             H[i, j] = 0.0
-    th, ths = u[TD], u[st]
+    th, ths = u[bt], u[st]
     ct, sn = np.cos(th), np.sin(th)
     cs_, ss = np.cos(ths), np.sin(ths)
-    px = u[XD] + xc * ct - yc * sn
-    py = u[YD] + xc * sn + yc * ct
+    px = u[bx] + xc * ct - yc * sn
+    py = u[by] + xc * sn + yc * ct
     dpx = -xc * sn - yc * ct
     dpy = xc * ct - yc * sn
     d2px = -xc * ct + yc * sn
@@ -196,15 +300,21 @@ def gap_hessian(u, corners, c, H, dof_slots):
     ny = k[K_NX] * ss + k[K_NY] * cs_
     rx = px - (k[K_PX] + u[sx])
     ry = py - k[K_PY]
+    if k[K_SY] >= 0.0:  # a joint corner: the facing segment moves in y too
+        ry = ry - u[int(k[K_SY])]
     dnx, dny = -ny, nx  # ∂n/∂θ_s
-    H[TD, TD] = nx * d2px + ny * d2py
-    H[XD, st] = dnx
-    H[YD, st] = dny
-    H[TD, st] = dnx * dpx + dny * dpy
+    H[bt, bt] = nx * d2px + ny * d2py
+    H[bx, st] = dnx
+    H[by, st] = dny
+    H[bt, st] = dnx * dpx + dny * dpy
     H[sx, st] = -dnx
     H[st, st] = -(nx * rx + ny * ry)  # ∂²n/∂θ_s² = −n
-    for i in (XD, YD, TD, sx):
+    for i in (bx, by, bt, sx):
         H[st, i] = H[i, st]
+    if k[K_SY] >= 0.0:
+        sy = int(k[K_SY])
+        H[sy, st] = -dny
+        H[st, sy] = -dny
     if k[K_FREE] == 0.0:  # fixed seat: no seat rows or columns
         for i in range(n_dof):
             H[sx, i] = 0.0

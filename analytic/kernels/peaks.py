@@ -63,7 +63,7 @@ from deckpound.analytic.kernels.system import (
     velocity_column,
 )
 from deckpound.models.engine_contract import engine_columns
-from deckpound.models.plan import DECK_X, DECK_Y, RELATIVE_COLUMNS, SEAT_X
+from deckpound.models.plan import RELATIVE_COLUMNS, SEAT_X
 from deckpound.models.result import peak_columns
 
 __all__ = [
@@ -71,6 +71,7 @@ __all__ = [
     "Peaks",
     "corner_support_lengths",
     "in_contact_now",
+    "n_relative",
     "new_peaks",
     "peak_row_size",
     "run_output_fields",
@@ -86,8 +87,9 @@ __all__ = [
 #: The per-step peaks bundle (a field of :data:`deckpound.analytic.bundles.Output`):
 #: ``row`` (n,) a step's row in the peak layout (:func:`track_step`), ``value`` (n,) the peak
 #: of each column so far (max |x|; min x for the gaps), ``time`` (n,) when it was reached [s];
-#: ``tx``, ``ty`` int64 the support channels of the shake tables in x and y (their mean is the
-#: reference of deck_x_rel, deck_y_rel), ``seat`` (2,) int64 the actuator channel of each seat;
+#: ``tx``, ``ty`` int64 the support channels of the shake tables in x and y whose mean is the
+#: reference of each segment's relative displacement, segment s's at ``tstart[s]:tstart[s +
+#: 1]`` (one segment: every table), ``seat`` (2,) int64 the actuator channel of each seat;
 #: ``inside`` (nc,) bool corner in contact at the last step, ``closures`` (nc,) int64 closures
 #: per corner; ``force`` (2, nc) scratch for the step's normal and tangential forces; per
 #: corner ``gap_open`` (nc,) the largest gap [m] and ``gap_open_time`` (nc,) its time [s],
@@ -105,6 +107,7 @@ Peaks = namedtuple(
         "time",
         "tx",
         "ty",
+        "tstart",
         "seat",
         "inside",
         "closures",
@@ -119,31 +122,60 @@ Peaks = namedtuple(
     ],
 )
 
-#: Number of relative-displacement columns of the peak layout (the bent deformations follow).
+#: Number of relative-displacement columns of the peak layout of a one-segment deck (the bent
+#: deformations follow); :func:`n_relative` gives it for any layout.
 N_RELATIVE = len(RELATIVE_COLUMNS)
+
+
+@kernel(inline="always")
+def n_relative(layout):
+    """Relative-displacement columns of ``layout``: x and y of each deck segment (three DOF
+    columns each after the seats' four), then each seat's x."""
+    return 2 * ((len(layout.dof_columns) - 4) // 3) + 2
 
 
 def peak_row_size(layout: RowLayout) -> int:
     """Length of the peak layout's row: the engine columns of ``layout``, the relative
     displacements, then the deformations of the ``layout.nbs`` bent springs."""
-    return end_column.py_func(layout) + N_RELATIVE + layout.nbs  # no kernel load here
+    # the offsets' Python twins: no kernel load here
+    return end_column.py_func(layout) + n_relative.py_func(layout) + layout.nbs
 
 
 def corner_support_lengths(scene, plan) -> np.ndarray:
-    """The support length N [m] of the seat each corner faces (``seats[i].support_length`` of
-    ``scene`` through the ``plan``'s corner table), +inf where it is not set (not checked)."""
-    lengths = [s.support_length for s in scene.seats]
+    """The support length N [m] under each corner (``seats[i].support_length`` or
+    ``joints[i].support_length`` of ``scene``, through the ``plan``'s corner table), +inf where
+    it is not set (not checked)."""
     return np.array(
-        [np.inf if lengths[c.seat] is None else float(lengths[c.seat]) for c in plan.corners]
+        [np.inf if c.support_length is None else float(c.support_length) for c in plan.corners]
     )
 
 
-def new_peaks(layout: RowLayout, channels, bent_names, support) -> Peaks:
+def _segment_tables(channels, bent_names, segment_bents) -> tuple[np.ndarray, ...]:
+    """(tx, ty, tstart): the x and y table channels of every segment's relative displacement
+    one after the other, segment s's at ``tstart[s]:tstart[s + 1]`` (its bents' tables, or
+    every table for a segment on no bent: :meth:`~deckpound.models.plan.Plan.
+    segment_table_channels`)."""
+    tx, ty, tstart = [], [], [0]
+    for bents in segment_bents:
+        names = [bent_names[i] for i in bents] if bents else list(bent_names)
+        tx += [channels.index(f"{b}_x") for b in names]
+        ty += [channels.index(f"{b}_y") for b in names]
+        tstart.append(len(tx))
+    return (
+        np.array(tx, dtype=np.int64),
+        np.array(ty, dtype=np.int64),
+        np.array(tstart, dtype=np.int64),
+    )
+
+
+def new_peaks(layout: RowLayout, channels, bent_names, support, segment_bents=None) -> Peaks:
     """Zeroed :data:`Peaks` for a model whose engine columns are in ``layout``
     (:func:`deckpound.analytic.kernels.system.row_layout`), with these support ``channels`` (the
     order of u_g) and bents; the gap entries start at +inf (their statistic is the minimum),
     the largest gaps at −inf. ``support`` (n_corners,) the corners' support lengths [m]
-    (:func:`corner_support_lengths`; +inf: not checked), one per corner of the layout."""
+    (:func:`corner_support_lengths`; +inf: not checked), one per corner of the layout;
+    ``segment_bents`` the bents each deck segment carries (default: one segment on every
+    bent)."""
     support = np.asarray(support, dtype=float)
     nc = len(layout.corners)
     if support.shape != (nc,):
@@ -152,6 +184,9 @@ def new_peaks(layout: RowLayout, channels, bent_names, support) -> Peaks:
         )
     n = peak_row_size(layout)
     channels = list(channels)
+    if segment_bents is None:
+        segment_bents = (tuple(range(len(bent_names))),)
+    tx, ty, tstart = _segment_tables(channels, list(bent_names), segment_bents)
     value = np.zeros(n)
     c_gap = gap_column.py_func(layout)
     value[c_gap : c_gap + nc] = np.inf
@@ -159,8 +194,9 @@ def new_peaks(layout: RowLayout, channels, bent_names, support) -> Peaks:
         row=np.zeros(n),
         value=value,
         time=np.zeros(n),
-        tx=np.array([channels.index(f"{b}_x") for b in bent_names], dtype=np.int64),
-        ty=np.array([channels.index(f"{b}_y") for b in bent_names], dtype=np.int64),
+        tx=tx,
+        ty=ty,
+        tstart=tstart,
         seat=np.array([channels.index("seat1_x"), channels.index("seat2_x")], dtype=np.int64),
         inside=np.zeros(nc, dtype=np.bool_),
         closures=np.zeros(nc, dtype=np.int64),
@@ -226,18 +262,19 @@ def _track_corner(pk, c, k_gap, gap, fn, t):
 
 
 @kernel(inline="always")
-def _table_means(pk, ug):
-    """The mean support displacement of the shake tables in x and in y [m] (the reference of
-    the deck's relative displacements)."""
+def _table_means(pk, ug, seg):
+    """The mean support displacement of segment ``seg``'s shake tables in x and in y [m]
+    (the reference of its relative displacements)."""
+    lo, hi = pk.tstart[seg], pk.tstart[seg + 1]
     mx = 0.0
-    for k in range(pk.tx.shape[0]):
+    for k in range(lo, hi):
         mx += ug[pk.tx[k]]
     my = 0.0
-    for k in range(pk.ty.shape[0]):
+    for k in range(lo, hi):
         my += ug[pk.ty[k]]
-    if pk.tx.shape[0] > 0:
-        mx = mx / pk.tx.shape[0]
-        my = my / pk.ty.shape[0]
+    if hi > lo:
+        mx = mx / (hi - lo)
+        my = my / (hi - lo)
     return mx, my
 
 
@@ -274,13 +311,17 @@ def track_state(pk, t, u, v, g, fn, ft, fs, ug, d):
         _peak_abs(value, time, c_ft + c, ft[c], t)
     for i in range(layout.nbs):
         _peak_abs(value, time, c_bent + i, fs[i], t)
-    mx, my = _table_means(pk, ug)
-    _peak_abs(value, time, base, u[DECK_X] - mx, t)
-    _peak_abs(value, time, base + 1, u[DECK_Y] - my, t)
-    _peak_abs(value, time, base + 2, u[SEAT_X[0]] - ug[pk.seat[0]], t)
-    _peak_abs(value, time, base + 3, u[SEAT_X[1]] - ug[pk.seat[1]], t)
+    n_seg = (len(layout.dof_columns) - 4) // 3
+    for s in range(n_seg):
+        mx, my = _table_means(pk, ug, s)
+        sx, sy = layout.dof_columns[3 * s], layout.dof_columns[3 * s + 1]
+        _peak_abs(value, time, base + 2 * s, u[sx] - mx, t)
+        _peak_abs(value, time, base + 2 * s + 1, u[sy] - my, t)
+    seats = base + 2 * n_seg
+    _peak_abs(value, time, seats, u[SEAT_X[0]] - ug[pk.seat[0]], t)
+    _peak_abs(value, time, seats + 1, u[SEAT_X[1]] - ug[pk.seat[1]], t)
     for i in range(layout.nbs):
-        _peak_abs(value, time, base + N_RELATIVE + i, d[i], t)
+        _peak_abs(value, time, seats + 2 + i, d[i], t)
     return unseated
 
 
@@ -298,13 +339,16 @@ def track_step(pk, t, u, ug, d):
     c_gap = gap_column(layout)
     c_fn = normal_force_column(layout)
     base = end_column(layout)
-    mx, my = _table_means(pk, ug)
-    row[base] = u[DECK_X] - mx
-    row[base + 1] = u[DECK_Y] - my
-    row[base + 2] = u[SEAT_X[0]] - ug[pk.seat[0]]
-    row[base + 3] = u[SEAT_X[1]] - ug[pk.seat[1]]
+    n_seg = (len(layout.dof_columns) - 4) // 3
+    for s in range(n_seg):
+        mx, my = _table_means(pk, ug, s)
+        row[base + 2 * s] = u[layout.dof_columns[3 * s]] - mx
+        row[base + 2 * s + 1] = u[layout.dof_columns[3 * s + 1]] - my
+    seats = base + 2 * n_seg
+    row[seats] = u[SEAT_X[0]] - ug[pk.seat[0]]
+    row[seats + 1] = u[SEAT_X[1]] - ug[pk.seat[1]]
     for i in range(layout.nbs):
-        row[base + N_RELATIVE + i] = d[i]
+        row[seats + 2 + i] = d[i]
     value, time = pk.value, pk.time
     # the gaps: the most negative value; every other column: the largest |x| (t excluded)
     for k in range(C_U, c_gap):
@@ -378,7 +422,13 @@ def run_peaks(scene, plan, ps) -> Peaks:
             f"corners, {len(layout.dof_columns)} DOF), but "
             f"deckpound.models.engine_contract.engine_columns names {n_named}"
         )
-    return new_peaks(layout, ps.channels, plan.bent_names, corner_support_lengths(scene, plan))
+    return new_peaks(
+        layout,
+        ps.channels,
+        plan.bent_names,
+        corner_support_lengths(scene, plan),
+        tuple(seg.bents for seg in plan.segments),
+    )
 
 
 def run_output_fields(pk: Peaks, plan) -> dict:
@@ -386,7 +436,9 @@ def run_output_fields(pk: Peaks, plan) -> dict:
     statistics: ``peaks``, ``gap_closures_per_corner``, ``gap_openings`` and ``unseated``."""
     names = [c.name for c in plan.corners]
     return {
-        "peaks": step_peaks(pk, peak_columns(engine_columns(plan), plan.bent_names)),
+        "peaks": step_peaks(
+            pk, peak_columns(engine_columns(plan), plan.bent_names, plan.relative_columns)
+        ),
         "gap_closures_per_corner": step_closures(pk, names),
         "gap_openings": step_openings(pk, names),
         "unseated": step_unseated(pk, names),

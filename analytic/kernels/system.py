@@ -74,7 +74,7 @@ from deckpound.analytic.kernels.hysteretic_layout import (
     T_TANGENT,
 )
 from deckpound.models.damping import DampingModel
-from deckpound.models.plan import DOF_COLUMNS, DOF_NAMES, Plan
+from deckpound.models.plan import DOF_NAMES, Plan
 
 __all__ = [
     "KIND_HYSTERETIC",
@@ -495,14 +495,14 @@ RowLayout = namedtuple("RowLayout", ["dof_columns", "corners", "nbs"])
 
 def row_layout(plan: Plan) -> RowLayout:
     """The :data:`RowLayout` of ``plan``'s engine columns: its corners and bent springs, and
-    the displacement columns of :data:`deckpound.models.plan.DOF_COLUMNS` (the columns
+    the displacement columns of :attr:`deckpound.models.plan.Plan.dof_columns` (the columns
     :func:`deckpound.models.engine_contract.engine_columns` names), which must cover the plan's
     DOF once each (ValueError otherwise: a plan of another size needs its own columns)."""
-    dof_columns = tuple(int(dof) for _, dof in DOF_COLUMNS)
+    dof_columns = tuple(int(dof) for _, dof in plan.dof_columns)
     n_dof = int(plan.mass.shape[0])
     if sorted(dof_columns) != list(range(n_dof)):
         raise ValueError(
-            f"the displacement columns (deckpound.models.plan.DOF_COLUMNS) read DOF "
+            f"the displacement columns (Plan.dof_columns) read DOF "
             f"{list(dof_columns)}; the plan has {n_dof} DOF, each needs one column"
         )
     return RowLayout(

@@ -81,7 +81,7 @@ from deckpound.analytic.nonsmooth.moreau_jean_work import (
     impulse_columns,
     moreau_jean_workspace,
 )
-from deckpound.models.columns import standard_columns
+from deckpound.models.columns import column_names
 from deckpound.models.contact_laws_table import RIGID_CONTACT, contact_law, friction_model
 from deckpound.models.damping import damping_model, refuse_tangent_damping
 from deckpound.models.engine_contract import (
@@ -102,9 +102,10 @@ __all__ = ["NonsmoothEngine", "output_columns", "run_nonsmooth", "separating_res
 def output_columns(scene: Scene) -> list[str]:
     """Column names of the nonsmooth result (standard, impulses and contact states of the
     scene's plan's corners, energies)."""
+    plan = plan_of(scene)
     return (
-        standard_columns([b.name for b in scene.bents])
-        + list(impulse_columns(c.name for c in plan_of(scene).corners))
+        column_names(plan)
+        + list(impulse_columns(c.name for c in plan.corners))
         + list(ENERGY_COLUMNS)
     )
 

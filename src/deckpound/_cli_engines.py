@@ -72,6 +72,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     q.set_defaults(func=_verify_contact_step)
 
 
+def _peak_rotations(result) -> str:
+    """'peak θ_d 3.622 mrad', or each deck segment's: 'peak θ frame1 1.2, frame2 0.8 mrad'."""
+    if "deck_theta" in result.columns:
+        return f"peak θ_d {1e3 * result.peak('deck_theta'):.3f} mrad"
+    names = [c for c in result.columns if c.endswith("_theta") and not c.startswith("seat")]
+    each = ", ".join(
+        f"{terminal_text(c[: -len('_theta')])} {1e3 * result.peak(c):.3f}" for c in names
+    )
+    return f"peak θ {each} mrad"
+
+
 def _run(args) -> int:
     from deckpound.compare.engines import get_engine, run_engine
     from deckpound.models import plausibility
@@ -98,8 +109,8 @@ def _run(args) -> int:
         scaled += f"; {m['message'] if m['status'] == 'unseated' else 'a corner unseated'}"
     print(
         f"{args.engine}: {m['status']} in {m.get('wall_time', 0):.2f} s, {m.get('steps', 0)} steps, "
-        f"{m.get('gap_closures', 0)} gap closures, peak θ_d "
-        f"{1e3 * result.peak('deck_theta'):.3f} mrad{scaled}; wrote {terminal_text(csv_path)}"
+        f"{m.get('gap_closures', 0)} gap closures, {_peak_rotations(result)}{scaled}; "
+        f"wrote {terminal_text(csv_path)}"
     )
     if result.doubtful:
         if scene.run.accept_doubtful:
@@ -142,7 +153,8 @@ def _export(args) -> int:
 def _modes(args) -> int:
     import numpy as np
 
-    from deckpound.models.mechanics import mass_matrix, mode_labels, natural_modes
+    from deckpound.models.mechanics import energy_groups, mode_labels, natural_modes
+    from deckpound.models.plan import plan_of
     from deckpound.models.scene_io import load_scene
 
     scene = load_scene(args.scene, args.overrides)
@@ -154,7 +166,8 @@ def _modes(args) -> int:
         modes = natural_modes(scene)
         periods, shapes = modes.periods, modes.shapes
     # named by what moves: the kinetic-energy shares (deck x, y, θ; the seats)
-    labels = mode_labels(shapes, np.diag(mass_matrix(scene)))
+    plan = plan_of(scene)
+    labels = mode_labels(shapes, np.diag(plan.mass_matrix), energy_groups(plan))
     print("mode  period [s]  freq [Hz]  kinetic energy by part")
     for i, T in enumerate(periods):
         print(f"{i + 1:4d}  {T:10.5f}  {1 / T:9.4f}  {labels[i]}")
