@@ -198,13 +198,23 @@ def shift_record(x: np.ndarray, steps: int) -> np.ndarray:
     return np.concatenate([np.zeros(steps), x[: len(x) - steps]])
 
 
+def table_positions(scene: Scene) -> list[int]:
+    """Each bent's table k (delayed by k·lag, with its own noise under incoherence): the rank
+    of its station among the distinct stations in scene order. Bents at one station — the
+    two halves of a pier under a deck joint — stand on one table and get one motion; for
+    bents at distinct stations k is the bent's index."""
+    tables: dict[float, int] = {}
+    return [tables.setdefault(b.station, len(tables)) for b in scene.bents]
+
+
 def check_lag(scene: Scene, dt: float, n: int) -> int:
     """Lag in whole steps; refuses a lag that delays the last table beyond the record."""
     exc = scene.excitation
     steps = round(exc.lag / dt)
-    last = (len(scene.bents) - 1) * steps
+    n_tables = max(table_positions(scene), default=0) + 1
+    last = (n_tables - 1) * steps
     if last >= n:
-        limit = (n - 1) * dt / max(1, len(scene.bents) - 1)
+        limit = (n - 1) * dt / max(1, n_tables - 1)
         raise SceneError(
             "excitation.lag",
             f"delays the last table by {last * dt:g} s, beyond the record length "

@@ -58,6 +58,7 @@ from .motion import (
     intensity_period,
     make_provenance,
     shift_record,
+    table_positions,
 )
 from .record_checks import AXIS_NAME, check_velocity_columns, scaling_note
 from .record_csv import CsvRecord, read_csv_record
@@ -417,7 +418,7 @@ def _tables(scene: Scene, base: dict, dt: float, n: int) -> tuple[dict, dict, di
     of the nearest table."""
     lag_steps = check_lag(scene, dt, n)
     disp, vel, acc = {}, {}, {}
-    for k, bent in enumerate(scene.bents):
+    for k, bent in zip(table_positions(scene), scene.bents):
         for axis in ("x", "y"):
             d, v, a = base[axis]
             ch = f"{bent.name}_{axis}"

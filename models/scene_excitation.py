@@ -96,7 +96,12 @@ class Excitation:
         "(model time)",
         gt=0.0,
     )
-    lag: float = spec(0.0, unit="s", doc="time lag between successive bent tables", ge=0.0)
+    lag: float = spec(
+        0.0,
+        unit="s",
+        doc="time lag between successive bent tables (bents at one station share a table)",
+        ge=0.0,
+    )
     incoherence: float = spec(
         0.0,
         unit="-",

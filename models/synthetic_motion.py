@@ -24,6 +24,7 @@ from .motion import (
     make_provenance,
     shift_record,
     synthetic_samples,
+    table_positions,
 )
 from .record_motion import highpass_padded
 
@@ -205,8 +206,9 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     # incoherence one per table and moving direction, each from its own seeded noise
     moving = [axis for axis in ("x", "y") if pgas[axis] > 0]
     rows = [(axis, None) for axis in moving]
+    tables = table_positions(scene)
     if exc.incoherence > 0:
-        rows += [(axis, k) for k in range(len(scene.bents)) for axis in moving]
+        rows += [(axis, k) for k in range(max(tables, default=-1) + 1) for axis in moving]
     mixed = [
         mixed_noise(exc, [exc.seed, ord(axis)] + ([] if k is None else [k + 1]), common[axis])
         for axis, k in rows
@@ -230,7 +232,7 @@ def synthetic_motion(scene: Scene) -> SupportMotion:
     disp: dict[str, np.ndarray] = {}
     vel: dict[str, np.ndarray] = {}
     acc: dict[str, np.ndarray] = {}
-    for k, bent in enumerate(scene.bents):
+    for k, bent in zip(tables, scene.bents):
         for axis in ("x", "y"):
             d, v, a = component.get((axis, k), component[(axis, None)])
             disp[f"{bent.name}_{axis}"] = shift_record(d, k * lag_steps)

@@ -34,6 +34,23 @@ LABELS = {
 }
 
 
+def column_label(column: str) -> tuple[str, float, str]:
+    """(axis label, scale, unit) of a history column: :data:`LABELS`, a deck segment's
+    ``<seg>_theta`` / ``<seg>_x_rel`` / ``<seg>_y_rel`` / gap, or the column's own name."""
+    if column in LABELS:
+        return LABELS[column]
+    for suffix, what, scale, unit in (
+        ("_theta", "rotation θ", 1e3, "mrad"),
+        ("_y_rel", "y rel. tables", 1e3, "mm"),
+        ("_x_rel", "x rel. tables", 1e3, "mm"),
+    ):
+        if column.endswith(suffix):
+            return f"{column[: -len(suffix)]} {what}", scale, unit
+    if column.startswith("gap_"):
+        return f"gap {column[4:]}", 1e3, "mm"
+    return column, 1.0, ""
+
+
 @reusable
 def histories(
     results: dict[str, Result],
@@ -49,7 +66,7 @@ def histories(
     fig, axes = new_figure(len(quantities), 1, width=7.5, height=2.2, sharex=True)
     styles = series_styles(list(results), points=[len(r.t) for r in results.values()])
     for i, q in enumerate(quantities):
-        name, scale, unit = LABELS.get(q, (q, 1.0, ""))
+        name, scale, unit = column_label(q)
         ax = axes[i, 0]
         for st, r in zip(styles, results.values()):
             if q in r.columns:
@@ -70,24 +87,36 @@ def contact_forces(
     title: str = "",
     formats: tuple[str, ...] = (),
 ) -> list[Path]:
-    """Normal contact force per corner (c1, c2 at seat 1; c3, c4 at seat 2), in the report's
+    """Normal contact force per corner, one column of panels per face (c1, c2 at seat 1; the
+    corners of each joint of a deck of segments; c3, c4 at seat 2), in the report's
     contact-force unit (:data:`~.render.CONTACT_FORCE`)."""
     from deckpound.compare.report.style import new_figure, outside_legend, save, series_styles
 
-    fig, axes = new_figure(2, 2, width=8.0, height=2.0, sharex=True)
+    faces = corner_faces(plan_of(scene))
+    fig, axes = new_figure(2, len(faces), width=4.0 * len(faces), height=2.0, sharex=True)
     styles = series_styles(list(results), points=[len(r.t) for r in results.values()])
-    for c in range(4):
-        ax = axes[c % 2, c // 2]
-        for st, r in zip(styles, results.values()):
-            ax.plot(r.t, CONTACT_FORCE.scale * r[f"fn_c{c + 1}"], **st)
-        ax.set_title(f"corner c{c + 1} (seat {1 + c // 2})")
-        ax.set_ylabel(f"normal force fn [{CONTACT_FORCE.unit}]")
-    axes[-1, 0].set_xlabel("time [s]")
-    axes[-1, 1].set_xlabel("time [s]")
-    outside_legend(axes[0, 1])
+    for col, (face, corners) in enumerate(faces):
+        for row, c in enumerate(corners):
+            ax = axes[row, col]
+            for st, r in zip(styles, results.values()):
+                ax.plot(r.t, CONTACT_FORCE.scale * r[f"fn_{c}"], **st)
+            ax.set_title(f"corner {c} ({face})")
+            ax.set_ylabel(f"normal force fn [{CONTACT_FORCE.unit}]")
+        axes[-1, col].set_xlabel("time [s]")
+    outside_legend(axes[0, -1])
     if title:
         fig.suptitle(title, fontsize=9)
     return save(fig, path, scene.name, formats)
+
+
+def corner_faces(plan) -> list[tuple[str, tuple[str, ...]]]:
+    """The plan's corners by the face they strike: ``[("seat 1", ("c1", "c2")), ("joint 1",
+    ("j1_c1", "j1_c2")), …, ("seat 2", ("c3", "c4"))]``, in order along the bridge."""
+    faces: dict[str, list[str]] = {}
+    for c in plan.corners:
+        face = f"joint {c.joint + 1}" if c.joint >= 0 else f"seat {c.seat + 1}"
+        faces.setdefault(face, []).append(c.name)
+    return [(face, tuple(names)) for face, names in faces.items()]
 
 
 @reusable
@@ -311,8 +340,9 @@ def hysteresis(
     return save(fig, path, scene.name, formats)
 
 
-#: the state columns a plan-view outline reads: displacements relative to the supports, so the
-#: picture shows the gaps and the rotation rather than the ground's translation
+#: the state columns a plan-view outline of a one-segment deck reads (:func:`outline_columns`):
+#: displacements relative to the supports, so the picture shows the gaps and the rotation
+#: rather than the ground's translation
 OUTLINE_COLUMNS = (
     "deck_x_rel",
     "deck_y_rel",
@@ -324,34 +354,67 @@ OUTLINE_COLUMNS = (
 )
 
 
-def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.ndarray]:
-    """Deck and seat outlines (closed polygons, metres) at one state, displacements × scale.
+def outline_columns(plan) -> tuple[str, ...]:
+    """The state columns :func:`outlines` reads for ``plan``: each deck segment's x, y
+    relative to its tables and θ, then the seats' (:data:`OUTLINE_COLUMNS` for one segment)."""
+    bodies = tuple(f"{seg.name}_{q}" for seg in plan.segments for q in ("x_rel", "y_rel", "theta"))
+    return bodies + OUTLINE_COLUMNS[3:]
 
-    The deck is the plan model's corner polygon (a parallelogram for a skewed deck) moved by
-    its displacement relative to the shake tables; each seat is a block behind its contact face
-    (the facing points of its two corners, g₀ behind the deck end along the normal), moved by
-    its displacement relative to its actuator and rotated about its pivot.
+
+def rotation_columns(plan) -> tuple[str, ...]:
+    """The deck rotation columns of ``plan``: ``deck_theta``, or each segment's θ."""
+    return tuple(f"{seg.name}_theta" for seg in plan.segments)
+
+
+def _segment_box(plan, seg) -> np.ndarray:
+    """A segment's outline at rest in its own frame (closed polygon, metres): its left face
+    corners, then its right face points (the facing points of the next joint's corners, or the
+    corners at seat 2)."""
+    mine = [c for c in plan.corners if c.body == seg.index]
+    left = [c for c in mine if c.seat == 0 or c.joint >= 0]
+    right = [c for c in mine if c.seat == 1]
+    if right:
+        rpts = [(c.x, c.y) for c in right]
+    else:  # the next joint's corners strike this segment's right face at their levers
+        nxt = [c for c in plan.corners if c.joint >= 0 and c.facing_dofs == seg.dofs]
+        rpts = [c.lever for c in nxt]
+    (l1, l2), (r1, r2) = [(c.x, c.y) for c in left], rpts
+    return np.array([l1, r1, r2, l2, l1])
+
+
+def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.ndarray]:
+    """Deck (or segment) and seat outlines (closed polygons, metres) at one state,
+    displacements × scale.
+
+    Each deck segment is its corner polygon (a parallelogram for a skewed deck) moved by its
+    displacement relative to the shake tables and placed at its centre; each seat is a block
+    behind its contact face (the facing points of its two corners, g₀ behind the deck end
+    along the normal), moved by its displacement relative to its actuator and rotated about
+    its pivot.
     """
     plan = plan_of(scene)
-    th = scale * row["deck_theta"]
-    c, s = np.cos(th), np.sin(th)
+    out = {}
+    for seg in plan.segments:
+        th = scale * row[f"{seg.name}_theta"]
+        c, s = np.cos(th), np.sin(th)
+        box = _segment_box(plan, seg)
+        out[seg.name] = np.column_stack(
+            [
+                seg.centre + scale * row[f"{seg.name}_x_rel"] + c * box[:, 0] - s * box[:, 1],
+                scale * row[f"{seg.name}_y_rel"] + s * box[:, 0] + c * box[:, 1],
+            ]
+        )
     k = {cn.name: cn for cn in plan.corners}
-    box = np.array([[k[n].x, k[n].y] for n in ("c1", "c3", "c4", "c2", "c1")])
-    deck = np.column_stack(
-        [
-            scale * row["deck_x_rel"] + c * box[:, 0] - s * box[:, 1],
-            scale * row["deck_y_rel"] + s * box[:, 0] + c * box[:, 1],
-        ]
-    )
-    out = {"deck": deck}
     depth, overhang = 0.6, 0.3
     for j in (1, 2):
         a, b = (k["c1"], k["c2"]) if j == 1 else (k["c3"], k["c4"])
+        centre = plan.segments[a.body].centre
         n, t = np.array(a.normal), np.array(a.tangent)
-        fa = np.array([a.x, a.y]) - a.gap * n - overhang * t
-        fb = np.array([b.x, b.y]) - b.gap * n + overhang * t
+        fa = np.array([a.x + centre, a.y]) - a.gap * n - overhang * t
+        fb = np.array([b.x + centre, b.y]) - b.gap * n + overhang * t
         seat = np.array([fa, fb, fb - depth * n, fa - depth * n, fa])
         pivot = 0.5 * (np.array([a.x, a.y]) + np.array([b.x, b.y])) - a.gap * n
+        pivot[0] += centre
         ts = scale * row[f"seat{j}_theta"]
         cs, ss = np.cos(ts), np.sin(ts)
         rel = seat - pivot
@@ -377,14 +440,18 @@ def plan_snapshot(
     formats: tuple[str, ...] = (),
 ) -> list[Path]:
     """Plan view of deck and seats at each engine's peak rotation (displacements × scale): the
-    output row of the largest |θ_d| (the drawn state is a stored row; the title gives its time
-    and rotation, which the every-step peak :meth:`Result.peak` may exceed between rows)."""
+    output row of the largest |θ_d| (for a deck of segments: of the segment that turns most;
+    the drawn state is a stored row; the title gives its time and rotation, which the
+    every-step peak :meth:`Result.peak` may exceed between rows)."""
     from deckpound.compare.report.style import new_figure, save
 
+    plan = plan_of(scene)
+    rotations = rotation_columns(plan)
     fig, axes = new_figure(len(results), 1, width=8.0, height=2.0)
     for i, (label, r) in enumerate(results.items()):
-        k = int(np.argmax(np.abs(r["deck_theta"])))
-        row = {q: r[q][k] for q in OUTLINE_COLUMNS}
+        theta = max(rotations, key=lambda q: float(np.max(np.abs(r[q]))))
+        k = int(np.argmax(np.abs(r[theta])))
+        row = {q: r[q][k] for q in outline_columns(plan)}
         ax = axes[i, 0]
         rest = outlines(scene, dict.fromkeys(row, 0.0), 1.0)
         for poly in rest.values():
@@ -393,14 +460,15 @@ def plan_snapshot(
             ax.fill(
                 poly[:, 0],
                 poly[:, 1],
-                facecolor="#dddddd" if name == "deck" else "#888888",
+                facecolor="#888888" if name.startswith("seat") else "#dddddd",
                 edgecolor="k",
                 linewidth=1.0,
                 alpha=0.8,
             )
         ax.set_aspect("equal")
+        which = "θ_d" if theta == "deck_theta" else f"θ {theta[: -len('_theta')]}"
         ax.set_title(
-            f"{label}: t = {r.t[k]:.2f} s, θ_d = {1e3 * row['deck_theta']:.2f} mrad "
+            f"{label}: t = {r.t[k]:.2f} s, {which} = {1e3 * row[theta]:.2f} mrad "
             f"(displacements relative to the supports × {scale:g})"
         )
         ax.set_xlabel("x [m]")

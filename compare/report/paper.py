@@ -389,7 +389,10 @@ def _paper(
             "from its carried state."
         )
     study_runs = []
-    for name in studies if studies is not None else tuple(STUDIES):
+    chosen = (
+        studies if studies is not None else [n for n in STUDIES if STUDIES[n].applies_to(scene)]
+    )
+    for name in chosen:
         for st in states if STUDIES[name].carried else states[-1:]:
             stages.note = f"study {name} ({st.label})"
             cases, results, table = study_results(

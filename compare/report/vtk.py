@@ -5,11 +5,12 @@ metadata, as ``deckpound run`` and ``deckpound compare`` write them):
 
 * ``fmt = "xdmf"`` (default): ONE file, ``<engine>.xdmf``, an XDMF temporal collection with
   its data inline (no companion files), that ParaView opens in one step as a time series. The
-  geometry is the outline of the deck and both seats at rest (three quadrilaterals, metres);
-  each time step carries the point data ``displacement`` (relative to the supports: the deck to
-  the shake tables, a seat to its actuator, true scale [m]; apply *Warp By Vector* with a scale
-  factor of about 100 to see the gaps and the rotation), ``displacement_abs`` (absolute [m])
-  and the cell data ``body`` (0 deck, 1 seat 1, 2 seat 2). meshio reads it back with
+  geometry is the outline of the deck (or of each deck segment) and both seats at rest
+  (quadrilaterals, metres); each time step carries the point data ``displacement`` (relative
+  to the supports: the deck to the shake tables, a seat to its actuator, true scale [m]; apply
+  *Warp By Vector* with a scale factor of about 100 to see the gaps and the rotation),
+  ``displacement_abs`` (absolute [m]) and the cell data ``body`` (0 deck — or the segments
+  0 … N−1 —, then seat 1, seat 2). meshio reads it back with
   :class:`meshio.xdmf.TimeSeriesReader`.
 * ``fmt = "pvd"``: the older layout, only when asked: ``<engine>/frame_NNNNNN.vtu`` (displaced
   outlines, true scale, one file per output time) and ``<engine>.pvd`` collecting them.
@@ -28,23 +29,15 @@ from xml.sax.saxutils import quoteattr
 import meshio
 import numpy as np
 
-from deckpound.compare.report.figures import OUTLINE_COLUMNS, outlines
+from deckpound.compare.report.figures import outline_columns, outlines
 from deckpound.compare.report.outputs import folder as make_folder
 from deckpound.compare.report.outputs import target, write_text
 from deckpound.models.errors import SceneError
+from deckpound.models.plan import plan_of
 from deckpound.models.result import Result
 from deckpound.models.scene_io import scene_from_mapping
 
-BODIES = ("deck", "seat1", "seat2")
 FORMATS = ("xdmf", "pvd")
-#: the absolute counterpart of each outline column (θ is the same: the supports do not rotate)
-ABSOLUTE = {
-    "deck_x_rel": "deck_x_abs",
-    "deck_y_rel": "deck_y_abs",
-    "seat1_x_rel": "seat1_x_abs",
-    "seat2_x_rel": "seat2_x_abs",
-}
-STATE = OUTLINE_COLUMNS
 #: most frames one ``pvd`` export may write per result (each frame is one file)
 MAX_FRAMES = 100_000
 
@@ -53,14 +46,30 @@ def result_engines(folder: Path) -> list[str]:
     return sorted(p.stem for p in folder.glob("*.json") if (folder / f"{p.stem}.csv").is_file())
 
 
+def bodies(scene) -> tuple[str, ...]:
+    """The outlined bodies in cell order: the deck (or each deck segment), seat 1, seat 2."""
+    return tuple(seg.name for seg in plan_of(scene).segments) + ("seat1", "seat2")
+
+
+def state_columns(scene) -> tuple[str, ...]:
+    """The relative state columns an outline reads (:func:`~.figures.outline_columns`)."""
+    return outline_columns(plan_of(scene))
+
+
+def absolute_column(column: str) -> str:
+    """The absolute counterpart of an outline column (θ is the same: the supports do not
+    rotate): ``deck_x_rel`` → ``deck_x_abs``."""
+    return column[: -len("_rel")] + "_abs" if column.endswith("_rel") else column
+
+
 def _points(scene, row: dict[str, float]) -> np.ndarray:
-    """The 12 outline points (deck, seat 1, seat 2; 4 corners each) at one state [m]."""
+    """The outline points (each body's 4 corners, in :func:`bodies` order) at one state [m]."""
     polys = outlines(scene, row, 1.0)
-    return np.concatenate([polys[name][:-1] for name in BODIES])
+    return np.concatenate([polys[name][:-1] for name in bodies(scene)])
 
 
-def _cells() -> np.ndarray:
-    return np.arange(4 * len(BODIES)).reshape(len(BODIES), 4)
+def _cells(n_bodies: int) -> np.ndarray:
+    return np.arange(4 * n_bodies).reshape(n_bodies, 4)
 
 
 def frame_mesh(scene, row: dict[str, float]) -> meshio.Mesh:
@@ -69,29 +78,32 @@ def frame_mesh(scene, row: dict[str, float]) -> meshio.Mesh:
     rest = _points(scene, dict.fromkeys(row, 0.0))
     pts = np.column_stack([p, np.zeros(len(p))])
     d = np.column_stack([p - rest, np.zeros(len(p))])
+    n = len(bodies(scene))
     return meshio.Mesh(
         pts,
-        [("polygon", _cells())],
+        [("polygon", _cells(n))],
         point_data={"displacement": d},
-        cell_data={"body": [np.arange(len(BODIES), dtype=float)]},
+        cell_data={"body": [np.arange(n, dtype=float)]},
     )
 
 
-def _rows(r: Result, k: int) -> tuple[dict[str, float], dict[str, float]]:
-    rel = {q: float(r[q][k]) for q in OUTLINE_COLUMNS}
-    absolute = {q: float(r[ABSOLUTE.get(q, q)][k]) for q in OUTLINE_COLUMNS}
+def _rows(scene, r: Result, k: int) -> tuple[dict[str, float], dict[str, float]]:
+    state = state_columns(scene)
+    rel = {q: float(r[q][k]) for q in state}
+    absolute = {q: float(r[absolute_column(q)][k]) for q in state}
     return rel, absolute
 
 
 def write_xdmf(scene, r: Result, path: Path, every: int = 1) -> Path:
     """The XDMF time series of one result (see the module docstring)."""
-    rest = _points(scene, dict.fromkeys(OUTLINE_COLUMNS, 0.0))
+    rest = _points(scene, dict.fromkeys(state_columns(scene), 0.0))
     z = np.zeros((len(rest), 1))
-    body = np.arange(len(BODIES), dtype=np.float32)
+    n = len(bodies(scene))
+    body = np.arange(n, dtype=np.float32)
     with target(path) as p, meshio.xdmf.TimeSeriesWriter(p, data_format="XML") as writer:
-        writer.write_points_cells(np.hstack([rest, z]), [("quad", _cells())])
+        writer.write_points_cells(np.hstack([rest, z]), [("quad", _cells(n))])
         for k in range(0, len(r.t), every):
-            rel, absolute = _rows(r, k)
+            rel, absolute = _rows(scene, r, k)
             d_rel = np.hstack([_points(scene, rel) - rest, z]).astype(np.float32)
             d_abs = np.hstack([_points(scene, absolute) - rest, z]).astype(np.float32)
             writer.write_data(
@@ -107,7 +119,7 @@ def write_pvd(scene, r: Result, out: Path, engine: str, every: int = 1) -> Path:
     frames = make_folder(out / engine)
     entries = []
     for k in range(0, len(r.t), every):
-        rel, _ = _rows(r, k)
+        rel, _ = _rows(scene, r, k)
         name = f"frame_{k:06d}.vtu"
         with target(frames / name) as p:
             meshio.write(p, frame_mesh(scene, rel))
@@ -157,12 +169,15 @@ def check_result_folder(
             scene = scene_from_mapping(r.meta["scene"])
         except SceneError as err:
             raise SceneError("RESULT_DIR", f"{engine}.json: its scene is invalid: {err}") from None
-        missing = [q for q in STATE + tuple(ABSOLUTE.values()) if q not in r.columns]
+        state = state_columns(scene)
+        missing = [
+            q for q in state + tuple(absolute_column(q) for q in state) if q not in r.columns
+        ]
         if missing:
             raise SceneError("RESULT_DIR", f"{engine}.csv lacks the column {missing[0]!r}")
         if len(r.t) < 1:
             raise SceneError("RESULT_DIR", f"{engine}.csv holds no rows")
-        for q in ("t",) + STATE:
+        for q in ("t",) + state:
             bad = np.flatnonzero(~np.isfinite(r[q]))
             if len(bad):
                 raise SceneError(

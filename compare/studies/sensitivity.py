@@ -17,6 +17,7 @@ law             contact law: linear, Kelvin–Voigt, Hertz, Hertz-damp, bilinear
 geometry        geometrically linear vs nonlinear contact kinematics
 opensees-mode   OpenSees stick vs rigid deck
 skew            skew angle 0–60° with and without friction, every engine (:mod:`.skew`)
+joint           joint gap × wave-passage lag of a deck of segments, every engine (:mod:`.joint`)
 sequence        the 7-run sequence with carried gap and stiffness, every engine
 ==============  ============================================================================
 
@@ -45,6 +46,13 @@ from deckpound.compare.studies.damping import (
     damping_figure,
     damping_headlines,
     damping_row,
+)
+from deckpound.compare.studies.joint import (
+    joint_cases,
+    joint_figure,
+    joint_headlines,
+    joint_row,
+    joint_units,
 )
 from deckpound.compare.studies.sequence_run import state_before, strongest_run
 from deckpound.compare.studies.skew import skew_cases, skew_figure, skew_headlines, skew_row
@@ -248,8 +256,9 @@ class Study:
     scene; ``x`` is the parameter on the figure's horizontal axis (``unit`` its unit);
     ``carried``: ``deckpound paper`` runs it from the strongest run's carried state as well
     as from the virgin state. Optionally its own table row (default :func:`case_row`), figure
-    (default :func:`.figures.study_figure`, same signature) and ``summary(table) -> list[str]``:
-    sentences stating the result from the table's numbers, for the report."""
+    (default :func:`.figures.study_figure`, same signature), ``summary(table) -> list[str]``:
+    sentences stating the result from the table's numbers, for the report, the units of its
+    table and the scenes it applies to."""
 
     name: str
     title: str
@@ -260,6 +269,14 @@ class Study:
     row: Callable[[Case, Result], dict] | None = None
     figure: Callable | None = None
     summary: Callable[[pd.DataFrame], list[str]] | None = None
+    #: the units of the table's own columns (default: those of :func:`case_row`)
+    units: Callable[[pd.DataFrame], dict[str, str]] | None = None
+    #: whether the study applies to a scene (default: every scene); ``deckpound paper``
+    #: leaves out the studies that do not apply to its scene
+    applies: Callable[[Scene], bool] | None = None
+
+    def applies_to(self, scene: Scene) -> bool:
+        return self.applies is None or self.applies(scene)
 
 
 STUDIES: dict[str, Study] = {
@@ -296,6 +313,18 @@ STUDIES: dict[str, Study] = {
             row=damping_row,
             figure=damping_figure,
             summary=damping_headlines,
+        ),
+        Study(
+            "joint",
+            "Deck segments: joint gap and wave-passage lag",
+            joint_cases,
+            "joint_gap",
+            "m",
+            row=joint_row,
+            figure=joint_figure,
+            summary=joint_headlines,
+            units=joint_units,
+            applies=lambda scene: bool(scene.joints),
         ),
     )
 }
@@ -340,8 +369,10 @@ def study_results(
 
 def study_units(name: str, table: pd.DataFrame) -> dict[str, str]:
     """Units of a study table's columns."""
-    units = {k: v for k, v in ROW_UNITS.items() if k in table}
     study = get_study(name)
+    if study.units is not None:
+        return study.units(table)
+    units = {k: v for k, v in ROW_UNITS.items() if k in table}
     if study.unit and study.x in table:
         units[study.x] = study.unit
     return units

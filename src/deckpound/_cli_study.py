@@ -232,7 +232,7 @@ def _compare(args) -> int:
 
 def _study(args) -> int:
     from deckpound.compare.result_cache import ResultCache
-    from deckpound.compare.studies.sensitivity import STUDY_NAMES, run_study
+    from deckpound.compare.studies.sensitivity import STUDY_NAMES, run_study, study_units
     from deckpound.models.file_io import output_folder, write_csv
 
     if args.name == "variability":
@@ -293,6 +293,9 @@ def _study(args) -> int:
             "pga",
             "peak_theta",
             "peak_y_rel",
+            "peak_fn_joint",
+            "joint_closures",
+            "joint_margin_min",
             "gap_closures",
             "wall_time",
             "status",
@@ -302,7 +305,8 @@ def _study(args) -> int:
     from deckpound.compare.report.outputs import unit_header
     from deckpound.compare.report.paper import sequence_units
 
-    print(unit_header(table[cols], sequence_units(table)).to_string(index=False))
+    units = study_units(args.name, table) if args.name != "sequence" else sequence_units(table)
+    print(unit_header(table[cols], units).to_string(index=False))
     print(f"wrote {terminal_text(out)}")
     return 0
 
