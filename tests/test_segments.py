@@ -242,3 +242,40 @@ def test_the_joint_study_rows_and_headlines(two_frame):
     assert len(lines) == 2 and all("peak joint force" in line for line in lines)
     with pytest.raises(SceneError, match="needs a deck of segments"):
         joint_cases(load_scene("saiidi-4span"), quick=True)
+
+
+def test_the_papers_joint_section_runs_the_two_frame_bridge_for_the_benchmark(tmp_path):
+    """deckpound paper shows the joint study of the built-in two-frame bridge on the
+    benchmark's record length, no section for another scene, and refuses a deck of segments."""
+    from deckpound.compare.report.joints import joints_scene, joints_section, run_joints
+    from deckpound.compare.report.paper import run_paper
+    from deckpound.compare.report.render import Figure, Table
+    from deckpound.compare.result_cache import ResultCache
+
+    bench = load_scene("saiidi-4span", ["excitation.duration=3", "run.duration=3"])
+    sc = joints_scene(bench)
+    assert sc.name == "two-frame" and sc.excitation.duration == 3.0 and sc.run.duration == 3.0
+    assert joints_scene(bench.replace(name="my-bridge")) is None
+    assert joints_scene(load_scene("two-frame")) is None
+    with pytest.raises(SceneError, match="deckpound paper reproduces.*'deckpound study joint'"):
+        run_paper(load_scene("two-frame"), tmp_path / "paper", quick=True, progress=False)
+    out = tmp_path / "report"
+    (out / "tables").mkdir(parents=True)
+    (out / "figures").mkdir()
+    run = run_joints(
+        bench.replace({"excitation.duration": 1.0, "run.duration": 1.0}),
+        out,
+        quick=True,
+        cache=ResultCache(tmp_path / "cache"),
+        workers=1,
+        scheduler=None,
+        progress=False,
+    )
+    assert (out / "tables" / "study_joint.csv").is_file()
+    assert (out / "figures" / "study_joint.png").is_file()
+    items = joints_section(run)
+    assert "'two-frame'" in items[0] and f"{len(run.table)} cases" in items[0]
+    assert any(isinstance(i, Figure) for i in items)
+    table = next(i for i in items if isinstance(i, Table)).frame
+    assert len(table) == len(run.table)
+    assert {"θ frame1 [mrad]", "θ frame2 [mrad]", "joint seat margin [mm]"} <= set(table.columns)

@@ -36,6 +36,7 @@ from deckpound.compare.metrics import METRIC_UNITS, closure_times_per_corner, co
 from deckpound.compare.progress import Progress
 from deckpound.compare.report import figures
 from deckpound.compare.report.figure_cache import MANIFEST_NAME, FigureManifest, reuse_figures
+from deckpound.compare.report.joints import JointsRun, run_joints
 from deckpound.compare.report.outputs import folder, folder_size, write_csv, write_text
 from deckpound.compare.report.sections import write_report
 from deckpound.compare.report.text import friction_effect
@@ -52,6 +53,7 @@ from deckpound.compare.studies.sensitivity import (
 )
 from deckpound.compare.studies.sequence_run import SequenceRun, run_sequences, strongest_run
 from deckpound.models.contact_laws_table import DEFAULT_FRICTION
+from deckpound.models.errors import SceneError
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import modified, scene_to_toml
 
@@ -183,6 +185,7 @@ class PaperData:
     wall: float = 0.0
     sizes: dict[str, int] = field(default_factory=dict)
     unseating: UnseatingRun | None = None
+    joints: JointsRun | None = None
     #: figures drawn by this run, and reused unchanged from an earlier run into the folder
     figures_drawn: int = 0
     figures_reused: int = 0
@@ -245,6 +248,13 @@ def run_paper(
     the report are drawn without a progress of their own): a log shows a line at least every
     :data:`~deckpound.compare.progress.PROGRESS_INTERVAL` s.
     """
+    if scene.segments is not None:
+        raise SceneError(
+            "segments",
+            "deckpound paper reproduces the paper's study of a one-body deck (its sequence, "
+            "figures and studies read the deck's rotation); for a deck of segments run "
+            "'deckpound compare' and 'deckpound study joint'",
+        )
     stages = Progress(PAPER_STAGES, "paper", progress, log_only=True, eta=False)
     try:
         with reuse_figures(Path(out) / MANIFEST_NAME, reuse=not redraw) as manifest:
@@ -421,6 +431,19 @@ def _paper(
                 mech_rows += _mech_rows(
                     "friction study", st.label, st.run, results, {c.label: c.scene for c in cases}
                 )
+    joints = None
+    if studies is None or "joint" in studies:
+        stages.note = "pounding between deck segments (joint study)"
+        joints = run_joints(
+            scene,
+            out,
+            quick=quick,
+            cache=cache,
+            workers=workers,
+            scheduler=scheduler,
+            progress=progress,
+            formats=formats,
+        )
     stages.note = "will the deck unseat? (IDA)"
     unseating = run_unseating(
         scene,
@@ -468,6 +491,7 @@ def _paper(
         formats=formats,
         full_histories=full_histories,
         unseating=unseating,
+        joints=joints,
     )
     data.sizes = {
         "report": folder_size(out, exclude=("cache",)),

@@ -17,6 +17,7 @@ from deckpound.compare.report import figures
 from deckpound.compare.report import inputs as inputs
 from deckpound.compare.report import text as text
 from deckpound.compare.report.friction import friction
+from deckpound.compare.report.joints import joints_section
 from deckpound.compare.report.render import (
     BENT_FORCE,
     CONTACT_FORCE,
@@ -393,6 +394,8 @@ def write_report(d):
     ]
     sections += study_sections(d)
     sections.append(("Will the deck unseat?", unseating_section(d.unseating)))
+    if d.joints is not None:
+        sections.append(("Pounding between deck segments", joints_section(d.joints)))
     sections.append(
         (
             "Every run of the sequence",
