@@ -128,10 +128,12 @@ def case_row(engine: str, scene: Scene) -> dict:
     except SceneError as err:
         return {"status": "refused", "message": str(err), "process_time": 0.0}
     per = r.meta.get("gap_closures_per_corner", {})
+    # a deck of segments: the segment that turns (moves) most
+    bodies = ["deck"] if scene.segments is None else [s.name for s in scene.segments]
     row = {
-        "peak_theta": r.peak("deck_theta"),  # every step (Result.peak)
-        "peak_y": r.peak("deck_y_rel"),
-        "peak_x": r.peak("deck_x_rel"),
+        "peak_theta": max(r.peak(f"{b}_theta") for b in bodies),  # every step (Result.peak)
+        "peak_y": max(r.peak(f"{b}_y_rel") for b in bodies),
+        "peak_x": max(r.peak(f"{b}_x_rel") for b in bodies),
         "gap_closures": int(r.meta.get("gap_closures", 0)),
         **{f"closures_{c}": int(v) for c, v in sorted(per.items())},
         "status": str(r.meta.get("status")),
