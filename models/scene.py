@@ -331,6 +331,7 @@ class Joint:
         "segment end's initial position; none (the default): the margin is not checked",
         gt=0.0,
     )
+
     def __post_init__(self) -> None:
         validate(self)
 
@@ -684,9 +685,17 @@ class Scene:
         # the laws whose force is K·δ^n carry K in kN/m^n (contact.stiffness)
         uses_exponent = "contact.exponent" in contact_law(self.contact.law).params
         k_unit = f"kN/m^{self.contact.exponent:g}" if uses_exponent else "kN/m"
+        segments = (
+            f", {len(self.segments)} segments, joint gaps "
+            + "/".join(f"{1e3 * j.gap:g}" for j in self.joints or ())
+            + " mm"
+            if self.segments is not None
+            else ""
+        )
         return {
             "name": self.name,
-            "deck": f"{self.deck.length:g} × {self.deck.width:g} m, {self.deck.mass:g} t{skew}",
+            "deck": f"{self.deck.length:g} × {self.deck.width:g} m, {self.deck.mass:g} t{skew}"
+            + segments,
             "bents": f"{len(self.bents)}",
             "gaps": f"{gaps} mm",
             "contact": f"{self.contact.law}, k = {self.contact.stiffness:g} {k_unit}"

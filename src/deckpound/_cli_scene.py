@@ -70,8 +70,15 @@ def _validate(args) -> int:
     # a free deck (bents = []) has three rigid-body modes (infinite periods): name them
     finite = [T for T in report.periods if float("inf") != T]
     rigid = len(report.periods) - len(finite)
+    segments = (
+        f"{len(scene.segments)} deck segments, joint gaps "
+        + "/".join(f"{j.gap:g}" for j in scene.joints)
+        + " m, "
+        if scene.segments is not None
+        else ""
+    )
     print(
-        f"{terminal_text(scene.name)}: valid; {len(scene.bents)} bents, gaps "
+        f"{terminal_text(scene.name)}: valid; {segments}{len(scene.bents)} bents, gaps "
         f"{scene.seats[0].gap:g}/{scene.seats[1].gap:g} m, record {motion.duration:g} s "
         f"({len(motion.channels)} supports), analysis {report.duration:g} s, "
         + (f"{rigid} rigid-body modes, " if rigid else "")
