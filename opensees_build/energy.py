@@ -62,11 +62,11 @@ import math
 import numpy as np
 
 from deckpound.models.columns import ENERGY_COLUMNS
-from deckpound.models.plan import DECK_THETA, DECK_X, DECK_Y, SEAT_THETA, SEAT_X, Plan
+from deckpound.models.plan import Plan
 from deckpound.models.scene import Scene
 
 from .damping import rayleigh_factors, rayleigh_members
-from .gaps import gap_mapping, gap_orientation
+from .gaps import corner_orientation, gap_mapping
 
 __all__ = [
     "EnergyBalance",
@@ -192,7 +192,7 @@ class EnergyBalance:
         self.beta_kc = beta_kc
         has_beta = beta_k != 0.0 or beta_k0 != 0.0 or beta_kc != 0.0
         self.links = self._spring_links(plan, info, elements, ray_bents, ray_seats, has_beta)
-        self.links += self._mass_damper_links(plan, dm, elements)
+        self.links += [_Link(m.element, m.dofs, dashpot=True, c=m.c) for m in info.mass_dampers]
         links = self.links
         # linear elements read at output steps only: (tag, basic stiffnesses, or None for a
         # beam, whose stored energy is ½ q·v)
@@ -215,9 +215,9 @@ class EnergyBalance:
         self.kn, self.kt, self.mu = ct.stiffness, ct.tangential_stiffness, ct.friction
         self.gap_laws = []
         if self.gaps and not self.friction:
-            orient = gap_orientation(scene)
-            axis = (1.0, 0.0) if orient is None else (orient[0], orient[1])
             for corner in plan.corners:
+                orient = corner_orientation(corner)
+                axis = (1.0, 0.0) if orient is None else (orient[0], orient[1])
                 spec = gap_mapping(scene, corner, 0, 0, 0)
                 # (material, its arguments, local x axis, the node order of the element)
                 self.gap_laws.append((spec.material, spec.args, axis))
@@ -280,26 +280,6 @@ class EnergyBalance:
             links.append(_Link(elements[f"seat{j + 1} dashpot"], (0, 2), dashpot=True, c=c))
         return links
 
-    @staticmethod
-    def _mass_damper_links(plan: Plan, dm, elements: dict) -> list[_Link]:
-        """The relative mass damping's dashpots (:func:`.damping.mass_dampers`), with the
-        damping model's coefficients."""
-        links: list[_Link] = []
-        by_dof = {
-            dof: [m.c for m in dm.mass_dampers if m.dof == dof] for dof in range(len(plan.mass))
-        }
-        for k, name in enumerate(plan.bent_names or ("fixed",)):
-            tag = elements.get(f"deck mass damper {name}")
-            if tag is not None:
-                c = [by_dof[dof][k] for dof in (DECK_X, DECK_Y, DECK_THETA)]
-                links.append(_Link(tag, (0, 1, 2), dashpot=True, c=c))
-        for j in range(2):
-            tag = elements.get(f"seat{j + 1} mass damper")
-            if tag is not None:
-                c = [by_dof[SEAT_X[j]][0], by_dof[SEAT_THETA[j]][0]]
-                links.append(_Link(tag, (0, 2), dashpot=True, c=c))
-        return links
-
     # -- the state ---------------------------------------------------------------------------
 
     def _start(self, ops) -> None:
@@ -318,15 +298,16 @@ class EnergyBalance:
         self.vel_mass = [vel[k] for k, _ in self.mass_nodes]
         for beam in self.beams:
             beam[3] = _beam_rayleigh(ops, beam[0])
-        self.stick = [0.0] * 4  # contact2d stick points s_p [m]
-        self.ft_acting = [0.0] * 4  # the tangential forces that acted at the last (sub)step
+        nc = len(self.g0)
+        self.stick = [0.0] * nc  # contact2d stick points s_p [m]
+        self.ft_acting = [0.0] * nc  # the tangential forces that acted at the last (sub)step
         if self.friction:
             # (g, s, fn, ft): zeroLengthContact2D computes its force from the nodes when asked
-            self.contact_state = [self._contact2d(ops, c, disp) for c in range(4)]
+            self.contact_state = [self._contact2d(ops, c, disp) for c in range(nc)]
         elif self.gaps:
             # (strain, stress) of the gap materials: open at the start (the engine refuses an
             # initial state that closes a gap), so the force is zero
-            self.contact_state = [(self._gap_strain(c, disp), 0.0) for c in range(4)]
+            self.contact_state = [(self._gap_strain(c, disp), 0.0) for c in range(nc)]
         ke, es, e_lin, ec, _ = self._stored(ops)
         W = self.W
         W[_INPUT] = ke + es + ec
@@ -457,7 +438,7 @@ class EnergyBalance:
 
     def _contact2d_step(self, ops, disp) -> None:
         W = self.W
-        for c in range(4):
+        for c in range(len(self.gaps)):
             g0, s0, fn0, _ = self.contact_state[c]
             g1, s1, fn1, ft_rep = self.contact_state[c] = self._contact2d(ops, c, disp)
             if fn1 > 0.0:

@@ -12,13 +12,16 @@ execute the same code.
 Result columns (sign conventions):
 
 * ``deck_x_abs``, ``deck_y_abs``, ``deck_theta`` — centre node displacement (absolute) [m, m,
-  rad], θ counter-clockwise; velocities ``deck_vx_abs``, ``deck_vy_abs``, ``deck_omega``;
+  rad], θ counter-clockwise; velocities ``deck_vx_abs``, ``deck_vy_abs``, ``deck_omega`` (a
+  deck of segments: ``<segment>_x_abs`` ... per segment centre node, in the plan's order);
 * ``seat1_x_abs``/``seat1_theta``, ``seat2_…`` — seat node (contact-face mid-point) [m, rad]
   and their velocities;
-* ``gap_c1..c4`` — g = g₀ + n·(u_deck corner − u_seat point) with n the corner's gap-opening
+* ``gap_<corner>`` (c1..c4, and j<k>_c1, j<k>_c2 at the joints of a deck of segments) —
+  g = g₀ + n·(u_deck corner − u_seat point) with n the corner's gap-opening
   normal of the plan's corner table (``plan["normals"]``; n = (side, 0), side +1 for c1, c2 at
-  seat 1 and −1 for c3, c4, for a straight deck, where only the x displacements are read);
-  negative = penetration;
+  seat 1 and at the joints, −1 for c3, c4, for a straight deck, where only the x
+  displacements are read; at a joint the "seat point" is the facing point on the other
+  segment); negative = penetration;
 * ``fn_c*`` — normal contact force ≥ 0 in compression [kN] (−stress of the gap material, or the
   contact element's force on the deck projected on n);
 * ``ft_c*`` — tangential contact force acting ON THE DECK corner along the face tangent
@@ -55,7 +58,7 @@ from deckpound.models.scene_settings import OpenSeesSettings
 
 from . import initial_state
 from .energy import EnergyBalance, energy_closure
-from .model import ModelInfo, analysis_commands, build_model, refuse_scene
+from .model import ModelInfo, analysis_commands, bent_bodies, build_model, refuse_scene
 from .ops import OpsSession, openseespy_version
 
 ENGINE = "opensees"
@@ -73,10 +76,10 @@ def define_analysis(ops, plan):
 
 
 def corner_gaps(ops, plan):
-    """Physical gaps g = g0 + n.(u_deck corner - u_seat point) of the four corners [m], n the
+    """Physical gaps g = g0 + n.(u_deck corner - u_seat point) of the corners [m], n the
     gap-opening normal ``plan['normals'][c]`` (a straight deck has n_y = 0: x displacements only)."""
     out = []
-    for c in range(4):
+    for c in range(len(plan["g0"])):
         nx, ny = plan["normals"][c]
         dk, st = plan["deck_corners"][c], plan["seat_corners"][c]
         g = plan["g0"][c] + nx * (ops.nodeDisp(dk, 1) - ops.nodeDisp(st, 1))
@@ -87,10 +90,10 @@ def corner_gaps(ops, plan):
 
 
 def contact_forces(ops, plan):
-    """(fn, ft) of the four corners [kN]: fn >= 0 compression, ft the force on the deck along
-    the face tangent ``plan['tangents'][c]`` (+y for a straight deck)."""
+    """(fn, ft) of the corners [kN]: fn >= 0 compression, ft the force on the deck along the
+    face tangent ``plan['tangents'][c]`` (+y for a straight deck)."""
     fn, ft = [], []
-    for c in range(4):
+    for c in range(len(plan["g0"])):
         e = plan["gap_elements"][c] if plan["gap_elements"] else 0
         if not e:
             fn.append(0.0)
@@ -110,30 +113,22 @@ def contact_forces(ops, plan):
 
 
 def sample_row(ops, plan, t):
-    """One output row in the order of plan['columns']."""
-    dk = ops.nodeDisp(plan["deck"])
+    """One output row in the order of plan['columns']: t, each deck segment's centre (x, y,
+    theta), the seats (x, theta), their velocities in the same order, the corners' gaps,
+    normal and tangential forces, the bents' forces (x, y)."""
     s1 = ops.nodeDisp(plan["seats"][0])
     s2 = ops.nodeDisp(plan["seats"][1])
-    vk = ops.nodeVel(plan["deck"])
     v1 = ops.nodeVel(plan["seats"][0])
     v2 = ops.nodeVel(plan["seats"][1])
-    row = [
-        t,
-        dk[0],
-        dk[1],
-        dk[2],
-        s1[0],
-        s1[2],
-        s2[0],
-        s2[2],
-        vk[0],
-        vk[1],
-        vk[2],
-        v1[0],
-        v1[2],
-        v2[0],
-        v2[2],
-    ]
+    row = [t]
+    for body in plan["bodies"]:
+        dk = ops.nodeDisp(body)
+        row += [dk[0], dk[1], dk[2]]
+    row += [s1[0], s1[2], s2[0], s2[2]]
+    for body in plan["bodies"]:
+        vk = ops.nodeVel(body)
+        row += [vk[0], vk[1], vk[2]]
+    row += [v1[0], v1[2], v2[0], v2[2]]
     row += corner_gaps(ops, plan)
     fn, ft = contact_forces(ops, plan)
     row += fn + ft
@@ -147,32 +142,34 @@ def new_tracker(ops, plan):
     """The peaks and gap closures over every step (:func:`track_step`), started at t = 0.
 
     Columns plan['peak_columns']: the engine columns (:func:`sample_row`), the displacements
-    relative to the supports (deck x, y to the mean table motion, seats to their actuators)
-    and the bent deformations (deck point above the bent - table, x then y, per bent), as the
-    epilogue derives them from the output rows. 'value' is the largest |x| of each column so
+    relative to the supports (each deck segment's x, y to the mean motion of its tables
+    plan['segment_tables'], seats to their actuators) and the bent deformations (deck point
+    above the bent - table, x then y, per bent), as the epilogue derives them from the output
+    rows. 'value' is the largest |x| of each column so
     far (for the gaps the smallest, most negative value), 'time' its first time [s];
-    'closures' counts per corner the steps at which the corner goes from out of contact to in
+    'closures' counts per corner (plan['corners']) the steps at which the corner goes from out of contact to in
     contact (gap <= 0 or fn > 0), a corner in contact at t = 0 counting one. Per corner,
     'gap_open' is the largest gap so far and 'gap_open_time' its first time, 'gap_start' the
     gap at t = 0; 'unseated' = [corner, time] of the first step at which the opening
-    g - g(0) exceeded the support length ``plan['support_lengths'][c]`` of the facing seat (None:
+    g - g(0) exceeded the support length ``plan['support_lengths'][c]`` of the seat under it (None:
     not checked), else None (deckpound.analytic.kernels.peaks, the same rule)."""
     cols = plan["peak_columns"]
-    g0 = cols.index("gap_c1")
+    nc = len(plan["corners"])
+    g0 = cols.index("gap_" + plan["corners"][0])
     value = [0.0] * len(cols)
-    for c in range(4):
+    for c in range(nc):
         value[g0 + c] = math.inf
     tr = {
         "value": value,
         "time": [0.0] * len(cols),
         "gap": g0,
-        "fn": cols.index("fn_c1"),
-        "abs": list(range(1, g0)) + list(range(g0 + 4, len(cols))),
-        "inside": [False] * 4,
-        "closures": [0] * 4,
-        "gap_open": [-math.inf] * 4,
-        "gap_open_time": [0.0] * 4,
-        "gap_start": [0.0] * 4,
+        "fn": cols.index("fn_" + plan["corners"][0]),
+        "abs": list(range(1, g0)) + list(range(g0 + nc, len(cols))),
+        "inside": [False] * nc,
+        "closures": [0] * nc,
+        "gap_open": [-math.inf] * nc,
+        "gap_open_time": [0.0] * nc,
+        "gap_start": [0.0] * nc,
         "unseated": None,
     }
     track_step(ops, plan, tr, 0.0)
@@ -185,19 +182,22 @@ def track_step(ops, plan, tr, t):
     tables = plan["tables"]
     ux = [ops.nodeDisp(tn, 1) for tn in tables]
     uy = [ops.nodeDisp(tn, 2) for tn in tables]
-    mx = sum(ux) / len(ux) if ux else 0.0
-    my = sum(uy) / len(uy) if uy else 0.0
+    for s, own in enumerate(plan["segment_tables"]):
+        mx = sum(ux[k] for k in own) / len(own) if own else 0.0
+        my = sum(uy[k] for k in own) / len(own) if own else 0.0
+        row += [row[1 + 3 * s] - mx, row[2 + 3 * s] - my]
     a1, a2 = plan["actuators"]
-    row += [row[1] - mx, row[2] - my, row[4] - ops.nodeDisp(a1, 1), row[6] - ops.nodeDisp(a2, 1)]
-    for k, xb in enumerate(plan["bent_x"]):
-        row += [row[1] - ux[k], row[2] + xb * row[3] - uy[k]]
+    seat1 = 1 + 3 * len(plan["bodies"])  # the column of seat 1's x
+    row += [row[seat1] - ops.nodeDisp(a1, 1), row[seat1 + 2] - ops.nodeDisp(a2, 1)]
+    for k, (xb, s) in enumerate(zip(plan["bent_x"], plan["bent_bodies"])):
+        row += [row[1 + 3 * s] - ux[k], row[2 + 3 * s] + xb * row[3 + 3 * s] - uy[k]]
     value, when, g0, f0 = tr["value"], tr["time"], tr["gap"], tr["fn"]
     for k in tr["abs"]:
         a = abs(row[k])
         if a > value[k]:
             value[k] = a
             when[k] = t
-    for c in range(4):
+    for c in range(len(plan["corners"])):
         g = row[g0 + c]
         if g < value[g0 + c]:
             value[g0 + c] = g
@@ -215,7 +215,7 @@ def track_step(ops, plan, tr, t):
             support = plan["support_lengths"][c]
             if support is not None and g - tr["gap_start"][c] > support:
                 if tr["unseated"] is None:
-                    tr["unseated"] = [f"c{c + 1}", t]
+                    tr["unseated"] = [plan["corners"][c], t]
 
 
 def run_steps(ops, plan, log=None, on_step=None):
@@ -280,9 +280,9 @@ def run_steps(ops, plan, log=None, on_step=None):
                 if ok == 0:
                     stats["rescued"] += 1
         if ok == 0:
-            dk = ops.nodeDisp(plan["deck"])
-            if not all(math.isfinite(v) for v in dk):
-                ok = -100
+            for body in plan["bodies"]:
+                if not all(math.isfinite(v) for v in ops.nodeDisp(body)):
+                    ok = -100
         if ok != 0:
             stats["status"] = "failed"
             stats["failed_step"] = n
@@ -314,10 +314,11 @@ def run_steps(ops, plan, log=None, on_step=None):
                 break
             rows.append(row)
     stats["gap_closures"] = sum(tr["closures"])
-    stats["gap_closures_per_corner"] = {f"c{c + 1}": tr["closures"][c] for c in range(4)}
+    names = plan["corners"]
+    stats["gap_closures_per_corner"] = {name: tr["closures"][c] for c, name in enumerate(names)}
     stats["gap_openings"] = {
-        f"c{c + 1}": [tr["gap_open"][c] - tr["gap_start"][c], tr["gap_open_time"][c]]
-        for c in range(4)
+        name: [tr["gap_open"][c] - tr["gap_start"][c], tr["gap_open_time"][c]]
+        for c, name in enumerate(names)
     }
     stats["unseated"] = tr["unseated"]
     stats["peaks"] = {
@@ -338,19 +339,22 @@ def step_plan(scene: Scene, plan: Plan, info: ModelInfo, duration: float) -> dic
     hold it as ``PLAN``; the runtime functions above take it as ``plan``). It is not the plan
     model: the corners' gaps, sides, normals and tangents, the bent stations, the columns and
     the seat each corner faces are copied from ``plan`` (:class:`Plan`), the tags from the
-    built model ``info``."""
+    built model ``info``. ``bodies``: the deck segments' centre nodes; ``segment_tables``: per
+    segment the indices (in bent order) of the tables its relative displacement is measured
+    from (:meth:`~deckpound.models.plan.Plan.segment_table_channels`); ``bent_bodies``: the
+    segment each bent carries."""
     dt = contact_resolving_step(scene, scene.opensees.dt)
-    # the support length of the seat each corner faces [m] (None: unseating not checked)
-    lengths = [seat.support_length for seat in scene.seats]
     columns = engine_columns(plan)
+    x_channels = plan.table_channels("x")
     return {
         "dt": dt,
         "n_steps": int(round(duration / dt)),
         "stride": output_stride(dt, scene.run.output_dt),
         "fallback": scene.opensees.fallback,
         "substeps": scene.opensees.substeps,
-        "deck": info.deck,
+        "bodies": list(info.bodies),
         "seats": list(info.seats),
+        "corners": [c.name for c in plan.corners],
         "deck_corners": list(info.deck_corners),
         "seat_corners": list(info.seat_corners),
         "gap_elements": list(info.gap_elements),
@@ -363,8 +367,14 @@ def step_plan(scene: Scene, plan: Plan, info: ModelInfo, duration: float) -> dic
         "analysis": [list(c) for c in analysis_commands(scene)],
         "columns": columns,
         "bent_x": list(plan.bent_x),
-        "peak_columns": peak_columns(columns, plan.bent_names),
-        "support_lengths": [lengths[c.seat] for c in plan.corners],
+        "bent_bodies": bent_bodies(plan),
+        "segment_tables": [
+            [x_channels.index(ch) for ch in plan.segment_table_channels(seg.index, "x")]
+            for seg in plan.segments
+        ],
+        "peak_columns": peak_columns(columns, plan.bent_names, plan.relative_columns),
+        # the support length under each corner [m] (None: unseating not checked)
+        "support_lengths": [c.support_length for c in plan.corners],
     }
 
 
@@ -396,9 +406,9 @@ def build(ops, scene: Scene, motion=None, plan: Plan | None = None):
         ops.call(*cmd)
     # part of the build (not of the run) so that the exported scripts start from the same
     # initial state as the in-process run (issue 12: textbook scenes)
-    initial_state.set_initial_displacement(ops, scene)
-    initial_state.set_initial_velocity(ops, scene)
-    initial_state.set_initial_acceleration(ops, scene, res, plan, damping)
+    initial_state.set_initial_displacement(ops, scene, plan, info)
+    initial_state.set_initial_velocity(ops, scene, plan, info)
+    initial_state.set_initial_acceleration(ops, scene, res, plan, damping, info)
     return info, steps
 
 
@@ -455,7 +465,7 @@ class OpenSeesEngine(Engine):
 
     def refuse(self, scene: Scene, settings) -> None:
         refuse_scene(scene)
-        if any(scene.initial.deck):
+        if initial_state.displaced(scene):
             initial_state.refuse_initial_displacement(scene, settings)
 
     def _run(

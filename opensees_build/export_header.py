@@ -37,9 +37,14 @@ WIDTH = 96
 _MEANING = {
     "node": [
         (r"deck", "deck centre: all the deck mass and polar inertia"),
+        (r"segment (\w+)", "centre of deck segment {0}: its mass and polar inertia"),
         (r"deck (c\d)", "deck corner {0}"),
+        (r"deck (j\d+)_(c\d)", "joint {0} corner {1}: the striking segment's left-end corner"),
+        (r"facing (j\d+)_(c\d)", "joint {0}: facing segment's end-face point met by corner {1}"),
+        (r"deck ref (.+)", "reference node of the relative mass damping ({0})"),
         (r"deck (\w+)", "deck point above bent {0}"),
         (r"stick (\d+)", "node of the deck stick axis"),
+        (r"stick (\w+) (\d+)", "node of the stick axis of segment {0}"),
         (r"seat(\d)", "seat {0}: contact-face mid-point, seat mass and inertia"),
         (r"seat(\d) (c\d)", "seat {0} point facing deck corner {1} (rigidLink to the seat)"),
         (r"actuator(\d)", "actuator {0}: imposed x motion; y and theta fixed"),
@@ -51,8 +56,12 @@ _MEANING = {
         (r"seat(\d) dashpot", "seat {0} dashpots cx, ctheta, actuator -> seat"),
         (r"seat(\d) guide", "seat {0} y guide (stiff spring, the seat has no y mass)"),
         (r"gap (c\d)", "contact (gap) element of corner {0}"),
+        (r"gap (j\d+_c\d)", "contact (gap) element of joint corner {0}"),
         (r"stick (c\d)", "transverse deck stick to corner {0}"),
+        (r"stick (j\d+_c\d)", "transverse stick of the striking segment to corner {0}"),
+        (r"stick facing (j\d+_c\d)", "transverse stick of the facing segment, met by {0}"),
         (r"stick (\d+)", "deck stick along the axis"),
+        (r"stick (\w+) (\d+)", "stick along the axis of segment {0}"),
     ],
     "material": [
         (r"(\w+) ([xy])", "bent {0}, {1}: Hysteretic (Takeda stand-in)"),
@@ -60,6 +69,7 @@ _MEANING = {
         (r"seat(\d) (cx|ctheta)", "seat {0} dashpot {1}"),
         (r"seat guide", "seat y guide spring"),
         (r"gap (c\d)", "gap law of corner {0}"),
+        (r"gap (j\d+_c\d)", "gap law of joint corner {0}"),
     ],
     "timeSeries": [
         (r"(\w+) disp", "displacement of support channel {0} [m]"),
@@ -160,16 +170,27 @@ def sign_lines(p: ExportParts) -> list[str]:
     """Gap and bent sign conventions, per corner from the element and material commands."""
     normals = p.plan.get("normals") or [[s, 0.0] for s in p.plan["sides"]]
     skewed = any(n[1] != 0.0 for n in normals)
+    names = p.plan["corners"]
+    # the first corner facing seat 2 (c3): after the joints' corners in a deck of segments
+    right = names.index("c3")
     out = [
         "Sign conventions (gap g, contact force fn, as deckpound reports them):",
         "  side = +1 for corners c1, c2 (seat 1, left), -1 for c3, c4 (seat 2, right);",
     ]
+    if len(names) > 4:
+        out.append(
+            "  joints: corners j<k>_c1, j<k>_c2 are the left-end corners of segment k + 1 "
+            "striking the right end face of segment k, side = +1; their 'seat point' is the "
+            "node 'facing j<k>_c<m>' on segment k's face (g0 from the corner along -n), "
+            "rigidLinked to segment k's centre (stick mode: a stick from its axis end);"
+        )
     if skewed:
         out += [
             (
                 "  skewed deck: n = gap-opening normal of each corner's end face (c1, c2: "
-                f"{_fmt(normals[0][0])}, {_fmt(normals[0][1])}; c3, c4: {_fmt(normals[2][0])}, "
-                f"{_fmt(normals[2][1])}), t = face tangent {_fmt(p.plan['tangents'][0][0])}, "
+                f"{_fmt(normals[0][0])}, {_fmt(normals[0][1])}; c3, c4: "
+                f"{_fmt(normals[right][0])}, "
+                f"{_fmt(normals[right][1])}), t = face tangent {_fmt(p.plan['tangents'][0][0])}, "
                 f"{_fmt(p.plan['tangents'][0][1])};"
             ),
             (
@@ -196,14 +217,14 @@ def sign_lines(p: ExportParts) -> list[str]:
             nx, ny = cmd.args[k + 1], cmd.args[k + 2]
             if skewed:
                 out.append(
-                    f"  c{c + 1}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
+                    f"  {names[c]}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
                     f"({_fmt(nx)}, {_fmt(ny)}) = -n, from the deck to the seat; g0 = "
                     f"{g0!r} m (the nodes sit g0 apart along n); fn = -n.(Fx_j, Fy_j), "
                     "ft = -t.(Fx_j, Fy_j)"
                 )
             else:
                 out.append(
-                    f"  c{c + 1}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
+                    f"  {names[c]}: zeroLengthContact2D {e}, i = {i}, j = {j}, normal "
                     f"({_fmt(nx)}, 0) from the deck to the seat; g0 = {g0!r} m (the nodes "
                     f"sit g0 apart); fn = -side*Fx_j = {_fmt(-side)}*Fx_j, ft = -Fy_j"
                 )
@@ -221,7 +242,7 @@ def sign_lines(p: ExportParts) -> list[str]:
                 along = "along x"
                 strain = f"u_j - u_i = {'+' if side > 0 else '-'}(u_deck - u_seat)"
             out.append(
-                f"  c{c + 1}: zeroLength {e} {along}, i = {i}, j = {j}: deformation "
+                f"  {names[c]}: zeroLength {e} {along}, i = {i}, j = {j}: deformation "
                 f"e = {strain} = g - g0, "
                 f"closing negative; material {mat.args[1]} {mat.args[0]} {args} (negative "
                 f"gap and yield: compression only); g = {g0!r} + e, fn = -stress"
@@ -332,8 +353,8 @@ def seat_lines(p: ExportParts) -> list[str]:
     """The unseating check of the step loop, with each corner's support length."""
     lengths = p.plan["support_lengths"]
     per_corner = ", ".join(
-        f"c{c + 1} {'none (not checked)' if n is None else f'{_fmt(n)} m'}"
-        for c, n in enumerate(lengths)
+        f"{name} {'none (not checked)' if n is None else f'{_fmt(n)} m'}"
+        for name, n in zip(p.plan["corners"], lengths)
     )
     where = "" if p.fmt == "tcl" else " and written to opensees.stats.json"
     return [
@@ -398,11 +419,12 @@ def header_lines(p: ExportParts) -> list[str]:
     sc = p.scene
     lang = "Tcl" if p.fmt == "tcl" else "OpenSeesPy"
     friction = f", friction {sc.contact.friction_mode}" if p.plan["friction"] else ""
+    segments = "" if sc.segments is None else f" of {len(sc.segments)} segments"
     out = [
         f"deckpound {VERSION} export ({lang}) of scene '{sc.name}'",
         f"scene sha256: {p.scene_hash}",
         (
-            f"model: {sc.opensees.mode} deck, {len(sc.bents)} bents, contact law "
+            f"model: {sc.opensees.mode} deck{segments}, {len(sc.bents)} bents, contact law "
             f"{sc.contact.law}{friction}; dt {sc.opensees.dt!r} s; {p.plan['n_steps']} steps"
         ),
         UNITS,

@@ -35,7 +35,7 @@ import textwrap
 
 from deckpound.models.columns import column_names, column_unit
 from deckpound.models.file_io import unit_label
-from deckpound.models.plan import DOF_COLUMNS, plan_of
+from deckpound.models.plan import plan_of
 
 from . import engine
 from .export_header import ExportParts, header_lines
@@ -60,7 +60,8 @@ def csv_plan(p: ExportParts) -> dict:
 
     ``records``: the displacement record file of each support channel (``Plan.channels``
     order), sampled at ``dt`` [s] from t = 0; ``means``: (engine column of an absolute deck
-    displacement, the channels it is taken relative to the mean of); ``seats``: (engine
+    (segment) displacement, the channels it is taken relative to the mean of: its segment's
+    tables, :meth:`~deckpound.models.plan.Plan.segment_table_channels`); ``seats``: (engine
     column of a seat's absolute displacement, its actuator's channel); ``springs``: per bent
     spring row of d = B u − S u_g, the (engine column, B coefficient) and (channel, S
     coefficient) terms; ``columns``: the CSV's columns (the in-process result's), ``header``:
@@ -82,7 +83,7 @@ def csv_plan(p: ExportParts) -> dict:
     steps = {r["dt"] for r in disp}
     if len(steps) != 1:
         raise AssertionError(f"support records with different steps {sorted(steps)}")
-    column_of_dof = {dof: engine_cols.index(name) for name, dof in DOF_COLUMNS}
+    column_of_dof = {dof: engine_cols.index(name) for name, dof in plan.dof_columns}
     B, S = plan.spring_matrices
     springs = [
         [
@@ -91,7 +92,7 @@ def csv_plan(p: ExportParts) -> dict:
         ]
         for i in range(plan.n_bent_springs)
     ]
-    derived = ["deck_x_rel", "deck_y_rel", "seat1_x_rel", "seat2_x_rel"]
+    derived = list(plan.relative_columns)
     derived += [f"{b}_d{axis}" for b in plan.bent_names for axis in ("x", "y")]
     extended = engine_cols + derived
     columns = column_names(plan)
@@ -101,8 +102,9 @@ def csv_plan(p: ExportParts) -> dict:
         "records": [r["file"] for r in disp],
         "dt": steps.pop(),
         "means": [
-            [engine_cols.index("deck_x_abs"), plan.table_channels("x")],
-            [engine_cols.index("deck_y_abs"), plan.table_channels("y")],
+            [engine_cols.index(f"{seg.name}_{axis}_abs"), plan.segment_table_channels(k, axis)]
+            for k, seg in enumerate(plan.segments)
+            for axis in ("x", "y")
         ],
         "seats": [
             [engine_cols.index(f"seat{j}_x_abs"), plan.channels.index(f"seat{j}_x")] for j in (1, 2)
@@ -149,7 +151,7 @@ def _total(terms):
 
 def result_rows(rows, rel, read_record):
     """Rows of the engine columns (t first) to rows of the result's columns (rel["columns"]):
-    the deck relative to the mean of its tables' displacement, each seat relative to its
+    each deck segment relative to the mean of its tables' displacement, each seat relative to its
     actuator and each bent spring's deformation d = B u - S u_g, the support displacements
     u_g read by read_record(file) and interpolated at each row's t (interp_record).
     """
@@ -177,17 +179,17 @@ UNCHECKED_SEATS = "not checked (no seats[i].support_length)"
 
 def seat_margin_minima(plan, stats, unchecked):
     """The seat margins of a finished step loop, the equation of deckpound's epilogue
-    (deckpound.models.engine_contract.seat_margins): for each corner c whose facing seat has a
-    support length N = plan['support_lengths'][c] [m], the smallest seat margin
+    (deckpound.models.engine_contract.seat_margins): for each corner c (plan['corners']) whose
+    seat has a support length N = plan['support_lengths'][c] [m], the smallest seat margin
     m = N - (g_max - g(0)) [m] and its time [s], from the largest opening over every converged
     step and sub-step (stats['gap_openings'] of run_steps). Returns 'seat_margin_min'
     ({corner: [margin m, time s]}) and 'seat_margin_basis' ('every step', or ``unchecked``
     when no corner's seat has a support length)."""
     margins = {}
-    for c, length in enumerate(plan["support_lengths"]):
+    for name, length in zip(plan["corners"], plan["support_lengths"]):
         if length is not None:
-            opening, when = stats["gap_openings"][f"c{c + 1}"]
-            margins[f"c{c + 1}"] = [float(length) - opening, when]
+            opening, when = stats["gap_openings"][name]
+            margins[name] = [float(length) - opening, when]
     return {
         "seat_margin_min": margins,
         "seat_margin_basis": "every step" if margins else unchecked,

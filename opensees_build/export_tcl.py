@@ -70,7 +70,7 @@ def tcl_script(p: ExportParts) -> str:
         + tcl_step_plan(p)
         + tcl_sampling()
         + tcl_csv_columns(csv)
-        + tcl_step_loop(csv)
+        + tcl_step_loop(csv, len(p.plan["corners"]))
     )
 
 
@@ -96,7 +96,7 @@ def tcl_step_plan(p: ExportParts) -> str:
     """The step plan as Tcl variables, ``defineAnalysis`` and the recorders."""
     plan = p.plan
     recorders = "\n".join(render_recorders(p.recorders, "tcl"))
-    gap_eles = plan["gap_elements"] or [0, 0, 0, 0]
+    gap_eles = plan["gap_elements"] or [0] * len(plan["corners"])
     margin = "0.5 / $nSub" if plan["fallback"] == "substep" else "0.5"
     return f"""# step plan (tags from the legend above)
 set dt {_num(plan["dt"])}
@@ -104,8 +104,9 @@ set nSteps {plan["n_steps"]}
 set stride {plan["stride"]}
 set fallback {tcl_word(plan["fallback"])}
 set nSub {plan["substeps"]}
-set deck {plan["deck"]}
+set bodies {_tcl_list(plan["bodies"])}
 set seats {_tcl_list(plan["seats"])}
+set cornerNames {{{" ".join(tcl_word(c) for c in plan["corners"])}}}
 set deckCorners {_tcl_list(plan["deck_corners"])}
 set seatCorners {_tcl_list(plan["seat_corners"])}
 set gapEles {_tcl_list(gap_eles)}
@@ -142,7 +143,7 @@ def tcl_sampling() -> str:
 proc cornerGaps {} {
     global deckCorners seatCorners g0 nX nY
     set out {}
-    for {set c 0} {$c < 4} {incr c} {
+    for {set c 0} {$c < [llength $g0]} {incr c} {
         set dk [lindex $deckCorners $c]
         set st [lindex $seatCorners $c]
         set g [expr {[lindex $g0 $c] + [lindex $nX $c] * ([nodeDisp $dk 1] - [nodeDisp $st 1])}]
@@ -155,20 +156,26 @@ proc cornerGaps {} {
 }
 
 proc sampleRow {t} {
-    global deck seats gapEles hasGaps friction nX nY tX tY bentEles
-    set dk [nodeDisp $deck]
+    global bodies seats gapEles hasGaps friction nX nY tX tY bentEles g0
     set s1 [nodeDisp [lindex $seats 0]]
     set s2 [nodeDisp [lindex $seats 1]]
-    set vk [nodeVel $deck]
     set v1 [nodeVel [lindex $seats 0]]
     set v2 [nodeVel [lindex $seats 1]]
-    set row [list $t [lindex $dk 0] [lindex $dk 1] [lindex $dk 2] [lindex $s1 0] [lindex $s1 2] \\
-             [lindex $s2 0] [lindex $s2 2] [lindex $vk 0] [lindex $vk 1] [lindex $vk 2] \\
-             [lindex $v1 0] [lindex $v1 2] [lindex $v2 0] [lindex $v2 2]]
+    set row [list $t]
+    foreach body $bodies {
+        set dk [nodeDisp $body]
+        lappend row [lindex $dk 0] [lindex $dk 1] [lindex $dk 2]
+    }
+    lappend row [lindex $s1 0] [lindex $s1 2] [lindex $s2 0] [lindex $s2 2]
+    foreach body $bodies {
+        set vk [nodeVel $body]
+        lappend row [lindex $vk 0] [lindex $vk 1] [lindex $vk 2]
+    }
+    lappend row [lindex $v1 0] [lindex $v1 2] [lindex $v2 0] [lindex $v2 2]
     set row [concat $row [cornerGaps]]
     set fn {}
     set ft {}
-    for {set c 0} {$c < 4} {incr c} {
+    for {set c 0} {$c < [llength $g0]} {incr c} {
         set e [lindex $gapEles $c]
         if {!$hasGaps} {
             lappend fn 0.0; lappend ft 0.0
@@ -275,29 +282,30 @@ proc csvRow {{row}} {{
 """
 
 
-def tcl_step_loop(csv: dict) -> str:
+def tcl_step_loop(csv: dict, nc: int) -> str:
     """``trackStep`` (the engine's :func:`~.engine.track_step`: gap closures and seat
     margins), ``keepStoredRows`` and the step loop with the sub-step fallback and the
     unseating stop of :func:`deckpound.opensees_build.engine.run_steps`, writing the CSV's
-    rows, then the status, unseating and seat-margin lines."""
+    rows, then the status, unseating and seat-margin lines; ``nc`` corners."""
     columns = " ".join(tcl_word(csv_cell(c)) for c in csv["header"])
+    zeros = " ".join(["0"] * nc)
     return f"""# every converged step and sub-step, as the engine's track_step: the gap closures (deckpound's
 # one definition: a corner is in contact when its gap is <= 0 or its normal force > 0; a closure
 # is a step at which a corner goes from out of contact to in contact, in contact at t = 0: one)
 # and each corner's largest gap g_max and its time (the first call gives g(0)): the corner is
 # unseated at the first step at which g_max - g(0) exceeds the support length N of the seat it
 # faces, seat margin N - (g - g(0)) < 0
-set inside {{0 0 0 0}}
+set inside {{{zeros}}}
 set gapClosures 0
-set gapOpen {{-Inf -Inf -Inf -Inf}}
-set gapOpenTime {{0.0 0.0 0.0 0.0}}
-set gapStart {{0.0 0.0 0.0 0.0}}
+set gapOpen {{{" ".join(["-Inf"] * nc)}}}
+set gapOpenTime {{{" ".join(["0.0"] * nc)}}}
+set gapStart {{{" ".join(["0.0"] * nc)}}}
 set unseated {{}}
 proc trackStep {{t}} {{
-    global inside gapClosures hasGaps gapEles friction nX nY
+    global inside gapClosures hasGaps gapEles friction nX nY cornerNames
     global seatLengths gapOpen gapOpenTime gapStart unseated
     set gaps [cornerGaps]
-    for {{set c 0}} {{$c < 4}} {{incr c}} {{
+    for {{set c 0}} {{$c < [llength $gaps]}} {{incr c}} {{
         set g [lindex $gaps $c]
         if {{$hasGaps}} {{
             set now [expr {{$g <= 0.0}}]
@@ -321,7 +329,7 @@ proc trackStep {{t}} {{
             set support [lindex $seatLengths $c]
             if {{$support ne "" && $unseated eq ""}} {{
                 if {{$g - [lindex $gapStart $c] > $support}} {{
-                    set unseated [list c[expr {{$c + 1}}] $t]
+                    set unseated [list [lindex $cornerNames $c] $t]
                 }}
             }}
         }}
@@ -410,11 +418,11 @@ if {{$status == "unseated"}} {{
 # the seat margins N - (g_max - g(0)) [m] at the time of the largest gap [s], the engine's
 # (export_py.seat_margin_minima)
 set margins {{}}
-for {{set c 0}} {{$c < 4}} {{incr c}} {{
+for {{set c 0}} {{$c < [llength $seatLengths]}} {{incr c}} {{
     set support [lindex $seatLengths $c]
     if {{$support ne ""}} {{
         set opening [expr {{[lindex $gapOpen $c] - [lindex $gapStart $c]}}]
-        lappend margins "c[expr {{$c + 1}}] [expr {{$support - $opening}}] [lindex $gapOpenTime $c]"
+        lappend margins "[lindex $cornerNames $c] [expr {{$support - $opening}}] [lindex $gapOpenTime $c]"
     }}
 }}
 if {{[llength $margins]}} {{

@@ -16,7 +16,14 @@ from deckpound.models.errors import SceneError
 from deckpound.models.plan import Corner
 from deckpound.models.scene import Scene
 
-__all__ = ["HUGE_FORCE", "GapSpec", "contact_normal", "gap_mapping", "gap_orientation"]
+__all__ = [
+    "HUGE_FORCE",
+    "GapSpec",
+    "contact_normal",
+    "corner_orientation",
+    "gap_mapping",
+    "gap_orientation",
+]
 
 #: "infinite" yield force of the linear gap (ElasticPPGap) [kN]
 HUGE_FORCE = 1.0e20
@@ -38,15 +45,31 @@ class GapSpec:
 
 
 def gap_orientation(scene: Scene) -> tuple[float, ...] | None:
-    """zeroLength ``-orient`` of the gap elements: local x = a = (cos φ, −sin φ), the right end
-    face's outward normal (= side·n for every corner, n the gap-opening normal), local y' =
-    t = (sin φ, cos φ) (so local z = a × t = +Z and direction 3 stays the plan rotation).
-    None for a straight deck: OpenSees' default orientation is then the same a = X."""
+    """zeroLength ``-orient`` of the abutment corners' gap elements: local x = a = (cos φ,
+    −sin φ), the right end face's outward normal (= side·n for every corner, n the
+    gap-opening normal), local y' = t = (sin φ, cos φ) (so local z = a × t = +Z and direction
+    3 stays the plan rotation). None for a straight deck: OpenSees' default orientation is
+    then the same a = X. A joint with a skew of its own: :func:`corner_orientation`."""
     if scene.deck.skew == 0.0:
         return None
     phi = math.radians(scene.deck.skew)
     cs, sn = math.cos(phi), math.sin(phi)
     return (cs, -sn, 0.0, sn, cs, 0.0)
+
+
+def corner_orientation(corner: Corner) -> tuple[float, ...] | None:
+    """zeroLength ``-orient`` of one corner's gap element, from the plan's corner table:
+    local x = a = side·n = (cos φ, −sin φ) with φ the skew of the corner's face (the
+    abutments' or the joint's), local y' = the face tangent t; None for a straight face
+    (a = X, OpenSees' default).
+    For an abutment corner these are :func:`gap_orientation`'s numbers exactly (side·n and
+    t are the same products of cos φ and sin φ)."""
+    nx, ny = corner.normal
+    if ny == 0.0:
+        return None
+    side = corner.side
+    tx, ty = corner.tangent
+    return (side * nx, side * ny, 0.0, tx, ty, 0.0)
 
 
 def gap_mapping(
@@ -56,8 +79,10 @@ def gap_mapping(
 
     Physical gap (positive when open), measured along the corner's gap-opening normal n of the
     plan's corner table: g = g₀ + n·(u_deck − u_seat); n = side·a with a = (cos φ, −sin φ),
-    side = +1 for c1, c2 (seat 1, left) and −1 for c3, c4 (``Corner.side``; a = X for a
-    straight deck), g₀ = ``Corner.gap``. The
+    side = +1 for c1, c2 (seat 1, left) and the joint corners, −1 for c3, c4 (``Corner.side``;
+    a = X for a straight face, :func:`corner_orientation`), g₀ = ``Corner.gap``. At a joint
+    the "deck" node is the striking segment's corner and the "seat" node the facing point on
+    the other segment's end face. The
     zeroLength element's direction-1 strain is a·(u_j − u_i) with a its local x axis
     (:func:`gap_orientation`; checked against openseespy in ``tests/test_skew_opensees.py``),
     so the nodes are ordered (seat, deck) for side +1 and (deck, seat) for side −1:
@@ -68,7 +93,7 @@ def gap_mapping(
     """
     g0 = corner.gap
     i, j = (seat_node, deck_node) if corner.side > 0 else (deck_node, seat_node)
-    orient = gap_orientation(scene)
+    orient = corner_orientation(corner)
     c = scene.contact
     law = contact_law(c.law)
     material = law.opensees

@@ -16,6 +16,18 @@ Nodes (tags by name through :meth:`OpsSession.tag`):
 * ``actuator1``/``actuator2`` — at the seat nodes, imposed x motion, y and θ fixed;
 * ``table <bent>`` — at (x_b, 0), imposed x and y motion, θ fixed.
 
+A deck of segments (``scene.segments``, the plan's :class:`~deckpound.models.plan.SegmentPlan`
+bodies) has one centre node per segment, ``segment <name>`` (mass m, m, I), at the position
+:func:`.geometry.segment_origins` gives it (the plan model's: consecutive segments g₀ apart
+along their joint's normal), and every node of a segment — its corners ``deck <corner>``,
+its bent nodes ``deck <bent>``, its sticks ``stick <name> <k>`` — at the segment's centre
+plus its position in the segment's frame. At each joint the two corners ``j<k>_c1``,
+``j<k>_c2`` (the striking segment's left-end corners) meet facing points ``facing <corner>``
+on the other segment's right end face, at the corner's position at rest minus g₀ n
+(rigidLinked to that segment's centre, or joined to its stick axis end in stick mode), with
+the gap element between them as at a seat. A one-segment deck keeps the nodes, tags and
+command log above.
+
 Mode ``rigid``: rigidLink beams from the centre to the corners and bent nodes (exactly the 7
 DOF of the analytic engines, plus massless seat-y DOFs held by a guide spring). Mode
 ``stick``: elasticBeamColumn sticks along the axis (``stick_elements`` equal elements per half,
@@ -71,9 +83,16 @@ from deckpound.models.errors import SceneError
 from deckpound.models.plan import Plan, plan_of
 from deckpound.models.scene import Scene
 
-from .damping import MEMBERS_TEXT, mass_dampers, rayleigh_factors, rayleigh_members
+from .damping import (
+    MEMBERS_TEXT,
+    MassDamperElement,
+    ReferenceNode,
+    mass_dampers,
+    rayleigh_factors,
+    rayleigh_members,
+)
 from .gaps import contact_normal, gap_mapping
-from .geometry import seat_pivot, stick_section, stick_stations
+from .geometry import placed, seat_pivot, segment_origins, stick_section, stick_stations
 from .ops import ArrayArg, OpsSession
 
 #: stiffness of the seat y guide springs [kN/m] (seat y stays ~ F_t / k ≈ 0)
@@ -98,7 +117,13 @@ class ModelInfo:
     """Tags the runner needs to read the model's state, and the damping it was built with.
 
     The geometry (gaps g₀, sides, normals n, tangents t of the corners) is the plan model's
-    corner table (:class:`deckpound.models.plan.Corner`), not repeated here.
+    corner table (:class:`deckpound.models.plan.Corner`), not repeated here. ``deck``: the
+    first segment's centre node (the deck centre of a one-segment deck); ``bodies``: every
+    segment's centre node, in plan order; ``deck_corners``: the corner nodes and
+    ``seat_corners`` the points they face (a seat point, or a facing point on the next
+    segment), both in the plan's corner order; ``body_nodes``: per segment, the global
+    position of its centre at rest and every node that moves with it (centre first);
+    ``mass_dampers``: the relative mass damping's elements (:func:`.damping.mass_dampers`).
     """
 
     mode: str
@@ -112,28 +137,48 @@ class ModelInfo:
     friction: bool
     damping: DampingModel
     stick_elements: tuple[int, ...] = ()
+    bodies: tuple[int, ...] = ()
+    body_nodes: tuple[tuple[tuple[float, float], tuple[int, ...]], ...] = ()
+    mass_dampers: tuple[MassDamperElement, ...] = ()
     notes: list[str] = field(default_factory=list)
 
 
 @dataclass
 class DeckNodes:
-    """The deck's tags: centre node, corner nodes (c1..c4), the deck node above each bent
-    (plan order) and the stick elements (stick mode; empty in rigid mode)."""
+    """The deck's tags: the first segment's centre node (the deck centre of a one-segment
+    deck), the corner nodes (plan order), the deck node above each bent (plan order), the
+    stick elements (stick mode; empty in rigid mode), every segment's centre node, the
+    segments' global positions at rest (:func:`.geometry.segment_origins`; None for one
+    segment), the facing point of each joint corner (corner index → node) and every node of
+    each segment (centre first)."""
 
     centre: int
     corners: list[int]
     bents: list[int]
     sticks: list[int]
+    bodies: list[int] = field(default_factory=list)
+    origins: list[tuple[float, float]] | None = None
+    facing: dict[int, int] = field(default_factory=dict)
+    members: list[list[int]] = field(default_factory=list)
+
+    def origin(self, segment: int) -> tuple[float, float] | None:
+        """Global position of segment ``segment``'s centre (None: a one-segment deck)."""
+        return None if self.origins is None else self.origins[segment]
+
+    def add(self, segment: int, node: int) -> None:
+        """Count ``node`` among the nodes that move with segment ``segment``."""
+        if node not in self.members[segment]:
+            self.members[segment].append(node)
 
 
 @dataclass
 class SeatNodes:
     """The seats' tags: pivot node and actuator node per seat, the seat point facing each
-    corner (c1..c4)."""
+    abutment corner (corner index → node)."""
 
     pivots: list[int]
     actuators: list[int]
-    points: list[int]
+    points: dict[int, int]
 
 
 # -- checks -------------------------------------------------------------------------------
@@ -145,13 +190,6 @@ def refuse_scene(scene: Scene) -> None:
     The "option does nothing" warnings are derived by the engine contract from
     :meth:`deckpound.opensees_build.engine.OpenSeesEngine.reads`.
     """
-    if scene.segments is not None:
-        raise SceneError(
-            "segments",
-            "the OpenSees model is built for a one-segment deck: its stick model has one deck "
-            "node and gap elements between the deck and the seats only; run a deck of "
-            "segments with the compliance or nonsmooth engine",
-        )
     c = scene.contact
     law = contact_law(c.law)
     if law.opensees is None:
@@ -218,15 +256,15 @@ def build_model(
     damped_bents, damped_seats = rayleigh_members(plan, damping)
     ops.model("basic", "-ndm", 2, "-ndf", 3)
     deck = define_deck(ops, scene, plan)
-    seats = define_seats(ops, scene, plan, friction, supports)
-    bent_eles, tables = define_bents(ops, plan, deck.bents, damped_bents, supports)
+    seats = define_seats(ops, scene, plan, friction, supports, deck)
+    bent_eles, tables = define_bents(ops, plan, deck, damped_bents, supports)
     define_seat_springs(ops, plan, seats, damped_seats)
     # with friction the guide also carries the tangential force: 1e10 would add a series
     # compliance 1/k_guide behind the 1e6 stick spring (a 1e-4 relative difference from the
     # plan model, whose seats do not move in y); the skew guide makes it round-off
     define_seat_guides(ops, seats, scene.deck.skew != 0.0 or friction)
     gap_eles = define_contacts(ops, scene, plan, deck, seats, friction) if gaps else []
-    ref_nodes = define_damping(ops, plan, damping, deck, seats, supports)
+    ref_nodes, dampers = define_damping(ops, plan, damping, deck, seats, supports)
     if supports == "motion":
         if motion is None:
             raise ValueError("build_model needs the resampled motion for supports='motion'")
@@ -236,30 +274,59 @@ def build_model(
         deck=deck.centre,
         seats=tuple(seats.pivots),
         deck_corners=tuple(deck.corners),
-        seat_corners=tuple(seats.points),
+        seat_corners=tuple(facing_points(plan, deck, seats)),
         gap_elements=tuple(gap_eles),
         bent_names=plan.bent_names,
         bent_elements=tuple(bent_eles),
         friction=friction,
         damping=damping,
         stick_elements=tuple(deck.sticks),
+        bodies=tuple(deck.bodies),
+        body_nodes=tuple(
+            (deck.origin(k) or (0.0, 0.0), tuple(nodes)) for k, nodes in enumerate(deck.members)
+        ),
+        mass_dampers=tuple(dampers),
     )
 
 
 def define_deck(ops: OpsSession, scene: Scene, plan: Plan) -> DeckNodes:
-    """The deck centre node with all the deck mass, its corner nodes (the plan's corner
-    table), and the rigid links (``rigid``) or the sticks (``stick``) that join them."""
+    """The deck's centre node(s) with the deck mass (one per segment, each with its own),
+    its corner nodes (the plan's corner table), the facing points of the joints, and the
+    rigid links (``rigid``) or the sticks (``stick``) that join them."""
     d = scene.deck
-    ops.comment("deck: centre node with all the deck mass")
-    centre = ops.tag("node", "deck")
-    ops.node(centre, 0.0, 0.0)
-    ops.mass(centre, d.mass, d.mass, d.inertia)
-    corners = []
+    origins = segment_origins(plan)
+    if origins is None:
+        ops.comment("deck: centre node with all the deck mass")
+        centre = ops.tag("node", "deck")
+        ops.node(centre, 0.0, 0.0)
+        ops.mass(centre, d.mass, d.mass, d.inertia)
+        bodies = [centre]
+    else:
+        ops.comment(
+            f"deck of {len(plan.segments)} segments: a centre node per segment with its mass"
+        )
+        bodies = []
+        for seg, (ox, oy) in zip(plan.segments, origins):
+            n = ops.tag("node", f"segment {seg.name}")
+            ops.node(n, ox, oy)
+            ops.mass(n, *(float(plan.mass[dof]) for dof in seg.dofs))
+            bodies.append(n)
+    deck = DeckNodes(bodies[0], [], [], [], bodies, origins, {}, [[b] for b in bodies])
     for corner in plan.corners:
         n = ops.tag("node", f"deck {corner.name}")
-        ops.node(n, corner.x, corner.y)
-        corners.append(n)
-    deck = DeckNodes(centre, corners, [], [])
+        ops.node(n, *placed(deck.origin(corner.body), corner.x, corner.y))
+        deck.corners.append(n)
+        deck.add(corner.body, n)
+    joints = [c for c in plan.corners if c.joint >= 0]
+    if joints:
+        ops.comment("joints: the facing points on the other segment's end face, g0 along -n")
+        for corner in joints:
+            px, py = placed(deck.origin(corner.body), corner.x, corner.y)
+            nx, ny = corner.normal
+            n = ops.tag("node", f"facing {corner.name}")
+            ops.node(n, px - corner.gap * nx, py - corner.gap * ny)
+            deck.facing[corner.index] = n
+            deck.add(corner.joint, n)  # joint k faces segment k (0-based)
     if scene.opensees.mode == "rigid":
         define_rigid_deck(ops, scene, plan, deck)
     else:
@@ -267,64 +334,104 @@ def define_deck(ops: OpsSession, scene: Scene, plan: Plan) -> DeckNodes:
     return deck
 
 
+def bent_bodies(plan: Plan) -> list[int]:
+    """The segment each bent carries, in bent order (the plan's ``SegmentPlan.bents``)."""
+    body = {k: seg.index for seg in plan.segments for k in seg.bents}
+    return [body[k] for k in range(len(plan.bent_names))]
+
+
 def define_rigid_deck(ops: OpsSession, scene: Scene, plan: Plan, deck: DeckNodes) -> None:
-    """Rigid mode: a deck node above each bent (the centre node for a bent at x = 0) and
-    rigidLink beams from the centre to the corners and those nodes."""
+    """Rigid mode: a deck node above each bent (its segment's centre node for a bent at the
+    centre) and rigidLink beams from each segment's centre to its corners, those nodes and
+    the facing points on its end face."""
     tol = 1e-9 * scene.deck.length
-    for name, xb in zip(plan.bent_names, plan.bent_x):
+    for name, xb, body in zip(plan.bent_names, plan.bent_x, bent_bodies(plan)):
+        centre = deck.bodies[body]
         if abs(xb) <= tol:
-            deck.bents.append(deck.centre)
+            deck.bents.append(centre)
         else:
             n = ops.tag("node", f"deck {name}")
-            ops.node(n, xb, 0.0)
+            ops.node(n, *placed(deck.origin(body), xb, 0.0))
             deck.bents.append(n)
-    ops.comment("rigid deck: rigidLink beams from the centre")
-    for n in deck.corners + [n for n in deck.bents if n != deck.centre]:
-        ops.rigidLink("beam", deck.centre, n)
+            deck.add(body, n)
+    ops.comment(
+        "rigid deck: rigidLink beams from the centre"
+        if len(deck.bodies) == 1
+        else "rigid segments: rigidLink beams from each segment's centre"
+    )
+    bodies = bent_bodies(plan)
+    for k, centre in enumerate(deck.bodies):
+        corners = [n for c, n in zip(plan.corners, deck.corners) if c.body == k]
+        bents = [n for n, b in zip(deck.bents, bodies) if b == k and n != centre]
+        facing = [n for i, n in deck.facing.items() if plan.corners[i].joint == k]
+        for n in corners + bents + facing:
+            ops.rigidLink("beam", centre, n)
 
 
 def define_stick_deck(ops: OpsSession, scene: Scene, plan: Plan, deck: DeckNodes) -> None:
-    """Stick mode: elasticBeamColumn sticks along the axis (nodes at :func:`stick_stations`)
-    and from the deck ends to the corners; each bent acts on the nearest axis node."""
+    """Stick mode: per segment, elasticBeamColumn sticks along its axis (nodes at
+    :func:`stick_stations`) and from its ends to its corners and to the facing points on its
+    end face; each bent acts on the nearest axis node of its segment."""
     d = scene.deck
     area, inertia = stick_section(scene)
     ops.comment(f"stick deck: E = {d.stick_modulus:g} kN/m2, A = W^2/8, I = W^4/96 (near-rigid)")
     transf = ops.tag("transf", "deck")
     ops.geomTransf("Linear", transf)
-    xs = stick_stations(scene, plan)
-    axis = []
-    for k, x in enumerate(xs):
-        if x == 0.0:
-            axis.append(deck.centre)
-            continue
-        n = ops.tag("node", f"stick {k}")
-        ops.node(n, x, 0.0)
-        axis.append(n)
-    for k in range(len(axis) - 1):
-        e = ops.tag("element", f"stick {k}")
-        ops.element(
-            "elasticBeamColumn", e, axis[k], axis[k + 1], area, d.stick_modulus, inertia, transf
-        )
-        deck.sticks.append(e)
-    for corner, n in zip(plan.corners, deck.corners):
-        end = axis[0] if corner.seat == 0 else axis[-1]
-        e = ops.tag("element", f"stick {corner.name}")
-        ops.element("elasticBeamColumn", e, end, n, area, d.stick_modulus, inertia, transf)
-        deck.sticks.append(e)
-    for xb in plan.bent_x:
+    one = len(plan.segments) == 1
+    stations, axes = [], []
+    for seg, centre in zip(plan.segments, deck.bodies):
+        prefix = "stick" if one else f"stick {seg.name}"
+        xs = stick_stations(scene, plan, seg.index)
+        axis = []
+        for k, x in enumerate(xs):
+            if x == 0.0:
+                axis.append(centre)
+                continue
+            n = ops.tag("node", f"{prefix} {k}")
+            ops.node(n, *placed(deck.origin(seg.index), x, 0.0))
+            axis.append(n)
+            deck.add(seg.index, n)
+        for k in range(len(axis) - 1):
+            e = ops.tag("element", f"{prefix} {k}")
+            ops.element(
+                "elasticBeamColumn", e, axis[k], axis[k + 1], area, d.stick_modulus, inertia, transf
+            )
+            deck.sticks.append(e)
+        for corner, n in zip(plan.corners, deck.corners):
+            if corner.body != seg.index:
+                continue
+            # the right end of the deck (seat 2) or the left end (seat 1, or a joint's
+            # striking segment)
+            end = axis[-1] if corner.seat == 1 else axis[0]
+            e = ops.tag("element", f"stick {corner.name}")
+            ops.element("elasticBeamColumn", e, end, n, area, d.stick_modulus, inertia, transf)
+            deck.sticks.append(e)
+        for i, n in deck.facing.items():
+            corner = plan.corners[i]
+            if corner.joint != seg.index:
+                continue
+            e = ops.tag("element", f"stick facing {corner.name}")
+            ops.element("elasticBeamColumn", e, axis[-1], n, area, d.stick_modulus, inertia, transf)
+            deck.sticks.append(e)
+        stations.append(xs)
+        axes.append(axis)
+    for xb, body in zip(plan.bent_x, bent_bodies(plan)):
+        xs = stations[body]
         k = min(range(len(xs)), key=lambda k: abs(xs[k] - xb))
-        deck.bents.append(axis[k])
+        deck.bents.append(axes[body][k])
 
 
 def define_seats(
-    ops: OpsSession, scene: Scene, plan: Plan, friction: bool, supports: str
+    ops: OpsSession, scene: Scene, plan: Plan, friction: bool, supports: str, deck: DeckNodes
 ) -> SeatNodes:
     """Per seat: its pivot node with the seat mass, its actuator node (x imposed or fixed, y
     and θ fixed), and the seat points facing its corners at pivot + lever, rigidLinked to the
-    pivot — or fixed, for a rigid abutment (``Corner.seat_fixed``)."""
-    seats = SeatNodes([], [], [])
+    pivot — or fixed, for a rigid abutment (``Corner.seat_fixed``). The pivot sits in the
+    frame of the deck segment the seat faces (:func:`.geometry.seat_pivot`)."""
+    seats = SeatNodes([], [], {})
     for j, seat in enumerate(scene.seats):
-        xf, yf = seat_pivot(plan, j, friction)
+        body = next(c.body for c in plan.corners if c.seat == j)
+        xf, yf = placed(deck.origin(body), *seat_pivot(plan, j, friction))
         ops.comment(f"seat {j + 1}: contact-face mid-point, guided in y by a stiff spring")
         n = ops.tag("node", f"seat{j + 1}")
         ops.node(n, xf, yf)
@@ -345,22 +452,29 @@ def define_seats(
                 ops.fix(sc, 1, 1, 1)
             else:
                 ops.rigidLink("beam", n, sc)
-            seats.points.append(sc)
+            seats.points[corner.index] = sc
     return seats
 
 
+def facing_points(plan: Plan, deck: DeckNodes, seats: SeatNodes) -> list[int]:
+    """The node each corner meets, in the plan's corner order: its seat point, or at a joint
+    the facing point on the other segment's end face."""
+    return [seats.points[c.index] if c.joint < 0 else deck.facing[c.index] for c in plan.corners]
+
+
 def define_bents(
-    ops: OpsSession, plan: Plan, deck_nodes: list[int], damped: list[bool], supports: str
+    ops: OpsSession, plan: Plan, deck: DeckNodes, damped: list[bool], supports: str
 ) -> tuple[list[int], list[int]]:
-    """Per bent: its shake-table node, a zeroLength table → deck node with the Hysteretic
-    materials of its x and y plan springs (``-doRayleigh 1`` when ``damped``), and its
-    explicit dashpots (the springs' ``dashpot``) in an element of their own. Returns (bent
-    elements, table nodes)."""
+    """Per bent: its shake-table node (under the deck node above the bent), a zeroLength
+    table → deck node with the Hysteretic materials of its x and y plan springs
+    (``-doRayleigh 1`` when ``damped``), and its explicit dashpots (the springs' ``dashpot``)
+    in an element of their own. Returns (bent elements, table nodes)."""
     elements, tables = [], []
-    for k, (name, xb, dn) in enumerate(zip(plan.bent_names, plan.bent_x, deck_nodes)):
+    rows = zip(plan.bent_names, plan.bent_x, deck.bents, bent_bodies(plan))
+    for k, (name, xb, dn, body) in enumerate(rows):
         springs = plan.springs[2 * k : 2 * k + 2]  # (x, y), Plan.springs order
         tn = ops.tag("node", f"table {name}")
-        ops.node(tn, xb, 0.0)
+        ops.node(tn, *placed(deck.origin(body), xb, 0.0))
         ops.fix(tn, *((1, 1, 1) if supports == "fixed" else (0, 0, 1)))
         tables.append(tn)
         mats = []
@@ -421,22 +535,23 @@ def define_seat_guides(ops: OpsSession, seats: SeatNodes, stiff: bool) -> None:
 def define_contacts(
     ops: OpsSession, scene: Scene, plan: Plan, deck: DeckNodes, seats: SeatNodes, friction: bool
 ) -> list[int]:
-    """The gap element of every corner: zeroLengthContact2D with friction, else a zeroLength
-    with the law's gap material (:func:`.gaps.gap_mapping`). Returns the element tags."""
+    """The gap element of every corner, between its corner node and the node it meets
+    (:func:`facing_points`): zeroLengthContact2D with friction, else a zeroLength with the
+    law's gap material (:func:`.gaps.gap_mapping`). Returns the element tags."""
     ct = scene.contact
     ops.comment(
         f"contact at the corners: law {ct.law}"
         + (", zeroLengthContact2D with friction" if friction else "")
     )
     elements = []
-    for corner, dk, st in zip(plan.corners, deck.corners, seats.points):
+    for corner, dk, st in zip(plan.corners, deck.corners, facing_points(plan, deck, seats)):
         e = ops.tag("element", f"gap {corner.name}")
         if friction:
-            # i = seat point, j = deck corner; zeroLengthContact2D (3.7) measures the gap
-            # as n_c·(x_i + u_i − x_j − u_j) (verified), so n_c = −n points from the deck to
-            # the seat: −x at seat 1, +x at seat 2 for a straight deck. Its nodes are g₀
-            # apart along n (it warns that L > tolerance: harmless, the gap is the
-            # geometric one).
+            # i = seat (facing) point, j = deck corner; zeroLengthContact2D (3.7) measures the
+            # gap as n_c·(x_i + u_i − x_j − u_j) (verified), so n_c = −n points from the deck
+            # to the seat: −x at seat 1 and at a joint, +x at seat 2 for a straight deck. Its
+            # nodes are g₀ apart along n (it warns that L > tolerance: harmless, the gap is
+            # the geometric one).
             nx, ny = contact_normal(corner)
             ops.element(
                 "zeroLengthContact2D",
@@ -468,10 +583,10 @@ def define_damping(
     deck: DeckNodes,
     seats: SeatNodes,
     supports: str,
-) -> list[int]:
+) -> tuple[list[ReferenceNode], list[MassDamperElement]]:
     """``rayleigh`` with the damping model's factors (:func:`.damping.rayleigh_factors`), the
     relative mass dampers (:func:`.damping.mass_dampers`) and the sticks' region without
-    Rayleigh damping. Returns the mass dampers' reference nodes."""
+    Rayleigh damping. Returns the mass dampers' reference nodes and elements."""
     wi, wj = damping.omega
     ops.comment(
         f"Rayleigh: a0 M ({damping.mass} velocities) + a1 K ({damping.stiffness} stiffness of "
@@ -483,30 +598,36 @@ def define_damping(
         )
     )
     ops.rayleigh(*rayleigh_factors(damping))
-    refs = mass_dampers(ops, plan, damping, deck.centre, seats.pivots, seats.actuators, supports)
+    refs, elements = mass_dampers(
+        ops, plan, damping, deck.bodies, deck.origins, seats.pivots, seats.actuators, supports
+    )
     if deck.sticks:
         ops.region(
             ops.tag("region", "sticks"), "-eleOnly", *deck.sticks, "-rayleigh", 0.0, 0.0, 0.0, 0.0
         )
-    return refs
+    return refs, elements
 
 
 def define_excitation(
-    ops: OpsSession, plan: Plan, motion, support_nodes: list[int], ref_nodes: list[int]
+    ops: OpsSession,
+    plan: Plan,
+    motion,
+    support_nodes: list[int],
+    ref_nodes: list[ReferenceNode],
 ) -> None:
     """MultipleSupport excitation: per support channel (``plan.channels``: the tables' x and
     y, then the actuators' x) a Path displacement and velocity series of the resampled record
     (padded, :func:`padded`), a groundMotion and its imposedMotion on the support node (and on
-    the relative mass dampers' reference node of that table). ``support_nodes``: the table
-    nodes in bent order, then the two actuators."""
+    the relative mass dampers' reference nodes that follow that table). ``support_nodes``: the
+    table nodes in bent order, then the two actuators."""
     n_tables = len(plan.bent_names)
     where = [(tn, dof) for tn in support_nodes[:n_tables] for dof in (1, 2)]
     where += [(act, 1) for act in support_nodes[n_tables:]]
     # reference nodes of the relative mass damping follow their table's motion
     also: dict[int, list[tuple[int, int]]] = {}
-    for k, rn in enumerate(ref_nodes):
-        also.setdefault(2 * k, []).append((rn, 1))
-        also.setdefault(2 * k + 1, []).append((rn, 2))
+    for ref in ref_nodes:
+        also.setdefault(ref.channel_x, []).append((ref.node, 1))
+        also.setdefault(ref.channel_y, []).append((ref.node, 2))
     dt = float(motion.t[1] - motion.t[0])
     ops.comment("multiple-support excitation: imposed displacement and velocity")
     ops.pattern("MultipleSupport", ops.tag("pattern", "supports"))

@@ -2,22 +2,24 @@
 deckpound's result columns (:func:`deckpound.models.engine_contract.engine_columns`).
 
 One recorder file per result column the engine writes, named after it (``deck_x_abs.out``,
-``deck_vx_abs.out``, ``gap_c1.out``, ``bent1_fx.out``, ...; the columns deckpound derives from
+``deck_vx_abs.out``, ``gap_c1.out``, ``bent1_fx.out``, ...; a deck of segments
+``frame1_x_abs.out``, ``gap_j1_c1.out``, ...; the columns deckpound derives from
 these and the support motion — displacements relative to the supports, bent deformations — are
 not recorded). Every file
 starts with the time column (``-time``) and holds raw OpenSees quantities at 17 significant
 digits; :class:`ColumnMap` states how a deckpound column follows from them:
 
 * node displacements are the columns themselves (absolute, as in deckpound);
-* ``gap_cK`` — straight deck without friction: the gap element's ``deformation``
+* ``gap_<corner>`` — straight deck without friction: the gap element's ``deformation``
   e = u_j − u_i, and g = g₀ + e (the nodes are ordered so that e = side·(u_deck − u_seat),
   closing negative); straight deck with friction (zeroLengthContact2D): the x displacements
-  of the deck corner and the seat point, g = g₀ + side·(u_deck − u_seat); skewed deck (either
+  of the deck corner and the seat point (at a joint: the facing point on the other segment),
+  g = g₀ + side·(u_deck − u_seat); skewed face (either
   element): their x and y displacements (``-dof 1 2``), g = g₀ + n·(u_deck − u_seat) with the
   corner's gap-opening normal n — the engine's own arithmetic;
-* ``fn_cK`` — without friction the material stress (``basicForce``, ≤ 0 in compression),
+* ``fn_<corner>`` — without friction the material stress (``basicForce``, ≤ 0 in compression),
   fn = −stress; with friction the element's resisting forces [Fx_i, Fy_i, M_i, Fx_j, Fy_j, M_j]
-  (j = deck corner), fn = −n·(Fx_j, Fy_j) and ``ft_cK`` = −t·(Fx_j, Fy_j) (force on the deck
+  (j = deck corner), fn = −n·(Fx_j, Fy_j) and ``ft_<corner>`` = −t·(Fx_j, Fy_j) (force on the deck
   along the face tangent t; −side·Fx_j and −Fy_j for a straight deck);
 * ``<bent>_fx/_fy`` — stress of the bent's Hysteretic material 1 (x) and 2 (y).
 
@@ -39,7 +41,6 @@ from pathlib import Path
 import numpy as np
 
 from deckpound.models.errors import SceneError
-from deckpound.models.plan import DOF_COLUMNS, VELOCITY_COLUMNS
 
 from .quoting import comment_text, py_str, safe_file_name, tcl_word
 
@@ -149,18 +150,17 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
     velocities, each corner's gap and contact forces, the bents' spring forces; the maps in
     the order of the result columns."""
     recs: list[Recorder] = []
-    maps: list[ColumnMap] = [ColumnMap("t", f"{DOF_COLUMNS[0][0]}.out", a=0)]
+    maps: list[ColumnMap] = [ColumnMap("t", f"{plan['columns'][1]}.out", a=0)]
     node_recorders(plan, recs, maps)
-    for c in range(4):
+    for c, name in enumerate(plan["corners"]):
         if plan["gap_elements"]:
             gap_recorder(plan, c, recs, maps)
             force_recorders(plan, c, recs, maps)
         else:
-            k = c + 1
             maps += [
-                ColumnMap(f"gap_c{k}", None, offset=plan["g0"][c]),
-                ColumnMap(f"fn_c{k}", None),
-                ColumnMap(f"ft_c{k}", None),
+                ColumnMap(f"gap_{name}", None, offset=plan["g0"][c]),
+                ColumnMap(f"fn_{name}", None),
+                ColumnMap(f"ft_{name}", None),
             ]
     bent_recorders(plan, bent_names, recs, maps)
     for r in recs:
@@ -174,8 +174,8 @@ def standard_recorders(plan: dict, bent_names) -> tuple[list[Recorder], list[Col
 
 
 def node_recorders(plan: dict, recs: list[Recorder], maps: list[ColumnMap]) -> None:
-    """Append the displacement and velocity recorders of the deck centre (x, y, θ) and the
-    seats (x, θ) and their maps."""
+    """Append the displacement and velocity recorders of the deck centre (x, y, θ; each
+    segment's centre for a deck of segments) and the seats (x, θ) and their maps."""
 
     def node(col: str, vcol: str, tag: int, dof: int, what: str, unit: str) -> None:
         for c, response, kind in ((col, "disp", ""), (vcol, "vel", "/s")):
@@ -193,22 +193,29 @@ def node_recorders(plan: dict, recs: list[Recorder], maps: list[ColumnMap]) -> N
             )
             maps.append(ColumnMap(c, f"{c}.out"))
 
-    # the plan model's column names, in DOF order: deck x, y, θ, then seat x, θ per seat
-    names = [(d, v) for (d, _), (v, _) in zip(DOF_COLUMNS, VELOCITY_COLUMNS)]
-    for dof, (col, vcol) in enumerate(names[:3], start=1):
-        unit = "rad" if dof == 3 else "m"
-        node(col, vcol, plan["deck"], dof, f"deck centre node {plan['deck']} dof {dof}", unit)
+    # the engine columns in DOF order: each segment's x, y, θ, then seat x, θ per seat, and
+    # the velocities in the same order (deckpound.models.engine_contract.engine_columns)
+    bodies = plan["bodies"]
+    n = 3 * len(bodies) + 4
+    cols = plan["columns"]
+    names = list(zip(cols[1 : 1 + n], cols[1 + n : 1 + 2 * n]))
+    for s, body in enumerate(bodies):
+        what = "deck centre" if len(bodies) == 1 else f"segment {cols[1 + 3 * s][:-6]} centre"
+        for dof, (col, vcol) in enumerate(names[3 * s : 3 * s + 3], start=1):
+            unit = "rad" if dof == 3 else "m"
+            node(col, vcol, body, dof, f"{what} node {body} dof {dof}", unit)
+    seats = names[3 * len(bodies) :]
     for j, seat in enumerate(plan["seats"], start=1):
-        for dof, (col, vcol) in zip((1, 3), names[1 + 2 * j : 3 + 2 * j]):
+        for dof, (col, vcol) in zip((1, 3), seats[2 * j - 2 : 2 * j]):
             unit = "rad" if dof == 3 else "m"
             node(col, vcol, seat, dof, f"seat {j} node {seat} dof {dof}", unit)
 
 
 def gap_recorder(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnMap]) -> None:
-    """Append corner ``c``'s gap recorder and map: a skewed deck (any element) records the
-    corner nodes' x and y displacements and projects them on n; a straight deck with
+    """Append corner ``c``'s gap recorder and map: a skewed face (any element) records the
+    corner nodes' x and y displacements and projects them on n; a straight face with
     friction their x displacements (n = (side, 0)); else the gap element's deformation."""
-    k = c + 1
+    k = plan["corners"][c]
     side, g0 = plan["sides"][c], plan["g0"][c]
     e = plan["gap_elements"][c]
     dn, sn = plan["deck_corners"][c], plan["seat_corners"][c]
@@ -219,7 +226,7 @@ def gap_recorder(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnMap]
         # but in other arithmetic: its last bits would differ from the engine's column)
         recs.append(
             Recorder(
-                f"gap_c{k}.out",
+                f"gap_{k}.out",
                 "Node",
                 (dn, sn),
                 ("disp",),
@@ -230,13 +237,13 @@ def gap_recorder(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnMap]
         )
         maps.append(
             ColumnMap(
-                f"gap_c{k}", f"gap_c{k}.out", a=1, b=3, offset=g0, scale=nx, a2=2, b2=4, scale2=ny
+                f"gap_{k}", f"gap_{k}.out", a=1, b=3, offset=g0, scale=nx, a2=2, b2=4, scale2=ny
             )
         )
     elif plan["friction"]:  # straight deck: x displacements only, n = (side, 0)
         recs.append(
             Recorder(
-                f"gap_c{k}.out",
+                f"gap_{k}.out",
                 "Node",
                 (dn, sn),
                 ("disp",),
@@ -245,11 +252,11 @@ def gap_recorder(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnMap]
                 dofs=(1,),
             )
         )
-        maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", a=1, b=2, offset=g0, scale=side))
+        maps.append(ColumnMap(f"gap_{k}", f"gap_{k}.out", a=1, b=2, offset=g0, scale=side))
     else:
         recs.append(
             Recorder(
-                f"gap_c{k}.out",
+                f"gap_{k}.out",
                 "Element",
                 (e,),
                 ("deformation",),
@@ -257,13 +264,13 @@ def gap_recorder(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnMap]
                 f"deformation u_j - u_i of gap element {e} [m]",
             )
         )
-        maps.append(ColumnMap(f"gap_c{k}", f"gap_c{k}.out", offset=g0))
+        maps.append(ColumnMap(f"gap_{k}", f"gap_{k}.out", offset=g0))
 
 
 def force_recorders(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnMap]) -> None:
     """Append corner ``c``'s contact force recorders and the fn, ft maps: with friction the
     element's resisting forces projected on −n and −t, else the gap material's stress."""
-    k = c + 1
+    k = plan["corners"][c]
     e = plan["gap_elements"][c]
     if plan["friction"]:
         side = plan["sides"][c]
@@ -271,9 +278,9 @@ def force_recorders(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnM
         # fn = -n.(Fx_j, Fy_j), ft = -t.(Fx_j, Fy_j) (j = deck corner); straight: -side*Fx_j,
         # -Fy_j
         terms = (
-            ((f"fn_c{k}", 4, -side, None, 0.0), (f"ft_c{k}", 5, -1.0, None, 0.0))
+            ((f"fn_{k}", 4, -side, None, 0.0), (f"ft_{k}", 5, -1.0, None, 0.0))
             if ny == 0.0
-            else ((f"fn_c{k}", 4, -nx, 5, -ny), (f"ft_c{k}", 4, -tx, 5, -ty))
+            else ((f"fn_{k}", 4, -nx, 5, -ny), (f"ft_{k}", 4, -tx, 5, -ty))
         )
         for col, a, scale, a2, scale2 in terms:
             recs.append(
@@ -291,7 +298,7 @@ def force_recorders(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnM
     else:
         recs.append(
             Recorder(
-                f"fn_c{k}.out",
+                f"fn_{k}.out",
                 "Element",
                 (e,),
                 ("basicForce",),
@@ -299,8 +306,8 @@ def force_recorders(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnM
                 f"material stress of gap element {e}, <= 0 in compression [kN]",
             )
         )
-        maps.append(ColumnMap(f"fn_c{k}", f"fn_c{k}.out", scale=-1.0))
-        maps.append(ColumnMap(f"ft_c{k}", None))
+        maps.append(ColumnMap(f"fn_{k}", f"fn_{k}.out", scale=-1.0))
+        maps.append(ColumnMap(f"ft_{k}", None))
 
 
 def bent_recorders(plan: dict, bent_names, recs: list[Recorder], maps: list[ColumnMap]) -> None:

@@ -16,8 +16,9 @@ import dataclasses
 
 import numpy as np
 
-from deckpound.models.columns import column_unit, standard_columns
+from deckpound.models.columns import column_names, column_unit
 from deckpound.models.excitation import support_motion
+from deckpound.models.plan import plan_of
 from deckpound.models.scene import Scene
 from deckpound.opensees_build.engine import run_opensees
 
@@ -115,7 +116,7 @@ def verify_clone(
     run_compliance(sc.replace(run=dataclasses.replace(sc.run, duration=0.01)), motion)
     ro = run_opensees(sc, motion)
     rc = run_compliance(sc, motion)
-    cols = [c for c in standard_columns([b.name for b in sc.bents]) if c != "t"]
+    cols = [c for c in column_names(plan_of(sc)) if c != "t"]  # a deck of segments' too
     dev = column_deviations(ro.columns, rc.columns, cols)
     velocity = {c for c in cols if column_unit(c) in ("m/s", "rad/s")}
     worst = max(((c, d) for c, d in dev.items() if c not in velocity), key=lambda kv: kv[1])
