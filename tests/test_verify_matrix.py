@@ -14,6 +14,7 @@ import sys
 import pytest
 
 from deckpound.compare.verify import matrix as vm
+from deckpound.models.scene_io import load_scene
 
 HAS_OPENSEES = importlib.util.find_spec("openseespy") is not None
 
@@ -27,17 +28,22 @@ def test_matrix_covers_every_choice_opensees_expresses():
     for law in vm.LAW_EXCLUSIONS:
         assert law not in vm.verified_laws()
     # the linear law: friction (none, contact2d) × skew × every damping choice; the other laws:
-    # skew × the default damping
+    # skew × the default damping; a deck of segments (two-frame) without and with friction
     others = len(vm.verified_laws()) - 1
-    assert len(cases) == len(set(cases)) == 2 * 2 * len(vm.DAMPING_CASES) + 2 * others
+    n = 2 * 2 * len(vm.DAMPING_CASES) + 2 * others
+    assert len(cases) == len(set(cases)) == n + len(vm.SEGMENT_CASES)
     assert {c.law for c in cases} == set(vm.verified_laws())
     assert set(vm.QUICK_CASES) <= set(cases)
+    segments = [c for c in cases if c.scene is not None]
+    assert segments == list(vm.SEGMENT_CASES)
+    assert {c.friction for c in segments} == {"none", "contact2d"}
+    assert load_scene(vm.SEGMENT_SCENE).segments is not None
+    # a scene of segments runs the product on itself, without the two-frame rows
+    assert vm.matrix_cases(load_scene(vm.SEGMENT_SCENE)) == cases[:n]
 
 
 @pytest.mark.skipif(not HAS_OPENSEES, reason="no openseespy")
 def test_a_case_above_tolerance_fails_the_command(monkeypatch):
-    from deckpound.models.scene_io import load_scene
-
     sc = load_scene("saiidi-4span", ["run.duration=1.5"])
     lines = []
     assert vm.main(sc, pinned=True, quick=False, log=lines.append) == 0

@@ -40,7 +40,7 @@ def publish_matrix(page: Path = PAGE, log=print) -> int:
     """Run the whole matrix on the benchmark and write its table; 1 when a case fails."""
     scene = load_scene(SCENE)
     results = verify_matrix.run_matrix(scene, log=log)
-    block = verify_matrix.readme_block(results, scene, quick=False)
+    block = verify_matrix.table_block(results, scene, quick=False)
     log(f"wrote {write_block(page, verify_matrix.BEGIN, verify_matrix.END, block)}")
     return 0 if all(r.ok for r in results) else 1
 
