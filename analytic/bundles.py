@@ -44,6 +44,7 @@ from collections import namedtuple
 import numpy as np
 
 from deckpound.analytic.kernels.contact_assembly import N_LAW_DERIVATIVES
+from deckpound.analytic.kernels.size_tags import corner_slots
 from deckpound.analytic.kernels.support_motion import record_slopes
 from deckpound.models.engine_contract import Status
 from deckpound.models.errors import SceneError
@@ -229,7 +230,7 @@ def new_contact_work(n_corners: int, n_dof: int) -> ContactWork:
     return ContactWork(
         fc=np.zeros(n_dof),
         evaluated=np.zeros(n_corners, dtype=np.bool_),
-        corners=tuple(range(n_corners)),
+        corners=corner_slots(n_corners),
         der=np.zeros((n_corners, N_LAW_DERIVATIVES)),
         **row_views(("g", "gd", "lam", "lt"), n_corners),
         **row_views(("WN", "WT"), n_corners, n_dof),

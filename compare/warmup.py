@@ -7,8 +7,8 @@ the scene and the engine settings, and the kernels' signatures change as the ker
 warm-up does not list signatures: it *runs* each analytic engine on tiny versions of the
 benchmark that cover the type specialisations a user can reach (:data:`ITEMS`: linear and
 nonlinear contact geometry, each friction mode, the newmark and adaptive integrators, the
-nonsmooth engine's lemke and enumeration solvers; the Hysteretic material used by
-``deckpound verify takeda``). Each item runs in this process through the public engine
+nonsmooth engine's lemke and enumeration solvers, a deck of several segments; the Hysteretic
+material used by ``deckpound verify takeda``). Each item runs in this process through the public engine
 registry, exactly as a user's run would, so whatever those runs compile is what the users'
 runs load.
 
@@ -51,14 +51,21 @@ WARM_DURATION = 0.02
 _FRICTION = ("contact.friction=0.2",)
 
 
+#: the scene of the warm-up runs of a deck of segments: every N ≥ 2 shares its kernels
+#: (:mod:`deckpound.analytic.kernels.size_tags`)
+SEGMENTS_SCENE = "two-frame"
+
+
 @dataclass(frozen=True)
 class Item:
-    """One warm-up run: an engine on the benchmark with ``overrides`` (``engine = "takeda"``:
-    the standalone Hysteretic material of ``deckpound verify takeda``)."""
+    """One warm-up run: an engine on ``scene`` (the benchmark by default) with ``overrides``
+    (``engine = "takeda"``: the standalone Hysteretic material of ``deckpound verify
+    takeda``)."""
 
     engine: str
     label: str
     overrides: tuple[str, ...] = ()
+    scene: str = "saiidi-4span"
 
 
 ITEMS: tuple[Item, ...] = (
@@ -97,6 +104,16 @@ ITEMS: tuple[Item, ...] = (
         "enumeration, linear geometry, friction",
         ("nonsmooth.solver=enumeration", *_FRICTION, "contact.friction_mode=stick"),
     ),
+    # a deck of segments: one specialisation per loop serves every N ≥ 2 (the variants above
+    # share it: they differ in values, not in the kernels' argument types)
+    Item("compliance", "newmark, deck of segments", (), SEGMENTS_SCENE),
+    Item(
+        "compliance",
+        "adaptive, deck of segments",
+        ("compliance.integrator=adaptive",),
+        SEGMENTS_SCENE,
+    ),
+    Item("nonsmooth", "lemke, deck of segments", (), SEGMENTS_SCENE),
     Item("takeda", "Hysteretic material (verify takeda)"),
 )
 
@@ -215,8 +232,8 @@ class _CompileCounter:
         self._event.unregister("numba:compile", self.listener)
 
 
-def _scene(overrides: Iterable[str]):
-    return load_scene("saiidi-4span", [f"run.duration={WARM_DURATION!r}", *overrides])
+def _scene(item: Item):
+    return load_scene(item.scene, [f"run.duration={WARM_DURATION!r}", *item.overrides])
 
 
 def _warm_takeda() -> None:
@@ -247,7 +264,7 @@ def warm_item(item: Item) -> WarmResult:
             _warm_takeda()
             status, compile_time = "success", 0.0
         else:
-            result = run_engine(item.engine, _scene(item.overrides))
+            result = run_engine(item.engine, _scene(item))
             status = str(result.meta.get("status"))
             compile_time = float(result.meta.get("compile_time", 0.0))
         seconds = time.perf_counter() - t0

@@ -423,6 +423,18 @@ class Plan:
         """Indices of the shake-table channels along ``axis`` (``x`` or ``y``)."""
         return [self.channels.index(f"{b}_{axis}") for b in self.bent_names]
 
+    def segment_positions(self) -> list[tuple[float, float]]:
+        """Each segment's centre at rest [m] as the contact model places it: the first at its
+        station's centre, each next one beyond the joint's clear gap, O_{k+1} = O_k − O₀ with
+        O₀ the facing centre in the striking segment's frame (``Corner.pivot``), so the joint
+        faces stand g₀ apart along their normal (the stations lay the segments end to end)."""
+        out = [(self.segments[0].centre, 0.0)]
+        for seg in self.segments[1:]:
+            corner = next(c for c in self.corners if c.body == seg.index and c.joint >= 0)
+            x, y = out[-1]
+            out.append((x - corner.pivot[0], y - corner.pivot[1]))
+        return out
+
     def segment_table_channels(self, segment: int, axis: str) -> list[int]:
         """The shake-table channels along ``axis`` that a segment's relative displacement is
         measured from: those of the bents it carries, or every table for a segment that

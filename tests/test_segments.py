@@ -279,3 +279,18 @@ def test_the_papers_joint_section_runs_the_two_frame_bridge_for_the_benchmark(tm
     table = next(i for i in items if isinstance(i, Table)).frame
     assert len(table) == len(run.table)
     assert {"θ frame1 [mrad]", "θ frame2 [mrad]", "joint seat margin [mm]"} <= set(table.columns)
+
+
+def test_the_outlines_keep_the_joint_gap(two_frame):
+    """At rest the drawn frames stand the joint's clear gap apart (the contact model's layout,
+    Plan.segment_positions), and the seats their gap behind the deck ends."""
+    from deckpound.compare.report.figures import outline_columns, outlines
+
+    plan = plan_of(two_frame)
+    polys = outlines(two_frame, dict.fromkeys(outline_columns(plan), 0.0), 1.0)
+    right_of_frame1 = polys["frame1"][:, 0].max()
+    left_of_frame2 = polys["frame2"][:, 0].min()
+    assert left_of_frame2 - right_of_frame1 == pytest.approx(0.0127, abs=1e-12)
+    assert polys["frame1"][:, 0].min() - polys["seat1"][:, 0].max() == pytest.approx(0.0127)
+    assert polys["seat2"][:, 0].min() - left_of_frame2 == pytest.approx(16.75 + 0.0127)
+    assert plan.segment_positions()[1] == pytest.approx((8.375 + 0.0127, 0.0))

@@ -73,6 +73,7 @@ from deckpound.analytic.kernels.hysteretic_layout import (
     T_STRESS,
     T_TANGENT,
 )
+from deckpound.analytic.kernels.size_tags import corner_slots, dof_slots, index_tag
 from deckpound.models.damping import DampingModel
 from deckpound.models.plan import DOF_NAMES, Plan
 
@@ -268,7 +269,7 @@ def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
         bkc=bkc,
         kc=k0.astype(float).copy(),
         cvar=np.zeros(ns),
-        dofs=tuple(range(mass.shape[0])),
+        dofs=dof_slots(mass.shape[0]),
     )
     K0 = B.T @ (k0[:, None] * B)
     return PackedSystem(
@@ -498,16 +499,19 @@ def row_layout(plan: Plan) -> RowLayout:
     the displacement columns of :attr:`deckpound.models.plan.Plan.dof_columns` (the columns
     :func:`deckpound.models.engine_contract.engine_columns` names), which must cover the plan's
     DOF once each (ValueError otherwise: a plan of another size needs its own columns)."""
-    dof_columns = tuple(int(dof) for _, dof in plan.dof_columns)
+    dofs = [int(dof) for _, dof in plan.dof_columns]
     n_dof = int(plan.mass.shape[0])
-    if sorted(dof_columns) != list(range(n_dof)):
+    corners = corner_slots(len(plan.corners))
+    # the layout's tags are tuples exactly when the loop's are (one compiled type per model)
+    dof_columns = index_tag(dofs, isinstance(dof_slots(n_dof), tuple))
+    if sorted(dofs) != list(range(n_dof)):
         raise ValueError(
             f"the displacement columns (Plan.dof_columns) read DOF "
             f"{list(dof_columns)}; the plan has {n_dof} DOF, each needs one column"
         )
     return RowLayout(
         dof_columns=dof_columns,
-        corners=tuple(range(len(plan.corners))),
+        corners=corners,
         nbs=int(plan.n_bent_springs),
     )
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from deckpound.analytic._jit import kernel
 from deckpound.analytic.kernels.dense import lu_solve
+from deckpound.analytic.kernels.size_tags import dof_slots
 from deckpound.analytic.nonsmooth.frictional_contact import (
     contact_solve_work,
     solve_contact_impulses_with,
@@ -79,7 +80,7 @@ def impulse_work(n_corners: int, n_dof: int) -> ImpulseWork:
         G=np.zeros((2 * nc, 2 * nc)),
         st=np.zeros(nc, dtype=np.int64),
         contact=contact_solve_work(nc),
-        dof_slots=size_tag(nd),
+        dof_slots=dof_slots(nd),
         **per_corner,
     )
 

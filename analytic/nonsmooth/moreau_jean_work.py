@@ -18,8 +18,9 @@ import numpy as np
 
 from deckpound.analytic import bundles as bd
 from deckpound.analytic._jit import kernel
+from deckpound.analytic.kernels.size_tags import corner_slots, dof_slots
 from deckpound.analytic.kernels.system import end_column, spring_stored_energy, store_standard
-from deckpound.analytic.nonsmooth.impulses import impulse_work, size_tag
+from deckpound.analytic.nonsmooth.impulses import impulse_work
 
 __all__ = [
     "ENERGY_COLUMNS",
@@ -132,7 +133,7 @@ MoreauJeanCorners = namedtuple("MoreauJeanCorners", _CORNER_FIELDS)
 #: ug, vg, ugo, vgo supports now and at the last step; W (N_WORK,) running work totals [kJ]
 #: (``W_*``); energy (N_ENERGY,) (``E_*``); impulse the contact solve's scratch
 #: (:func:`.impulses.impulse_work`).
-#: ``dof_slots``, ``corner_slots``: the size tags (:func:`size_tag`) of n_dof and n_corners.
+#: ``dof_slots``, ``corner_slots``: the size tags (:mod:`deckpound.analytic.kernels.size_tags`) of n_dof and n_corners.
 MoreauJeanWork = namedtuple(
     "MoreauJeanWork",
     ("u0", "v0", "hstate", "final", "dof", "spring", "corner")
@@ -219,6 +220,6 @@ def moreau_jean_workspace(u0, v0, hstate, ns: int, nch: int, n_corners: int) -> 
         W=np.zeros(N_WORK),
         energy=np.zeros(N_ENERGY),
         impulse=impulse_work(n_corners, n_dof),
-        dof_slots=size_tag(n_dof),
-        corner_slots=size_tag(n_corners),
+        dof_slots=dof_slots(n_dof),
+        corner_slots=corner_slots(n_corners),
     )

@@ -394,27 +394,28 @@ def outlines(scene: Scene, row: dict[str, float], scale: float) -> dict[str, np.
     """
     plan = plan_of(scene)
     out = {}
+    positions = plan.segment_positions()
     for seg in plan.segments:
         th = scale * row[f"{seg.name}_theta"]
         c, s = np.cos(th), np.sin(th)
         box = _segment_box(plan, seg)
+        x0, y0 = positions[seg.index]
         out[seg.name] = np.column_stack(
             [
-                seg.centre + scale * row[f"{seg.name}_x_rel"] + c * box[:, 0] - s * box[:, 1],
-                scale * row[f"{seg.name}_y_rel"] + s * box[:, 0] + c * box[:, 1],
+                x0 + scale * row[f"{seg.name}_x_rel"] + c * box[:, 0] - s * box[:, 1],
+                y0 + scale * row[f"{seg.name}_y_rel"] + s * box[:, 0] + c * box[:, 1],
             ]
         )
     k = {cn.name: cn for cn in plan.corners}
     depth, overhang = 0.6, 0.3
     for j in (1, 2):
         a, b = (k["c1"], k["c2"]) if j == 1 else (k["c3"], k["c4"])
-        centre = plan.segments[a.body].centre
+        centre = np.array(positions[a.body])
         n, t = np.array(a.normal), np.array(a.tangent)
-        fa = np.array([a.x + centre, a.y]) - a.gap * n - overhang * t
-        fb = np.array([b.x + centre, b.y]) - b.gap * n + overhang * t
+        fa = np.array([a.x, a.y]) + centre - a.gap * n - overhang * t
+        fb = np.array([b.x, b.y]) + centre - b.gap * n + overhang * t
         seat = np.array([fa, fb, fb - depth * n, fa - depth * n, fa])
-        pivot = 0.5 * (np.array([a.x, a.y]) + np.array([b.x, b.y])) - a.gap * n
-        pivot[0] += centre
+        pivot = 0.5 * (np.array([a.x, a.y]) + np.array([b.x, b.y])) + centre - a.gap * n
         ts = scale * row[f"seat{j}_theta"]
         cs, ss = np.cos(ts), np.sin(ts)
         rel = seat - pivot
