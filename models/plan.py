@@ -314,22 +314,20 @@ class Plan:
     def dof_columns(self) -> tuple[tuple[str, int], ...]:
         """Absolute displacement columns and the DOF each reads (:data:`DOF_COLUMNS` for a
         one-segment deck): each segment's x, y, θ, then the seats."""
-        bodies = tuple(
-            (f"{s.name}_{d}", dof)
-            for s in self.segments
-            for d, dof in zip(("x_abs", "y_abs", "theta"), s.dofs)
-        )
-        return bodies + DOF_COLUMNS[3:]
+        return self._segment_columns(("x_abs", "y_abs", "theta"), DOF_COLUMNS)
 
     @property
     def velocity_columns(self) -> tuple[tuple[str, int], ...]:
         """Absolute velocity columns, in the order of :attr:`dof_columns`."""
+        return self._segment_columns(("vx_abs", "vy_abs", "omega"), VELOCITY_COLUMNS)
+
+    def _segment_columns(self, suffixes, one_body) -> tuple[tuple[str, int], ...]:
+        """Each segment's three columns ``<name>_<suffix>`` with their DOF, then the seats'
+        columns of ``one_body`` (the one-body table, whose first three are the deck's)."""
         bodies = tuple(
-            (f"{s.name}_{d}", dof)
-            for s in self.segments
-            for d, dof in zip(("vx_abs", "vy_abs", "omega"), s.dofs)
+            (f"{s.name}_{d}", dof) for s in self.segments for d, dof in zip(suffixes, s.dofs)
         )
-        return bodies + VELOCITY_COLUMNS[3:]
+        return bodies + one_body[3:]
 
     @property
     def relative_columns(self) -> tuple[str, ...]:
