@@ -42,6 +42,24 @@ def test_matrix_covers_every_choice_opensees_expresses():
     assert vm.matrix_cases(load_scene(vm.SEGMENT_SCENE)) == cases[:n]
 
 
+def test_runs_pass_when_they_end_alike():
+    """Both succeed, or both stop unseated at the same corner and time (a deck that leaves its
+    seat is compared up to that step); anything else fails the case."""
+
+    def rep(a, b, where_a=None, where_b=None):
+        return {
+            "status": {"opensees": a, "compliance": b},
+            "unseated": {"opensees": where_a, "compliance": where_b},
+        }
+
+    assert vm.ended_alike(rep("success", "success"))
+    assert vm.ended_alike(rep("unseated", "unseated", ("c1", 4.775), ("c1", 4.775)))
+    assert not vm.ended_alike(rep("unseated", "unseated", ("c1", 4.775), ("c2", 4.775)))
+    assert not vm.ended_alike(rep("unseated", "unseated", ("c1", 4.775), ("c1", 4.78)))
+    assert not vm.ended_alike(rep("unseated", "success", ("c1", 4.775)))
+    assert not vm.ended_alike(rep("failed", "failed"))
+
+
 @pytest.mark.skipif(not HAS_OPENSEES, reason="no openseespy")
 def test_a_case_above_tolerance_fails_the_command(monkeypatch):
     sc = load_scene("saiidi-4span", ["run.duration=1.5"])

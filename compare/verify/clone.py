@@ -149,4 +149,11 @@ def verify_clone(
             "compliance": rc.meta.get("newton_iterations"),
         },
         "status": {"opensees": ro.meta["status"], "compliance": rc.meta["status"]},
+        # where and when each run stopped unseated (None: it did not)
+        "unseated": {
+            name: (r.meta["unseated_corner"], r.meta["unseated_time"])
+            if r.meta.get("unseated")
+            else None
+            for name, r in (("opensees", ro), ("compliance", rc))
+        },
     }
