@@ -174,7 +174,7 @@ def result_rows(rows, rel, read_record):
 
 
 #: the engine contract's words for seats without a support length (``seat_margin_basis``)
-UNCHECKED_SEATS = "not checked (no seats[i].support_length)"
+UNCHECKED_SEATS = "not checked (no seats[i].support_length or joints[i].support_length)"
 
 
 def seat_margin_minima(plan, stats, unchecked):
