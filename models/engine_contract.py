@@ -423,9 +423,7 @@ def _relative_columns(plan: Plan, motion, cols: dict[str, np.ndarray]) -> dict[s
 PENETRATION_WARN_FRACTION = {True: 0.10, False: 0.20}
 
 
-def _contact_quality(
-    engine: Engine, scene: Scene, plan: Plan, cols: dict, out: RunOutput
-) -> dict:
+def _contact_quality(engine: Engine, scene: Scene, plan: Plan, cols: dict, out: RunOutput) -> dict:
     """``max_penetration`` [m] (per step when the engine measures it, else on the output
     rows), its basis, ``max_complementarity_residual`` and the penetration quality warning."""
     gaps = [cols[k] for k in (f"gap_{c.name}" for c in plan.corners) if len(cols[k])]

@@ -43,13 +43,15 @@ def test_matrix_covers_every_choice_opensees_expresses():
 
 
 def test_runs_pass_when_they_end_alike():
-    """Both succeed, or both stop unseated at the same corner and time (a deck that leaves its
-    seat is compared up to that step); anything else fails the case."""
+    """Both succeed, both stop unseated at the same corner and time (a deck that leaves its
+    seat is compared up to that step), or both fail the same way at the same step (the clone
+    reproduces OpenSees's failures too); anything else fails the case."""
 
-    def rep(a, b, where_a=None, where_b=None):
+    def rep(a, b, where_a=None, where_b=None, failed_a=None, failed_b=None):
         return {
             "status": {"opensees": a, "compliance": b},
             "unseated": {"opensees": where_a, "compliance": where_b},
+            "failed": {"opensees": failed_a, "compliance": failed_b},
         }
 
     assert vm.ended_alike(rep("success", "success"))
@@ -58,6 +60,22 @@ def test_runs_pass_when_they_end_alike():
     assert not vm.ended_alike(rep("unseated", "unseated", ("c1", 4.775), ("c1", 4.78)))
     assert not vm.ended_alike(rep("unseated", "success", ("c1", 4.775)))
     assert not vm.ended_alike(rep("failed", "failed"))
+    newton = ("not_converged", 14820, 7.41)
+    assert vm.ended_alike(rep("failed", "failed", failed_a=newton, failed_b=newton))
+    assert not vm.ended_alike(
+        rep("failed", "failed", failed_a=newton, failed_b=("not_converged", 14821, 7.4105))
+    )
+    assert not vm.ended_alike(rep("failed", "success", failed_a=newton))
+    assert vm.ended_text(rep("success", "success")) == "success"
+    assert vm.ended_text(rep("failed", "failed", failed_a=newton, failed_b=newton)) == (
+        "both failed (not_converged at 7.41 s)"
+    )
+    assert vm.ended_text(rep("unseated", "unseated", ("c1", 4.775), ("c1", 4.775))) == (
+        "both unseated (c1, 4.775 s)"
+    )
+    assert vm.ended_text(rep("failed", "success", failed_a=newton)) == (
+        "opensees failed, compliance success"
+    )
 
 
 @pytest.mark.skipif(not HAS_OPENSEES, reason="no openseespy")

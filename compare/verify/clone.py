@@ -149,6 +149,13 @@ def verify_clone(
             "compliance": rc.meta.get("newton_iterations"),
         },
         "status": {"opensees": ro.meta["status"], "compliance": rc.meta["status"]},
+        # how and when each failed run stopped (None: it finished)
+        "failed": {
+            name: (r.meta["failure"], r.meta.get("failed_step"), r.meta.get("failed_time"))
+            if r.meta.get("failure")
+            else None
+            for name, r in (("opensees", ro), ("compliance", rc))
+        },
         # where and when each run stopped unseated (None: it did not)
         "unseated": {
             name: (r.meta["unseated_corner"], r.meta["unseated_time"])

@@ -8,8 +8,9 @@ velocity columns, whether the Newton iteration counts are identical, and the spe
 (OpenSees's engine-reported wall time over the clone's, measured in the same run; the clone's
 kernels are loaded before the timed run, so compilation is excluded). A case passes when both
 deviations are ≤ :data:`TOLERANCE` (the issue's "round-off" criterion; measured values are
-~1e-9) and both runs end alike (:func:`ended_alike`: both succeed, or both stop unseated at the
-same corner and time); the command exits 1 when any case fails.
+~1e-9) and both runs end alike (:func:`ended_alike`: both succeed, both stop unseated at the
+same corner and time, or both fail the same way at the same step); the command exits 1 when
+any case fails.
 
 The matrix (:func:`matrix_cases`) is the product of
 
@@ -97,6 +98,7 @@ COLUMNS = (
     "Newton its",
     "clone × OpenSees",
     "scene",
+    "ended",
     "pass",
 )
 
@@ -197,6 +199,8 @@ class CaseResult:
     ok: bool
     status: dict
     notes: list[str]
+    #: how the two runs ended (:func:`ended_text`)
+    ended: str = "success"
 
     def line(self) -> str:
         """The one-line summary of the case."""
@@ -205,7 +209,7 @@ class CaseResult:
         return (
             f"{'PASS' if self.ok else 'FAIL'}  {self.label}: {d:.2e} ({c}), velocities "
             f"{dv:.2e} ({cv}); Newton iterations {its}; clone {self.speed_ratio:.0f}× "
-            "OpenSees"
+            f"OpenSees; ended: {self.ended}"
         )
 
 
@@ -233,23 +237,46 @@ def run_case(
         ok=ok_status and worst[1] <= TOLERANCE and wv[1] <= TOLERANCE,
         status=rep["status"],
         notes=rep["notes"],
+        ended=ended_text(rep),
     )
+
+
+def ended_text(rep: dict) -> str:
+    """How the two runs of a report ended, in a table cell: ``success``, ``both unseated
+    (c1, 4.775 s)``, ``both failed (not_converged at 7.41 s)``, or each engine's status."""
+    status = rep["status"]
+    if set(status.values()) == {"success"}:
+        return "success"
+    if ended_alike(rep):
+        if "unseated" in status.values():
+            corner, when = rep["unseated"]["opensees"]
+            return f"both unseated ({corner}, {when:g} s)"
+        failure, _, when = rep["failed"]["opensees"]
+        return f"both failed ({failure} at {when:g} s)"
+    return ", ".join(f"{name} {s}" for name, s in status.items())
 
 
 def ended_alike(rep: dict) -> bool:
     """Whether both runs of a :func:`~deckpound.compare.verify.clone.verify_clone` report
-    ended the same way: both succeeded, or both stopped unseated at the same corner and
-    time (a legitimate end of a run, ``meta["status"] = "unseated"``: a case whose deck
-    leaves its seat, e.g. undamped or skewed, is compared up to that step)."""
+    ended the same way: both succeeded; both stopped unseated at the same corner and time (a
+    legitimate end of a run, ``meta["status"] = "unseated"``: a case whose deck leaves its
+    seat, e.g. undamped or skewed, is compared up to that step); or both failed the same way
+    at the same step (the clone reproduces OpenSees's algorithm, its failures included: the
+    Kelvin–Voigt gap, whose material reports no damping tangent, can leave Newton without a
+    converging iterate in both; the histories are compared up to that step and the table
+    shows the statuses)."""
     status = set(rep["status"].values())
     if status == {"success"}:
         return True
-    where = rep.get("unseated", {})
-    return (
-        status == {"unseated"}
-        and where.get("opensees") is not None
-        and where.get("opensees") == where.get("compliance")
-    )
+    for key, wanted in (("unseated", "unseated"), ("failed", "failed")):
+        where = rep.get(key, {})
+        if (
+            status == {wanted}
+            and where.get("opensees") is not None
+            and where.get("opensees") == where.get("compliance")
+        ):
+            return True
+    return False
 
 
 def run_matrix(scene: Scene, *, quick: bool = False, log=print) -> list[CaseResult]:
@@ -281,7 +308,8 @@ def table_block(
         lines.append(
             f"| {c.law} | {c.friction} | {c.skew:g} | {c.damping} | {dev:.1e} | {col} | "
             f"{vdev:.1e} | {vcol} | {'identical' if r.same_iterations else 'differ'} | "
-            f"{r.speed_ratio:.0f} | {c.scene or scene.name} | {'yes' if r.ok else 'NO'} |"
+            f"{r.speed_ratio:.0f} | {c.scene or scene.name} | {r.ended} | "
+            f"{'yes' if r.ok else 'NO'} |"
         )
     span = (
         f"first {QUICK_DURATION:g} s (--quick)"
