@@ -188,7 +188,8 @@ def _verify_takeda(args) -> int:
 
 def _verify_clone(args) -> int:
     """One line per case (compare/verify/matrix.py); exit 1 when a case exceeds its tolerance.
-    With --set: one case, the scene as given, with its column-by-column deviations."""
+    With --set: one case, the scene as given, with its column-by-column deviations (exit 1
+    when the two runs end differently, :func:`~deckpound.compare.verify.matrix.ended_alike`)."""
 
     from deckpound.compare.verify import matrix as verify_matrix
     from deckpound.models.scene_io import load_scene
@@ -223,8 +224,10 @@ def _verify_single(scene, verify_matrix) -> int:
         f"(per-step ratio {us['opensees'] / us['compliance']:.1f}); whole-run wall-time ratio "
         f"{report['speed_ratio']:.1f}"
     )
-    if any(s != "success" for s in report["status"].values()):
-        raise EngineFailure(f"a run failed: {report['status']}")
+    if not verify_matrix.ended_alike(report):
+        raise EngineFailure(f"the runs ended differently: {verify_matrix.ended_text(report)}")
+    if verify_matrix.ended_text(report) != "success":  # compared up to where both stopped
+        print(f"the runs ended alike: {verify_matrix.ended_text(report)}")
     tol = verify_matrix.TOLERANCE
     tcol, tworst = report["twin_worst"]
     print(
