@@ -80,7 +80,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "name",
         metavar="NAME",
         help="stiffness, friction, sticking, law, geometry, "
-        "opensees-mode, skew, damping, sequence or variability",
+        "opensees-mode, skew, damping, joint, sequence or variability",
     )
     add_scene_args(p)
     p.add_argument(
