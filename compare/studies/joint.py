@@ -198,11 +198,16 @@ def joint_figure(
 
 
 def _range(g: pd.DataFrame, col: str, scale: float, unit: str, fmt: str = ".3g") -> str:
+    """'low (its case) to high (its case)'; a zero is named as no contact at the joint."""
     lo, hi = g[col].idxmin(), g[col].idxmax()
+
+    def value(k) -> str:
+        v = scale * g.loc[k, col]
+        return "0, no joint contact," if v == 0 else f"{v:{fmt}} {unit}"
+
     return (
-        f"{scale * g.loc[lo, col]:{fmt}} {unit} (gap {1e3 * g.loc[lo, 'joint_gap']:g} mm, lag "
-        f"{g.loc[lo, 'lag']:g} s) to {scale * g.loc[hi, col]:{fmt}} {unit} (gap "
-        f"{1e3 * g.loc[hi, 'joint_gap']:g} mm, lag {g.loc[hi, 'lag']:g} s)"
+        f"{value(lo)} (gap {1e3 * g.loc[lo, 'joint_gap']:g} mm, lag {g.loc[lo, 'lag']:g} s) to "
+        f"{value(hi)} (gap {1e3 * g.loc[hi, 'joint_gap']:g} mm, lag {g.loc[hi, 'lag']:g} s)"
     )
 
 
