@@ -231,6 +231,10 @@ def gap_closures(columns: dict[str, np.ndarray]) -> dict[str, int]:
     return out
 
 
+#: a deck segment's own columns ``<segment>_<quantity>`` (:meth:`Result.to_xarray` stacks them)
+SEGMENT_QUANTITIES = ("x_abs", "y_abs", "theta", "vx_abs", "vy_abs", "omega", "x_rel", "y_rel")
+
+
 def peak_columns(engine_columns, bent_names, relative=RELATIVE_COLUMNS) -> list[str]:
     """The columns whose peaks the engines track at every step, in their order: the engine
     columns (``t`` first, :func:`deckpound.models.engine_contract.engine_columns`), the relative
@@ -474,12 +478,15 @@ class Result:
         return frame
 
     def to_xarray(self):
-        """xarray Dataset with named dimensions ``time``, ``corner``, ``bent``, ``direction``.
+        """xarray Dataset with named dimensions ``time``, ``corner``, ``bent``, ``direction``
+        (and ``segment`` for a deck of segments).
 
         Per-corner columns (``gap_c1``…, ``fn_``, ``ft_``, ``pn_``, ``pt_``, ``state_``) become
         one variable over (time, corner); bent forces and deformations (``<bent>_fx``…) one
-        variable each over (time, bent, direction); everything else a variable over time.
-        Units are in each variable's ``attrs["units"]``.
+        variable each over (time, bent, direction); a deck of segments' columns
+        (``<segment>_theta``…) one variable each over (time, segment), named
+        ``segment_<quantity>`` (``segment_theta``, ``segment_x_rel``, …); everything else a
+        variable over time. Units are in each variable's ``attrs["units"]``.
         """
 
         t = self.t
@@ -499,6 +506,16 @@ class Result:
                     {"units": units[names[0]]},
                 )
                 used.update(names)
+        segments = [s["name"] for s in (self.meta.get("scene") or {}).get("segments") or ()]
+        for q in SEGMENT_QUANTITIES if segments else ():
+            names = [f"{s}_{q}" for s in segments]
+            if all(n in self.columns for n in names):
+                data_vars[f"segment_{q}"] = (
+                    ("time", "segment"),
+                    np.column_stack([self[n] for n in names]),
+                    {"units": units[names[0]]},
+                )
+                used.update(names)
         bents = [b for b in self.meta.get("bent_names", []) if f"{b}_fx" in self.columns]
         for kind, stem in (("f", "bent_force"), ("d", "bent_deformation")):
             names = [[f"{b}_{kind}x", f"{b}_{kind}y"] for b in bents]
@@ -514,6 +531,8 @@ class Result:
             if k not in used:
                 data_vars[k] = (("time",), v, {"units": units[k]})
         coords: dict[str, Any] = {"time": ("time", t, {"units": "s"}), "corner": corners}
+        if segments:
+            coords["segment"] = segments
         if bents:
             coords["bent"] = bents
             coords["direction"] = ["x", "y"]

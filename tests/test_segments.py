@@ -321,3 +321,17 @@ def test_every_law_and_friction_model_runs_a_deck_of_segments(overrides):
     assert r.peak("fn_j1_c1") > 0.0
     if "energy_error" in r.columns:
         assert np.max(np.abs(r["energy_error"])) <= 0.01 * np.max(np.abs(r["energy_input"]))
+
+
+def test_a_deck_of_segments_in_xarray_has_a_segment_dimension(two_frame):
+    """Each segment's columns stack into one variable over (time, segment); the corners'
+    over (time, corner), joint corners included."""
+    r = dp.run(two_frame, engine="nonsmooth")
+    ds = r.to_xarray()
+    assert list(ds.coords["segment"].values) == ["frame1", "frame2"]
+    np.testing.assert_array_equal(ds["segment_theta"].sel(segment="frame2"), r["frame2_theta"])
+    np.testing.assert_array_equal(ds["segment_x_rel"].sel(segment="frame1"), r["frame1_x_rel"])
+    assert ds["segment_omega"].attrs["units"] == "rad/s"
+    assert "j1_c2" in list(ds.coords["corner"].values)
+    np.testing.assert_array_equal(ds["fn"].sel(corner="j1_c1"), r["fn_j1_c1"])
+    assert "frame1_theta" not in ds
