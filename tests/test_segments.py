@@ -335,3 +335,20 @@ def test_a_deck_of_segments_in_xarray_has_a_segment_dimension(two_frame):
     assert "j1_c2" in list(ds.coords["corner"].values)
     np.testing.assert_array_equal(ds["fn"].sel(corner="j1_c1"), r["fn_j1_c1"])
     assert "frame1_theta" not in ds
+
+
+def test_the_work_precision_errors_of_a_deck_of_segments(two_frame):
+    """deckpound bench on a deck of segments: each error is the largest over the segments."""
+    from deckpound.compare.bench.work_precision import errors
+    from deckpound.compare.metrics import peak
+
+    ref = dp.run(two_frame, engine="compliance")
+    r = dp.run(two_frame, engine="nonsmooth")
+    e = errors(r, ref, "deck_x_rel")
+    by_segment = [
+        abs(peak(r[f"{s}_theta"]) - peak(ref[f"{s}_theta"])) / peak(ref[f"{s}_theta"])
+        for s in ("frame1", "frame2")
+    ]
+    assert e["err_peak_theta"] == max(by_segment)
+    assert e["err_primary"] == e["err_peak_x"] > 0.0
+    assert errors(ref, ref)["err_peak_theta"] == 0.0

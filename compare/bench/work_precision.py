@@ -157,17 +157,37 @@ def _rel_peak_error(result, ref, col) -> float:
     return abs(peak(result[col]) - pr) / pr if pr > 0 else np.nan
 
 
+def _bodies(result) -> list[str]:
+    """The deck's bodies in a result: ``deck``, or each segment of a deck of segments."""
+    return [c[: -len("_theta")] for c in result.columns if c.endswith("_theta")
+            and not c.startswith("seat")]  # fmt: skip
+
+
 def errors(result, ref, primary: str = "deck_theta") -> dict[str, float]:
     """Relative peak errors, rotation-history NRMSE and the primary error ``err_primary`` (the
-    relative peak error of ``primary``) of a result against a reference."""
-    al = align({"x": result, "ref": ref}, columns=["deck_theta", "deck_y_rel", "deck_x_rel"])
+    relative peak error of ``primary``) of a result against a reference; for a deck of
+    segments each error is the largest over the segments, a primary ``deck_<q>`` too."""
+    bodies = _bodies(ref)
+    cols = [f"{b}_{q}" for b in bodies for q in ("theta", "y_rel", "x_rel")]
+    al = align({"x": result, "ref": ref}, columns=cols)
+
+    def worst(q: str) -> float:
+        return max(_rel_peak_error(result, ref, f"{b}_{q}") for b in bodies)
+
     out = {
-        "err_peak_theta": _rel_peak_error(result, ref, "deck_theta"),
-        "err_peak_y": _rel_peak_error(result, ref, "deck_y_rel"),
-        "err_peak_x": _rel_peak_error(result, ref, "deck_x_rel"),
-        "nrmse_theta": nrmse(al["x"]["deck_theta"].to_numpy(), al["ref"]["deck_theta"].to_numpy()),
+        "err_peak_theta": worst("theta"),
+        "err_peak_y": worst("y_rel"),
+        "err_peak_x": worst("x_rel"),
+        "nrmse_theta": max(
+            nrmse(al["x"][f"{b}_theta"].to_numpy(), al["ref"][f"{b}_theta"].to_numpy())
+            for b in bodies
+        ),
     }
-    out["err_primary"] = _rel_peak_error(result, ref, primary)
+    out["err_primary"] = (
+        worst(primary[len("deck_") :])
+        if primary.startswith("deck_") and bodies != ["deck"]
+        else _rel_peak_error(result, ref, primary)
+    )
     out["primary"] = primary
     return out
 
