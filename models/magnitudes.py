@@ -248,11 +248,9 @@ def _inertia_and_periods(scene: Scene, flagged: set[str]) -> list[tuple[str, str
     found = _bent_springs(scene)
     deck = scene.deck
     plan = plan_of(scene)
-    # corners from the deck centre (a segment's corners are in its own frame)
-    r2 = max(
-        (c.x + plan.segments[c.body].centre) ** 2 + c.y * c.y if c.body else c.x * c.x + c.y * c.y
-        for c in plan.corners
-    )
+    # corners from the deck centre (a segment's corners are in its own frame; one segment: 0)
+    centres = [seg.centre for seg in plan.segments]
+    r2 = max((c.x + centres[c.body]) * (c.x + centres[c.body]) + c.y * c.y for c in plan.corners)
     if deck.inertia > deck.mass * r2:
         found.append(
             (

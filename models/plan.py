@@ -147,11 +147,6 @@ class Corner:
     support_length: float | None = None
 
     @property
-    def seat_dofs(self) -> tuple[int, int]:
-        """DOF indices (x, θ) of the facing body (a seat's, or a facing segment's x and θ)."""
-        return self.facing_dofs[0], self.facing_dofs[2]
-
-    @property
     def side(self) -> float:
         """−1 for a corner facing seat 2 (right), +1 otherwise (the sign of n_x)."""
         return -1.0 if self.seat == 1 else 1.0

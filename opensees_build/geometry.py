@@ -51,15 +51,7 @@ def segment_origins(plan: Plan) -> list[tuple[float, float]] | None:
     """
     if len(plan.segments) <= 1:
         return None
-    first = plan.segments[0]
-    origins = [(first.centre, 0.0)]
-    for seg in plan.segments[1:]:
-        # the first corner of the joint on this segment's left end
-        corner = next(c for c in plan.corners if c.joint >= 0 and c.body == seg.index)
-        ox, oy = origins[-1]
-        px, py = corner.pivot
-        origins.append((ox - px, oy - py))
-    return origins
+    return plan.segment_positions()
 
 
 def placed(origin: tuple[float, float] | None, x: float, y: float) -> tuple[float, float]:

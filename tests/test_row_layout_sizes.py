@@ -217,11 +217,11 @@ def test_the_engines_name_the_columns_of_every_corner_of_the_plan():
     sc = scene()
     plan = plan_of(sc)
     ps = pack_system(plan, damping_model(sc, plan))
-    pk = run_peaks(sc, plan, ps)
+    pk = run_peaks(plan, ps)
     assert pk.row.shape[0] > end_column(pk.layout) == len(engine_columns(plan))
     assert set(run_output_fields(pk, plan)["gap_closures_per_corner"]) == {"c1", "c2", "c3", "c4"}
     plan6 = six_corner_plan(plan)
-    pk6 = run_peaks(sc, plan6, pack_system(plan6, damping_model(sc, plan6)))
+    pk6 = run_peaks(plan6, pack_system(plan6, damping_model(sc, plan6)))
     assert end_column(pk6.layout) == len(engine_columns(plan6)) == end_column(pk.layout) + 6
     assert "fn_c6" in engine_columns(plan6)
     assert set(run_output_fields(pk6, plan6)["gap_closures_per_corner"]) == {
@@ -229,7 +229,7 @@ def test_the_engines_name_the_columns_of_every_corner_of_the_plan():
     }
     plan9 = dataclasses.replace(plan, mass=np.ones(9))
     with pytest.raises(ValueError, match="the plan has 9 DOF"):
-        run_peaks(sc, plan9, ps)
+        run_peaks(plan9, ps)
 
 
 def test_nine_dof_layout_and_its_refusal_without_columns():

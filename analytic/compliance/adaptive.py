@@ -109,7 +109,7 @@ def run_adaptive(
     out_dt = scene.run.output_dt
     nout = round(duration / out_dt) + 1
     cols = engine_columns(plan) + list(ENERGY_COLUMNS)
-    peaks = run_peaks(scene, plan, ps)
+    peaks = run_peaks(plan, ps)
     output = bd.Output(
         bd.output_table(nout, len(cols)),
         np.arange(len(cols), dtype=np.int64),

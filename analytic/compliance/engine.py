@@ -305,7 +305,7 @@ def _run_newmark(
         want_energy=any(c in ENERGY_COLUMNS for c in cols),
         flush_subnormals=settings.subnormals == "flush",
     )
-    peaks = run_peaks(scene, plan, ps)
+    peaks = run_peaks(plan, ps)
     n_full = len(engine_columns(plan)) + len(ENERGY_COLUMNS)
     output = bd.Output(bd.output_table(rows_max, len(cols)), colsel, np.zeros(n_full), peaks)
     u0, v0 = initial_dofs(initial_state, ps.arrays.mass.shape[0])

@@ -141,10 +141,10 @@ def peak_row_size(layout: RowLayout) -> int:
     return end_column.py_func(layout) + n_relative.py_func(layout) + layout.nbs
 
 
-def corner_support_lengths(scene, plan) -> np.ndarray:
-    """The support length N [m] under each corner (``seats[i].support_length`` or
-    ``joints[i].support_length`` of ``scene``, through the ``plan``'s corner table), +inf where
-    it is not set (not checked)."""
+def corner_support_lengths(plan) -> np.ndarray:
+    """The support length N [m] under each corner of the ``plan`` (the scene's
+    ``seats[i].support_length`` or ``joints[i].support_length``, ``Corner.support_length``),
+    +inf where it is not set (not checked)."""
     return np.array(
         [np.inf if c.support_length is None else float(c.support_length) for c in plan.corners]
     )
@@ -405,10 +405,10 @@ def step_closures(pk: Peaks, corner_names) -> dict[str, int]:
     return {c: int(pk.closures[k]) for k, c in enumerate(_checked_names(pk, corner_names))}
 
 
-def run_peaks(scene, plan, ps) -> Peaks:
-    """Zeroed :data:`Peaks` for a run of ``scene`` on ``plan`` with the packed system ``ps``
-    (its support channels and bent springs) and the seats' support lengths: what every
-    analytic engine's driver hands its step loop.
+def run_peaks(plan, ps) -> Peaks:
+    """Zeroed :data:`Peaks` for a run on ``plan`` with the packed system ``ps`` (its support
+    channels and bent springs) and the corners' support lengths: what every analytic engine's
+    driver hands its step loop.
 
     The drivers size the output rows by the names of
     :func:`deckpound.models.engine_contract.engine_columns` and the loops write the columns of
@@ -426,7 +426,7 @@ def run_peaks(scene, plan, ps) -> Peaks:
         layout,
         ps.channels,
         plan.bent_names,
-        corner_support_lengths(scene, plan),
+        corner_support_lengths(plan),
         tuple(seg.bents for seg in plan.segments),
     )
 

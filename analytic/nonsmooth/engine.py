@@ -221,7 +221,7 @@ class NonsmoothEngine(Engine):
         nsteps = round(duration / h)
         corner_names = [c.name for c in plan.corners]
         cols = engine_columns(plan) + list(impulse_columns(corner_names)) + list(ENERGY_COLUMNS)
-        peaks = run_peaks(scene, plan, ps)
+        peaks = run_peaks(plan, ps)
         output = bd.Output(
             bd.output_table(nsteps // stride + 1, len(cols)),
             np.arange(len(cols), dtype=np.int64),
