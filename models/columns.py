@@ -11,7 +11,7 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass
 
-from .plan import CORNER_NAMES, DOF_COLUMNS, RELATIVE_COLUMNS, VELOCITY_COLUMNS, Plan
+from .plan import CORNER_NAMES, Plan, deck_column_names
 
 __all__ = [
     "ENERGY_COLUMNS",
@@ -103,7 +103,7 @@ def result_columns(
     """The standard columns of a model with these bents, deck bodies (``("deck",)``, or the
     segments' names) and corners, in output order (frozen columns, made once per model
     layout: every run of a sweep asks for them)."""
-    dof, vel, rel = _body_columns(bodies)
+    dof, vel, rel = deck_column_names(bodies)
     cols = [Column("t", "s", "time", "time")]
     for name in dof:
         part = _body_of(name, bodies)
@@ -139,25 +139,6 @@ def result_columns(
     cols += _corner_columns(corners)
     cols += _bent_columns(bent_names)
     return tuple(cols)
-
-
-def _body_columns(bodies: tuple[str, ...]) -> tuple[list[str], list[str], list[str]]:
-    """The displacement, velocity and relative columns of these deck bodies and the seats
-    (:data:`DOF_COLUMNS`, :data:`VELOCITY_COLUMNS`, :data:`RELATIVE_COLUMNS` for ``deck``)."""
-    if bodies == ("deck",):
-        return (
-            [n for n, _ in DOF_COLUMNS],
-            [n for n, _ in VELOCITY_COLUMNS],
-            list(RELATIVE_COLUMNS),
-        )
-    dof = [f"{b}_{d}" for b in bodies for d in ("x_abs", "y_abs", "theta")]
-    vel = [f"{b}_{d}" for b in bodies for d in ("vx_abs", "vy_abs", "omega")]
-    rel = [f"{b}_{d}_rel" for b in bodies for d in ("x", "y")]
-    return (
-        dof + [n for n, _ in DOF_COLUMNS[3:]],
-        vel + [n for n, _ in VELOCITY_COLUMNS[3:]],
-        rel + list(RELATIVE_COLUMNS[2:]),
-    )
 
 
 def _corner_columns(corners: tuple[str, ...]) -> list[Column]:

@@ -59,6 +59,7 @@ __all__ = [
     "Plan",
     "SegmentPlan",
     "Spring",
+    "deck_column_names",
     "plan_of",
     "support_channels",
     "takeda_hysteretic_args",
@@ -96,6 +97,26 @@ VELOCITY_COLUMNS = (
 #: Displacements relative to the supports: the deck centre relative to the mean motion of the
 #: shake tables (the table motion itself for coherent input), each seat relative to its actuator.
 RELATIVE_COLUMNS = ("deck_x_rel", "deck_y_rel", "seat1_x_rel", "seat2_x_rel")
+
+
+def deck_column_names(bodies: tuple[str, ...]) -> tuple[tuple[str, ...], ...]:
+    """(displacement, velocity, relative) column names of a deck of these bodies (``("deck",)``
+    or the segments' names): ``<body>_x_abs``, ``_y_abs``, ``_theta``; ``<body>_vx_abs``,
+    ``_vy_abs``, ``_omega``; ``<body>_x_rel``, ``_y_rel``; each followed by the seats' (the
+    one-body deck's: :data:`DOF_COLUMNS`, :data:`VELOCITY_COLUMNS`, :data:`RELATIVE_COLUMNS`)."""
+    own = [
+        tuple(f"{b}_{q}" for b in bodies for q in suffixes)
+        for suffixes in (
+            ("x_abs", "y_abs", "theta"),
+            ("vx_abs", "vy_abs", "omega"),
+            ("x_rel", "y_rel"),
+        )
+    ]
+    return (
+        own[0] + tuple(n for n, _ in DOF_COLUMNS[3:]),
+        own[1] + tuple(n for n, _ in VELOCITY_COLUMNS[3:]),
+        own[2] + RELATIVE_COLUMNS[2:],
+    )
 
 
 @dataclass(frozen=True)
@@ -309,28 +330,30 @@ class Plan:
     def dof_columns(self) -> tuple[tuple[str, int], ...]:
         """Absolute displacement columns and the DOF each reads (:data:`DOF_COLUMNS` for a
         one-segment deck): each segment's x, y, θ, then the seats."""
-        return self._segment_columns(("x_abs", "y_abs", "theta"), DOF_COLUMNS)
+        return tuple(zip(deck_column_names(self._bodies)[0], self._column_dofs))
 
     @property
     def velocity_columns(self) -> tuple[tuple[str, int], ...]:
         """Absolute velocity columns, in the order of :attr:`dof_columns`."""
-        return self._segment_columns(("vx_abs", "vy_abs", "omega"), VELOCITY_COLUMNS)
-
-    def _segment_columns(self, suffixes, one_body) -> tuple[tuple[str, int], ...]:
-        """Each segment's three columns ``<name>_<suffix>`` with their DOF, then the seats'
-        columns of ``one_body`` (the one-body table, whose first three are the deck's)."""
-        bodies = tuple(
-            (f"{s.name}_{d}", dof) for s in self.segments for d, dof in zip(suffixes, s.dofs)
-        )
-        return bodies + one_body[3:]
+        return tuple(zip(deck_column_names(self._bodies)[1], self._column_dofs))
 
     @property
     def relative_columns(self) -> tuple[str, ...]:
         """Displacements relative to the supports (:data:`RELATIVE_COLUMNS` for a one-segment
         deck): each segment's x, y relative to the mean motion of its bents' tables, then each
         seat relative to its actuator."""
-        bodies = tuple(f"{s.name}_{d}_rel" for s in self.segments for d in ("x", "y"))
-        return bodies + RELATIVE_COLUMNS[2:]
+        return deck_column_names(self._bodies)[2]
+
+    @property
+    def _bodies(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.segments)
+
+    @property
+    def _column_dofs(self) -> tuple[int, ...]:
+        """The DOF of each displacement column: the segments' x, y, θ, then the seats'."""
+        return tuple(d for s in self.segments for d in s.dofs) + tuple(
+            dof for _, dof in DOF_COLUMNS[3:]
+        )
 
     # -- springs -----------------------------------------------------------------------------
     @property
