@@ -7,6 +7,7 @@ docs/verification.md shows is checked in tests/docs/test_docs_pages.py.)
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import subprocess
 import sys
@@ -84,6 +85,7 @@ def test_a_case_above_tolerance_fails_the_command(monkeypatch):
     lines = []
     assert vm.main(sc, pinned=True, quick=False, log=lines.append) == 0
     monkeypatch.setattr(vm, "TOLERANCE", 1e-30)
+    monkeypatch.setattr(vm, "BACKWARD_TOLERANCE", 1e-30)
     assert vm.main(sc, pinned=True, quick=False, log=lines.append) == 1
     assert lines[-2].startswith("FAIL")
 
@@ -133,3 +135,61 @@ def test_the_kelvin_voigt_limitation_stated_on_the_verification_page():
     ):
         r = dp.run(load_scene("skew-30", kv + extra), engine="compliance")
         assert r.meta["status"] == "success", extra
+
+
+def test_the_backward_error_criterion():
+    """A column beyond TOLERANCE is justified only by the clone's own twin: the deviation
+    times TWIN_SCALE over the twin's deviation of that column, the largest over the failing
+    columns; a column the twin leaves unchanged cannot be justified; a deviation above
+    FORWARD_CAP fails whatever its backward error."""
+    from deckpound.compare.verify.clone import TWIN_SCALE
+
+    rep = {
+        "deviation": {"a": 3e-4, "b": 5e-7, "c": 2e-6},
+        "twin_deviation": {"a": 1e-5, "b": 0.0, "c": 1e-6},
+    }
+    assert vm.backward_error(rep) == pytest.approx(max(3e-4 / 1e-5, 2e-6 / 1e-6) * TWIN_SCALE)
+    assert vm.backward_error({**rep, "twin_deviation": {"a": 1e-5, "b": 1e-9, "c": 0.0}}) == (
+        float("inf")
+    )
+    assert vm.backward_error({**rep, "deviation": {"a": 1e-6, "b": 0.0, "c": 0.0}}) == 0.0
+    assert vm.within_tolerance(vm.TOLERANCE, float("inf"))
+    assert vm.within_tolerance(vm.FORWARD_CAP, vm.BACKWARD_TOLERANCE)
+    assert not vm.within_tolerance(vm.FORWARD_CAP * 1.01, 0.0)
+    assert not vm.within_tolerance(2 * vm.TOLERANCE, 1.01 * vm.BACKWARD_TOLERANCE)
+
+
+@pytest.mark.skipif(not HAS_OPENSEES, reason="no openseespy")
+def test_an_undamped_deck_of_segments_passes_by_its_backward_error_and_a_model_error_fails():
+    """Undamped, two frames pounding amplify round-off about a million-fold: the engines end
+    beyond TOLERANCE apart, by what a change of the record below its tenth digit makes. The
+    criterion still sees a model error: the clone against itself on the record changed by
+    1e-8 (a model that differs in the eighth digit) has a backward error of that size and
+    fails."""
+    from deckpound.analytic.compliance.engine import run_compliance
+    from deckpound.compare.verify.clone import column_deviations, twin_motion, verify_clone
+    from deckpound.models.excitation import support_motion
+
+    sc = load_scene("two-frame", ["damping.method=none", "run.duration=8.0"])
+    rep = verify_clone(sc, twin=True)
+    worst = max(rep["worst"][1], rep["worst_velocity"][1])
+    assert vm.TOLERANCE < worst <= vm.FORWARD_CAP
+    assert vm.backward_error(rep) <= vm.BACKWARD_TOLERANCE
+    assert vm.within_tolerance(worst, vm.backward_error(rep))
+
+    clone_scene = sc.replace(
+        compliance=dataclasses.replace(
+            sc.compliance,
+            integrator="newmark",
+            dt=sc.opensees.dt,
+            tolerance=1e-12,
+            max_iterations=sc.opensees.max_iterations,
+            contact_tangent="opensees",
+        )
+    )
+    motion = support_motion(clone_scene)
+    exact = run_compliance(clone_scene, motion).columns
+    wrong = run_compliance(clone_scene, twin_motion(motion, 1e-8)).columns
+    bug = {**rep, "deviation": column_deviations(exact, wrong, list(rep["deviation"]))}
+    assert vm.backward_error(bug) > 100 * vm.BACKWARD_TOLERANCE
+    assert not vm.within_tolerance(max(bug["deviation"].values()), vm.backward_error(bug))

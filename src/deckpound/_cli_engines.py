@@ -234,17 +234,30 @@ def _verify_single(scene, verify_matrix) -> int:
         f"the clone's own sensitivity: the support motion scaled by 1 + {TWIN_SCALE:g} moves it "
         f"by {tworst:.3e} of the column's peak (in {tcol})"
     )
-    if max(worst, vworst) > tol:
-        print(f"FAIL: deviation above {tol:g} of the column's peak")
-        if tworst > tol:
-            print(
-                f"the scene's response itself is not determined to {tol:g}: a change of "
-                f"{TWIN_SCALE:g} in the record moves the clone beyond it (stiff contact: Newton "
-                "iteration counts flip on round-off and the impacts amplify it)"
-            )
-        return 1
-    print(f"PASS: every column within {tol:g} of its peak")
-    return 0
+    if max(worst, vworst) <= tol:
+        print(f"PASS: every column within {tol:g} of its peak")
+        return 0
+    backward = verify_matrix.backward_error(report)
+    print(
+        f"backward error: the clone moves as far as the engines are apart on the record "
+        f"changed by {backward:.1e} of itself"
+    )
+    if verify_matrix.within_tolerance(max(worst, vworst), backward):
+        print(
+            f"PASS: deviation above {tol:g} of the column's peak but within "
+            f"{verify_matrix.FORWARD_CAP:g}, at a backward error within "
+            f"{verify_matrix.BACKWARD_TOLERANCE:g} (the response amplifies round-off: the "
+            "engines differ by what a change of the record in its tenth digit makes)"
+        )
+        return 0
+    print(f"FAIL: deviation above {tol:g} of the column's peak")
+    if tworst > tol:
+        print(
+            f"the scene's response itself is not determined to {tol:g}: a change of "
+            f"{TWIN_SCALE:g} in the record moves the clone beyond it (stiff contact: Newton "
+            "iteration counts flip on round-off and the impacts amplify it)"
+        )
+    return 1
 
 
 def _verify_contact_step(args) -> int:
