@@ -48,15 +48,21 @@ def opensees_friction(scene: Scene) -> tuple[Scene, list[str]]:
     clone verifies the friction algorithm OpenSees does have, zeroLengthContact2D, which the
     compliance engine runs as ``contact2d``. So ``friction_mode = stick`` is verified as
     ``contact2d``, and the returned note says so (never silently)."""
-    ct = scene.contact
-    if ct.has_friction and ct.friction_mode == "stick":
-        sc = scene.replace(contact=dataclasses.replace(ct, friction_mode="contact2d"))
-        return sc, [
-            "friction_mode = 'stick' (the project's stick law) has no OpenSees "
-            "counterpart; verifying friction_mode = 'contact2d' (OpenSees's "
-            "zeroLengthContact2D algorithm, in both engines) instead"
-        ]
-    return scene, []
+    wheres = [
+        where
+        for where, ct in scene.contact_tables()
+        if ct.has_friction and ct.friction_mode == "stick"
+    ]
+    if not wheres:
+        return scene, []
+    sc = scene.replace(dict.fromkeys((f"{w}.friction_mode" for w in wheres), "contact2d"))
+    return sc, [
+        "friction_mode = 'stick'"
+        + ("" if w == "contact" else f" at {w}")
+        + " (the project's stick law) has no OpenSees counterpart; verifying friction_mode = "
+        "'contact2d' (OpenSees's zeroLengthContact2D algorithm, in both engines) instead"
+        for w in wheres
+    ]
 
 
 def twin_motion(motion, scale: float = TWIN_SCALE):
@@ -73,7 +79,12 @@ def twin_motion(motion, scale: float = TWIN_SCALE):
 
 
 def verify_clone(
-    scene: Scene, motion=None, *, tolerance: float | None = 1e-12, twin: bool = False
+    scene: Scene,
+    motion=None,
+    *,
+    tolerance: float | None = 1e-12,
+    twin: bool = False,
+    twin_scale: float = TWIN_SCALE,
 ) -> dict:
     """Run OpenSees (rigid) and the Newmark clone on ``scene``; report their agreement.
 
@@ -86,9 +97,10 @@ def verify_clone(
     "speed_ratio": OpenSees wall time / clone wall time (clone compiled beforehand),
     "us_per_step": {...}, "iterations": {...}, "status": {...}}``.
 
-    ``twin``: also run the clone on the support motion scaled by 1 + :data:`TWIN_SCALE` and
-    report how far that moves the clone itself (``"twin_deviation"``, ``"twin_worst"``, same
-    measure): how well the scene's response is determined at all. Stiff contact makes it
+    ``twin``: also run the clone on the support motion scaled by 1 + ``twin_scale`` (default
+    :data:`TWIN_SCALE`) and report how far that moves the clone itself (``"twin_deviation"``,
+    ``"twin_worst"``, same measure; ``"twin_scale"``): how well the scene's response is
+    determined at all. Stiff contact makes it
     sensitive — a step's Newton iteration count flips on round-off, and the impacts that
     follow amplify the difference — so a deviation between the engines above the tolerance
     is only a disagreement of the models when the twin stays within it.
@@ -124,9 +136,10 @@ def verify_clone(
     steps = max(int(ro.meta.get("steps", 1)), 1)
     extra = {}
     if twin:
-        rt = run_compliance(sc, twin_motion(motion))
+        rt = run_compliance(sc, twin_motion(motion, twin_scale))
         twin_dev = column_deviations(rc.columns, rt.columns, cols)
         extra = {
+            "twin_scale": twin_scale,
             "twin_deviation": twin_dev,
             "twin_worst": max(
                 ((c, d) for c, d in twin_dev.items() if c not in velocity), key=lambda kv: kv[1]

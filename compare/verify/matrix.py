@@ -54,7 +54,7 @@ import platform
 import time
 from dataclasses import dataclass
 
-from deckpound.compare.verify.clone import TWIN_SCALE, verify_clone
+from deckpound.compare.verify.clone import verify_clone
 from deckpound.models.contact_laws_table import CONTACT_LAW_TABLE, DEFAULT_FRICTION, friction_model
 from deckpound.models.scene import Scene
 from deckpound.models.scene_io import load_scene, modified
@@ -239,7 +239,7 @@ def run_case(
     sc = modified(scene, *case.overrides) if case is not None else scene
     if duration is not None:
         sc = sc.replace(run=dataclasses.replace(sc.run, duration=duration))
-    rep = verify_clone(sc, twin=True)
+    rep = verify_clone(sc, twin=True, twin_scale=BACKWARD_TOLERANCE)
     worst, wv = rep["worst"], rep["worst_velocity"]
     backward = backward_error(rep)
     return CaseResult(
@@ -261,20 +261,23 @@ def backward_error(rep: dict) -> float:
     """How far the record must change for the clone to move as far as the engines are apart.
 
     For each column whose deviation d_c exceeds :data:`TOLERANCE`: d_c · s / d_c(s), where
-    d_c(s) is how far the clone's own twin run on the record scaled by 1 + s
-    (s = :data:`~deckpound.compare.verify.clone.TWIN_SCALE`) moves that column (the report of
-    ``verify_clone(..., twin=True)``); the largest over those columns, 0 when there are none,
-    inf where the twin leaves a failing column unchanged. This is the backward error of
-    numerical analysis, with the response's amplification measured along one direction (a
-    scaling of the record): an answer that is OpenSees's own for a record changed in its
-    tenth digit is as right as the record determines it, even where impacts amplify
-    round-off a million-fold (an undamped deck of segments) and no two implementations can
-    agree to :data:`TOLERANCE` over the whole record."""
-    twin = rep["twin_deviation"]
+    d_c(s) is how far the clone's own twin run on the record scaled by 1 + s moves that column
+    (the report of ``verify_clone(..., twin=True, twin_scale=s)``; the matrix runs
+    s = :data:`BACKWARD_TOLERANCE`, so that the value is ≤ the tolerance exactly when the
+    record changed in its tenth digit moves every such column at least as far as the engines
+    are apart, a direct comparison, whatever impacts or stick–slip switches the change sets
+    off); the largest over those columns, 0 when there are none, inf where the twin leaves a
+    failing column unchanged. This is the backward error of numerical analysis, with the
+    response's amplification measured along one direction (a scaling of the record): an
+    answer that is OpenSees's own for a record changed in its tenth digit is as right as the
+    record determines it, even where impacts amplify round-off a million-fold (an undamped
+    deck of segments) and no two implementations can agree to :data:`TOLERANCE` over the
+    whole record."""
+    twin, scale = rep["twin_deviation"], rep["twin_scale"]
     out = 0.0
     for col, dev in rep["deviation"].items():
         if dev > TOLERANCE:
-            out = max(out, dev * TWIN_SCALE / twin[col] if twin[col] > 0.0 else math.inf)
+            out = max(out, dev * scale / twin[col] if twin[col] > 0.0 else math.inf)
     return out
 
 

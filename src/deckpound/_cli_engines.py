@@ -203,9 +203,10 @@ def _verify_clone(args) -> int:
 
 
 def _verify_single(scene, verify_matrix) -> int:
-    from deckpound.compare.verify.clone import TWIN_SCALE, verify_clone
+    from deckpound.compare.verify.clone import verify_clone
 
-    report = verify_clone(scene, twin=True)
+    twin_scale = verify_matrix.BACKWARD_TOLERANCE
+    report = verify_clone(scene, twin=True, twin_scale=twin_scale)
     for note in report["notes"]:
         print(f"note: {note}")
     for col, dev in sorted(report["deviation"].items(), key=lambda kv: -kv[1]):
@@ -231,7 +232,7 @@ def _verify_single(scene, verify_matrix) -> int:
     tol = verify_matrix.TOLERANCE
     tcol, tworst = report["twin_worst"]
     print(
-        f"the clone's own sensitivity: the support motion scaled by 1 + {TWIN_SCALE:g} moves it "
+        f"the clone's own sensitivity: the support motion scaled by 1 + {twin_scale:g} moves it "
         f"by {tworst:.3e} of the column's peak (in {tcol})"
     )
     if max(worst, vworst) <= tol:
@@ -254,7 +255,7 @@ def _verify_single(scene, verify_matrix) -> int:
     if tworst > tol:
         print(
             f"the scene's response itself is not determined to {tol:g}: a change of "
-            f"{TWIN_SCALE:g} in the record moves the clone beyond it (stiff contact: Newton "
+            f"{twin_scale:g} in the record moves the clone beyond it (stiff contact: Newton "
             "iteration counts flip on round-off and the impacts amplify it)"
         )
     return 1
