@@ -22,11 +22,25 @@ from __future__ import annotations
 import numpy as np
 
 from .contact_laws_table import contact_law
-from .plan import Plan, plan_of
-from .scene import Scene
+from .plan import Corner, Plan, plan_of
+from .scene import Contact, Scene
 
 #: penetration at which the Hertz secant stiffness is taken for the contact period [m]
 HERTZ_SECANT_DEPTH = 0.01
+
+
+def corner_contacts(scene: Scene, plan: Plan | None = None) -> list[Contact]:
+    """The contact table of each corner of ``plan`` (default: the scene's): a joint corner's
+    joint's (:meth:`~deckpound.models.scene.Scene.joint_contact`), the scene's ``contact``
+    at the abutments."""
+    plan = plan_of(scene) if plan is None else plan
+    return [corner_contact(scene, c) for c in plan.corners]
+
+
+def corner_contact(scene: Scene, corner: Corner) -> Contact:
+    """The contact table of one corner of the scene's plan: its joint's
+    (:meth:`~deckpound.models.scene.Scene.joint_contact`) at a joint, else the scene's."""
+    return scene.joint_contact(corner.joint) if corner.joint >= 0 else scene.contact
 
 
 def effective_masses(scene: Scene, plan: Plan | None = None) -> np.ndarray:
@@ -44,27 +58,35 @@ def kelvin_voigt_ratio(e: float) -> float:
 
 
 def kelvin_voigt_damping(scene: Scene, plan: Plan | None = None) -> np.ndarray:
-    """Dashpot of each corner of ``plan`` (default: the scene's) [kN·s/m]: c = 2 ζ(e) √(k m_eff)."""
-    z = kelvin_voigt_ratio(scene.contact.restitution)
-    m_eff = effective_masses(scene, plan)
-    return 2.0 * z * np.sqrt(scene.contact.stiffness * m_eff)
+    """Dashpot of each corner of ``plan`` (default: the scene's) [kN·s/m]: c = 2 ζ(e) √(k m_eff),
+    e and k of the corner's contact table (:func:`corner_contacts`)."""
+    plan = plan_of(scene) if plan is None else plan
+    tables = corner_contacts(scene, plan)
+    z = np.array([kelvin_voigt_ratio(ct.restitution) for ct in tables])
+    k = np.array([ct.stiffness for ct in tables])
+    return 2.0 * z * np.sqrt(k * effective_masses(scene, plan))
 
 
 def contact_period(scene: Scene, plan: Plan | None = None) -> float:
     """Period of the stiffest corner's contact oscillation, T_c = 2π √(m_eff / k_eff) [s].
 
-    k_eff is ``contact.stiffness`` (K1 of the bilinear law); for the Hertz-type laws (those
-    whose force reads ``contact.exponent`` in the law table: hertz, hertz-damp, hertzdamp,
-    flores) the secant stiffness k δ^(n−1) at δ = :data:`HERTZ_SECANT_DEPTH`. NaN when there
-    is no contact stiffness or no moving mass. ``plan``: the scene's plan model when the
-    caller has it (default: made from the scene).
+    k_eff is the corner's ``stiffness`` (K1 of the bilinear law; each corner's contact table,
+    :func:`corner_contacts`); for the Hertz-type laws (those whose force reads
+    ``contact.exponent`` in the law table: hertz, hertz-damp, hertzdamp, flores) the secant
+    stiffness k δ^(n−1) at δ = :data:`HERTZ_SECANT_DEPTH`. The shortest over the corners; NaN
+    when there is no contact stiffness or no moving mass. ``plan``: the scene's plan model
+    when the caller has it (default: made from the scene).
     """
-    ct = scene.contact
-    k = ct.stiffness
-    if "contact.exponent" in contact_law(ct.law).params:  # λ ∝ δ^n: the Hertz-type laws
-        k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
-    m = float(np.min(effective_masses(scene, plan)))
-    return float(2.0 * np.pi * np.sqrt(m / k)) if k > 0 and m > 0 else float("nan")
+    plan = plan_of(scene) if plan is None else plan
+    m_eff = effective_masses(scene, plan)
+    periods = []
+    for ct, m in zip(corner_contacts(scene, plan), m_eff, strict=True):
+        k = ct.stiffness
+        if "contact.exponent" in contact_law(ct.law).params:  # λ ∝ δ^n: the Hertz-type laws
+            k = k * HERTZ_SECANT_DEPTH ** (ct.exponent - 1.0)
+        if k > 0 and m > 0:
+            periods.append(float(2.0 * np.pi * np.sqrt(m / k)))
+    return min(periods) if periods else float("nan")
 
 
 def contact_resolving_step(scene: Scene, dt: float, plan: Plan | None = None) -> float:

@@ -96,7 +96,7 @@ from deckpound.models.result import (
     scene_hash,
     settings_hash,
 )
-from deckpound.models.scene import Contact, Deck, Scene
+from deckpound.models.scene import Contact, Deck, Scene, joint_contact_error
 from deckpound.models.scene_settings import RunSettings
 from deckpound.models.version import VERSION
 
@@ -113,6 +113,7 @@ __all__ = [
     "engine_columns",
     "finish",
     "ignored_options",
+    "joint_contact_scenes",
     "output_stride",
     "seat_margins",
 ]
@@ -308,16 +309,46 @@ class Engine:
                 f"expects {self.Settings.__name__} settings, got {type(settings).__name__}",
             )
         self.refuse(scene, settings)
+        joints = joint_contact_scenes(scene)
+        for k, jscene in joints:
+            try:
+                self.refuse(jscene, settings)
+            except SceneError as err:
+                raise joint_contact_error(err, k) from None
         msgs = [
             f"{p} = {_value(scene, p)!r} does nothing in the {self.name} engine"
             + _why(self, p, scene)
             for p in ignored_options(self, scene, settings)
         ]
-        msgs += [f"{self.name} engine: {n}" for n in self.notes(scene, settings)]
+        notes = self.notes(scene, settings)
+        msgs += [f"{self.name} engine: {n}" for n in notes]
+        for k, jscene in joints:
+            msgs += self._joint_messages(scene, k, jscene, settings, notes)
         if warn:
             for m in msgs:
                 warnings.warn(m, OptionIgnored, stacklevel=3)
         return msgs
+
+    def _joint_messages(
+        self, scene: Scene, k: int, jscene: Scene, settings: Any, notes: list[str]
+    ) -> list[str]:
+        """The option messages of joint ``k``'s own contact fields (``jscene``: the scene as the
+        joint's corners see it): each field it gives that the engine does not read, and the
+        engine's notes its table adds to the scene's ``notes``."""
+        read = self.reads(jscene, settings)
+        at = f"joints[{k}].contact."
+        out = [
+            f"{at}{name} = {value!r} does nothing in the {self.name} engine"
+            + _why(self, f"contact.{name}", jscene).replace("contact.", at)
+            for name, value in scene.joints[k].contact.given().items()
+            if f"contact.{name}" not in read
+        ]
+        out += [
+            f"{self.name} engine: {n} (at joints[{k}])"
+            for n in self.notes(jscene, settings)
+            if n not in notes
+        ]
+        return out
 
     # -- running ----------------------------------------------------------------------------
     def run(
@@ -361,6 +392,17 @@ class Engine:
 
     def _run(self, plan: Plan, scene: Scene, settings: Any, motion, **options: Any) -> RunOutput:
         raise NotImplementedError(f"engine {self.name!r} does not implement _run")
+
+
+def joint_contact_scenes(scene: Scene) -> list[tuple[int, Scene]]:
+    """``(k, the scene as joint k's corners see it)`` for each joint with contact fields of its
+    own: the scene with ``contact`` replaced by :meth:`~deckpound.models.scene.Scene.
+    joint_contact` — what an engine's ``refuse`` and ``reads`` check for that joint."""
+    return [
+        (k, scene.replace(contact=scene.joint_contact(k)))
+        for k, joint in enumerate(scene.joints or ())
+        if joint.contact is not None and joint.contact.given()
+    ]
 
 
 def _value(scene: Scene, path: str) -> Any:

@@ -102,6 +102,11 @@ def _lengths(scene: Scene) -> list[tuple[str, float]]:
     """Every length of the scene [m] (field path, value) that only the 10 km bound limits."""
     out = [
         ("contact.bilinear_yield", scene.contact.bilinear_yield),
+        *(
+            (f"joints[{k}].contact.bilinear_yield", j.contact.bilinear_yield)
+            for k, j in enumerate(scene.joints or ())
+            if j.contact is not None and j.contact.bilinear_yield is not None
+        ),
         ("initial.deck[0]", abs(scene.initial.deck[0])),
         ("initial.deck[1]", abs(scene.initial.deck[1])),
     ]
@@ -191,30 +196,41 @@ def _findings(scene: Scene) -> list[tuple[str, str, str]]:
             "0.5-2.5 t/m², scale models with added mass a few t/m²): is it in kg?",
         )
 
-    mu = scene.contact.friction
-    if mu > FRICTION_MAX:
+    _contact_magnitudes("contact", scene.contact, add)
+    for k, joint in enumerate(scene.joints or ()):
+        if joint.contact is not None:
+            _contact_magnitudes(f"joints[{k}].contact", joint.contact, add)
+    return found
+
+
+def _contact_magnitudes(where: str, ct, add) -> None:
+    """Friction and contact stiffnesses of one contact table (``where``: its field path; a
+    joint's table checks the fields it gives, none is not given)."""
+    mu = ct.friction
+    if mu is None:
+        pass
+    elif mu > FRICTION_MAX:
         add(
             "error",
-            "contact.friction",
+            f"{where}.friction",
             f"μ = {mu:g} is beyond any pair of dry surfaces (at most {FRICTION_MAX:g}; "
             "concrete on concrete 0.5-0.8)",
         )
     elif mu > FRICTION_WARN:
         add(
             "warning",
-            "contact.friction",
+            f"{where}.friction",
             f"μ = {mu:g} is more than dry concrete (0.5-0.8) or rubber (about 1) give",
         )
     for name in ("stiffness", "tangential_stiffness"):
-        k = getattr(scene.contact, name)
-        if k > STIFFNESS_WARN:
+        k = getattr(ct, name)
+        if k is not None and k > STIFFNESS_WARN:
             add(
                 "warning",
-                f"contact.{name}",
+                f"{where}.{name}",
                 f"{k:g} kN/m is 1000× the stiffest contact of the stiffness study (1e8 kN/m): "
                 f"is it in N/m? (kN/m meant: {k / SLIP:g})",
             )
-    return found
 
 
 def _bent_springs(scene: Scene) -> list[tuple[str, str, str]]:

@@ -50,10 +50,12 @@ __all__ = [
     "Deck",
     "Initial",
     "Joint",
+    "JointContact",
     "Scene",
     "Seat",
     "Segment",
     "TakedaSpring",
+    "joint_contact_error",
 ]
 
 CONTACT_LAWS = tuple(LAW_CODES)  # the rows of contact_laws_table, in code order
@@ -269,6 +271,50 @@ class Contact:
         return self.friction > 0.0 and self.friction_mode != "none"
 
 
+def _joint_field(name: str) -> Any:
+    """The spec of :class:`Contact`'s field ``name`` as an optional joint field (default none:
+    the scene's value): the same unit, range and choices, one declaration of each."""
+    meta = Contact.__dataclass_fields__[name].metadata
+    limits = {k: meta[k] for k in ("unit", "gt", "ge", "lt", "le", "choices")}
+    return spec(None, doc=f"{meta['doc']} (none: contact.{name})", **limits)
+
+
+@dataclass(frozen=True, kw_only=True)
+class JointContact:
+    """The contact of one joint's corners where it differs from the scene's ``contact`` table.
+
+    A field given replaces the scene's value at that joint; a field left out (none) takes the
+    scene's, so ``--set contact.stiffness=...`` still reaches every joint that does not give
+    its own. A deck–deck joint (concrete on concrete, an elastomeric filler, a shear key) often
+    has a stiffness, restitution or friction of its own, unlike the deck–abutment seats. The
+    contact kinematics (``contact.geometry``) is one choice for the whole model and is not
+    here. Every engine applies these per corner or refuses, with the reason, what it cannot
+    express (the engines' ``refuse``, run on the joint's table).
+    """
+
+    law: str | None = _joint_field("law")
+    stiffness: float | None = _joint_field("stiffness")
+    exponent: float | None = _joint_field("exponent")
+    restitution: float | None = _joint_field("restitution")
+    bilinear_ratio: float | None = _joint_field("bilinear_ratio")
+    bilinear_yield: float | None = _joint_field("bilinear_yield")
+    friction: float | None = _joint_field("friction")
+    friction_mode: str | None = _joint_field("friction_mode")
+    tangential_stiffness: float | None = _joint_field("tangential_stiffness")
+    slip_velocity: float | None = _joint_field("slip_velocity")
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+    def given(self) -> dict[str, Any]:
+        """The fields the joint gives, by name."""
+        return {
+            f.name: getattr(self, f.name)
+            for f in dataclasses.fields(self)
+            if getattr(self, f.name) is not None
+        }
+
+
 @dataclass(frozen=True, kw_only=True)
 class Segment:
     """One rigid deck segment (frame) of a deck made of several (``Scene.segments``).
@@ -313,7 +359,8 @@ class Joint:
     bodies moving). ``support_length`` is the seat (support) length under the joint: the
     margin N − (g − g₀) of each joint corner is checked like an abutment seat's (a run whose
     margin becomes negative ends 'unseated'). The joint's corners take the scene's
-    ``contact`` table (law, stiffness, restitution, friction), as the abutment corners do.
+    ``contact`` table (law, stiffness, restitution, friction), as the abutment corners do,
+    with the fields ``contact`` gives in place of the scene's (:meth:`Scene.joint_contact`).
     """
 
     gap: float = spec(unit="m", doc="initial clear gap between the segment ends", ge=0.0)
@@ -330,6 +377,11 @@ class Joint:
         doc="seat (support) length under the joint, along the face normal, measured from the "
         "segment end's initial position; none (the default): the margin is not checked",
         gt=0.0,
+    )
+    contact: JointContact | None = spec(
+        None,
+        doc="the joint's own contact fields (law, stiffness, restitution, friction, ...); "
+        "none (the default): the scene's contact table",
     )
 
     def __post_init__(self) -> None:
@@ -520,6 +572,8 @@ class Scene:
                 f"must hold one joint between each pair of consecutive segments: "
                 f"{len(segs) - 1} for {len(segs)} segments, got {n_joints}",
             )
+        for k in range(n_joints):
+            self.joint_contact(k)
         names = [s.name for s in segs]
         bent_names = {b.name for b in self.bents}
         for i, name in enumerate(names):
@@ -550,6 +604,28 @@ class Scene:
                 "initial.deck and initial.deck_velocity describe a one-segment deck; give "
                 "segments[i].displacement and segments[i].velocity instead",
             )
+
+    def joint_contact(self, k: int) -> Contact:
+        """The contact table of joint ``k``'s corners: the scene's ``contact`` with the fields
+        ``joints[k].contact`` gives in their place (validated as a Contact; a refusal names
+        the joint's field)."""
+        own = self.joints[k].contact if self.joints is not None else None
+        given = own.given() if own is not None else {}
+        if not given:
+            return self.contact
+        try:
+            return dataclasses.replace(self.contact, **given)
+        except SceneError as err:
+            raise joint_contact_error(err, k) from None
+
+    def contact_tables(self) -> list[tuple[str, Contact]]:
+        """Every contact table the scene's corners use, with where it is given: the scene's
+        ``contact``, then each joint that gives contact fields of its own."""
+        out = [("contact", self.contact)]
+        for k, joint in enumerate(self.joints or ()):
+            if joint.contact is not None and joint.contact.given():
+                out.append((f"joints[{k}].contact", self.joint_contact(k)))
+        return out
 
     @property
     def segment_centres(self) -> tuple[float, ...]:
@@ -713,6 +789,22 @@ class Scene:
     def _repr_html_(self) -> str:
         """An HTML table of :meth:`summary` for notebooks (every text escaped)."""
         return html_table("Scene", self.summary())
+
+
+def joint_contact_error(err: SceneError, k: int) -> SceneError:
+    """``err``, raised on joint ``k``'s contact table (:meth:`Scene.joint_contact`, or an
+    engine's refusal of it), with the field named where the joint gives it: ``restitution``
+    or ``contact.restitution`` → ``joints[k].contact.restitution``; a refusal that names
+    another table (``compliance.integrator``) keeps its field and says which joint asked."""
+    field = err.field
+    names = {f.name for f in dataclasses.fields(Contact)}
+    if not field or field == "contact":
+        return SceneError(f"joints[{k}].contact", err.reason)
+    if field.startswith("contact."):
+        return SceneError(f"joints[{k}].{field}", err.reason)
+    if field in names:
+        return SceneError(f"joints[{k}].contact.{field}", err.reason)
+    return SceneError(field, f"{err.reason} (at joint {k}: joints[{k}].contact)")
 
 
 def _check_sum(field: str, value: float, parts: list[float], what: str) -> None:

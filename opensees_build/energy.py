@@ -62,6 +62,7 @@ import math
 import numpy as np
 
 from deckpound.models.columns import ENERGY_COLUMNS
+from deckpound.models.contact_params import corner_contacts
 from deckpound.models.plan import Plan
 from deckpound.models.scene import Scene
 
@@ -206,16 +207,23 @@ class EnergyBalance:
             if any(m):
                 mass_nodes.append((tag, m))
         # contact
-        self.friction = bool(info.friction)
+        # per corner: zeroLengthContact2D (its contact table has friction), else a gap material
+        self.friction = list(info.corner_friction)
         self.gaps = list(info.gap_elements)
         self.g0 = [float(c.gap) for c in plan.corners]
         self.normals = [tuple(c.normal) for c in plan.corners]
         self.tangents = [tuple(c.tangent) for c in plan.corners]
-        ct = scene.contact
-        self.kn, self.kt, self.mu = ct.stiffness, ct.tangential_stiffness, ct.friction
+        # each corner's contact table (a joint's own, else the scene's)
+        tables = corner_contacts(scene, plan)
+        self.kn = [ct.stiffness for ct in tables]
+        self.kt = [ct.tangential_stiffness for ct in tables]
+        self.mu = [ct.friction for ct in tables]
         self.gap_laws = []
-        if self.gaps and not self.friction:
+        if self.gaps:
             for corner in plan.corners:
+                if self.friction[corner.index]:
+                    self.gap_laws.append(None)
+                    continue
                 orient = corner_orientation(corner)
                 axis = (1.0, 0.0) if orient is None else (orient[0], orient[1])
                 spec = gap_mapping(scene, corner, 0, 0, 0)
@@ -235,7 +243,7 @@ class EnergyBalance:
         self.corner_nodes = []
         if self.gaps:
             for c, tag in enumerate(self.gaps):
-                if self.friction:
+                if self.friction[c]:
                     # zeroLengthContact2D: i = seat point, j = deck corner
                     dk, st = info.deck_corners[c], info.seat_corners[c]
                     self.corner_nodes.append((index(st), index(dk)))
@@ -301,13 +309,16 @@ class EnergyBalance:
         nc = len(self.g0)
         self.stick = [0.0] * nc  # contact2d stick points s_p [m]
         self.ft_acting = [0.0] * nc  # the tangential forces that acted at the last (sub)step
-        if self.friction:
-            # (g, s, fn, ft): zeroLengthContact2D computes its force from the nodes when asked
-            self.contact_state = [self._contact2d(ops, c, disp) for c in range(nc)]
-        elif self.gaps:
-            # (strain, stress) of the gap materials: open at the start (the engine refuses an
-            # initial state that closes a gap), so the force is zero
-            self.contact_state = [(self._gap_strain(c, disp), 0.0) for c in range(nc)]
+        if self.gaps:
+            # zeroLengthContact2D: (g, s, fn, ft), computed from the nodes when asked; a gap
+            # material: (strain, stress), open at the start (the engine refuses an initial
+            # state that closes a gap), so the force is zero
+            self.contact_state = [
+                self._contact2d(ops, c, disp)
+                if self.friction[c]
+                else (self._gap_strain(c, disp), 0.0)
+                for c in range(nc)
+            ]
         ke, es, e_lin, ec, _ = self._stored(ops)
         W = self.W
         W[_INPUT] = ke + es + ec
@@ -418,12 +429,14 @@ class EnergyBalance:
         W[_INPUT] += 0.5 * w_in
         W[_SPRINGS] += 0.5 * w_springs
         W[_VISCOUS] += 0.5 * w_visc
-        if self.friction:
+        if self.gaps:
             self._contact2d_step(ops, disp)
-        elif self.gaps:
+        if self.gaps and not all(self.friction):
             work = 0.0
             state = self.contact_state
             for c, tag in enumerate(self.gaps):
+                if self.friction[c]:
+                    continue
                 e0, s0 = state[c]
                 e1 = self._gap_strain(c, disp)
                 p = ops.eleForce(tag)
@@ -439,18 +452,20 @@ class EnergyBalance:
     def _contact2d_step(self, ops, disp) -> None:
         W = self.W
         for c in range(len(self.gaps)):
+            if not self.friction[c]:
+                continue
             g0, s0, fn0, _ = self.contact_state[c]
             g1, s1, fn1, ft_rep = self.contact_state[c] = self._contact2d(ops, c, disp)
             if fn1 > 0.0:
-                trial = -self.kt * (s1 - self.stick[c])
+                trial = -self.kt[c] * (s1 - self.stick[c])
                 if 2.0 * abs(ft_rep) < abs(trial):
                     # slid: the element moved its stick point to s and reports 0 (up to the
                     # round-off of projecting its force on t), while μ p acted in the step
-                    ft = math.copysign(self.mu * fn1, trial)
+                    ft = math.copysign(self.mu[c] * fn1, trial)
                     self.stick[c] = s1
                 else:  # stuck: the element reports the force that acted, −k_t (s − s_p)
                     ft = ft_rep
-                    self.stick[c] = s1 + ft_rep / self.kt
+                    self.stick[c] = s1 + ft_rep / self.kt[c]
             else:
                 ft = 0.0
             W[_CONTACT] -= 0.5 * (fn0 + fn1) * (g1 - g0)
@@ -487,17 +502,18 @@ class EnergyBalance:
         es += e_lin
         ec = 0.0
         efs = 0.0
-        if self.friction:
-            for g, _, fn, ft_rep in self.contact_state:
+        for c, state in enumerate(self.contact_state if self.gaps else ()):
+            if self.friction[c]:
+                g, _, fn, ft_rep = state
                 if fn > 0.0 and g < 0.0:
-                    ec += 0.5 * self.kn * g * g
+                    ec += 0.5 * self.kn[c] * g * g
                 if ft_rep != 0.0:
-                    efs += 0.5 * ft_rep * ft_rep / self.kt
-            ec += efs
-        elif self.gaps:
-            for c, (strain, stress) in enumerate(self.contact_state):
+                    efs += 0.5 * ft_rep * ft_rep / self.kt[c]
+            else:
+                strain, stress = state
                 material, args, _ = self.gap_laws[c]
                 ec += contact_stored_energy(material, args, self.g0[c] + strain, -stress)
+        ec += efs
         return ke, es, e_lin, ec, efs
 
     def _snapshot(self, ops, n: int) -> None:

@@ -98,7 +98,7 @@ def contact_forces(ops, plan):
         if not e:
             fn.append(0.0)
             ft.append(0.0)
-        elif plan["friction"]:
+        elif plan["corner_friction"][c]:
             f = ops.eleResponse(e, "force")  # resisting forces [Fx_i, Fy_i, M_i, Fx_j, Fy_j, M_j]
             # the force ON the deck (node j) is minus its resisting force; compression pushes
             # the deck along the gap-opening normal n (+x at seat 1, -x at seat 2 when straight)
@@ -363,7 +363,7 @@ def step_plan(scene: Scene, plan: Plan, info: ModelInfo, duration: float) -> dic
         "normals": [list(c.normal) for c in plan.corners],
         "tangents": [list(c.tangent) for c in plan.corners],
         "bent_elements": list(info.bent_elements),
-        "friction": info.friction,
+        "corner_friction": list(info.corner_friction),
         "analysis": [list(c) for c in analysis_commands(scene)],
         "columns": columns,
         "bent_x": list(plan.bent_x),

@@ -207,12 +207,11 @@ def sign_lines(p: ExportParts) -> list[str]:
                 "+ = +y."
             ),
         ]
-    friction = p.plan["friction"]
     for c, e in enumerate(p.plan["gap_elements"]):
         cmd = _first(p.log, "element", 1, e)
         i, j = p.name("node", cmd.args[2]), p.name("node", cmd.args[3])
         side, g0 = p.plan["sides"][c], p.plan["g0"][c]
-        if friction:
+        if p.plan["corner_friction"][c]:
             k = cmd.args.index("-normal")
             nx, ny = cmd.args[k + 1], cmd.args[k + 2]
             if skewed:
@@ -418,14 +417,19 @@ def header_lines(p: ExportParts) -> list[str]:
     """The header as plain text lines (the writers make them comments)."""
     sc = p.scene
     lang = "Tcl" if p.fmt == "tcl" else "OpenSeesPy"
-    friction = f", friction {sc.contact.friction_mode}" if p.plan["friction"] else ""
+    friction = f", friction {sc.contact.friction_mode}" if sc.contact.has_friction else ""
+    joints = "".join(
+        f"; {where}: law {jc.law}" + (f", friction {jc.friction_mode}" if jc.has_friction else "")
+        for where, jc in sc.contact_tables()[1:]
+    )
     segments = "" if sc.segments is None else f" of {len(sc.segments)} segments"
     out = [
         f"deckpound {VERSION} export ({lang}) of scene '{sc.name}'",
         f"scene sha256: {p.scene_hash}",
         (
             f"model: {sc.opensees.mode} deck{segments}, {len(sc.bents)} bents, contact law "
-            f"{sc.contact.law}{friction}; dt {sc.opensees.dt!r} s; {p.plan['n_steps']} steps"
+            f"{sc.contact.law}{friction}{joints}; dt {sc.opensees.dt!r} s; "
+            f"{p.plan['n_steps']} steps"
         ),
         UNITS,
         AXES,

@@ -118,7 +118,7 @@ set nY {_tcl_list([n[1] for n in plan["normals"]])}
 set tX {_tcl_list([t[0] for t in plan["tangents"]])}
 set tY {_tcl_list([t[1] for t in plan["tangents"]])}
 set bentEles {_tcl_list(plan["bent_elements"])}
-set friction {1 if plan["friction"] else 0}
+set friction {_tcl_list([1 if f else 0 for f in plan["corner_friction"]])}
 # the support length N of the seat each corner faces [m] (empty: unseating not checked)
 set seatLengths {_tcl_lengths(plan["support_lengths"])}
 set seatsUnchecked {tcl_word(UNCHECKED_SEATS)}
@@ -179,7 +179,7 @@ proc sampleRow {t} {
         set e [lindex $gapEles $c]
         if {!$hasGaps} {
             lappend fn 0.0; lappend ft 0.0
-        } elseif {$friction} {
+        } elseif {[lindex $friction $c]} {
             set f [eleResponse $e force]
             set fx [lindex $f 3]
             set fy [lindex $f 4]
@@ -311,7 +311,7 @@ proc trackStep {{t}} {{
             set now [expr {{$g <= 0.0}}]
             if {{!$now}} {{
                 set e [lindex $gapEles $c]
-                if {{$friction}} {{
+                if {{[lindex $friction $c]}} {{
                     set f [eleResponse $e force]
                     set fn [expr {{-([lindex $nX $c] * [lindex $f 3] + [lindex $nY $c] * [lindex $f 4])}}]
                 }} else {{

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 
 from deckpound.models.contact_laws_table import contact_law
-from deckpound.models.contact_params import kelvin_voigt_damping
+from deckpound.models.contact_params import corner_contact, kelvin_voigt_damping
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import Corner
 from deckpound.models.scene import Scene
@@ -89,12 +89,13 @@ def gap_mapping(
     strain = side·a·(u_deck − u_seat) = g − g₀, and closing is negative (compression). The
     materials take a negative gap −g₀ (and negative yield values), so their stress is ≤ 0 and
     the contact force fn = −stress ≥ 0 acts on the deck along n. The material is the law's
-    OpenSees counterpart in the contact-law table (:mod:`deckpound.models.contact_laws_table`).
+    OpenSees counterpart in the contact-law table (:mod:`deckpound.models.contact_laws_table`),
+    with the corner's contact table (a joint's own, else the scene's).
     """
     g0 = corner.gap
     i, j = (seat_node, deck_node) if corner.side > 0 else (deck_node, seat_node)
     orient = corner_orientation(corner)
-    c = scene.contact
+    c = corner_contact(scene, corner)
     law = contact_law(c.law)
     material = law.opensees
     if material == "ElasticPPGap":

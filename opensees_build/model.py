@@ -78,6 +78,7 @@ from deckpound.models.contact_laws_table import (
     contact_law,
     friction_model,
 )
+from deckpound.models.contact_params import corner_contacts
 from deckpound.models.damping import DampingModel, damping_model
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import Plan, plan_of
@@ -134,7 +135,9 @@ class ModelInfo:
     gap_elements: tuple[int, ...]
     bent_names: tuple[str, ...]
     bent_elements: tuple[int, ...]
-    friction: bool
+    #: per corner (plan order): its element is zeroLengthContact2D (its contact table has
+    #: friction), else a zeroLength gap element
+    corner_friction: tuple[bool, ...]
     damping: DampingModel
     stick_elements: tuple[int, ...] = ()
     bodies: tuple[int, ...] = ()
@@ -190,7 +193,20 @@ def refuse_scene(scene: Scene) -> None:
     The "option does nothing" warnings are derived by the engine contract from
     :meth:`deckpound.opensees_build.engine.OpenSeesEngine.reads`.
     """
-    c = scene.contact
+    tables = scene.contact_tables()
+    for where, c in tables:
+        try:
+            _refuse_contact(scene, c)
+        except SceneError as err:
+            raise (
+                err
+                if where == "contact"
+                else SceneError(err.field.replace("contact", where, 1), err.reason)
+            ) from None
+
+
+def _refuse_contact(scene: Scene, c) -> None:
+    """:func:`refuse_scene` on one contact table ``c`` (the scene's or a joint's)."""
     law = contact_law(c.law)
     if law.opensees is None:
         raise SceneError("contact.law", law.opensees_refusal)
@@ -252,6 +268,7 @@ def build_model(
         plan = plan_of(scene)
     if damping is None:
         damping = damping_model(scene, plan)
+    # the abutment corners' friction places the seats' pivots and stiffens their guides
     friction = gaps and scene.contact.has_friction
     damped_bents, damped_seats = rayleigh_members(plan, damping)
     ops.model("basic", "-ndm", 2, "-ndf", 3)
@@ -263,7 +280,7 @@ def build_model(
     # compliance 1/k_guide behind the 1e6 stick spring (a 1e-4 relative difference from the
     # plan model, whose seats do not move in y); the skew guide makes it round-off
     define_seat_guides(ops, seats, scene.deck.skew != 0.0 or friction)
-    gap_eles = define_contacts(ops, scene, plan, deck, seats, friction) if gaps else []
+    gap_eles = define_contacts(ops, scene, plan, deck, seats) if gaps else []
     ref_nodes, dampers = define_damping(ops, plan, damping, deck, seats, supports)
     if supports == "motion":
         if motion is None:
@@ -278,7 +295,7 @@ def build_model(
         gap_elements=tuple(gap_eles),
         bent_names=plan.bent_names,
         bent_elements=tuple(bent_eles),
-        friction=friction,
+        corner_friction=tuple(gaps and ct.has_friction for ct in corner_contacts(scene, plan)),
         damping=damping,
         stick_elements=tuple(deck.sticks),
         bodies=tuple(deck.bodies),
@@ -533,20 +550,29 @@ def define_seat_guides(ops: OpsSession, seats: SeatNodes, stiff: bool) -> None:
 
 
 def define_contacts(
-    ops: OpsSession, scene: Scene, plan: Plan, deck: DeckNodes, seats: SeatNodes, friction: bool
+    ops: OpsSession, scene: Scene, plan: Plan, deck: DeckNodes, seats: SeatNodes
 ) -> list[int]:
     """The gap element of every corner, between its corner node and the node it meets
     (:func:`facing_points`): zeroLengthContact2D with friction, else a zeroLength with the
-    law's gap material (:func:`.gaps.gap_mapping`). Returns the element tags."""
+    law's gap material (:func:`.gaps.gap_mapping`). Returns the element tags. Each corner takes
+    its contact table (:func:`~deckpound.models.contact_params.corner_contacts`: a joint's own,
+    else the scene's): zeroLengthContact2D where that table has friction."""
     ct = scene.contact
     ops.comment(
         f"contact at the corners: law {ct.law}"
-        + (", zeroLengthContact2D with friction" if friction else "")
+        + (", zeroLengthContact2D with friction" if ct.has_friction else "")
     )
+    for where, jc in scene.contact_tables()[1:]:
+        ops.comment(
+            f"{where}: law {jc.law}"
+            + (", zeroLengthContact2D with friction" if jc.has_friction else "")
+        )
     elements = []
+    tables = corner_contacts(scene, plan)
     for corner, dk, st in zip(plan.corners, deck.corners, facing_points(plan, deck, seats)):
         e = ops.tag("element", f"gap {corner.name}")
-        if friction:
+        ct = tables[corner.index]
+        if ct.has_friction:
             # i = seat (facing) point, j = deck corner; zeroLengthContact2D (3.7) measures the
             # gap as n_c·(x_i + u_i − x_j − u_j) (verified), so n_c = −n points from the deck
             # to the seat: −x at seat 1 and at a joint, +x at seat 2 for a straight deck. Its

@@ -240,7 +240,7 @@ def gap_recorder(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnMap]
                 f"gap_{k}", f"gap_{k}.out", a=1, b=3, offset=g0, scale=nx, a2=2, b2=4, scale2=ny
             )
         )
-    elif plan["friction"]:  # straight deck: x displacements only, n = (side, 0)
+    elif plan["corner_friction"][c]:  # straight face: x displacements only, n = (side, 0)
         recs.append(
             Recorder(
                 f"gap_{k}.out",
@@ -272,7 +272,7 @@ def force_recorders(plan: dict, c: int, recs: list[Recorder], maps: list[ColumnM
     element's resisting forces projected on −n and −t, else the gap material's stress."""
     k = plan["corners"][c]
     e = plan["gap_elements"][c]
-    if plan["friction"]:
+    if plan["corner_friction"][c]:
         side = plan["sides"][c]
         (nx, ny), (tx, ty) = plan["normals"][c], plan["tangents"][c]
         # fn = -n.(Fx_j, Fy_j), ft = -t.(Fx_j, Fy_j) (j = deck corner); straight: -side*Fx_j,

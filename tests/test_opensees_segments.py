@@ -52,7 +52,14 @@ from deckpound.opensees_build.ops import OpsSession
 
 SHORT = ("run.duration=3", "excitation.duration=3")
 FRICTION = ("contact.friction=0.2", "contact.friction_mode=contact2d")
-VARIANTS = {"frictionless": (), "contact2d": FRICTION}
+#: friction at the joint alone, with its own μ and stiffness (``joints[0].contact``): the
+#: joint's corners are zeroLengthContact2D elements, the abutments' gap materials
+JOINT_FRICTION = (
+    "joints[0].contact.friction=0.4",
+    "joints[0].contact.friction_mode=contact2d",
+    "joints[0].contact.stiffness=2e6",
+)
+VARIANTS = {"frictionless": (), "contact2d": FRICTION, "joint-friction": JOINT_FRICTION}
 #: both engines stepped to the same converged states (tests/test_clone_vs_opensees.py)
 TIGHT = ("opensees.tolerance=1e-12", "compliance.tolerance=1e-12", "opensees.mode=rigid")
 JOINT = ("gap_j1_c1", "gap_j1_c2", "fn_j1_c1", "fn_j1_c2", "ft_j1_c1", "ft_j1_c2")
@@ -113,10 +120,12 @@ def test_clone_equals_opensees(variant):
     assert rep["iterations"]["opensees"] == rep["iterations"]["compliance"]
     # both joint corners pound (so the joint's columns are compared while they move)
     assert rep["peaks"]["fn_j1_c1"] > 10.0 and rep["peaks"]["fn_j1_c2"] > 10.0
-    if variant == "contact2d":
+    if variant != "frictionless":
         assert rep["peaks"]["ft_j1_c1"] > 1.0 and rep["peaks"]["ft_j1_c2"] > 1.0
     else:
         assert rep["peaks"]["ft_j1_c1"] == 0.0
+    if variant == "joint-friction":  # the abutments' corners keep their gap materials
+        assert rep["peaks"]["ft_c1"] == 0.0 and rep["peaks"]["fn_c1"] > 0.0
     for c in JOINT:
         assert rep["deviation"][c] <= 1e-7, (c, rep["deviation"][c])
 
@@ -160,10 +169,11 @@ def test_python_export_reproduces_the_engine(variant, tmp_path):
 
 
 @pytest.mark.skipif(not HAS_TCL, reason="the Tcl OpenSees interpreter (pip 'opensees') is absent")
-def test_tcl_export_reproduces_the_engine(tmp_path):
+@pytest.mark.parametrize("variant", ["contact2d", "joint-friction"])
+def test_tcl_export_reproduces_the_engine(variant, tmp_path):
     """Another OpenSees build (xara) running the Tcl script: round-off, the tolerances of
     tests/test_skew_opensees.py (1e-9 of each column's peak, velocities 1e-8)."""
-    scene = two_frame(*FRICTION)
+    scene = two_frame(*VARIANTS[variant])
     ref = quiet(run_engine, "opensees", scene)
     tcl = export_script(scene, "tcl", tmp_path / "two_frame.tcl")
     cp = run_tcl(tcl)
@@ -190,7 +200,7 @@ def test_energy_balance_closes_and_equals_the_clones(variant):
     closure = float(np.max(np.abs(ro["energy_error"]))) / float(np.max(np.abs(ro["energy_input"])))
     assert closure <= 1e-11 and ro.meta["energy_closure"] == pytest.approx(closure, abs=1e-300)
     assert np.max(ro["energy_contact_stored"]) > 0.0
-    if variant == "contact2d":
+    if variant != "frictionless":
         assert ro["energy_friction"][-1] > 1e-3 * e_in
 
 

@@ -172,7 +172,8 @@ def pack_contact(
 ) -> np.ndarray:
     """Per-corner parameter array (n_corners, N_CP) of the scene's contact law and friction,
     one row per corner of ``plan`` (default: the scene's plan, :func:`deckpound.models.plan.
-    plan_of`); every corner gets the scene's law.
+    plan_of`); each corner gets its contact table's law and friction
+    (:func:`deckpound.models.contact_params.corner_contacts`: a joint's own, else the scene's).
 
     ``impact_opensees`` keeps ImpactMaterial's first-contact quirk in the bilinear law (the
     increment taken from the last open strain, so the force jumps at closure and Newton can
@@ -186,23 +187,23 @@ def pack_contact(
     (∂λ/∂ġ = 0), Hertzdamp (hertz, hertzdamp) reports its stiffness with the opposite sign
     (+n(k + ξ δ̇) δ^(n−1) as ∂λ/∂g) and no damping tangent.
     """
-    ct = scene.contact
     plan = plan_of(scene) if plan is None else plan
     cp = np.zeros((len(plan.corners), N_CP))
-    law = CONTACT_LAW_TABLE[LAW_CODES[ct.law]]
-    cp[:, P_LAW] = law.code
-    cp[:, P_EVENT] = 1.0 if law.rate_event else 0.0
-    cp[:, P_E] = ct.restitution
-    cp[:, P_K] = ct.stiffness
-    cp[:, P_N] = ct.exponent
     cp[:, P_C] = contact_params.kelvin_voigt_damping(scene, plan)
-    cp[:, P_D] = law.hysteresis(ct.restitution) if law.hysteresis is not None else 0.0
-    cp[:, P_K2] = ct.bilinear_ratio * ct.stiffness
-    cp[:, P_DY] = ct.bilinear_yield
-    cp[:, P_MU] = ct.friction
-    cp[:, P_FMODE] = FRICTION_CODES[ct.friction_mode] if ct.friction > 0.0 else 0
-    cp[:, P_KT] = ct.tangential_stiffness
-    cp[:, P_V0] = ct.slip_velocity
+    for row, ct in zip(cp, contact_params.corner_contacts(scene, plan), strict=True):
+        law = CONTACT_LAW_TABLE[LAW_CODES[ct.law]]
+        row[P_LAW] = law.code
+        row[P_EVENT] = 1.0 if law.rate_event else 0.0
+        row[P_E] = ct.restitution
+        row[P_K] = ct.stiffness
+        row[P_N] = ct.exponent
+        row[P_D] = law.hysteresis(ct.restitution) if law.hysteresis is not None else 0.0
+        row[P_K2] = ct.bilinear_ratio * ct.stiffness
+        row[P_DY] = ct.bilinear_yield
+        row[P_MU] = ct.friction
+        row[P_FMODE] = FRICTION_CODES[ct.friction_mode] if ct.friction > 0.0 else 0
+        row[P_KT] = ct.tangential_stiffness
+        row[P_V0] = ct.slip_velocity
     cp[:, P_CLIP] = 1.0 if kv_clip else 0.0
     cp[:, P_IMPQ] = 1.0 if impact_opensees else 0.0
     cp[:, P_OTAN] = 1.0 if opensees_tangent else 0.0

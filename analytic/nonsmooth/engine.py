@@ -83,6 +83,7 @@ from deckpound.analytic.nonsmooth.moreau_jean_work import (
 )
 from deckpound.models.columns import column_names
 from deckpound.models.contact_laws_table import RIGID_CONTACT, contact_law, friction_model
+from deckpound.models.contact_params import corner_contacts
 from deckpound.models.damping import damping_model, refuse_tangent_damping
 from deckpound.models.engine_contract import (
     Engine,
@@ -217,6 +218,7 @@ class NonsmoothEngine(Engine):
         record = bd.record(*support_record(motion, ps.channels))
         ct = scene.contact
         mu = float(ct.friction) if ct.has_friction else 0.0
+        tables = corner_contacts(scene, plan)
         stride = output_stride(h, scene.run.output_dt)
         nsteps = round(duration / h)
         corner_names = [c.name for c in plan.corners]
@@ -239,9 +241,11 @@ class NonsmoothEngine(Engine):
             nsteps=nsteps,
             h=float(h),
             theta=float(theta),
-            ecoef=float(ct.restitution),
-            esep=separating_restitution(ct.restitution, theta, ns_set.impact_law),
-            mu=mu,
+            ecoef=np.array([float(c.restitution) for c in tables]),
+            esep=np.array(
+                [separating_restitution(c.restitution, theta, ns_set.impact_law) for c in tables]
+            ),
+            mu=np.array([float(c.friction) if c.has_friction else 0.0 for c in tables]),
             mode=MODE_ENUM if ns_set.solver == "enumeration" else MODE_AUTO,
             rtol=float(ns_set.tolerance),
             ftol=_force_tolerance(ps, ns_set.tolerance),

@@ -91,8 +91,10 @@ def solve_active_impulses(
 ):
     """Solve the frictional impact problem of the active corners act[:nact].
 
-    G = W Ŵ⁻¹ Wᵀ, u_free = W v_free, U_N⁻ = W_N v0; vnew = v_free + Ŵ⁻¹ Wᵀ P. Restitution
-    ``ecoef`` for approaching corners (U_N⁻ ≤ 0), ``esep`` for separating ones.
+    G = W Ŵ⁻¹ Wᵀ, u_free = W v_free, U_N⁻ = W_N v0; vnew = v_free + Ŵ⁻¹ Wᵀ P. Per corner
+    (n_corners,): restitution ``ecoef`` where it approaches (U_N⁻ ≤ 0), ``esep`` where it
+    separates, friction coefficient ``mu`` (each corner's contact table: a joint's may differ
+    from the abutments').
     P_N, P_T, state (n_corners,) are written per corner (zero / open for inactive corners);
     the DOF count is the size tag ``work.dof_slots``, the corner count P_N's length.
     ``work``: the :data:`ImpulseWork` (:func:`impulse_work`). Returns (status, comp_res,
@@ -133,8 +135,9 @@ def solve_active_impulses(
         uNf[a] = sN
         uTf[a] = sT
         uNm[a] = sm
-        ea[a] = ecoef if sm <= 0.0 else esep
-        ma[a] = mu
+        c = act[a]
+        ea[a] = ecoef[c] if sm <= 0.0 else esep[c]
+        ma[a] = mu[c]
     pN = work.pN[:nc]
     pT = work.pT[:nc]
     uNp = work.uNp[:nc]

@@ -70,9 +70,10 @@ W_INPUT, W_SPRING, W_VISCOUS, W_IMPACT, W_FRICTION, W_NUMERICAL = range(N_WORK)
 #: Rows of ``work.final``: displacement and velocity at the last accepted step.
 FINAL_U, FINAL_V = 0, 1
 
-#: The scalars of :func:`moreau_jean_run`: ``nsteps`` steps of length ``h`` [s], ``theta``;
-#: restitution ``ecoef`` of approaching corners and ``esep`` of separating ones
-#: (:func:`deckpound.analytic.nonsmooth.engine.separating_restitution`); friction coefficient ``mu``;
+#: The options of :func:`moreau_jean_run`: ``nsteps`` steps of length ``h`` [s], ``theta``;
+#: per corner (n_corners,) arrays: restitution ``ecoef`` of an approaching corner and ``esep``
+#: of a separating one (:func:`deckpound.analytic.nonsmooth.engine.separating_restitution`),
+#: friction coefficient ``mu``;
 #: contact solver ``mode`` (:mod:`deckpound.analytic.nonsmooth.frictional_contact` ``MODE_*``); ``rtol``
 #: relative acceptance of the contact solution; ``ftol`` [kN] Newton acceptance of the spring
 #: forces and ``maxit`` Newton iterations; output every ``stride`` steps; ``flush_subnormals``
