@@ -52,13 +52,15 @@ __all__ = [
     "run_case",
     "run_cases",
     "summary_key",
+    "task_batches",
 ]
 
 #: seconds to wait for a Dask scheduler before giving up (exit status 3 on the CLI)
 CONNECT_TIMEOUT = 20.0
-#: the most cases one task carries to a worker (a batch: one round trip, one pickled list),
-#: and how many batches each worker gets at least, so that the last ones still balance
-MAX_BATCH = 8
+#: the most cases one task carries to a worker (a batch: one round trip, one pickled list;
+#: tens of cases, so that a cluster's per-task cost is paid once per tens of runs), and how
+#: many batches of that size each worker gets at least while there are enough items
+MAX_BATCH = 32
 BATCHES_PER_WORKER = 8
 
 
@@ -261,7 +263,7 @@ def map_parallel(
             for it in items:
                 on_done(it, func(*args_of(it)))
         return
-    batches = _batches(items, batch_size(len(items), n), n)
+    batches = task_batches(items, batch_size(len(items), n), n)
     map_local(batches, _batch_args(args_of, func), run_batch, _batch_done(on_done), n)
 
 
@@ -276,13 +278,18 @@ def run_batch(func: Callable, arguments: list[tuple]) -> list:
     return [func(*args) for args in arguments]
 
 
-def _batches(items: list, size: int, workers: int = 1) -> list[tuple]:
-    """``items`` in tasks of ``size``, the last ``workers × size`` items one per task (guided
-    self-scheduling): at the end of a map no worker waits for another's whole batch."""
-    tail = min(len(items), workers * size) if size > 1 else 0
-    head = len(items) - tail
-    out = [tuple(items[i : i + size]) for i in range(0, head, size)]
-    return out + [(it,) for it in items[head:]]
+def task_batches(items: list, size: int, workers: int = 1) -> list[tuple]:
+    """``items`` in tasks of at most ``size``, shrinking towards the end: each takes
+    ⌈remaining / (2 × workers)⌉ items (guided self-scheduling, Polychronopoulos & Kuck 1987,
+    with half its share per task), so the first tasks carry ``size`` and the last ones a single item: at the
+    end of a map no worker waits for another's whole batch, in about n / size + 2 workers
+    log₂(size) tasks."""
+    out, start, n = [], 0, len(items)
+    while start < n:
+        take = max(1, min(size, -(-(n - start) // (2 * workers))))
+        out.append(tuple(items[start : start + take]))
+        start += take
+    return out
 
 
 def _batch_args(args_of: Callable, func: Callable) -> Callable:
@@ -335,7 +342,7 @@ def _map_dask(
         # every worker loads cached kernels the fast way; a worker keeps them for its lifetime
         client.run(_dask_worker_setup)
         threads = sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values())
-        batches = _batches(items, batch_size(len(items), threads), threads)
+        batches = task_batches(items, batch_size(len(items), threads), threads)
         arguments, done = _batch_args(args_of, func), _batch_done(on_done)
         futures = {client.submit(run_batch, *arguments(b), pure=False): b for b in batches}
         try:

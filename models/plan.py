@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cache, cached_property
 
 import numpy as np
 
@@ -99,6 +99,7 @@ VELOCITY_COLUMNS = (
 RELATIVE_COLUMNS = ("deck_x_rel", "deck_y_rel", "seat1_x_rel", "seat2_x_rel")
 
 
+@cache  # read for every column list of every run: a sweep would build them anew
 def deck_column_names(bodies: tuple[str, ...]) -> tuple[tuple[str, ...], ...]:
     """(displacement, velocity, relative) column names of a deck of these bodies (``("deck",)``
     or the segments' names): ``<body>_x_abs``, ``_y_abs``, ``_theta``; ``<body>_vx_abs``,

@@ -15,7 +15,7 @@ from _process_helpers import alive, start_in_own_group, wait_for_rows
 import deckpound as dp
 from deckpound import cli
 from deckpound.compare import pool
-from deckpound.compare.cases import MAX_BATCH, batch_size, map_parallel
+from deckpound.compare.cases import MAX_BATCH, batch_size, map_parallel, task_batches
 from deckpound.models.result import read_table
 
 SHORT = ["excitation.duration=2.0"]
@@ -63,11 +63,17 @@ def test_a_sweep_travels_in_batches_and_every_item_is_done_once():
     )
     assert sorted(seen) == list(range(60))
     assert all(seen[i][0] == i * i for i in seen)
-    # items of one batch run in one worker, one after the other; the last 2 × size items go
-    # one per task (no worker waits at the end for another's whole batch)
+    # items of one batch run in one worker, one after the other; the batches shrink to single
+    # items at the end (no worker waits at the end for another's whole batch)
     size = batch_size(60, 2)
-    head = 60 - 2 * size
-    assert all(seen[i][1] == seen[i - i % size][1] for i in seen if i < head)
+    batches = task_batches(list(range(60)), size, 2)
+    assert [i for b in batches for i in b] == list(range(60))
+    lengths = [len(b) for b in batches]
+    assert lengths[0] == size and lengths[-1] == 1 and lengths == sorted(lengths, reverse=True)
+    assert all(len({seen[i][1] for i in b}) == 1 for b in batches)
+    # a long map: a task per MAX_BATCH items, then the shrinking tail
+    long = [len(b) for b in task_batches(list(range(10_000)), MAX_BATCH, 2)]
+    assert long.count(MAX_BATCH) >= 10_000 // MAX_BATCH - 4 and len(long) < 10_000 // MAX_BATCH + 40
 
 
 def test_pool_scope_reuses_workers_across_maps():
