@@ -768,6 +768,16 @@ class Scene:
             if self.segments is not None
             else ""
         )
+        # a joint's own contact fields, as given (the rest is the scene's)
+        joints = "".join(
+            f"; joints[{k}]: "
+            + ", ".join(
+                f"{name} {value:g}" if isinstance(value, float) else f"{name} {value}"
+                for name, value in j.contact.given().items()
+            )
+            for k, j in enumerate(self.joints or ())
+            if j.contact is not None and j.contact.given()
+        )
         return {
             "name": self.name,
             "deck": f"{self.deck.length:g} × {self.deck.width:g} m, {self.deck.mass:g} t{skew}"
@@ -775,7 +785,8 @@ class Scene:
             "bents": f"{len(self.bents)}",
             "gaps": f"{gaps} mm",
             "contact": f"{self.contact.law}, k = {self.contact.stiffness:g} {k_unit}"
-            + (f", μ = {self.contact.friction:g}" if self.contact.has_friction else ""),
+            + (f", μ = {self.contact.friction:g}" if self.contact.has_friction else "")
+            + joints,
             "record": self.excitation.kind,
         }
 

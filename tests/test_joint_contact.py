@@ -86,6 +86,7 @@ def test_a_joint_gives_its_fields_and_takes_the_rest_from_the_scene():
     plain = load_scene("two-frame")
     assert plain.joint_contact(0) is plain.contact
     assert [w for w, _ in sc.contact_tables()] == ["contact", "joints[0].contact"]
+    assert "; joints[0]: stiffness 5e+06, restitution 0.2" in repr(sc)  # the summary says it
 
 
 @pytest.mark.parametrize(

@@ -59,7 +59,14 @@ JOINT_FRICTION = (
     "joints[0].contact.friction_mode=contact2d",
     "joints[0].contact.stiffness=2e6",
 )
-VARIANTS = {"frictionless": (), "contact2d": FRICTION, "joint-friction": JOINT_FRICTION}
+#: the joint's own law (a Kelvin–Voigt gap, ViscoelasticGap) beside the abutments' linear gaps
+JOINT_LAW = ("joints[0].contact.law=kelvin-voigt", "joints[0].contact.restitution=0.4")
+VARIANTS = {
+    "frictionless": (),
+    "contact2d": FRICTION,
+    "joint-friction": JOINT_FRICTION,
+    "joint-law": JOINT_LAW,
+}
 #: both engines stepped to the same converged states (tests/test_clone_vs_opensees.py)
 TIGHT = ("opensees.tolerance=1e-12", "compliance.tolerance=1e-12", "opensees.mode=rigid")
 JOINT = ("gap_j1_c1", "gap_j1_c2", "fn_j1_c1", "fn_j1_c2", "ft_j1_c1", "ft_j1_c2")
@@ -120,7 +127,7 @@ def test_clone_equals_opensees(variant):
     assert rep["iterations"]["opensees"] == rep["iterations"]["compliance"]
     # both joint corners pound (so the joint's columns are compared while they move)
     assert rep["peaks"]["fn_j1_c1"] > 10.0 and rep["peaks"]["fn_j1_c2"] > 10.0
-    if variant != "frictionless":
+    if variant in ("contact2d", "joint-friction"):
         assert rep["peaks"]["ft_j1_c1"] > 1.0 and rep["peaks"]["ft_j1_c2"] > 1.0
     else:
         assert rep["peaks"]["ft_j1_c1"] == 0.0
@@ -169,7 +176,7 @@ def test_python_export_reproduces_the_engine(variant, tmp_path):
 
 
 @pytest.mark.skipif(not HAS_TCL, reason="the Tcl OpenSees interpreter (pip 'opensees') is absent")
-@pytest.mark.parametrize("variant", ["contact2d", "joint-friction"])
+@pytest.mark.parametrize("variant", ["contact2d", "joint-friction", "joint-law"])
 def test_tcl_export_reproduces_the_engine(variant, tmp_path):
     """Another OpenSees build (xara) running the Tcl script: round-off, the tolerances of
     tests/test_skew_opensees.py (1e-9 of each column's peak, velocities 1e-8)."""
@@ -180,7 +187,9 @@ def test_tcl_export_reproduces_the_engine(variant, tmp_path):
     assert cp.returncode == 0, (cp.stdout + cp.stderr)[-2000:]
     assert "success" in cp.stdout and "j1_c1" in cp.stdout  # the seat-margin line names it
     dev = deviation(recorded(tcl, tmp_path / "two_frame_results"), ref)
-    assert {c for c in dev if c.startswith("ft_j1")} and np.max(np.abs(ref["ft_j1_c1"])) > 1.0
+    assert {c for c in dev if c.startswith("fn_j1")} and np.max(ref["fn_j1_c1"]) > 1.0
+    if variant != "joint-law":  # friction at the joint
+        assert np.max(np.abs(ref["ft_j1_c1"])) > 1.0
     for c, d in dev.items():
         assert d <= (1e-8 if column_unit(c) in ("m/s", "rad/s") else 1e-9), (c, d)
 
@@ -198,9 +207,12 @@ def test_energy_balance_closes_and_equals_the_clones(variant):
     # of the input energy (the benchmark on the same 3 s record: 8.1e-11)
     assert max(dev.values()) <= 1e-9, dev
     closure = float(np.max(np.abs(ro["energy_error"]))) / float(np.max(np.abs(ro["energy_input"])))
-    assert closure <= 1e-11 and ro.meta["energy_closure"] == pytest.approx(closure, abs=1e-300)
+    # the Kelvin–Voigt gap: Newton fails at a few closures and OpenSees's sub-stepped rescue
+    # closes to ~1e-10 (the same with the scene's law kelvin-voigt at every corner)
+    bound = 1e-9 if variant == "joint-law" else 1e-11
+    assert closure <= bound and ro.meta["energy_closure"] == pytest.approx(closure, abs=1e-300)
     assert np.max(ro["energy_contact_stored"]) > 0.0
-    if variant != "frictionless":
+    if variant in ("contact2d", "joint-friction"):
         assert ro["energy_friction"][-1] > 1e-3 * e_in
 
 

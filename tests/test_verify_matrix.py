@@ -194,3 +194,13 @@ def test_an_undamped_deck_of_segments_passes_by_its_backward_error_and_a_model_e
     bug = {**rep, "deviation": column_deviations(exact, wrong, list(rep["deviation"]))}
     assert vm.backward_error(bug) > 100 * vm.BACKWARD_TOLERANCE
     assert not vm.within_tolerance(max(bug["deviation"].values()), vm.backward_error(bug))
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not HAS_OPENSEES, reason="no openseespy")
+def test_verify_clone_two_frame_passes_every_case():
+    """Issue 31's "done when": ``deckpound verify clone two-frame`` (the whole matrix on the
+    deck of two frames, without and with friction, every damping choice; about 3 min)."""
+    lines = []
+    assert vm.main(load_scene(vm.SEGMENT_SCENE), pinned=False, quick=False, log=lines.append) == 0
+    assert lines[-1].startswith(f"{len(vm.matrix_cases(load_scene(vm.SEGMENT_SCENE)))} of ")
