@@ -274,6 +274,7 @@ class SegmentPlan:
     dofs : its DOF indices (x, y, θ).
     centre : x of its centre from the deck centre at rest [m].
     half_length : half its length [m].
+    half_width : half its width [m] (``segments[i].width``, else ``deck.width``).
     displacement, velocity : its initial state [m, m, rad; m/s, m/s, rad/s] (zeros for a
         one-segment deck, whose state is the scene's ``initial`` table).
     bents : indices of the bents it carries (scene order).
@@ -284,6 +285,7 @@ class SegmentPlan:
     dofs: tuple[int, int, int]
     centre: float
     half_length: float
+    half_width: float
     displacement: tuple[float, ...] = (0.0, 0.0, 0.0)
     velocity: tuple[float, ...] = (0.0, 0.0, 0.0)
     bents: tuple[int, ...] = ()
@@ -468,7 +470,17 @@ def _segment_plans(scene: Scene) -> tuple[SegmentPlan, ...]:
     if scene.segments is None:
         dofs = (DECK_X, DECK_Y, DECK_THETA)
         everything = tuple(range(len(scene.bents)))
-        return (SegmentPlan("deck", 0, dofs, 0.0, 0.5 * scene.deck.length, bents=everything),)
+        return (
+            SegmentPlan(
+                "deck",
+                0,
+                dofs,
+                0.0,
+                0.5 * scene.deck.length,
+                0.5 * scene.deck.width,
+                bents=everything,
+            ),
+        )
     return tuple(
         SegmentPlan(
             s.name,
@@ -476,6 +488,7 @@ def _segment_plans(scene: Scene) -> tuple[SegmentPlan, ...]:
             (4 + 3 * i, 5 + 3 * i, 6 + 3 * i),
             centre,
             0.5 * s.length,
+            0.5 * (scene.deck.width if s.width is None else s.width),
             s.displacement,
             s.velocity,
             tuple(k for k, seg in enumerate(carried) if seg == i),
@@ -495,7 +508,6 @@ def _corner_table(
 ) -> tuple[Corner, ...]:
     """The abutment corners (c1, c2 on the first segment's left end, c3, c4 on the last
     one's right end) and, for a deck of segments, two corners per joint, in order along x."""
-    hw = 0.5 * scene.deck.width
     tn, cs, sn = _face_frame(scene.deck.skew)
     first, last = segments[0], segments[-1]
     out: list[Corner] = []
@@ -504,7 +516,7 @@ def _corner_table(
         body = first if seat == 0 else last
         if k == 2:
             out += _joint_corners(scene, segments, len(out))
-        yc = ys * hw
+        yc = ys * body.half_width
         xc = xs * body.half_length + yc * tn
         side = 1.0 if seat == 0 else -1.0
         # φ = 0 gives exactly n = (±1, 0), t = (0, 1), r = (0, y_c): the straight-deck formulae
@@ -535,16 +547,17 @@ def _corner_table(
 
 
 def _joint_corners(scene: Scene, segments: tuple[SegmentPlan, ...], start: int) -> list[Corner]:
-    """The corners of every joint: segment k + 1's left-end corners (y = ∓W/2) striking
-    segment k's right end face across the joint's gap, both bodies moving.
+    """The corners of every joint: segment k + 1's left-end corners (y = ∓W/2, W the narrower
+    of the two segments' widths: where their end faces overlap) striking segment k's right
+    end face across the joint's gap, both bodies moving.
 
     In the striking segment's frame the facing point at rest is Q₀ = P₀ − g₀ n, the lever r
     is Q₀ relative to the facing segment's centre, (L_k/2 + y tan φ, y), and that centre
     is O₀ = Q₀ − r: the segments lie end to end and the gap is a clearance along n."""
-    hw = 0.5 * scene.deck.width
     out: list[Corner] = []
     for k, joint in enumerate(scene.joints or ()):
         facing, body = segments[k], segments[k + 1]
+        hw = min(facing.half_width, body.half_width)
         tn, cs, sn = _face_frame(scene.deck.skew if joint.skew is None else joint.skew)
         normal = (cs, -sn)
         for m, ys in enumerate((-1.0, 1.0)):

@@ -323,8 +323,10 @@ class Segment:
     [−L/2 + Σ_{j<i} L_j, −L/2 + Σ_{j≤i} L_j] of the deck's length L = Σ L_j (the joint gaps
     are clearances measured along the joint's face normal and do not shift the stations). A
     segment's end faces are parallel to the abutment faces (``deck.skew``) at the abutments
-    and to its joint's faces (``joints[i].skew``) at a joint; its width is ``deck.width``.
-    Mass and polar inertia (about the segment's own centre, the mid-point of its axis) are
+    and to its joint's faces (``joints[i].skew``) at a joint; its ``width`` (default
+    ``deck.width``) is centred on the bridge axis, so two segments of different widths meet
+    where their end faces overlap (the joint's corners at ± the narrower half-width). Mass and
+    polar inertia (about the segment's own centre, the mid-point of its axis) are
     given, not derived: a frame's mass depends on its girders, diaphragms and cap beams.
     ``displacement`` and ``velocity`` give its initial state (absolute, [x, y, θ] of its
     centre, at rest by default): the scene's ``initial.deck`` table is for a one-segment deck.
@@ -334,6 +336,9 @@ class Segment:
     length: float = spec(unit="m", doc="length along x between the end faces' mid-points", gt=0.0)
     mass: float = spec(unit="t", doc="segment mass", gt=0.0)
     inertia: float = spec(unit="t*m^2", doc="polar mass moment of inertia about its centre", gt=0.0)
+    width: float | None = spec(
+        None, unit="m", doc="width along y, centred on the bridge axis (none: deck.width)", gt=0.0
+    )
     displacement: tuple[float, ...] = spec(
         (0.0, 0.0, 0.0), unit="m, m, rad", doc="initial displacement of its centre [x, y, theta]"
     )

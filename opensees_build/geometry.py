@@ -11,9 +11,10 @@ from deckpound.models.plan import Plan
 from deckpound.models.scene import Scene
 
 
-def stick_section(scene: Scene) -> tuple[float, float]:
-    """(A [m²], I [m⁴]) of the deck sticks: a section W wide and W/8 deep, bending in plan."""
-    w = scene.deck.width
+def stick_section(width: float) -> tuple[float, float]:
+    """(A [m²], I [m⁴]) of a deck segment's sticks: a section W = ``width`` [m] wide and W/8
+    deep, bending in plan."""
+    w = width
     return w * w / 8.0, w**4 / 96.0
 
 

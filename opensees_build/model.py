@@ -390,13 +390,13 @@ def define_stick_deck(ops: OpsSession, scene: Scene, plan: Plan, deck: DeckNodes
     :func:`stick_stations`) and from its ends to its corners and to the facing points on its
     end face; each bent acts on the nearest axis node of its segment."""
     d = scene.deck
-    area, inertia = stick_section(scene)
     ops.comment(f"stick deck: E = {d.stick_modulus:g} kN/m2, A = W^2/8, I = W^4/96 (near-rigid)")
     transf = ops.tag("transf", "deck")
     ops.geomTransf("Linear", transf)
     one = len(plan.segments) == 1
     stations, axes = [], []
     for seg, centre in zip(plan.segments, deck.bodies):
+        area, inertia = stick_section(2.0 * seg.half_width)  # W of the segment
         prefix = "stick" if one else f"stick {seg.name}"
         xs = stick_stations(scene, plan, seg.index)
         axis = []

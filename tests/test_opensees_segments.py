@@ -61,11 +61,15 @@ JOINT_FRICTION = (
 )
 #: the joint's own law (a Kelvin–Voigt gap, ViscoelasticGap) beside the abutments' linear gaps
 JOINT_LAW = ("joints[0].contact.law=kelvin-voigt", "joints[0].contact.restitution=0.4")
+#: frames of different widths (frame2 3.6 m against the deck's 2.4 m): the joint's corners at
+#: the narrower half width, frame2's abutment corners at its own
+WIDE_FRAME = ("segments[1].width=3.6",)
 VARIANTS = {
     "frictionless": (),
     "contact2d": FRICTION,
     "joint-friction": JOINT_FRICTION,
     "joint-law": JOINT_LAW,
+    "wide-frame": WIDE_FRAME,
 }
 #: both engines stepped to the same converged states (tests/test_clone_vs_opensees.py)
 TIGHT = ("opensees.tolerance=1e-12", "compliance.tolerance=1e-12", "opensees.mode=rigid")

@@ -409,6 +409,7 @@ POINT = (3.0, -2.0)  # a fixed point off the deck axis [m]
 MOMENTUM_ROUND_OFF = 1e-13
 
 
+@pytest.mark.parametrize("widths", [(), (3.6, 1.8, 2.4)], ids=["one-width", "three-widths"])
 @pytest.mark.parametrize("skews", [(None, None), (15.0, 30.0)], ids=["straight", "skewed"])
 @pytest.mark.parametrize(
     ("engine", "integrator", "geometry"),
@@ -419,9 +420,12 @@ MOMENTUM_ROUND_OFF = 1e-13
         ("compliance", "adaptive", "linear"),
     ],
 )
-def test_free_chain_keeps_its_momenta_through_the_impacts(engine, integrator, geometry, skews):
+def test_free_chain_keeps_its_momenta_through_the_impacts(
+    engine, integrator, geometry, skews, widths
+):
     """Eccentric impacts (the segments spin and drift sideways, so single corners strike):
-    Σ m v_x, Σ m v_y and the angular momentum about a fixed point to round-off (item 3)."""
+    Σ m v_x, Σ m v_y and the angular momentum about a fixed point to round-off (item 3); also
+    with segments of three widths (each joint's corners where the two faces overlap)."""
     sc = free_chain(
         MASSES,
         LAUNCH,
@@ -436,6 +440,7 @@ def test_free_chain_keeps_its_momenta_through_the_impacts(engine, integrator, ge
             "excitation.duration": 0.2,
             "run.output_dt": 1e-4,
             "nonsmooth.h": 1e-4,
+            **{f"segments[{i}].width": w for i, w in enumerate(widths)},
         },
     )
     r = run(sc, engine)

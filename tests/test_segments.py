@@ -13,7 +13,8 @@ import deckpound as dp
 from deckpound.analytic.kernels.kinematics import contact_kinematics, gap_hessian, pack_corners
 from deckpound.analytic.nonsmooth.impulses import size_tag
 from deckpound.compare.compare_run import compare_quantities, run_compare
-from deckpound.compare.report.vtk import check_result_folder, export_vtk
+from deckpound.compare.report.figures import outlines
+from deckpound.compare.report.vtk import check_result_folder, export_vtk, state_columns
 from deckpound.compare.studies.joint import joint_cases, joint_headlines, joint_row
 from deckpound.models.columns import column_names
 from deckpound.models.errors import SceneError
@@ -352,3 +353,25 @@ def test_the_work_precision_errors_of_a_deck_of_segments(two_frame):
     assert e["err_peak_theta"] == max(by_segment)
     assert e["err_primary"] == e["err_peak_x"] > 0.0
     assert errors(ref, ref)["err_peak_theta"] == 0.0
+
+
+def test_segments_of_different_widths_meet_where_their_end_faces_overlap():
+    """segments[i].width (default deck.width), centred on the bridge axis: the abutment
+    corners at the end segments' own half widths, a joint's corners at the narrower one's;
+    the outlines (figures, ParaView) draw each segment at its own width; the OpenSees sticks
+    take their segment's section."""
+    for widths, ends, joint in (((2.4, 3.6), (1.2, 1.8), 1.2), ((3.6, 2.0), (1.8, 1.0), 1.0)):
+        sc = load_scene("two-frame", [f"segments[{i}].width={w}" for i, w in enumerate(widths)])
+        plan = plan_of(sc)
+        y = {c.name: c.y for c in plan.corners}
+        assert (y["c1"], y["c2"]) == (-ends[0], ends[0])
+        assert (y["c3"], y["c4"]) == (-ends[1], ends[1])
+        assert (y["j1_c1"], y["j1_c2"]) == (-joint, joint)
+        assert [s.half_width for s in plan.segments] == [0.5 * w for w in widths]
+        boxes = outlines(sc, dict.fromkeys(state_columns(sc), 0.0), 1.0)
+        for seg, w in zip(plan.segments, widths):
+            assert np.ptp(boxes[seg.name][:, 1]) == pytest.approx(w, abs=1e-12)
+            assert np.ptp(boxes[seg.name][:, 0]) == pytest.approx(2 * seg.half_length, abs=1e-12)
+    # the default: every segment deck.width wide, the corners as before
+    plain = plan_of(load_scene("two-frame"))
+    assert {abs(c.y) for c in plain.corners} == {0.5 * load_scene("two-frame").deck.width}

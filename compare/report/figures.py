@@ -366,10 +366,21 @@ def rotation_columns(plan) -> tuple[str, ...]:
     return tuple(f"{seg.name}_theta" for seg in plan.segments)
 
 
+def _face_points(points: list, hw: float) -> list:
+    """The two points of an end face (y ascending) moved along the face to y = ∓hw, the
+    segment's own half width: a joint between segments of different widths has its corners
+    where the faces overlap, not at the wider segment's corners [m]."""
+    (x1, y1), (x2, y2) = points
+    if y1 == -hw and y2 == hw:
+        return points
+    slope = (x2 - x1) / (y2 - y1)
+    return [(x1 + (-hw - y1) * slope, -hw), (x1 + (hw - y1) * slope, hw)]
+
+
 def _segment_box(plan, seg) -> np.ndarray:
     """A segment's outline at rest in its own frame (closed polygon, metres): its left face
     corners, then its right face points (the facing points of the next joint's corners, or the
-    corners at seat 2)."""
+    corners at seat 2), each face at the segment's own width (:func:`_face_points`)."""
     mine = [c for c in plan.corners if c.body == seg.index]
     left = [c for c in mine if c.seat == 0 or c.joint >= 0]
     right = [c for c in mine if c.seat == 1]
@@ -378,7 +389,8 @@ def _segment_box(plan, seg) -> np.ndarray:
     else:  # the next joint's corners strike this segment's right face at their levers
         nxt = [c for c in plan.corners if c.joint >= 0 and c.facing_dofs == seg.dofs]
         rpts = [c.lever for c in nxt]
-    (l1, l2), (r1, r2) = [(c.x, c.y) for c in left], rpts
+    hw = seg.half_width
+    (l1, l2), (r1, r2) = _face_points([(c.x, c.y) for c in left], hw), _face_points(rpts, hw)
     return np.array([l1, r1, r2, l2, l1])
 
 
