@@ -25,6 +25,17 @@ def alive(pid: int) -> bool:
         return False
 
 
+def running(pids: list[int], timeout: float = 10.0) -> list[int]:
+    """Those of ``pids`` still running after up to ``timeout`` s (polled: a loaded machine
+    takes its time to reap a killed worker or a process left orphaned)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        left = [p for p in pids if alive(p)]
+        if not left or time.monotonic() >= deadline:
+            return left
+        time.sleep(0.1)
+
+
 def start_in_own_group(argv: list[str], cwd) -> subprocess.Popen:
     """Start a command in a process group of its own, as a terminal runs one: a Ctrl-C sent to
     the group (``os.killpg``) reaches it and every worker it started."""

@@ -9,10 +9,9 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
-from _process_helpers import alive, start_in_own_group, wait_for_rows
+from _process_helpers import running, start_in_own_group, wait_for_rows
 from _record_helpers import quake, write_at2
 
 PAIRS = 12
@@ -42,8 +41,7 @@ def test_ctrl_c_stops_an_ida_cleanly_and_it_resumes(tmp_path):
     assert len(lines) == 1 and "Traceback" not in err + out, err
     assert lines[0].startswith("deckpound: interrupted: ")
     assert "run the same command again to resume" in lines[0]
-    time.sleep(0.5)
-    assert not [p for p in workers if alive(p)]  # every worker is gone
+    assert not running(workers)  # every worker is gone
     assert (tmp_path / "out" / "INCOMPLETE").is_file()
     cached = len(list(rows.rglob("*.json")))
     done = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=900)

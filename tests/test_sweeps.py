@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 import pytest
-from _process_helpers import alive, start_in_own_group, wait_for_rows
+from _process_helpers import running, start_in_own_group, wait_for_rows
 
 import deckpound as dp
 from deckpound import cli
@@ -215,8 +215,7 @@ def test_ctrl_c_stops_every_worker_with_one_line_and_resumes(tmp_path, sig, stat
     assert len(lines) == 1 and "Traceback" not in err + out, err
     assert lines[0].startswith(f"deckpound: {word}: study variability: ")
     assert "cached in" in lines[0] and "run the same command again to resume" in lines[0]
-    time.sleep(0.5)
-    assert not [p for p in workers if alive(p)]  # every worker is gone
+    assert not running(workers)  # every worker is gone
     cached = len(list(rows.glob("*.json")))
     assert (tmp_path / "out" / "INCOMPLETE").is_file()
     # resume: the same command computes only the missing cases
