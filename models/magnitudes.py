@@ -206,10 +206,8 @@ def _findings(scene: Scene) -> list[tuple[str, str, str]]:
 def _contact_magnitudes(where: str, ct, add) -> None:
     """Friction and contact stiffnesses of one contact table (``where``: its field path; a
     joint's table checks the fields it gives, none is not given)."""
-    mu = ct.friction
-    if mu is None:
-        pass
-    elif mu > FRICTION_MAX:
+    mu = 0.0 if ct.friction is None else ct.friction
+    if mu > FRICTION_MAX:
         add(
             "error",
             f"{where}.friction",

@@ -46,6 +46,7 @@ import numpy as np
 from .scene import Scene, TakedaSpring
 
 __all__ = [
+    "BODY_QUANTITIES",
     "CORNER_NAMES",
     "DECK_THETA",
     "DECK_X",
@@ -99,20 +100,18 @@ VELOCITY_COLUMNS = (
 RELATIVE_COLUMNS = ("deck_x_rel", "deck_y_rel", "seat1_x_rel", "seat2_x_rel")
 
 
+#: the quantities of each deck body's own columns ``<body>_<quantity>``: displacements,
+#: velocities, displacements relative to its tables (:func:`deck_column_names`)
+BODY_QUANTITIES = (("x_abs", "y_abs", "theta"), ("vx_abs", "vy_abs", "omega"), ("x_rel", "y_rel"))
+
+
 @cache  # read for every column list of every run: a sweep would build them anew
 def deck_column_names(bodies: tuple[str, ...]) -> tuple[tuple[str, ...], ...]:
     """(displacement, velocity, relative) column names of a deck of these bodies (``("deck",)``
     or the segments' names): ``<body>_x_abs``, ``_y_abs``, ``_theta``; ``<body>_vx_abs``,
     ``_vy_abs``, ``_omega``; ``<body>_x_rel``, ``_y_rel``; each followed by the seats' (the
     one-body deck's: :data:`DOF_COLUMNS`, :data:`VELOCITY_COLUMNS`, :data:`RELATIVE_COLUMNS`)."""
-    own = [
-        tuple(f"{b}_{q}" for b in bodies for q in suffixes)
-        for suffixes in (
-            ("x_abs", "y_abs", "theta"),
-            ("vx_abs", "vy_abs", "omega"),
-            ("x_rel", "y_rel"),
-        )
-    ]
+    own = [tuple(f"{b}_{q}" for b in bodies for q in suffixes) for suffixes in BODY_QUANTITIES]
     return (
         own[0] + tuple(n for n, _ in DOF_COLUMNS[3:]),
         own[1] + tuple(n for n, _ in VELOCITY_COLUMNS[3:]),

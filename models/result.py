@@ -54,7 +54,7 @@ from .columns import column_unit
 from .errors import SceneError
 from .fields import to_mapping
 from .html_table import html_table, short_text
-from .plan import CORNER_NAMES, RELATIVE_COLUMNS
+from .plan import BODY_QUANTITIES, CORNER_NAMES, RELATIVE_COLUMNS
 
 if TYPE_CHECKING:  # annotations only
     import pandas as pd
@@ -232,7 +232,7 @@ def gap_closures(columns: dict[str, np.ndarray]) -> dict[str, int]:
 
 
 #: a deck segment's own columns ``<segment>_<quantity>`` (:meth:`Result.to_xarray` stacks them)
-SEGMENT_QUANTITIES = ("x_abs", "y_abs", "theta", "vx_abs", "vy_abs", "omega", "x_rel", "y_rel")
+SEGMENT_QUANTITIES = tuple(q for group in BODY_QUANTITIES for q in group)
 
 
 def peak_columns(engine_columns, bent_names, relative=RELATIVE_COLUMNS) -> list[str]:

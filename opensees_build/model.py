@@ -82,7 +82,7 @@ from deckpound.models.contact_params import corner_contacts
 from deckpound.models.damping import DampingModel, damping_model
 from deckpound.models.errors import SceneError
 from deckpound.models.plan import Plan, plan_of
-from deckpound.models.scene import Scene
+from deckpound.models.scene import Scene, joint_contact_error
 
 from .damping import (
     MEMBERS_TEXT,
@@ -193,16 +193,14 @@ def refuse_scene(scene: Scene) -> None:
     The "option does nothing" warnings are derived by the engine contract from
     :meth:`deckpound.opensees_build.engine.OpenSeesEngine.reads`.
     """
-    tables = scene.contact_tables()
-    for where, c in tables:
-        try:
-            _refuse_contact(scene, c)
-        except SceneError as err:
-            raise (
-                err
-                if where == "contact"
-                else SceneError(err.field.replace("contact", where, 1), err.reason)
-            ) from None
+    _refuse_contact(scene, scene.contact)
+    # a joint's own table, named at the joint (the exports build without Engine.validate)
+    for k, joint in enumerate(scene.joints or ()):
+        if joint.contact is not None and joint.contact.given():
+            try:
+                _refuse_contact(scene, scene.joint_contact(k))
+            except SceneError as err:
+                raise joint_contact_error(err, k) from None
 
 
 def _refuse_contact(scene: Scene, c) -> None:
