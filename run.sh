@@ -36,8 +36,9 @@ fi
 if [ "${DECKPOUND_SKIP_COMPILE:-0}" != "1" ]; then
   cstamp="$venv/.deckpound-compiled"
   ckey="$( { cat "$stamp"; echo "${DECKPOUND_TAKEDA_SHORTCUT:-1} ${NUMBA_CACHE_DIR:-} ${XDG_CACHE_HOME:-$HOME/.cache}";
-            echo "$here"; stat -c '%n %Y' analytic/*.py;   # numba's index checks path and mtime
-            for f in analytic/*.py; do echo "$f"; cat "$f"; done; } | sha256sum | cut -d' ' -f1)"
+            echo "$here"; kernels="$(find analytic -name '*.py' | LC_ALL=C sort)"
+            stat -c '%n %Y' $kernels;   # numba's index checks path and mtime (every subpackage)
+            for f in $kernels; do echo "$f"; cat "$f"; done; } | sha256sum | cut -d' ' -f1)"
   cdir="$(sed -n 2p "$cstamp" 2>/dev/null || true)"
   if [ "$(head -n 1 "$cstamp" 2>/dev/null || true)" != "$ckey" ] || [ ! -d "$cdir" ]; then
     echo "run.sh: compiling the numba kernels once (deckpound compile; a few minutes)" >&2
