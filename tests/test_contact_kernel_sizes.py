@@ -117,6 +117,7 @@ def contact_forces(sc, table, u, v, nonlinear):
     contact = Contact(table, cp, nonlinear)
     cw = new_contact_work(nc, nd)
     dofs = tuple(range(nd))
+    ca.linear_rows(contact, cw, u, dofs)  # as the loops do at the start of a run
     if ca.eval_contacts(contact, cs, cw, u, v, np.zeros(nd), dofs) < 0:
         ca.eval_closed(contact, cs, cw, u, v, np.zeros(nd), dofs)
     return contact, cw

@@ -37,7 +37,8 @@ def test_lu_solves_random_spd_systems_of_every_size(n):
         lu_solve(LU, piv, b, x, size_tag(n))
         want = np.linalg.solve(A, b)
         np.testing.assert_allclose(x, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
-        # the same answer, bit for bit, as exchanging b's rows one swap at a time first
+        # the same answer, bit for bit, as exchanging b's rows one swap at a time first and
+        # multiplying by the pivots' reciprocals the factors hold on their diagonal
         y = b[piv].copy()
         L, U = np.tril(LU, -1), np.triu(LU)
         for i in range(n):
@@ -49,14 +50,14 @@ def test_lu_solves_random_spd_systems_of_every_size(n):
             s = y[i]
             for j in range(i + 1, n):
                 s -= U[i, j] * y[j]
-            y[i] = s / U[i, i]
+            y[i] = s * U[i, i]
         np.testing.assert_array_equal(x, y)
 
 
 @pytest.mark.parametrize("n", [4, N_DOF, 11])
 def test_lu_factors_are_the_row_swapped_product_of_unit_l_and_u(n):
-    """P A = L U with the recorded row permutation (row k of the factors is row piv[k] of A),
-    on a matrix that needs pivoting."""
+    """P A = L U with the recorded row permutation (row k of the factors is row piv[k] of A)
+    and U's pivots stored as their reciprocals, on a matrix that needs pivoting."""
     rng = np.random.default_rng(n)
     A = rng.standard_normal((n, n))
     A[0, 0] = 0.0  # the first pivot must come from another row
@@ -65,7 +66,7 @@ def test_lu_factors_are_the_row_swapped_product_of_unit_l_and_u(n):
     assert piv[0] != 0
     assert sorted(piv.tolist()) == list(range(n))  # a permutation
     L = np.tril(LU, -1) + np.eye(n)
-    U = np.triu(LU)
+    U = np.triu(LU, 1) + np.diag(1.0 / np.diag(LU))  # the diagonal holds 1 / u_kk
     np.testing.assert_allclose(L @ U, A[piv], atol=1e-12 * np.abs(A).max())
 
 

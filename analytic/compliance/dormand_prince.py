@@ -297,6 +297,7 @@ def _start(sa, contact, record, output, ws, stats):
         y[nd + j] = ws.v0[j]
     for j in range(nd):
         ws.uc[j] = y[j]
+    ca.linear_rows(contact, ws.cw, ws.u0, sa.dofs)
     _rhs(0.0, y, sa, contact, record, ws, ws.k1)
     stats.count[bd.CNT_RHS_CALLS] += 1
     spring_commit(sa, ws.hstate)

@@ -197,6 +197,7 @@ def _start(sa, contact, record, opt, output, work):
     _copy(work.u0, dof.u, nd)
     _copy(work.v0, dof.v, nd)
     _copy(work.u0, dof.un, nd)
+    ca.linear_rows(contact, cw, work.u0, sa.dofs)
     _form_unbalance(sa, contact, hstate, cs, cw, dof, work.spring, sup, opt.skip_contact)
     for j in range(nd):
         dof.a[j] = (cw.fc[j] - dof.f[j]) / sa.mass[j]
@@ -426,40 +427,48 @@ def _update(nd, dof, h):
 
 
 @kernel(inline="always")
-def _newton(sa, contact, opt, work, stats, h, nsub, nonel, anyev, reuse, lu_held, lu_h):
-    """Newton iterations of one (sub)step from the predictor's residual until ‖Δu‖₂ ≤ tol
+def _newton(sa, contact, opt, work, stats, h, nsub, reuse, lu_held, lu_h):
+    """The unbalance at the predictor, then Newton iterations until ‖Δu‖₂ ≤ tol
     (``CTestNormDispIncr``), ``opt.maxit`` solves, a singular matrix, a non-finite increment
-    or the halt flag. Returns (status, iterations, any corner evaluated at the last
-    evaluation, lu_held, lu_h)."""
+    or the halt flag; each iteration solves, updates and forms the unbalance at the new
+    iterate before the test (the predictor's unbalance and the iterates' share one copy of
+    :func:`_form_unbalance` in the compiled loop). Returns (status, iterations, any corner
+    evaluated at the last evaluation, lu_held, lu_h)."""
     dof, spr, sup, cw = work.dof, work.spring, work.support, work.cw
     it = 0
+    nrm = 0.0
+    nonel = 0
+    anyev = False
+    evaluate = True
     while True:
+        if evaluate:
+            nonel, anyev = _form_unbalance(
+                sa, contact, work.hstate, work.cstate, cw, dof, spr, sup, opt.skip_contact
+            )
+        if it > 0:
+            if not np.isfinite(nrm):
+                return RUN_NONFINITE, it, anyev, lu_held, lu_h
+            if nrm <= opt.tol:
+                return RUN_OK, it, anyev, lu_held, lu_h
+            if it >= opt.maxit:
+                return RUN_NOT_CONVERGED, it, anyev, lu_held, lu_h
+            if stats.halt[0] != 0:
+                return RUN_INTERRUPTED, it, anyev, lu_held, lu_h
         ok, lu_held, lu_h = _solve(
             sa, contact, work, stats, h, nsub, nonel, anyev, reuse, lu_held, lu_h
         )
         if not ok:
             return RUN_SINGULAR, it, anyev, lu_held, lu_h
         nrm, moved = _update(len(sa.dofs), dof, h)
-        if opt.skip_unmoved and not moved and not anyev and nrm <= opt.tol:
+        it += 1
+        evaluate = not (opt.skip_unmoved and not moved and not anyev and nrm <= opt.tol)
+        if not evaluate:
             # converged, and the increment (round-off of a step that stayed on its branches)
             # left u bitwise as it was: the materials, spring forces and gaps are those just
             # evaluated; only the rates follow the new u̇
             spring_deformations(sa, dof.u, dof.v, sup.ug, sup.vg, spr.d_new, spr.dd_new)
             ca.gap_rates(contact, dof.v, cw, sa.dofs)
             stats.count[bd.CNT_UNMOVED] += 1
-        else:
-            nonel, anyev = _form_unbalance(
-                sa, contact, work.hstate, work.cstate, cw, dof, spr, sup, opt.skip_contact
-            )
-        it += 1
-        if not np.isfinite(nrm):
-            return RUN_NONFINITE, it, anyev, lu_held, lu_h
-        if nrm <= opt.tol:
-            return RUN_OK, it, anyev, lu_held, lu_h
-        if it >= opt.maxit:
-            return RUN_NOT_CONVERGED, it, anyev, lu_held, lu_h
-        if stats.halt[0] != 0:
-            return RUN_INTERRUPTED, it, anyev, lu_held, lu_h
 
 
 @kernel(inline="always")
@@ -539,19 +548,8 @@ def _attempt(sa, contact, opt, output, work, stats, n, nsub, reuse, lu_held, lu_
     unseated = False
     for ksub in range(nsub):
         _predict(len(sa.dofs), work, nsub, ksub, h)
-        nonel, anyev = _form_unbalance(
-            sa,
-            contact,
-            work.hstate,
-            work.cstate,
-            work.cw,
-            work.dof,
-            work.spring,
-            work.support,
-            opt.skip_contact,
-        )
         status, it, anyev, lu_held, lu_h = _newton(
-            sa, contact, opt, work, stats, h, nsub, nonel, anyev, reuse, lu_held, lu_h
+            sa, contact, opt, work, stats, h, nsub, reuse, lu_held, lu_h
         )
         cnt[bd.CNT_NEWTON] += it
         cnt[bd.CNT_MAX_IT] = max(cnt[bd.CNT_MAX_IT], it)

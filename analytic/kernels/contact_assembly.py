@@ -43,6 +43,7 @@ __all__ = [
     "eval_contacts",
     "gap_rates",
     "gaps_and_rates",
+    "linear_rows",
 ]
 
 #: Columns of ``ContactWork.der`` a corner's laws fill (:func:`eval_contacts`): ∂λ_N/∂g,
@@ -93,14 +94,31 @@ def gaps_and_rates(contact, u, v, cw, dofs):
 
 
 @kernel
+def linear_rows(contact, cw, u, dofs):
+    """The constant rows W_N, W_T (cw.WN, cw.WT) of linear (small-rotation) kinematics, once at
+    the start of a run (u: the initial displacement), before :func:`eval_closed` reads them;
+    nothing for nonlinear kinematics, whose rows :func:`eval_closed` forms at every
+    evaluation. ``dofs``: the DOF size tag. (The gaps it also writes are overwritten by the
+    first evaluation.)"""
+    if not contact.nonlinear:
+        contact_kinematics(u, contact.corners, False, cw.g, cw.WN, cw.WT, cw.corners, dofs)
+
+
+@kernel(inline="always")
 def eval_closed(contact, cs, cw, u, v, un, dofs):
     """Evaluate the laws of the corners flagged in cw.evaluated (all closed ones for nonlinear
     kinematics) at the trial (u, u̇); fills cw (see :func:`eval_contacts`). Returns the
-    number of closed corners."""
+    number of closed corners.
+
+    Linear kinematics: the gaps and rates are those :func:`eval_contacts` just computed at
+    this (u, u̇), and the rows W_N, W_T the constant ones :func:`linear_rows` filled at the
+    start of the run (neither depends on u, so they are not formed again at every evaluation).
+    Inlined into the force evaluations (a call would pass the Contact and ContactWork bundles
+    by value at every evaluation in contact).
+    """
     corners = cw.corners
     n_dof = len(dofs)
     cp = contact.params
-    geom = contact.corners
     g, gd, WN, WT, fc, lam, lt, der, evaluated = (
         cw.g,
         cw.gd,
@@ -120,8 +138,6 @@ def eval_closed(contact, cs, cw, u, v, un, dofs):
             lam[c] = 0.0
             lt[c] = 0.0
             evaluated[c] = g[c] <= 0.0
-    else:
-        contact_kinematics(u, geom, False, g, WN, WT, corners, dofs)
     nclosed = 0
     for c in range(len(corners)):
         for k in range(N_LAW_DERIVATIVES):

@@ -413,7 +413,7 @@ def _negative_increment(p, s, d_strain):
     s[T_TANGENT] = tangent
 
 
-@kernel
+@kernel(inline="always")
 def hyst_set_trial(params, state, strain):
     """OpenSees 3.7.1 ``HystereticMaterial::setTrialStrain``.
 

@@ -55,9 +55,10 @@ def record_slopes(tb, D, V) -> tuple[np.ndarray, np.ndarray]:
     return SD, SV
 
 
-@kernel
+@kernel(inline="always")
 def record_at(tb, D, V, SD, SV, t, j, ug, vg):
     """Fill ug, vg (n_channels,) with the support motion at time t; returns the new hint.
+    Inlined into the step loops (once per step; a call would pass seven arrays by value).
 
     SD, SV: :func:`record_slopes` of the record. Identical to ``np.interp(t, tb, D[:, k])``
     (and V) for every channel k.

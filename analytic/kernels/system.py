@@ -313,9 +313,15 @@ def spring_deformations(sa, u, v, ug, vg, d, dd):
         dd[i] = vi
 
 
-@kernel(inline="always")
+@kernel
 def spring_update_materials(hparams, hstate, kind, d):
-    """Set the trial deformation d[i] of every Hysteretic spring (trial state in hstate)."""
+    """Set the trial deformation d[i] of every Hysteretic spring (trial state in hstate).
+
+    One compiled call per force evaluation with the Takeda update inlined into its loop over
+    the springs (:func:`.hysteretic_kernel.hyst_set_trial` is ``inline="always"``): a call
+    per spring would pass two array views each time, and inlining this loop into every force
+    evaluation of every integrator would multiply the Takeda branches in their compiled code
+    (compile time and memory)."""
     for i in range(kind.shape[0]):
         if kind[i] == 1:
             hyst_set_trial(hparams[i], hstate[i], d[i])
