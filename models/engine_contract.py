@@ -56,6 +56,12 @@ A new engine is one module plus one registry entry. It must:
     ``meta["seat_margin_min"]``, ``meta["unseated"]`` and friends (:func:`seat_margins`).
     What happens after unseating (the deck falls) is outside the model.
 
+12. Optionally store only the rows a summary needs: an engine that keeps points 8, 10 and 11
+    sets ``summary_rows = True`` and its ``_run`` takes the keyword ``summary_rows``; when
+    :meth:`Engine.run` passes True (``summary_only``, the sweeps) it stores only ``t`` and its
+    energy columns (what the epilogue's energy check reads from rows) and returns
+    ``RunOutput.summary_rows = True``: a sweep's run writes no histories it would drop.
+
 :meth:`Engine.run` (not overridden) does the rest the same way for every engine: validation,
 support motion, timing, and the epilogue :func:`finish`, which adds the columns computed from
 the plan and the support motion (displacements relative to the supports, bent deformations),
@@ -220,6 +226,7 @@ class RunOutput:
         g_c − g_c(0) over every step and when (point 11); None: taken from the output rows.
     unseated : ``(corner, time [s])`` of the first step at which a seat margin was negative
         (with ``status = Status.UNSEATED``), or None.
+    summary_rows : the columns are only ``t`` and the energy columns (point 12).
     extra : engine-specific metadata (documented by the engine).
     """
 
@@ -241,6 +248,7 @@ class RunOutput:
     gap_closures_per_corner: dict[str, int] | None = None
     gap_openings: dict[str, tuple[float, float]] | None = None
     unseated: tuple[str, float] | None = None
+    summary_rows: bool = False
     extra: dict[str, Any] = field(default_factory=dict)
 
 
@@ -268,6 +276,8 @@ class Engine:
     style: ClassVar[dict[str, Any]] = {}
     #: True for penalty (compliant) contact, whose fixed step must resolve a contact duration
     compliant_contact: ClassVar[bool] = True
+    #: True when ``_run`` takes ``summary_rows`` (point 12)
+    summary_rows: ClassVar[bool] = False
 
     # -- declarations ---------------------------------------------------------------------
     def settings_of(self, scene: Scene) -> Any:
@@ -375,6 +385,8 @@ class Engine:
             # a summary keeps no record provenance a user reads: no intensity measures
             motion = support_motion(scene, intensity=not summary_only)
         plan = plan_of(scene)
+        if summary_only and self.summary_rows:
+            options["summary_rows"] = True
         out = self._run(plan, scene, settings, motion, **options)
         total = time.perf_counter() - t0
         return finish(
@@ -465,20 +477,38 @@ def _relative_columns(plan: Plan, motion, cols: dict[str, np.ndarray]) -> dict[s
 PENETRATION_WARN_FRACTION = {True: 0.10, False: 0.20}
 
 
+def _check_columns(engine: Engine, plan: Plan, cols: dict, out: RunOutput, light: bool) -> None:
+    """Refuse an engine's output that breaks the contract: an engine column missing (point 5),
+    or summary rows (point 12) without the every-step measurements that replace the rest."""
+    if out.summary_rows:
+        if not light or out.max_penetration is None:
+            raise RuntimeError(
+                f"engine {engine.name!r} returned summary rows without its every-step peaks, "
+                "openings and penetration (engine contract, point 12)"
+            )
+        need = ["t"]
+    else:
+        need = engine_columns(plan)
+    missing = [c for c in need if c not in cols]
+    if missing:
+        raise RuntimeError(
+            f"engine {engine.name!r} returned no column {missing[0]!r} (engine contract, point 5)"
+        )
+
+
 def _contact_quality(engine: Engine, scene: Scene, plan: Plan, cols: dict, out: RunOutput) -> dict:
     """``max_penetration`` [m] (per step when the engine measures it, else on the output
     rows), its basis, ``max_complementarity_residual`` and the penetration quality warning."""
-    gaps = [cols[k] for k in (f"gap_{c.name}" for c in plan.corners) if len(cols[k])]
+    names = [f"gap_{c.name}" for c in plan.corners]
+    gaps = [cols[k] for k in names if k in cols and len(cols[k])]
     rows_pen = max((float(max(0.0, -np.min(g))) for g in gaps), default=0.0)
     if out.max_penetration is not None:
         pen, basis = max(float(out.max_penetration), rows_pen), "every step"
     else:
         pen, basis = rows_pen, "output rows"
-    q: dict[str, Any] = {
-        "max_penetration": pen,
-        "max_penetration_basis": basis,
-        "max_penetration_rows": rows_pen,
-    }
+    q: dict[str, Any] = {"max_penetration": pen, "max_penetration_basis": basis}
+    if not out.summary_rows:  # summary rows hold no gaps (point 12)
+        q["max_penetration_rows"] = rows_pen
     if out.max_complementarity_residual is not None:
         q["max_complementarity_residual"] = float(out.max_complementarity_residual)
     g0 = min([seat.gap for seat in scene.seats] + [j.gap for j in scene.joints or ()])
@@ -678,13 +708,9 @@ def finish(
     relative columns are not made (the caller keys the case). An engine that does not measure
     its peaks at every step gets the full epilogue, whose rows are then dropped."""
     cols = dict(out.columns)
-    missing = [c for c in engine_columns(plan) if c not in cols]
-    if missing:
-        raise RuntimeError(
-            f"engine {engine.name!r} returned no column {missing[0]!r} (engine contract, point 5)"
-        )
     # without the engine's every-step measurements the statistics come from the rows
     light = summary_only and out.peaks is not None and out.gap_openings is not None
+    _check_columns(engine, plan, cols, out, light)
     if light:
         columns: dict[str, np.ndarray] = {}
     else:

@@ -5,6 +5,7 @@ output table, handed to the Result without a copy)."""
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -88,6 +89,47 @@ def test_a_summary_shows_no_rows():
     assert "peak θ_d" in facts
     with pytest.raises(KeyError, match="energy_input"):
         summary.peak("energy_input")  # not tracked at every step: it needs the rows
+
+
+@pytest.mark.parametrize("case", ["compliance", "nonsmooth", "friction"])
+def test_a_summary_run_stores_only_the_rows_its_checks_read(case):
+    """Engine contract point 12: the loop stores t and the energy columns, nothing else; the
+    adaptive integrator stores every column (it keeps no summary rows)."""
+    engine = dp.get_engine("nonsmooth" if case == "nonsmooth" else "compliance")
+    scene = load_scene("saiidi-4span", [*SHORT, *CASES[case]])
+    settings = engine.settings_of(scene)
+    plan = dp.plan_of(scene)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        motion = dp.support_motion(scene)
+        out = engine._run(plan, scene, settings, motion, summary_rows=True)
+        full = engine._run(plan, scene, settings, motion)
+    energies = [c for c in full.columns if c.startswith("energy_")]
+    assert out.summary_rows and not full.summary_rows
+    assert list(out.columns) == ["t", *energies] and len(energies) >= 8
+    for name in out.columns:
+        np.testing.assert_array_equal(out.columns[name], full.columns[name])
+    assert out.max_penetration == full.max_penetration and out.peaks == full.peaks
+
+
+def test_summary_rows_without_every_step_measurements_are_refused():
+    scene = load_scene("saiidi-4span", SHORT)
+    engine = dp.get_engine("compliance")
+
+    class Forgetful(type(engine)):
+        def _run(self, *args, **kw):
+            out = super()._run(*args, **kw)
+            return dataclasses.replace(out, peaks=None)
+
+    with warnings.catch_warnings(), pytest.raises(RuntimeError, match="point 12"):
+        warnings.simplefilter("ignore")
+        Forgetful().run(scene, summary_only=True)
+
+
+def test_the_adaptive_integrator_keeps_every_row_of_a_summary():
+    _, summary = pair("adaptive")
+    assert summary.meta["max_penetration_basis"] == "every step"
+    assert "max_penetration_rows" in summary.meta  # it stored the gaps
 
 
 @pytest.mark.parametrize("engine", ["compliance", "nonsmooth"])

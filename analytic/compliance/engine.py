@@ -116,6 +116,7 @@ class ComplianceEngine(Engine):
     Settings = ComplianceSettings
     settings_field = "compliance"
     step_field = "dt"
+    summary_rows = True  # engine contract, point 12 (the Newmark loop; adaptive: all rows)
     style: ClassVar[dict] = {
         "color": "#1f5fa8",
         "linestyle": "--",
@@ -187,6 +188,7 @@ class ComplianceEngine(Engine):
         initial_state=None,
         substeps: int = SUBSTEPS,
         channels=None,
+        summary_rows: bool = False,
         on_interrupt: str = "raise",
         _skips: dict | None = None,
     ) -> RunOutput:
@@ -196,7 +198,8 @@ class ComplianceEngine(Engine):
         velocities (default: the scene's ``initial`` table); ``substeps``: sub-steps of the fallback for a
         failed step (1 disables it); ``channels``: store only these columns besides the engine
         columns (energy work is not accumulated unless an energy column is requested);
-        ``on_interrupt``: what Ctrl-C during the step loop does (it stops the loop within one
+        ``summary_rows``: store only ``t`` and the energy columns (engine contract, point 12;
+        the Newmark integrator, the adaptive one stores every column); ``on_interrupt``: what Ctrl-C during the step loop does (it stops the loop within one
         Newton iteration, see :mod:`deckpound.analytic.bundles`): ``"raise"`` (default)
         re-raises KeyboardInterrupt, ``"return"`` returns ``Status.INTERRUPTED`` with the rows
         computed so far; ``_skips`` (private, for measurement): ``{name: False}`` turns off a
@@ -224,6 +227,7 @@ class ComplianceEngine(Engine):
             initial_state=initial_state,
             substeps=substeps,
             channels=channels,
+            summary_rows=summary_rows,
             skips=_skips,
             on_interrupt=on_interrupt,
         )
@@ -239,12 +243,17 @@ def _skip_switches(skips: dict | None) -> dict[str, bool]:
     return on
 
 
-def _stored_columns(plan: Plan, scene: Scene, channels) -> tuple[list[str], np.ndarray]:
+def _stored_columns(
+    plan: Plan, scene: Scene, channels, summary_rows: bool = False
+) -> tuple[list[str], np.ndarray]:
     """The columns a Newmark run stores (the engine columns and the energies, or the engine
-    columns plus ``channels``) and their indices into the loop's full row."""
+    columns plus ``channels``, or for summary rows ``t`` and the energies) and their indices
+    into the loop's full row."""
     all_cols = output_columns(scene, plan)
     engine_cols = engine_columns(plan)
-    if channels is None:
+    if summary_rows:
+        cols = ["t"] + [c for c in all_cols if c in ENERGY_COLUMNS]
+    elif channels is None:
         cols = [c for c in all_cols if c in engine_cols or c in ENERGY_COLUMNS]
     else:
         unknown = [c for c in channels if c not in all_cols]
@@ -278,6 +287,7 @@ def _run_newmark(
     initial_state,
     substeps,
     channels,
+    summary_rows,
     skips,
     on_interrupt,
 ) -> RunOutput:
@@ -290,7 +300,7 @@ def _run_newmark(
     stride = output_stride(dt, scene.run.output_dt)
     kstride = stride if on["decimate"] else 1
     nsteps = round(duration / dt)
-    cols, colsel = _stored_columns(plan, scene, channels)
+    cols, colsel = _stored_columns(plan, scene, channels, summary_rows)
     rows_max = nsteps // kstride + 1
     opts = NewmarkOptions(
         nsteps=nsteps,
@@ -369,6 +379,7 @@ def _run_newmark(
         loop_time=loop,
         max_penetration=st["max_penetration"],
         **run_output_fields(peaks, plan),
+        summary_rows=summary_rows,
         extra=extra,
     )
 

@@ -142,6 +142,7 @@ class NonsmoothEngine(Engine):
     settings_field = "nonsmooth"
     step_field = "h"
     compliant_contact = False
+    summary_rows = True  # engine contract, point 12
     style: ClassVar[dict] = {
         "color": "#c0392b",
         "linestyle": ":",
@@ -193,10 +194,12 @@ class NonsmoothEngine(Engine):
         motion,
         *,
         initial_state=None,
+        summary_rows: bool = False,
         on_interrupt: str = "raise",
     ) -> RunOutput:
         """Extra keywords (not scene options): ``initial_state = (u0, v0)`` starts from the
         given DOF displacements and velocities (default: the scene's ``initial`` table);
+        ``summary_rows``: store only ``t`` and the energy columns (engine contract, point 12);
         ``on_interrupt``: Ctrl-C during the step loop stops it within one Newton iteration
         (:mod:`deckpound.analytic.bundles`) and then re-raises KeyboardInterrupt (``"raise"``,
         default) or returns ``Status.INTERRUPTED`` with the rows so far (``"return"``)."""
@@ -222,12 +225,13 @@ class NonsmoothEngine(Engine):
         stride = output_stride(h, scene.run.output_dt)
         nsteps = round(duration / h)
         corner_names = [c.name for c in plan.corners]
-        cols = engine_columns(plan) + list(impulse_columns(corner_names)) + list(ENERGY_COLUMNS)
+        full = engine_columns(plan) + list(impulse_columns(corner_names)) + list(ENERGY_COLUMNS)
+        cols = ["t", *ENERGY_COLUMNS] if summary_rows else full
         peaks = run_peaks(plan, ps)
         output = bd.Output(
             bd.output_table(nsteps // stride + 1, len(cols)),
-            np.arange(len(cols), dtype=np.int64),
-            np.zeros(len(cols)),
+            np.array([full.index(c) for c in cols], dtype=np.int64),
+            np.zeros(len(full)),
             peaks,
         )
         u0, v0 = initial_dofs(initial_state, ps.arrays.mass.shape[0])
@@ -306,6 +310,7 @@ class NonsmoothEngine(Engine):
             max_penetration=st["max_penetration"],
             max_complementarity_residual=st["max_complementarity"],
             **run_output_fields(peaks, plan),
+            summary_rows=summary_rows,
             extra=extra,
         )
 
