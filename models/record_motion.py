@@ -41,6 +41,9 @@ displacement are its trapezoidal integrals, so the three agree exactly on the re
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
+
 import numpy as np
 
 from deckpound.models.plan import support_channels
@@ -75,6 +78,11 @@ ACC_UNITS = {"g": G, "m/s^2": 1.0, "cm/s^2": 0.01}  # to m/s²
 LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}  # to m
 BASELINE_DEGREE = 2  # quadratic acceleration baseline = quartic displacement drift
 DRIFT_FRACTION = 0.2  # final |d| above this fraction of peak |d| is reported as drift
+#: measures of processed, unscaled pairs kept per process (:func:`pair_factor`: a sweep scales
+#: one pair to many levels and measures it once), keyed by the measure, step, period and the
+#: SHA-256 of both components' samples
+MEASURES_KEPT = 64
+_MEASURED: OrderedDict[tuple, float] = OrderedDict()
 
 
 def integrate(a: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -263,16 +271,7 @@ def pair_factor(
             f"scaling = {exc.scaling!r} needs a period and the scene has no finite natural "
             "period to default to; give excitation.im_period",
         )
-    vel, disp = {}, {}
-    for axis, a in acc.items():
-        vel[axis], disp[axis] = integrate(a, dt)
-    ims = pair_measures(dt, acc, vel, disp, period if spectral else None)
-    before = {
-        "pair-pga": np.sqrt(ims["x"]["pga"] * ims["y"]["pga"]),
-        "pair-pgv": np.sqrt(ims["x"]["pgv"] * ims["y"]["pgv"]),
-        "pair-sa": ims["sa_geomean"],
-        "pair-rotd50": ims["rotd50"],
-    }[exc.scaling]
+    before = _pair_measure(exc.scaling, acc, dt, period if spectral else None)
     if not before > 0.0:
         raise SceneError(
             "excitation.scaling",
@@ -289,6 +288,33 @@ def pair_factor(
         "period": period if spectral else None,
     }
     return factor, info
+
+
+def _pair_measure(
+    scaling: str, acc: dict[str, np.ndarray], dt: float, period: float | None
+) -> float:
+    """The measure ``scaling`` (pair-pga, -pgv, -sa, -rotd50) of the unscaled pair (see
+    :func:`pair_factor`), computed once per pair content, step and period in a process."""
+    key = (scaling, dt, period) + tuple(
+        hashlib.sha256(np.ascontiguousarray(acc[a]).tobytes()).hexdigest() for a in ("x", "y")
+    )
+    if key in _MEASURED:
+        _MEASURED.move_to_end(key)
+        return _MEASURED[key]
+    vel, disp = {}, {}
+    for axis, a in acc.items():
+        vel[axis], disp[axis] = integrate(a, dt)
+    ims = pair_measures(dt, acc, vel, disp, period)
+    before = {
+        "pair-pga": np.sqrt(ims["x"]["pga"] * ims["y"]["pga"]),
+        "pair-pgv": np.sqrt(ims["x"]["pgv"] * ims["y"]["pgv"]),
+        "pair-sa": ims["sa_geomean"],
+        "pair-rotd50": ims["rotd50"],
+    }[scaling]
+    _MEASURED[key] = before = float(before)
+    while len(_MEASURED) > MEASURES_KEPT:
+        _MEASURED.popitem(last=False)
+    return before
 
 
 def pair_scaling_note(info: dict) -> str | None:

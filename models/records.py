@@ -21,9 +21,12 @@ Rules every reader follows (issue 16):
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import io
 import re
+from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -36,6 +39,11 @@ MAX_SAMPLES = 2_000_000  # longest record held in memory (600 s at 0.3 ms)
 MAX_RECORD_BYTES = 256 * 2**20  # 2e6 rows of a 23-column CSV hold about 250 MB
 EXCERPT = 24  # longest excerpt of a record quoted in a message [characters]
 _CHUNK = 2**20
+#: parsed record files kept per process (a sweep applies one record pair at many levels: IDA,
+#: stripes; each file is parsed once, not once per case), keyed by field, path and the SHA-256
+#: of the bytes just read: an edited file is parsed again
+PARSED_KEPT = 64
+_PARSED: OrderedDict[tuple[str, str, str, str], RecordFile] = OrderedDict()
 
 # a number ends where no digit, point, exponent or sign follows ("1.2.3", "1e" are no numbers)
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][-+]?\d+)?(?![\d.EeDd+-])"
@@ -216,6 +224,23 @@ def _npts_dt(n: str, d: str) -> tuple[int, float]:
     return (int(npts) if np.isfinite(npts) and npts == int(npts) else -1), dt
 
 
+def _parsed(kind: str, raw: bytes, rec: RecordFile, parse: Callable) -> RecordFile:
+    """``parse(raw, rec)`` (it fills ``rec``) once per file content: a file read again with the
+    same bytes gets a copy of the first parse (its own notes list; the values array shared,
+    read-only). A refused file is parsed (and refused) every time."""
+    key = (kind, rec.field, rec.path, rec.sha256)
+    done = _PARSED.get(key)
+    if done is None:
+        parse(raw, rec)
+        rec.values.flags.writeable = False
+        done = _PARSED[key] = dataclasses.replace(rec, notes=list(rec.notes))
+        while len(_PARSED) > PARSED_KEPT:
+            _PARSED.popitem(last=False)
+    else:
+        _PARSED.move_to_end(key)
+    return dataclasses.replace(done, notes=list(done.notes))
+
+
 def read_at2(path: str | Path | None, field_name: str = "excitation.file_x") -> RecordFile:
     """Read a PEER AT2 acceleration record [g].
 
@@ -231,6 +256,12 @@ def read_at2(path: str | Path | None, field_name: str = "excitation.file_x") -> 
     the values are converted), DT outside [1e-5, 0.5] s.
     """
     raw, rec = read_capped(path, field_name, "AT2 record", MAX_SAMPLES + 10)
+    return _parsed("at2", raw, rec, _parse_at2)
+
+
+def _parse_at2(raw: bytes, rec: RecordFile) -> None:
+    """The AT2 parse of :func:`read_at2` into ``rec``."""
+    field_name = rec.field
     text = raw.decode("utf-8", errors="replace")
     lines = text.splitlines()
     head = _at2_header(lines)
@@ -274,7 +305,8 @@ def read_at2(path: str | Path | None, field_name: str = "excitation.file_x") -> 
     rec.npts, rec.dt = npts, dt
     body = lines[k + 1 :]
     counts = np.cumsum([0] + [len(line.split()) for line in body])
-    tokens = " ".join(body).split()
+    joined = " ".join(body)
+    tokens = joined.split()
     if len(tokens) < npts:
         raise SceneError(
             field_name,
@@ -300,8 +332,9 @@ def read_at2(path: str | Path | None, field_name: str = "excitation.file_x") -> 
     def where(i: int) -> str:
         return f"line {k + 2 + int(np.searchsorted(counts, i, side='right')) - 1}"
 
-    rec.values = _to_floats([t.replace("D", "E").replace("d", "e") for t in tokens], rec, where)
-    return rec
+    if "D" in joined or "d" in joined:  # Fortran exponents (1.0D-03) somewhere: Python's form
+        tokens = [t.replace("D", "E").replace("d", "e") for t in tokens]
+    rec.values = _to_floats(tokens, rec, where)
 
 
 # -- two-column text -----------------------------------------------------------------------
@@ -317,6 +350,12 @@ def read_text(path: str | Path | None, field_name: str = "excitation.file_x") ->
     starting at 0 is shifted to 0, with a note.
     """
     raw, rec = read_capped(path, field_name, "text record", MAX_SAMPLES + 1000)
+    return _parsed("text", raw, rec, _parse_text)
+
+
+def _parse_text(raw: bytes, rec: RecordFile) -> None:
+    """The two-column parse of :func:`read_text` into ``rec``."""
+    field_name = rec.field
     decoded = raw.decode("utf-8", errors="replace")
     text = decoded.translate(_TO_SPACE)
     lines = text.splitlines()
@@ -357,7 +396,6 @@ def read_text(path: str | Path | None, field_name: str = "excitation.file_x") ->
         else []
     )
     rec.dt = uniform_step(t, rec, lambda i: f"line {rows[i]}" if rows else f"sample {i + 1}")
-    return rec
 
 
 _TO_SPACE = str.maketrans(",;", "  ")

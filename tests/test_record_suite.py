@@ -190,6 +190,31 @@ def test_pair_scaling_meets_its_target(tmp_path, scaling, target, measure):
     assert ims["x"]["pga"] / ims["y"]["pga"] == pytest.approx(PGA_000 / PGA_090, rel=1e-12)
 
 
+def test_a_pair_scaled_to_many_levels_meets_each_with_one_measurement(tmp_path):
+    """An IDA scales one pair to many levels: its measure is kept per pair content, step and
+    period (record_motion._pair_measure), so every level's factor is level / the same measure,
+    and another period or another pair is measured anew."""
+    factors = {}
+    for level in (0.2, 0.8, 0.5):
+        prov = applied(tmp_path, "excitation.scaling=pair-sa", f"excitation.target_sa={level}")
+        assert prov["intensity"]["sa_geomean"] == pytest.approx(level, rel=1e-9)
+        factors[level] = prov["pair_scaling"]["factor"]
+        assert prov["pair_scaling"]["before"] == pytest.approx(level / factors[level], rel=1e-15)
+    assert factors[0.8] / factors[0.2] == pytest.approx(4.0, rel=1e-15)
+    sets = ("excitation.scaling=pair-sa", "excitation.target_sa=0.5")
+    other_period = applied(tmp_path, *sets, "excitation.im_period=0.3")
+    assert other_period["intensity"]["sa_geomean"] == pytest.approx(0.5, rel=1e-9)
+    assert other_period["pair_scaling"]["factor"] != factors[0.5]
+    other = tmp_path / "other"
+    other.mkdir()
+    fx, fy = peer_pair(other, seed=7)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        prov = support_motion(record_scene("at2", fx, fy, None, *sets)).provenance
+    assert prov["intensity"]["sa_geomean"] == pytest.approx(0.5, rel=1e-9)
+    assert prov["pair_scaling"]["factor"] != factors[0.5]
+
+
 def test_pair_scaling_refusals(tmp_path):
     fx, fy = peer_pair(tmp_path)
     with pytest.raises(SceneError, match="scaling.*applies to records"):

@@ -480,3 +480,30 @@ def test_unusable_path_refused_in_one_line(tmp_path, path, reason):
     )
     with pytest.raises(SceneError, match=r"^excitation.file_x: is not a usable file path"):
         load_scene(tmp_path / "s.toml")
+
+
+def test_a_file_read_again_is_parsed_once_and_an_edited_one_again(tmp_path):
+    """Sweeps apply one pair at many levels: the parse is kept per file content (records.
+    _parsed), each reader gets its own notes, and new bytes at the same path are read anew."""
+    path = write_at2(tmp_path / "a.at2", quake(), extra=["0.0"])
+    first, second = read_at2(path), read_at2(path)
+    assert first is not second and first.notes == second.notes and len(first.notes) == 1
+    first.note("a caller's own sentence")
+    assert len(second.notes) == 1 and len(read_at2(path).notes) == 1
+    np.testing.assert_array_equal(first.values, second.values)
+    assert not first.values.flags.writeable  # shared: nobody may change it in place
+    write_at2(path, 2.0 * quake())
+    edited = read_at2(path)
+    assert edited.sha256 != first.sha256 and edited.notes == []
+    np.testing.assert_allclose(edited.values, 2.0 * first.values[: len(edited.values)], rtol=1e-6)
+    # the same bytes under another field name: messages name that field
+    assert read_at2(path, "excitation.file_y").label.startswith("excitation.file_y")
+
+
+def test_at2_with_fortran_double_exponents(tmp_path):
+    values = quake()
+    path = write_at2(tmp_path / "d.at2", values)
+    text = path.read_text().splitlines()
+    body = [line.replace("E", "D") for line in text[4:]]
+    path.write_text("\n".join(text[:4] + body) + "\n")
+    np.testing.assert_allclose(read_at2(path).values, values, rtol=1e-6)
