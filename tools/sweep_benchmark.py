@@ -16,9 +16,12 @@ It measures, one after the other in one process (so the ratios share the machine
 2. summary-only sweeps (:func:`deckpound.compare.studies.variability.sweep_rows`: one summary
    row per case, no histories, each sweep into an empty row cache) of N seeds of the 20 s
    synthetic record with the compliance engine: in this process (1 worker), on the local pool
-   of 2 workers and on a local Dask cluster of two single-threaded worker processes. Before the
-   clock starts the kernels are loaded and the workers have run a few cases of other seeds
-   (the steady rate of a sweep). Overhead over the step loops: workers × wall / Σ loop − 1;
+   of 2 workers and on a local Dask cluster of two single-threaded worker processes; and an
+   IDA on the local pool (synthetic station pairs written as PEER AT2 files, each scaled by
+   one factor to levels of Sa(T₁): reading, processing and scaling records is in every case).
+   Before the clock starts the kernels are loaded and the workers have run a few cases of
+   other seeds or another pair (the steady rate of a sweep). Overhead over the step loops:
+   workers × wall / Σ loop − 1;
 3. a sweep of M cases on 2 local workers in a fresh process, end to end (the cases built, the
    pool started, the sweep): its wall time, the peak resident memory of that process
    (``VmHWM``: its own address space, not ``ru_maxrss``, which a fresh process inherits) and of its largest worker (``RUSAGE_CHILDREN``, read after the pool's
@@ -58,6 +61,7 @@ from docs_blocks import DOCS, RESULTS, ROOT
 from deckpound.compare.bench.memory import peak_resident_mb, peak_rss
 from deckpound.compare.engines import run_engine
 from deckpound.compare.pool import pool_scope
+from deckpound.compare.studies.ida import ida_cases, synthetic_pairs
 from deckpound.compare.studies.variability import FINISHED, seed_cases, sweep_rows
 from deckpound.models.file_io import atomic_write_text
 from deckpound.models.iir import load_compiled_filter
@@ -79,9 +83,14 @@ WORKERS = 2
 #: warm-up cases per worker before a timed sweep (other seeds than the timed ones)
 WARM_CASES_PER_WORKER = 4
 FULL = {"cases": 400, "memory_cases": 10_000, "rounds": 5, "repeats": 3,
-        "durations": (20.0, 80.0, 320.0)}  # fmt: skip
+        "durations": (20.0, 80.0, 320.0), "ida_pairs": 22, "ida_levels": 10}  # fmt: skip
 QUICK = {"cases": 24, "memory_cases": 48, "rounds": 1, "repeats": 1,
-         "durations": (5.0, 10.0, 20.0)}  # fmt: skip
+         "durations": (5.0, 10.0, 20.0), "ida_pairs": 2, "ida_levels": 3}  # fmt: skip
+#: the intensity measure of the IDA sweep and its levels: IDA_STEP, 2·IDA_STEP, ... [g]
+IDA_IM = "sa-t1"
+IDA_STEP = 0.1
+#: where the IDA sweep ran (its row of the sweep table)
+IDA_WHERE = "IDA on AT2 pairs, local pool"
 MB = 1024.0 * 1024.0
 
 # the targets of the issues (the sizes they are stated for, and the limits)
@@ -160,6 +169,37 @@ def _timed_sweep(scene, cases: int, scheduler: str | None, workers: int) -> dict
         "cases": computed,
         "wall": wall,
         # a refused or failed case has no finite loop time: it adds none
+        "loop": math.fsum(v for r in rows.values() if math.isfinite(v := r.get("loop_time", 0.0))),
+        "finished": sum(r.get("status") in FINISHED for r in rows.values()),
+    }
+
+
+def ida_sweep(scene, pairs: int, levels: int) -> dict:
+    """A timed IDA on the local pool: ``pairs`` synthetic station pairs written as PEER AT2
+    files (:func:`~deckpound.compare.studies.ida.synthetic_pairs`, the scene's record length),
+    each scaled by one factor to ``levels`` levels of Sa(T₁) (the IDA's cases: reading,
+    processing and scaling real records is part of each case), after a warm-up on another
+    pair's levels."""
+    duration = scene.excitation.duration
+    grid = [IDA_STEP * (k + 1) for k in range(levels)]
+    with tempfile.TemporaryDirectory(prefix="deckpound-ida-") as tmp:
+        warm = synthetic_pairs(scene, Path(tmp) / "warm", 1, 10_000, duration)
+        timed = synthetic_pairs(scene, Path(tmp) / "timed", pairs, 0, duration)
+        warm_scenes = [sc for _, sc in ida_cases(scene, warm, IDA_IM, grid)]
+        scenes = [sc for _, sc in ida_cases(scene, timed, IDA_IM, grid)]
+        opts = {"workers": WORKERS, "progress": False}
+        with pool_scope():
+            sweep_rows(warm_scenes, SWEEP_ENGINE, Path(tmp) / "warm-rows", "warm", **opts)
+            t0 = time.perf_counter()
+            rows, computed = sweep_rows(scenes, SWEEP_ENGINE, Path(tmp) / "rows", "ida", **opts)
+            wall = time.perf_counter() - t0
+    return {
+        "where": IDA_WHERE,
+        "workers": WORKERS,
+        "cases": computed,
+        "pairs": pairs,
+        "levels": levels,
+        "wall": wall,
         "loop": math.fsum(v for r in rows.values() if math.isfinite(v := r.get("loop_time", 0.0))),
         "finished": sum(r.get("status") in FINISHED for r in rows.values()),
     }
@@ -297,6 +337,9 @@ def measure(settings: dict, quick: bool, say: Callable[[str], None] = print) -> 
         sweeps.append(local_sweep(scene, settings["cases"], workers))
     say(f"summary-only sweep of {settings['cases']} cases on a local Dask cluster")
     sweeps.append(dask_sweep(scene, settings["cases"]))
+    pairs, levels = settings["ida_pairs"], settings["ida_levels"]
+    say(f"IDA of {pairs} AT2 pairs x {levels} levels, {WORKERS} local workers")
+    sweeps.append(ida_sweep(scene, pairs, levels))
     say(f"a sweep of {settings['memory_cases']} cases in a fresh process (memory)")
     big = memory_sweep(settings["memory_cases"])
     say("peak memory against output length")
@@ -336,6 +379,10 @@ def _verdict(value: float | None, limit: float, at_most: bool = True) -> str:
     if value is None:
         return "not measured"
     return "met" if (value <= limit if at_most else value >= limit) else "not met"
+
+
+#: the rows of the seed sweeps on local workers (1: this process)
+LOCAL_WHERE = ("this process", "local pool")
 
 
 def overhead(sweep: dict) -> float:
@@ -480,14 +527,15 @@ def targets(m: dict) -> list[tuple[str, str, str, str]]:
     """(issue, target, measured, verdict) of every target of the two issues, from the stored
     measurement ``m``."""
     figs = loop_figures(m["loops"])
-    local = {s["workers"]: s for s in m["sweeps"] if s["where"] != "Dask LocalCluster"}
+    local = {s["workers"]: s for s in m["sweeps"] if s["where"] in LOCAL_WHERE}
     dask = next(s for s in m["sweeps"] if s["where"] == "Dask LocalCluster")
+    ida = [s for s in m["sweeps"] if s["where"] == IDA_WHERE]
     big = m["memory_sweep"]
     full_size = big["cases"] >= TARGET_CASES
     size = f"{big['cases']} cases" + ("" if full_size else f", fewer than {TARGET_CASES}")
     sweep_mb = big["parent_mb"] + big["workers"] * big["worker_mb"]
     out = []
-    for s in (*local.values(), dask):
+    for s in (*local.values(), dask, *ida):
         where = "in this process" if s["workers"] == 1 else f"{s['where']}, {s['workers']} workers"
         out.append(
             (
@@ -635,6 +683,7 @@ def render(m: dict) -> str:
         "cache, inter-process traffic, idle workers). The Dask cluster is "
         f"`distributed.LocalCluster(n_workers={WORKERS}, threads_per_worker=1, processes=True)`; "
         f"its wall time is {dask['wall'] / local2['wall']:.2f}× the local pool's.",
+        *_ida_sentence(m["sweeps"]),
         "",
         *_sweep_lines(m["sweeps"]),
         "",
@@ -668,6 +717,23 @@ def render(m: dict) -> str:
                 "shortest and the longest record."
             )
     return "\n".join(lines) + "\n"
+
+
+def _ida_sentence(sweeps: list[dict]) -> list[str]:
+    """What the IDA row measured (none when the stored measurement has no IDA sweep)."""
+    ida = next((s for s in sweeps if s["where"] == IDA_WHERE), None)
+    if ida is None:
+        return []
+    top = IDA_STEP * ida["levels"]
+    return [
+        "",
+        f"The IDA row: {ida['pairs']} synthetic station pairs written as PEER AT2 files, each "
+        f"pair scaled by one factor to {ida['levels']} levels of Sa(T₁) "
+        f"({IDA_STEP:g} to {top:g} g), {SWEEP_ENGINE} engine, summary rows: every case reads "
+        "its two files, processes and scales the pair, after a warm-up on another pair. "
+        f"{ida['finished']} of {ida['cases']} cases finished with an answer (success, doubtful "
+        "or unseated; unseated runs stop early).",
+    ]
 
 
 def load(path: Path = RESULTS_FILE) -> dict:
@@ -705,6 +771,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rounds", type=_positive, help="rounds of the step loops (5)")
     ap.add_argument("--repeats", type=_positive, help="reference loops per round (3)")
     ap.add_argument("--durations", type=_durations, help="record lengths [s] (20,80,320)")
+    ap.add_argument("--ida-pairs", type=_positive, help="record pairs of the IDA sweep (22)")
+    ap.add_argument("--ida-levels", type=_positive, help="levels of the IDA sweep (10)")
     ap.add_argument("--results", type=Path, default=RESULTS_FILE, help="measurement file")
     ap.add_argument("--page", type=Path, default=PAGE, help="the page written")
     ap.add_argument("--render", action="store_true", help="only render --results to --page")

@@ -25,6 +25,7 @@ in the fragility table (``left_out``).
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import json
 import math
@@ -220,8 +221,10 @@ def ida_cases(
     out = []
     for _, params, base in pairs:
         for level in levels:
-            sc = modified(base, f"excitation.scaling={scaling}", f"excitation.{field}={level!r}")
-            out.append(({**params, "im": im, "level": level}, sc))
+            # the pair's scene with its excitation replaced (validated again): the levels share
+            # every other part, whose hashes a sweep's case keys then compute once
+            exc = dataclasses.replace(base.excitation, scaling=scaling, **{field: float(level)})
+            out.append(({**params, "im": im, "level": level}, base.replace(excitation=exc)))
     return out
 
 

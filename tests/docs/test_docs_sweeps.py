@@ -83,6 +83,7 @@ def _measurement() -> dict:
             _sweep("this process", 1, 400, 24.0, 20.0),
             _sweep("local pool", 2, 400, 10.0, 2 * 10.0 / 1.1),
             _sweep("Dask LocalCluster", 2, 400, 12.5, 20.0),
+            {**_sweep(sb.IDA_WHERE, 2, 220, 4.0, 8.0 / 1.12), "pairs": 22, "levels": 10},
         ],
         "memory_sweep": {
             "cases": 10000,
@@ -115,11 +116,12 @@ def _find(targets: dict, *words: str) -> tuple[str, str]:
 
 def test_every_target_of_both_issues_is_stated_with_a_computed_verdict():
     t = _targets(_measurement())
-    assert len(t) == 14
+    assert len(t) == 15
     assert {v for _, v in t.values()} <= {"met", "not met", "not measured"}
     assert _find(t, "step loops (in this process)") == ("20 %", "not met")
     assert _find(t, "step loops (local pool") == ("10 %", "met")
     assert _find(t, "step loops (Dask") == ("25 %", "not met")  # 2 × 12.5 / 20 − 1
+    assert _find(t, "step loops (IDA on AT2 pairs") == ("12 %", "met")
     assert _find(t, "30 cases/s") == ("40.0 cases/s", "met")
     assert _find(t, "1 GB") == ("800 MB (10000 cases)", "met")  # 400 + 2 × 200
     assert _find(t, "90 s") == ("85.0 s (10000 cases)", "met")
@@ -159,6 +161,16 @@ def test_the_pages_tables_have_their_columns_and_a_quick_run_says_so():
     assert "quick run" not in text
     m["context"]["quick"] = True
     assert "**A quick run (`--quick`)**" in sb.render(m)
+
+
+def test_the_ida_row_is_described_and_an_older_measurement_without_it_renders():
+    m = _measurement()
+    text = sb.render(m)
+    assert "The IDA row: 22 synthetic station pairs" in text and "0.1 to 1 g" in text
+    assert "| IDA on AT2 pairs, local pool | 2 | 220 | 220 |" in text
+    m["sweeps"] = [s for s in m["sweeps"] if s["where"] != sb.IDA_WHERE]
+    t = _targets(m)
+    assert len(t) == 14 and "IDA row" not in sb.render(m)
 
 
 def test_render_refuses_another_layout_and_the_stored_file_is_json():
