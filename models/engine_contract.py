@@ -69,8 +69,9 @@ puts the engine's every-step peaks and gap closures into the metadata (point 10)
 metadata (status, message, failure step/time, statistics, wall and compile time, hashes,
 settings, record provenance, warnings). With ``summary_only=True`` (the sweeps) it keeps no
 histories: the statistics, checks and status come from the engine's every-step measurements
-(points 10 and 11) and its rows, which are then dropped; an engine that keeps the contract's
-optional points gets the same answer either way (``tests/test_summary_only.py``).
+(points 8, 10 and 11) and the energy columns of its rows (an engine of point 12 stores no other
+column; another engine's rows are dropped); an engine that keeps the contract's optional
+points gets the same answer either way (``tests/test_summary_only.py``).
 """
 
 from __future__ import annotations
@@ -701,8 +702,9 @@ def finish(
     """The shared epilogue: standard columns in order, statistics, status and metadata.
 
     ``summary_only`` (sweeps): the same checks, statistics and status, taken from the engine's
-    every-step measurements (peaks, closures, openings; contract points 10 and 11) and its
-    output rows (penetration, the energy balance), but the result keeps no histories: its
+    every-step measurements (penetration, peaks, closures, openings; contract points 8, 10
+    and 11) and its output rows (the energy balance; an engine of point 12 stores only ``t``
+    and the energy columns), but the result keeps no histories: its
     only column is an empty ``t``, ``meta["histories"]`` is False, ``meta["final_energies"]``
     holds the energy columns' last values [kJ], and the scene itself, its hash and the
     relative columns are not made (the caller keys the case). An engine that does not measure
