@@ -151,19 +151,17 @@ def measure_loops(scene, rounds: int, repeats: int) -> dict:
     }
 
 
-def _timed_sweep(scene, cases: int, scheduler: str | None, workers: int) -> dict:
-    """A sweep of ``cases`` seeds after a warm-up of other seeds on the same workers."""
-    warm = seed_cases(
-        scene.replace({"excitation.seed": scene.excitation.seed + cases}),
-        WARM_CASES_PER_WORKER * workers,
-    )
-    scenes = [sc for _, _, sc in seed_cases(scene, cases)]
-    with tempfile.TemporaryDirectory(prefix="deckpound-sweep-") as cache:
-        opts = {"workers": workers, "scheduler": scheduler, "progress": False}
-        sweep_rows([sc for _, _, sc in warm], SWEEP_ENGINE, Path(cache) / "warm", "warm", **opts)
-        t0 = time.perf_counter()
-        rows, computed = sweep_rows(scenes, SWEEP_ENGINE, Path(cache) / "timed", "bench", **opts)
-        wall = time.perf_counter() - t0
+def _warm_then_timed(
+    warm: list, scenes: list, folder: Path, workers: int, scheduler: str | None = None
+) -> dict:
+    """Sweep ``warm`` (the workers started, the kernels loaded), then time the sweep of
+    ``scenes`` on the same workers, each into an empty row cache below ``folder``: workers,
+    cases computed, wall time [s], Σ step loops [s] and cases finished."""
+    opts = {"workers": workers, "scheduler": scheduler, "progress": False}
+    sweep_rows(warm, SWEEP_ENGINE, folder / "warm", "warm", **opts)
+    t0 = time.perf_counter()
+    rows, computed = sweep_rows(scenes, SWEEP_ENGINE, folder / "timed", "bench", **opts)
+    wall = time.perf_counter() - t0
     return {
         "workers": workers,
         "cases": computed,
@@ -172,6 +170,17 @@ def _timed_sweep(scene, cases: int, scheduler: str | None, workers: int) -> dict
         "loop": math.fsum(v for r in rows.values() if math.isfinite(v := r.get("loop_time", 0.0))),
         "finished": sum(r.get("status") in FINISHED for r in rows.values()),
     }
+
+
+def _timed_sweep(scene, cases: int, scheduler: str | None, workers: int) -> dict:
+    """A sweep of ``cases`` seeds after a warm-up of other seeds on the same workers."""
+    warm = seed_cases(
+        scene.replace({"excitation.seed": scene.excitation.seed + cases}),
+        WARM_CASES_PER_WORKER * workers,
+    )
+    scenes = [sc for _, _, sc in seed_cases(scene, cases)]
+    with tempfile.TemporaryDirectory(prefix="deckpound-sweep-") as cache:
+        return _warm_then_timed([sc for _, _, sc in warm], scenes, Path(cache), workers, scheduler)
 
 
 def ida_sweep(scene, pairs: int, levels: int) -> dict:
@@ -187,22 +196,9 @@ def ida_sweep(scene, pairs: int, levels: int) -> dict:
         timed = synthetic_pairs(scene, Path(tmp) / "timed", pairs, 0, duration)
         warm_scenes = [sc for _, sc in ida_cases(scene, warm, IDA_IM, grid)]
         scenes = [sc for _, sc in ida_cases(scene, timed, IDA_IM, grid)]
-        opts = {"workers": WORKERS, "progress": False}
         with pool_scope():
-            sweep_rows(warm_scenes, SWEEP_ENGINE, Path(tmp) / "warm-rows", "warm", **opts)
-            t0 = time.perf_counter()
-            rows, computed = sweep_rows(scenes, SWEEP_ENGINE, Path(tmp) / "rows", "ida", **opts)
-            wall = time.perf_counter() - t0
-    return {
-        "where": IDA_WHERE,
-        "workers": WORKERS,
-        "cases": computed,
-        "pairs": pairs,
-        "levels": levels,
-        "wall": wall,
-        "loop": math.fsum(v for r in rows.values() if math.isfinite(v := r.get("loop_time", 0.0))),
-        "finished": sum(r.get("status") in FINISHED for r in rows.values()),
-    }
+            out = _warm_then_timed(warm_scenes, scenes, Path(tmp), WORKERS)
+    return {"where": IDA_WHERE, "pairs": pairs, "levels": levels, **out}
 
 
 def local_sweep(scene, cases: int, workers: int) -> dict:
