@@ -39,10 +39,11 @@ MAX_SAMPLES = 2_000_000  # longest record held in memory (600 s at 0.3 ms)
 MAX_RECORD_BYTES = 256 * 2**20  # 2e6 rows of a 23-column CSV hold about 250 MB
 EXCERPT = 24  # longest excerpt of a record quoted in a message [characters]
 _CHUNK = 2**20
-#: parsed record files kept per process (a sweep applies one record pair at many levels: IDA,
-#: stripes; each file is parsed once, not once per case), keyed by field, path and the SHA-256
-#: of the bytes just read: an edited file is parsed again
-PARSED_KEPT = 64
+#: samples of parsed record files kept per process, at most [bytes] (a sweep applies one record
+#: pair at many levels: IDA, stripes; each file is parsed once, not once per case), keyed by
+#: field, path and the SHA-256 of the bytes just read: an edited file is parsed again; the
+#: least recently read go first, and a record larger than this is not kept
+PARSED_BYTES = 64 * 2**20
 _PARSED: OrderedDict[tuple[str, str, str, str], RecordFile] = OrderedDict()
 
 # a number ends where no digit, point, exponent or sign follows ("1.2.3", "1e" are no numbers)
@@ -234,7 +235,7 @@ def _parsed(kind: str, raw: bytes, rec: RecordFile, parse: Callable) -> RecordFi
         parse(raw, rec)
         rec.values.flags.writeable = False
         done = _PARSED[key] = dataclasses.replace(rec, notes=list(rec.notes))
-        while len(_PARSED) > PARSED_KEPT:
+        while _PARSED and sum(r.values.nbytes for r in _PARSED.values()) > PARSED_BYTES:
             _PARSED.popitem(last=False)
     else:
         _PARSED.move_to_end(key)

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from _record_helpers import DT, STATION, quake, record_scene, write_acc_csv, write_at2, write_text
 
+from deckpound.models import records
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import support_motion
 from deckpound.models.motion import G, RecordWarning
@@ -498,6 +499,23 @@ def test_a_file_read_again_is_parsed_once_and_an_edited_one_again(tmp_path):
     np.testing.assert_allclose(edited.values, 2.0 * first.values[: len(edited.values)], rtol=1e-6)
     # the same bytes under another field name: messages name that field
     assert read_at2(path, "excitation.file_y").label.startswith("excitation.file_y")
+
+
+def test_the_parsed_records_kept_stay_within_their_byte_budget(tmp_path, monkeypatch):
+    monkeypatch.setattr(records, "_PARSED", records.OrderedDict())
+    budget = 3 * 800 * 8  # three 800-sample records
+    monkeypatch.setattr(records, "PARSED_BYTES", budget)
+    paths = [write_at2(tmp_path / f"r{i}.at2", quake(seed=i)) for i in range(5)]
+    for p in paths:
+        read_at2(p)
+        kept = sum(r.values.nbytes for r in records._PARSED.values())
+        assert kept <= budget
+    assert [k[2] for k in records._PARSED] == [str(p) for p in paths[2:]]  # the latest three
+    read_at2(paths[2])  # read again: the most recent now
+    read_at2(paths[0])
+    assert [k[2] for k in records._PARSED] == [str(p) for p in (paths[4], paths[2], paths[0])]
+    big = write_at2(tmp_path / "big.at2", quake(n=4 * 800))
+    assert len(read_at2(big).values) == 3200 and not records._PARSED  # larger than the budget
 
 
 def test_at2_with_fortran_double_exponents(tmp_path):
