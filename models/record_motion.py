@@ -42,6 +42,7 @@ displacement are its trapezoidal integrals, so the three agree exactly on the re
 from __future__ import annotations
 
 import hashlib
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -83,6 +84,8 @@ DRIFT_FRACTION = 0.2  # final |d| above this fraction of peak |d| is reported as
 #: SHA-256 of both components' samples
 MEASURES_KEPT = 64
 _MEASURED: OrderedDict[tuple, float] = OrderedDict()
+#: guards _MEASURED: a Dask worker with several threads scales pairs concurrently
+_MEASURED_LOCK = threading.Lock()
 
 
 def integrate(a: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -298,9 +301,10 @@ def _pair_measure(
     key = (scaling, dt, period) + tuple(
         hashlib.sha256(np.ascontiguousarray(acc[a]).tobytes()).hexdigest() for a in ("x", "y")
     )
-    if key in _MEASURED:
-        _MEASURED.move_to_end(key)
-        return _MEASURED[key]
+    with _MEASURED_LOCK:
+        if key in _MEASURED:
+            _MEASURED.move_to_end(key)
+            return _MEASURED[key]
     vel, disp = {}, {}
     for axis, a in acc.items():
         vel[axis], disp[axis] = integrate(a, dt)
@@ -311,9 +315,11 @@ def _pair_measure(
         "pair-sa": ims["sa_geomean"],
         "pair-rotd50": ims["rotd50"],
     }[scaling]
-    _MEASURED[key] = before = float(before)
-    while len(_MEASURED) > MEASURES_KEPT:
-        _MEASURED.popitem(last=False)
+    before = float(before)
+    with _MEASURED_LOCK:
+        _MEASURED[key] = before
+        while len(_MEASURED) > MEASURES_KEPT:
+            _MEASURED.popitem(last=False)
     return before
 
 

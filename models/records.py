@@ -25,6 +25,7 @@ import dataclasses
 import hashlib
 import io
 import re
+import threading
 from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -45,6 +46,8 @@ _CHUNK = 2**20
 #: least recently read go first, and a record larger than this is not kept
 PARSED_BYTES = 64 * 2**20
 _PARSED: OrderedDict[tuple[str, str, str, str], RecordFile] = OrderedDict()
+#: guards _PARSED: a Dask worker with several threads reads records concurrently
+_PARSED_LOCK = threading.Lock()
 
 # a number ends where no digit, point, exponent or sign follows ("1.2.3", "1e" are no numbers)
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][-+]?\d+)?(?![\d.EeDd+-])"
@@ -230,15 +233,18 @@ def _parsed(kind: str, raw: bytes, rec: RecordFile, parse: Callable) -> RecordFi
     same bytes gets a copy of the first parse (its own notes list; the values array shared,
     read-only). A refused file is parsed (and refused) every time."""
     key = (kind, rec.field, rec.path, rec.sha256)
-    done = _PARSED.get(key)
+    with _PARSED_LOCK:
+        done = _PARSED.get(key)
+        if done is not None:
+            _PARSED.move_to_end(key)
     if done is None:
-        parse(raw, rec)
+        parse(raw, rec)  # outside the lock: threads parse different files at once
         rec.values.flags.writeable = False
-        done = _PARSED[key] = dataclasses.replace(rec, notes=list(rec.notes))
-        while _PARSED and sum(r.values.nbytes for r in _PARSED.values()) > PARSED_BYTES:
-            _PARSED.popitem(last=False)
-    else:
-        _PARSED.move_to_end(key)
+        done = dataclasses.replace(rec, notes=list(rec.notes))
+        with _PARSED_LOCK:
+            _PARSED[key] = done
+            while _PARSED and sum(r.values.nbytes for r in _PARSED.values()) > PARSED_BYTES:
+                _PARSED.popitem(last=False)
     return dataclasses.replace(done, notes=list(done.notes))
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import sys
 import tracemalloc
 import warnings
 
@@ -525,3 +526,27 @@ def test_at2_with_fortran_double_exponents(tmp_path):
     body = [line.replace("E", "D") for line in text[4:]]
     path.write_text("\n".join(text[:4] + body) + "\n")
     np.testing.assert_allclose(read_at2(path).values, values, rtol=1e-6)
+
+
+def test_records_read_by_many_threads_at_once(tmp_path, monkeypatch):
+    """A Dask worker with several threads reads and evicts records concurrently: every read
+    gets its own file's values, and nothing raises."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    monkeypatch.setattr(records, "_PARSED", records.OrderedDict())
+    monkeypatch.setattr(records, "PARSED_BYTES", 2 * 800 * 8)  # evictions all the time
+    paths = [write_at2(tmp_path / f"r{i}.at2", quake(seed=i)) for i in range(6)]
+    expected = {str(p): read_at2(p).values.copy() for p in paths}
+
+    def read(i: int) -> bool:
+        p = paths[i % len(paths)]
+        return bool(np.array_equal(read_at2(p).values, expected[str(p)]))
+
+    # switch threads every microsecond: the check-then-act steps of an unguarded cache race
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)
+    try:
+        with ThreadPoolExecutor(8) as pool:
+            assert all(pool.map(read, range(600)))
+    finally:
+        sys.setswitchinterval(interval)
