@@ -42,8 +42,6 @@ displacement are its trapezoidal integrals, so the three agree exactly on the re
 from __future__ import annotations
 
 import hashlib
-import threading
-from collections import OrderedDict
 
 import numpy as np
 
@@ -54,6 +52,7 @@ from deckpound.models.scene_excitation import ABSURD_PGA, EXTREME_PGA, Excitatio
 from .errors import SceneError
 from .iir import butter_highpass_sos, sosfiltfilt
 from .intensity import pair_measures
+from .kept import Kept
 from .motion import (
     G,
     SupportMotion,
@@ -82,10 +81,7 @@ DRIFT_FRACTION = 0.2  # final |d| above this fraction of peak |d| is reported as
 #: measures of processed, unscaled pairs kept per process (:func:`pair_factor`: a sweep scales
 #: one pair to many levels and measures it once), keyed by the measure, step, period and the
 #: SHA-256 of both components' samples
-MEASURES_KEPT = 64
-_MEASURED: OrderedDict[tuple, float] = OrderedDict()
-#: guards _MEASURED: a Dask worker with several threads scales pairs concurrently
-_MEASURED_LOCK = threading.Lock()
+MEASURED = Kept(64)
 
 
 def integrate(a: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -301,10 +297,9 @@ def _pair_measure(
     key = (scaling, dt, period) + tuple(
         hashlib.sha256(np.ascontiguousarray(acc[a]).tobytes()).hexdigest() for a in ("x", "y")
     )
-    with _MEASURED_LOCK:
-        if key in _MEASURED:
-            _MEASURED.move_to_end(key)
-            return _MEASURED[key]
+    kept = MEASURED.get(key)
+    if kept is not None:
+        return kept
     vel, disp = {}, {}
     for axis, a in acc.items():
         vel[axis], disp[axis] = integrate(a, dt)
@@ -316,10 +311,7 @@ def _pair_measure(
         "pair-rotd50": ims["rotd50"],
     }[scaling]
     before = float(before)
-    with _MEASURED_LOCK:
-        _MEASURED[key] = before
-        while len(_MEASURED) > MEASURES_KEPT:
-            _MEASURED.popitem(last=False)
+    MEASURED.put(key, before)
     return before
 
 

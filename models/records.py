@@ -25,8 +25,6 @@ import dataclasses
 import hashlib
 import io
 import re
-import threading
-from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SceneError
+from .kept import Kept
 
 MIN_SAMPLES = 16  # shortest record the processing (zero-phase filter, taper) can handle
 MAX_SAMPLES = 2_000_000  # longest record held in memory (600 s at 0.3 ms)
@@ -45,9 +44,7 @@ _CHUNK = 2**20
 #: field, path and the SHA-256 of the bytes just read: an edited file is parsed again; the
 #: least recently read go first, and a record larger than this is not kept
 PARSED_BYTES = 64 * 2**20
-_PARSED: OrderedDict[tuple[str, str, str, str], RecordFile] = OrderedDict()
-#: guards _PARSED: a Dask worker with several threads reads records concurrently
-_PARSED_LOCK = threading.Lock()
+PARSED = Kept(PARSED_BYTES, lambda rec: rec.values.nbytes)
 
 # a number ends where no digit, point, exponent or sign follows ("1.2.3", "1e" are no numbers)
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[EeDd][-+]?\d+)?(?![\d.EeDd+-])"
@@ -233,18 +230,12 @@ def _parsed(kind: str, raw: bytes, rec: RecordFile, parse: Callable) -> RecordFi
     same bytes gets a copy of the first parse (its own notes list; the values array shared,
     read-only). A refused file is parsed (and refused) every time."""
     key = (kind, rec.field, rec.path, rec.sha256)
-    with _PARSED_LOCK:
-        done = _PARSED.get(key)
-        if done is not None:
-            _PARSED.move_to_end(key)
+    done = PARSED.get(key)
     if done is None:
-        parse(raw, rec)  # outside the lock: threads parse different files at once
+        parse(raw, rec)
         rec.values.flags.writeable = False
         done = dataclasses.replace(rec, notes=list(rec.notes))
-        with _PARSED_LOCK:
-            _PARSED[key] = done
-            while _PARSED and sum(r.values.nbytes for r in _PARSED.values()) > PARSED_BYTES:
-                _PARSED.popitem(last=False)
+        PARSED.put(key, done)
     return dataclasses.replace(done, notes=list(done.notes))
 
 

@@ -21,6 +21,7 @@ from _record_helpers import DT, STATION, quake, record_scene, write_acc_csv, wri
 from deckpound.models import records
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import support_motion
+from deckpound.models.kept import Kept
 from deckpound.models.motion import G, RecordWarning
 from deckpound.models.records import MAX_SAMPLES, read_at2, read_text
 from deckpound.models.scene_io import RecordPathWarning, load_scene, scene_to_toml
@@ -503,20 +504,19 @@ def test_a_file_read_again_is_parsed_once_and_an_edited_one_again(tmp_path):
 
 
 def test_the_parsed_records_kept_stay_within_their_byte_budget(tmp_path, monkeypatch):
-    monkeypatch.setattr(records, "_PARSED", records.OrderedDict())
     budget = 3 * 800 * 8  # three 800-sample records
-    monkeypatch.setattr(records, "PARSED_BYTES", budget)
+    kept = Kept(budget, lambda rec: rec.values.nbytes)
+    monkeypatch.setattr(records, "PARSED", kept)
     paths = [write_at2(tmp_path / f"r{i}.at2", quake(seed=i)) for i in range(5)]
     for p in paths:
         read_at2(p)
-        kept = sum(r.values.nbytes for r in records._PARSED.values())
-        assert kept <= budget
-    assert [k[2] for k in records._PARSED] == [str(p) for p in paths[2:]]  # the latest three
+        assert kept.total <= budget
+    assert [k[2] for k in kept.order()] == [str(p) for p in paths[2:]]  # the latest three
     read_at2(paths[2])  # read again: the most recent now
     read_at2(paths[0])
-    assert [k[2] for k in records._PARSED] == [str(p) for p in (paths[4], paths[2], paths[0])]
+    assert [k[2] for k in kept.order()] == [str(p) for p in (paths[4], paths[2], paths[0])]
     big = write_at2(tmp_path / "big.at2", quake(n=4 * 800))
-    assert len(read_at2(big).values) == 3200 and not records._PARSED  # larger than the budget
+    assert len(read_at2(big).values) == 3200 and not kept.order()  # larger than the budget
 
 
 def test_at2_with_fortran_double_exponents(tmp_path):
@@ -533,8 +533,8 @@ def test_records_read_by_many_threads_at_once(tmp_path, monkeypatch):
     gets its own file's values, and nothing raises."""
     from concurrent.futures import ThreadPoolExecutor
 
-    monkeypatch.setattr(records, "_PARSED", records.OrderedDict())
-    monkeypatch.setattr(records, "PARSED_BYTES", 2 * 800 * 8)  # evictions all the time
+    # a budget of two records: evictions all the time
+    monkeypatch.setattr(records, "PARSED", Kept(2 * 800 * 8, lambda rec: rec.values.nbytes))
     paths = [write_at2(tmp_path / f"r{i}.at2", quake(seed=i)) for i in range(6)]
     expected = {str(p): read_at2(p).values.copy() for p in paths}
 
