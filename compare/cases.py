@@ -30,6 +30,7 @@ from typing import Any
 from deckpound.compare.engines import get_engine, run_engine
 from deckpound.compare.pool import (
     Interrupted,
+    gc_frozen,
     map_local,
     one_blas_thread,
 )
@@ -259,7 +260,7 @@ def map_parallel(
         sweep = len(items) >= SCIPY_AFTER
         if sweep:  # its import now, not at its 16th record
             load_compiled_filter()
-        with one_blas_thread() if sweep else contextlib.nullcontext():
+        with one_blas_thread() if sweep else contextlib.nullcontext(), gc_frozen():
             for it in items:
                 on_done(it, func(*args_of(it)))
         return
@@ -274,8 +275,10 @@ def batch_size(items: int, workers: int) -> int:
 
 
 def run_batch(func: Callable, arguments: list[tuple]) -> list:
-    """The worker side of a batch: ``[func(*args) for args in arguments]``."""
-    return [func(*args) for args in arguments]
+    """The worker side of a batch: ``[func(*args) for args in arguments]``, with the worker's
+    older objects out of the garbage collector's way (:func:`.pool.gc_frozen`)."""
+    with gc_frozen():
+        return [func(*args) for args in arguments]
 
 
 def task_batches(items: list, size: int, workers: int = 1) -> list[tuple]:

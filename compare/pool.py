@@ -22,6 +22,7 @@ how to resume — the CLI prints it as its one line and exits 130.
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 import signal
 import sys
@@ -35,6 +36,7 @@ from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 
 __all__ = [
     "Interrupted",
+    "gc_frozen",
     "map_local",
     "one_blas_thread",
     "pool_scope",
@@ -60,6 +62,27 @@ def one_blas_thread():
     their step loops: two workers ran at the speed of one (``tools/sweep_benchmark.py``)."""
 
     return threadpool_limits(limits=1)
+
+
+@contextlib.contextmanager
+def gc_frozen() -> Iterator[None]:
+    """Inside: Python's cyclic garbage collector leaves the objects that existed at entry alone
+    (``gc.freeze``; ``gc.unfreeze`` at the end puts them back in its oldest generation).
+
+    A sweep allocates a few hundred container objects per case, so every few hundred cases the
+    collector runs a full collection, which visits every object of the process: the imported
+    numba, numpy, scipy (and distributed in a Dask worker), about 10⁵ objects, for longer than
+    a case's step loop. None of them becomes garbage because of the sweep; the cases' own
+    objects are still collected as before (reference counting frees most of them at once).
+    Where the process has frozen objects already (its owner's choice), nothing is changed."""
+    if gc.get_freeze_count():
+        yield
+        return
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()
 
 
 def worker_init(parent_pid: int) -> None:
