@@ -33,11 +33,14 @@ polls that flag once per Newton iteration / Runge–Kutta step attempt and ends 
 iteration (microseconds to milliseconds), not the rest of the run. The engines then re-raise
 KeyboardInterrupt (default: the CLI exits 130, no partial result is cached) or, with the engine
 keyword ``on_interrupt="return"``, return ``Status.INTERRUPTED`` with the rows so far. The flag
-is a plain memory load per iteration, and running in the thread changes no arithmetic.
+is a plain memory load per iteration, and running in the thread changes no arithmetic. Where
+SIGINT is ignored (``SIG_IGN``: a sweep's worker processes) or outside the main thread, no
+KeyboardInterrupt can arrive, and the loop is called directly.
 """
 
 from __future__ import annotations
 
+import signal
 import threading
 from collections import namedtuple
 
@@ -286,9 +289,14 @@ def run_loop(loop, args, stats: Stats) -> bool:
 
     In the main thread the loop runs in a helper thread (it releases the interpreter lock) while
     this thread waits and turns a KeyboardInterrupt into ``stats.halt[0] = 1`` (module
-    docstring); elsewhere (no signals are delivered there) it is called directly.
+    docstring); elsewhere (no signals are delivered there), and where Ctrl-C is ignored (a
+    sweep's worker process: its parent stops it), it is called directly, without the thread's
+    start and the wake-up of this one at its end.
     """
-    if threading.current_thread() is not threading.main_thread():
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    ):
         loop(*args)
         return False
     failure: list[BaseException] = []

@@ -202,6 +202,26 @@ def test_the_loop_thread_changes_no_result(engine, integrator, monkeypatch):
         assert np.array_equal(np.asarray(v), np.asarray(threaded.columns[k]), equal_nan=True), k
 
 
+def test_the_loop_runs_in_the_calling_thread_where_ctrl_c_is_ignored():
+    """With Ctrl-C interruptible (the default SIGINT handler) run_loop runs the loop in a helper
+    thread; where SIGINT is ignored (a sweep's worker process) no KeyboardInterrupt can come, and
+    the loop runs in the calling thread (no thread start, no wake-up at its end)."""
+    stats = bundles.new_stats()
+    ran_in = []
+
+    def loop():
+        ran_in.append(threading.get_ident())
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        assert bundles.run_loop(loop, (), stats) is False
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        assert bundles.run_loop(loop, (), stats) is False
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert ran_in[0] != threading.get_ident() and ran_in[1] == threading.get_ident()
+
+
 def test_adaptive_step_budget_stops_with_the_time_reached():
     scene = load_scene(
         "saiidi-4span",
