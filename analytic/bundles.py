@@ -24,24 +24,16 @@ namedtuples of arrays need none)::
 * ``stats`` — :data:`Stats`: integer counts and float values with named indices
   (``CNT_*``, ``VAL_*``, decoded by :func:`stats_dict`) and the ``halt`` flag.
 
-Interrupts (:func:`run_loop`). A compiled loop holds the interpreter lock, so a Python signal
-handler (Ctrl-C → KeyboardInterrupt) cannot run until it returns. :func:`run_loop` therefore
-runs the loop in a helper thread with the lock released (the loops are compiled ``nogil``),
-waits for it in the main thread, and on KeyboardInterrupt sets ``stats.halt[0]``; every loop
-polls that flag once per Newton iteration / Runge–Kutta step attempt and ends with status
-:data:`RUN_INTERRUPTED`, its output rows written so far intact. The wait is therefore one
-iteration (microseconds to milliseconds), not the rest of the run. The engines then re-raise
-KeyboardInterrupt (default: the CLI exits 130, no partial result is cached) or, with the engine
-keyword ``on_interrupt="return"``, return ``Status.INTERRUPTED`` with the rows so far. The flag
-is a plain memory load per iteration, and running in the thread changes no arithmetic. Where
-SIGINT is ignored (``SIG_IGN``: a sweep's worker processes) or outside the main thread, no
-KeyboardInterrupt can arrive, and the loop is called directly.
+The ``halt`` flag: every loop polls it once per Newton iteration / Runge–Kutta step attempt and
+ends with status :data:`RUN_INTERRUPTED`, its output rows written so far intact; Ctrl-C sets it
+(:func:`deckpound.analytic.interruptible.run_loop`). The engines then re-raise KeyboardInterrupt
+(default: the CLI exits 130, no partial result is cached) or, with the engine keyword
+``on_interrupt="return"``, return ``Status.INTERRUPTED`` with the rows so far. The flag is a
+plain memory load per iteration.
 """
 
 from __future__ import annotations
 
-import signal
-import threading
 from collections import namedtuple
 
 import numpy as np
@@ -78,7 +70,6 @@ __all__ = [
     "record",
     "result_columns",
     "row_views",
-    "run_loop",
     "stats_dict",
     "status_of",
 ]
@@ -282,47 +273,3 @@ def result_columns(table: np.ndarray, rows: int, names) -> dict[str, np.ndarray]
         col.flags.writeable = False
         out[name] = col
     return out
-
-
-def run_loop(loop, args, stats: Stats) -> bool:
-    """Run the compiled ``loop(*args)`` so that Ctrl-C stops it; True if it was interrupted.
-
-    In the main thread the loop runs in a helper thread (it releases the interpreter lock) while
-    this thread waits and turns a KeyboardInterrupt into ``stats.halt[0] = 1`` (module
-    docstring); elsewhere (no signals are delivered there), and where Ctrl-C is ignored (a
-    sweep's worker process: its parent stops it), it is called directly, without the thread's
-    start and the wake-up of this one at its end.
-    """
-    if (
-        threading.current_thread() is not threading.main_thread()
-        or signal.getsignal(signal.SIGINT) is signal.SIG_IGN
-    ):
-        loop(*args)
-        return False
-    failure: list[BaseException] = []
-    done = threading.Event()
-
-    def target():
-        try:
-            loop(*args)
-        except BaseException as exc:
-            failure.append(exc)
-        finally:
-            done.set()
-
-    # waiting on an Event, not Thread.join: a join interrupted by KeyboardInterrupt marks the
-    # thread finished although it still runs (CPython 3.11, the bpo-45274 lock handling)
-    worker = threading.Thread(target=target, name="deckpound-loop", daemon=True)
-    interrupted = False
-    worker.start()
-    try:
-        while not done.wait(0.05):
-            pass
-    except KeyboardInterrupt:
-        interrupted = True
-        stats.halt[0] = 1
-        while not done.wait(0.05):  # the loop stops within one iteration
-            pass
-    if failure:
-        raise failure[0]
-    return interrupted

@@ -2,7 +2,7 @@
 adaptive integrator has a step budget, and output tables are sized before they are allocated.
 
 The compiled loops poll ``Stats.halt`` once per Newton iteration / Runge–Kutta attempt while
-:func:`deckpound.analytic.bundles.run_loop` waits for them in the main thread
+:func:`deckpound.analytic.interruptible.run_loop` waits for them in the main thread
 (:mod:`deckpound.analytic.bundles`).
 
 No test here interrupts the test runner's own thread: ``_thread.interrupt_main()`` on a timer
@@ -13,8 +13,10 @@ child process; the in-process tests set the halt flag the compiled loops poll.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -23,7 +25,7 @@ import time
 import numpy as np
 import pytest
 
-from deckpound.analytic import bundles
+from deckpound.analytic import bundles, interruptible
 from deckpound.compare.engines import run_engine
 from deckpound.models.errors import SceneError
 from deckpound.models.scene_io import load_scene
@@ -50,10 +52,14 @@ LONG = {
 }
 
 CHILD = r"""
-import sys, time, warnings
+import signal, sys, time, warnings
 warnings.simplefilter("ignore")
 from deckpound.cli import main
-engine, overrides = sys.argv[1], sys.argv[2:]
+path, engine, overrides = sys.argv[1], sys.argv[2], sys.argv[3:]
+if path == "threaded":  # a program's own SIGTERM handler, as the CLI's: the loop in a thread
+    def on_sigterm(signum, frame):
+        raise KeyboardInterrupt
+    signal.signal(signal.SIGTERM, on_sigterm)
 sets = [a for o in overrides for a in ("--set", o)]
 # warm-up: compile or load the kernels, so that the long run starts at once
 main(["run", "saiidi-4span", "--engine", engine, "--set", "run.duration=0.05",
@@ -64,19 +70,23 @@ sys.exit(main(["run", "saiidi-4span", "--engine", engine, *sets, "-o", sys.argv[
 """
 
 
-@pytest.mark.parametrize("which", list(LONG))
-def test_ctrl_c_stops_a_long_run_long_before_it_would_end(which, tmp_path):
+@pytest.mark.parametrize(
+    "which,path", [(w, "watched") for w in LONG] + [("compliance", "threaded")]
+)
+def test_ctrl_c_stops_a_long_run_long_before_it_would_end(which, path, tmp_path):
     """The long run holds at least 40 s of step loop (4e7 steps at ~1 µs, more under load);
-    Ctrl-C must end it within one Newton iteration. The bounds are loose on purpose (a
-    loaded machine may be slow to schedule the child): a loop that ignored the flag would run
-    for its whole record, far beyond them."""
+    Ctrl-C must end it within one Newton iteration, on both of run_loop's main-thread paths
+    (the loop watched in the main thread; in a helper thread where the program has a SIGTERM
+    handler of its own). The bounds are loose on purpose (a loaded machine may be slow to
+    schedule the child): a loop that ignored the flag would run for its whole record, far
+    beyond them."""
     engine, overrides = LONG[which]
     script = tmp_path / "child.py"
     script.write_text(CHILD)
     errfile = tmp_path / "stderr.txt"
     with open(errfile, "w") as err_out:
         proc = subprocess.Popen(
-            [sys.executable, str(script), engine, *overrides],
+            [sys.executable, str(script), path, engine, *overrides],
             stdout=subprocess.PIPE,
             stderr=err_out,
             text=True,
@@ -105,7 +115,7 @@ def test_ctrl_c_stops_a_long_run_long_before_it_would_end(which, tmp_path):
             proc.wait()
     err = errfile.read_text()
     print(
-        f"{which}: 'interrupted' {latency} s after SIGINT, process gone after {exited:.2f} s "
+        f"{which} ({path}): 'interrupted' {latency} s after SIGINT, process gone after {exited:.2f} s "
         f"(interpreter teardown), exit {code}"
     )
     assert code == 130, err
@@ -121,10 +131,10 @@ HALT_ROW = 20
 def _ctrl_c_after_row(monkeypatch, row: int) -> list[int]:
     """Make the engines' loops stop as Ctrl-C stops them, without a signal: once a loop has
     written output row ``row``, a watcher thread sets ``Stats.halt`` — the flag that
-    :func:`~deckpound.analytic.bundles.run_loop` sets on Ctrl-C and the compiled loop polls —
+    :func:`~deckpound.analytic.interruptible.run_loop` sets on Ctrl-C and the compiled loop polls —
     and the loop's runner then reports an interrupt, as run_loop does after a Ctrl-C. Returns
     the list of loops halted so (their number of output rows allocated)."""
-    real, halted = bundles.run_loop, []
+    real, halted = interruptible.run_loop, []
 
     def run_loop(loop, args, stats):
         table, done = args[4].table, threading.Event()
@@ -146,7 +156,7 @@ def _ctrl_c_after_row(monkeypatch, row: int) -> list[int]:
             watcher.join()
         return bundles.stats_dict(stats)["status"] == bundles.RUN_INTERRUPTED
 
-    monkeypatch.setattr(bundles, "run_loop", run_loop)
+    monkeypatch.setattr(interruptible, "run_loop", run_loop)
     return halted
 
 
@@ -184,42 +194,69 @@ def test_interrupt_raises_keyboard_interrupt_by_default(monkeypatch):
     "engine,integrator",
     [("compliance", "newmark"), ("compliance", "adaptive"), ("nonsmooth", None)],
 )
-def test_the_loop_thread_changes_no_result(engine, integrator, monkeypatch):
-    """Running the compiled loop in the helper thread (interruptible) and calling it directly
-    give bit-identical results."""
+def test_the_loop_thread_changes_no_result(engine, integrator):
+    """The compiled loop watched in the main thread (the default), in the helper thread (a
+    program's own SIGTERM handler) and called directly (SIGINT ignored) give bit-identical
+    results."""
     ov = ["run.duration=3"] + ([f"compliance.integrator={integrator}"] if integrator else [])
     scene = load_scene("saiidi-4span", ov + ["contact.friction=0.2", "contact.friction_mode=stick"])
-    threaded = run_engine(engine, scene)
-
-    def direct(loop, args, stats):
-        loop(*args)
-        return False
-
-    monkeypatch.setattr(bundles, "run_loop", direct)
-    plain = run_engine(engine, scene)
-    assert threaded.meta["gap_closures"] == plain.meta["gap_closures"] > 0
-    for k, v in plain.columns.items():
-        assert np.array_equal(np.asarray(v), np.asarray(threaded.columns[k]), equal_nan=True), k
+    watched = run_engine(engine, scene)
+    with _handlers(signal.default_int_handler, _raise_interrupt):
+        threaded = run_engine(engine, scene)
+    with _handlers(signal.SIG_IGN, signal.SIG_DFL):
+        direct = run_engine(engine, scene)
+    assert watched.meta["gap_closures"] == direct.meta["gap_closures"] > 0
+    for other in (threaded, direct):
+        for k, v in watched.columns.items():
+            assert np.array_equal(np.asarray(v), np.asarray(other.columns[k]), equal_nan=True), k
 
 
-def test_the_loop_runs_in_the_calling_thread_where_ctrl_c_is_ignored():
-    """With Ctrl-C interruptible (the default SIGINT handler) run_loop runs the loop in a helper
-    thread; where SIGINT is ignored (a sweep's worker process) no KeyboardInterrupt can come, and
-    the loop runs in the calling thread (no thread start, no wake-up at its end)."""
+def _raise_interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _handlers(on_sigint, on_sigterm):
+    """SIGINT and SIGTERM handled so inside, as before outside."""
+    old = signal.signal(signal.SIGINT, on_sigint), signal.signal(signal.SIGTERM, on_sigterm)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old[0])
+        signal.signal(signal.SIGTERM, old[1])
+
+
+def test_where_the_loop_runs():
+    """run_loop's paths: with Python's default SIGINT handler and no SIGTERM handler the loop
+    runs in the calling (main) thread, watched; with a program's own SIGTERM handler, or with
+    the signal wake-up descriptor held by someone else (whose descriptor stays), in a helper
+    thread; with SIGINT ignored (a sweep's worker) in the calling thread."""
     stats = bundles.new_stats()
     ran_in = []
 
     def loop():
         ran_in.append(threading.get_ident())
 
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    def where(on_sigint, on_sigterm) -> bool:
+        with _handlers(on_sigint, on_sigterm):
+            assert interruptible.run_loop(loop, (), stats) is False
+        return ran_in[-1] == threading.get_ident()
+
+    assert where(signal.default_int_handler, signal.SIG_DFL)
+    assert signal.set_wakeup_fd(-1) == -1  # taken only while the loop ran
+    assert not where(signal.default_int_handler, _raise_interrupt)
+    assert where(signal.SIG_IGN, signal.SIG_DFL)
+    theirs, other = socket.socketpair()
+    theirs.setblocking(False)
+    signal.set_wakeup_fd(theirs.fileno())
     try:
-        assert bundles.run_loop(loop, (), stats) is False
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-        assert bundles.run_loop(loop, (), stats) is False
+        assert not where(signal.default_int_handler, signal.SIG_DFL)
+        assert signal.set_wakeup_fd(-1) == theirs.fileno()
     finally:
-        signal.signal(signal.SIGINT, previous)
-    assert ran_in[0] != threading.get_ident() and ran_in[1] == threading.get_ident()
+        signal.set_wakeup_fd(-1)
+        theirs.close()
+        other.close()
+    assert stats.halt[0] == 0
 
 
 def test_adaptive_step_budget_stops_with_the_time_reached():

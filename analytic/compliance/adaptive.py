@@ -37,6 +37,7 @@ import time as _time
 import numpy as np
 
 from deckpound.analytic import bundles as bd
+from deckpound.analytic import interruptible
 from deckpound.analytic._jit import ensure_compiled
 from deckpound.analytic.compliance.dormand_prince import adaptive_run
 from deckpound.analytic.compliance.dormand_prince_work import (
@@ -135,7 +136,7 @@ def run_adaptive(
     args = (ps.arrays, contact, bd.record(tb, UG, VG), opts, output, work, stats)
     compile_time = ensure_compiled(adaptive_run, *args)
     t1 = _time.perf_counter()
-    interrupted = bd.run_loop(adaptive_run, args, stats)
+    interrupted = interruptible.run_loop(adaptive_run, args, stats)
     loop = _time.perf_counter() - t1
     if interrupted and on_interrupt == "raise":
         raise KeyboardInterrupt

@@ -40,6 +40,7 @@ from typing import ClassVar
 import numpy as np
 
 from deckpound.analytic import bundles as bd
+from deckpound.analytic import interruptible
 from deckpound.analytic._jit import ensure_compiled
 from deckpound.analytic.compliance.adaptive import run_adaptive
 from deckpound.analytic.compliance.newmark import BETA, GAMMA, newmark_run
@@ -326,7 +327,7 @@ def _run_newmark(
     args = (ps.arrays, contact, bd.record(*record), opts, output, work, stats)
     compile_time = ensure_compiled(newmark_run, *args)
     t1 = _time.perf_counter()
-    interrupted = bd.run_loop(newmark_run, args, stats)
+    interrupted = interruptible.run_loop(newmark_run, args, stats)
     loop = _time.perf_counter() - t1
     if interrupted and on_interrupt == "raise":
         raise KeyboardInterrupt

@@ -63,6 +63,7 @@ from typing import ClassVar
 import numpy as np
 
 from deckpound.analytic import bundles as bd
+from deckpound.analytic import interruptible
 from deckpound.analytic._jit import ensure_compiled
 from deckpound.analytic.fp_mode import flush_note
 from deckpound.analytic.kernels.contact_laws import pack_contact
@@ -261,7 +262,7 @@ class NonsmoothEngine(Engine):
         args = (ps.arrays, contact, record, opts, output, work, stats)
         compile_time = ensure_compiled(moreau_jean_run, *args)
         t1 = _time.perf_counter()
-        interrupted = bd.run_loop(moreau_jean_run, args, stats)
+        interrupted = interruptible.run_loop(moreau_jean_run, args, stats)
         loop = _time.perf_counter() - t1
         if interrupted and on_interrupt == "raise":
             raise KeyboardInterrupt
