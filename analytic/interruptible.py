@@ -9,17 +9,18 @@ Newton iteration / Runge–Kutta step attempt and, when it is set, ends with sta
 * **Called directly** outside the main thread (no signal handler runs there) and where SIGINT
   is ignored (``SIG_IGN``: a sweep's worker process, which its parent stops): no
   KeyboardInterrupt can come.
-* **Watched** in the main thread while SIGINT has Python's default handler and SIGTERM no
-  Python handler (the usual case of a script or a notebook): the loop runs in the main thread
+* **Watched** in the main thread while SIGINT has Python's default handler and no other
+  signal a Python handler (the usual case of a script): the loop runs in the main thread
   with the interpreter lock released (the loops are compiled ``nogil``). Python's C-level
   signal handler writes the number of every signal it receives to the wake-up descriptor
   (``signal.set_wakeup_fd``), here one end of a socket pair whose other end a watcher thread
   of this process reads: on a SIGINT it sets the running loop's halt flag. When the loop has
   stopped, the pending KeyboardInterrupt is raised in the main thread and caught here. The
   descriptor is taken only while the loop runs and only if no one else holds it.
-* **Threaded** otherwise (a program's own SIGTERM handler, as the CLI's; a wake-up descriptor
-  held by someone else, as an asyncio loop's): the loop runs in a helper thread while the
-  main thread waits and turns a KeyboardInterrupt into the halt flag.
+* **Threaded** otherwise (a program's own signal handler, as the CLI's for SIGTERM, which must
+  run during the loop, not after it; a wake-up descriptor held by someone else, as an asyncio
+  loop's): the loop runs in a helper thread while the main thread waits, running the
+  program's handlers, and turns a KeyboardInterrupt into the halt flag.
 
 The first two need no thread start and no wake-up of a waiting thread at the loop's end, a
 hand-off that costs a sweep's case about a millisecond on a virtual machine. None of the three
@@ -47,6 +48,14 @@ class _Watch:
 
 
 _WATCH = _Watch()
+#: what getsignal reports for a signal without a Python handler
+_NOT_PYTHON = (signal.SIG_DFL, signal.SIG_IGN, None)
+#: the signals other than SIGINT that a Python handler can be installed for
+_OTHER_SIGNALS = tuple(
+    s
+    for s in signal.valid_signals()
+    if s not in (signal.SIGINT, getattr(signal, "SIGKILL", None), getattr(signal, "SIGSTOP", None))
+)
 
 
 def run_loop(loop, args, stats) -> bool:
@@ -59,15 +68,23 @@ def run_loop(loop, args, stats) -> bool:
     ):
         loop(*args)
         return False
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler and signal.getsignal(
-        signal.SIGTERM
-    ) in (signal.SIG_DFL, signal.SIG_IGN):
+    if _python_handles_only_sigint():
         fd = _watch_fd()
         previous = signal.set_wakeup_fd(fd, warn_on_full_buffer=False)
         if previous in (-1, fd):
             return _run_watched(loop, args, stats)
         signal.set_wakeup_fd(previous)  # someone else's: theirs stays
     return _run_threaded(loop, args, stats)
+
+
+def _python_handles_only_sigint() -> bool:
+    """Whether SIGINT has Python's default handler (KeyboardInterrupt) and no other signal a
+    Python handler: a program's own handler (the CLI's SIGTERM, an alarm's timeout) would
+    otherwise wait for the loop's end to run, so it keeps the helper thread, where it runs
+    while the loop does."""
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        return False
+    return all(signal.getsignal(s) in _NOT_PYTHON for s in _OTHER_SIGNALS)
 
 
 def _watch_fd() -> int:

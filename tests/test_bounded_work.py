@@ -228,9 +228,10 @@ def _handlers(on_sigint, on_sigterm):
 
 def test_where_the_loop_runs():
     """run_loop's paths: with Python's default SIGINT handler and no SIGTERM handler the loop
-    runs in the calling (main) thread, watched; with a program's own SIGTERM handler, or with
-    the signal wake-up descriptor held by someone else (whose descriptor stays), in a helper
-    thread; with SIGINT ignored (a sweep's worker) in the calling thread."""
+    runs in the calling (main) thread, watched; with a program's own handler of another signal
+    (the CLI's SIGTERM, an alarm), which must run during the loop, or with the signal wake-up
+    descriptor held by someone else (whose descriptor stays), in a helper thread; with SIGINT
+    ignored (a sweep's worker) in the calling thread."""
     stats = bundles.new_stats()
     ran_in = []
 
@@ -245,6 +246,11 @@ def test_where_the_loop_runs():
     assert where(signal.default_int_handler, signal.SIG_DFL)
     assert signal.set_wakeup_fd(-1) == -1  # taken only while the loop ran
     assert not where(signal.default_int_handler, _raise_interrupt)
+    previous = signal.signal(signal.SIGALRM, _raise_interrupt)  # e.g. a program's timeout
+    try:
+        assert not where(signal.default_int_handler, signal.SIG_DFL)
+    finally:
+        signal.signal(signal.SIGALRM, previous)
     assert where(signal.SIG_IGN, signal.SIG_DFL)
     theirs, other = socket.socketpair()
     theirs.setblocking(False)
