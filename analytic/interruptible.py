@@ -13,7 +13,7 @@ Newton iteration / Runge–Kutta step attempt and, when it is set, ends with sta
   signal a Python handler (the usual case of a script): the loop runs in the main thread
   with the interpreter lock released (the loops are compiled ``nogil``). Python's C-level
   signal handler writes the number of every signal it receives to the wake-up descriptor
-  (``signal.set_wakeup_fd``), here one end of a socket pair whose other end a watcher thread
+  (``signal.set_wakeup_fd``), here the write end of a pipe whose read end a watcher thread
   of this process reads: on a SIGINT it sets the running loop's halt flag. When the loop has
   stopped, the pending KeyboardInterrupt is raised in the main thread and caught here. The
   descriptor is taken only while the loop runs and only if no one else holds it.
@@ -31,19 +31,18 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import threading
 
 __all__ = ["run_loop"]
 
 
 class _Watch:
-    """This process's watcher: the socket pair, the process that made it (a forked child
-    makes its own), and the stats of the loop now running."""
+    """This process's watcher: the pipe (read and write descriptors), the process that made it
+    (a forked child makes its own), and the stats of the loop now running."""
 
     def __init__(self):
         self.pid = None
-        self.sockets: tuple[socket.socket, socket.socket] | None = None
+        self.pipe: tuple[int, int] | None = None
         self.stats = None
 
 
@@ -88,27 +87,27 @@ def _python_handles_only_sigint() -> bool:
 
 
 def _watch_fd() -> int:
-    """The write end of this process's watcher socket, made (with its thread) at first use and
+    """The write end of this process's watcher pipe, made (with its thread) at first use and
     again in a forked child."""
     if _WATCH.pid != os.getpid():
-        if _WATCH.sockets is not None:  # the parent's, inherited by a fork: not ours to read
-            for s in _WATCH.sockets:
-                s.close()
-        reader, writer = socket.socketpair()
-        writer.setblocking(False)  # set_wakeup_fd needs a non-blocking descriptor
-        _WATCH.sockets, _WATCH.pid = (reader, writer), os.getpid()
+        if _WATCH.pipe is not None:  # the parent's, inherited by a fork: not ours to read
+            for fd in _WATCH.pipe:
+                os.close(fd)
+        reader, writer = os.pipe()
+        os.set_blocking(writer, False)  # set_wakeup_fd needs a non-blocking descriptor
+        _WATCH.pipe, _WATCH.pid = (reader, writer), os.getpid()
         threading.Thread(
             target=_watch, args=(reader,), name="deckpound-sigint", daemon=True
         ).start()
-    return _WATCH.sockets[1].fileno()
+    return _WATCH.pipe[1]
 
 
-def _watch(reader: socket.socket) -> None:
+def _watch(reader: int) -> None:
     """The watcher thread: every signal number written to the wake-up descriptor is one byte;
     a SIGINT halts the loop that runs now (none: nothing to do)."""
     while True:
         try:
-            numbers = reader.recv(256)
+            numbers = os.read(reader, 256)
         except OSError:
             return
         if not numbers:
