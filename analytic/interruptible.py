@@ -22,9 +22,8 @@ Newton iteration / Runge–Kutta step attempt and, when it is set, ends with sta
   loop's): the loop runs in a helper thread while the main thread waits, running the
   program's handlers, and turns a KeyboardInterrupt into the halt flag.
 
-The first two need no thread start and no wake-up of a waiting thread at the loop's end, a
-hand-off that costs a sweep's case about a millisecond on a virtual machine. None of the three
-changes the loop's arithmetic.
+The first two need no thread start and no wake-up of a waiting thread at the loop's end, which
+the measured loop time would include. None of the three changes the loop's arithmetic.
 """
 
 from __future__ import annotations

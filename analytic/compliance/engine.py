@@ -202,7 +202,7 @@ class ComplianceEngine(Engine):
         ``summary_rows``: store only ``t`` and the energy columns (engine contract, point 12;
         the Newmark integrator, the adaptive one stores every column); ``on_interrupt``: what
         Ctrl-C during the step loop does (it stops the loop within one Newton iteration, see
-        :mod:`deckpound.analytic.bundles`): ``"raise"`` (default)
+        :mod:`deckpound.analytic.interruptible`): ``"raise"`` (default)
         re-raises KeyboardInterrupt, ``"return"`` returns ``Status.INTERRUPTED`` with the rows
         computed so far; ``_skips`` (private, for measurement): ``{name: False}`` turns off a
         work-saving skip of :data:`SKIPS` (``newmark`` only; results are identical)."""

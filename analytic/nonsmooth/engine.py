@@ -202,7 +202,7 @@ class NonsmoothEngine(Engine):
         given DOF displacements and velocities (default: the scene's ``initial`` table);
         ``summary_rows``: store only ``t`` and the energy columns (engine contract, point 12);
         ``on_interrupt``: Ctrl-C during the step loop stops it within one Newton iteration
-        (:mod:`deckpound.analytic.bundles`) and then re-raises KeyboardInterrupt (``"raise"``,
+        (:mod:`deckpound.analytic.interruptible`) and then re-raises KeyboardInterrupt (``"raise"``,
         default) or returns ``Status.INTERRUPTED`` with the rows so far (``"return"``)."""
         text_of = {
             bd.RUN_NOT_CONVERGED: "Newton iteration of the Takeda springs did not converge",
