@@ -12,7 +12,10 @@ It measures, one after the other in one process (so the ratios share the machine
 
 1. µs/step of the C reference loop, of the compliance engine and of the nonsmooth engine on
    the built-in benchmark (``benchmarks/reference_loop/run.py``'s :func:`measure`: interleaved
-   rounds, medians) and their ratios, per step and over the record;
+   rounds, medians) and their ratios, per step and over the record; and what the compliance
+   loop does beyond the reference, each with its cost: the engine without its energy columns,
+   with one output row and with neither, and the reference with the whole residual at the
+   converged iterate (its ``REF_FULL_RESIDUAL`` build);
 2. summary-only sweeps (:func:`deckpound.compare.studies.variability.sweep_rows`: one summary
    row per case, no histories, each sweep into an empty row cache) of N seeds of the 20 s
    synthetic record with the compliance engine: in this process (1 worker), on the local pool
@@ -72,7 +75,7 @@ PAGE = DOCS / "sweeps.md"
 RESULTS_FILE = RESULTS / "sweeps.json"
 REFERENCE_LOOP = ROOT / "benchmarks" / "reference_loop" / "run.py"
 #: version of the measurement file's layout
-FORMAT = 1
+FORMAT = 2
 SCENE = "saiidi-4span"
 #: the engine of the sweeps (the issues' targets are for the compliance engine)
 SWEEP_ENGINE = "compliance"
@@ -124,11 +127,17 @@ def reference_loop():
     return module
 
 
+#: the reference build that forms the whole residual at the converged iterate, as the
+#: compliance loop does (benchmarks/reference_loop/run.py's VARIANTS)
+FULL_RESIDUAL = "reference + residual at the converged iterate"
+
+
 def measure_loops(scene, rounds: int, repeats: int) -> dict:
     """µs/step and loop times [s] of the reference, compliance and nonsmooth loops (every
-    timed round), and how far the reference's deck peaks are from the compliance engine's."""
+    timed round), of the extras' variants (:data:`EXTRAS`), and how far the reference's deck
+    peaks are from the compliance engine's."""
     ref = reference_loop()
-    times = ref.measure(scene, rounds=rounds, repeats=repeats)
+    times = ref.measure(scene, rounds=rounds, repeats=repeats, variants=True)
     steps = times.problem.steps
     peaks = ref.reference_peaks(times.reports["reference"])
     last = times.compliance[-1]
@@ -143,6 +152,10 @@ def measure_loops(scene, rounds: int, repeats: int) -> dict:
         "compliance_loop_s": [r.meta["loop_time"] for r in times.compliance],
         "nonsmooth_us": [r.meta["us_per_step"] for r in times.nonsmooth],
         "nonsmooth_loop_s": [r.meta["loop_time"] for r in times.nonsmooth],
+        "full_residual_us": times.reference_us(FULL_RESIDUAL),
+        "no_energy_us": [r.meta["us_per_step"] for r in times.compliance_no_energy],
+        "one_row_us": [r.meta["us_per_step"] for r in times.compliance_one_row],
+        "bare_us": [r.meta["us_per_step"] for r in times.compliance_bare],
         "nonsmooth_steps": nonsmooth["steps"],
         "nonsmooth_h": nonsmooth["settings"]["h"],
         "peak_difference": max(
@@ -461,6 +474,49 @@ def _loop_lines(loops: dict) -> list[str]:
     return _table(header, rows)
 
 
+def extras(loops: dict) -> list[tuple[str, str, float]]:
+    """What the compliance loop does beyond the reference: (what, measured as, µs/step) from
+    the medians of the stored rounds; the last row is the whole excess over the reference."""
+    med = {k: statistics.median(loops[f"{k}_us"]) for k in
+           ("reference", "compliance", "no_energy", "one_row", "bare", "full_residual")}  # fmt: skip
+    comp = med["compliance"]
+    return [
+        ("energy work terms and the energy columns",
+         "compliance − compliance without energy columns (`channels=[]`)",
+         comp - med["no_energy"]),
+        ("output rows",
+         "compliance − compliance with one output row",
+         comp - med["one_row"]),
+        ("the two together",
+         "compliance − compliance with neither",
+         comp - med["bare"]),
+        ("the whole residual (springs, contacts) at a converged iterate that moved, where the "
+         "reference sets only the materials' trial deformations (emulated: its cost in the C "
+         "loop)",
+         "reference with `REF_FULL_RESIDUAL` − reference",
+         med["full_residual"] - med["reference"]),
+        ("the rest: peaks and closures of every result column and seat margins at every "
+         "step, the saved step start of the sub-step fallback, the record's interpolation, "
+         "the contact-law dispatch, counters, the interrupt flag, and whatever else differs in "
+         "the compiled code (numba's bundles of arrays against the C loop's fixed-size structs)",
+         "compliance with neither − reference with `REF_FULL_RESIDUAL`",
+         med["bare"] - med["full_residual"]),
+        ("all of it: the compliance loop's excess over the reference",
+         "compliance − reference",
+         comp - med["reference"]),
+    ]  # fmt: skip
+
+
+def _extra_lines(loops: dict) -> list[str]:
+    rows = extras(loops)
+    total = rows[-1][2]
+    header = ["what the compliance loop does beyond the reference", "measured as",
+              "µs/step (median)", "share of the excess"]  # fmt: skip
+    cells = [[what, how, f"{us:.3f}", f"{100 * us / total:.0f} %" if total > 0 else "–"]
+             for what, how, us in rows]  # fmt: skip
+    return _table(header, cells)
+
+
 def _sweep_lines(sweeps: list[dict]) -> list[str]:
     header = [
         "where",
@@ -668,6 +724,15 @@ def render(m: dict) -> str:
         f"{loops['peak_difference']:.1e} (relative).",
         "",
         *_loop_lines(loops),
+        "",
+        "What the compliance loop does that the reference leaves out, and what each costs, "
+        "measured in the same rounds (each difference of medians; the first two overlap with "
+        "the third, and the items need not add up exactly). Without energy columns and output "
+        "rows the compliance loop runs at "
+        f"{statistics.median(loops['bare_us']) / statistics.median(loops['reference_us']):.2f}× "
+        "the reference per step.",
+        "",
+        *_extra_lines(loops),
         "",
         "## Summary-only sweeps",
         "",

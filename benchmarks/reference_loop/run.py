@@ -25,8 +25,8 @@ the same machine load), and prints
 
 ``--variants`` also builds the reference with the switches that emulate what deckpound's loop
 does in addition (``REF_REFACTOR_CONTACT``, ``REF_FULL_RESIDUAL``) and runs the compliance engine
-without its energy columns (``channels=[]``) and with one output row (``run.output_dt`` = the
-record): what each costs.
+without its energy columns (``channels=[]``), with one output row (``run.output_dt`` = the
+record) and with neither: what each costs.
 
 :func:`measure` does the timed rounds and returns them (:class:`LoopTimes`); ``main`` prints
 them, and ``tools/sweep_benchmark.py`` puts them on docs/sweeps.md beside the sweeps.
@@ -268,7 +268,8 @@ def _engine_line(label: str, results: list, ref_us: float) -> str:
 class LoopTimes:
     """The timed rounds of :func:`measure`: the problem, the reference builds' loop times [s]
     (every timed repeat of every round) and last reports, and the engines' results of every
-    round (``meta["us_per_step"]``, ``meta["loop_time"]``: the step loop alone)."""
+    round (``meta["us_per_step"]``, ``meta["loop_time"]``: the step loop alone); with the
+    variants also without energy columns, with one output row, and with neither (bare)."""
 
     problem: Problem
     ndof: int
@@ -278,6 +279,7 @@ class LoopTimes:
     nonsmooth: list
     compliance_no_energy: list
     compliance_one_row: list
+    compliance_bare: list
     load_before: tuple[float, float, float]
     load_after: tuple[float, float, float]
 
@@ -314,7 +316,7 @@ def measure(
         scene_one_row = scene.replace({"run.output_dt": problem.steps * problem.dt})
         ref_times: dict[str, list[float]] = {k: [] for k in builds}
         reports: dict[str, dict] = {}
-        comp, nons, comp_noenergy, comp_onerow = [], [], [], []
+        comp, nons, comp_noenergy, comp_onerow, comp_bare = [], [], [], [], []
         for _ in range(rounds):
             for label, exe in builds.items():
                 # one loop more than timed: the first touches the input's pages
@@ -325,6 +327,9 @@ def measure(
             if variants:
                 comp_noenergy.append(dp.run(scene, engine="compliance", motion=motion, channels=[]))
                 comp_onerow.append(dp.run(scene_one_row, engine="compliance", motion=motion))
+                comp_bare.append(
+                    dp.run(scene_one_row, engine="compliance", motion=motion, channels=[])
+                )
             if nonsmooth:
                 nons.append(dp.run(scene, engine="nonsmooth", motion=motion))
     return LoopTimes(
@@ -336,6 +341,7 @@ def measure(
         nonsmooth=nons,
         compliance_no_energy=comp_noenergy,
         compliance_one_row=comp_onerow,
+        compliance_bare=comp_bare,
         load_before=load_before,
         load_after=os.getloadavg(),
     )
@@ -404,6 +410,7 @@ def main(argv: list[str] | None = None) -> int:
             print(ref_line(label))
         print(_engine_line("compliance, no energy columns", times.compliance_no_energy, ref_us))
         print(_engine_line("compliance, one output row", times.compliance_one_row, ref_us))
+        print(_engine_line("compliance, neither", times.compliance_bare, ref_us))
     if nons:
         print(_engine_line("nonsmooth (its own step)", nons, ref_us))
         nons_s = statistics.median(r.meta["loop_time"] for r in nons)
