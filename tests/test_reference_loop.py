@@ -1,7 +1,8 @@
 """The lean C reference loop of ``benchmarks/reference_loop`` solves the compliance engine's
 problem (issue 33): on a short record with pounding and yielding bents its peaks agree with the
 engine's, and what makes it lean (factors reused while the contact state and the springs'
-tangents stay, no residual at a converged iterate) does not change its answer. Nothing here is
+tangents stay, no residual at a converged iterate) does not change its answer; its algorithm
+written in numba (``lean_numba.py``) gives the same answer bit for bit. Nothing here is
 timed: ``benchmarks/reference_loop/run.py`` measures the speed.
 """
 
@@ -12,6 +13,7 @@ import shutil
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import deckpound as dp
@@ -64,6 +66,29 @@ def test_reference_peaks_agree_with_the_compliance_engine(short_case):
         assert ref.relative_difference(peaks[column], result.peak(column)) < 5e-3, column
     # the same Newton iterations: the same algorithm and convergence test
     assert report["newton_iterations"] == pytest.approx(result.meta["newton_iterations"], rel=0.02)
+
+
+@needs_gcc
+def test_the_numba_port_gives_the_c_loops_answer_bit_for_bit(short_case):
+    """lean_numba.py is reference.c statement for statement: the same status, Newton
+    iterations, factorisations and peaks (with their times) to the last bit, so its speed
+    against the C loop's is numba's code against gcc's on the same arithmetic."""
+    ref, _, _, inputs, folder, ndof = short_case
+    c_loop = ref.run_reference(ref.compile_reference(folder, ndof), inputs)
+    lean = ref.lean_numba()
+    port = lean.run_lean(lean.load_inputs(inputs), repeats=1)
+    for key in ("status", "steps", "newton_iterations", "factorisations", "max_step_iterations",
+                "peak", "peak_time"):  # fmt: skip
+        assert port[key] == c_loop[key], key
+    assert len(port["loop_seconds"]) == 1
+
+
+def test_the_numba_port_refuses_a_foreign_input_file(tmp_path):
+    lean = _driver().lean_numba()
+    path = tmp_path / "foreign.f64"
+    np.array([1.0, 2.0, 3.0]).astype("<f8").tofile(path)
+    with pytest.raises(ValueError, match="not an input file"):
+        lean.load_inputs(path)
 
 
 @needs_gcc

@@ -153,6 +153,8 @@ def measure_loops(scene, rounds: int, repeats: int) -> dict:
         "nonsmooth_us": [r.meta["us_per_step"] for r in times.nonsmooth],
         "nonsmooth_loop_s": [r.meta["loop_time"] for r in times.nonsmooth],
         "full_residual_us": times.reference_us(FULL_RESIDUAL),
+        "lean_us": times.reference_us(ref.LEAN),
+        "lean_loop_s": times.reference_seconds[ref.LEAN],
         "no_energy_us": [r.meta["us_per_step"] for r in times.compliance_no_energy],
         "one_row_us": [r.meta["us_per_step"] for r in times.compliance_one_row],
         "bare_us": [r.meta["us_per_step"] for r in times.compliance_bare],
@@ -400,10 +402,11 @@ def overhead(sweep: dict) -> float:
 
 
 def loop_figures(loops: dict) -> dict[str, dict[str, float]]:
-    """Per loop (reference, compliance, nonsmooth): µs/step (median, minimum), loop over the
+    """Per loop (reference, its algorithm in numba, compliance, nonsmooth): µs/step (median,
+    minimum), loop over the
     record [s] (median), and the ratios of the medians to the reference's."""
     out = {}
-    for name in ("reference", "compliance", "nonsmooth"):
+    for name in ("reference", "lean", "compliance", "nonsmooth"):
         us, loop = loops[f"{name}_us"], loops[f"{name}_loop_s"]
         out[name] = {
             "us": statistics.median(us),
@@ -441,11 +444,13 @@ def _loop_lines(loops: dict) -> list[str]:
     figs = loop_figures(loops)
     steps = {
         "reference": (loops["dt"], loops["steps"]),
+        "lean": (loops["dt"], loops["steps"]),
         "compliance": (loops["dt"], loops["steps"]),
     }
     steps["nonsmooth"] = (loops["nonsmooth_h"], loops["nonsmooth_steps"])
-    label = {"reference": "reference (C, gcc -O3)", "compliance": "compliance",
-             "nonsmooth": "nonsmooth (its own step)"}  # fmt: skip
+    label = {"reference": "reference (C, gcc -O3)",
+             "lean": "the reference's algorithm in numba (`lean_numba.py`)",
+             "compliance": "compliance", "nonsmooth": "nonsmooth (its own step)"}  # fmt: skip
     header = [
         "step loop",
         "step [s]",
@@ -478,8 +483,10 @@ def extras(loops: dict) -> list[tuple[str, str, float]]:
     """What the compliance loop does beyond the reference: (what, measured as, µs/step) from
     the medians of the stored rounds; the last row is the whole excess over the reference."""
     med = {k: statistics.median(loops[f"{k}_us"]) for k in
-           ("reference", "compliance", "no_energy", "one_row", "bare", "full_residual")}  # fmt: skip
-    comp = med["compliance"]
+           ("reference", "compliance", "no_energy", "one_row", "bare", "full_residual",
+            "lean")}  # fmt: skip
+    comp, ref = med["compliance"], med["reference"]
+    full_residual, compiler = med["full_residual"] - ref, med["lean"] - ref
     return [
         ("energy work terms and the energy columns",
          "compliance − compliance without energy columns (`channels=[]`)",
@@ -494,16 +501,21 @@ def extras(loops: dict) -> list[tuple[str, str, float]]:
          "reference sets only the materials' trial deformations (emulated: its cost in the C "
          "loop)",
          "reference with `REF_FULL_RESIDUAL` − reference",
-         med["full_residual"] - med["reference"]),
+         full_residual),
+        ("numba's code against gcc's for the reference's own algorithm (not an extra: the "
+         "compiler's share)",
+         "the reference's algorithm in numba − reference",
+         compiler),
         ("the rest: peaks and closures of every result column and seat margins at every "
          "step, the saved step start of the sub-step fallback, the record's interpolation, "
-         "the contact-law dispatch, counters, the interrupt flag, and whatever else differs in "
-         "the compiled code (numba's bundles of arrays against the C loop's fixed-size structs)",
-         "compliance with neither − reference with `REF_FULL_RESIDUAL`",
-         med["bare"] - med["full_residual"]),
+         "the contact-law dispatch, counters, the interrupt flag, and the engine's structure "
+         "(bundles of arrays, stages shared by every scene option) against the lean loop's "
+         "flat arrays",
+         "compliance with neither − reference − the two rows above",
+         med["bare"] - ref - full_residual - compiler),
         ("all of it: the compliance loop's excess over the reference",
          "compliance − reference",
-         comp - med["reference"]),
+         comp - ref),
     ]  # fmt: skip
 
 
@@ -717,7 +729,8 @@ def render(m: dict) -> str:
         f"The built-in benchmark ({c['scene']}, its {c['record_duration']:g} s synthetic "
         f"record, {loops['ndof']} DOF), timed by `benchmarks/reference_loop/run.py`'s "
         f"`measure` in {c['settings']['rounds']} interleaved round(s) (each: the reference loop "
-        f"{c['settings']['repeats']}×, each engine once): the step loop alone, medians. The "
+        f"and its variants {c['settings']['repeats']}× each, each engine once): the step loop "
+        "alone, medians. The "
         "reference is the lean C loop of the compliance engine's problem (what it leaves out: "
         "`benchmarks/reference_loop/README.md`); its peak deck "
         "displacements and rotation differ from the compliance engine's by at most "
@@ -726,11 +739,15 @@ def render(m: dict) -> str:
         *_loop_lines(loops),
         "",
         "What the compliance loop does that the reference leaves out, and what each costs, "
-        "measured in the same rounds (each difference of medians; the first two overlap with "
+        "measured in the same rounds (each a difference of medians; the first two overlap with "
         "the third, and the items need not add up exactly). Without energy columns and output "
         "rows the compliance loop runs at "
         f"{statistics.median(loops['bare_us']) / statistics.median(loops['reference_us']):.2f}× "
-        "the reference per step.",
+        "the reference per step. The reference's own algorithm written in numba "
+        "(`benchmarks/reference_loop/lean_numba.py`: the C loop statement for statement, "
+        "flat arrays, the same answer bit for bit, `tests/test_reference_loop.py`) runs at "
+        f"{statistics.median(loops['lean_us']) / statistics.median(loops['reference_us']):.2f}×: "
+        "that part of the excess is the compiler's, the rest is the engine's.",
         "",
         *_extra_lines(loops),
         "",

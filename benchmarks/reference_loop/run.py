@@ -26,7 +26,9 @@ the same machine load), and prints
 ``--variants`` also builds the reference with the switches that emulate what deckpound's loop
 does in addition (``REF_REFACTOR_CONTACT``, ``REF_FULL_RESIDUAL``) and runs the compliance engine
 without its energy columns (``channels=[]``), with one output row (``run.output_dt`` = the
-record) and with neither: what each costs.
+record) and with neither: what each costs; and it runs the reference's own algorithm written
+in numba (``lean_numba.py``, the same answer bit for bit): how far numba's code is from gcc's
+on the lean loop itself.
 
 :func:`measure` does the timed rounds and returns them (:class:`LoopTimes`); ``main`` prints
 them, and ``tools/sweep_benchmark.py`` puts them on docs/sweeps.md beside the sweeps.
@@ -39,6 +41,7 @@ integrator; another scene is refused with the field and the value that it cannot
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import os
 import shutil
@@ -57,6 +60,10 @@ from deckpound.models.plan import DOF_COLUMNS
 
 HERE = Path(__file__).resolve().parent
 SOURCE = HERE / "reference.c"
+#: the reference's algorithm in numba (the same loop, statement for statement)
+LEAN_NUMBA = HERE / "lean_numba.py"
+#: the label of its loop times in LoopTimes.reference_seconds and reports
+LEAN = "reference's algorithm in numba"
 #: the first value of the input file (``REF_FORMAT`` in reference.c)
 REF_FORMAT = 33001.0
 #: the switches of reference.c that emulate what deckpound's loop does in addition
@@ -192,6 +199,15 @@ def input_values(problem: Problem) -> tuple[int, np.ndarray]:
     return nd, values
 
 
+def lean_numba():
+    """lean_numba.py as a module (the benchmarks are not installed)."""
+    spec = importlib.util.spec_from_file_location("reference_loop_lean_numba", LEAN_NUMBA)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # its dataclass resolves the module by name
+    spec.loader.exec_module(module)
+    return module
+
+
 def write_inputs(problem: Problem, path: Path) -> int:
     """Write the input file of ``problem`` to ``path``; returns the number of DOF."""
     nd, values = input_values(problem)
@@ -267,7 +283,8 @@ def _engine_line(label: str, results: list, ref_us: float) -> str:
 @dataclass
 class LoopTimes:
     """The timed rounds of :func:`measure`: the problem, the reference builds' loop times [s]
-    (every timed repeat of every round) and last reports, and the engines' results of every
+    (every timed repeat of every round) and last reports (also of :data:`LEAN`, the
+    reference's algorithm in numba, with the variants), and the engines' results of every
     round (``meta["us_per_step"]``, ``meta["loop_time"]``: the step loop alone); with the
     variants also without energy columns, with one output row, and with neither (bare)."""
 
@@ -313,8 +330,12 @@ def measure(
         if variants:
             for label, defines in VARIANTS.items():
                 builds[label] = compile_reference(folder, nd, defines)
+            lean = lean_numba()
+            lean_model = lean.load_inputs(inputs)
         scene_one_row = scene.replace({"run.output_dt": problem.steps * problem.dt})
-        ref_times: dict[str, list[float]] = {k: [] for k in builds}
+        ref_times: dict[str, list[float]] = {k: [] for k in builds} | (
+            {LEAN: []} if variants else {}
+        )
         reports: dict[str, dict] = {}
         comp, nons, comp_noenergy, comp_onerow, comp_bare = [], [], [], [], []
         for _ in range(rounds):
@@ -323,6 +344,10 @@ def measure(
                 rep = run_reference(exe, inputs, repeats + 1)
                 ref_times[label] += rep["loop_seconds"][1:]
                 reports[label] = rep
+            if variants:  # its first loop compiles (once) and touches the pages: not timed
+                rep = lean.run_lean(lean_model, repeats)
+                ref_times[LEAN] += rep["loop_seconds"]
+                reports[LEAN] = rep
             comp.append(dp.run(scene, engine="compliance", motion=motion))
             if variants:
                 comp_noenergy.append(dp.run(scene, engine="compliance", motion=motion, channels=[]))
@@ -408,6 +433,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.variants:
         for label in VARIANTS:
             print(ref_line(label))
+        print(ref_line(LEAN))
         print(_engine_line("compliance, no energy columns", times.compliance_no_energy, ref_us))
         print(_engine_line("compliance, one output row", times.compliance_one_row, ref_us))
         print(_engine_line("compliance, neither", times.compliance_bare, ref_us))
