@@ -367,8 +367,8 @@ def _negative_increment(P, S, h, d_strain):
 
 @jit
 def _hyst_set_trial(P, S, h, strain):
-    """HystereticMaterial::setTrialStrain (3.7.1), as reference.c's hyst_set_trial (a call,
-    as there)."""
+    """HystereticMaterial::setTrialStrain (3.7.1), as reference.c's hyst_set_trial (inlined
+    into the loop, as every helper of the material here)."""
     if S[h, TLOAD] == 0.0 and strain == 0.0:
         return
     S[h, TROT_MAX] = S[h, CROT_MAX]
@@ -440,9 +440,13 @@ def lean_loop(ndof: int):
 _LOOPS: dict = {}
 
 
-def _make_loop(NDOF: int):  # the C file's name: one loop, as there
+def _make_loop(NDOF: int):  # NDOF: reference.c's name of the compile-time DOF count
+    """The compiled loop for NDOF DOF: reference.c's ``residual`` and ``run``."""
+
     @numba.njit(_nrt=False, inline="always")
     def residual(m, hs, ugn, u, v, a, R, pg, kt, closed, f):
+        """R = F_c − F − M ü at the trial (u, u̇) with the step's support forces pg; the
+        springs' tangents kt and the closed corners (the factorisation key). f: scratch."""
         (K, C, mass, hdof, hcoef, hnnz, hchan, hchan_coef, hparams, g0, kc, wc) = m
         for i in range(NDOF):
             s = -pg[i]
@@ -475,6 +479,9 @@ def _make_loop(NDOF: int):  # the C file's name: one loop, as there
     @numba.njit(_nrt=False, nogil=True)
     def run(model, work, hs, ug, vg, Kg, Cg, nsteps, maxit, dt, tol, gamma, beta, u0, v0,
             flush, peak, peak_time):  # fmt: skip
+        """reference.c's ``run``: the whole record from the initial state; fills peak and
+        peak_time (|u_j| over every step) and returns (status, failed step, Newton
+        iterations, factorisations, most iterations of a step)."""
         (K, C, mass, hdof, hcoef, hnnz, hchan, hchan_coef, hparams, g0, kc, wc) = model
         (u, v, a, R, du, pg, f, x, inv_diag, kt, kt_fact, closed, closed_fact, LU, Kbase,
          perm) = work  # fmt: skip
