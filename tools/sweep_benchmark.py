@@ -127,15 +127,10 @@ def reference_loop():
     return module
 
 
-#: the reference build that forms the whole residual at the converged iterate, as the
-#: compliance loop does (benchmarks/reference_loop/run.py's VARIANTS)
-FULL_RESIDUAL = "reference + residual at the converged iterate"
-
-
 def measure_loops(scene, rounds: int, repeats: int) -> dict:
     """µs/step and loop times [s] of the reference, compliance and nonsmooth loops (every
-    timed round), of the extras' variants (:data:`EXTRAS`), and how far the reference's deck
-    peaks are from the compliance engine's."""
+    timed round), of the variants that :func:`extras` compares, and how far the reference's
+    deck peaks are from the compliance engine's."""
     ref = reference_loop()
     times = ref.measure(scene, rounds=rounds, repeats=repeats, variants=True)
     steps = times.problem.steps
@@ -152,7 +147,7 @@ def measure_loops(scene, rounds: int, repeats: int) -> dict:
         "compliance_loop_s": [r.meta["loop_time"] for r in times.compliance],
         "nonsmooth_us": [r.meta["us_per_step"] for r in times.nonsmooth],
         "nonsmooth_loop_s": [r.meta["loop_time"] for r in times.nonsmooth],
-        "full_residual_us": times.reference_us(FULL_RESIDUAL),
+        "full_residual_us": times.reference_us(ref.FULL_RESIDUAL),
         "lean_us": times.reference_us(ref.LEAN),
         "lean_loop_s": times.reference_seconds[ref.LEAN],
         "no_energy_us": [r.meta["us_per_step"] for r in times.compliance_no_energy],
@@ -403,8 +398,8 @@ def overhead(sweep: dict) -> float:
 
 def loop_figures(loops: dict) -> dict[str, dict[str, float]]:
     """Per loop (reference, its algorithm in numba, compliance, nonsmooth): µs/step (median,
-    minimum), loop over the
-    record [s] (median), and the ratios of the medians to the reference's."""
+    minimum), loop over the record [s] (median), and the ratios of the medians to the
+    reference's."""
     out = {}
     for name in ("reference", "lean", "compliance", "nonsmooth"):
         us, loop = loops[f"{name}_us"], loops[f"{name}_loop_s"]

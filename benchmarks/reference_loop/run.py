@@ -64,12 +64,15 @@ SOURCE = HERE / "reference.c"
 LEAN_NUMBA = HERE / "lean_numba.py"
 #: the label of its loop times in LoopTimes.reference_seconds and reports
 LEAN = "reference's algorithm in numba"
+#: the label of the build that forms the whole residual at the converged iterate, as the
+#: compliance loop does (a key of VARIANTS)
+FULL_RESIDUAL = "reference + residual at the converged iterate"
 #: the first value of the input file (``REF_FORMAT`` in reference.c)
 REF_FORMAT = 33001.0
 #: the switches of reference.c that emulate what deckpound's loop does in addition
 VARIANTS = {
     "reference + refactor while in contact": ("REF_REFACTOR_CONTACT",),
-    "reference + residual at the converged iterate": ("REF_FULL_RESIDUAL",),
+    FULL_RESIDUAL: ("REF_FULL_RESIDUAL",),
     "reference + both": ("REF_REFACTOR_CONTACT", "REF_FULL_RESIDUAL"),
 }
 #: the peaks compared (the deck's absolute displacements and rotation)
