@@ -27,6 +27,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from deckpound.compare._heap import keep_freed_memory
 from deckpound.compare.engines import get_engine, run_engine
 from deckpound.compare.pool import (
     Interrupted,
@@ -362,5 +363,6 @@ def _dask_worker_setup() -> bool:
     from deckpound.analytic.kernel_load import install
 
     one_blas_thread()  # several workers share the machine's cores (see the function)
+    keep_freed_memory()  # its tasks run in a thread, whose heap returned pages at every case
     load_compiled_filter()  # a long-lived worker: scipy.signal now, not mid-sweep
     return install()

@@ -31,6 +31,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from threadpoolctl import threadpool_limits
 
+from deckpound.compare._heap import keep_freed_memory
 from deckpound.compare._workers import die_with_parent
 from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 
@@ -86,11 +87,12 @@ def gc_frozen() -> Iterator[None]:
 
 
 def worker_init(parent_pid: int) -> None:
-    """Pool initializer: die with the parent, leave SIGINT to it, one BLAS thread, load kernels
-    fast."""
+    """Pool initializer: die with the parent, leave SIGINT to it, one BLAS thread, freed memory
+    kept for the next case (:mod:`._heap`), load kernels fast."""
 
     die_with_parent(parent_pid)
     one_blas_thread()
+    keep_freed_memory()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     # the CLI's SIGTERM handler (forked with the parent) is the parent's: a worker told to
     # terminate does so at once
