@@ -10,13 +10,7 @@ Repository tooling (not installed)::
 
 It measures, one after the other in one process (so the ratios share the machine's state):
 
-1. µs/step of the C reference loop, of the compliance engine and of the nonsmooth engine on
-   the built-in benchmark (``benchmarks/reference_loop/run.py``'s :func:`measure`: interleaved
-   rounds, medians) and their ratios, per step and over the record; and what the compliance
-   loop does beyond the reference, each with its cost: the engine without its energy columns,
-   with one output row and with neither, and the reference with the whole residual at the
-   converged iterate (its ``REF_FULL_RESIDUAL`` build);
-2. summary-only sweeps (:func:`deckpound.compare.studies.variability.sweep_rows`: one summary
+1. summary-only sweeps (:func:`deckpound.compare.studies.variability.sweep_rows`: one summary
    row per case, no histories, each sweep into an empty row cache) of N seeds of the 20 s
    synthetic record with the compliance engine: in this process (1 worker), on the local pool
    of 2 workers and on a local Dask cluster of two single-threaded worker processes; and an
@@ -24,7 +18,16 @@ It measures, one after the other in one process (so the ratios share the machine
    one factor to levels of Sa(T₁): reading, processing and scaling records is in every case).
    Before the clock starts the kernels are loaded and the workers have run a few cases of
    other seeds or another pair (the steady rate of a sweep). Overhead over the step loops:
-   workers × wall / Σ loop − 1;
+   workers × wall / Σ loop − 1. The sweeps come first, while this process has run nothing
+   but the warm-up run, as the process of a ``deckpound`` command: the loop measurement
+   compiles the lean numba port in this process, and an in-process sweep measured after it
+   ran slower than the same sweep before it;
+2. µs/step of the C reference loop, of the compliance engine and of the nonsmooth engine on
+   the built-in benchmark (``benchmarks/reference_loop/run.py``'s :func:`measure`: interleaved
+   rounds, medians) and their ratios, per step and over the record; and what the compliance
+   loop does beyond the reference, each with its cost: the engine without its energy columns,
+   with one output row and with neither, and the reference with the whole residual at the
+   converged iterate (its ``REF_FULL_RESIDUAL`` build);
 3. a sweep of M cases on 2 local workers in a fresh process, end to end (the cases built, the
    pool started, the sweep): its wall time, the peak resident memory of that process
    (``VmHWM``: its own address space, not ``ru_maxrss``, which a fresh process inherits) and of its largest worker (``RUSAGE_CHILDREN``, read after the pool's
@@ -335,8 +338,6 @@ def measure(settings: dict, quick: bool, say: Callable[[str], None] = print) -> 
     started = time.perf_counter()
     run_engine(SWEEP_ENGINE, scene)  # the kernels loaded (or compiled) before any clock
     load_compiled_filter()  # the sweeps' scipy.signal now: the pools fork with it
-    say("step loops against the reference loop")
-    loops = measure_loops(scene, settings["rounds"], settings["repeats"])
     sweeps = []
     for workers in (1, WORKERS):
         say(f"summary-only sweep of {settings['cases']} cases, {workers} local worker(s)")
@@ -346,6 +347,9 @@ def measure(settings: dict, quick: bool, say: Callable[[str], None] = print) -> 
     pairs, levels = settings["ida_pairs"], settings["ida_levels"]
     say(f"IDA of {pairs} AT2 pairs x {levels} levels, {WORKERS} local workers")
     sweeps.append(ida_sweep(scene, pairs, levels))
+    # after the sweeps: it compiles the lean numba port in this process (module docstring)
+    say("step loops against the reference loop")
+    loops = measure_loops(scene, settings["rounds"], settings["repeats"])
     say(f"a sweep of {settings['memory_cases']} cases in a fresh process (memory)")
     big = memory_sweep(settings["memory_cases"])
     say("peak memory against output length")
