@@ -43,10 +43,16 @@ def _same_bits(a, b) -> bool:
 def test_a_run_from_the_kept_model_gives_the_bits_of_a_fresh_pack(scene, monkeypatch):
     first = scene.replace({"excitation.seed": 11})
     second = scene.replace({"excitation.seed": 12})
-    run_compliance(first)  # packs the model and keeps it
+    packed = []
+    real = pack.system.pack_system
+    monkeypatch.setattr(pack.system, "pack_system", lambda *a: packed.append(1) or real(*a))
+    run_compliance(first)  # packs the model (unless an earlier test did) and keeps it
+    packed.clear()
     kept = run_compliance(second)
+    assert packed == []
     monkeypatch.setattr(pack, "MODELS_KEPT", 0)  # none kept: every run packs afresh
     fresh = run_compliance(second)
+    assert packed == [1]
     assert kept.meta["status"] == fresh.meta["status"] == "success"
     assert kept.meta["gap_closures"] == fresh.meta["gap_closures"] > 0
     assert set(kept.columns) == set(fresh.columns)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from _compliance_helpers import base_scene, with_contact, with_run
 
+from deckpound.analytic.compliance import pack as compliance_pack
 from deckpound.analytic.kernels import contact_law_checks as clc
 from deckpound.analytic.kernels import contact_laws as cl
 from deckpound.compare.engines import get_engine, run_engine
@@ -93,6 +94,7 @@ def test_a_run_with_an_unknown_code_is_refused(monkeypatch):
         return cp
 
     monkeypatch.setattr(cl, "pack_contact", broken)
+    monkeypatch.setattr(compliance_pack, "MODELS_KEPT", 0)  # packed now, not kept from before
     with pytest.raises(NotImplementedError, match="code 99 has no branch"):
         run_engine("compliance", with_run(base_scene(), duration=0.05))
 

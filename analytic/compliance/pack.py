@@ -73,16 +73,18 @@ def packed_model(plan: Plan, scene: Scene, *, kv_clip: bool = False):
     model, packed at its first run in this process (the :data:`MODELS_KEPT` most recent
     models are kept) and copied for every run: fresh, writable arrays with the same bits."""
     key = model_key(plan, scene, kv_clip)
+    while len(_KEPT) > MODELS_KEPT:  # the bound, also where it was lowered since
+        _KEPT.popitem(last=False)
     try:
         kept = _KEPT.get(key)
     except TypeError:  # a field that cannot be hashed: packed afresh, not kept
         key, kept = None, None
     if kept is None:
         kept = _pack_model(plan, scene, kv_clip)
-        if key is not None:
+        if key is not None and MODELS_KEPT > 0:
             _KEPT[key] = kept
-        while len(_KEPT) > MODELS_KEPT:
-            _KEPT.popitem(last=False)
+            if len(_KEPT) > MODELS_KEPT:
+                _KEPT.popitem(last=False)
     else:
         _KEPT.move_to_end(key)
     ps, cp, corners = kept
