@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import subprocess
 import time
+from pathlib import Path
+
+from deckpound.compare.row_log import LOG_NAME, RowLog
 
 
 def children(pid: int) -> list[int]:
@@ -52,11 +55,16 @@ def start_in_own_group(argv: list[str], cwd) -> subprocess.Popen:
 def wait_for_rows(
     proc: subprocess.Popen, rows, at_least: int = 3, timeout: float = 300
 ) -> list[int]:
-    """Wait until a sweep has cached ``at_least`` row files (``*.json`` below ``rows``) or ended;
-    the PIDs of its workers at that moment."""
+    """Wait until a sweep has cached ``at_least`` rows (lines of the row logs below ``rows``)
+    or ended; the PIDs of its workers at that moment."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline and proc.poll() is None:
-        if rows.is_dir() and len(list(rows.rglob("*.json"))) >= at_least:
+        if rows.is_dir() and cached_rows(rows) >= at_least:
             break
         time.sleep(0.2)
     return children(proc.pid)
+
+
+def cached_rows(rows) -> int:
+    """The rows cached below the folder ``rows``: the whole lines of its row logs."""
+    return sum(len(RowLog(log.parent).read()) for log in Path(rows).rglob(LOG_NAME))

@@ -38,6 +38,7 @@ import pandas as pd
 from deckpound.compare.cases import case_key, interrupted, map_parallel, run_case
 from deckpound.compare.progress import Progress
 from deckpound.compare.report.outputs import write_csv
+from deckpound.compare.row_log import RowLog
 from deckpound.models.errors import SceneError
 from deckpound.models.file_io import atomic_write_text, ensure_folder
 from deckpound.models.motion import RecordWarning
@@ -175,14 +176,6 @@ def row_key(engine: str, scene: Scene) -> str:
 FINISHED = ("success", "doubtful", "unseated")
 
 
-def _read_row(path: Path) -> dict | None:
-    try:
-        row = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None  # absent or damaged: recomputed
-    return row if isinstance(row, dict) and row.get("status") in FINISHED else None
-
-
 def sweep_rows(
     scenes: list[Scene],
     engine: str,
@@ -194,16 +187,19 @@ def sweep_rows(
     progress: bool = True,
 ) -> tuple[dict[int, dict], int]:
     """Run ``engine`` on every scene for its summary row (:func:`case_row`, in the workers of
-    :mod:`.pool` or a Dask cluster: no histories travel), one cached JSON row per case in
-    ``rows_dir`` (finished cases are read back, not recomputed: Ctrl-C loses only the cases
-    running). Returns ({index: row}, number of cases computed now)."""
+    :mod:`.pool` or a Dask cluster: no histories travel), the row of every finished case
+    appended to the row log of ``rows_dir`` (:mod:`deckpound.compare.row_log`; finished cases
+    are read back, not recomputed: Ctrl-C loses only the cases running). Returns ({index:
+    row}, number of cases computed now)."""
 
     keys = [row_key(engine, sc) for sc in scenes]
-    rows: dict[int, dict] = {}
-    for i, k in enumerate(keys):
-        cached = _read_row(rows_dir / f"{k}.json")
-        if cached is not None:
-            rows[i] = cached
+    log = RowLog(rows_dir)
+    cached = log.read()
+    rows: dict[int, dict] = {
+        i: cached[k]
+        for i, k in enumerate(keys)
+        if k in cached and cached[k].get("status") in FINISHED
+    }
     todo = [i for i in range(len(scenes)) if i not in rows]
     bar = Progress(len(scenes), title, progress)
     bar.skip(len(rows))  # cached rows: done, not in the rate
@@ -211,17 +207,15 @@ def sweep_rows(
     def done(i: int, row: dict) -> None:
         rows[i] = row
         if row.get("status") in FINISHED:
-            # not durable: a row a power cut leaves unreadable is computed again (_read_row)
-            atomic_write_text(
-                rows_dir / f"{keys[i]}.json", json.dumps(row), field="--cache", durable=False
-            )
+            log.append(keys[i], row)
         bar.advance()
 
-    try:
-        map_parallel(todo, lambda i: (engine, scenes[i]), case_row, done, workers, scheduler)
-    except KeyboardInterrupt as err:
-        bar.close()
-        raise interrupted(err, title, len(rows), len(scenes), rows_dir) from None
+    with log:
+        try:
+            map_parallel(todo, lambda i: (engine, scenes[i]), case_row, done, workers, scheduler)
+        except KeyboardInterrupt as err:
+            bar.close()
+            raise interrupted(err, title, len(rows), len(scenes), rows_dir) from None
     bar.close()
     return rows, len(todo)
 
