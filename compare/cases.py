@@ -250,11 +250,18 @@ def map_parallel(
     Workers take the items in batches (:func:`batch_size`): a task is one round trip however
     many cases it carries, and a case of a sweep takes tens of milliseconds, which a task per
     case would spend again on scheduling and transfer. ``on_done`` still sees every item.
+    In this process and as a Dask client (whose messages, with a local cluster's scheduler's,
+    and the rows coming back otherwise set off full collections of every object this process
+    holds, on the cores the workers need) the map runs with the process's older objects out
+    of the garbage collector's way (:func:`.pool.gc_frozen`), as every worker's batch does.
+    Not so the local pool's parent: its workers are forked from it, and forked from a frozen
+    parent the pool ran slower on the sweep benchmark (``tools/sweep_benchmark.py``).
     """
     if not items:
         return
     if scheduler:
-        _map_dask(items, args_of, func, on_done, check_scheduler_address(scheduler))
+        with gc_frozen():
+            _map_dask(items, args_of, func, on_done, check_scheduler_address(scheduler))
         return
     n = workers if workers is not None else (os.cpu_count() or 1)
     if n <= 1 or len(items) == 1:

@@ -16,7 +16,7 @@ from _process_helpers import cached_rows, running, start_in_own_group, wait_for_
 
 import deckpound as dp
 from deckpound import cli
-from deckpound.compare import pool
+from deckpound.compare import cases, pool
 from deckpound.compare.cases import MAX_BATCH, batch_size, map_parallel, task_batches
 from deckpound.models.file_io import is_temporary
 from deckpound.models.result import read_table
@@ -54,22 +54,33 @@ def _frozen_objects(_x):
     return gc.get_freeze_count()
 
 
-@pytest.mark.parametrize("workers", [1, 2])
-def test_cases_run_with_the_older_objects_out_of_the_collectors_way(workers):
-    """A sweep's cases run inside pool.gc_frozen, in this process and in the workers' batches:
-    the full collections a sweep's allocations trigger do not visit the objects that existed
-    before it; after it, nothing is left frozen."""
+@pytest.mark.parametrize("where", ["this process", "pool", "dask"])
+def test_cases_run_with_the_older_objects_out_of_the_collectors_way(where, monkeypatch):
+    """A sweep's cases run inside pool.gc_frozen, in this process and in the workers' batches,
+    and a Dask client (with, here, its scheduler) stays frozen while the map runs: the full
+    collections a sweep's allocations trigger do not visit the objects that existed before
+    it; after it, nothing is left frozen. (The local pool's parent is not frozen: see
+    map_parallel.)"""
     assert gc.get_freeze_count() == 0
-    inside = []
-    map_parallel(
-        list(range(4)),
-        lambda i: (i,),
-        _frozen_objects,
-        lambda it, v: inside.append(v),
-        workers,
-        None,
-    )
+    inside, parent = [], []
+
+    def done(it, v):
+        inside.append(v)
+        parent.append(gc.get_freeze_count())
+
+    args = (list(range(4)), lambda i: (i,), _frozen_objects, done)
+    if where == "dask":
+        distributed = pytest.importorskip("dask.distributed")
+        # the worker runs in this process: its heap and kernels are the test process's own
+        monkeypatch.setattr(cases, "keep_freed_memory", lambda: False)
+        with distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster:
+            map_parallel(*args, None, cluster.scheduler_address)
+    else:
+        map_parallel(*args, 1 if where == "this process" else 2, None)
     assert len(inside) == 4 and min(inside) > 0
+    assert min(parent) > 0 if where != "pool" else max(parent) == 0
     assert gc.get_freeze_count() == 0
 
 
