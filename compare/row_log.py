@@ -4,8 +4,9 @@ A sweep (:func:`deckpound.compare.studies.variability.sweep_rows`: the variabili
 multiple-stripe analysis) keeps the row of every finished case, so that a sweep stopped by
 Ctrl-C, a kill or a power cut resumes with the cases it had not finished. The rows of one cache
 folder are the lines of its file :data:`LOG_NAME`, each ``{"key": case key, "row": {...}}``,
-appended with one ``write`` each to a file opened with ``O_APPEND`` (whole lines also when two
-processes sweep into one folder). A file per row cost a file creation and a rename per case,
+appended with one ``write`` each to a file opened with ``O_APPEND``
+(:func:`deckpound.models.file_io.open_append`: whole lines also when two processes sweep into
+one folder, never through a link). A file per row cost a file creation and a rename per case,
 more than the rest of a case's bookkeeping; a 10,000-case sweep left 10,000 files.
 
 Reading takes every line that is a whole record; a line that is not (the last one a kill cut
@@ -21,7 +22,7 @@ import os
 from pathlib import Path
 
 from deckpound.models.errors import SceneError
-from deckpound.models.file_io import ensure_folder
+from deckpound.models.file_io import open_append, write_all
 
 __all__ = ["LOG_NAME", "RowLog"]
 
@@ -69,11 +70,8 @@ class RowLog:
         start = b""
         if self._fd is None:
             start = b"" if self._ends_whole() else b"\n"  # a cut line stays apart
-            self._fd = self._open()
-        line = start + (json.dumps({"key": key, "row": row}) + "\n").encode("utf-8")
-        view = memoryview(line)
-        while view:  # a regular file takes it in one write; a short write is finished
-            view = view[os.write(self._fd, view) :]
+            self._fd = open_append(self.path, self.field)
+        write_all(self._fd, start + (json.dumps({"key": key, "row": row}) + "\n").encode("utf-8"))
 
     def _ends_whole(self) -> bool:
         """Whether the log is absent, empty or ends with a newline."""
@@ -84,17 +82,7 @@ class RowLog:
                 fh.seek(-1, os.SEEK_END)
                 return fh.read(1) == b"\n"
         except OSError:
-            return True  # absent (or unreadable: _open says why)
-
-    def _open(self) -> int:
-        ensure_folder(self.folder, self.field)
-        try:
-            # never through a link (as every deckpound write), appended whole lines
-            return os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o666)
-        except OSError as err:
-            raise SceneError(
-                self.field, f"cannot write {str(self.path)!r}: {err.strerror or err}"
-            ) from None
+            return True  # absent (or unreadable: open_append says why)
 
     def close(self) -> None:
         if self._fd is not None:

@@ -7,7 +7,8 @@ Every file a deckpound command writes goes through this module, for three promis
   :func:`atomic_path` for libraries that want a file name, e.g. matplotlib, pandas, meshio).
   A reader sees the old file or the new one, never half of one; an error, a full disk or
   Ctrl-C removes the temporary file. :func:`atomic_write_files` writes a *set* of files all
-  or nothing (every temporary file first, then the renames, which need no space).
+  or nothing (every temporary file first, then the renames, which need no space). The one
+  exception is a log read back line by line (:func:`open_append`): whole lines appended.
 * **Never through a link.** A target file or an output folder that is a symbolic link is
   refused (:class:`~deckpound.models.errors.SceneError`, exit status 2): writing through it
   would overwrite whatever the link points to. Folders *above* the named output are the
@@ -169,9 +170,7 @@ def _write_stream(path: Path, data: bytes) -> None:
     """Write into an existing character device or pipe (no temporary file, no rename)."""
     fd = os.open(path, os.O_WRONLY | getattr(os, "O_CLOEXEC", 0))
     try:
-        view = memoryview(data)
-        while view:
-            view = view[os.write(fd, view) :]
+        write_all(fd, data)
     except OSError as err:
         raise OSError(err.errno, err.strerror, str(path)) from None
     finally:
@@ -207,25 +206,47 @@ def ensure_folder(path: str | Path, field: str = "--output") -> Path:
     return path
 
 
-def _write_fd(fd: int, data: bytes, durable: bool = True) -> None:
+def write_all(fd: int, data: bytes) -> None:
+    """Write all of ``data`` to the open file ``fd`` (a short write is continued)."""
     view = memoryview(data)
     while view:
-        n = os.write(fd, view)
-        view = view[n:]
-    if durable:
-        os.fsync(fd)
+        view = view[os.write(fd, view) :]
 
 
-def _write_temporary(path: Path, data: bytes, durable: bool = True) -> Path:
+def open_append(path: str | Path, field: str = "--output") -> int:
+    """``path`` opened for appending, its folder made: each ``write`` lands whole at the end of
+    the file (``O_APPEND``), also with several writers. Created with mode 0o666 less the umask;
+    a link (also one made after the check: ``O_NOFOLLOW``), a folder, a device or a pipe in its
+    place is refused (SceneError naming ``field``). For logs read back line by line (a sweep's
+    rows, :mod:`deckpound.compare.row_log`); every other file is written atomically."""
+    path = Path(path)
+    if _kind(path, field) == "stream":
+        raise SceneError(field, f"{str(path)!r} is a device or a pipe, not a file to append to")
+    ensure_folder(path.parent, field)
+    flags = os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW | getattr(os, "O_CLOEXEC", 0)
+    try:
+        return os.open(path, flags, 0o666)
+    except OSError as err:
+        if err.errno == errno.ELOOP:
+            _kind(path, field)  # a link made since the check: refused as such
+        raise OSError(err.errno, err.strerror, str(path)) from None
+
+
+def _write_fd(fd: int, data: bytes) -> None:
+    write_all(fd, data)
+    os.fsync(fd)
+
+
+def _write_temporary(path: Path, data: bytes) -> Path:
     """``data`` in a new temporary file beside ``path`` (mode 0o666 less the umask), flushed
-    to the disk unless not ``durable``."""
+    to the disk."""
     tmp = _tmp_name(path)
     try:
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
     except OSError as err:  # name the file the user asked for, not the temporary one
         raise OSError(err.errno, err.strerror, str(path)) from None
     try:
-        _write_fd(fd, data, durable=durable)
+        _write_fd(fd, data)
     except BaseException as err:
         os.close(fd)
         _unlink_quietly(tmp)
@@ -241,22 +262,15 @@ def _unlink_quietly(path: Path) -> None:
         os.unlink(path)
 
 
-def atomic_write_bytes(
-    path: str | Path, data: bytes, *, field: str = "--output", durable: bool = True
-) -> Path:
-    """Write ``data`` to ``path`` atomically (temporary file, fsync, rename).
-
-    ``durable=False`` leaves out the fsync: the file is still whole or absent for every reader
-    (the rename is atomic), but a power cut may leave it empty — for a cache whose reader
-    recomputes an unreadable entry (a sweep's rows: one fsync per case cost more than the
-    rest of its bookkeeping)."""
+def atomic_write_bytes(path: str | Path, data: bytes, *, field: str = "--output") -> Path:
+    """Write ``data`` to ``path`` atomically (temporary file, fsync, rename)."""
     path = Path(path)
     if _kind(path, field) == "stream":
         _write_stream(path, data)
         return path
     check_parent(path, field)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = _write_temporary(path, data, durable)
+    tmp = _write_temporary(path, data)
     try:
         os.replace(tmp, path)
     except BaseException:
@@ -265,11 +279,9 @@ def atomic_write_bytes(
     return path
 
 
-def atomic_write_text(
-    path: str | Path, text: str, *, field: str = "--output", durable: bool = True
-) -> Path:
+def atomic_write_text(path: str | Path, text: str, *, field: str = "--output") -> Path:
     """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_write_bytes`)."""
-    return atomic_write_bytes(path, text.encode("utf-8"), field=field, durable=durable)
+    return atomic_write_bytes(path, text.encode("utf-8"), field=field)
 
 
 def atomic_write_files(files: dict[Path, str | bytes], *, field: str = "--output") -> list[Path]:

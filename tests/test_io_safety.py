@@ -430,14 +430,11 @@ def test_an_export_to_a_device_or_pipe_is_refused(tmp_path, capsys):
     assert not os.path.exists("/dev/null_data") and not (tmp_path / "pipe_data").exists()
 
 
-def test_a_cache_entry_is_written_whole_without_a_flush(tmp_path, monkeypatch):
-    """A sweep's row cache writes one small file per case: atomically (renamed into place,
-    never torn) but without the fsync, which cost more than the rest of a case's bookkeeping;
-    its reader recomputes an entry a power cut left unreadable. Results keep the flush."""
+def test_an_atomic_write_is_flushed_to_the_disk(tmp_path, monkeypatch):
+    """A result file is flushed (fsync) before its rename; only a sweep's row log, read back
+    line by line, is appended without a flush (deckpound.compare.row_log)."""
     flushed = []
     real_fsync = os.fsync
     monkeypatch.setattr(os, "fsync", lambda fd: flushed.append(fd) or real_fsync(fd))
-    row = atomic_write_text(tmp_path / "row.json", '{"status": "success"}', durable=False)
-    assert row.read_text() == '{"status": "success"}' and flushed == [] and not _temps(tmp_path)
-    atomic_write_text(tmp_path / "result.json", "{}")
-    assert len(flushed) == 1
+    result = atomic_write_text(tmp_path / "result.json", "{}")
+    assert result.read_text() == "{}" and len(flushed) == 1 and not _temps(tmp_path)
