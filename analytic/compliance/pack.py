@@ -73,18 +73,16 @@ def packed_model(plan: Plan, scene: Scene, *, kv_clip: bool = False):
     model, packed at its first run in this process (the :data:`MODELS_KEPT` most recent
     models are kept) and copied for every run: fresh, writable arrays with the same bits."""
     key = model_key(plan, scene, kv_clip)
-    while len(_KEPT) > MODELS_KEPT:  # the bound, also where it was lowered since
-        _KEPT.popitem(last=False)
+    _keep_at_most(MODELS_KEPT)  # the bound, also where it was lowered since the last run
     try:
         kept = _KEPT.get(key)
     except TypeError:  # a field that cannot be hashed: packed afresh, not kept
         key, kept = None, None
     if kept is None:
         kept = _pack_model(plan, scene, kv_clip)
-        if key is not None and MODELS_KEPT > 0:
+        if key is not None:
             _KEPT[key] = kept
-            if len(_KEPT) > MODELS_KEPT:
-                _KEPT.popitem(last=False)
+            _keep_at_most(MODELS_KEPT)
     else:
         _KEPT.move_to_end(key)
     ps, cp, corners = kept
@@ -93,6 +91,11 @@ def packed_model(plan: Plan, scene: Scene, *, kv_clip: bool = False):
     )
     ps = dataclasses.replace(ps, arrays=arrays, C=ps.C.copy(), K0=ps.K0.copy())
     return ps, cp.copy(), corners.copy()
+
+
+def _keep_at_most(n: int) -> None:
+    while len(_KEPT) > n:  # the least recently used first
+        _KEPT.popitem(last=False)
 
 
 def _pack_model(plan: Plan, scene: Scene, kv_clip: bool):
