@@ -31,7 +31,7 @@ from deckpound.analytic.kernels.contact_laws import (
 from deckpound.analytic.kernels.kinematics import (
     contact_kinematics,
     gap_hessian,
-    linear_gap,
+    linear_gap_and_rate,
     linear_gap_rate,
 )
 
@@ -61,8 +61,7 @@ def _linear_gaps(u, v, corners, cw):
     (kinematics.contact_kinematics), the corners of ``cw.corners``."""
     g, gd = cw.g, cw.gd
     for c in range(len(cw.corners)):
-        g[c] = linear_gap(corners[c], u)
-        gd[c] = linear_gap_rate(corners[c], v)
+        g[c], gd[c] = linear_gap_and_rate(corners[c], u, v)
 
 
 @kernel(inline="always")
@@ -189,9 +188,8 @@ def eval_contacts(contact, cs, cw, u, v, un, dofs):
         geom = contact.corners
         g, gd, lam, lt, evaluated, fc = cw.g, cw.gd, cw.lam, cw.lt, cw.evaluated, cw.fc
         for c in range(len(cw.corners)):
-            gc = linear_gap(geom[c], u)
+            gc, gd[c] = linear_gap_and_rate(geom[c], u, v)
             g[c] = gc
-            gd[c] = linear_gap_rate(geom[c], v)
             lam[c] = 0.0
             lt[c] = 0.0
             evaluated[c] = gc <= 0.0

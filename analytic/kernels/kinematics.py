@@ -47,6 +47,7 @@ __all__ = [
     "contact_kinematics",
     "gap_hessian",
     "linear_gap",
+    "linear_gap_and_rate",
     "linear_gap_rate",
     "pack_corners",
 ]
@@ -102,39 +103,48 @@ def pack_corners(plan: Plan) -> np.ndarray:
 
 
 @kernel(inline="always")
+def _corner_dofs(k):
+    """The DOF indices of row k of the corner table: (sx, st, bx, by, bt, sy); sy −1 for a
+    seat (guided in y)."""
+    sy = -1 if k[K_SY] < 0.0 else int(k[K_SY])
+    return int(k[K_SX]), int(k[K_ST]), int(k[K_BX]), int(k[K_BY]), int(k[K_BT]), sy
+
+
+@kernel(inline="always")
+def _normal_terms(k, x, sx, st, bx, by, bt, sy):
+    """The two terms of W_N x for one corner (row k, DOF indices of :func:`_corner_dofs`):
+    n_x (Δ of the x motions at the corner) and n_y (Δ of the y motions), linear kinematics."""
+    along_x = k[K_NX] * ((x[bx] - k[K_Y] * x[bt]) - (x[sx] - k[K_RY] * x[st]))
+    if sy < 0:  # a seat: guided in y
+        return along_x, k[K_NY] * ((x[by] + k[K_X] * x[bt]) - k[K_RX] * x[st])
+    return along_x, k[K_NY] * ((x[by] + k[K_X] * x[bt]) - (x[sy] + k[K_RX] * x[st]))
+
+
+@kernel(inline="always")
 def linear_gap(k, u):
-    """Gap of one corner (row k of the corner table) for displacement u, linear kinematics."""
-    sx = int(k[K_SX])
-    st = int(k[K_ST])
-    bx, by, bt = int(k[K_BX]), int(k[K_BY]), int(k[K_BT])
-    if k[K_SY] < 0.0:  # a seat: guided in y
-        return (
-            k[K_G0]
-            + k[K_NX] * ((u[bx] - k[K_Y] * u[bt]) - (u[sx] - k[K_RY] * u[st]))
-            + k[K_NY] * ((u[by] + k[K_X] * u[bt]) - k[K_RX] * u[st])
-        )
-    sy = int(k[K_SY])
-    return (
-        k[K_G0]
-        + k[K_NX] * ((u[bx] - k[K_Y] * u[bt]) - (u[sx] - k[K_RY] * u[st]))
-        + k[K_NY] * ((u[by] + k[K_X] * u[bt]) - (u[sy] + k[K_RX] * u[st]))
-    )
+    """Gap of one corner (row k of the corner table) for displacement u, linear kinematics:
+    g = g₀ + W_N u."""
+    sx, st, bx, by, bt, sy = _corner_dofs(k)
+    along_x, along_y = _normal_terms(k, u, sx, st, bx, by, bt, sy)
+    return k[K_G0] + along_x + along_y
 
 
 @kernel(inline="always")
 def linear_gap_rate(k, v):
     """ġ_N = W_N u̇ of one corner, linear kinematics (the gap formula without g₀)."""
-    sx = int(k[K_SX])
-    st = int(k[K_ST])
-    bx, by, bt = int(k[K_BX]), int(k[K_BY]), int(k[K_BT])
-    if k[K_SY] < 0.0:
-        return k[K_NX] * ((v[bx] - k[K_Y] * v[bt]) - (v[sx] - k[K_RY] * v[st])) + k[K_NY] * (
-            (v[by] + k[K_X] * v[bt]) - k[K_RX] * v[st]
-        )
-    sy = int(k[K_SY])
-    return k[K_NX] * ((v[bx] - k[K_Y] * v[bt]) - (v[sx] - k[K_RY] * v[st])) + k[K_NY] * (
-        (v[by] + k[K_X] * v[bt]) - (v[sy] + k[K_RX] * v[st])
-    )
+    sx, st, bx, by, bt, sy = _corner_dofs(k)
+    along_x, along_y = _normal_terms(k, v, sx, st, bx, by, bt, sy)
+    return along_x + along_y
+
+
+@kernel(inline="always")
+def linear_gap_and_rate(k, u, v):
+    """(:func:`linear_gap`, :func:`linear_gap_rate`) of one corner, its DOF indices read once:
+    the same operations, for the force evaluations that need both."""
+    sx, st, bx, by, bt, sy = _corner_dofs(k)
+    gx, gy = _normal_terms(k, u, sx, st, bx, by, bt, sy)
+    rx, ry = _normal_terms(k, v, sx, st, bx, by, bt, sy)
+    return k[K_G0] + gx + gy, rx + ry
 
 
 @kernel

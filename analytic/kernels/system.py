@@ -86,6 +86,9 @@ __all__ = [
     "PackedSystem",
     "RowLayout",
     "SystemArrays",
+    "b_row_dot",
+    "b_row_outer",
+    "b_row_scatter",
     "bent_column",
     "end_column",
     "gap_column",
@@ -217,8 +220,11 @@ def pack_system(plan: Plan, damping: DampingModel) -> PackedSystem:
     kind = np.zeros(ns, dtype=np.int64)
     hparams = np.zeros((ns, N_PARAMS))
     for i, spring in enumerate(plan.springs):
-        if len(spring.dofs) > 2:
-            raise ValueError(f"spring {spring.name}: more than 2 DOFs in its deformation")
+        if not 1 <= len(spring.dofs) <= 2:
+            # the kernels read a row's first non-zero unconditionally (spring_deformations)
+            raise ValueError(
+                f"spring {spring.name}: its deformation needs 1 or 2 DOFs, got {len(spring.dofs)}"
+            )
         bnnz[i] = len(spring.dofs)
         bidx[i, : len(spring.dofs)] = spring.dofs
         bval[i, : len(spring.dofs)] = spring.coefs
@@ -295,16 +301,50 @@ def _or_zero(beta, plan: Plan) -> np.ndarray:
 # ``sa`` bundle (20 arrays, ~150 machine words) by value, and building those argument lists was
 # the hottest lines of the Newmark loop in a perf profile (results are bit-identical).
 @kernel(inline="always")
+def b_row_dot(sa, i, x):
+    """(B x)_i = Σ_q bval[i, q]·x[bidx[i, q]], summed from 0.0 in the order of the row's ≤ 2
+    non-zeros: the operations of a loop over them, written out (no loop of run-time length in
+    the force evaluations; the same bits)."""
+    s = 0.0 + sa.bval[i, 0] * x[sa.bidx[i, 0]]
+    if sa.bnnz[i] > 1:
+        s += sa.bval[i, 1] * x[sa.bidx[i, 1]]
+    return s
+
+
+@kernel(inline="always")
+def b_row_scatter(sa, i, y, value):
+    """y += B[i, :]ᵀ·value (the row's ≤ 2 non-zeros in order, as :func:`b_row_dot`)."""
+    y[sa.bidx[i, 0]] += sa.bval[i, 0] * value
+    if sa.bnnz[i] > 1:
+        y[sa.bidx[i, 1]] += sa.bval[i, 1] * value
+
+
+@kernel(inline="always")
+def b_row_outer(sa, i, K, coef):
+    """K += B[i, :]ᵀ·coef·B[i, :]: each of the ≤ 4 entries once, (bval[i, q]·coef)·bval[i, r]
+    in the order q, r of a double loop over the row's non-zeros."""
+    j0 = sa.bidx[i, 0]
+    b0 = sa.bval[i, 0]
+    c0 = b0 * coef
+    if sa.bnnz[i] > 1:
+        j1 = sa.bidx[i, 1]
+        b1 = sa.bval[i, 1]
+        c1 = b1 * coef
+        K[j0, j0] += c0 * b0
+        K[j0, j1] += c0 * b1
+        K[j1, j0] += c1 * b0
+        K[j1, j1] += c1 * b1
+    else:
+        K[j0, j0] += c0 * b0
+
+
+@kernel(inline="always")
 def spring_deformations(sa, u, v, ug, vg, d, dd):
     """Fill d = B u − S u_g and dd = B u̇ − S u̇_g (shape (ns,))."""
     ns = sa.k0.shape[0]
     for i in range(ns):
-        di = 0.0
-        vi = 0.0
-        for q in range(sa.bnnz[i]):
-            j = sa.bidx[i, q]
-            di += sa.bval[i, q] * u[j]
-            vi += sa.bval[i, q] * v[j]
+        di = b_row_dot(sa, i, u)
+        vi = b_row_dot(sa, i, v)
         ch = sa.schan[i]
         if ch >= 0:
             di -= sa.sval[i] * ug[ch]
@@ -356,8 +396,7 @@ def spring_assemble(sa, hstate, d, dd, v, f, fs, kt):
             cv = sa.bk[i] * kti + sa.bkc[i] * sa.kc[i]
             sa.cvar[i] = cv
             fi += cv * dd[i]
-        for q in range(sa.bnnz[i]):
-            f[sa.bidx[i, q]] += sa.bval[i, q] * fi
+        b_row_scatter(sa, i, f, fi)
     return nonel
 
 
@@ -369,12 +408,7 @@ def spring_tangent(sa, kt, K):
         for k in range(nd):
             K[j, k] = 0.0
     for i in range(sa.k0.shape[0]):
-        nnz = sa.bnnz[i]
-        for q in range(nnz):
-            j = sa.bidx[i, q]
-            bj = sa.bval[i, q] * kt[i]
-            for r in range(nnz):
-                K[j, sa.bidx[i, r]] += bj * sa.bval[i, r]
+        b_row_outer(sa, i, K, kt[i])
 
 
 @kernel(inline="always")
@@ -385,14 +419,8 @@ def spring_damping_tangent(sa, c2, Keff):
         return
     for i in range(sa.k0.shape[0]):
         cv = c2 * sa.cvar[i]
-        if cv == 0.0:
-            continue
-        nnz = sa.bnnz[i]
-        for q in range(nnz):
-            j = sa.bidx[i, q]
-            bj = sa.bval[i, q] * cv
-            for r in range(nnz):
-                Keff[j, sa.bidx[i, r]] += bj * sa.bval[i, r]
+        if cv != 0.0:
+            b_row_outer(sa, i, Keff, cv)
 
 
 @kernel
@@ -448,9 +476,7 @@ def spring_stored_energy(sa, hstate, u, ug):
             ku = _unloading_stiffness(sa.hparams[i], hstate[i], s)
             e += 0.5 * s * s / ku
         else:
-            di = 0.0
-            for q in range(sa.bnnz[i]):
-                di += sa.bval[i, q] * u[sa.bidx[i, q]]
+            di = b_row_dot(sa, i, u)
             ch = sa.schan[i]
             if ch >= 0:
                 di -= sa.sval[i] * ug[ch]

@@ -89,6 +89,8 @@ from deckpound.analytic.kernels.peaks import track_state
 from deckpound.analytic.kernels.support_motion import record_at
 from deckpound.analytic.kernels.system import (
     KIND_HYSTERETIC,
+    b_row_dot,
+    b_row_scatter,
     spring_assemble,
     spring_commit,
     spring_deformations,
@@ -271,12 +273,9 @@ def _linearise(system, work, h, th):
     for j in range(n_dof):
         R[j] = h * dof.Fk[j]
     for i in range(spr.d_k.shape[0]):
-        bv = 0.0
-        for r in range(sa.bnnz[i]):
-            bv += sa.bval[i, r] * vk[sa.bidx[i, r]]
+        bv = b_row_dot(sa, i, vk)
         t_i = th * h * (spr.kt_k[i] * (h * bv - spr.sdu[i]) - sa.crate[i] * spr.sdv[i])
-        for r in range(sa.bnnz[i]):
-            R[sa.bidx[i, r]] += sa.bval[i, r] * t_i
+        b_row_scatter(sa, i, R, t_i)
         spr.d_lin[i] = spr.d_k[i]
         spr.fs_lin[i] = spr.fs_k[i]
         spr.kt_lin[i] = spr.kt_k[i]
