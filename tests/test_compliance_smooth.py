@@ -158,3 +158,15 @@ def test_failure_time_of_an_adaptive_run_is_its_own():
     ).meta
     assert meta["status"] == "failed" and meta["failed_step"] == 1234
     assert meta["failed_time"] == 3.25 and meta["message"].endswith("(t = 3.25 s)")
+
+
+@pytest.mark.parametrize("dofs", [(), (0, 1, 4)])
+def test_spring_without_one_or_two_dofs_is_refused(dofs):
+    """The spring kernels read a row's first non-zero unconditionally and at most two: a
+    spring whose deformation has no DOF or more than two is refused when packed, by name."""
+    sc = base_scene()
+    plan = plan_of(sc)
+    bad = dataclasses.replace(plan.springs[0], dofs=dofs, coefs=tuple(1.0 for _ in dofs))
+    plan = dataclasses.replace(plan, springs=(bad, *plan.springs[1:]))
+    with pytest.raises(ValueError, match=rf"spring {bad.name}: .*1 or 2 DOFs, got {len(dofs)}"):
+        pack_system(plan, damping_model(sc, plan))

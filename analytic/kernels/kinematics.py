@@ -105,9 +105,11 @@ def pack_corners(plan: Plan) -> np.ndarray:
 @kernel(inline="always")
 def _corner_dofs(k):
     """The DOF indices of row k of the corner table: (sx, st, bx, by, bt, sy); sy −1 for a
-    seat (guided in y)."""
+    seat (guided in y). The others are never negative: unsigned, so that indexing with them
+    needs no wrap-around of negative indices (the same elements)."""
     sy = -1 if k[K_SY] < 0.0 else int(k[K_SY])
-    return int(k[K_SX]), int(k[K_ST]), int(k[K_BX]), int(k[K_BY]), int(k[K_BT]), sy
+    sx, st = np.uint64(k[K_SX]), np.uint64(k[K_ST])
+    return sx, st, np.uint64(k[K_BX]), np.uint64(k[K_BY]), np.uint64(k[K_BT]), sy
 
 
 @kernel(inline="always")

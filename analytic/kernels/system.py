@@ -345,8 +345,8 @@ def spring_deformations(sa, u, v, ug, vg, d, dd):
     for i in range(ns):
         di = b_row_dot(sa, i, u)
         vi = b_row_dot(sa, i, v)
-        ch = sa.schan[i]
-        if ch >= 0:
+        if sa.schan[i] >= 0:
+            ch = np.uint64(sa.schan[i])  # unsigned: no wrap-around of a negative index
             di -= sa.sval[i] * ug[ch]
             vi -= sa.sval[i] * vg[ch]
         d[i] = di
