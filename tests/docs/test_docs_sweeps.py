@@ -198,6 +198,10 @@ def test_what_the_loop_does_beyond_the_reference_is_costed_from_the_rounds_media
         "flat arrays, the same answer bit for bit, `tests/test_reference_loop.py`) runs at 1.04×"
         in text
     )
+    # the floor: (0.52 + 0.7 − 0.58) / 0.5
+    assert sb.numba_floor(_measurement()["loops"]) == pytest.approx(1.28)
+    floor = "output rows, which the engine's answer needs (the energy balance, the results), is "
+    assert floor + "1.28× the reference per step" in " ".join(text.split())
 
 
 def test_the_ida_row_is_described_and_an_older_measurement_without_it_renders():
