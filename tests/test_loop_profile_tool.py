@@ -1,7 +1,8 @@
 """``tools/loop_profile.py`` (repository tooling): perf samples binned over a dumped step loop.
 
 The binning is checked on a small hand-made disassembly and sample list; the dump is checked on
-the real compliance loop (its code copied from the process, its address inside the mapping)."""
+the real compliance loop (every compiled version copied from the process, each inside its
+mapping)."""
 
 from __future__ import annotations
 
@@ -61,14 +62,31 @@ def test_a_target_outside_the_code_or_at_its_start_is_no_region(tool):
     assert tool.call_targets(asm, BASE, 0x800) == []
 
 
-def test_dump_copies_the_compliance_loop(tool, tmp_path):
+def test_the_version_with_the_most_samples_is_profiled(tool):
+    loops = [
+        {"file": "code0.bin", "base": BASE, "size": 0x100},
+        {"file": "code1.bin", "base": BASE + 0x10000, "size": 0x100},
+    ]
+    ips = [BASE + 0x10] + [BASE + 0x10000 + 0x20] * 3
+    loop, counts = tool.profiled_loop(loops, ips)
+    assert loop["file"] == "code1.bin" and counts == Counter({0x20: 3})
+
+
+def test_dump_copies_every_compiled_version_of_the_compliance_loop(tool, tmp_path):
+    """A process that ran another model size first (the two-segment deck of ``two-frame``)
+    holds two versions of the loop: both are copied, each inside its mapping."""
+    import deckpound as dp
+
+    two = dp.load_scene("two-frame")
+    dp.run(two.replace({"run.duration": 0.2, "excitation.duration": 0.2}), engine="compliance")
     info = tool.dump(tmp_path, "compliance", "saiidi-4span", 1)
-    code = (tmp_path / "code.bin").read_bytes()
-    assert len(code) == info["size"] > 0
     assert json.loads((tmp_path / "loop.json").read_text()) == info
     assert info["us_per_step_median"] > 0
-    # a compiled function's first instruction is real code: not a run of zero bytes
-    assert code[:16] != bytes(16)
+    assert len(info["loops"]) >= 2
+    for loop in info["loops"]:
+        code = (tmp_path / loop["file"]).read_bytes()
+        assert len(code) == loop["size"] > 0
+        assert code[:16] != bytes(16)  # real code, not a run of zero bytes
 
 
 def test_annotate_needs_its_three_files(tool, tmp_path, capsys):

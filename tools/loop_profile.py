@@ -11,8 +11,9 @@ readable in three steps::
 
 ``dump`` runs the engine on the scene ``--runs`` times (after one untimed run that loads or
 compiles the kernels), then copies the step loop's machine code from the process's memory to
-``DIR/code.bin`` with its address (``DIR/loop.json``). ``annotate`` disassembles it
-(``objdump``), counts the samples of ``DIR/ips.txt`` that fall inside it, and prints the share
+``DIR/code<k>.bin`` with its address (``DIR/loop.json``; one file per compiled version of the
+loop in the process). ``annotate`` takes the version with the most samples of ``DIR/ips.txt``,
+disassembles it (``objdump``), counts the samples that fall inside it, and prints the share
 of each region between the call targets found in the code (the loop itself and the compiled
 functions it calls, e.g. the Takeda update), then the hottest 256-byte blocks; it writes
 ``DIR/annotated.asm``, every instruction with its sample count.
@@ -61,9 +62,10 @@ def _mapping_end(address: int) -> int:
 
 
 def dump(folder: Path, engine: str, scene_name: str, runs: int) -> dict:
-    """Run ``engine`` on ``scene_name`` ``runs`` times, then write the step loop's machine code
-    (``code.bin``) and ``loop.json`` (its address, size, name and the runs' µs/step) into
-    ``folder``. Returns the JSON's content."""
+    """Run ``engine`` on ``scene_name`` ``runs`` times, then write the machine code of every
+    compiled version of its step loop in this process (``code<k>.bin``: the process may hold
+    others, for other model sizes, besides the scene's) and ``loop.json`` (their addresses,
+    sizes and names, and the runs' µs/step) into ``folder``. Returns the JSON's content."""
     import importlib
 
     import deckpound as dp
@@ -73,18 +75,18 @@ def dump(folder: Path, engine: str, scene_name: str, runs: int) -> dict:
     us = [dp.run(scene, engine=engine).meta["us_per_step"] for _ in range(runs)]
     module, name = LOOPS[engine]
     dispatcher = getattr(importlib.import_module(module), name)
-    (cres,) = dispatcher.overloads.values()
-    symbol = cres.fndesc.llvm_func_name
-    base = cres.library.get_pointer_to_function(symbol)
-    size = min(MAX_CODE, _mapping_end(base) - base)
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "code.bin").write_bytes(ctypes.string_at(base, size))
+    loops = []
+    for k, cres in enumerate(dispatcher.overloads.values()):
+        symbol = cres.fndesc.llvm_func_name
+        base = cres.library.get_pointer_to_function(symbol)
+        size = min(MAX_CODE, _mapping_end(base) - base)
+        (folder / f"code{k}.bin").write_bytes(ctypes.string_at(base, size))
+        loops.append({"file": f"code{k}.bin", "function": symbol, "base": base, "size": size})
     info = {
         "engine": engine,
         "scene": scene_name,
-        "function": symbol,
-        "base": base,
-        "size": size,
+        "loops": loops,
         "runs": runs,
         "us_per_step_median": statistics.median(us) if us else None,
     }
@@ -139,26 +141,40 @@ def annotated(asm: str, counts: Counter) -> str:
     return "\n".join(lines) + "\n"
 
 
-def annotate(folder: Path) -> str:
-    """Read ``folder``'s ``loop.json``, ``code.bin`` and ``ips.txt``; write
-    ``annotated.asm``; return the report text."""
-    info = json.loads((folder / "loop.json").read_text())
+def _disassembled(path: Path) -> str:
     objdump = shutil.which("objdump")
     if objdump is None:
         raise SystemExit("loop_profile: objdump (binutils) is needed to disassemble the loop")
-    asm = subprocess.run(
-        [objdump, "-D", "-b", "binary", "-mi386:x86-64", str(folder / "code.bin")],
+    return subprocess.run(
+        [objdump, "-D", "-b", "binary", "-mi386:x86-64", str(path)],
         check=True,
         capture_output=True,
         text=True,
     ).stdout
-    base, size = info["base"], info["size"]
+
+
+def profiled_loop(loops: list[dict], ips: list[int]) -> tuple[dict, Counter]:
+    """The dumped loop (an entry of ``loop.json``'s ``loops``) with the most samples, and its
+    samples per offset: the version the profiled runs executed."""
+    counted = [(loop, sample_offsets(ips, loop["base"], loop["size"])) for loop in loops]
+    return max(counted, key=lambda lc: sum(lc[1].values()))
+
+
+def annotate(folder: Path) -> str:
+    """Read ``folder``'s ``loop.json``, code files and ``ips.txt``; write ``annotated.asm``
+    for the loop version with the most samples; return the report text."""
+    info = json.loads((folder / "loop.json").read_text())
     ips = read_ips((folder / "ips.txt").read_text())
-    counts = sample_offsets(ips, base, size)
+    loop, counts = profiled_loop(info["loops"], ips)
+    asm = _disassembled(folder / loop["file"])
+    base, size = loop["base"], loop["size"]
     total = sum(counts.values())
+    if total == 0:
+        raise SystemExit(f"loop_profile: no sample of {folder / 'ips.txt'} is in the loop's code")
     (folder / "annotated.asm").write_text(annotated(asm, counts))
     lines = [
-        f"{info['engine']} on {info['scene']}: {'.'.join(LOOPS[info['engine']])}",
+        f"{info['engine']} on {info['scene']}: {'.'.join(LOOPS[info['engine']])} "
+        f"({len(info['loops'])} compiled version(s) in the process, {loop['file']} profiled)",
         f"{total} of {len(ips)} samples inside the loop's code ({size} B at {base:#x})",
         "regions (the loop, then the functions it calls), share of the loop's samples:",
     ]
@@ -190,9 +206,9 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--runs must be at least 1, got {args.runs}")
         info = dump(args.folder, args.engine, args.scene, args.runs)
         loop = ".".join(LOOPS[args.engine])
-        print(f"{loop}: {info['size']} B of code at {info['base']:#x} -> {args.folder}")
+        print(f"{loop}: {len(info['loops'])} compiled version(s) -> {args.folder}")
         return 0
-    for name in ("loop.json", "code.bin", "ips.txt"):
+    for name in ("loop.json", "ips.txt"):
         if not (args.folder / name).is_file():
             parser.error(f"{args.folder / name} is missing (module docstring: the three steps)")
     print(annotate(args.folder))
