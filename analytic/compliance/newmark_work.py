@@ -92,7 +92,7 @@ NewmarkSprings = namedtuple("NewmarkSprings", _NS)
 NewmarkSupports = namedtuple("NewmarkSupports", _CH)
 #: The workspace of :func:`newmark_run` (:func:`newmark_workspace`), one named field per array,
 #: grouped by shape (a group is loaded as one value in the compiled code: small groups keep
-#: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states, cstate
+#: the compile short): u0, v0 initial state; hstate (ns, N_STATE) Takeda states, cstate
 #: (n_corners, N_CS) corner states; cw the ContactWork; dof, mat, spring, support the groups
 #: above; lam/lt/g_prev last committed contact forces and gaps (n_corners,); W (N_WORK,) running
 #: work totals [kJ] (offsets ``W_*`` of :mod:`.work_energy`); energy (N_ENERGY,) the output

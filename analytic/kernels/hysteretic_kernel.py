@@ -71,6 +71,16 @@ from deckpound.analytic.kernels.hysteretic_layout import (
     P_S3N,
     P_S3P,
     POS_INF_STRAIN,
+    R_CH,
+    R_K_PINCH,
+    R_K_RELOAD,
+    R_MOM,
+    R_NEG,
+    R_POS,
+    R_REL,
+    R_ROT,
+    R_ROT0,
+    R_VALID,
     T_ENERGYD,
     T_LOADIND,
     T_ROTMAX,
@@ -245,20 +255,34 @@ def hyst_revert_to_start(params, state):
     state[T_STRAIN] = 0.0
     state[T_STRESS] = 0.0
     state[T_TANGENT] = params[P_E1P_SLOPE]
+    state[R_POS + R_VALID] = 0.0
+    state[R_NEG + R_VALID] = 0.0
 
 
 @kernel
 def hyst_commit(state):
     """OpenSees ``commitState``: copy trial history/stress/strain to
-    committed (there is no committed tangent)."""
-    state[C_ROTMAX] = state[T_ROTMAX]
-    state[C_ROTMIN] = state[T_ROTMIN]
-    state[C_ROTPU] = state[T_ROTPU]
-    state[C_ROTNU] = state[T_ROTNU]
-    state[C_ENERGYD] = state[T_ENERGYD]
-    state[C_LOADIND] = state[T_LOADIND]
-    state[C_STRESS] = state[T_STRESS]
-    state[C_STRAIN] = state[T_STRAIN]
+    committed (there is no committed tangent).
+
+    A reversal cache stays valid while its inputs do not change: the positive one while the
+    material keeps loading positively (committed load indicator 1 before and after: no
+    reversal, whose point depends on the committed strain and stress) and the excursions and
+    the zero-stress strain it read (CrotMax, CrotMin, CrotNu) are unchanged; the negative one
+    likewise (indicator 2; CrotMax, CrotMin, CrotPu)."""
+    s = state
+    same_rot = s[T_ROTMAX] == s[C_ROTMAX] and s[T_ROTMIN] == s[C_ROTMIN]
+    if not (s[C_LOADIND] == 1.0 and s[T_LOADIND] == 1.0 and same_rot and s[T_ROTNU] == s[C_ROTNU]):
+        s[R_POS + R_VALID] = 0.0
+    if not (s[C_LOADIND] == 2.0 and s[T_LOADIND] == 2.0 and same_rot and s[T_ROTPU] == s[C_ROTPU]):
+        s[R_NEG + R_VALID] = 0.0
+    s[C_ROTMAX] = s[T_ROTMAX]
+    s[C_ROTMIN] = s[T_ROTMIN]
+    s[C_ROTPU] = s[T_ROTPU]
+    s[C_ROTNU] = s[T_ROTNU]
+    s[C_ENERGYD] = s[T_ENERGYD]
+    s[C_LOADIND] = s[T_LOADIND]
+    s[C_STRESS] = s[T_STRESS]
+    s[C_STRAIN] = s[T_STRAIN]
 
 
 @kernel
@@ -276,7 +300,11 @@ def hyst_revert(state):
 
 
 @njit(cache=True, inline="always")
-def _positive_increment(p, s, d_strain):
+def _positive_reversal(p, s, kn, kp):
+    """OpenSees ``positiveIncrement`` up to the trial strain: the trial excursion and
+    zero-stress strain from the committed state (a reversal from a negative increment moves
+    them), the backbone force there, the release and pinching strains; kept in the state's
+    positive reversal cache (R_POS), the slopes marked not computed."""
     c_rot_max = s[C_ROTMAX]
     c_rot_min = s[C_ROTMIN]
     c_stress = s[C_STRESS]
@@ -284,32 +312,54 @@ def _positive_increment(p, s, d_strain):
     e_un = p[P_EUN]
     rot1p = p[P_E1P]
     rot1n = p[P_E1N]
-    kn = _cached_degradation(p, s, c_rot_min, rot1n, K_KN, K_KN_ROT)
-    kp = _cached_degradation(p, s, c_rot_max, rot1p, K_KP, K_KP_ROT)
-
+    t_rot_max = s[C_ROTMAX]
+    t_rot_nu = s[C_ROTNU]
     if s[T_LOADIND] == 2.0:
         if c_stress <= 0.0:
-            s[T_ROTNU] = s[C_STRAIN] - c_stress / (e_un * kn)
+            t_rot_nu = s[C_STRAIN] - c_stress / (e_un * kn)
             energy = s[C_ENERGYD] - 0.5 * c_stress / (e_un * kn) * c_stress
             damfc = 0.0
             if c_rot_min < rot1n:
                 damfc = p[P_DAMAGE2] * energy / p[P_ENERGYA]
                 damfc += p[P_DAMAGE1] * (c_rot_min - rot1n) / rot1n
-            s[T_ROTMAX] = c_rot_max * (1.0 + damfc)
-    s[T_LOADIND] = 1.0
-
-    t_rot_max = s[T_ROTMAX]
+            t_rot_max = c_rot_max * (1.0 + damfc)
     t_rot_max = min(t_rot_max, POS_INF_STRAIN)
     t_rot_max = max(rot1p, t_rot_max)
-    s[T_ROTMAX] = t_rot_max
-
-    t_rot_nu = s[T_ROTNU]
     pinch_y = p[P_PINCHY]
     maxmom = _pos_env_stress(p, t_rot_max)
     rotlim = _neg_env_rotlim(p, c_rot_min)
     rotrel = max(t_rot_nu, rotlim)
     rotmp2 = t_rot_max - (1.0 - pinch_y) * maxmom / (e_up * kp)
-    rotch = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
+    r = R_POS
+    s[r + R_ROT] = t_rot_max
+    s[r + R_ROT0] = t_rot_nu
+    s[r + R_MOM] = maxmom
+    s[r + R_REL] = rotrel
+    s[r + R_CH] = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
+    s[r + R_K_PINCH] = np.nan
+    s[r + R_K_RELOAD] = np.nan
+    s[r + R_VALID] = 1.0
+
+
+@njit(cache=True, inline="always")
+def _positive_increment(p, s, d_strain):
+    c_stress = s[C_STRESS]
+    e_up = p[P_EUP]
+    e_un = p[P_EUN]
+    kn = _cached_degradation(p, s, s[C_ROTMIN], p[P_E1N], K_KN, K_KN_ROT)
+    kp = _cached_degradation(p, s, s[C_ROTMAX], p[P_E1P], K_KP, K_KP_ROT)
+    r = R_POS
+    if s[r + R_VALID] == 0.0:
+        _positive_reversal(p, s, kn, kp)
+    t_rot_max = s[r + R_ROT]
+    t_rot_nu = s[r + R_ROT0]
+    maxmom = s[r + R_MOM]
+    rotrel = s[r + R_REL]
+    rotch = s[r + R_CH]
+    s[T_ROTMAX] = t_rot_max
+    s[T_ROTNU] = t_rot_nu
+    s[T_LOADIND] = 1.0
+    pinch_y = p[P_PINCHY]
 
     t_strain = s[T_STRAIN]
     if t_strain < t_rot_nu:
@@ -323,7 +373,10 @@ def _positive_increment(p, s, d_strain):
             stress = 0.0
             tangent = e_up * 1.0e-9
         else:
-            tangent = maxmom * pinch_y / (rotch - rotrel)
+            tangent = s[r + R_K_PINCH]
+            if np.isnan(tangent):
+                tangent = maxmom * pinch_y / (rotch - rotrel)
+                s[r + R_K_PINCH] = tangent
             tmpmo1 = c_stress + e_up * kp * d_strain
             tmpmo2 = (t_strain - rotrel) * tangent
             if tmpmo1 < tmpmo2:
@@ -332,7 +385,10 @@ def _positive_increment(p, s, d_strain):
             else:
                 stress = tmpmo2
     else:
-        tangent = (1.0 - pinch_y) * maxmom / (t_rot_max - rotch)
+        tangent = s[r + R_K_RELOAD]
+        if np.isnan(tangent):
+            tangent = (1.0 - pinch_y) * maxmom / (t_rot_max - rotch)
+            s[r + R_K_RELOAD] = tangent
         tmpmo1 = c_stress + e_up * kp * d_strain
         tmpmo2 = pinch_y * maxmom + (t_strain - rotch) * tangent
         if tmpmo1 < tmpmo2:
@@ -345,7 +401,9 @@ def _positive_increment(p, s, d_strain):
 
 
 @njit(cache=True, inline="always")
-def _negative_increment(p, s, d_strain):
+def _negative_reversal(p, s, kn, kp):
+    """OpenSees ``negativeIncrement`` up to the trial strain, as :func:`_positive_reversal`
+    (the negative reversal cache, R_NEG)."""
     c_rot_max = s[C_ROTMAX]
     c_rot_min = s[C_ROTMIN]
     c_stress = s[C_STRESS]
@@ -353,32 +411,54 @@ def _negative_increment(p, s, d_strain):
     e_un = p[P_EUN]
     rot1p = p[P_E1P]
     rot1n = p[P_E1N]
-    kn = _cached_degradation(p, s, c_rot_min, rot1n, K_KN, K_KN_ROT)
-    kp = _cached_degradation(p, s, c_rot_max, rot1p, K_KP, K_KP_ROT)
-
+    t_rot_min = s[C_ROTMIN]
+    t_rot_pu = s[C_ROTPU]
     if s[T_LOADIND] == 1.0:
         if c_stress >= 0.0:
-            s[T_ROTPU] = s[C_STRAIN] - c_stress / (e_up * kp)
+            t_rot_pu = s[C_STRAIN] - c_stress / (e_up * kp)
             energy = s[C_ENERGYD] - 0.5 * c_stress / (e_up * kp) * c_stress
             damfc = 0.0
             if c_rot_max > rot1p:
                 damfc = p[P_DAMAGE2] * energy / p[P_ENERGYA]
                 damfc += p[P_DAMAGE1] * (c_rot_max - rot1p) / rot1p
-            s[T_ROTMIN] = c_rot_min * (1.0 + damfc)
-    s[T_LOADIND] = 2.0
-
-    t_rot_min = s[T_ROTMIN]
+            t_rot_min = c_rot_min * (1.0 + damfc)
     t_rot_min = max(t_rot_min, NEG_INF_STRAIN)
     t_rot_min = min(rot1n, t_rot_min)
-    s[T_ROTMIN] = t_rot_min
-
-    t_rot_pu = s[T_ROTPU]
     pinch_y = p[P_PINCHY]
     minmom = _neg_env_stress(p, t_rot_min)
     rotlim = _pos_env_rotlim(p, c_rot_max)
     rotrel = min(t_rot_pu, rotlim)
     rotmp2 = t_rot_min - (1.0 - pinch_y) * minmom / (e_un * kn)
-    rotch = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
+    r = R_NEG
+    s[r + R_ROT] = t_rot_min
+    s[r + R_ROT0] = t_rot_pu
+    s[r + R_MOM] = minmom
+    s[r + R_REL] = rotrel
+    s[r + R_CH] = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
+    s[r + R_K_PINCH] = np.nan
+    s[r + R_K_RELOAD] = np.nan
+    s[r + R_VALID] = 1.0
+
+
+@njit(cache=True, inline="always")
+def _negative_increment(p, s, d_strain):
+    c_stress = s[C_STRESS]
+    e_up = p[P_EUP]
+    e_un = p[P_EUN]
+    kn = _cached_degradation(p, s, s[C_ROTMIN], p[P_E1N], K_KN, K_KN_ROT)
+    kp = _cached_degradation(p, s, s[C_ROTMAX], p[P_E1P], K_KP, K_KP_ROT)
+    r = R_NEG
+    if s[r + R_VALID] == 0.0:
+        _negative_reversal(p, s, kn, kp)
+    t_rot_min = s[r + R_ROT]
+    t_rot_pu = s[r + R_ROT0]
+    minmom = s[r + R_MOM]
+    rotrel = s[r + R_REL]
+    rotch = s[r + R_CH]
+    s[T_ROTMIN] = t_rot_min
+    s[T_ROTPU] = t_rot_pu
+    s[T_LOADIND] = 2.0
+    pinch_y = p[P_PINCHY]
 
     t_strain = s[T_STRAIN]
     if t_strain > t_rot_pu:
@@ -392,7 +472,10 @@ def _negative_increment(p, s, d_strain):
             stress = 0.0
             tangent = e_un * 1.0e-9
         else:
-            tangent = minmom * pinch_y / (rotch - rotrel)
+            tangent = s[r + R_K_PINCH]
+            if np.isnan(tangent):
+                tangent = minmom * pinch_y / (rotch - rotrel)
+                s[r + R_K_PINCH] = tangent
             tmpmo1 = c_stress + e_un * kn * d_strain
             tmpmo2 = (t_strain - rotrel) * tangent
             if tmpmo1 > tmpmo2:
@@ -401,7 +484,10 @@ def _negative_increment(p, s, d_strain):
             else:
                 stress = tmpmo2
     else:
-        tangent = (1.0 - pinch_y) * minmom / (t_rot_min - rotch)
+        tangent = s[r + R_K_RELOAD]
+        if np.isnan(tangent):
+            tangent = (1.0 - pinch_y) * minmom / (t_rot_min - rotch)
+            s[r + R_K_RELOAD] = tangent
         tmpmo1 = c_stress + e_un * kn * d_strain
         tmpmo2 = pinch_y * minmom + (t_strain - rotch) * tangent
         if tmpmo1 > tmpmo2:
@@ -430,7 +516,10 @@ def hyst_set_trial(params, state, strain):
     Cost: no ``pow`` while ``e1n <= CrotMin`` and ``CrotMax <= e1p`` (see
     ``_degradation``); after yielding, one ``pow`` per committed excursion
     that grew since the last call (the state's degradation cache), where
-    OpenSees calls ``pow`` twice per call.
+    OpenSees calls ``pow`` twice per call. Inside the hysteresis loop the
+    reversal point, pinching strains and branch slopes come from the state's
+    reversal caches while the committed values they depend on stay the same
+    (:mod:`.hysteretic_layout`), where OpenSees computes them at every call.
     """
     p = params
     s = state

@@ -54,6 +54,8 @@ idx   name            meaning
 18    knRot           cache: the CrotMin that kn was computed for
 19    kp              cache: unloading-stiffness factor of CrotMax
 20    kpRot           cache: the CrotMax that kp was computed for
+21-28 reversal (+)    cache: the positive increment's reversal point
+29-36 reversal (-)    cache: the negative increment's reversal point
 ====  ==============  ==============================================
 
 The cache (17-20) is not OpenSees state: ``kn``/``kp`` are the pure
@@ -64,6 +66,21 @@ with the excursion they belong to and recomputed when it differs (or when
 ``kn``/``kp`` is 0.0, i.e. never computed: a zero-filled state is valid).
 The same ``pow`` on the same arguments gives the same double, so results are
 bit-identical; it removes ~20 % of the Newmark loop's time after yielding.
+
+The reversal caches (21-36) hold what an increment inside the hysteresis loop computes
+before it looks at the trial strain, the same for every trial strain of a step: OpenSees's
+``positiveIncrement`` (``negativeIncrement``) sets the trial excursion and zero-stress strain
+from the committed state, then the backbone force at the excursion, the release and
+pinching strains, and divides by the reloading slopes. All of these are functions of the
+committed state and the direction of the increment; Newton asks for several trial strains
+per step, and the cache gives the later ones the numbers of the first: per direction, a
+valid flag, the trial excursion and zero-stress strain, the backbone force, the release and
+pinching strains, and the two slopes of the pinched and the reloading branch, each
+computed when its branch is first taken (NaN until then). :func:`hyst_commit` and
+``revertToStart`` clear a flag when the committed values that cache read change (while the
+material keeps loading in one direction inside the loop, they do not, and the cache serves
+step after step); ``revertToLastCommit`` leaves the committed state, and the flags, as they
+are. The same expressions on the same doubles: results are bit-identical.
 
 There is deliberately no committed tangent: OpenSees 3.7.1 does not keep one,
 so ``revertToLastCommit`` leaves the trial tangent untouched.
@@ -117,6 +134,16 @@ __all__ = [
     "P_S2P",
     "P_S3N",
     "P_S3P",
+    "R_CH",
+    "R_K_PINCH",
+    "R_K_RELOAD",
+    "R_MOM",
+    "R_NEG",
+    "R_POS",
+    "R_REL",
+    "R_ROT",
+    "R_ROT0",
+    "R_VALID",
     "T_ENERGYD",
     "T_LOADIND",
     "T_ROTMAX",
@@ -150,7 +177,12 @@ C_STRESS, C_STRAIN = 6, 7
 T_ROTMAX, T_ROTMIN, T_ROTPU, T_ROTNU, T_ENERGYD, T_LOADIND = 8, 9, 10, 11, 12, 13
 T_STRESS, T_STRAIN, T_TANGENT = 14, 15, 16
 K_KN, K_KN_ROT, K_KP, K_KP_ROT = 17, 18, 19, 20  # degradation cache
-N_STATE = 21
+# reversal caches, the positive increment's then the negative one's (8 slots each):
+# valid flag, trial excursion, trial zero-stress strain, backbone force at the excursion,
+# release strain, pinching strain, slope of the pinched branch, slope of the reloading branch
+R_POS, R_NEG = 21, 29
+R_VALID, R_ROT, R_ROT0, R_MOM, R_REL, R_CH, R_K_PINCH, R_K_RELOAD = 0, 1, 2, 3, 4, 5, 6, 7
+N_STATE = 37
 
 
 def pack_hysteretic_params(

@@ -191,7 +191,7 @@ class PackedSystem:
         return len(self.spring_names)
 
     def new_state(self) -> np.ndarray:
-        """Fresh (virgin) material state, shape (n_springs, 17); rows of linear springs unused."""
+        """Fresh (virgin) material state, shape (n_springs, N_STATE); rows of linear springs unused."""
         st = np.zeros((self.n_springs, N_STATE))
         for i in range(self.n_springs):
             if self.arrays.kind[i] == KIND_HYSTERETIC:

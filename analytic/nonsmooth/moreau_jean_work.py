@@ -129,7 +129,7 @@ MoreauJeanSprings = namedtuple("MoreauJeanSprings", _SPRING_VECTORS)
 MoreauJeanCorners = namedtuple("MoreauJeanCorners", _CORNER_FIELDS)
 #: The workspace of :func:`moreau_jean_run` (:func:`moreau_jean_workspace`), one named field
 #: per array, grouped (a group is loaded as one value in the compiled code: small groups keep
-#: the compile short): u0, v0 initial state; hstate (ns, 17) Takeda states; final (2, n_dof)
+#: the compile short): u0, v0 initial state; hstate (ns, N_STATE) Takeda states; final (2, n_dof)
 #: displacement and velocity at the last accepted step; dof, spring, corner the groups above;
 #: ug, vg, ugo, vgo supports now and at the last step; W (N_WORK,) running work totals [kJ]
 #: (``W_*``); energy (N_ENERGY,) (``E_*``); impulse the contact solve's scratch
