@@ -300,6 +300,18 @@ def hyst_revert(state):
 
 
 @njit(cache=True, inline="always")
+def _kept_slope(s, slot, a, b, den):
+    """The branch slope a·b / den (OpenSees's expression, in its order) of a reversal cache:
+    computed at the branch's first call since the cache was filled (the slot holds NaN), then
+    read from ``s[slot]``."""
+    slope = s[slot]
+    if np.isnan(slope):
+        slope = a * b / den
+        s[slot] = slope
+    return slope
+
+
+@njit(cache=True, inline="always")
 def _positive_reversal(p, s, kn, kp):
     """OpenSees ``positiveIncrement`` up to the trial strain: the trial excursion and
     zero-stress strain from the committed state (a reversal from a negative increment moves
@@ -312,7 +324,7 @@ def _positive_reversal(p, s, kn, kp):
     e_un = p[P_EUN]
     rot1p = p[P_E1P]
     rot1n = p[P_E1N]
-    t_rot_max = s[C_ROTMAX]
+    t_rot_max = c_rot_max
     t_rot_nu = s[C_ROTNU]
     if s[T_LOADIND] == 2.0:
         if c_stress <= 0.0:
@@ -373,10 +385,7 @@ def _positive_increment(p, s, d_strain):
             stress = 0.0
             tangent = e_up * 1.0e-9
         else:
-            tangent = s[r + R_K_PINCH]
-            if np.isnan(tangent):
-                tangent = maxmom * pinch_y / (rotch - rotrel)
-                s[r + R_K_PINCH] = tangent
+            tangent = _kept_slope(s, r + R_K_PINCH, maxmom, pinch_y, rotch - rotrel)
             tmpmo1 = c_stress + e_up * kp * d_strain
             tmpmo2 = (t_strain - rotrel) * tangent
             if tmpmo1 < tmpmo2:
@@ -385,10 +394,7 @@ def _positive_increment(p, s, d_strain):
             else:
                 stress = tmpmo2
     else:
-        tangent = s[r + R_K_RELOAD]
-        if np.isnan(tangent):
-            tangent = (1.0 - pinch_y) * maxmom / (t_rot_max - rotch)
-            s[r + R_K_RELOAD] = tangent
+        tangent = _kept_slope(s, r + R_K_RELOAD, 1.0 - pinch_y, maxmom, t_rot_max - rotch)
         tmpmo1 = c_stress + e_up * kp * d_strain
         tmpmo2 = pinch_y * maxmom + (t_strain - rotch) * tangent
         if tmpmo1 < tmpmo2:
@@ -411,7 +417,7 @@ def _negative_reversal(p, s, kn, kp):
     e_un = p[P_EUN]
     rot1p = p[P_E1P]
     rot1n = p[P_E1N]
-    t_rot_min = s[C_ROTMIN]
+    t_rot_min = c_rot_min
     t_rot_pu = s[C_ROTPU]
     if s[T_LOADIND] == 1.0:
         if c_stress >= 0.0:
@@ -472,10 +478,7 @@ def _negative_increment(p, s, d_strain):
             stress = 0.0
             tangent = e_un * 1.0e-9
         else:
-            tangent = s[r + R_K_PINCH]
-            if np.isnan(tangent):
-                tangent = minmom * pinch_y / (rotch - rotrel)
-                s[r + R_K_PINCH] = tangent
+            tangent = _kept_slope(s, r + R_K_PINCH, minmom, pinch_y, rotch - rotrel)
             tmpmo1 = c_stress + e_un * kn * d_strain
             tmpmo2 = (t_strain - rotrel) * tangent
             if tmpmo1 > tmpmo2:
@@ -484,10 +487,7 @@ def _negative_increment(p, s, d_strain):
             else:
                 stress = tmpmo2
     else:
-        tangent = s[r + R_K_RELOAD]
-        if np.isnan(tangent):
-            tangent = (1.0 - pinch_y) * minmom / (t_rot_min - rotch)
-            s[r + R_K_RELOAD] = tangent
+        tangent = _kept_slope(s, r + R_K_RELOAD, 1.0 - pinch_y, minmom, t_rot_min - rotch)
         tmpmo1 = c_stress + e_un * kn * d_strain
         tmpmo2 = pinch_y * minmom + (t_strain - rotch) * tangent
         if tmpmo1 > tmpmo2:
