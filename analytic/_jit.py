@@ -23,6 +23,15 @@ caller takes a returned array as a new reference and releases it, which frees th
 array under it (a crash). Kernels write into the arrays they are given and return scalars or
 tuples of scalars.
 
+Both decorators compile with ``error_model="numpy"``: a float division follows IEEE 754
+(x/0 is ±inf, 0/0 NaN) instead of numba's default, which tests every divisor for zero to raise
+``ZeroDivisionError`` (a compare and a branch per division on the step path, the Takeda kernel's
+included: it is inlined and compiled with its caller's flags). Where a division by zero could
+come from the state, the step loops' finiteness test of the Newton increment (or of the state)
+ends the run with ``RUN_NONFINITE`` instead of an exception from inside the kernel. An integer
+``//`` or ``%`` by zero gives 0 under this model: the kernels' integer divisors (output strides,
+counts) are at least 1 by construction.
+
 Use ``@kernel`` in place of ``@njit(cache=True)`` for functions on the per-step path;
 ``@kernel(inline="always")`` etc. pass options through.
 """
@@ -55,17 +64,19 @@ _HERE = Path(__file__).resolve().parent
 
 
 def kernel(fn=None, **options):
-    """``numba.njit(cache=True, _nrt=False, **options)``, one specialisation per argument
-    types (:func:`plain_argument_types`): see the module docstring."""
+    """``numba.njit(cache=True, _nrt=False, error_model="numpy", **options)``, one
+    specialisation per argument types (:func:`plain_argument_types`): see the module
+    docstring."""
     opts = {"cache": True, "_nrt": False}
     opts.update(options)
     return compiled(fn, **opts)
 
 
 def compiled(fn=None, **options):
-    """``numba.njit(cache=True, **options)`` with :func:`plain_argument_types` (for the
-    functions that allocate, which keep numba's runtime)."""
-    opts = {"cache": True}
+    """``numba.njit(cache=True, error_model="numpy", **options)`` with
+    :func:`plain_argument_types` (for the functions that allocate, which keep numba's
+    runtime)."""
+    opts = {"cache": True, "error_model": "numpy"}
     opts.update(options)
     if fn is None:
         return lambda f: plain_argument_types(njit(**opts)(f))

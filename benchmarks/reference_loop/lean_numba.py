@@ -153,7 +153,8 @@ def load_inputs(path: Path) -> LeanModel:
 
 
 # ------------------------------------------------------------ OpenSees Hysteretic 3.7.1
-jit = numba.njit(_nrt=False, inline="always")
+# IEEE division without numba's zero-divisor test, as in C and in the engines' kernels
+jit = numba.njit(_nrt=False, inline="always", error_model="numpy")
 
 
 @jit
@@ -436,7 +437,7 @@ def lean_loop(NDOF: int):  # NDOF: reference.c's name of the compile-time DOF co
     variable), reference.c's ``residual`` and ``run``; compiled on its first call, one
     compiled function per DOF count."""
 
-    @numba.njit(_nrt=False, inline="always")
+    @numba.njit(_nrt=False, inline="always", error_model="numpy")
     def residual(m, hs, ugn, u, v, a, R, pg, kt, closed, f):
         """R = F_c − F − M ü at the trial (u, u̇) with the step's support forces pg; the
         springs' tangents kt and the closed corners (the factorisation key). f: scratch."""
@@ -469,7 +470,7 @@ def lean_loop(NDOF: int):  # NDOF: reference.c's name of the compile-time DOF co
         for i in range(NDOF):
             R[i] = -f[i] - mass[i] * a[i]
 
-    @numba.njit(_nrt=False, nogil=True)
+    @numba.njit(_nrt=False, nogil=True, error_model="numpy")
     def run(model, work, hs, ug, vg, Kg, Cg, nsteps, maxit, dt, tol, gamma, beta, u0, v0,
             flush, peak, peak_time):  # fmt: skip
         """reference.c's ``run``: the whole record from the initial state; fills peak and
