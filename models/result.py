@@ -34,6 +34,7 @@ import dataclasses
 import hashlib
 import io
 import json
+import math
 import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -137,7 +138,30 @@ def _fields_of(obj: Any) -> dict[str, Any]:
 
 def _mapping_text(items: dict) -> str:
     keys = sorted((str(k), k) for k in items)
-    return "{" + ",".join(f"{json.dumps(s)}:{canonical_json(items[k])}" for s, k in keys) + "}"
+    return "{" + ",".join(f"{_ascii_string(s)}:{canonical_json(items[k])}" for s, k in keys) + "}"
+
+
+#: json's own string encoder (``ensure_ascii``: the C one where it is built)
+_ascii_string = json.encoder.encode_basestring_ascii
+
+
+def _float_text(x: float) -> str:
+    """A float as ``json.dumps(_jsonable(x))`` writes it: its repr, a non-finite one as the
+    string of its name."""
+    return float.__repr__(x) if math.isfinite(x) else _ascii_string(str(x))
+
+
+#: the text of a value of exactly these built-in types, as ``json.dumps`` writes it (the
+#: scalars of a scene's tables: a fresh table of a sweep's case is mostly these, and one
+#: ``json.dumps`` call per value cost more than its case's cache key needs; subclasses, as
+#: enum members, take the general path)
+_SCALAR_TEXT = {
+    str: _ascii_string,
+    bool: lambda b: "true" if b else "false",
+    int: int.__repr__,
+    float: _float_text,
+    type(None): lambda _: "null",
+}
 
 
 def canonical_json(obj: Any) -> str:
@@ -147,6 +171,9 @@ def canonical_json(obj: Any) -> str:
     texts of its parts; the text of a frozen description is made once per object
     (:data:`_LIVE_TEXTS`), so the cases of a sweep, which share all of the scene's tables but
     one, cost one table each."""
+    scalar = _SCALAR_TEXT.get(type(obj))
+    if scalar is not None:
+        return scalar(obj)
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         return _remembered(obj, "json", lambda o: _mapping_text(_fields_of(o)))
     if isinstance(obj, dict):

@@ -6,6 +6,7 @@ cache keys do not change, and never a stale text of another scene."""
 from __future__ import annotations
 
 import dataclasses
+import enum
 import json
 
 import pytest
@@ -52,6 +53,28 @@ def test_mixed_values_as_json_writes_them():
         separators=(",", ":"),
     )
     assert canonical_json(value) == expected
+
+
+@pytest.mark.parametrize(
+    "value",
+    ["", 'x\u202e\n"\\', "é", True, False, 0, -7, 10**30, 2.5, -0.0, 1e-300, 5e300, 0.1, None],
+)
+def test_a_scalar_as_json_dumps_writes_it(value):
+    """The scalars' shortcut (exact built-in types) writes what json.dumps writes."""
+    assert canonical_json(value) == json.dumps(value)
+    assert canonical_json({"k": [value]}) == json.dumps({"k": [value]}, separators=(",", ":"))
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), float("-inf")])
+def test_a_non_finite_float_is_the_string_of_its_name(value):
+    assert canonical_json(value) == json.dumps(str(value))
+
+
+def test_an_enum_member_is_its_value():
+    class Kind(enum.StrEnum):
+        A = "a-kind"
+
+    assert canonical_json({"k": Kind.A}) == '{"k":"a-kind"}'
 
 
 def test_scenes_sharing_tables_keep_their_own_hashes():
