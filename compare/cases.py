@@ -80,34 +80,51 @@ class Case:
         return case_key(self.engine, self.scene)
 
 
-def record_digests(scene: Scene) -> dict[str, str]:
+def record_digests(scene: Scene, read: dict[str, str | None] | None = None) -> dict[str, str]:
     """SHA-256 of every record file the scene reads: a record edited in place changes the key
-    (the scene only names the file)."""
+    (the scene only names the file).
+
+    ``read``: the digests of files already read for the same batch of keys (path → digest, or
+    None for a file that could not be read), filled as files are read. The keys of a sweep are
+    made together, before its first case runs; its cases share their files (an IDA applies each
+    pair at every level), and a file is then read and hashed once per sweep, not once per case.
+    The keys describe the files as they were when the batch was made, as they would one read
+    earlier."""
+    read = {} if read is None else read
     out = {}
     for name in ("file", "file_x", "file_y"):
         path = getattr(scene.excitation, name, None)
         if path:
-            h = hashlib.sha256()
-            try:
-                with open(path, "rb") as fh:
-                    for chunk in iter(lambda: fh.read(1 << 20), b""):
-                        h.update(chunk)
-            except OSError:
-                continue  # the run refuses the scene with its own message
-            out[name] = h.hexdigest()
+            if path not in read:
+                read[path] = _file_digest(path)
+            if read[path] is not None:
+                out[name] = read[path]
     return out
 
 
-def case_key(engine: str, scene: Scene) -> str:
+def _file_digest(path: str) -> str | None:
+    """SHA-256 of a file's bytes, or None when it cannot be read (the run refuses the scene
+    with its own message)."""
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as fh:
+            for chunk in iter(lambda: fh.read(1 << 20), b""):
+                h.update(chunk)
+    except OSError:
+        return None
+    return h.hexdigest()
+
+
+def case_key(engine: str, scene: Scene, read: dict[str, str | None] | None = None) -> str:
     """The cache key: SHA-256 of engine name, physics hash, the record files' digests, that
-    engine's settings and the version."""
+    engine's settings and the version (``read``: see :func:`record_digests`)."""
 
     settings = get_engine(engine).settings_of(scene)
     text = json.dumps(
         {
             "engine": engine,
             "physics": physics_hash(scene),
-            "records": record_digests(scene),
+            "records": record_digests(scene, read),
             "settings": settings_hash(settings),
             "version": VERSION,
         },

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 from _record_helpers import quake, record_scene, write_acc_csv, write_at2
 
+from deckpound.compare.cases import case_key, record_digests
 from deckpound.compare.studies.variability import record_cases, run_variability
 from deckpound.models.errors import SceneError
 from deckpound.models.excitation import support_motion
@@ -256,3 +257,27 @@ def test_variability_over_two_pairs_runs_two_cases_with_x_and_y(tmp_path):
     assert list(table["record"]) == ["RSN753_LOMAP_CLS", "quake"]
     assert all(table["file_x"] != table["file_y"])
     assert set(table["status"]) <= {"success", "doubtful"}
+
+
+def test_case_keys_read_each_record_once_per_batch_and_follow_an_edit(tmp_path):
+    """The keys of a sweep's cases name the bytes of their record files: made as one batch
+    (each file read once for every case that applies it, as an IDA's levels do), they equal
+    the keys made one case at a time; a file edited in place gives the next batch new keys;
+    a file that cannot be read adds no digest, and the run refuses it with its own message."""
+    fx, fy = peer_pair(tmp_path)
+    levels = [
+        record_scene("at2", fx, fy, None, "excitation.scaling=factor", f"excitation.scale={s}")
+        for s in (0.5, 1, 2)
+    ]
+    read: dict = {}
+    batch = [case_key("compliance", sc, read) for sc in levels]
+    assert batch == [case_key("compliance", sc) for sc in levels]
+    assert len(set(batch)) == 3 and sorted(read) == sorted([str(fx), str(fy)])
+    write_at2(fx, quake(seed=7, peak=PGA_000))  # edited in place
+    again = [case_key("compliance", sc, {}) for sc in levels]
+    assert not set(again) & set(batch)
+    assert again[1] != case_key(
+        "compliance", record_scene("at2", fx, fy, None, "excitation.scaling=factor"), read
+    )
+    fy.unlink()
+    assert record_digests(levels[0], {}) == {"file_x": record_digests(levels[0])["file_x"]}

@@ -163,10 +163,11 @@ def _smallest_margin(margins) -> float:
     return min(values) if values else float("nan")
 
 
-def row_key(engine: str, scene: Scene) -> str:
-    """Cache key of a case's row: the result cache's key, the row format."""
+def row_key(engine: str, scene: Scene, read: dict[str, str | None] | None = None) -> str:
+    """Cache key of a case's row: the result cache's key, the row format (``read``: the record
+    files' digests of the batch of keys, :func:`~deckpound.compare.cases.record_digests`)."""
 
-    text = f"{case_key(engine, scene)}:variability-row:{ROW_FORMAT}"
+    text = f"{case_key(engine, scene, read)}:variability-row:{ROW_FORMAT}"
     return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -192,7 +193,8 @@ def sweep_rows(
     are read back, not recomputed: Ctrl-C loses only the cases running). Returns ({index:
     row}, number of cases computed now)."""
 
-    keys = [row_key(engine, sc) for sc in scenes]
+    read: dict[str, str | None] = {}  # each record file read once for all the keys
+    keys = [row_key(engine, sc, read) for sc in scenes]
     log = RowLog(rows_dir)
     cached = log.read()
     rows: dict[int, dict] = {
