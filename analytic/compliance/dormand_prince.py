@@ -468,6 +468,9 @@ def _integrate(sa, contact, record, opt, output, ws, stats):
     h = min(opt.max_step, out_dt, 1e-4)
     yielded = _any_yielded(sa, ws.hstate)
     kseg = 0
+    # the last trial step's error estimate was not finite: a step shrunk to nothing for that
+    # reason meets a state or record that is not finite, not a stiff stretch
+    nonfinite = False
     while t < t_end - _TINY * max(1.0, t_end):
         if stats.halt[0] != 0:
             return RUN_INTERRUPTED, t, row
@@ -480,10 +483,11 @@ def _integrate(sa, contact, record, opt, output, ws, stats):
         h = min(h, hmax)
         hit_break = abs((t + h) - tbreak) <= _TINY * max(1.0, tbreak)
         if h <= 1e-14:
-            return RUN_STEP_UNDERFLOW, t, row
+            return (RUN_NONFINITE if nonfinite else RUN_STEP_UNDERFLOW), t, row
         err = _rk_step(t, ws.y, h, sa, contact, record, ws, opt.atol, opt.rtol)
         cnt[bd.CNT_RHS_CALLS] += 6
-        if not np.isfinite(err):
+        nonfinite = not np.isfinite(err)
+        if nonfinite:
             err = 1e10
         if err > 1.0:
             cnt[bd.CNT_REJECTED] += 1
