@@ -321,14 +321,29 @@ def output_memory(durations) -> list[dict]:
 
 
 def git_commit() -> str:
-    """``git describe --always --dirty`` of the repository (``unknown`` without git)."""
+    """The repository's commit (``git rev-parse --short HEAD``), with ``-dirty`` when a file
+    other than this tool's own outputs (the page and its measurement file, which an earlier
+    sitting rewrote and which change nothing measured) differs from it; ``unknown`` without
+    git."""
     try:
-        out = subprocess.run(
-            ["git", "describe", "--always", "--dirty"], cwd=ROOT, capture_output=True, text=True
+        head = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True, text=True
+        )
+        changed = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
         )
     except OSError:
         return "unknown"
-    return out.stdout.strip() or "unknown"
+    commit = head.stdout.strip()
+    if not commit:
+        return "unknown"
+    own = {PAGE.resolve(), RESULTS_FILE.resolve()}
+    paths = [line[3:].strip() for line in changed.stdout.splitlines() if line.strip()]
+    dirty = any((ROOT / p).resolve() not in own for p in paths)
+    return commit + ("-dirty" if dirty else "")
 
 
 def measure(settings: dict, quick: bool, say: Callable[[str], None] = print) -> dict:
