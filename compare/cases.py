@@ -38,6 +38,7 @@ from deckpound.compare.pool import (
 from deckpound.compare.progress import Progress
 from deckpound.compare.result_cache import ResultCache
 from deckpound.models.errors import SceneError
+from deckpound.models.file_io import file_digest
 from deckpound.models.iir import SCIPY_AFTER, load_compiled_filter
 from deckpound.models.result import Result, physics_hash, settings_hash
 from deckpound.models.scene import Scene
@@ -103,16 +104,12 @@ def record_digests(scene: Scene, read: dict[str, str | None] | None = None) -> d
 
 
 def _file_digest(path: str) -> str | None:
-    """SHA-256 of a file's bytes, or None when it cannot be read (the run refuses the scene
-    with its own message)."""
-    h = hashlib.sha256()
+    """:func:`~deckpound.models.file_io.file_digest`, or None when the file cannot be read
+    (the run refuses the scene with its own message)."""
     try:
-        with open(path, "rb") as fh:
-            for chunk in iter(lambda: fh.read(1 << 20), b""):
-                h.update(chunk)
+        return file_digest(path)
     except OSError:
         return None
-    return h.hexdigest()
 
 
 def case_key(engine: str, scene: Scene, read: dict[str, str | None] | None = None) -> str:

@@ -206,6 +206,12 @@ def ensure_folder(path: str | Path, field: str = "--output") -> Path:
     return path
 
 
+def file_digest(path: str | Path) -> str:
+    """SHA-256 of a file's bytes (hex); OSError when it cannot be read."""
+    with open(path, "rb") as f:
+        return hashlib.file_digest(f, "sha256").hexdigest()
+
+
 def write_all(fd: int, data: bytes) -> None:
     """Write all of ``data`` to the open file ``fd`` (a short write is continued)."""
     view = memoryview(data)

@@ -46,7 +46,7 @@ import pandas as pd
 
 from deckpound.compare.engines import engine_names, engine_style
 from deckpound.compare.studies.sequence_run import SequenceRun
-from deckpound.models.file_io import atomic_write_text
+from deckpound.models.file_io import atomic_write_text, file_digest
 from deckpound.models.result import Result, physics_hash
 from deckpound.models.scene import Scene
 from deckpound.models.version import VERSION
@@ -156,12 +156,6 @@ def reuse_figures(manifest: str | Path, reuse: bool = True) -> Iterator[FigureMa
         yield opened
     finally:
         _OPEN.reset(token)
-
-
-def file_digest(path: Path) -> str:
-    """SHA-256 of a file's bytes (hex)."""
-    with open(path, "rb") as f:
-        return hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def _imported_modules(module_name: str) -> list[str]:
