@@ -312,6 +312,28 @@ def _kept_slope(s, slot, a, b, den):
 
 
 @njit(cache=True, inline="always")
+def _fill_reversal(s, r, rot, rot0, mom, rel, ch):
+    """Fill the reversal cache at ``r`` (R_POS or R_NEG): the trial excursion ``rot``, the
+    zero-stress strain ``rot0``, the backbone force ``mom`` there, the release strain ``rel``
+    and the pinching strain ``ch``; the two branch slopes marked not computed (NaN)."""
+    s[r + R_ROT] = rot
+    s[r + R_ROT0] = rot0
+    s[r + R_MOM] = mom
+    s[r + R_REL] = rel
+    s[r + R_CH] = ch
+    s[r + R_K_PINCH] = np.nan
+    s[r + R_K_RELOAD] = np.nan
+    s[r + R_VALID] = 1.0
+
+
+@njit(cache=True, inline="always")
+def _reversal(s, r):
+    """The reversal cache at ``r`` as :func:`_fill_reversal` filled it: (excursion,
+    zero-stress strain, backbone force, release strain, pinching strain)."""
+    return s[r + R_ROT], s[r + R_ROT0], s[r + R_MOM], s[r + R_REL], s[r + R_CH]
+
+
+@njit(cache=True, inline="always")
 def _positive_reversal(p, s, kn, kp):
     """OpenSees ``positiveIncrement`` up to the trial strain: the trial excursion and
     zero-stress strain from the committed state (a reversal from a negative increment moves
@@ -342,15 +364,8 @@ def _positive_reversal(p, s, kn, kp):
     rotlim = _neg_env_rotlim(p, c_rot_min)
     rotrel = max(t_rot_nu, rotlim)
     rotmp2 = t_rot_max - (1.0 - pinch_y) * maxmom / (e_up * kp)
-    r = R_POS
-    s[r + R_ROT] = t_rot_max
-    s[r + R_ROT0] = t_rot_nu
-    s[r + R_MOM] = maxmom
-    s[r + R_REL] = rotrel
-    s[r + R_CH] = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
-    s[r + R_K_PINCH] = np.nan
-    s[r + R_K_RELOAD] = np.nan
-    s[r + R_VALID] = 1.0
+    rotch = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
+    _fill_reversal(s, R_POS, t_rot_max, t_rot_nu, maxmom, rotrel, rotch)
 
 
 @njit(cache=True, inline="always")
@@ -363,11 +378,7 @@ def _positive_increment(p, s, d_strain):
     r = R_POS
     if s[r + R_VALID] == 0.0:
         _positive_reversal(p, s, kn, kp)
-    t_rot_max = s[r + R_ROT]
-    t_rot_nu = s[r + R_ROT0]
-    maxmom = s[r + R_MOM]
-    rotrel = s[r + R_REL]
-    rotch = s[r + R_CH]
+    t_rot_max, t_rot_nu, maxmom, rotrel, rotch = _reversal(s, r)
     s[T_ROTMAX] = t_rot_max
     s[T_ROTNU] = t_rot_nu
     s[T_LOADIND] = 1.0
@@ -435,15 +446,8 @@ def _negative_reversal(p, s, kn, kp):
     rotlim = _pos_env_rotlim(p, c_rot_max)
     rotrel = min(t_rot_pu, rotlim)
     rotmp2 = t_rot_min - (1.0 - pinch_y) * minmom / (e_un * kn)
-    r = R_NEG
-    s[r + R_ROT] = t_rot_min
-    s[r + R_ROT0] = t_rot_pu
-    s[r + R_MOM] = minmom
-    s[r + R_REL] = rotrel
-    s[r + R_CH] = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
-    s[r + R_K_PINCH] = np.nan
-    s[r + R_K_RELOAD] = np.nan
-    s[r + R_VALID] = 1.0
+    rotch = rotrel + (rotmp2 - rotrel) * p[P_PINCHX]
+    _fill_reversal(s, R_NEG, t_rot_min, t_rot_pu, minmom, rotrel, rotch)
 
 
 @njit(cache=True, inline="always")
@@ -456,11 +460,7 @@ def _negative_increment(p, s, d_strain):
     r = R_NEG
     if s[r + R_VALID] == 0.0:
         _negative_reversal(p, s, kn, kp)
-    t_rot_min = s[r + R_ROT]
-    t_rot_pu = s[r + R_ROT0]
-    minmom = s[r + R_MOM]
-    rotrel = s[r + R_REL]
-    rotch = s[r + R_CH]
+    t_rot_min, t_rot_pu, minmom, rotrel, rotch = _reversal(s, r)
     s[T_ROTMIN] = t_rot_min
     s[T_ROTPU] = t_rot_pu
     s[T_LOADIND] = 2.0
